@@ -1,0 +1,94 @@
+// Scene data shared by every pass: bind group 0, laid out by src/gi/scene_gpu.rs.
+// Triangle arrays are in BVH slot order (see src/bvh.rs).
+
+struct SceneInfo {
+    num_tris: u32,
+    num_nodes: u32,
+    num_emitters: u32,
+    num_lights: u32,
+    // Sum of emitter powers (area x luminance of emitted radiance), the emitter CDF's total.
+    emit_power: f32,
+    // Ray offset scale: 1e-5 x the scene's diagonal (scale-free self-intersection guard).
+    eps: f32,
+    extent: f32,
+    _pad: u32,
+}
+
+struct BvhNode {
+    min: vec3<f32>,
+    prim_count: u32,
+    max: vec3<f32>,
+    first_index: u32,
+}
+
+struct Tri {
+    v0: vec4<f32>,
+    v1: vec4<f32>,
+    v2: vec4<f32>,
+}
+
+// Shading normals and texture coordinates: n0..n2 carry u0, v0, u1 in w; `extra` is (v1, u2, v2, material).
+struct TriShade {
+    n0: vec4<f32>,
+    n1: vec4<f32>,
+    n2: vec4<f32>,
+    extra: vec4<f32>,
+}
+
+struct Material {
+    base_color: vec4<f32>,
+    emissive: vec4<f32>,
+    // x: base colour texture, y: emissive texture (-1 = none).
+    tex: vec4<i32>,
+}
+
+struct TexInfo {
+    offset: u32,
+    width: u32,
+    height: u32,
+    _pad: u32,
+}
+
+// An emissive triangle with its CDF value (inclusive prefix sum of power, normalised to 1).
+struct Emitter {
+    slot: u32,
+    cdf: f32,
+    area: f32,
+    power: f32,
+}
+
+// kind: 0 point, 1 spot, 2 directional. dir: direction light travels. color = colour x intensity.
+struct Light {
+    pos_kind: vec4<f32>,
+    dir_cos_outer: vec4<f32>,
+    color_cos_inner: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> scene: SceneInfo;
+@group(0) @binding(1) var<storage, read> bvh_nodes: array<BvhNode>;
+@group(0) @binding(2) var<storage, read> tris: array<Tri>;
+@group(0) @binding(3) var<storage, read> tri_shade: array<TriShade>;
+@group(0) @binding(4) var<storage, read> materials: array<Material>;
+@group(0) @binding(5) var<storage, read> tex_info: array<TexInfo>;
+@group(0) @binding(6) var<storage, read> texels: array<u32>;
+@group(0) @binding(7) var<storage, read> emitters: array<Emitter>;
+@group(0) @binding(8) var<storage, read> lights: array<Light>;
+
+// Pipeline-overridable switches: a scene without textures or punctual lights compiles those paths out.
+override HAS_TEXTURES: bool = true;
+override HAS_EMITTERS: bool = true;
+override HAS_PUNCTUAL: bool = true;
+
+const PI: f32 = 3.14159265358979;
+const INF: f32 = 3.4028235e38;
+const INVALID: u32 = 0xffffffffu;
+
+fn max_abs3(p: vec3<f32>) -> f32 {
+    let a = abs(p);
+    return max(a.x, max(a.y, a.z));
+}
+
+// Offsets a ray origin off a surface along `n` by a scale-free distance.
+fn offset_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    return p + n * (scene.eps + 4e-6 * max_abs3(p));
+}

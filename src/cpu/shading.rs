@@ -1,0 +1,305 @@
+//! CPU twins of `primary.wgsl` and `direct.wgsl` (with `common/surface.wgsl`, `common/lights.wgsl`,
+//! `common/sampling.wgsl`): the same formulas, the same random numbers, obvhs for the rays.
+
+use glam::{Vec2, Vec3, Vec3A};
+
+use super::rng::{rng_next, rng_seed};
+use crate::bvh::SceneBvh;
+use crate::gi::primary::CameraParams;
+use crate::gi::scene_gpu::{GpuEmitter, SceneInfo};
+use crate::scene::{LightKind, Scene, Texture};
+
+/// A shading point as `common/gbuffer.wgsl` lays it out (w components: valid flag, material).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingPoint {
+    pub valid: bool,
+    pub pos: Vec3,
+    pub normal: Vec3,
+    pub material: u32,
+    pub albedo: Vec3,
+    pub emission: Vec3,
+}
+
+impl ShadingPoint {
+    /// Decodes one G-buffer record (4 × vec4).
+    pub fn from_gpu(r: &[[f32; 4]]) -> Self {
+        ShadingPoint {
+            valid: r[0][3] > 0.0,
+            pos: Vec3::new(r[0][0], r[0][1], r[0][2]),
+            normal: Vec3::new(r[1][0], r[1][1], r[1][2]),
+            material: r[1][3].to_bits(),
+            albedo: Vec3::new(r[2][0], r[2][1], r[2][2]),
+            emission: Vec3::new(r[3][0], r[3][1], r[3][2]),
+        }
+    }
+}
+
+/// Everything the twins need besides the scene and the BVH.
+pub struct CpuScene<'a> {
+    pub scene: &'a Scene,
+    pub bvh: &'a SceneBvh,
+    pub info: SceneInfo,
+    pub emitters: &'a [GpuEmitter],
+}
+
+fn srgb(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn fetch(t: &Texture, x: i32, y: i32) -> [f32; 4] {
+    let (w, h) = (t.width as i32, t.height as i32);
+    let xi = x.rem_euclid(w);
+    let yi = y.rem_euclid(h);
+    let c = t.rgba8[(yi * w + xi) as usize];
+    [
+        srgb(c[0] as f32 / 255.0),
+        srgb(c[1] as f32 / 255.0),
+        srgb(c[2] as f32 / 255.0),
+        c[3] as f32 / 255.0,
+    ]
+}
+
+/// Twin of `sample_texture` (bilinear, repeat, sRGB decode).
+pub fn sample_texture(t: &Texture, uv: Vec2) -> Vec3 {
+    let f = (uv - uv.floor()) * Vec2::new(t.width as f32, t.height as f32) - 0.5;
+    let i = f.floor();
+    let w = f - i;
+    let (x, y) = (i.x as i32, i.y as i32);
+    let a = fetch(t, x, y);
+    let b = fetch(t, x + 1, y);
+    let c = fetch(t, x, y + 1);
+    let d = fetch(t, x + 1, y + 1);
+    let lerp = |p: [f32; 4], q: [f32; 4], s: f32| {
+        Vec3::new(p[0], p[1], p[2]).lerp(Vec3::new(q[0], q[1], q[2]), s)
+    };
+    lerp(a, b, w.x).lerp(lerp(c, d, w.x), w.y)
+}
+
+impl<'a> CpuScene<'a> {
+    fn tri(&self, slot: u32) -> &crate::scene::Triangle {
+        &self.scene.triangles[self.bvh.slot_to_triangle[slot as usize] as usize]
+    }
+
+    fn emission(&self, material: u32, uv: Vec2) -> Vec3 {
+        let m = &self.scene.materials[material as usize];
+        let mut e = m.emissive;
+        if let Some(t) = m.emissive_texture {
+            e *= sample_texture(&self.scene.textures[t as usize], uv);
+        }
+        e
+    }
+
+    fn albedo(&self, material: u32, uv: Vec2) -> Vec3 {
+        let m = &self.scene.materials[material as usize];
+        let mut a = m.base_color.truncate();
+        if let Some(t) = m.base_color_texture {
+            a *= sample_texture(&self.scene.textures[t as usize], uv);
+        }
+        a.clamp(Vec3::ZERO, Vec3::ONE)
+    }
+
+    fn shading_normal(&self, slot: u32, b1: f32, b2: f32) -> Vec3 {
+        let t = self.tri(slot);
+        let n = (1.0 - b1 - b2) * t.n[0] + b1 * t.n[1] + b2 * t.n[2];
+        let l = n.length();
+        if l > 1e-12 {
+            n / l
+        } else {
+            self.geometric_normal(slot)
+        }
+    }
+
+    fn geometric_normal(&self, slot: u32) -> Vec3 {
+        let t = &self.bvh.tris[slot as usize];
+        Vec3::from((t.v1 - t.v0).cross(t.v2 - t.v0).normalize())
+    }
+
+    fn point(&self, slot: u32, b1: f32, b2: f32) -> Vec3 {
+        let t = &self.bvh.tris[slot as usize];
+        Vec3::from((1.0 - b1 - b2) * t.v0 + b1 * t.v1 + b2 * t.v2)
+    }
+
+    fn uv(&self, slot: u32, b1: f32, b2: f32) -> Vec2 {
+        let t = self.tri(slot);
+        (1.0 - b1 - b2) * t.uv[0] + b1 * t.uv[1] + b2 * t.uv[2]
+    }
+
+    /// Twin of `primary.wgsl` for one pixel.
+    pub fn primary(&self, cam: &CameraParams, pixel: u32) -> ShadingPoint {
+        let (w, h) = (cam.size[0], cam.size[1]);
+        let x = (pixel % w) as f32 + 0.5;
+        let y = (pixel / w) as f32 + 0.5;
+        let sx = 2.0 * x / w as f32 - 1.0;
+        let sy = 1.0 - 2.0 * y / h as f32;
+        let v = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
+        let dir = (v(cam.forward) + sx * v(cam.right) + sy * v(cam.up)).normalize();
+        let eye = v(cam.eye);
+        let none = ShadingPoint {
+            valid: false,
+            pos: Vec3::ZERO,
+            normal: Vec3::Z,
+            material: 0,
+            albedo: Vec3::ZERO,
+            emission: Vec3::ZERO,
+        };
+        let Some(hit) = self.bvh.closest(eye.into(), dir.into(), 0.0, f32::INFINITY) else {
+            return none;
+        };
+        let slot = self
+            .bvh
+            .slot_to_triangle
+            .iter()
+            .position(|&t| t == hit.triangle)
+            .unwrap() as u32;
+        let (b1, b2) = barycentrics(&self.bvh.tris[slot as usize], eye, dir);
+        let material = self.tri(slot).material;
+        let uv = self.uv(slot, b1, b2);
+        let mut ng = self.geometric_normal(slot);
+        let mut n = self.shading_normal(slot, b1, b2);
+        let front = n.dot(dir) < 0.0;
+        let emission = if front {
+            self.emission(material, uv)
+        } else {
+            Vec3::ZERO
+        };
+        if ng.dot(dir) > 0.0 {
+            ng = -ng;
+        }
+        if n.dot(ng) < 0.0 {
+            n = -n;
+        }
+        ShadingPoint {
+            valid: true,
+            pos: eye + hit.t * dir,
+            normal: n,
+            material,
+            albedo: self.albedo(material, uv),
+            emission,
+        }
+    }
+
+    fn offset_origin(&self, p: Vec3, n: Vec3) -> Vec3 {
+        p + n * (self.info.eps + 4e-6 * p.abs().max_element())
+    }
+
+    fn emitter_index(&self, u: f32) -> usize {
+        let (mut lo, mut hi) = (0usize, self.emitters.len() - 1);
+        while lo < hi {
+            let mid = (lo + hi) / 2;
+            if self.emitters[mid].cdf <= u {
+                lo = mid + 1;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    }
+
+    /// Twin of `direct.wgsl`: emission + direct light of one shading point.
+    pub fn direct(&self, sp: &ShadingPoint, pixel: u32, seed: u32, spp: u32) -> Vec3 {
+        if !sp.valid {
+            return Vec3::ZERO;
+        }
+        let (p, n) = (sp.pos, sp.normal);
+        let mut sum = Vec3::ZERO;
+        if !self.emitters.is_empty() {
+            let mut rng = rng_seed(pixel, seed, 0x9e3779b9);
+            let spp = spp.max(1);
+            let mut area_sum = Vec3::ZERO;
+            for s in 0..spp {
+                let u0 = (s as f32 + rng_next(&mut rng)) / spp as f32;
+                let (u1, u2) = (rng_next(&mut rng), rng_next(&mut rng));
+                let e = self.emitters[self.emitter_index(u0.min(0.99999994))];
+                let sq = u1.sqrt();
+                let (b1, b2) = (1.0 - sq, u2 * sq);
+                let lp = self.point(e.slot, b1, b2);
+                let ln = self.shading_normal(e.slot, b1, b2);
+                let le = self.emission(self.tri(e.slot).material, self.uv(e.slot, b1, b2));
+                let pdf = (e.power / self.info.emit_power) / e.area;
+                let d = lp - p;
+                let d2 = d.dot(d);
+                if d2 <= 0.0 {
+                    continue;
+                }
+                let wi = d / d2.sqrt();
+                let (cp, cl) = (n.dot(wi), ln.dot(-wi));
+                if cp <= 0.0 || cl <= 0.0 || pdf <= 0.0 {
+                    continue;
+                }
+                if self.visible(p, n, lp - ln * self.info.eps) {
+                    area_sum += le * cp * cl / (d2 * pdf);
+                }
+            }
+            sum += area_sum / spp as f32;
+        }
+        for l in &self.scene.lights {
+            let c = l.color * l.intensity;
+            let (wi, dist, e) = match l.kind {
+                LightKind::Directional => (-l.direction, f32::INFINITY, c),
+                _ => {
+                    let d = l.position - p;
+                    let d2 = d.dot(d).max(1e-30);
+                    let dist = d2.sqrt();
+                    let wi = d / dist;
+                    let mut fall = 1.0;
+                    if let LightKind::Spot {
+                        inner_cone,
+                        outer_cone,
+                    } = l.kind
+                    {
+                        let cd = l.direction.dot(-wi);
+                        let (co, ci) = (outer_cone.cos(), inner_cone.cos());
+                        let t = ((cd - co) / (ci - co).max(1e-4)).clamp(0.0, 1.0);
+                        fall = t * t;
+                    }
+                    (wi, dist, c * fall / d2)
+                }
+            };
+            let cp = n.dot(wi);
+            if cp <= 0.0 || e == Vec3::ZERO {
+                continue;
+            }
+            let o = self.offset_origin(p, n);
+            let tmax = if dist.is_finite() {
+                dist * (1.0 - 1e-4)
+            } else {
+                f32::INFINITY
+            };
+            if !self.bvh.occluded(o.into(), wi.into(), 0.0, tmax) {
+                sum += e * cp;
+            }
+        }
+        sp.emission + sp.albedo / std::f32::consts::PI * sum
+    }
+
+    fn visible(&self, p: Vec3, n: Vec3, q: Vec3) -> bool {
+        let o = self.offset_origin(p, n);
+        let d = q - o;
+        let dist = d.length();
+        if dist <= 0.0 {
+            return false;
+        }
+        !self.bvh.occluded(
+            o.into(),
+            (d / dist).into(),
+            0.0,
+            dist * (1.0 - 1e-4) - self.info.eps,
+        )
+    }
+}
+
+/// Barycentrics (u, v) of the ray's hit on `t` with the shader's Möller–Trumbore formula.
+pub fn barycentrics(t: &obvhs::triangle::Triangle, o: Vec3, d: Vec3) -> (f32, f32) {
+    let (o, d) = (Vec3A::from(o), Vec3A::from(d));
+    let e1 = t.v0 - t.v1;
+    let e2 = t.v2 - t.v0;
+    let n = e1.cross(e2);
+    let c = t.v0 - o;
+    let r = d.cross(c);
+    let inv_det = 1.0 / n.dot(d);
+    (r.dot(e2) * inv_det, r.dot(e1) * inv_det)
+}

@@ -1,0 +1,113 @@
+//! Image output: EXR (linear HDR radiance) and PNG (exposure, clamp, sRGB). Files are written to a
+//! temporary file in the same directory and renamed, so a reader never sees a half-written file.
+
+use std::io::{BufWriter, Write};
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+use image::{ImageBuffer, ImageFormat, Rgb};
+
+/// Writes `bytes_fn`'s output to `path` atomically (temp file + rename).
+pub fn write_atomic(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<std::fs::File>) -> Result<()>,
+) -> Result<()> {
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .with_context(|| format!("{}: not a file name", path.display()))?
+        .to_string_lossy();
+    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+    let result = (|| -> Result<()> {
+        let f = std::fs::File::create(&tmp)
+            .with_context(|| format!("{}: cannot create", tmp.display()))?;
+        let mut w = BufWriter::new(f);
+        write(&mut w)?;
+        w.flush()?;
+        w.get_ref().sync_all()?;
+        Ok(())
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e);
+    }
+    std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write", path.display()))?;
+    Ok(())
+}
+
+/// Linear → sRGB transfer for one channel in [0, 1].
+pub fn linear_to_srgb(c: f32) -> f32 {
+    let c = if c.is_finite() {
+        c.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    if c <= 0.0031308 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// 8-bit sRGB display of linear radiance × exposure (clamped).
+pub fn to_srgb8(radiance: &[[f32; 3]], exposure: f32) -> Vec<u8> {
+    radiance
+        .iter()
+        .flat_map(|p| p.map(|c| (linear_to_srgb(c * exposure) * 255.0 + 0.5) as u8))
+        .collect()
+}
+
+pub fn write_exr(path: &Path, width: u32, height: u32, radiance: &[[f32; 3]]) -> Result<()> {
+    let data: Vec<f32> = radiance.iter().flatten().copied().collect();
+    let img: ImageBuffer<Rgb<f32>, Vec<f32>> = ImageBuffer::from_raw(width, height, data)
+        .context("image size does not match its pixels")?;
+    write_atomic(path, |w| {
+        img.write_to(w, ImageFormat::OpenExr)
+            .with_context(|| format!("{}: EXR encoding failed", path.display()))
+    })
+}
+
+pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: Vec<u8>) -> Result<()> {
+    let img: ImageBuffer<Rgb<u8>, Vec<u8>> = ImageBuffer::from_raw(width, height, rgb)
+        .context("image size does not match its pixels")?;
+    write_atomic(path, |w| {
+        img.write_to(w, ImageFormat::Png)
+            .with_context(|| format!("{}: PNG encoding failed", path.display()))
+    })
+}
+
+/// Writes radiance as EXR or tone-mapped PNG, by the file's extension.
+pub fn write_image(
+    path: &Path,
+    width: u32,
+    height: u32,
+    radiance: &[[f32; 3]],
+    exposure: f32,
+) -> Result<()> {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .as_deref()
+    {
+        Some("exr") => write_exr(path, width, height, radiance),
+        Some("png") => write_png_rgb8(path, width, height, to_srgb8(radiance, exposure)),
+        _ => bail!("{}: output must end in .exr or .png", path.display()),
+    }
+}
+
+/// Reads an EXR as linear RGB.
+pub fn read_exr(path: &Path) -> Result<(u32, u32, Vec<[f32; 3]>)> {
+    let img = image::ImageReader::open(path)
+        .with_context(|| format!("{}: cannot open", path.display()))?
+        .with_guessed_format()?
+        .decode()
+        .with_context(|| format!("{}: not a readable image", path.display()))?
+        .into_rgb32f();
+    let (w, h) = img.dimensions();
+    let px = img.pixels().map(|p| p.0).collect();
+    Ok((w, h, px))
+}

@@ -1,0 +1,156 @@
+//! A compute kernel with bounded dispatches: bind group 0 is the scene, group 1 the pass's own
+//! resources with the `Chunk` uniform (`shaders-wgsl/common/chunk.wgsl`) at binding 0. A heavy pass runs
+//! as several submissions over item ranges so no single submission runs long (software drivers report a
+//! long one as a lost device).
+
+use bytemuck::{Pod, Zeroable};
+
+use super::scene_gpu::{SceneGpu, uniform_layout};
+use crate::gpu::{GpuContext, profiler::Profiler, shader};
+
+pub const WORKGROUP: u32 = 64;
+/// The most workgroups one dispatch row holds (WebGPU's guaranteed minimum per dimension).
+const MAX_GROUPS_X: u32 = 65535;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct Chunk {
+    pub offset: u32,
+    pub count: u32,
+    pub seed: u32,
+    pub _pad: u32,
+}
+
+pub struct Kernel {
+    pub name: &'static str,
+    pub pipeline: wgpu::ComputePipeline,
+    pub layout: wgpu::BindGroupLayout,
+    chunk: wgpu::Buffer,
+}
+
+impl Kernel {
+    /// Builds the pipeline of `shaders-wgsl/<name>.wgsl`; `entries` are group 1's bindings from 1 on.
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &SceneGpu,
+        name: &'static str,
+        entries: &[wgpu::BindGroupLayoutEntry],
+        extra_constants: &[(&'static str, f64)],
+    ) -> Kernel {
+        let mut all = vec![uniform_layout(0)];
+        all.extend_from_slice(entries);
+        let layout = ctx
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(name),
+                entries: &all,
+            });
+        let pl = ctx
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(name),
+                bind_group_layouts: &[Some(&scene.layout), Some(&layout)],
+                immediate_size: 0,
+            });
+        let module = shader::module(&ctx.device, name);
+        let mut constants = scene.overrides();
+        constants.extend_from_slice(extra_constants);
+        let pipeline = ctx
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(name),
+                layout: Some(&pl),
+                module: &module,
+                entry_point: Some("main"),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &constants,
+                    zero_initialize_workgroup_memory: true,
+                },
+                cache: None,
+            });
+        let chunk = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("chunk"),
+            size: std::mem::size_of::<Chunk>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Kernel {
+            name,
+            pipeline,
+            layout,
+            chunk,
+        }
+    }
+
+    /// Group 1 bind group: binding 0 is the chunk uniform, the rest as given (binding, buffer).
+    pub fn bind_group(
+        &self,
+        ctx: &GpuContext,
+        buffers: &[(u32, &wgpu::Buffer)],
+    ) -> wgpu::BindGroup {
+        let mut entries = vec![wgpu::BindGroupEntry {
+            binding: 0,
+            resource: self.chunk.as_entire_binding(),
+        }];
+        for (b, buf) in buffers {
+            entries.push(wgpu::BindGroupEntry {
+                binding: *b,
+                resource: buf.as_entire_binding(),
+            });
+        }
+        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(self.name),
+            layout: &self.layout,
+            entries: &entries,
+        })
+    }
+
+    /// Runs the kernel over items `0..total` in submissions of at most `per_chunk` items, timing each
+    /// under `label`. `progress` is called after each submission with (done, total).
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        profiler: &mut Profiler,
+        label: &str,
+        scene: &SceneGpu,
+        group: &wgpu::BindGroup,
+        total: u32,
+        per_chunk: u32,
+        seed: u32,
+        progress: &mut dyn FnMut(u32, u32),
+    ) {
+        let per_chunk = per_chunk.clamp(WORKGROUP, WORKGROUP * MAX_GROUPS_X);
+        let mut offset = 0;
+        while offset < total {
+            let count = per_chunk.min(total - offset);
+            let c = Chunk {
+                offset,
+                count,
+                seed,
+                _pad: 0,
+            };
+            ctx.queue
+                .write_buffer(&self.chunk, 0, bytemuck::bytes_of(&c));
+            let mut enc = ctx.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some(label),
+                    timestamp_writes: profiler.pass(label),
+                });
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, &scene.bind_group, &[]);
+                pass.set_bind_group(1, group, &[]);
+                pass.dispatch_workgroups(count.div_ceil(WORKGROUP), 1, 1);
+            }
+            ctx.queue.submit([enc.finish()]);
+            offset += count;
+            // Waiting keeps each submission short and bounded on software drivers.
+            let _ = ctx.device.poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: None,
+            });
+            progress(offset, total);
+        }
+    }
+}

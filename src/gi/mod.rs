@@ -1,0 +1,9 @@
+//! The GI passes, one module per pass, each owning its pipeline and bind-group layout and driving the
+//! WGSL file of the same name. `pipeline` decides which passes run.
+
+pub mod direct;
+pub mod dispatch;
+pub mod pipeline;
+pub mod primary;
+pub mod raycast;
+pub mod scene_gpu;

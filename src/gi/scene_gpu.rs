@@ -1,0 +1,300 @@
+//! The scene on the GPU: bind group 0 of every pass (`shaders-wgsl/common/scene.wgsl`).
+//! Uploaded once per scene; all triangle arrays are in BVH slot order.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+use crate::bvh::SceneBvh;
+use crate::gpu::GpuContext;
+use crate::scene::{LightKind, Scene};
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct SceneInfo {
+    pub num_tris: u32,
+    pub num_nodes: u32,
+    pub num_emitters: u32,
+    pub num_lights: u32,
+    pub emit_power: f32,
+    pub eps: f32,
+    pub extent: f32,
+    pub _pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuTriShade {
+    pub n0: [f32; 4],
+    pub n1: [f32; 4],
+    pub n2: [f32; 4],
+    pub extra: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuMaterial {
+    pub base_color: [f32; 4],
+    pub emissive: [f32; 4],
+    pub tex: [i32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuTexInfo {
+    pub offset: u32,
+    pub width: u32,
+    pub height: u32,
+    pub _pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuEmitter {
+    pub slot: u32,
+    pub cdf: f32,
+    pub area: f32,
+    pub power: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuLight {
+    pub pos_kind: [f32; 4],
+    pub dir_cos_outer: [f32; 4],
+    pub color_cos_inner: [f32; 4],
+}
+
+/// Emitter table: emissive triangles (by slot) with a CDF over power = area × mean emitted radiance
+/// (× the mean of the emissive texture when there is one). Shared by the GPU upload and the CPU twins.
+pub fn emitter_table(scene: &Scene, bvh: &SceneBvh) -> (Vec<GpuEmitter>, f32) {
+    let tex_mean: Vec<Vec3> = scene
+        .textures
+        .iter()
+        .map(|t| {
+            let mut s = Vec3::ZERO;
+            for c in &t.rgba8 {
+                s += Vec3::new(
+                    srgb_to_linear(c[0]),
+                    srgb_to_linear(c[1]),
+                    srgb_to_linear(c[2]),
+                );
+            }
+            s / t.rgba8.len().max(1) as f32
+        })
+        .collect();
+    let mut out = Vec::new();
+    let mut total = 0.0f64;
+    for (slot, &ti) in bvh.slot_to_triangle.iter().enumerate() {
+        let t = &scene.triangles[ti as usize];
+        let m = &scene.materials[t.material as usize];
+        let mut e = m.emissive;
+        if let Some(k) = m.emissive_texture {
+            e *= tex_mean[k as usize];
+        }
+        let area = t.area();
+        let power = area * (e.x + e.y + e.z) / 3.0;
+        if power > 0.0 && power.is_finite() {
+            total += power as f64;
+            out.push(GpuEmitter {
+                slot: slot as u32,
+                cdf: total as f32,
+                area,
+                power,
+            });
+        }
+    }
+    for e in &mut out {
+        e.cdf = (e.cdf as f64 / total) as f32;
+    }
+    if let Some(last) = out.last_mut() {
+        last.cdf = 1.0;
+    }
+    (out, total as f32)
+}
+
+pub fn srgb_to_linear(c: u8) -> f32 {
+    let c = c as f32 / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+pub struct SceneGpu {
+    pub layout: wgpu::BindGroupLayout,
+    pub bind_group: wgpu::BindGroup,
+    pub info: SceneInfo,
+    pub has_textures: bool,
+    pub has_emitters: bool,
+    pub has_punctual: bool,
+    pub emitters: Vec<GpuEmitter>,
+}
+
+fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// A layout entry for a storage buffer (`read_only` or read-write) visible to compute.
+pub fn storage_layout(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    let mut e = storage_entry(binding);
+    e.ty = wgpu::BindingType::Buffer {
+        ty: wgpu::BufferBindingType::Storage { read_only },
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    };
+    e
+}
+
+/// A layout entry for a uniform buffer visible to compute.
+pub fn uniform_layout(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+impl SceneGpu {
+    pub fn upload(ctx: &GpuContext, scene: &Scene, bvh: &SceneBvh) -> SceneGpu {
+        let nodes = bvh.gpu_nodes();
+        let tris = bvh.gpu_triangles();
+        let shade: Vec<GpuTriShade> = bvh
+            .slot_to_triangle
+            .iter()
+            .map(|&i| {
+                let t = &scene.triangles[i as usize];
+                let n = t.n;
+                let uv = t.uv;
+                GpuTriShade {
+                    n0: [n[0].x, n[0].y, n[0].z, uv[0].x],
+                    n1: [n[1].x, n[1].y, n[1].z, uv[0].y],
+                    n2: [n[2].x, n[2].y, n[2].z, uv[1].x],
+                    extra: [uv[1].y, uv[2].x, uv[2].y, f32::from_bits(t.material)],
+                }
+            })
+            .collect();
+        let materials: Vec<GpuMaterial> = scene
+            .materials
+            .iter()
+            .map(|m| GpuMaterial {
+                base_color: m.base_color.into(),
+                emissive: m.emissive.extend(0.0).into(),
+                tex: [
+                    m.base_color_texture.map_or(-1, |t| t as i32),
+                    m.emissive_texture.map_or(-1, |t| t as i32),
+                    0,
+                    0,
+                ],
+            })
+            .collect();
+        let mut tex_info = Vec::new();
+        let mut texels: Vec<u32> = Vec::new();
+        for t in &scene.textures {
+            tex_info.push(GpuTexInfo {
+                offset: texels.len() as u32,
+                width: t.width,
+                height: t.height,
+                _pad: 0,
+            });
+            texels.extend(t.rgba8.iter().map(|c| u32::from_le_bytes(*c)));
+        }
+        let (emitters, emit_power) = emitter_table(scene, bvh);
+        let lights: Vec<GpuLight> = scene
+            .lights
+            .iter()
+            .map(|l| {
+                let (kind, co, ci) = match l.kind {
+                    LightKind::Point => (0.0, -1.0, 1.0),
+                    LightKind::Spot {
+                        inner_cone,
+                        outer_cone,
+                    } => (1.0, outer_cone.cos(), inner_cone.cos()),
+                    LightKind::Directional => (2.0, -1.0, 1.0),
+                };
+                let c = l.color * l.intensity;
+                GpuLight {
+                    pos_kind: [l.position.x, l.position.y, l.position.z, kind],
+                    dir_cos_outer: [l.direction.x, l.direction.y, l.direction.z, co],
+                    color_cos_inner: [c.x, c.y, c.z, ci],
+                }
+            })
+            .collect();
+        let extent = scene.extent();
+        let info = SceneInfo {
+            num_tris: tris.len() as u32,
+            num_nodes: nodes.len() as u32,
+            num_emitters: emitters.len() as u32,
+            num_lights: lights.len() as u32,
+            emit_power,
+            eps: 1e-5 * extent,
+            extent,
+            _pad: 0,
+        };
+        let entries: Vec<wgpu::BindGroupLayoutEntry> = std::iter::once(uniform_layout(0))
+            .chain((1..=8).map(storage_entry))
+            .collect();
+        let layout = ctx
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("scene"),
+                entries: &entries,
+            });
+        let buffers = [
+            ctx.uniform("scene info", &info),
+            ctx.storage_init("bvh nodes", &nodes),
+            ctx.storage_init("triangles", &tris),
+            ctx.storage_init("triangle shading", &shade),
+            ctx.storage_init("materials", &materials),
+            ctx.storage_init("texture info", &tex_info),
+            ctx.storage_init("texels", &texels),
+            ctx.storage_init("emitters", &emitters),
+            ctx.storage_init("lights", &lights),
+        ];
+        let bind_entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("scene"),
+            layout: &layout,
+            entries: &bind_entries,
+        });
+        SceneGpu {
+            layout,
+            bind_group,
+            info,
+            has_textures: !scene.textures.is_empty() && scene.uses_textures(),
+            has_emitters: !emitters.is_empty(),
+            has_punctual: !lights.is_empty(),
+            emitters,
+        }
+    }
+
+    /// Override constants that compile unused shader paths out.
+    pub fn overrides(&self) -> Vec<(&'static str, f64)> {
+        vec![
+            ("HAS_TEXTURES", self.has_textures as u32 as f64),
+            ("HAS_EMITTERS", self.has_emitters as u32 as f64),
+            ("HAS_PUNCTUAL", self.has_punctual as u32 as f64),
+        ]
+    }
+}

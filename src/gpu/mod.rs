@@ -1,0 +1,186 @@
+//! Device set-up, buffer helpers, timestamp profiling and shader composition.
+
+pub mod profiler;
+pub mod shader;
+
+use anyhow::{Context as _, Result, anyhow};
+use wgpu::util::DeviceExt;
+
+/// The wgpu device with the limits and features this project asks for.
+pub struct GpuContext {
+    pub instance: wgpu::Instance,
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    /// `adapter.get_info().name` plus driver, for stats.
+    pub adapter_name: String,
+    pub timestamps: bool,
+}
+
+/// Limits requested explicitly: what our passes need, clamped to what the adapter has. lavapipe allows
+/// 1024 invocations per workgroup, 32 KiB workgroup memory and 128 MiB per storage binding.
+pub fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
+    let mut l = wgpu::Limits::default();
+    l.max_storage_buffers_per_shader_stage = adapter.max_storage_buffers_per_shader_stage.min(16);
+    l.max_storage_buffer_binding_size = adapter.max_storage_buffer_binding_size;
+    l.max_buffer_size = adapter.max_buffer_size;
+    l.max_compute_invocations_per_workgroup =
+        adapter.max_compute_invocations_per_workgroup.min(1024);
+    l.max_compute_workgroup_storage_size = adapter.max_compute_workgroup_storage_size.min(32768);
+    l.max_compute_workgroups_per_dimension = adapter.max_compute_workgroups_per_dimension;
+    l.max_bind_groups = adapter.max_bind_groups.min(4);
+    l
+}
+
+impl GpuContext {
+    /// Creates a headless context on the first adapter (any backend wgpu finds: Vulkan on lavapipe here).
+    pub fn new_headless() -> Result<Self> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        // The primary backends (Vulkan here, lavapipe without a GPU); the GL backend only adds noise.
+        // WGPU_BACKEND still overrides.
+        if std::env::var_os("WGPU_BACKEND").is_none() {
+            desc.backends = wgpu::Backends::PRIMARY;
+        }
+        let instance = wgpu::Instance::new(desc);
+        pollster::block_on(Self::from_instance(instance, None))
+    }
+
+    pub async fn from_instance(
+        instance: wgpu::Instance,
+        surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<Self> {
+        let adapter = instance
+            .request_adapter(&wgpu::RequestAdapterOptions {
+                power_preference: wgpu::PowerPreference::HighPerformance,
+                force_fallback_adapter: false,
+                compatible_surface: surface,
+                apply_limit_buckets: false,
+            })
+            .await
+            .map_err(|e| {
+                anyhow!(
+                    "no GPU adapter found ({e}); on a machine without a GPU install Mesa's software Vulkan driver: apt-get install mesa-vulkan-drivers"
+                )
+            })?;
+        let info = adapter.get_info();
+        let adapter_name = format!("{} ({:?}, {})", info.name, info.backend, info.driver_info);
+        let adapter_limits = adapter.limits();
+        if adapter_limits.max_storage_buffers_per_shader_stage < 12 {
+            return Err(anyhow!(
+                "adapter {adapter_name} allows only {} storage buffers per shader stage; fuzzy-vpl needs 12",
+                adapter_limits.max_storage_buffers_per_shader_stage
+            ));
+        }
+        let want = wgpu::Features::TIMESTAMP_QUERY;
+        let features = adapter.features() & want;
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("fuzzy-vpl"),
+                required_features: features,
+                required_limits: required_limits(&adapter_limits),
+                experimental_features: wgpu::ExperimentalFeatures::disabled(),
+                memory_hints: wgpu::MemoryHints::Performance,
+                trace: wgpu::Trace::Off,
+            })
+            .await
+            .context("requesting a wgpu device")?;
+        Ok(GpuContext {
+            instance,
+            adapter,
+            device,
+            queue,
+            adapter_name,
+            timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
+        })
+    }
+
+    /// A storage buffer initialised from `data` (at least 256 bytes so an empty array still binds to any struct).
+    pub fn storage_init<T: bytemuck::Pod>(&self, label: &str, data: &[T]) -> wgpu::Buffer {
+        let mut bytes: Vec<u8> = bytemuck::cast_slice(data).to_vec();
+        if bytes.len() < 256 {
+            bytes.resize(256, 0);
+        }
+        self.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &bytes,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_SRC
+                    | wgpu::BufferUsages::COPY_DST,
+            })
+    }
+
+    /// An uninitialised (zeroed) storage buffer of `size` bytes.
+    pub fn storage(&self, label: &str, size: u64) -> wgpu::Buffer {
+        self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: size.max(256),
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    pub fn uniform<T: bytemuck::Pod>(&self, label: &str, value: &T) -> wgpu::Buffer {
+        self.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytemuck::bytes_of(value),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            })
+    }
+
+    /// Blocks until all submitted work is done.
+    pub fn wait(&self) -> Result<()> {
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: None,
+            })
+            .map_err(|e| anyhow!("GPU wait failed: {e}"))?;
+        Ok(())
+    }
+
+    /// Copies a buffer back to the CPU.
+    pub fn read_buffer<T: bytemuck::Pod>(
+        &self,
+        buffer: &wgpu::Buffer,
+        count: usize,
+    ) -> Result<Vec<T>> {
+        let size = (count * std::mem::size_of::<T>()) as u64;
+        if size == 0 {
+            return Ok(Vec::new());
+        }
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+        self.queue.submit([enc.finish()]);
+        let slice = staging.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.wait()?;
+        rx.recv()
+            .map_err(|_| anyhow!("readback callback dropped"))?
+            .map_err(|e| anyhow!("mapping a readback buffer failed: {e}"))?;
+        let view = slice
+            .get_mapped_range()
+            .map_err(|e| anyhow!("reading a mapped buffer failed: {e}"))?;
+        let out = bytemuck::cast_slice::<u8, T>(&view).to_vec();
+        drop(view);
+        staging.unmap();
+        Ok(out)
+    }
+}
+
+/// Number of workgroups of `size` covering `n` items.
+pub fn groups(n: u32, size: u32) -> u32 {
+    n.div_ceil(size)
+}

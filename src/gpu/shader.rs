@@ -1,0 +1,148 @@
+//! WGSL composition: a pass shader names the shared files it needs with `#import common/NAME.wgsl`
+//! lines; they are inlined once each, in order, before naga parses the result. This is all the
+//! composition the project needs, so it does without naga_oil.
+
+use std::collections::HashSet;
+
+/// Every WGSL file of the project, by path relative to `shaders-wgsl/`.
+pub const FILES: &[(&str, &str)] = &[
+    (
+        "common/scene.wgsl",
+        include_str!("../../shaders-wgsl/common/scene.wgsl"),
+    ),
+    (
+        "common/bvh.wgsl",
+        include_str!("../../shaders-wgsl/common/bvh.wgsl"),
+    ),
+    (
+        "common/rng.wgsl",
+        include_str!("../../shaders-wgsl/common/rng.wgsl"),
+    ),
+    (
+        "common/sampling.wgsl",
+        include_str!("../../shaders-wgsl/common/sampling.wgsl"),
+    ),
+    (
+        "common/surface.wgsl",
+        include_str!("../../shaders-wgsl/common/surface.wgsl"),
+    ),
+    (
+        "common/lights.wgsl",
+        include_str!("../../shaders-wgsl/common/lights.wgsl"),
+    ),
+    (
+        "common/chunk.wgsl",
+        include_str!("../../shaders-wgsl/common/chunk.wgsl"),
+    ),
+    (
+        "common/gbuffer.wgsl",
+        include_str!("../../shaders-wgsl/common/gbuffer.wgsl"),
+    ),
+    (
+        "raycast.wgsl",
+        include_str!("../../shaders-wgsl/raycast.wgsl"),
+    ),
+    (
+        "primary.wgsl",
+        include_str!("../../shaders-wgsl/primary.wgsl"),
+    ),
+    (
+        "direct.wgsl",
+        include_str!("../../shaders-wgsl/direct.wgsl"),
+    ),
+];
+
+/// The pass shaders (top-level files), each composed and validated on its own.
+pub fn pass_names() -> impl Iterator<Item = &'static str> {
+    FILES
+        .iter()
+        .map(|(p, _)| *p)
+        .filter(|p| !p.starts_with("common/"))
+        .map(|p| p.trim_end_matches(".wgsl"))
+}
+
+fn file(path: &str) -> Option<&'static str> {
+    FILES.iter().find(|(p, _)| *p == path).map(|(_, s)| *s)
+}
+
+/// The composed source of pass `name` (e.g. "primary").
+pub fn compose(name: &str) -> String {
+    let mut seen = HashSet::new();
+    let mut out = String::new();
+    inline(&format!("{name}.wgsl"), &mut seen, &mut out);
+    out
+}
+
+fn inline(path: &str, seen: &mut HashSet<String>, out: &mut String) {
+    if !seen.insert(path.to_string()) {
+        return;
+    }
+    let src = file(path)
+        .unwrap_or_else(|| panic!("unknown WGSL file {path} (add it to gpu::shader::FILES)"));
+    for line in src.lines() {
+        if let Some(dep) = line.trim().strip_prefix("#import ") {
+            inline(dep.trim(), seen, out);
+        } else {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+}
+
+/// Parses and validates a composed shader with naga (no GPU needed).
+pub fn validate(name: &str) -> Result<naga::Module, String> {
+    let src = compose(name);
+    let module = naga::front::wgsl::parse_str(&src).map_err(|e| e.emit_to_string(&src))?;
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::default(),
+    )
+    .validate(&module)
+    .map_err(|e| e.emit_to_string(&src))?;
+    Ok(module)
+}
+
+/// Creates the shader module for pass `name`.
+pub fn module(device: &wgpu::Device, name: &str) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(name),
+        source: wgpu::ShaderSource::Wgsl(compose(name).into()),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_wgsl_file_is_listed() {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/shaders-wgsl");
+        let mut on_disk = Vec::new();
+        for sub in ["", "common/"] {
+            for e in std::fs::read_dir(format!("{dir}/{sub}")).unwrap() {
+                let name = e.unwrap().file_name().into_string().unwrap();
+                if name.ends_with(".wgsl") {
+                    on_disk.push(format!("{sub}{name}"));
+                }
+            }
+        }
+        for f in &on_disk {
+            assert!(
+                file(f).is_some(),
+                "{f} exists but is not in gpu::shader::FILES"
+            );
+        }
+    }
+
+    #[test]
+    fn every_pass_shader_validates_under_naga() {
+        let mut n = 0;
+        for name in pass_names() {
+            if let Err(e) = validate(name) {
+                panic!("{name}.wgsl does not validate:\n{e}");
+            }
+            n += 1;
+        }
+        assert!(n >= 3);
+    }
+}

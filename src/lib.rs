@@ -1,0 +1,13 @@
+//! fuzzy-vpl: interactive VPL global illumination with fuzzy k-means clustering of shading points and
+//! VPLs (Colom, Marques, Santos 2022), on wgpu with a software BVH traversal shader.
+//!
+//! Data flows one way: scene → BVH → VPLs → clusters → frame → image.
+
+pub mod bvh;
+pub mod cpu;
+pub mod export;
+pub mod gi;
+pub mod gpu;
+pub mod metrics;
+pub mod scene;
+pub mod stats;

@@ -1,0 +1,366 @@
+//! `fuzzy-vpl`: command-line front end (DESIGN.md §4).
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Result;
+use clap::{Args, Parser, Subcommand};
+
+use fuzzy_vpl::gi::pipeline::{FrameSettings, Renderer};
+use fuzzy_vpl::gpu::GpuContext;
+use fuzzy_vpl::scene::{self, Scene, extra_lights};
+use fuzzy_vpl::{export, metrics, stats};
+
+const LIGHTS_HELP: &str = "\
+Added lights (for scenes that ship without any):
+  --sun DX,DY,DZ,E[,R,G,B]     directional light; (DX,DY,DZ) points towards the sun, E is the
+                               irradiance at normal incidence, optional linear RGB colour
+  --point X,Y,Z,I[,R,G,B]      point light at (X,Y,Z) with intensity I (per steradian)
+  --light-scale F              multiplies every emitter (emissive materials and lights) by F
+Example: fuzzy-vpl render ../shared/scenes/livingroom_lowpoly/livingroom.glb -o lr.png --sun 0.3,1,0.2,3";
+
+#[derive(Parser)]
+#[command(name = "fuzzy-vpl", version, about = "VPL global illumination with fuzzy k-means clustering (Colom, Marques, Santos 2022) on wgpu", after_help = LIGHTS_HELP)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render one frame headless to EXR (linear HDR) or PNG (tone-mapped sRGB).
+    #[command(after_help = LIGHTS_HELP)]
+    Render(RenderArgs),
+    /// Print what a scene holds and which passes would run.
+    #[command(after_help = LIGHTS_HELP)]
+    Info(InfoArgs),
+}
+
+#[derive(Args, Clone)]
+struct SceneArgs {
+    /// A .gltf/.glb path or builtin:NAME (builtin:cornell, builtin:conference).
+    #[arg(default_value = "builtin:cornell")]
+    scene: String,
+    /// Add a directional light: DX,DY,DZ,E[,R,G,B] (direction towards the sun).
+    #[arg(long, value_name = "DX,DY,DZ,E[,R,G,B]", allow_hyphen_values = true)]
+    sun: Vec<String>,
+    /// Add a point light: X,Y,Z,I[,R,G,B].
+    #[arg(long, value_name = "X,Y,Z,I[,R,G,B]", allow_hyphen_values = true)]
+    point: Vec<String>,
+    /// Multiply every emitter's power by this factor.
+    #[arg(long, default_value_t = 1.0)]
+    light_scale: f32,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Output image: .exr (linear radiance) or .png (exposure, clamp, sRGB).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Write the stats JSON (DESIGN.md §4) here.
+    #[arg(long)]
+    stats: Option<PathBuf>,
+    /// Fill the stats' error block against this reference EXR.
+    #[arg(long)]
+    compare: Option<PathBuf>,
+    #[arg(long, default_value_t = 640)]
+    width: u32,
+    #[arg(long, default_value_t = 480)]
+    height: u32,
+    /// Use the Nth glTF camera (0-based); default: the scene's first camera, else a view of its bounds.
+    #[arg(long)]
+    camera: Option<usize>,
+    #[arg(long, default_value_t = 1)]
+    seed: u32,
+    /// Area-light samples (shadow rays) per pixel for direct light.
+    #[arg(long, default_value_t = 16)]
+    direct_samples: u32,
+    /// Exposure multiplier for PNG output (EXR stays unscaled radiance).
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
+    /// Render N times; timings are the mean of the 3 best (the paper's method).
+    #[arg(long, default_value_t = 1)]
+    repeat: u32,
+}
+
+#[derive(Args)]
+struct InfoArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+}
+
+/// An error that is the user's input: exit code 2.
+#[derive(Debug)]
+struct BadInput(String);
+impl std::fmt::Display for BadInput {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+impl std::error::Error for BadInput {}
+
+fn bad(msg: impl Into<String>) -> anyhow::Error {
+    BadInput(msg.into()).into()
+}
+
+fn main() -> ExitCode {
+    // Mesa's Vulkan loader complains on stderr when XDG_RUNTIME_DIR is unset (headless machines, CI).
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        let dir = std::env::temp_dir().join("fuzzy-vpl-runtime");
+        if std::fs::create_dir_all(&dir).is_ok() {
+            // SAFETY: first thing in main, before any other thread exists.
+            unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
+        }
+    }
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    let cli = Cli::parse();
+    let result = match cli.command {
+        None => {
+            println!(
+                "fuzzy-vpl: the interactive viewer is not built yet.\n\
+                 Render headless instead, e.g.:\n  \
+                 fuzzy-vpl render builtin:cornell -o cornell.png\n  \
+                 fuzzy-vpl info builtin:conference\n\
+                 See `fuzzy-vpl --help`."
+            );
+            Ok(())
+        }
+        Some(Command::Render(a)) => render(a),
+        Some(Command::Info(a)) => info(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            let is_input = e.downcast_ref::<BadInput>().is_some()
+                || e.downcast_ref::<scene::SceneError>().is_some();
+            eprintln!("error: {e}");
+            if is_input {
+                ExitCode::from(2)
+            } else {
+                ExitCode::from(1)
+            }
+        }
+    }
+}
+
+fn load_scene(a: &SceneArgs) -> Result<Scene> {
+    let mut s = scene::load(&a.scene)?;
+    for w in &s.report.warnings {
+        eprintln!("warning: {}: {w}", a.scene);
+    }
+    for v in &a.sun {
+        s.lights
+            .push(extra_lights::parse_sun(v).map_err(|e| bad(format!("--sun {v}: {e}")))?);
+    }
+    for v in &a.point {
+        s.lights
+            .push(extra_lights::parse_point(v).map_err(|e| bad(format!("--point {v}: {e}")))?);
+    }
+    if !(a.light_scale.is_finite() && a.light_scale >= 0.0) {
+        return Err(bad(format!(
+            "--light-scale {}: must be a finite number >= 0",
+            a.light_scale
+        )));
+    }
+    s.scale_light_power(a.light_scale);
+    if !s.has_light() {
+        eprintln!(
+            "warning: {}: the scene has no light (no emissive material, no punctual light); it renders black. Add one with --sun or --point.",
+            a.scene
+        );
+    }
+    Ok(s)
+}
+
+fn render(a: RenderArgs) -> Result<()> {
+    let ext = a
+        .output
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
+        return Err(bad(format!(
+            "{}: output must end in .exr or .png",
+            a.output.display()
+        )));
+    }
+    if a.width == 0 || a.height == 0 || a.width > 16384 || a.height > 16384 {
+        return Err(bad(format!(
+            "--width/--height {}x{}: must be 1..16384",
+            a.width, a.height
+        )));
+    }
+    if a.repeat == 0 {
+        return Err(bad("--repeat must be at least 1"));
+    }
+    if !(a.exposure.is_finite() && a.exposure >= 0.0) {
+        return Err(bad("--exposure must be a finite number >= 0"));
+    }
+    let reference = match &a.compare {
+        Some(p) => {
+            let (w, h, px) = export::read_exr(p).map_err(|e| bad(format!("{e:#}")))?;
+            if (w, h) != (a.width, a.height) {
+                return Err(bad(format!(
+                    "{}: reference is {w}x{h}, the render is {}x{}",
+                    p.display(),
+                    a.width,
+                    a.height
+                )));
+            }
+            Some(px)
+        }
+        None => None,
+    };
+    let scene = load_scene(&a.scene)?;
+    let camera = match a.camera {
+        Some(i) => scene.cameras.get(i).cloned().ok_or_else(|| {
+            bad(format!(
+                "{}: --camera {i}: the scene has {} camera(s)",
+                a.scene.scene,
+                scene.cameras.len()
+            ))
+        })?,
+        None => scene.default_camera(),
+    };
+    let ctx = GpuContext::new_headless()?;
+    let mut renderer = Renderer::new(&ctx, &scene)?;
+    let settings = FrameSettings {
+        width: a.width,
+        height: a.height,
+        seed: a.seed,
+        direct_samples: a.direct_samples.max(1),
+    };
+    let mut runs = Vec::new();
+    let mut frame = None;
+    for _ in 0..a.repeat {
+        let f = renderer.render(&camera, &settings)?;
+        runs.push(f.timings_ms.clone());
+        frame = Some(f);
+    }
+    let frame = frame.expect("repeat >= 1");
+    let non_finite = frame
+        .radiance
+        .iter()
+        .flatten()
+        .filter(|c| !c.is_finite())
+        .count();
+    if non_finite > 0 {
+        eprintln!("warning: {non_finite} non-finite pixel channels in the output");
+    }
+    export::write_image(
+        &a.output,
+        frame.width,
+        frame.height,
+        &frame.radiance,
+        a.exposure,
+    )?;
+    let error = reference.as_ref().map(|r| stats::ErrorStats {
+        mse: metrics::mse(&frame.radiance, r),
+        rel_mse: metrics::rel_mse(&frame.radiance, r),
+    });
+    let timings_ms = stats::best_of_runs(&runs);
+    eprintln!(
+        "{}: {}x{} in {:.1} ms GPU ({}), mean luminance {:.4} -> {}",
+        a.scene.scene,
+        frame.width,
+        frame.height,
+        timings_ms["frame"],
+        frame.passes.join(" + "),
+        metrics::mean_luminance(&frame.radiance),
+        a.output.display()
+    );
+    if let Some(p) = &a.stats {
+        let s = stats::Stats {
+            scene: a.scene.scene.clone(),
+            width: frame.width,
+            height: frame.height,
+            adapter: ctx.adapter_name.clone(),
+            settings: stats::Settings {
+                vpls: 0,
+                vpl_clusters: 0,
+                sp_clusters: 0,
+                fuzziness: 1,
+                gamma: 1,
+                normal_threshold: 0.866,
+                weighting: "hard".into(),
+                reference: false,
+                seed: a.seed,
+                direct_samples: settings.direct_samples,
+                light_scale: a.scene.light_scale,
+                exposure: a.exposure,
+            },
+            counts: stats::Counts {
+                triangles: scene.triangles.len() as u64,
+                shading_points: frame.shading_points as u64,
+                shadow_rays: frame.shadow_rays,
+                emissive_triangles: renderer.gpu.emitters.len() as u64,
+                punctual_lights: scene.lights.len() as u64,
+                ..Default::default()
+            },
+            passes: frame.passes.iter().map(|s| s.to_string()).collect(),
+            timings_ms,
+            repeat: a.repeat,
+            mean_luminance: metrics::mean_luminance(&frame.radiance),
+            bvh_build_ms: renderer.bvh.build_ms,
+            error,
+        };
+        let json = serde_json::to_string_pretty(&s)?;
+        export::write_atomic(p, |w| {
+            use std::io::Write;
+            w.write_all(json.as_bytes())?;
+            Ok(())
+        })?;
+    }
+    Ok(())
+}
+
+fn info(a: InfoArgs) -> Result<()> {
+    let s = load_scene(&a.scene)?;
+    let (lo, hi) = s.bounds();
+    println!("scene:               {}", a.scene.scene);
+    println!("triangles:           {}", s.triangles.len());
+    println!("dropped degenerate:  {}", s.report.dropped_degenerate);
+    println!(
+        "generated normals:   {} triangles",
+        s.report.generated_normals
+    );
+    println!("materials:           {}", s.materials.len());
+    println!("textures:            {}", s.textures.len());
+    println!("emissive triangles:  {}", s.emissive_triangle_count());
+    let kinds = |k: fn(&scene::LightKind) -> bool| s.lights.iter().filter(|l| k(&l.kind)).count();
+    println!(
+        "punctual lights:     {} (point {}, spot {}, directional {})",
+        s.lights.len(),
+        kinds(|k| matches!(k, scene::LightKind::Point)),
+        kinds(|k| matches!(k, scene::LightKind::Spot { .. })),
+        kinds(|k| matches!(k, scene::LightKind::Directional)),
+    );
+    println!("cameras:             {}", s.cameras.len());
+    for (i, c) in s.cameras.iter().enumerate() {
+        let e = c.eye();
+        println!(
+            "  [{i}] {:<16} eye ({:.3}, {:.3}, {:.3}) yfov {:.1} deg",
+            c.name,
+            e.x,
+            e.y,
+            e.z,
+            c.yfov.to_degrees()
+        );
+    }
+    println!(
+        "bounds:              ({:.4}, {:.4}, {:.4}) .. ({:.4}, {:.4}, {:.4})",
+        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+    );
+    println!(
+        "extensions used:     {}",
+        s.report.extensions_used.join(", ")
+    );
+    println!("features:            {}", s.features().join(", "));
+    println!(
+        "passes (render):     {}",
+        Renderer::passes_for(&s, &FrameSettings::default()).join(" -> ")
+    );
+    Ok(())
+}

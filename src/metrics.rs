@@ -1,0 +1,51 @@
+//! Error metrics of DESIGN.md §4.
+
+/// The paper's MSE: mean over pixels and RGB channels of (x − ref)², both clamped to [0, 1].
+pub fn mse(x: &[[f32; 3]], reference: &[[f32; 3]]) -> f64 {
+    assert_eq!(x.len(), reference.len());
+    let mut s = 0.0f64;
+    for (a, b) in x.iter().zip(reference) {
+        for c in 0..3 {
+            let d = a[c].clamp(0.0, 1.0) as f64 - b[c].clamp(0.0, 1.0) as f64;
+            s += d * d;
+        }
+    }
+    s / (3 * x.len().max(1)) as f64
+}
+
+/// Scale-free relative MSE: mean of (x − ref)² / (ref² + 0.01), unclamped.
+pub fn rel_mse(x: &[[f32; 3]], reference: &[[f32; 3]]) -> f64 {
+    assert_eq!(x.len(), reference.len());
+    let mut s = 0.0f64;
+    for (a, b) in x.iter().zip(reference) {
+        for c in 0..3 {
+            let (a, b) = (a[c] as f64, b[c] as f64);
+            s += (a - b) * (a - b) / (b * b + 0.01);
+        }
+    }
+    s / (3 * x.len().max(1)) as f64
+}
+
+/// Rec. 709 luminance.
+pub fn luminance(p: [f32; 3]) -> f32 {
+    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
+}
+
+pub fn mean_luminance(img: &[[f32; 3]]) -> f64 {
+    img.iter().map(|p| luminance(*p) as f64).sum::<f64>() / img.len().max(1) as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mse_clamps_and_rel_mse_does_not() {
+        let a = [[2.0, 0.5, 0.0]];
+        let b = [[1.0, 0.0, 0.0]];
+        assert!((mse(&a, &b) - 0.25 / 3.0).abs() < 1e-12);
+        let r = (1.0 / 1.01 + 0.25 / 0.01) / 3.0;
+        assert!((rel_mse(&a, &b) - r).abs() < 1e-9);
+        assert_eq!(mse(&b, &b), 0.0);
+    }
+}

@@ -1,0 +1,287 @@
+//! Scenes: the flattened, world-space triangle soup the renderer consumes.
+//!
+//! A `Scene` is produced by the glTF loader (`gltf_load`), from a built-in asset (`builtin`), and then
+//! optionally extended with command-line lights (`extra_lights`). Everything downstream (BVH, GPU upload,
+//! VPL tracing) reads only this structure.
+
+pub mod builtin;
+pub mod extra_lights;
+pub mod gltf_load;
+
+use glam::{Mat4, Vec2, Vec3, Vec4};
+use std::path::PathBuf;
+
+/// One triangle in world space with its shading attributes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle {
+    /// World-space vertex positions.
+    pub p: [Vec3; 3],
+    /// World-space unit shading normals (generated from the face when the file has none or they are invalid).
+    pub n: [Vec3; 3],
+    /// Texture coordinates (TEXCOORD_0), zero when absent.
+    pub uv: [Vec2; 3],
+    /// Index into `Scene::materials`.
+    pub material: u32,
+}
+
+impl Triangle {
+    pub fn area(&self) -> f32 {
+        0.5 * (self.p[1] - self.p[0])
+            .cross(self.p[2] - self.p[0])
+            .length()
+    }
+    pub fn geometric_normal(&self) -> Vec3 {
+        (self.p[1] - self.p[0])
+            .cross(self.p[2] - self.p[0])
+            .normalize_or_zero()
+    }
+}
+
+/// A diffuse material (the paper's system handles diffuse surfaces only).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Linear base colour factor (RGBA); alpha is ignored by the renderer.
+    pub base_color: Vec4,
+    pub base_color_texture: Option<u32>,
+    /// Emitted radiance factor: glTF `emissiveFactor` × `KHR_materials_emissive_strength`.
+    pub emissive: Vec3,
+    pub emissive_texture: Option<u32>,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            name: "default".into(),
+            base_color: Vec4::ONE,
+            base_color_texture: None,
+            emissive: Vec3::ZERO,
+            emissive_texture: None,
+        }
+    }
+}
+
+/// An 8-bit RGBA texture. `srgb` says whether texel values are sRGB-encoded (base colour and emissive
+/// textures are, per the glTF spec); the GPU decodes on fetch.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    /// `width * height` texels, row-major, RGBA8.
+    pub rgba8: Vec<[u8; 4]>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKind {
+    /// Intensity in W/sr-like units (glTF: candela).
+    Point,
+    /// Cone angles in radians.
+    Spot { inner_cone: f32, outer_cone: f32 },
+    /// Irradiance at normal incidence (glTF: lux).
+    Directional,
+}
+
+/// A `KHR_lights_punctual` light (or one added from the command line), in world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PunctualLight {
+    pub kind: LightKind,
+    pub position: Vec3,
+    /// Unit direction the light travels along (spot axis / sun rays). Unused for point lights.
+    pub direction: Vec3,
+    /// Linear RGB colour × intensity.
+    pub color: Vec3,
+    pub intensity: f32,
+}
+
+/// A perspective camera in world space.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    pub name: String,
+    /// Camera-to-world transform; the camera looks down its local -Z with +Y up (glTF convention).
+    pub transform: Mat4,
+    /// Vertical field of view in radians.
+    pub yfov: f32,
+}
+
+impl Camera {
+    pub fn eye(&self) -> Vec3 {
+        self.transform.w_axis.truncate()
+    }
+    pub fn forward(&self) -> Vec3 {
+        (-self.transform.z_axis.truncate()).normalize()
+    }
+    pub fn up(&self) -> Vec3 {
+        self.transform.y_axis.truncate().normalize()
+    }
+    pub fn look_at(name: &str, eye: Vec3, target: Vec3, up: Vec3, yfov: f32) -> Camera {
+        let f = (target - eye).normalize();
+        let right = f.cross(up).normalize();
+        let up = right.cross(f);
+        Camera {
+            name: name.to_string(),
+            transform: Mat4::from_cols(
+                right.extend(0.0),
+                up.extend(0.0),
+                (-f).extend(0.0),
+                eye.extend(1.0),
+            ),
+            yfov,
+        }
+    }
+}
+
+/// What the loader saw and did, for `info` and warnings.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoadReport {
+    /// glTF extensions the file declares as used.
+    pub extensions_used: Vec<String>,
+    /// Degenerate or zero-area triangles dropped (not an error).
+    pub dropped_degenerate: usize,
+    /// Triangles whose normals were generated (absent, NaN or zero in the file).
+    pub generated_normals: usize,
+    /// Non-triangle primitives (points, lines) skipped.
+    pub skipped_primitives: usize,
+    /// Human-readable warnings (printed to stderr by the CLI).
+    pub warnings: Vec<String>,
+}
+
+/// A loaded scene, flattened to world space.
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    /// `builtin:NAME` or the file path as given.
+    pub name: String,
+    pub path: Option<PathBuf>,
+    pub triangles: Vec<Triangle>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    pub lights: Vec<PunctualLight>,
+    pub cameras: Vec<Camera>,
+    pub report: LoadReport,
+}
+
+impl Scene {
+    /// Axis-aligned bounds of all triangles; `(ZERO, ZERO)` for an empty scene.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for t in &self.triangles {
+            for p in t.p {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+        if lo.x > hi.x {
+            (Vec3::ZERO, Vec3::ZERO)
+        } else {
+            (lo, hi)
+        }
+    }
+
+    /// Length of the bounds' diagonal, at least a tiny positive number.
+    pub fn extent(&self) -> f32 {
+        let (lo, hi) = self.bounds();
+        (hi - lo).length().max(1e-30)
+    }
+
+    pub fn is_emissive(&self, t: &Triangle) -> bool {
+        let m = &self.materials[t.material as usize];
+        m.emissive.max_element() > 0.0
+    }
+
+    pub fn emissive_triangle_count(&self) -> usize {
+        self.triangles
+            .iter()
+            .filter(|t| self.is_emissive(t))
+            .count()
+    }
+
+    pub fn has_light(&self) -> bool {
+        !self.lights.is_empty() || self.emissive_triangle_count() > 0
+    }
+
+    pub fn uses_textures(&self) -> bool {
+        self.materials
+            .iter()
+            .any(|m| m.base_color_texture.is_some() || m.emissive_texture.is_some())
+    }
+
+    /// The default view: the Nth glTF camera if asked and present, else the first camera, else a view
+    /// framing the bounds from the +Z side (looking down -Z, +Y up), slightly raised.
+    pub fn default_camera(&self) -> Camera {
+        if let Some(c) = self.cameras.first() {
+            return c.clone();
+        }
+        let (lo, hi) = self.bounds();
+        let center = 0.5 * (lo + hi);
+        let radius = (0.5 * (hi - lo).length()).max(1e-30);
+        let yfov = 45f32.to_radians();
+        let dist = radius / (0.5 * yfov).sin();
+        let dir = Vec3::new(0.0, 0.25, 1.0).normalize();
+        Camera::look_at("default", center + dir * dist, center, Vec3::Y, yfov)
+    }
+
+    /// Multiplies every emitter (emissive materials and punctual lights) by `factor`.
+    pub fn scale_light_power(&mut self, factor: f32) {
+        for m in &mut self.materials {
+            m.emissive *= factor;
+        }
+        for l in &mut self.lights {
+            l.intensity *= factor;
+        }
+    }
+
+    /// Features the scene uses, for `info` and for choosing passes.
+    pub fn features(&self) -> Vec<&'static str> {
+        let mut f = Vec::new();
+        if self.emissive_triangle_count() > 0 {
+            f.push("emissive-triangles");
+        }
+        if !self.lights.is_empty() {
+            f.push("punctual-lights");
+        }
+        if self.uses_textures() {
+            f.push("textures");
+        }
+        if self
+            .materials
+            .iter()
+            .any(|m| m.emissive_texture.is_some() && m.emissive.max_element() > 0.0)
+        {
+            f.push("emissive-textures");
+        }
+        if !self.cameras.is_empty() {
+            f.push("cameras");
+        }
+        if self.report.generated_normals > 0 {
+            f.push("generated-normals");
+        }
+        f
+    }
+}
+
+/// A scene that could not be used: names the file and the problem in one line.
+#[derive(Debug, thiserror::Error)]
+#[error("{file}: {problem}")]
+pub struct SceneError {
+    pub file: String,
+    pub problem: String,
+}
+
+impl SceneError {
+    pub fn new(file: impl Into<String>, problem: impl Into<String>) -> Self {
+        SceneError {
+            file: file.into(),
+            problem: problem.into(),
+        }
+    }
+}
+
+/// Loads `builtin:NAME` or a `.gltf`/`.glb` path.
+pub fn load(spec: &str) -> Result<Scene, SceneError> {
+    if let Some(name) = spec.strip_prefix("builtin:") {
+        builtin::load(name)
+    } else {
+        gltf_load::load_path(std::path::Path::new(spec))
+    }
+}

@@ -1,0 +1,36 @@
+//! Shared helpers for GPU tests (they run on lavapipe in CI: `apt-get install mesa-vulkan-drivers`).
+#![allow(dead_code)]
+
+use fuzzy_vpl::gpu::GpuContext;
+
+pub fn gpu() -> GpuContext {
+    GpuContext::new_headless().unwrap_or_else(|e| {
+        panic!("no wgpu adapter: {e:#}. Install Mesa's software Vulkan driver: apt-get install mesa-vulkan-drivers")
+    })
+}
+
+pub fn all_finite(img: &[[f32; 3]]) -> bool {
+    img.iter().flatten().all(|c| c.is_finite())
+}
+
+/// Deterministic xorshift for test data.
+pub struct Rand(pub u64);
+impl Rand {
+    pub fn next_u32(&mut self) -> u32 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 32) as u32
+    }
+    pub fn f32(&mut self) -> f32 {
+        (self.next_u32() >> 8) as f32 / 16777216.0
+    }
+}
+
+/// A scratch directory unique to this test.
+pub fn scratch(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("fuzzy-vpl-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}

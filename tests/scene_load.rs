@@ -1,0 +1,1322 @@
+//! glTF loading: crafted valid and malformed files, the assimp glTF test corpus, and the real scenes.
+
+use fuzzy_vpl::scene::{self, LightKind, Scene, SceneError, builtin, gltf_load};
+use glam::{Vec2, Vec3};
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+
+// ---------------------------------------------------------------------------------------------
+// Helpers
+
+/// A fresh, empty directory for one test.
+fn temp_dir(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("fuzzy-vpl-scene-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn b64(data: &[u8]) -> String {
+    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut s = String::new();
+    for c in data.chunks(3) {
+        let n = (c[0] as u32) << 16
+            | (*c.get(1).unwrap_or(&0) as u32) << 8
+            | *c.get(2).unwrap_or(&0) as u32;
+        for k in 0..4 {
+            if k <= c.len() {
+                s.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
+            } else {
+                s.push('=');
+            }
+        }
+    }
+    s
+}
+
+/// A glTF document under construction with one binary buffer.
+struct Doc {
+    json: Value,
+    bin: Vec<u8>,
+}
+
+impl Doc {
+    fn new() -> Doc {
+        Doc {
+            json: json!({"asset": {"version": "2.0"}, "bufferViews": [], "accessors": [],
+                         "meshes": [], "nodes": [], "scenes": [{"nodes": []}], "scene": 0}),
+            bin: Vec::new(),
+        }
+    }
+
+    fn arr(&mut self, key: &str) -> &mut Vec<Value> {
+        if self.json.get(key).is_none() {
+            self.json[key] = json!([]);
+        }
+        self.json[key].as_array_mut().unwrap()
+    }
+
+    fn push(&mut self, key: &str, v: Value) -> usize {
+        let a = self.arr(key);
+        a.push(v);
+        a.len() - 1
+    }
+
+    fn view(&mut self, bytes: &[u8], stride: Option<usize>) -> usize {
+        while self.bin.len() % 4 != 0 {
+            self.bin.push(0);
+        }
+        let mut v = json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()});
+        if let Some(s) = stride {
+            v["byteStride"] = json!(s);
+        }
+        self.bin.extend_from_slice(bytes);
+        self.push("bufferViews", v)
+    }
+
+    fn floats<const N: usize>(&mut self, data: &[[f32; N]], ty: &str, bounds: bool) -> usize {
+        let bytes: Vec<u8> = data
+            .iter()
+            .flatten()
+            .flat_map(|f| f.to_le_bytes())
+            .collect();
+        let view = self.view(&bytes, None);
+        let mut a =
+            json!({"bufferView": view, "componentType": 5126, "count": data.len(), "type": ty});
+        if bounds {
+            let lo: Vec<f32> = (0..N)
+                .map(|c| data.iter().map(|v| v[c]).fold(f32::INFINITY, f32::min))
+                .collect();
+            let hi: Vec<f32> = (0..N)
+                .map(|c| data.iter().map(|v| v[c]).fold(f32::NEG_INFINITY, f32::max))
+                .collect();
+            let fix = |v: Vec<f32>| -> Vec<f32> {
+                v.into_iter()
+                    .map(|x| if x.is_finite() { x } else { 0.0 })
+                    .collect()
+            };
+            a["min"] = json!(fix(lo));
+            a["max"] = json!(fix(hi));
+        }
+        self.push("accessors", a)
+    }
+
+    fn positions(&mut self, p: &[[f32; 3]]) -> usize {
+        self.floats(p, "VEC3", true)
+    }
+
+    fn indices(&mut self, idx: &[u32]) -> usize {
+        let bytes: Vec<u8> = idx.iter().flat_map(|i| (*i as u16).to_le_bytes()).collect();
+        let view = self.view(&bytes, None);
+        self.push("accessors", json!({"bufferView": view, "componentType": 5123, "count": idx.len(), "type": "SCALAR"}))
+    }
+
+    /// A mesh with one primitive (attributes by accessor index).
+    fn mesh(&mut self, prim: Value) -> usize {
+        self.push("meshes", json!({"primitives": [prim]}))
+    }
+
+    /// A node, added to the scene's roots when `root`.
+    fn node(&mut self, v: Value, root: bool) -> usize {
+        let i = self.push("nodes", v);
+        if root {
+            self.json["scenes"][0]["nodes"]
+                .as_array_mut()
+                .unwrap()
+                .push(json!(i));
+        }
+        i
+    }
+
+    /// Triangle (0,0,0), (1,0,0), (0,1,0), optionally with +Z normals; returns the mesh.
+    fn triangle_mesh(&mut self, normals: bool) -> usize {
+        let p = self.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+        let mut attrs = json!({"POSITION": p});
+        if normals {
+            attrs["NORMAL"] = json!(self.floats(&[[0.0, 0.0, 1.0]; 3], "VEC3", false));
+        }
+        self.mesh(json!({"attributes": attrs}))
+    }
+
+    fn with_buffer(&self, uri: Option<String>) -> Value {
+        let mut j = self.json.clone();
+        let mut b = json!({"byteLength": self.bin.len()});
+        if let Some(u) = uri {
+            b["uri"] = json!(u);
+        }
+        j["buffers"] = json!([b]);
+        j
+    }
+
+    /// Writes `NAME.gltf` + `NAME.bin`.
+    fn write_gltf(&self, dir: &Path, name: &str) -> PathBuf {
+        std::fs::write(dir.join(format!("{name}.bin")), &self.bin).unwrap();
+        let path = dir.join(format!("{name}.gltf"));
+        let j = self.with_buffer(Some(format!("{name}.bin")));
+        std::fs::write(&path, serde_json::to_vec_pretty(&j).unwrap()).unwrap();
+        path
+    }
+
+    /// A self-contained glTF with the buffer as a data: URI.
+    fn embedded(&self) -> Vec<u8> {
+        let uri = format!("data:application/octet-stream;base64,{}", b64(&self.bin));
+        serde_json::to_vec(&self.with_buffer(Some(uri))).unwrap()
+    }
+
+    fn glb(&self) -> Vec<u8> {
+        let mut j = serde_json::to_vec(&self.with_buffer(None)).unwrap();
+        while j.len() % 4 != 0 {
+            j.push(b' ');
+        }
+        let mut bin = self.bin.clone();
+        while bin.len() % 4 != 0 {
+            bin.push(0);
+        }
+        let total = 12 + 8 + j.len() + 8 + bin.len();
+        let mut out = Vec::new();
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&(total as u32).to_le_bytes());
+        out.extend_from_slice(&(j.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&j);
+        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&bin);
+        out
+    }
+}
+
+fn load_ok(path: &Path) -> Scene {
+    gltf_load::load_path(path)
+        .unwrap_or_else(|e| panic!("expected {} to load: {e}", path.display()))
+}
+
+/// Asserts a load failed with a one-line message naming the file and containing `needle`.
+fn assert_err(result: Result<Scene, SceneError>, file: &str, needle: &str) -> String {
+    let e = match result {
+        Ok(s) => panic!(
+            "expected {file} to fail, it loaded {} triangles",
+            s.triangles.len()
+        ),
+        Err(e) => e.to_string(),
+    };
+    assert!(e.contains(file), "error does not name {file}: {e}");
+    assert!(
+        !e.contains('\n') && !e.contains('\r'),
+        "error is not one line: {e:?}"
+    );
+    assert!(
+        e.to_lowercase().contains(&needle.to_lowercase()),
+        "error for {file} should mention '{needle}': {e}"
+    );
+    assert!(!e.contains("internal error"), "loader panicked: {e}");
+    e
+}
+
+fn close(a: Vec3, b: Vec3) -> bool {
+    (a - b).length() < 1e-5
+}
+
+// ---------------------------------------------------------------------------------------------
+// Malformed files
+
+#[test]
+fn bad_json() {
+    let dir = temp_dir("bad_json");
+    let p = dir.join("broken.gltf");
+    std::fs::write(&p, b"{ \"asset\": { \"version\": \"2.0\" }, \"nodes\": [ }").unwrap();
+    assert_err(gltf_load::load_path(&p), "broken.gltf", "json");
+    let p = dir.join("wrongtype.gltf");
+    std::fs::write(&p, br#"{"asset": {"version": "2.0"}, "scene": "zero"}"#).unwrap();
+    assert_err(gltf_load::load_path(&p), "wrongtype.gltf", "invalid glTF");
+    let p = dir.join("empty.gltf");
+    std::fs::write(&p, b"").unwrap();
+    assert_err(gltf_load::load_path(&p), "empty.gltf", "json");
+}
+
+#[test]
+fn unreadable_file() {
+    let dir = temp_dir("unreadable");
+    assert_err(
+        gltf_load::load_path(&dir.join("nothing.glb")),
+        "nothing.glb",
+        "cannot read",
+    );
+    assert_err(
+        scene::load(dir.join("nothing.gltf").to_str().unwrap()),
+        "nothing.gltf",
+        "cannot read",
+    );
+}
+
+#[test]
+fn truncated_and_wrong_magic_glb() {
+    let dir = temp_dir("glb");
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m}), true);
+    let glb = d.glb();
+    let ok = dir.join("ok.glb");
+    std::fs::write(&ok, &glb).unwrap();
+    assert_eq!(load_ok(&ok).triangles.len(), 1);
+    assert_eq!(
+        gltf_load::load_slice(&glb, "mem.glb")
+            .unwrap()
+            .triangles
+            .len(),
+        1
+    );
+
+    let cut = dir.join("half.glb");
+    std::fs::write(&cut, &glb[..glb.len() / 2]).unwrap();
+    assert_err(gltf_load::load_path(&cut), "half.glb", "truncated");
+    let tiny = dir.join("tiny.glb");
+    std::fs::write(&tiny, &glb[..7]).unwrap();
+    assert_err(gltf_load::load_path(&tiny), "tiny.glb", "GLB");
+
+    let mut bad = glb.clone();
+    bad[3] = b'X';
+    let magic = dir.join("magic.glb");
+    std::fs::write(&magic, &bad).unwrap();
+    assert_err(gltf_load::load_path(&magic), "magic.glb", "magic");
+
+    // A chunk length pointing past the end.
+    let mut bad = glb.clone();
+    bad[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+    let chunk = dir.join("chunk.glb");
+    std::fs::write(&chunk, &bad).unwrap();
+    assert_err(gltf_load::load_path(&chunk), "chunk.glb", "GLB");
+
+    // GLB version 1 is glTF 1.0.
+    let mut v1 = glb.clone();
+    v1[4] = 1;
+    assert_err(
+        gltf_load::load_slice(&v1, "old.glb"),
+        "old.glb",
+        "glTF 1.0 is not supported",
+    );
+}
+
+#[test]
+fn missing_or_short_buffer() {
+    let dir = temp_dir("buffers");
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(false);
+    d.node(json!({"mesh": m}), true);
+    let p = d.write_gltf(&dir, "nobin");
+    std::fs::remove_file(dir.join("nobin.bin")).unwrap();
+    let e = assert_err(gltf_load::load_path(&p), "nobin.gltf", "cannot read");
+    assert!(e.contains("nobin.bin"), "{e}");
+
+    // The .bin file is shorter than the buffer's byteLength.
+    let p = d.write_gltf(&dir, "shortbin");
+    std::fs::write(dir.join("shortbin.bin"), &d.bin[..10]).unwrap();
+    assert_err(gltf_load::load_path(&p), "shortbin.gltf", "too short");
+
+    // The buffer is long enough for its views, but an accessor reads past its view.
+    let mut d = Doc::new();
+    let pos = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    d.json["accessors"][pos]["count"] = json!(300);
+    let m = d.mesh(json!({"attributes": {"POSITION": pos}}));
+    d.node(json!({"mesh": m}), true);
+    let p = d.write_gltf(&dir, "shortview");
+    assert_err(gltf_load::load_path(&p), "shortview.gltf", "too short");
+
+    // A bufferView lying outside its buffer (also caught).
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(false);
+    d.node(json!({"mesh": m}), true);
+    d.json["bufferViews"][0]["byteOffset"] = json!(4000);
+    let p = d.write_gltf(&dir, "viewout");
+    assert_err(gltf_load::load_path(&p), "viewout.gltf", "outside");
+
+    // External references cannot be resolved for in-memory scenes.
+    let bytes = std::fs::read(dir.join("viewout.gltf")).unwrap();
+    assert_err(
+        gltf_load::load_slice(&bytes, "inmem.gltf"),
+        "inmem.gltf",
+        "in-memory",
+    );
+}
+
+#[test]
+fn index_out_of_range() {
+    let dir = temp_dir("index");
+    let mut d = Doc::new();
+    let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    let i = d.indices(&[0, 1, 7]);
+    let m = d.mesh(json!({"attributes": {"POSITION": p}, "indices": i}));
+    d.node(json!({"mesh": m}), true);
+    let path = d.write_gltf(&dir, "oob");
+    assert_err(gltf_load::load_path(&path), "oob.gltf", "out of range");
+
+    // An accessor index that does not exist (the gltf crate's validation).
+    let mut d = Doc::new();
+    let m = d.mesh(json!({"attributes": {"POSITION": 42}}));
+    d.node(json!({"mesh": m}), true);
+    let path = d.write_gltf(&dir, "noacc");
+    assert_err(gltf_load::load_path(&path), "noacc.gltf", "invalid glTF");
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(false);
+    d.node(json!({"mesh": m, "children": [9]}), true);
+    let path = d.write_gltf(&dir, "nochild");
+    assert_err(
+        gltf_load::load_path(&path),
+        "nochild.gltf",
+        "nodes[0].children",
+    );
+}
+
+#[test]
+fn non_finite_positions() {
+    let dir = temp_dir("nonfinite");
+    for (name, bad) in [
+        ("nan", f32::NAN),
+        ("inf", f32::INFINITY),
+        ("neginf", f32::NEG_INFINITY),
+    ] {
+        let mut d = Doc::new();
+        let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, bad, 0.0], [0.0, 1.0, 0.0]]);
+        let m = d.mesh(json!({"attributes": {"POSITION": p}}));
+        d.node(json!({"mesh": m}), true);
+        let path = d.write_gltf(&dir, name);
+        assert_err(
+            gltf_load::load_path(&path),
+            &format!("{name}.gltf"),
+            "non-finite",
+        );
+    }
+    // Finite in the file, infinite after the node transform.
+    let mut d = Doc::new();
+    let p = d.positions(&[[0.0, 0.0, 0.0], [1e30, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    let m = d.mesh(json!({"attributes": {"POSITION": p}}));
+    d.node(json!({"mesh": m, "scale": [1e30, 1.0, 1.0]}), true);
+    let path = d.write_gltf(&dir, "overflow");
+    assert_err(gltf_load::load_path(&path), "overflow.gltf", "not finite");
+}
+
+#[test]
+fn nothing_to_render() {
+    let dir = temp_dir("nothing");
+    // Only points.
+    let mut d = Doc::new();
+    let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    let m = d.mesh(json!({"attributes": {"POSITION": p}, "mode": 0}));
+    d.node(json!({"mesh": m}), true);
+    let path = d.write_gltf(&dir, "points");
+    let e = assert_err(gltf_load::load_path(&path), "points.gltf", "no triangles");
+    assert!(e.contains("1 non-triangle"), "{e}");
+
+    // An empty scene (the mesh node is not in it).
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m}), false);
+    let path = d.write_gltf(&dir, "emptyscene");
+    assert_err(
+        gltf_load::load_path(&path),
+        "emptyscene.gltf",
+        "no triangles",
+    );
+
+    // Only degenerate triangles.
+    let mut d = Doc::new();
+    let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [2.0, 2.0, 2.0]]);
+    let m = d.mesh(json!({"attributes": {"POSITION": p}}));
+    d.node(json!({"mesh": m}), true);
+    let path = d.write_gltf(&dir, "collinear");
+    let e = assert_err(
+        gltf_load::load_path(&path),
+        "collinear.gltf",
+        "no triangles",
+    );
+    assert!(e.contains("1 degenerate"), "{e}");
+
+    // A bare minimum document.
+    let p = dir.join("bare.gltf");
+    std::fs::write(&p, br#"{"asset": {"version": "2.0"}}"#).unwrap();
+    assert_err(gltf_load::load_path(&p), "bare.gltf", "no triangles");
+}
+
+#[test]
+fn unsupported_required_extension_and_version() {
+    let dir = temp_dir("required");
+    for ext in [
+        "KHR_draco_mesh_compression",
+        "EXT_meshopt_compression",
+        "KHR_materials_pbrSpecularGlossiness",
+    ] {
+        let mut d = Doc::new();
+        let m = d.triangle_mesh(true);
+        d.node(json!({"mesh": m}), true);
+        d.json["extensionsUsed"] = json!([ext]);
+        d.json["extensionsRequired"] = json!([ext]);
+        let path = d.write_gltf(&dir, ext);
+        let e = assert_err(gltf_load::load_path(&path), &format!("{ext}.gltf"), ext);
+        assert!(e.contains("does not support"), "{e}");
+    }
+    // Optional unknown extensions are ignored but recorded.
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m}), true);
+    d.json["extensionsUsed"] = json!(["KHR_draco_mesh_compression", "MSFT_texture_dds"]);
+    let s = load_ok(&d.write_gltf(&dir, "optional"));
+    assert_eq!(
+        s.report.extensions_used,
+        ["KHR_draco_mesh_compression", "MSFT_texture_dds"]
+    );
+
+    // glTF 1.0 and unknown versions.
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m}), true);
+    d.json["asset"]["version"] = json!("1.0");
+    let path = d.write_gltf(&dir, "v1");
+    assert_err(
+        gltf_load::load_path(&path),
+        "v1.gltf",
+        "glTF 1.0 is not supported",
+    );
+    d.json["asset"]["version"] = json!("3.0");
+    let path = d.write_gltf(&dir, "v3");
+    assert_err(gltf_load::load_path(&path), "v3.gltf", "version");
+}
+
+#[test]
+fn invalid_node_hierarchy() {
+    let dir = temp_dir("hierarchy");
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m, "children": [1]}), true);
+    d.node(json!({"children": [0]}), false);
+    let path = d.write_gltf(&dir, "cycle");
+    assert_err(gltf_load::load_path(&path), "cycle.gltf", "hierarchy");
+
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m, "children": [0]}), true);
+    let path = d.write_gltf(&dir, "selfchild");
+    assert_err(gltf_load::load_path(&path), "selfchild.gltf", "hierarchy");
+
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    let leaf = d.node(json!({"mesh": m}), false);
+    d.node(json!({"children": [leaf]}), true);
+    d.node(json!({"children": [leaf]}), true);
+    let path = d.write_gltf(&dir, "twoparents");
+    assert_err(
+        gltf_load::load_path(&path),
+        "twoparents.gltf",
+        "two parents",
+    );
+
+    // A very deep (but valid) chain does not overflow the stack.
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    let n = 20_000;
+    for i in 0..n {
+        let child = if i + 1 < n {
+            json!({"children": [i + 1]})
+        } else {
+            json!({"mesh": m})
+        };
+        d.node(child, i == 0);
+    }
+    assert_eq!(load_ok(&d.write_gltf(&dir, "deep")).triangles.len(), 1);
+}
+
+/// Random corruptions of a valid file: every outcome must be a clean `Ok` or one-line `Err`, and the
+/// loader itself must not panic (the guard would report "internal error").
+#[test]
+fn corrupted_files_never_panic() {
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    let p = d.positions(&[
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [1.0, 1.0, 0.0],
+    ]);
+    let i = d.indices(&[0, 1, 2, 2, 1, 3]);
+    let m2 = d.mesh(json!({"attributes": {"POSITION": p}, "indices": i, "mode": 5}));
+    d.node(json!({"mesh": m, "translation": [1, 2, 3]}), true);
+    d.node(json!({"mesh": m2, "scale": [1, -1, 1]}), true);
+    let glb = d.glb();
+    let text = d.embedded();
+    let mut seed = 0x2545F4914F6CDD1Du64;
+    let mut rnd = move |n: usize| {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed % n as u64) as usize
+    };
+    let (mut ok, mut err) = (0, 0);
+    for round in 0..3000 {
+        let src = if round % 2 == 0 { &glb } else { &text };
+        let mut bytes = src.clone();
+        match rnd(3) {
+            0 => bytes.truncate(rnd(bytes.len())),
+            1 => {
+                for _ in 0..1 + rnd(4) {
+                    let at = rnd(bytes.len());
+                    bytes[at] = rnd(256) as u8;
+                }
+            }
+            _ => {
+                // Replace a digit, to make plausible-but-wrong JSON numbers.
+                let at = rnd(bytes.len());
+                if let Some(k) = bytes[at..].iter().position(u8::is_ascii_digit) {
+                    bytes[at + k] = b"0123456789"[rnd(10)];
+                    if rnd(2) == 0 {
+                        bytes.insert(at + k, b"9"[0]);
+                    }
+                }
+            }
+        }
+        let name = if round % 2 == 0 {
+            "fuzz.glb"
+        } else {
+            "fuzz.gltf"
+        };
+        match gltf_load::load_slice(&bytes, name) {
+            Ok(s) => {
+                ok += 1;
+                assert!(
+                    s.triangles
+                        .iter()
+                        .all(|t| t.p.iter().all(|p| p.is_finite()))
+                );
+            }
+            Err(e) => {
+                err += 1;
+                let e = e.to_string();
+                assert!(e.starts_with(name) && !e.contains('\n'), "{e}");
+                assert!(!e.contains("internal error"), "round {round}: {e}");
+            }
+        }
+    }
+    println!("corruption rounds: {ok} loaded, {err} refused");
+    assert!(err > 0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Valid files
+
+#[test]
+fn nested_trs_and_matrix_nodes() {
+    let dir = temp_dir("nested");
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    // Child: a matrix translating by (0,0,1). Parent: T(1,2,3) · R(90° about Y) · S(2).
+    let child = d.node(
+        json!({"mesh": m, "matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,1,1]}),
+        false,
+    );
+    let h = std::f32::consts::FRAC_1_SQRT_2;
+    d.node(
+        json!({"children": [child], "translation": [1, 2, 3], "rotation": [0, h, 0, h], "scale": [2, 2, 2]}),
+        true,
+    );
+    for s in [
+        load_ok(&d.write_gltf(&dir, "nested")),
+        gltf_load::load_slice(&d.glb(), "n.glb").unwrap(),
+    ] {
+        assert_eq!(s.triangles.len(), 1);
+        let t = s.triangles[0];
+        let want = [
+            Vec3::new(3.0, 2.0, 3.0),
+            Vec3::new(3.0, 2.0, 1.0),
+            Vec3::new(3.0, 4.0, 3.0),
+        ];
+        for k in 0..3 {
+            assert!(
+                close(t.p[k], want[k]),
+                "vertex {k}: {} vs {}",
+                t.p[k],
+                want[k]
+            );
+            assert!(close(t.n[k], Vec3::X), "normal {k}: {}", t.n[k]);
+        }
+        assert!(close(t.geometric_normal(), Vec3::X));
+        assert_eq!(s.report.generated_normals, 0);
+        // A node with both a mesh and children: the mesh uses the node's own transform.
+        assert_eq!(s.materials.len(), 1);
+        assert_eq!(s.materials[0], scene::Material::default());
+    }
+}
+
+#[test]
+fn missing_normals_are_generated() {
+    let dir = temp_dir("normals");
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(false);
+    d.node(
+        json!({"mesh": m, "rotation": [0.38268343, 0, 0, 0.9238795]}),
+        true,
+    );
+    // Zero and NaN normals are replaced too.
+    let p = d.positions(&[[0.0, 0.0, 2.0], [1.0, 0.0, 2.0], [0.0, 1.0, 2.0]]);
+    let n = d.floats(
+        &[[0.0, 0.0, 0.0], [f32::NAN, 0.0, 1.0], [0.0, 0.0, 1.0]],
+        "VEC3",
+        false,
+    );
+    let m2 = d.mesh(json!({"attributes": {"POSITION": p, "NORMAL": n}}));
+    d.node(json!({"mesh": m2}), true);
+    let s = load_ok(&d.write_gltf(&dir, "normals"));
+    assert_eq!(s.triangles.len(), 2);
+    assert_eq!(s.report.generated_normals, 2);
+    for t in &s.triangles {
+        for n in t.n {
+            assert!((n.length() - 1.0).abs() < 1e-5, "{n}");
+            assert!(n.dot(t.geometric_normal()) > 0.999, "{n}");
+        }
+    }
+    assert!(s.features().contains(&"generated-normals"));
+}
+
+#[test]
+fn negative_scale_keeps_front_faces() {
+    let dir = temp_dir("mirror");
+    let mut d = Doc::new();
+    let with_n = d.triangle_mesh(true);
+    let without_n = d.triangle_mesh(false);
+    d.node(json!({"mesh": with_n, "scale": [-1, 1, 1]}), true);
+    d.node(
+        json!({"mesh": without_n, "matrix": [1,0,0,0, 0,1,0,0, 0,0,-1,0, 5,0,0,1]}),
+        true,
+    );
+    d.node(json!({"mesh": with_n, "translation": [0, 0, 3]}), true);
+    let s = load_ok(&d.write_gltf(&dir, "mirror"));
+    assert_eq!(s.triangles.len(), 3);
+    for t in &s.triangles {
+        let g = t.geometric_normal();
+        for n in t.n {
+            assert!(
+                n.dot(g) > 0.999,
+                "shading normal {n} disagrees with face normal {g}"
+            );
+        }
+    }
+    // Mirrored in X: positions mirrored, the front face still +Z.
+    let t = s.triangles[0];
+    assert!(t.p.contains(&Vec3::new(-1.0, 0.0, 0.0)));
+    assert!(close(t.geometric_normal(), Vec3::Z));
+    // Mirrored in Z: the front face flips to -Z along with the geometry.
+    assert!(close(s.triangles[1].geometric_normal(), Vec3::NEG_Z));
+}
+
+#[test]
+fn degenerate_triangles_are_dropped() {
+    let dir = temp_dir("degenerate");
+    let mut d = Doc::new();
+    let p = d.positions(&[
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [2.0, 2.0, 0.0],  // collinear with 0 and 3
+        [1.0, 1e-8, 0.0], // with 0 and 1: a numerical sliver (height 1e-8 × its length)
+        [1e-7, 1e-7, 0.0],
+        [0.0, 1e-7, 0.0], // tiny (area 5e-15) triangle with 0
+    ]);
+    let i = d.indices(&[0, 1, 2, 2, 1, 3, 0, 0, 1, 0, 3, 4, 0, 1, 5, 0, 6, 7]);
+    let m = d.mesh(json!({"attributes": {"POSITION": p}, "indices": i}));
+    d.node(json!({"mesh": m}), true);
+    let s = load_ok(&d.write_gltf(&dir, "degenerate"));
+    assert_eq!(s.triangles.len(), 2);
+    assert_eq!(s.report.dropped_degenerate, 4);
+    assert!(s.triangles.iter().all(|t| t.area() > 0.4));
+}
+
+#[test]
+fn non_indexed_strip_and_fan() {
+    let dir = temp_dir("modes");
+    let mut d = Doc::new();
+    let soup = d.positions(&[
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [1.0, 0.0, 1.0],
+        [0.0, 1.0, 1.0],
+    ]);
+    let m = d.mesh(json!({"attributes": {"POSITION": soup}}));
+    d.node(json!({"mesh": m}), true);
+    let strip = d.positions(&[
+        [0.0, 0.0, 2.0],
+        [1.0, 0.0, 2.0],
+        [0.0, 1.0, 2.0],
+        [1.0, 1.0, 2.0],
+        [0.0, 2.0, 2.0],
+    ]);
+    let m = d.mesh(json!({"attributes": {"POSITION": strip}, "mode": 5}));
+    d.node(json!({"mesh": m}), true);
+    let fan = d.positions(&[
+        [0.0, 0.0, 3.0],
+        [1.0, 0.0, 3.0],
+        [1.0, 1.0, 3.0],
+        [0.0, 1.0, 3.0],
+    ]);
+    let fi = d.indices(&[0, 1, 2, 3]);
+    let m = d.mesh(json!({"attributes": {"POSITION": fan}, "indices": fi, "mode": 6}));
+    d.node(json!({"mesh": m}), true);
+    let lines = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]);
+    let m = d.mesh(json!({"attributes": {"POSITION": lines}, "mode": 1}));
+    d.node(json!({"mesh": m}), true);
+
+    let s = load_ok(&d.write_gltf(&dir, "modes"));
+    assert_eq!(s.triangles.len(), 2 + 3 + 2);
+    assert_eq!(s.report.skipped_primitives, 1);
+    for t in &s.triangles {
+        assert!(close(t.geometric_normal(), Vec3::Z), "winding: {:?}", t.p);
+        assert!((t.area() - 0.5).abs() < 1e-6);
+    }
+    // The strip covers the unit squares [0,1]² and the triangle up to y = 2.
+    let strip_area: f32 = s
+        .triangles
+        .iter()
+        .filter(|t| t.p[0].z == 2.0)
+        .map(|t| t.area())
+        .sum();
+    assert!((strip_area - 1.5).abs() < 1e-6);
+}
+
+#[test]
+fn punctual_lights() {
+    let dir = temp_dir("lights");
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m}), true);
+    d.json["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+    d.json["extensions"] = json!({"KHR_lights_punctual": {"lights": [
+        {"type": "point", "color": [1.0, 0.5, 0.25], "intensity": 40.0},
+        {"type": "spot", "intensity": 10.0, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.6}},
+        {"type": "directional", "intensity": 3.0},
+        {"type": "spot", "spot": {"innerConeAngle": 1.0, "outerConeAngle": 0.5}}
+    ]}});
+    let h = std::f32::consts::FRAC_1_SQRT_2;
+    let parent = d.node(json!({"translation": [10, 0, 0]}), true);
+    let point = d.node(
+        json!({"translation": [1, 2, 3], "extensions": {"KHR_lights_punctual": {"light": 0}}}),
+        false,
+    );
+    d.json["nodes"][parent]["children"] = json!([point]);
+    d.node(
+        json!({"translation": [0, 3, 0], "rotation": [-h, 0, 0, h],
+                  "extensions": {"KHR_lights_punctual": {"light": 1}}}),
+        true,
+    );
+    d.node(
+        json!({"extensions": {"KHR_lights_punctual": {"light": 2}}}),
+        true,
+    );
+    d.node(
+        json!({"extensions": {"KHR_lights_punctual": {"light": 3}}}),
+        true,
+    );
+    let s = load_ok(&d.write_gltf(&dir, "lights"));
+    assert_eq!(s.lights.len(), 4);
+    let l = &s.lights[0];
+    assert_eq!(l.kind, LightKind::Point);
+    assert!(close(l.position, Vec3::new(11.0, 2.0, 3.0)));
+    assert_eq!(l.color, Vec3::new(1.0, 0.5, 0.25));
+    assert_eq!(l.intensity, 40.0);
+    let l = &s.lights[1];
+    assert_eq!(
+        l.kind,
+        LightKind::Spot {
+            inner_cone: 0.2,
+            outer_cone: 0.6
+        }
+    );
+    assert!(close(l.position, Vec3::new(0.0, 3.0, 0.0)));
+    assert!(close(l.direction, Vec3::NEG_Y), "{}", l.direction);
+    assert_eq!((l.color, l.intensity), (Vec3::ONE, 10.0));
+    let l = &s.lights[2];
+    assert_eq!(l.kind, LightKind::Directional);
+    assert!(close(l.direction, Vec3::NEG_Z));
+    assert_eq!(l.intensity, 3.0);
+    // Invalid cone angles are repaired with a warning.
+    match s.lights[3].kind {
+        LightKind::Spot {
+            inner_cone,
+            outer_cone,
+        } => assert!(inner_cone < outer_cone && outer_cone == 0.5),
+        k => panic!("{k:?}"),
+    }
+    assert!(
+        s.report.warnings.iter().any(|w| w.contains("cone")),
+        "{:?}",
+        s.report.warnings
+    );
+    assert!(s.has_light() && s.features().contains(&"punctual-lights"));
+}
+
+#[test]
+fn cameras() {
+    let dir = temp_dir("cameras");
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m}), true);
+    d.json["cameras"] = json!([
+        {"type": "perspective", "name": "main", "perspective": {"yfov": 0.8, "znear": 0.1}},
+        {"type": "orthographic", "orthographic": {"xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 10}}
+    ]);
+    let h = std::f32::consts::FRAC_1_SQRT_2;
+    // Scaled and rotated 90° about Y: looks down -X.
+    d.node(json!({"camera": 0, "translation": [0, 1, 5], "rotation": [0, h, 0, h], "scale": [3, 3, 3]}), true);
+    d.node(json!({"camera": 1}), true);
+    let s = load_ok(&d.write_gltf(&dir, "cameras"));
+    assert_eq!(s.cameras.len(), 1);
+    let c = &s.cameras[0];
+    assert_eq!(c.name, "main");
+    assert_eq!(c.yfov, 0.8);
+    assert!(close(c.eye(), Vec3::new(0.0, 1.0, 5.0)));
+    assert!(close(c.forward(), Vec3::NEG_X), "{}", c.forward());
+    assert!(close(c.up(), Vec3::Y));
+    for axis in [c.transform.x_axis, c.transform.y_axis, c.transform.z_axis] {
+        assert!(
+            (axis.truncate().length() - 1.0).abs() < 1e-5,
+            "scale not removed"
+        );
+    }
+    assert!(s.report.warnings.iter().any(|w| w.contains("orthographic")));
+    assert_eq!(s.default_camera(), *c);
+}
+
+#[test]
+fn emissive_strength_and_default_material() {
+    let dir = temp_dir("emissive");
+    let mut d = Doc::new();
+    let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    let lamp = d.mesh(json!({"attributes": {"POSITION": p}, "material": 0}));
+    let plain = d.mesh(json!({"attributes": {"POSITION": p}}));
+    let weak = d.mesh(json!({"attributes": {"POSITION": p}, "material": 1}));
+    d.json["extensionsUsed"] = json!(["KHR_materials_emissive_strength"]);
+    d.json["materials"] = json!([
+        {"name": "lamp", "emissiveFactor": [1.0, 0.5, 0.25],
+         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}},
+         "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.25, 1.0, 1.0]}},
+        {"name": "weak", "emissiveFactor": [1.0, 1.0, 1.0]}
+    ]);
+    d.node(json!({"mesh": lamp}), true);
+    d.node(json!({"mesh": plain, "translation": [0, 0, 1]}), true);
+    d.node(json!({"mesh": weak, "translation": [0, 0, 2]}), true);
+    let s = load_ok(&d.write_gltf(&dir, "emissive"));
+    assert_eq!(s.materials.len(), 3);
+    assert_eq!(s.materials[0].name, "lamp");
+    assert_eq!(s.materials[0].emissive, Vec3::new(4.0, 2.0, 1.0));
+    assert_eq!(
+        s.materials[0].base_color,
+        glam::Vec4::new(0.5, 0.25, 1.0, 1.0)
+    );
+    assert_eq!(s.materials[1].emissive, Vec3::ONE);
+    assert_eq!(s.materials[2], scene::Material::default());
+    assert_eq!(s.triangles[0].material, 0);
+    assert_eq!(s.triangles[1].material, 2);
+    assert_eq!(s.triangles[2].material, 1);
+    assert_eq!(s.emissive_triangle_count(), 2);
+    assert_eq!(
+        s.report.extensions_used,
+        ["KHR_materials_emissive_strength"]
+    );
+}
+
+/// The same grid scene scaled by 1e-4, 1 and 1e4 keeps every triangle.
+#[test]
+fn scale_invariance() {
+    let dir = temp_dir("scale");
+    let mut counts = Vec::new();
+    for scale in [1e-4f32, 1.0, 1e4] {
+        let mut d = Doc::new();
+        let n = 40;
+        let mut pos = Vec::new();
+        for y in 0..=n {
+            for x in 0..=n {
+                // A gently curved grid with fine detail: cells are 1/40 of the extent.
+                let (u, v) = (x as f32 / n as f32, y as f32 / n as f32);
+                pos.push([u, v, 0.1 * (6.0 * u).sin() * (4.0 * v).cos()]);
+            }
+        }
+        let mut idx = Vec::new();
+        for y in 0..n {
+            for x in 0..n {
+                let a = y * (n + 1) + x;
+                idx.extend([a, a + 1, a + n + 1, a + n + 1, a + 1, a + n + 2]);
+            }
+        }
+        let p = d.positions(&pos);
+        let i = d.indices(&idx);
+        let m = d.mesh(json!({"attributes": {"POSITION": p}, "indices": i}));
+        // A small but real detail: a triangle 1e-3 of the extent.
+        let tiny = d.positions(&[[0.5, 0.5, 0.5], [0.501, 0.5, 0.5], [0.5, 0.501, 0.5]]);
+        let mt = d.mesh(json!({"attributes": {"POSITION": tiny}}));
+        let root = d.node(
+            json!({"scale": [scale, scale, scale], "translation": [scale * 3.0, 0, 0]}),
+            true,
+        );
+        let a = d.node(json!({"mesh": m}), false);
+        let b = d.node(json!({"mesh": mt}), false);
+        d.json["nodes"][root]["children"] = json!([a, b]);
+        let s = load_ok(&d.write_gltf(&dir, &format!("scale{scale}")));
+        assert_eq!(s.report.dropped_degenerate, 0, "scale {scale}");
+        assert!((s.extent() / scale - (1.0f32 + 1.0 + 0.5f32.powi(2)).sqrt()).abs() < 0.3);
+        counts.push(s.triangles.len());
+    }
+    assert_eq!(counts, [2 * 40 * 40 + 1; 3]);
+}
+
+fn png_bytes(w: u32, h: u32, rgba: [u8; 4]) -> Vec<u8> {
+    let img = image::RgbaImage::from_pixel(w, h, image::Rgba(rgba));
+    let mut out = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut out), image::ImageFormat::Png)
+        .unwrap();
+    out
+}
+
+#[test]
+fn textures_and_uvs() {
+    let dir = temp_dir("textures");
+    std::fs::write(dir.join("red.png"), png_bytes(4, 2, [255, 0, 0, 255])).unwrap();
+    std::fs::write(dir.join("fake.dds"), b"DDS not really").unwrap();
+    let mut d = Doc::new();
+    let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    let uv = d.floats(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], "VEC2", false);
+    let green = png_bytes(3, 3, [0, 255, 0, 255]);
+    let gview = d.view(&green, None);
+    d.json["images"] = json!([
+        {"uri": "red.png"},
+        {"uri": "fake.dds"},
+        {"uri": "missing.jpg"},
+        {"bufferView": gview, "mimeType": "image/png", "name": "green"},
+        {"uri": format!("data:image/png;base64,{}", b64(&png_bytes(5000, 1000, [0, 0, 255, 255])))}
+    ]);
+    d.json["textures"] =
+        json!([{"source": 0}, {"source": 1}, {"source": 2}, {"source": 3}, {"source": 4}]);
+    d.json["extensionsUsed"] = json!(["KHR_texture_transform"]);
+    d.json["materials"] = json!([
+        {"name": "red", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
+            "extensions": {"KHR_texture_transform": {"offset": [0.5, 0.25], "scale": [2, 2]}}}}},
+        {"name": "red again", "emissiveFactor": [1, 1, 1], "emissiveTexture": {"index": 0}},
+        {"name": "dds", "pbrMetallicRoughness": {"baseColorTexture": {"index": 1}}},
+        {"name": "missing", "pbrMetallicRoughness": {"baseColorTexture": {"index": 2}}},
+        {"name": "uv1", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 1}}},
+        {"name": "green", "pbrMetallicRoughness": {"baseColorTexture": {"index": 3}}},
+        {"name": "big", "pbrMetallicRoughness": {"baseColorTexture": {"index": 4}}}
+    ]);
+    for mat in 0..7 {
+        let m = d.mesh(json!({"attributes": {"POSITION": p, "TEXCOORD_0": uv}, "material": mat}));
+        d.node(json!({"mesh": m, "translation": [0, 0, mat]}), true);
+    }
+    let s = load_ok(&d.write_gltf(&dir, "textures"));
+    assert_eq!(s.triangles.len(), 7);
+    // red.png decoded once for two materials; the DDS and missing images fall back to factors.
+    assert_eq!(
+        s.textures.len(),
+        3,
+        "{:?}",
+        s.textures.iter().map(|t| &t.name).collect::<Vec<_>>()
+    );
+    let red = &s.textures[0];
+    assert_eq!((red.width, red.height), (4, 2));
+    assert_eq!(red.rgba8.len(), 8);
+    assert_eq!(red.rgba8[0], [255, 0, 0, 255]);
+    assert_eq!(s.materials[0].base_color_texture, Some(0));
+    assert_eq!(s.materials[1].emissive_texture, Some(0));
+    assert_eq!(s.materials[2].base_color_texture, None);
+    assert_eq!(s.materials[3].base_color_texture, None);
+    assert_eq!(s.materials[4].base_color_texture, None);
+    assert_eq!(s.materials[5].base_color_texture, Some(1));
+    assert_eq!(s.textures[1].rgba8[4], [0, 255, 0, 255]);
+    assert_eq!(s.materials[6].base_color_texture, Some(2));
+    assert_eq!((s.textures[2].width, s.textures[2].height), (2048, 410));
+    let w = &s.report.warnings;
+    assert!(w.iter().any(|w| w.contains("fake.dds")), "{w:?}");
+    assert!(w.iter().any(|w| w.contains("missing.jpg")), "{w:?}");
+    assert!(w.iter().any(|w| w.contains("TEXCOORD_1")), "{w:?}");
+    // UVs: KHR_texture_transform applied for material 0 only.
+    let t0 = s.triangles.iter().find(|t| t.material == 0).unwrap();
+    assert_eq!(
+        t0.uv,
+        [
+            Vec2::new(0.5, 0.25),
+            Vec2::new(2.5, 0.25),
+            Vec2::new(0.5, 2.25)
+        ]
+    );
+    let t1 = s.triangles.iter().find(|t| t.material == 1).unwrap();
+    assert_eq!(t1.uv, [Vec2::ZERO, Vec2::X, Vec2::Y]);
+    assert!(s.uses_textures());
+}
+
+#[test]
+fn quantized_sparse_and_sceneless() {
+    let dir = temp_dir("quantized");
+    let mut d = Doc::new();
+    // Positions as unsigned shorts (KHR_mesh_quantization), 8-byte stride.
+    let mut bytes = Vec::new();
+    for p in [[0u16, 0, 0], [2, 0, 0], [0, 2, 0]] {
+        for c in p {
+            bytes.extend(c.to_le_bytes());
+        }
+        bytes.extend([0, 0]);
+    }
+    let view = d.view(&bytes, Some(8));
+    let pos = d.push(
+        "accessors",
+        json!({"bufferView": view, "componentType": 5123, "count": 3,
+        "type": "VEC3", "min": [0, 0, 0], "max": [2, 2, 0]}),
+    );
+    // Normalised signed-byte normals, 4-byte stride.
+    let nview = d.view(&[0, 0, 127, 0, 0, 0, 127, 0, 0, 0, 127, 0], Some(4));
+    let nrm = d.push(
+        "accessors",
+        json!({"bufferView": nview, "componentType": 5120, "normalized": true,
+        "count": 3, "type": "VEC3"}),
+    );
+    let m = d.mesh(json!({"attributes": {"POSITION": pos, "NORMAL": nrm}}));
+    d.node(json!({"mesh": m}), true);
+    // A sparse accessor with no bufferView: zeros, then vertices 1 and 2 substituted.
+    let sidx = d.view(&[1, 2], None);
+    let sval = d.view(
+        &[[0.0f32, 0.0, 5.0], [0.0, 3.0, 5.0]]
+            .iter()
+            .flatten()
+            .flat_map(|f| f.to_le_bytes())
+            .collect::<Vec<u8>>(),
+        None,
+    );
+    let sp = d.push(
+        "accessors",
+        json!({"componentType": 5126, "count": 3, "type": "VEC3",
+        "min": [0, 0, 0], "max": [0, 3, 5],
+        "sparse": {"count": 2, "indices": {"bufferView": sidx, "componentType": 5121},
+                   "values": {"bufferView": sval}}}),
+    );
+    let m = d.mesh(json!({"attributes": {"POSITION": sp}}));
+    d.node(json!({"mesh": m}), true);
+    d.json["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
+    d.json["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+    let s = load_ok(&d.write_gltf(&dir, "quantized"));
+    assert_eq!(s.triangles.len(), 2);
+    assert_eq!(
+        s.triangles[0].p,
+        [
+            Vec3::ZERO,
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(0.0, 2.0, 0.0)
+        ]
+    );
+    assert_eq!(s.triangles[0].n, [Vec3::Z; 3]);
+    assert_eq!(
+        s.triangles[1].p,
+        [
+            Vec3::ZERO,
+            Vec3::new(0.0, 0.0, 5.0),
+            Vec3::new(0.0, 3.0, 5.0)
+        ]
+    );
+
+    // Without scenes, every root node is used.
+    d.json.as_object_mut().unwrap().remove("scenes");
+    d.json.as_object_mut().unwrap().remove("scene");
+    let s = gltf_load::load_slice(&d.embedded(), "sceneless.gltf").unwrap();
+    assert_eq!(s.triangles.len(), 2);
+    assert_eq!(s.name, "sceneless.gltf");
+    assert!(s.path.is_none());
+}
+
+#[test]
+fn load_dispatches_builtin_and_paths() {
+    let s = scene::load("builtin:cornell").unwrap();
+    assert_eq!(s.name, "builtin:cornell");
+    assert!(!s.triangles.is_empty());
+    let e = scene::load("builtin:nope").unwrap_err().to_string();
+    assert!(e.contains("builtin:nope") && e.contains("cornell"), "{e}");
+    assert_eq!(builtin::NAMES, ["cornell", "conference"]);
+
+    let dir = temp_dir("dispatch");
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m}), true);
+    let p = d.write_gltf(&dir, "plain");
+    let s = scene::load(p.to_str().unwrap()).unwrap();
+    assert_eq!(s.name, p.display().to_string());
+    assert_eq!(s.path.as_deref(), Some(p.as_path()));
+}
+
+// ---------------------------------------------------------------------------------------------
+// The assimp glTF corpus
+
+/// Whether a file declares glTF 1.x (JSON `asset.version` or GLB container version 1).
+fn is_gltf1(path: &Path) -> bool {
+    let Ok(bytes) = std::fs::read(path) else {
+        return false;
+    };
+    if bytes.starts_with(b"glTF") {
+        return bytes.len() >= 8 && bytes[4] == 1;
+    }
+    serde_json::from_slice::<Value>(&bytes)
+        .ok()
+        .and_then(|v| {
+            v.pointer("/asset/version")
+                .and_then(|v| v.as_str().map(str::to_string))
+        })
+        .is_some_and(|v| v.starts_with('1'))
+}
+
+fn gltf_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            gltf_files(&p, out);
+        } else if p
+            .extension()
+            .is_some_and(|x| x.eq_ignore_ascii_case("gltf") || x.eq_ignore_ascii_case("glb"))
+        {
+            out.push(p);
+        }
+    }
+}
+
+#[test]
+fn assimp_gltf_corpus() {
+    let root = Path::new("/usr/share/assimp");
+    assert!(
+        root.join("models").is_dir(),
+        "the assimp glTF test corpus is missing: run `apt-get install assimp-testmodels`"
+    );
+    let mut files = Vec::new();
+    for base in ["models", "models-nonbsd"] {
+        for e in std::fs::read_dir(root.join(base))
+            .into_iter()
+            .flatten()
+            .flatten()
+        {
+            if e.file_name().to_string_lossy().starts_with("glTF") {
+                gltf_files(&e.path(), &mut files);
+            }
+        }
+    }
+    files.sort();
+    assert!(
+        files.len() >= 20,
+        "only {} glTF files found under {}",
+        files.len(),
+        root.display()
+    );
+    let (mut loaded, mut refused, mut v1) = (0, 0, 0);
+    for f in &files {
+        let name = f.file_name().unwrap().to_string_lossy().to_string();
+        match gltf_load::load_path(f) {
+            Ok(s) => {
+                assert!(!is_gltf1(f), "{} is glTF 1.0 but loaded", f.display());
+                assert!(!s.triangles.is_empty());
+                assert!(
+                    s.triangles
+                        .iter()
+                        .all(|t| t.p.iter().chain(&t.n).all(|v| v.is_finite()))
+                );
+                assert!(
+                    s.triangles
+                        .iter()
+                        .all(|t| (s.materials.len() as u32) > t.material)
+                );
+                println!(
+                    "loaded  {}: {} triangles, {} warnings",
+                    f.display(),
+                    s.triangles.len(),
+                    s.report.warnings.len()
+                );
+                loaded += 1;
+            }
+            Err(e) => {
+                let msg = e.to_string();
+                assert!(msg.contains(&name), "error does not name the file: {msg}");
+                assert!(!msg.contains('\n'), "multi-line error: {msg:?}");
+                assert!(!msg.contains("internal error"), "loader panicked: {msg}");
+                if is_gltf1(f) {
+                    assert!(msg.contains("glTF 1.0 is not supported"), "{msg}");
+                    v1 += 1;
+                }
+                println!("refused {msg}");
+                refused += 1;
+            }
+        }
+    }
+    println!("assimp glTF corpus: loaded {loaded}, refused {refused} ({v1} of them glTF 1.0)");
+    assert!(
+        v1 >= 5 && loaded >= 10,
+        "loaded {loaded}, refused {refused}, glTF 1.0 {v1}"
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Real scenes (outside the repository)
+
+#[test]
+fn real_scenes() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes");
+    if !dir.is_dir() {
+        println!(
+            "NOTICE: {} is absent; real-scene test skipped",
+            dir.display()
+        );
+        return;
+    }
+    // (file, instanced triangle count from SOURCES.md)
+    let scenes = [
+        ("cornell_wgpu/cornell-box.glb", 1_040),
+        ("breakfast_room/BreakfastRoom.gltf", 262_687),
+        ("livingroom_lowpoly/livingroom.glb", 3_344),
+        ("conference_table/scene.gltf", 640),
+    ];
+    for (file, expected) in scenes {
+        let path = dir.join(file);
+        let start = std::time::Instant::now();
+        let s = load_ok(&path);
+        let secs = start.elapsed().as_secs_f64();
+        let n = s.triangles.len();
+        println!(
+            "{file}: {n} triangles (+{} degenerate dropped), {} materials, {} textures, {} lights, {} cameras, {:.2} s; warnings: {:?}",
+            s.report.dropped_degenerate,
+            s.materials.len(),
+            s.textures.len(),
+            s.lights.len(),
+            s.cameras.len(),
+            secs,
+            s.report.warnings
+        );
+        assert_eq!(n + s.report.dropped_degenerate, expected, "{file}");
+        assert!(
+            s.report.dropped_degenerate * 100 <= expected,
+            "{file}: too many degenerate"
+        );
+        assert!(
+            s.triangles
+                .iter()
+                .all(|t| t.p.iter().chain(&t.n).all(|v| v.is_finite()))
+        );
+        assert!(
+            s.triangles
+                .iter()
+                .all(|t| t.n.iter().all(|n| (n.length() - 1.0).abs() < 1e-3))
+        );
+        match file {
+            f if f.starts_with("cornell") => {
+                assert!(s.emissive_triangle_count() > 0, "cornell has no emitter")
+            }
+            f if f.starts_with("breakfast") => {
+                assert!(s.textures.len() >= 2, "breakfast room textures not decoded");
+                assert!(s.textures.iter().all(|t| t.width.max(t.height) <= 2048));
+                assert!(!s.has_light());
+            }
+            f if f.starts_with("conference") => assert!(s.uses_textures()),
+            _ => {}
+        }
+    }
+}
