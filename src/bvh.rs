@@ -15,10 +15,10 @@ use obvhs::{
 
 use crate::scene::Scene;
 
-/// The traversal stack in WGSL holds this many entries; deeper trees are refused at build time.
-pub const MAX_GPU_DEPTH: usize = 64;
+/// Deeper trees are refused at build time (the layout is built recursively).
+pub const MAX_GPU_DEPTH: usize = 256;
 
-/// A BVH node as the shader reads it.
+/// A BVH node as the shader reads it (preorder with skip links, see `SceneBvh::gpu_nodes`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuNode {
@@ -26,8 +26,8 @@ pub struct GpuNode {
     /// 0 for inner nodes; for leaves the number of triangles.
     pub prim_count: u32,
     pub max: [f32; 3],
-    /// Inner: index of the first child (the second follows it). Leaf: first triangle slot.
-    pub first_index: u32,
+    /// Inner: the skip link (node after this subtree; = node count past the end). Leaf: first slot.
+    pub index: u32,
 }
 
 /// A triangle's vertices as the shader reads them (w unused).
@@ -73,9 +73,7 @@ impl SceneBvh {
         let tris: Vec<OTri> = slot_to_triangle.iter().map(|&i| tris[i as usize]).collect();
         let depth = depth_of(&bvh);
         if depth >= MAX_GPU_DEPTH {
-            anyhow::bail!(
-                "BVH depth {depth} exceeds the shader's traversal stack ({MAX_GPU_DEPTH})"
-            );
+            anyhow::bail!("BVH depth {depth} exceeds {MAX_GPU_DEPTH}");
         }
         Ok(SceneBvh {
             bvh,
@@ -86,17 +84,31 @@ impl SceneBvh {
         })
     }
 
+    /// The tree in depth-first preorder with skip links (Smits 1998), the layout the shader traverses.
+    /// An inner node's first child is the next node and `skip` is where traversal goes when the ray
+    /// misses it; a leaf is always followed by the next node. Traversal needs no stack: on SIMD software
+    /// drivers (lavapipe) a per-lane stack array turns every push and pop into a gather or scatter.
     pub fn gpu_nodes(&self) -> Vec<GpuNode> {
-        self.bvh
-            .nodes
-            .iter()
-            .map(|n| GpuNode {
+        fn emit(nodes: &[obvhs::bvh2::node::Bvh2Node], i: usize, out: &mut Vec<GpuNode>) {
+            let n = &nodes[i];
+            let me = out.len();
+            out.push(GpuNode {
                 min: n.aabb.min.into(),
                 prim_count: n.prim_count,
                 max: n.aabb.max.into(),
-                first_index: n.first_index,
-            })
-            .collect()
+                index: n.first_index,
+            });
+            if n.prim_count == 0 {
+                emit(nodes, n.first_index as usize, out);
+                emit(nodes, n.first_index as usize + 1, out);
+                out[me].index = out.len() as u32;
+            }
+        }
+        let mut out = Vec::with_capacity(self.bvh.nodes.len());
+        if !self.bvh.nodes.is_empty() {
+            emit(&self.bvh.nodes, 0, &mut out);
+        }
+        out
     }
 
     pub fn gpu_triangles(&self) -> Vec<GpuTriangle> {

@@ -9,5 +9,6 @@ pub mod export;
 pub mod gi;
 pub mod gpu;
 pub mod metrics;
+pub mod raybench;
 pub mod scene;
 pub mod stats;

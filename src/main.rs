@@ -34,6 +34,22 @@ enum Command {
     /// Print what a scene holds and which passes would run.
     #[command(after_help = LIGHTS_HELP)]
     Info(InfoArgs),
+    /// Ray throughput of the WGSL traversal against obvhs on all CPU cores (primary and shadow rays).
+    Raybench(RaybenchArgs),
+}
+
+#[derive(Args)]
+struct RaybenchArgs {
+    /// Scenes to measure.
+    #[arg(default_values_t = ["builtin:cornell".to_string(), "builtin:conference".to_string()])]
+    scenes: Vec<String>,
+    #[arg(long, default_value_t = 640)]
+    width: u32,
+    #[arg(long, default_value_t = 480)]
+    height: u32,
+    /// Also write the rows as JSON here.
+    #[arg(long)]
+    json: Option<PathBuf>,
 }
 
 #[derive(Args, Clone)]
@@ -129,6 +145,7 @@ fn main() -> ExitCode {
         }
         Some(Command::Render(a)) => render(a),
         Some(Command::Info(a)) => info(a),
+        Some(Command::Raybench(a)) => raybench(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -362,5 +379,46 @@ fn info(a: InfoArgs) -> Result<()> {
         "passes (render):     {}",
         Renderer::passes_for(&s, &FrameSettings::default()).join(" -> ")
     );
+    Ok(())
+}
+
+fn raybench(a: RaybenchArgs) -> Result<()> {
+    let ctx = GpuContext::new_headless()?;
+    println!(
+        "adapter: {}; CPU: {} threads (rayon)",
+        ctx.adapter_name,
+        rayon::current_num_threads()
+    );
+    println!(
+        "{:<40} {:>8} {:>9} {:>9} {:>12} {:>12} {:>12} {:>7}",
+        "scene", "rays", "triangles", "kind", "GPU Mray/s", "CPU BVH2", "CPU CWBVH", "GPU/CPU"
+    );
+    let mut rows = Vec::new();
+    for spec in &a.scenes {
+        let s = scene::load(spec)?;
+        let cam = s.default_camera();
+        for r in fuzzy_vpl::raybench::run(&ctx, &s, &cam, a.width, a.height)? {
+            println!(
+                "{:<40} {:>8} {:>9} {:>9} {:>12.3} {:>12.3} {:>12.3} {:>7.2}",
+                r.scene,
+                r.rays,
+                r.triangles,
+                r.kind,
+                r.gpu_mrays_s,
+                r.cpu_bvh2_mrays_s,
+                r.cpu_cwbvh_mrays_s,
+                r.ratio
+            );
+            rows.push(r);
+        }
+    }
+    if let Some(p) = &a.json {
+        let json = serde_json::to_string_pretty(&rows)?;
+        export::write_atomic(p, |w| {
+            use std::io::Write;
+            w.write_all(json.as_bytes())?;
+            Ok(())
+        })?;
+    }
     Ok(())
 }

@@ -63,7 +63,7 @@ impl Doc {
     }
 
     fn view(&mut self, bytes: &[u8], stride: Option<usize>) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let mut v = json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()});
@@ -165,11 +165,11 @@ impl Doc {
 
     fn glb(&self) -> Vec<u8> {
         let mut j = serde_json::to_vec(&self.with_buffer(None)).unwrap();
-        while j.len() % 4 != 0 {
+        while !j.len().is_multiple_of(4) {
             j.push(b' ');
         }
         let mut bin = self.bin.clone();
-        while bin.len() % 4 != 0 {
+        while !bin.len().is_multiple_of(4) {
             bin.push(0);
         }
         let total = 12 + 8 + j.len() + 8 + bin.len();
@@ -628,14 +628,9 @@ fn nested_trs_and_matrix_nodes() {
             Vec3::new(3.0, 2.0, 1.0),
             Vec3::new(3.0, 4.0, 3.0),
         ];
-        for k in 0..3 {
-            assert!(
-                close(t.p[k], want[k]),
-                "vertex {k}: {} vs {}",
-                t.p[k],
-                want[k]
-            );
-            assert!(close(t.n[k], Vec3::X), "normal {k}: {}", t.n[k]);
+        for (k, (p, n)) in t.p.iter().zip(t.n).enumerate() {
+            assert!(close(*p, want[k]), "vertex {k}: {p} vs {}", want[k]);
+            assert!(close(n, Vec3::X), "normal {k}: {n}");
         }
         assert!(close(t.geometric_normal(), Vec3::X));
         assert_eq!(s.report.generated_normals, 0);

@@ -1,8 +1,6 @@
-// Software BVH2 traversal: the same stack traversal and Moller-Trumbore test as obvhs' CPU code
-// (src/bvh.rs tests both against each other).
+// Software BVH2 traversal (stackless, skip links) with the same ray-box and Moller-Trumbore tests as
+// obvhs' CPU code; tests/traversal.rs checks both agree.
 #import common/scene.wgsl
-
-const STACK_SIZE: u32 = 64u;
 
 struct Ray {
     origin: vec3<f32>,
@@ -64,84 +62,31 @@ fn intersect_tri(slot: u32, ray: Ray) -> vec3<f32> {
     return vec3<f32>(INF, 0.0, 0.0);
 }
 
-// Closest hit along the ray; hit.slot == INVALID on a miss.
+// Closest hit along the ray; hit.slot == INVALID on a miss. Stackless: nodes are visited in preorder,
+// a missed inner node is skipped with its link.
 fn trace_closest(ray_in: Ray) -> Hit {
     var ray = ray_in;
     // Misses report INF (the largest finite float): an infinite tmax must not count them as hits.
     ray.tmax = min(ray.tmax, INF);
     var hit = Hit(INF, INVALID, 0.0, 0.0);
-    if scene.num_nodes == 0u {
-        return hit;
-    }
     let inv_dir = vec3<f32>(safe_inverse(ray.dir.x), safe_inverse(ray.dir.y), safe_inverse(ray.dir.z));
-    var stack: array<u32, STACK_SIZE>;
-    var sp = 0u;
-    let root = bvh_nodes[0];
-    if aabb_entry(root.min, root.max, ray.origin, inv_dir) >= ray.tmax {
-        return hit;
-    }
-    if root.prim_count > 0u {
-        for (var i = root.first_index; i < root.first_index + root.prim_count; i++) {
-            let r = intersect_tri(i, ray);
-            if r.x < ray.tmax {
-                ray.tmax = r.x;
-                hit = Hit(r.x, i, r.y, r.z);
-            }
-        }
-        return hit;
-    }
-    var current = root.first_index;
-    loop {
-        var left = bvh_nodes[current];
-        var right = bvh_nodes[current + 1u];
-        var tl = aabb_entry(left.min, left.max, ray.origin, inv_dir);
-        var tr = aabb_entry(right.min, right.max, ray.origin, inv_dir);
-        if tl > tr {
-            let tn = left;
-            left = right;
-            right = tn;
-            let tt = tl;
-            tl = tr;
-            tr = tt;
-        }
-        var go_left = tl < ray.tmax;
-        if go_left && left.prim_count > 0u {
-            for (var i = left.first_index; i < left.first_index + left.prim_count; i++) {
-                let r = intersect_tri(i, ray);
-                if r.x < ray.tmax {
-                    ray.tmax = r.x;
-                    hit = Hit(r.x, i, r.y, r.z);
+    var i = 0u;
+    while i < scene.num_nodes {
+        let node = bvh_nodes[i];
+        let entered = aabb_entry(node.min, node.max, ray.origin, inv_dir) < ray.tmax;
+        if node.prim_count > 0u {
+            if entered {
+                for (var k = node.index; k < node.index + node.prim_count; k++) {
+                    let r = intersect_tri(k, ray);
+                    if r.x < ray.tmax {
+                        ray.tmax = r.x;
+                        hit = Hit(r.x, k, r.y, r.z);
+                    }
                 }
             }
-            go_left = false;
-        }
-        var go_right = tr < ray.tmax;
-        if go_right && right.prim_count > 0u {
-            for (var i = right.first_index; i < right.first_index + right.prim_count; i++) {
-                let r = intersect_tri(i, ray);
-                if r.x < ray.tmax {
-                    ray.tmax = r.x;
-                    hit = Hit(r.x, i, r.y, r.z);
-                }
-            }
-            go_right = false;
-        }
-        if go_left && go_right {
-            current = left.first_index;
-            if sp < STACK_SIZE {
-                stack[sp] = right.first_index;
-                sp += 1u;
-            }
-        } else if go_left {
-            current = left.first_index;
-        } else if go_right {
-            current = right.first_index;
+            i += 1u;
         } else {
-            if sp == 0u {
-                break;
-            }
-            sp -= 1u;
-            current = stack[sp];
+            i = select(node.index, i + 1u, entered);
         }
     }
     return hit;
@@ -151,62 +96,22 @@ fn trace_closest(ray_in: Ray) -> Hit {
 fn trace_any(ray_in: Ray) -> bool {
     var ray = ray_in;
     ray.tmax = min(ray.tmax, INF);
-    if scene.num_nodes == 0u {
-        return false;
-    }
     let inv_dir = vec3<f32>(safe_inverse(ray.dir.x), safe_inverse(ray.dir.y), safe_inverse(ray.dir.z));
-    var stack: array<u32, STACK_SIZE>;
-    var sp = 0u;
-    let root = bvh_nodes[0];
-    if aabb_entry(root.min, root.max, ray.origin, inv_dir) >= ray.tmax {
-        return false;
-    }
-    if root.prim_count > 0u {
-        for (var i = root.first_index; i < root.first_index + root.prim_count; i++) {
-            if intersect_tri(i, ray).x < ray.tmax {
-                return true;
-            }
-        }
-        return false;
-    }
-    var current = root.first_index;
-    loop {
-        let left = bvh_nodes[current];
-        let right = bvh_nodes[current + 1u];
-        var go_left = aabb_entry(left.min, left.max, ray.origin, inv_dir) < ray.tmax;
-        var go_right = aabb_entry(right.min, right.max, ray.origin, inv_dir) < ray.tmax;
-        if go_left && left.prim_count > 0u {
-            for (var i = left.first_index; i < left.first_index + left.prim_count; i++) {
-                if intersect_tri(i, ray).x < ray.tmax {
-                    return true;
+    var i = 0u;
+    while i < scene.num_nodes {
+        let node = bvh_nodes[i];
+        let entered = aabb_entry(node.min, node.max, ray.origin, inv_dir) < ray.tmax;
+        if node.prim_count > 0u {
+            if entered {
+                for (var k = node.index; k < node.index + node.prim_count; k++) {
+                    if intersect_tri(k, ray).x < ray.tmax {
+                        return true;
+                    }
                 }
             }
-            go_left = false;
-        }
-        if go_right && right.prim_count > 0u {
-            for (var i = right.first_index; i < right.first_index + right.prim_count; i++) {
-                if intersect_tri(i, ray).x < ray.tmax {
-                    return true;
-                }
-            }
-            go_right = false;
-        }
-        if go_left && go_right {
-            current = left.first_index;
-            if sp < STACK_SIZE {
-                stack[sp] = right.first_index;
-                sp += 1u;
-            }
-        } else if go_left {
-            current = left.first_index;
-        } else if go_right {
-            current = right.first_index;
+            i += 1u;
         } else {
-            if sp == 0u {
-                break;
-            }
-            sp -= 1u;
-            current = stack[sp];
+            i = select(node.index, i + 1u, entered);
         }
     }
     return false;

@@ -14,11 +14,13 @@ struct SceneInfo {
     _pad: u32,
 }
 
+// BVH2 in depth-first preorder with skip links (src/bvh.rs): an inner node's first child follows it;
+// `index` is the inner node's skip link (next node after its subtree) or the leaf's first triangle slot.
 struct BvhNode {
     min: vec3<f32>,
     prim_count: u32,
     max: vec3<f32>,
-    first_index: u32,
+    index: u32,
 }
 
 struct Tri {

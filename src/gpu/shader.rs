@@ -104,10 +104,18 @@ pub fn validate(name: &str) -> Result<naga::Module, String> {
 
 /// Creates the shader module for pass `name`.
 pub fn module(device: &wgpu::Device, name: &str) -> wgpu::ShaderModule {
-    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+    let desc = wgpu::ShaderModuleDescriptor {
         label: Some(name),
         source: wgpu::ShaderSource::Wgsl(compose(name).into()),
-    })
+    };
+    let mut checks = wgpu::ShaderRuntimeChecks::checked();
+    if std::env::var_os("FVPL_NO_BOUNDS").is_some() {
+        checks.bounds_checks = false;
+    }
+    if std::env::var_os("FVPL_NO_LOOPBOUND").is_some() {
+        checks.force_loop_bounding = false;
+    }
+    unsafe { device.create_shader_module_trusted(desc, checks) }
 }
 
 #[cfg(test)]

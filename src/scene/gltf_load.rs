@@ -17,10 +17,11 @@ mod uri;
 use super::{
     Camera, LightKind, LoadReport, Material, PunctualLight, Scene, SceneError, Texture, Triangle,
 };
-use glam::{Affine2, Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
+use glam::{Affine2, DMat3, Mat4, Quat, Vec2, Vec3, Vec4};
 use gltf::json::validation::Validate;
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
+use std::collections::hash_map::Entry;
 use std::path::Path;
 
 pub use images::MAX_TEXTURE_SIDE;
@@ -377,6 +378,64 @@ fn finite_or(v: Vec4, fallback: Vec4) -> Vec4 {
     if v.is_finite() { v } else { fallback }
 }
 
+/// Texture decoding state: each glTF image is decoded at most once.
+struct TextureCache<'a> {
+    buffers: &'a [Vec<u8>],
+    base: Option<&'a Path>,
+    /// glTF image index → `textures` index (`None` when it could not be decoded).
+    decoded: HashMap<usize, Option<u32>>,
+    textures: Vec<Texture>,
+}
+
+impl TextureCache<'_> {
+    /// The scene texture and uv transform for a material's texture slot, or `None` (with a warning
+    /// when the slot is set but unusable) so the material falls back to its factor.
+    fn resolve(
+        &mut self,
+        info: Option<gltf::texture::Info>,
+        what: &str,
+        report: &mut LoadReport,
+    ) -> Option<(u32, Option<Affine2>)> {
+        let info = info?;
+        let set = info
+            .texture_transform()
+            .and_then(|t| t.tex_coord())
+            .unwrap_or(info.tex_coord());
+        if set != 0 {
+            report.warnings.push(format!(
+                "{what} uses TEXCOORD_{set}; only TEXCOORD_0 is supported, texture ignored"
+            ));
+            return None;
+        }
+        let image = info.texture().source();
+        let index = *self.decoded.entry(image.index()).or_insert_with(|| {
+            let label = images::image_name(&image);
+            // A decoder crash on a hostile image costs the texture, not the scene.
+            let decoded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                images::encoded_bytes(&image, self.buffers, self.base)
+                    .and_then(|bytes| images::decode(&bytes, &label))
+            }))
+            .unwrap_or_else(|_| {
+                let msg = PANIC_MESSAGE.with(|m| m.borrow_mut().take());
+                Err(format!("the image decoder crashed: {}", msg.unwrap_or_default()))
+            });
+            match decoded {
+                Ok(t) => {
+                    self.textures.push(t);
+                    Some((self.textures.len() - 1) as u32)
+                }
+                Err(e) => {
+                    report.warnings.push(format!(
+                        "texture image '{label}' not usable ({e}); materials using it fall back to their factors"
+                    ));
+                    None
+                }
+            }
+        });
+        Some((index?, texture_transform(&info)))
+    }
+}
+
 /// Builds the material table; textures are decoded once per glTF image actually used.
 fn load_materials(
     doc: &gltf::Document,
@@ -384,9 +443,12 @@ fn load_materials(
     base: Option<&Path>,
     report: &mut LoadReport,
 ) -> (MaterialTable, Vec<Texture>) {
-    let mut textures = Vec::new();
-    // glTF image index → Scene texture (None when it could not be decoded).
-    let mut decoded: HashMap<usize, Option<u32>> = HashMap::new();
+    let mut cache = TextureCache {
+        buffers,
+        base,
+        decoded: HashMap::new(),
+        textures: Vec::new(),
+    };
     let mut table = MaterialTable {
         materials: Vec::new(),
         uv_transform: Vec::new(),
@@ -421,68 +483,45 @@ fn load_materials(
             Vec3::ZERO
         };
 
-        let mut uv_transform = None;
-        let mut texture = |info: Option<gltf::texture::Info>,
-                           slot: &str,
-                           report: &mut LoadReport,
-                           textures: &mut Vec<Texture>|
-         -> Option<u32> {
-            let info = info?;
-            let xf = texture_transform(&info);
-            let set = info
-                .texture_transform()
-                .and_then(|t| t.tex_coord())
-                .unwrap_or(info.tex_coord());
-            if set != 0 {
-                report.warnings.push(format!(
-                    "material '{name}': {slot} texture uses TEXCOORD_{set}; only TEXCOORD_0 is supported, texture ignored"
-                ));
-                return None;
-            }
-            match (uv_transform, xf) {
-                (None, Some(x)) => uv_transform = Some(x),
-                (Some(a), Some(b)) if !a.abs_diff_eq(b, 1e-6) => report.warnings.push(format!(
-                    "material '{name}': base colour and emissive textures use different KHR_texture_transform; the base colour one is used"
-                )),
-                _ => {}
-            }
-            let image = info.texture().source();
-            *decoded.entry(image.index()).or_insert_with(|| {
-                let label = images::image_name(&image);
-                match images::encoded_bytes(&image, buffers, base)
-                    .and_then(|bytes| images::decode(&bytes, &label))
-                {
-                    Ok(t) => {
-                        textures.push(t);
-                        Some((textures.len() - 1) as u32)
-                    }
-                    Err(e) => {
-                        report.warnings.push(format!(
-                            "texture image '{label}' not usable ({e}); its materials use their factors only"
-                        ));
-                        None
-                    }
-                }
-            })
-        };
-        let base_color_texture = texture(
+        let base_tex = cache.resolve(
             pbr.base_color_texture(),
-            "base colour",
+            &format!("material '{name}': the base colour texture"),
             report,
-            &mut textures,
         );
-        let emissive_texture = texture(m.emissive_texture(), "emissive", report, &mut textures);
+        let emissive_tex = cache.resolve(
+            m.emissive_texture(),
+            &format!("material '{name}': the emissive texture"),
+            report,
+        );
+        // Triangles carry one uv set, so one KHR_texture_transform per material: the base colour
+        // texture's when there is one.
+        let uv_transform = match (base_tex, emissive_tex) {
+            (Some((_, a)), Some((_, b))) => {
+                let same = match (a, b) {
+                    (Some(a), Some(b)) => a.abs_diff_eq(b, 1e-6),
+                    (a, b) => a.is_none() && b.is_none(),
+                };
+                if !same {
+                    report.warnings.push(format!(
+                        "material '{name}': base colour and emissive textures have different KHR_texture_transform; the base colour one is used for both"
+                    ));
+                }
+                a
+            }
+            (Some((_, a)), None) | (None, Some((_, a))) => a,
+            (None, None) => None,
+        };
 
         table.materials.push(Material {
             name,
             base_color: clamped,
-            base_color_texture,
+            base_color_texture: base_tex.map(|t| t.0),
             emissive,
-            emissive_texture,
+            emissive_texture: emissive_tex.map(|t| t.0),
         });
         table.uv_transform.push(uv_transform);
     }
-    (table, textures)
+    (table, cache.textures)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -598,7 +637,7 @@ fn decode_primitive(
 
     let tris: Vec<[u32; 3]> = match mode {
         Mode::Triangles => {
-            if indices.len() % 3 != 0 {
+            if !indices.len().is_multiple_of(3) {
                 report.warnings.push(format!(
                     "{label}: {} indices is not a multiple of 3, the last {} ignored",
                     indices.len(),
@@ -734,9 +773,12 @@ fn emit(
             "node {node}: a vertex position is not finite after the node transform ({p})"
         ));
     }
-    let m3 = Mat3::from_mat4(*world);
+    // In f64 so that tiny (or huge) scales keep a usable determinant sign and inverse.
+    let m3 = DMat3::from_mat4(world.as_dmat4());
     let det = m3.determinant();
-    let normal_matrix = (det != 0.0 && det.is_finite()).then(|| m3.inverse().transpose());
+    let normal_matrix = (det != 0.0 && det.is_finite())
+        .then(|| m3.inverse().transpose().as_mat3())
+        .filter(|m| m.is_finite());
     let world_n: Option<Vec<Vec3>> = match (normals, normal_matrix) {
         (Some(ns), Some(nm)) => Some(
             ns.iter()
@@ -955,18 +997,17 @@ fn load_bytes(bytes: &[u8], base: Option<&Path>, glb_name: bool) -> Result<Scene
                 );
             }
             for prim in mesh.primitives() {
-                let key = (mesh.index(), prim.index());
-                if !primitives.contains_key(&key) {
-                    let p = decode_primitive(&prim, &mesh, &buffers, &mut table, &mut report)?;
-                    primitives.insert(key, p);
-                }
-                emit(
-                    &primitives[&key],
-                    &world,
-                    i,
-                    &table.uv_transform,
-                    &mut triangles,
-                )?;
+                let decoded = match primitives.entry((mesh.index(), prim.index())) {
+                    Entry::Occupied(e) => e.into_mut(),
+                    Entry::Vacant(e) => e.insert(decode_primitive(
+                        &prim,
+                        &mesh,
+                        &buffers,
+                        &mut table,
+                        &mut report,
+                    )?),
+                };
+                emit(decoded, &world, i, &table.uv_transform, &mut triangles)?;
             }
         }
         if let Some(light) = node.light()
@@ -997,7 +1038,7 @@ fn load_bytes(bytes: &[u8], base: Option<&Path>, glb_name: bool) -> Result<Scene
     triangles.retain(|t| !is_degenerate(t, extent_sq));
     report.dropped_degenerate = before - triangles.len();
     for t in &mut triangles {
-        if t.n.iter().any(|n| *n == Vec3::ZERO) {
+        if t.n.contains(&Vec3::ZERO) {
             let face = t.geometric_normal();
             for n in &mut t.n {
                 if *n == Vec3::ZERO {
@@ -1025,4 +1066,48 @@ fn load_bytes(bytes: &[u8], base: Option<&Path>, glb_name: bool) -> Result<Scene
         cameras,
         report,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn panics_become_one_line_errors() {
+        let e = guarded("boom.glb", || panic!("kaboom\nsecond line")).unwrap_err();
+        let msg = e.to_string();
+        assert!(msg.starts_with("boom.glb: internal error"), "{msg}");
+        assert!(msg.contains("kaboom second line"), "{msg}");
+        assert!(!msg.contains('\n'));
+        // The guard is released: ordinary panics still propagate to catch_unwind callers.
+        assert!(std::panic::catch_unwind(|| panic!("outside")).is_err());
+        assert!(!QUIET_PANICS.with(Cell::get));
+    }
+
+    #[test]
+    fn problems_are_flattened_to_one_line() {
+        let e = guarded("x.gltf", || Err("a\n  b\r\nc".into())).unwrap_err();
+        assert_eq!(e.to_string(), "x.gltf: a b c");
+    }
+
+    #[test]
+    fn versions() {
+        assert!(check_version("2.0").is_ok());
+        assert!(check_version("2.1").is_ok());
+        assert!(
+            check_version("1.0")
+                .unwrap_err()
+                .contains("glTF 1.0 is not supported")
+        );
+        assert!(
+            check_version("1")
+                .unwrap_err()
+                .contains("glTF 1.0 is not supported")
+        );
+        assert!(
+            check_version("3.0")
+                .unwrap_err()
+                .contains("unsupported glTF version")
+        );
+    }
 }
