@@ -99,6 +99,19 @@ struct RenderArgs {
     /// Render N times; timings are the mean of the 3 best (the paper's method).
     #[arg(long, default_value_t = 1)]
     repeat: u32,
+    /// Number of VPLs (traced once, resident).
+    #[arg(long, default_value_t = 8192)]
+    vpls: u32,
+    /// Indirect light without any clustering: every pixel gathers every VPL with its own shadow ray
+    /// (Eq. 5; the paper's reference).
+    #[arg(long)]
+    reference: bool,
+    /// G-term clamp: the VPL distance in 1/d² is at least CLAMP × scene diagonal (scale-free).
+    #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_CLAMP)]
+    clamp: f32,
+    /// Write a false-colour per-pixel error image against --compare (log10 rel. error, -4..0).
+    #[arg(long, requires = "compare")]
+    error_map: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -243,11 +256,26 @@ fn render(a: RenderArgs) -> Result<()> {
     };
     let ctx = GpuContext::new_headless()?;
     let mut renderer = Renderer::new(&ctx, &scene)?;
+    if !(a.clamp.is_finite() && a.clamp >= 0.0 && a.clamp < 1.0) {
+        return Err(bad(format!("--clamp {}: must be in [0, 1)", a.clamp)));
+    }
+    if let Some(p) = &a.error_map
+        && p.extension().and_then(|e| e.to_str()) != Some("png")
+    {
+        return Err(bad(format!(
+            "{}: --error-map must end in .png",
+            p.display()
+        )));
+    }
     let settings = FrameSettings {
         width: a.width,
         height: a.height,
         seed: a.seed,
         direct_samples: a.direct_samples.max(1),
+        vpls: a.vpls,
+        reference: a.reference,
+        clamp: a.clamp,
+        progress: true,
     };
     let mut runs = Vec::new();
     let mut frame = None;
@@ -273,6 +301,14 @@ fn render(a: RenderArgs) -> Result<()> {
         &frame.radiance,
         a.exposure,
     )?;
+    if let (Some(p), Some(r)) = (&a.error_map, &reference) {
+        export::write_png_rgb8(
+            p,
+            frame.width,
+            frame.height,
+            metrics::error_map(&frame.radiance, r),
+        )?;
+    }
     let error = reference.as_ref().map(|r| stats::ErrorStats {
         mse: metrics::mse(&frame.radiance, r),
         rel_mse: metrics::rel_mse(&frame.radiance, r),
@@ -295,21 +331,23 @@ fn render(a: RenderArgs) -> Result<()> {
             height: frame.height,
             adapter: ctx.adapter_name.clone(),
             settings: stats::Settings {
-                vpls: 0,
+                vpls: frame.vpls,
                 vpl_clusters: 0,
                 sp_clusters: 0,
                 fuzziness: 1,
                 gamma: 1,
                 normal_threshold: 0.866,
                 weighting: "hard".into(),
-                reference: false,
+                reference: a.reference,
                 seed: a.seed,
                 direct_samples: settings.direct_samples,
                 light_scale: a.scene.light_scale,
                 exposure: a.exposure,
+                clamp: a.clamp,
             },
             counts: stats::Counts {
                 triangles: scene.triangles.len() as u64,
+                vpls: frame.vpls as u64,
                 shading_points: frame.shading_points as u64,
                 shadow_rays: frame.shadow_rays,
                 emissive_triangles: renderer.gpu.emitters.len() as u64,

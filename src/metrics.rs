@@ -35,6 +35,35 @@ pub fn mean_luminance(img: &[[f32; 3]]) -> f64 {
     img.iter().map(|p| luminance(*p) as f64).sum::<f64>() / img.len().max(1) as f64
 }
 
+/// A false-colour image of the per-pixel relative error (mean over RGB of (x − ref)² / (ref² + 0.01)),
+/// log10 mapped from 1e-4 (dark blue) to 1 (red), RGB8.
+pub fn error_map(x: &[[f32; 3]], reference: &[[f32; 3]]) -> Vec<u8> {
+    x.iter()
+        .zip(reference)
+        .flat_map(|(a, b)| {
+            let e = rel_mse(&[*a], &[*b]);
+            let t = ((e.max(1e-12).log10() + 4.0) / 4.0).clamp(0.0, 1.0) as f32;
+            ramp(t).map(|c| (c * 255.0 + 0.5) as u8)
+        })
+        .collect()
+}
+
+/// A blue → cyan → green → yellow → red ramp.
+fn ramp(t: f32) -> [f32; 3] {
+    let stops = [
+        [0.05, 0.05, 0.35],
+        [0.0, 0.6, 0.9],
+        [0.1, 0.8, 0.2],
+        [0.95, 0.9, 0.1],
+        [0.9, 0.1, 0.05],
+    ];
+    let f = t * (stops.len() - 1) as f32;
+    let i = (f as usize).min(stops.len() - 2);
+    let w = f - i as f32;
+    let (a, b) = (stops[i], stops[i + 1]);
+    [0, 1, 2].map(|c| a[c] + (b[c] - a[c]) * w)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -18,6 +18,8 @@ pub struct Settings {
     pub direct_samples: u32,
     pub light_scale: f32,
     pub exposure: f32,
+    /// G-term clamp as a fraction of the scene diagonal.
+    pub clamp: f32,
 }
 
 #[derive(Clone, Debug, Default, Serialize)]
@@ -65,6 +67,7 @@ pub const TIMING_KEYS: &[&str] = &[
     "visibility",
     "shade",
     "direct",
+    "reference",
     "frame",
 ];
 

@@ -15,6 +15,7 @@ fn settings(w: u32, h: u32, spp: u32) -> FrameSettings {
         height: h,
         seed: 7,
         direct_samples: spp,
+        ..Default::default()
     }
 }
 

@@ -8,12 +8,27 @@ use std::path::{Path, PathBuf};
 // ---------------------------------------------------------------------------------------------
 // Helpers
 
-/// A fresh, empty directory for one test.
-fn temp_dir(test: &str) -> PathBuf {
+/// A fresh, empty directory for one test, removed when dropped.
+struct TempDir(PathBuf);
+
+impl std::ops::Deref for TempDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn temp_dir(test: &str) -> TempDir {
     let dir = std::env::temp_dir().join(format!("fuzzy-vpl-scene-{}-{test}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    dir
+    TempDir(dir)
 }
 
 fn b64(data: &[u8]) -> String {

@@ -5,6 +5,10 @@ struct Chunk {
     count: u32,
     seed: u32,
     _pad: u32,
+    // A second range for two-dimensional work (e.g. pixels x VPLs): [sub_offset, sub_offset + sub_count).
+    sub_offset: u32,
+    sub_count: u32,
+    _pad2: vec2<u32>,
 }
 
 @group(1) @binding(0) var<uniform> chunk: Chunk;

@@ -19,6 +19,9 @@ pub struct Chunk {
     pub count: u32,
     pub seed: u32,
     pub _pad: u32,
+    pub sub_offset: u32,
+    pub sub_count: u32,
+    pub _pad2: [u32; 2],
 }
 
 pub struct Kernel {
@@ -120,37 +123,81 @@ impl Kernel {
         seed: u32,
         progress: &mut dyn FnMut(u32, u32),
     ) {
+        self.run_2d(
+            ctx,
+            profiler,
+            label,
+            scene,
+            group,
+            (total, per_chunk),
+            (1, 1),
+            seed,
+            &mut |done, all| progress(done as u32, all as u32),
+        )
+    }
+
+    /// Like `run`, over items × a second range (`sub`: total, per chunk), e.g. pixels × VPLs. Each
+    /// submission covers one item range and one sub range; `progress` gets (chunks done, chunks).
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_2d(
+        &self,
+        ctx: &GpuContext,
+        profiler: &mut Profiler,
+        label: &str,
+        scene: &SceneGpu,
+        group: &wgpu::BindGroup,
+        items: (u32, u32),
+        sub: (u32, u32),
+        seed: u32,
+        progress: &mut dyn FnMut(u64, u64),
+    ) {
+        let (total, per_chunk) = items;
         let per_chunk = per_chunk.clamp(WORKGROUP, WORKGROUP * MAX_GROUPS_X);
+        let (sub_total, sub_per) = (sub.0, sub.1.max(1));
+        let chunks = total.div_ceil(per_chunk) as u64 * sub_total.div_ceil(sub_per).max(1) as u64;
+        let mut done = 0u64;
         let mut offset = 0;
         while offset < total {
             let count = per_chunk.min(total - offset);
-            let c = Chunk {
-                offset,
-                count,
-                seed,
-                _pad: 0,
-            };
-            ctx.queue
-                .write_buffer(&self.chunk, 0, bytemuck::bytes_of(&c));
-            let mut enc = ctx.device.create_command_encoder(&Default::default());
-            {
-                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some(label),
-                    timestamp_writes: profiler.pass(label),
+            let mut sub_offset = 0;
+            loop {
+                let sub_count = sub_per.min(sub_total.saturating_sub(sub_offset));
+                let c = Chunk {
+                    offset,
+                    count,
+                    seed,
+                    _pad: 0,
+                    sub_offset,
+                    sub_count,
+                    _pad2: [0; 2],
+                };
+                ctx.queue
+                    .write_buffer(&self.chunk, 0, bytemuck::bytes_of(&c));
+                let mut enc = ctx.device.create_command_encoder(&Default::default());
+                {
+                    let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some(label),
+                        timestamp_writes: profiler.pass(label),
+                    });
+                    pass.set_pipeline(&self.pipeline);
+                    pass.set_bind_group(0, &scene.bind_group, &[]);
+                    pass.set_bind_group(1, group, &[]);
+                    pass.dispatch_workgroups(count.div_ceil(WORKGROUP), 1, 1);
+                }
+                ctx.queue.submit([enc.finish()]);
+                // Waiting keeps each submission short and bounded on software drivers.
+                let _ = ctx.device.poll(wgpu::PollType::Wait {
+                    submission_index: None,
+                    timeout: None,
                 });
-                pass.set_pipeline(&self.pipeline);
-                pass.set_bind_group(0, &scene.bind_group, &[]);
-                pass.set_bind_group(1, group, &[]);
-                pass.dispatch_workgroups(count.div_ceil(WORKGROUP), 1, 1);
+                done += 1;
+                progress(done, chunks);
+                sub_offset += sub_count;
+                if sub_offset >= sub_total {
+                    break;
+                }
             }
-            ctx.queue.submit([enc.finish()]);
             offset += count;
-            // Waiting keeps each submission short and bounded on software drivers.
-            let _ = ctx.device.poll(wgpu::PollType::Wait {
-                submission_index: None,
-                timeout: None,
-            });
-            progress(offset, total);
         }
     }
 }

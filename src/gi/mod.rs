@@ -3,7 +3,10 @@
 
 pub mod direct;
 pub mod dispatch;
+pub mod pathtrace;
 pub mod pipeline;
 pub mod primary;
 pub mod raycast;
+pub mod reference;
 pub mod scene_gpu;
+pub mod vpl_trace;

@@ -20,16 +20,18 @@ pub struct GpuContext {
 /// Limits requested explicitly: what our passes need, clamped to what the adapter has. lavapipe allows
 /// 1024 invocations per workgroup, 32 KiB workgroup memory and 128 MiB per storage binding.
 pub fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
-    let mut l = wgpu::Limits::default();
-    l.max_storage_buffers_per_shader_stage = adapter.max_storage_buffers_per_shader_stage.min(16);
-    l.max_storage_buffer_binding_size = adapter.max_storage_buffer_binding_size;
-    l.max_buffer_size = adapter.max_buffer_size;
-    l.max_compute_invocations_per_workgroup =
-        adapter.max_compute_invocations_per_workgroup.min(1024);
-    l.max_compute_workgroup_storage_size = adapter.max_compute_workgroup_storage_size.min(32768);
-    l.max_compute_workgroups_per_dimension = adapter.max_compute_workgroups_per_dimension;
-    l.max_bind_groups = adapter.max_bind_groups.min(4);
-    l
+    wgpu::Limits {
+        max_storage_buffers_per_shader_stage: adapter.max_storage_buffers_per_shader_stage.min(16),
+        max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
+        max_buffer_size: adapter.max_buffer_size,
+        max_compute_invocations_per_workgroup: adapter
+            .max_compute_invocations_per_workgroup
+            .min(1024),
+        max_compute_workgroup_storage_size: adapter.max_compute_workgroup_storage_size.min(32768),
+        max_compute_workgroups_per_dimension: adapter.max_compute_workgroups_per_dimension,
+        max_bind_groups: adapter.max_bind_groups.min(4),
+        ..Default::default()
+    }
 }
 
 impl GpuContext {

@@ -4,52 +4,29 @@
 
 use std::collections::HashSet;
 
+macro_rules! wgsl {
+    ($($path:literal),* $(,)?) => {
+        &[$(($path, include_str!(concat!("../../shaders-wgsl/", $path)))),*]
+    };
+}
+
 /// Every WGSL file of the project, by path relative to `shaders-wgsl/`.
-pub const FILES: &[(&str, &str)] = &[
-    (
-        "common/scene.wgsl",
-        include_str!("../../shaders-wgsl/common/scene.wgsl"),
-    ),
-    (
-        "common/bvh.wgsl",
-        include_str!("../../shaders-wgsl/common/bvh.wgsl"),
-    ),
-    (
-        "common/rng.wgsl",
-        include_str!("../../shaders-wgsl/common/rng.wgsl"),
-    ),
-    (
-        "common/sampling.wgsl",
-        include_str!("../../shaders-wgsl/common/sampling.wgsl"),
-    ),
-    (
-        "common/surface.wgsl",
-        include_str!("../../shaders-wgsl/common/surface.wgsl"),
-    ),
-    (
-        "common/lights.wgsl",
-        include_str!("../../shaders-wgsl/common/lights.wgsl"),
-    ),
-    (
-        "common/chunk.wgsl",
-        include_str!("../../shaders-wgsl/common/chunk.wgsl"),
-    ),
-    (
-        "common/gbuffer.wgsl",
-        include_str!("../../shaders-wgsl/common/gbuffer.wgsl"),
-    ),
-    (
-        "raycast.wgsl",
-        include_str!("../../shaders-wgsl/raycast.wgsl"),
-    ),
-    (
-        "primary.wgsl",
-        include_str!("../../shaders-wgsl/primary.wgsl"),
-    ),
-    (
-        "direct.wgsl",
-        include_str!("../../shaders-wgsl/direct.wgsl"),
-    ),
+pub const FILES: &[(&str, &str)] = wgsl![
+    "common/scene.wgsl",
+    "common/bvh.wgsl",
+    "common/rng.wgsl",
+    "common/sampling.wgsl",
+    "common/surface.wgsl",
+    "common/lights.wgsl",
+    "common/chunk.wgsl",
+    "common/gbuffer.wgsl",
+    "common/vpl.wgsl",
+    "raycast.wgsl",
+    "primary.wgsl",
+    "direct.wgsl",
+    "vpl_trace.wgsl",
+    "reference.wgsl",
+    "pathtrace.wgsl",
 ];
 
 /// The pass shaders (top-level files), each composed and validated on its own.

@@ -61,8 +61,8 @@ impl Default for Material {
     }
 }
 
-/// An 8-bit RGBA texture. `srgb` says whether texel values are sRGB-encoded (base colour and emissive
-/// textures are, per the glTF spec); the GPU decodes on fetch.
+/// An 8-bit RGBA texture. Base colour and emissive textures are sRGB-encoded (glTF spec); the GPU
+/// decodes on fetch. Sampling wraps (repeat).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
     pub name: String,
@@ -89,7 +89,7 @@ pub struct PunctualLight {
     pub position: Vec3,
     /// Unit direction the light travels along (spot axis / sun rays). Unused for point lights.
     pub direction: Vec3,
-    /// Linear RGB colour × intensity.
+    /// Linear RGB colour; the emitted quantity is `color × intensity`.
     pub color: Vec3,
     pub intensity: f32,
 }
@@ -206,8 +206,8 @@ impl Scene {
             .any(|m| m.base_color_texture.is_some() || m.emissive_texture.is_some())
     }
 
-    /// The default view: the Nth glTF camera if asked and present, else the first camera, else a view
-    /// framing the bounds from the +Z side (looking down -Z, +Y up), slightly raised.
+    /// The default view: the first glTF camera, else a view framing the bounds from the +Z side
+    /// (looking down -Z, +Y up), slightly raised.
     pub fn default_camera(&self) -> Camera {
         if let Some(c) = self.cameras.first() {
             return c.clone();

@@ -1,0 +1,53 @@
+// The unclustered reference (Eq. 5): every shading point gathers every VPL with its own shadow ray.
+// Runs as bounded dispatches over pixel ranges x VPL ranges, accumulating into `indirect`.
+#import common/bvh.wgsl
+#import common/chunk.wgsl
+#import common/gbuffer.wgsl
+#import common/vpl.wgsl
+
+struct RefParams {
+    d_min2: f32,
+    _a: u32,
+    _b: u32,
+    _c: u32,
+}
+
+@group(1) @binding(1) var<uniform> params: RefParams;
+@group(1) @binding(2) var<storage, read> gbuffer: array<ShadingPoint>;
+@group(1) @binding(3) var<storage, read> vpls: array<Vpl>;
+@group(1) @binding(4) var<storage, read_write> indirect: array<vec4<f32>>;
+
+// V(p, q) of Eq. (5): the segment from p (offset along n) to q (offset along the VPL normal) is free.
+fn vpl_visible(p: vec3<f32>, n: vec3<f32>, q: vec3<f32>, qn: vec3<f32>) -> bool {
+    let o = offset_origin(p, n);
+    let t = offset_origin(q, qn);
+    let d = t - o;
+    let dist = length(d);
+    if !(dist > 0.0) {
+        return false;
+    }
+    return !trace_any(Ray(o, d / dist, 0.0, dist * (1.0 - 1e-4)));
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = chunk_item(gid, nwg);
+    if i == INVALID {
+        return;
+    }
+    let sp = gbuffer[i];
+    if sp.pos.w <= 0.0 {
+        return;
+    }
+    let p = sp.pos.xyz;
+    let n = sp.nrm.xyz;
+    var sum = vec3<f32>(0.0);
+    for (var j = chunk.sub_offset; j < chunk.sub_offset + chunk.sub_count; j++) {
+        let v = vpls[j];
+        let c = vpl_term(p, n, sp.albedo.xyz, v, params.d_min2);
+        if any(c > vec3<f32>(0.0)) && vpl_visible(p, n, v.pos.xyz, v.nrm.xyz) {
+            sum += c;
+        }
+    }
+    indirect[i] += vec4<f32>(sum, 0.0);
+}

@@ -1,0 +1,97 @@
+//! A diffuse GPU path tracer over the same BVH and materials (`shaders-wgsl/pathtrace.wgsl`), used to
+//! measure the VPL reference's own bias (docs/reference.md). Progressive: each dispatch adds samples.
+
+use anyhow::Result;
+use bytemuck::{Pod, Zeroable};
+
+use super::dispatch::Kernel;
+use super::primary::CameraParams;
+use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
+use super::vpl_trace::MAX_DEPTH;
+use crate::gpu::{GpuContext, profiler::Profiler};
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct PtParams {
+    width: u32,
+    height: u32,
+    max_vertices: u32,
+    spp: u32,
+    eye: [f32; 4],
+    right: [f32; 4],
+    up: [f32; 4],
+    forward: [f32; 4],
+}
+
+pub struct PathTrace {
+    kernel: Kernel,
+}
+
+impl PathTrace {
+    pub fn new(ctx: &GpuContext, scene: &SceneGpu) -> Self {
+        let entries = [uniform_layout(1), storage_layout(2, false)];
+        PathTrace {
+            kernel: Kernel::new(ctx, scene, "pathtrace", &entries, &[]),
+        }
+    }
+
+    /// Renders `spp` samples per pixel (in passes of `spp_per_pass`) and returns the mean radiance.
+    /// Paths have at most MAX_DEPTH + 1 surface vertices: the light transport the VPLs carry (a VPL
+    /// path has at most MAX_DEPTH reflections before the shading point's own).
+    #[allow(clippy::too_many_arguments)]
+    pub fn render(
+        &self,
+        ctx: &GpuContext,
+        scene: &SceneGpu,
+        profiler: &mut Profiler,
+        cam: &CameraParams,
+        spp: u32,
+        spp_per_pass: u32,
+        seed: u32,
+    ) -> Result<Vec<[f32; 3]>> {
+        let (w, h) = (cam.size[0], cam.size[1]);
+        let n = w * h;
+        let accum = ctx.storage("pt accum", n as u64 * 16);
+        let mut done = 0;
+        let mut pass = 0;
+        while done < spp {
+            let k = spp_per_pass.min(spp - done).max(1);
+            let params = ctx.uniform(
+                "pt params",
+                &PtParams {
+                    width: w,
+                    height: h,
+                    max_vertices: MAX_DEPTH + 1,
+                    spp: k,
+                    eye: cam.eye,
+                    right: cam.right,
+                    up: cam.up,
+                    forward: cam.forward,
+                },
+            );
+            let bg = self.kernel.bind_group(ctx, &[(1, &params), (2, &accum)]);
+            let per = ((1u32 << 18) / k).max(64);
+            self.kernel.run(
+                ctx,
+                profiler,
+                "pathtrace",
+                scene,
+                &bg,
+                n,
+                per,
+                seed.wrapping_mul(7919).wrapping_add(pass),
+                &mut |_, _| {},
+            );
+            done += k;
+            pass += 1;
+        }
+        let acc: Vec<[f32; 4]> = ctx.read_buffer(&accum, n as usize)?;
+        Ok(acc
+            .iter()
+            .map(|a| {
+                let c = a[3].max(1.0);
+                [a[0] / c, a[1] / c, a[2] / c]
+            })
+            .collect())
+    }
+}

@@ -1,0 +1,79 @@
+//! The unclustered reference (Eq. 5, `shaders-wgsl/reference.wgsl`): every shading point gathers every
+//! VPL with its own shadow ray, in bounded dispatches over pixel ranges × VPL ranges.
+
+use bytemuck::{Pod, Zeroable};
+
+use super::dispatch::Kernel;
+use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
+use crate::gpu::{GpuContext, profiler::Profiler};
+
+/// Shadow rays per submission: about a second of lavapipe work.
+pub const RAYS_PER_SUBMISSION: u32 = 1 << 20;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct RefParams {
+    pub d_min2: f32,
+    pub _pad: [u32; 3],
+}
+
+pub struct Reference {
+    kernel: Kernel,
+}
+
+impl Reference {
+    pub fn new(ctx: &GpuContext, scene: &SceneGpu) -> Self {
+        let entries = [
+            uniform_layout(1),
+            storage_layout(2, true),
+            storage_layout(3, true),
+            storage_layout(4, false),
+        ];
+        Reference {
+            kernel: Kernel::new(ctx, scene, "reference", &entries, &[]),
+        }
+    }
+
+    /// Adds the VPLs' light to `indirect` (vec4 per pixel, zeroed by the caller).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        scene: &SceneGpu,
+        profiler: &mut Profiler,
+        gbuffer: &wgpu::Buffer,
+        vpls: &wgpu::Buffer,
+        num_vpls: u32,
+        indirect: &wgpu::Buffer,
+        pixels: u32,
+        d_min: f32,
+        progress: &mut dyn FnMut(u64, u64),
+    ) {
+        if num_vpls == 0 || pixels == 0 {
+            return;
+        }
+        let params = ctx.uniform(
+            "reference params",
+            &RefParams {
+                d_min2: d_min * d_min,
+                _pad: [0; 3],
+            },
+        );
+        let bg = self
+            .kernel
+            .bind_group(ctx, &[(1, &params), (2, gbuffer), (3, vpls), (4, indirect)]);
+        let px_chunk = pixels.min(1 << 14);
+        let vpl_chunk = (RAYS_PER_SUBMISSION / px_chunk).clamp(1, num_vpls);
+        self.kernel.run_2d(
+            ctx,
+            profiler,
+            "reference",
+            scene,
+            &bg,
+            (pixels, px_chunk),
+            (num_vpls, vpl_chunk),
+            0,
+            progress,
+        );
+    }
+}

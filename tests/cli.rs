@@ -1,0 +1,285 @@
+//! The `fuzzy-vpl` binary: exit codes, outputs, stats JSON, bad input.
+
+mod common;
+
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_fuzzy-vpl"))
+}
+
+fn run(args: &[&str]) -> (i32, String, String) {
+    let o = bin().args(args).output().unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+/// The lines of stderr that are ours (drivers may print their own).
+fn error_lines(stderr: &str) -> Vec<&str> {
+    stderr
+        .lines()
+        .filter(|l| l.starts_with("error: "))
+        .collect()
+}
+
+#[test]
+fn no_arguments_says_how_to_render() {
+    let (code, out, _) = run(&[]);
+    assert_eq!(code, 0);
+    assert!(out.contains("fuzzy-vpl render builtin:cornell"), "{out}");
+}
+
+#[test]
+fn render_cornell_128_exr_with_stats() {
+    let d = common::scratch("cli-exr");
+    let exr = d.join("c.exr");
+    let stats = d.join("s.json");
+    let (code, _, err) = run(&[
+        "render",
+        "builtin:cornell",
+        "-o",
+        exr.to_str().unwrap(),
+        "--width",
+        "128",
+        "--height",
+        "128",
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (w, h, px) = fuzzy_vpl::export::read_exr(&exr).unwrap();
+    assert_eq!((w, h), (128, 128));
+    assert!(common::all_finite(&px));
+    assert!(fuzzy_vpl::metrics::mean_luminance(&px) > 0.02);
+    // An independent OpenEXR reader (Debian's openexr tools) opens it as float RGB.
+    let o = Command::new("exrheader")
+        .arg(&exr)
+        .output()
+        .expect("exrheader not found: apt-get install openexr");
+    let header = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{header}");
+    for c in [
+        "R, 32-bit floating-point",
+        "G, 32-bit floating-point",
+        "B, 32-bit floating-point",
+    ] {
+        assert!(header.contains(c), "{header}");
+    }
+    assert!(header.contains("(0 0) - (127 127)"), "{header}");
+    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    for k in [
+        "scene",
+        "width",
+        "height",
+        "adapter",
+        "settings",
+        "counts",
+        "passes",
+        "timings_ms",
+    ] {
+        assert!(j.get(k).is_some(), "stats lack {k}");
+    }
+    for k in fuzzy_vpl::stats::TIMING_KEYS {
+        assert!(j["timings_ms"][k].is_number(), "timings_ms lacks {k}");
+    }
+    assert!(j["timings_ms"]["frame"].as_f64().unwrap() > 0.0);
+    assert_eq!(j["counts"]["triangles"], 32);
+    assert!(j.get("error").is_none());
+    // No temporary files left beside the outputs.
+    let names: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names.len(), 2, "{names:?}");
+}
+
+#[test]
+fn compare_fills_error_and_writes_error_map() {
+    let d = common::scratch("cli-compare");
+    let r = d.join("ref.exr");
+    let base = [
+        "render",
+        "builtin:cornell",
+        "--width",
+        "32",
+        "--height",
+        "32",
+    ];
+    let (code, _, err) = run(&[&base[..], &["-o", r.to_str().unwrap(), "--seed", "1"]].concat());
+    assert_eq!(code, 0, "{err}");
+    let stats = d.join("s.json");
+    let map = d.join("err.png");
+    let (code, _, err) = run(&[
+        &base[..],
+        &[
+            "-o",
+            d.join("x.png").to_str().unwrap(),
+            "--seed",
+            "2",
+            "--compare",
+            r.to_str().unwrap(),
+            "--error-map",
+            map.to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+        ],
+    ]
+    .concat());
+    assert_eq!(code, 0, "{err}");
+    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    let mse = j["error"]["mse"].as_f64().unwrap();
+    let rel = j["error"]["rel_mse"].as_f64().unwrap();
+    // Different seeds: small, non-zero noise difference.
+    assert!(mse > 0.0 && mse < 0.01, "mse {mse}");
+    assert!(rel > 0.0 && rel < 0.1, "rel_mse {rel}");
+    assert!(image::open(&map).unwrap().width() == 32);
+}
+
+#[test]
+fn bad_input_exits_2_with_one_line() {
+    let d = common::scratch("cli-bad");
+    let missing = d.join("nope.gltf");
+    let out = d.join("o.png");
+    let bad_json = d.join("bad.gltf");
+    std::fs::write(&bad_json, "{ not json").unwrap();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec![
+                "render".into(),
+                missing.display().to_string(),
+                "-o".into(),
+                out.display().to_string(),
+            ],
+            "nope.gltf",
+        ),
+        (
+            vec!["info".into(), bad_json.display().to_string()],
+            "bad.gltf",
+        ),
+        (
+            vec![
+                "render".into(),
+                "builtin:cornell".into(),
+                "-o".into(),
+                d.join("o.jpg").display().to_string(),
+            ],
+            "o.jpg",
+        ),
+        (
+            vec!["info".into(), "builtin:nosuch".into()],
+            "builtin:nosuch",
+        ),
+        (
+            vec![
+                "render".into(),
+                "builtin:cornell".into(),
+                "-o".into(),
+                out.display().to_string(),
+                "--camera".into(),
+                "5".into(),
+            ],
+            "camera",
+        ),
+        (
+            vec![
+                "render".into(),
+                "builtin:cornell".into(),
+                "-o".into(),
+                out.display().to_string(),
+                "--sun".into(),
+                "0,0,0,1".into(),
+            ],
+            "--sun",
+        ),
+        (
+            vec![
+                "render".into(),
+                "builtin:cornell".into(),
+                "-o".into(),
+                out.display().to_string(),
+                "--compare".into(),
+                missing.display().to_string(),
+            ],
+            "nope.gltf",
+        ),
+    ];
+    for (args, needle) in cases {
+        let a: Vec<&str> = args.iter().map(|s| s.as_str()).collect();
+        let (code, _, err) = run(&a);
+        assert_eq!(code, 2, "{a:?}: {err}");
+        let lines = error_lines(&err);
+        assert_eq!(lines.len(), 1, "{a:?}: {err}");
+        assert!(lines[0].contains(needle), "{a:?}: {err}");
+        assert!(!err.contains("panicked"), "{a:?}: {err}");
+    }
+    assert!(!out.exists());
+}
+
+/// A valid scene without any light renders black with a warning, exit 0.
+#[test]
+fn scene_without_light_renders_black() {
+    let d = common::scratch("cli-dark");
+    // One triangle facing +Z, no material, no light.
+    let pos: [f32; 9] = [-1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 0.0];
+    let bytes: Vec<u8> = pos.iter().flat_map(|f| f.to_le_bytes()).collect();
+    std::fs::write(d.join("t.bin"), &bytes).unwrap();
+    let gltf = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+      "meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
+      "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[-1,-1,0],"max":[1,1,0]}],
+      "bufferViews":[{"buffer":0,"byteLength":36}],"buffers":[{"uri":"t.bin","byteLength":36}]}"#;
+    let path = d.join("dark.gltf");
+    std::fs::write(&path, gltf).unwrap();
+    let out = d.join("dark.exr");
+    let (code, _, err) = run(&[
+        "render",
+        path.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("warning") && err.contains("no light"), "{err}");
+    let (_, _, px) = fuzzy_vpl::export::read_exr(&out).unwrap();
+    assert!(px.iter().flatten().all(|c| *c == 0.0));
+    // The same scene with a point light from the command line is lit.
+    let (code, _, err) = run(&[
+        "render",
+        path.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--point",
+        "0,0,2,5",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (_, _, px) = fuzzy_vpl::export::read_exr(&out).unwrap();
+    assert!(common::all_finite(&px));
+    assert!(px.iter().any(|p| p[0] > 0.0));
+}
+
+#[test]
+fn info_prints_counts_and_passes() {
+    let (code, out, err) = run(&["info", "builtin:conference"]);
+    assert_eq!(code, 0, "{err}");
+    for k in [
+        "triangles:",
+        "emissive triangles:",
+        "punctual lights:",
+        "cameras:",
+        "bounds:",
+        "features:",
+        "passes",
+    ] {
+        assert!(out.contains(k), "{out}");
+    }
+    assert!(out.contains("1448"), "{out}");
+}
