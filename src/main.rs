@@ -109,6 +109,10 @@ struct RenderArgs {
     /// G-term clamp: the VPL distance in 1/d² is at least CLAMP × scene diagonal (scale-free).
     #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_CLAMP)]
     clamp: f32,
+    /// Render with the diffuse path tracer instead (SPP samples per pixel, same bounce budget as the
+    /// VPLs): the check of the VPL reference's own bias.
+    #[arg(long, value_name = "SPP", conflicts_with = "reference")]
+    path_trace: Option<u32>,
     /// Write a false-colour per-pixel error image against --compare (log10 rel. error, -4..0).
     #[arg(long, requires = "compare")]
     error_map: Option<PathBuf>,
@@ -280,7 +284,17 @@ fn render(a: RenderArgs) -> Result<()> {
     let mut runs = Vec::new();
     let mut frame = None;
     for _ in 0..a.repeat {
-        let f = renderer.render(&camera, &settings)?;
+        let mut f = renderer.render(&camera, &settings)?;
+        if let Some(spp) = a.path_trace {
+            let pt = fuzzy_vpl::gi::pathtrace::PathTrace::new(&ctx, &renderer.gpu);
+            let cam = fuzzy_vpl::gi::primary::CameraParams::new(&camera, a.width, a.height);
+            let _ = renderer.profiler.collect(&ctx)?;
+            f.radiance = pt.render(&ctx, &renderer.gpu, &mut renderer.profiler, &cam, spp.max(1), 16, a.seed)?;
+            f.passes = vec!["pathtrace"];
+            f.timings_ms = renderer.profiler.collect(&ctx)?;
+            let ms: f64 = f.timings_ms.values().sum();
+            f.timings_ms.insert("frame".into(), ms);
+        }
         runs.push(f.timings_ms.clone());
         frame = Some(f);
     }
