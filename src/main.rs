@@ -289,7 +289,15 @@ fn render(a: RenderArgs) -> Result<()> {
             let pt = fuzzy_vpl::gi::pathtrace::PathTrace::new(&ctx, &renderer.gpu);
             let cam = fuzzy_vpl::gi::primary::CameraParams::new(&camera, a.width, a.height);
             let _ = renderer.profiler.collect(&ctx)?;
-            f.radiance = pt.render(&ctx, &renderer.gpu, &mut renderer.profiler, &cam, spp.max(1), 16, a.seed)?;
+            f.radiance = pt.render(
+                &ctx,
+                &renderer.gpu,
+                &mut renderer.profiler,
+                &cam,
+                spp.max(1),
+                16,
+                a.seed,
+            )?;
             f.passes = vec!["pathtrace"];
             f.timings_ms = renderer.profiler.collect(&ctx)?;
             let ms: f64 = f.timings_ms.values().sum();
