@@ -26,17 +26,34 @@ pub struct Chunk {
 
 pub struct Kernel {
     pub name: &'static str,
-    pub pipeline: wgpu::ComputePipeline,
+    /// One pipeline per entry point of the shader, in the order given; the first is `run`'s.
+    pipelines: Vec<(&'static str, wgpu::ComputePipeline)>,
     pub layout: wgpu::BindGroupLayout,
+    /// Whether group 0 is the scene (kernels on plain data, such as k-means, leave it empty).
+    uses_scene: bool,
     chunk: wgpu::Buffer,
 }
 
 impl Kernel {
-    /// Builds the pipeline of `shaders-wgsl/<name>.wgsl`; `entries` are group 1's bindings from 1 on.
+    /// Builds the pipeline of `shaders-wgsl/<name>.wgsl` (entry point `main`); `entries` are group 1's
+    /// bindings from 1 on.
     pub fn new(
         ctx: &GpuContext,
         scene: &SceneGpu,
         name: &'static str,
+        entries: &[wgpu::BindGroupLayoutEntry],
+        extra_constants: &[(&'static str, f64)],
+    ) -> Kernel {
+        Self::with_entries(ctx, Some(scene), name, &["main"], entries, extra_constants)
+    }
+
+    /// Pipelines for several entry points sharing group 1's layout. With `scene: None` group 0 stays
+    /// empty (the shader must not import `common/scene.wgsl`).
+    pub fn with_entries(
+        ctx: &GpuContext,
+        scene: Option<&SceneGpu>,
+        name: &'static str,
+        entry_points: &[&'static str],
         entries: &[wgpu::BindGroupLayoutEntry],
         extra_constants: &[(&'static str, f64)],
     ) -> Kernel {
@@ -52,25 +69,31 @@ impl Kernel {
             .device
             .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some(name),
-                bind_group_layouts: &[Some(&scene.layout), Some(&layout)],
+                bind_group_layouts: &[scene.map(|s| &s.layout), Some(&layout)],
                 immediate_size: 0,
             });
         let module = shader::module(&ctx.device, name);
-        let mut constants = scene.overrides();
+        let mut constants = scene.map(|s| s.overrides()).unwrap_or_default();
         constants.extend_from_slice(extra_constants);
-        let pipeline = ctx
-            .device
-            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(name),
-                layout: Some(&pl),
-                module: &module,
-                entry_point: Some("main"),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &constants,
-                    zero_initialize_workgroup_memory: true,
-                },
-                cache: None,
-            });
+        let pipelines = entry_points
+            .iter()
+            .map(|&entry| {
+                let p = ctx
+                    .device
+                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some(entry),
+                        layout: Some(&pl),
+                        module: &module,
+                        entry_point: Some(entry),
+                        compilation_options: wgpu::PipelineCompilationOptions {
+                            constants: &constants,
+                            zero_initialize_workgroup_memory: true,
+                        },
+                        cache: None,
+                    });
+                (entry, p)
+            })
+            .collect();
         let chunk = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("chunk"),
             size: std::mem::size_of::<Chunk>() as u64,
@@ -79,8 +102,9 @@ impl Kernel {
         });
         Kernel {
             name,
-            pipeline,
+            pipelines,
             layout,
+            uses_scene: scene.is_some(),
             chunk,
         }
     }
@@ -136,6 +160,38 @@ impl Kernel {
         )
     }
 
+    /// Runs entry point `entry` over `total` items in one submission (small kernels: k-means steps).
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_entry(
+        &self,
+        ctx: &GpuContext,
+        profiler: &mut Profiler,
+        label: &str,
+        scene: &SceneGpu,
+        group: &wgpu::BindGroup,
+        entry: &str,
+        total: u32,
+        seed: u32,
+    ) {
+        let index = self
+            .pipelines
+            .iter()
+            .position(|(e, _)| *e == entry)
+            .unwrap_or_else(|| panic!("{}: no entry point {entry}", self.name));
+        self.submit(
+            ctx,
+            profiler,
+            label,
+            scene,
+            group,
+            index,
+            total,
+            (0, 1),
+            seed,
+            0,
+        );
+    }
+
     /// Like `run`, over items × a second range (`sub`: total, per chunk), e.g. pixels × VPLs. Each
     /// submission covers one item range and one sub range; `progress` gets (chunks done, chunks).
     #[allow(clippy::too_many_arguments)]
@@ -162,34 +218,18 @@ impl Kernel {
             let mut sub_offset = 0;
             loop {
                 let sub_count = sub_per.min(sub_total.saturating_sub(sub_offset));
-                let c = Chunk {
-                    offset,
+                self.submit(
+                    ctx,
+                    profiler,
+                    label,
+                    scene,
+                    group,
+                    0,
                     count,
+                    (sub_offset, sub_count),
                     seed,
-                    _pad: 0,
-                    sub_offset,
-                    sub_count,
-                    _pad2: [0; 2],
-                };
-                ctx.queue
-                    .write_buffer(&self.chunk, 0, bytemuck::bytes_of(&c));
-                let mut enc = ctx.device.create_command_encoder(&Default::default());
-                {
-                    let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                        label: Some(label),
-                        timestamp_writes: profiler.pass(label),
-                    });
-                    pass.set_pipeline(&self.pipeline);
-                    pass.set_bind_group(0, &scene.bind_group, &[]);
-                    pass.set_bind_group(1, group, &[]);
-                    pass.dispatch_workgroups(count.div_ceil(WORKGROUP), 1, 1);
-                }
-                ctx.queue.submit([enc.finish()]);
-                // Waiting keeps each submission short and bounded on software drivers.
-                let _ = ctx.device.poll(wgpu::PollType::Wait {
-                    submission_index: None,
-                    timeout: None,
-                });
+                    offset,
+                );
                 done += 1;
                 progress(done, chunks);
                 sub_offset += sub_count;
@@ -199,5 +239,53 @@ impl Kernel {
             }
             offset += count;
         }
+    }
+
+    /// One bounded submission of pipeline `index` over items `offset..offset + count`.
+    #[allow(clippy::too_many_arguments)]
+    fn submit(
+        &self,
+        ctx: &GpuContext,
+        profiler: &mut Profiler,
+        label: &str,
+        scene: &SceneGpu,
+        group: &wgpu::BindGroup,
+        index: usize,
+        count: u32,
+        sub: (u32, u32),
+        seed: u32,
+        offset: u32,
+    ) {
+        let c = Chunk {
+            offset,
+            count,
+            seed,
+            _pad: 0,
+            sub_offset: sub.0,
+            sub_count: sub.1,
+            _pad2: [0; 2],
+        };
+        ctx.queue
+            .write_buffer(&self.chunk, 0, bytemuck::bytes_of(&c));
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(label),
+                timestamp_writes: profiler.pass(label),
+            });
+            pass.set_pipeline(&self.pipelines[index].1);
+            if self.uses_scene {
+                pass.set_bind_group(0, &scene.bind_group, &[]);
+            }
+            pass.set_bind_group(1, group, &[]);
+            let groups = count.div_ceil(WORKGROUP).max(1);
+            pass.dispatch_workgroups(groups.min(MAX_GROUPS_X), groups.div_ceil(MAX_GROUPS_X), 1);
+        }
+        ctx.queue.submit([enc.finish()]);
+        // Waiting keeps each submission short and bounded on software drivers.
+        let _ = ctx.device.poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        });
     }
 }

@@ -3,6 +3,7 @@
 
 pub mod direct;
 pub mod dispatch;
+pub mod kmeans;
 pub mod pathtrace;
 pub mod pipeline;
 pub mod primary;

@@ -27,6 +27,9 @@ pub const FILES: &[(&str, &str)] = wgsl![
     "vpl_trace.wgsl",
     "reference.wgsl",
     "pathtrace.wgsl",
+    "kmeans.wgsl",
+    "visibility.wgsl",
+    "shade.wgsl",
 ];
 
 /// The pass shaders (top-level files), each composed and validated on its own.

@@ -1,0 +1,521 @@
+// Algorithms 1 and 2 of the paper: GPU k-means of surface points (position, normal) with a uniform grid
+// over the centroids, the distance of Eq. (7), and the final fuzzy assignment with inverse-distance
+// weights (Eq. 10). One implementation for shading points and VPLs: points are read from `data` with a
+// stride (in vec4s) so the G-buffer and the VPL array are both used in place. CPU twin: src/cpu/kmeans.rs.
+#import common/chunk.wgsl
+
+const INVALID: u32 = 0xffffffffu;
+const BIG: f32 = 3.4028235e38;
+const MAX_F: u32 = 16u;
+const MAX_DIM: u32 = 64u;
+// Fixed point: positions in the data frame scaled by 2^24, normals (n + 1) by 2^23.
+const POS_SCALE: f32 = 16777216.0;
+const NRM_SCALE: f32 = 8388608.0;
+
+struct KmParams {
+    num_points: u32,
+    // vec4s per point in `data`; point m is data[m * stride] (xyz position, w > 0 when valid) and
+    // data[m * stride + 1] (xyz normal).
+    stride: u32,
+    gamma: u32,
+    num_sampled: u32,
+    k: u32,
+    f: u32,
+    // Eq. (7) orientation threshold (cosine).
+    normal_threshold: f32,
+    seed: u32,
+    // Fixed-point frame: lo + ext spans every point.
+    lo: vec4<f32>,
+    ext: vec4<f32>,
+}
+
+// The grid over the centroids (written by grid_setup).
+struct Grid {
+    origin: vec3<f32>,
+    cell: f32,
+    dims: vec3<u32>,
+    num_cells: u32,
+}
+
+struct Centroid {
+    // xyz position; w = 1 when the cluster holds at least one point.
+    pos: vec4<f32>,
+    nrm: vec4<f32>,
+}
+
+@group(1) @binding(1) var<uniform> params: KmParams;
+@group(1) @binding(2) var<storage, read> data: array<vec4<f32>>;
+@group(1) @binding(3) var<storage, read_write> centroids: array<Centroid>;
+// Per cluster: 6 components x (lo, hi) words of 64-bit fixed-point sums, then the count (13 words).
+@group(1) @binding(4) var<storage, read_write> sums: array<atomic<u32>>;
+// Centroid bounds as order-preserving float bits: min xyz, max xyz.
+@group(1) @binding(5) var<storage, read_write> bounds: array<atomic<u32>, 8>;
+@group(1) @binding(6) var<storage, read_write> grid: Grid;
+// Cell counts, then exclusive offsets (num_cells each), then a cursor per cell for the scatter.
+@group(1) @binding(7) var<storage, read_write> cells: array<atomic<u32>>;
+// Centroid indices sorted by cell.
+@group(1) @binding(8) var<storage, read_write> cell_items: array<u32>;
+// Sampled-point assignment during the iterations (one per sampled point).
+@group(1) @binding(9) var<storage, read_write> sample_assign: array<u32>;
+// Final assignment: F cluster indices per point (INVALID past the ones found) and weights (Eq. 10).
+@group(1) @binding(10) var<storage, read_write> assign: array<u32>;
+@group(1) @binding(11) var<storage, read_write> weights: array<f32>;
+// Representatives: per cluster the smallest member distance (float bits) and the member index.
+@group(1) @binding(12) var<storage, read_write> reps: array<atomic<u32>>;
+
+const WORDS: u32 = 13u;
+
+fn point_pos(m: u32) -> vec4<f32> {
+    return data[m * params.stride];
+}
+
+fn point_nrm(m: u32) -> vec3<f32> {
+    return data[m * params.stride + 1u].xyz;
+}
+
+// The data point behind sampled point s: one per stratum of gamma points, jittered (Alg. 1 line 1).
+fn sample_index(s: u32) -> u32 {
+    let g = max(params.gamma, 1u);
+    let h = (s * 747796405u + params.seed * 2891336453u) ^ (s >> 7u);
+    return min(s * g + (h >> 8u) % g, params.num_points - 1u);
+}
+
+// Eq. (7): Euclidean distance when the normals agree beyond the threshold, else infinite (BIG).
+fn dist7(p: vec3<f32>, n: vec3<f32>, c: Centroid) -> f32 {
+    if dot(n, c.nrm.xyz) > params.normal_threshold {
+        return length(p - c.pos.xyz);
+    }
+    return BIG;
+}
+
+// Order-preserving map of floats to u32 (for atomicMin/Max on floats).
+fn float_key(x: f32) -> u32 {
+    let b = bitcast<u32>(x);
+    return select(b | 0x80000000u, ~b, (b & 0x80000000u) != 0u);
+}
+
+fn key_float(k: u32) -> f32 {
+    return bitcast<f32>(select(~k, k & 0x7fffffffu, (k & 0x80000000u) != 0u));
+}
+
+fn cell_coord(p: vec3<f32>) -> vec3<i32> {
+    let c = floor((p - grid.origin) / grid.cell);
+    let hi = vec3<f32>(grid.dims) - 1.0;
+    return vec3<i32>(clamp(c, vec3<f32>(0.0), hi));
+}
+
+fn cell_index(c: vec3<i32>) -> u32 {
+    let d = grid.dims;
+    return (u32(c.z) * d.y + u32(c.y)) * d.x + u32(c.x);
+}
+
+// --- Alg. 1 line 2: initial centroids, stratified over the (sampled) data: centroid k takes the
+// first valid sampled point of stratum k of the sampled sequence.
+@compute @workgroup_size(64)
+fn init_centroids(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let k = chunk_item(gid, nwg);
+    if k == INVALID || k >= params.k {
+        return;
+    }
+    let s0 = u32(u64_mul_div(k, params.num_sampled, params.k));
+    let s1 = max(u32(u64_mul_div(k + 1u, params.num_sampled, params.k)), s0 + 1u);
+    var c: Centroid;
+    c.pos = vec4<f32>(0.0);
+    c.nrm = vec4<f32>(0.0, 0.0, 1.0, 0.0);
+    for (var s = s0; s < min(s1, params.num_sampled); s++) {
+        let m = sample_index(s);
+        let p = point_pos(m);
+        if p.w > 0.0 {
+            c.pos = vec4<f32>(p.xyz, 1.0);
+            c.nrm = vec4<f32>(point_nrm(m), 0.0);
+            break;
+        }
+    }
+    centroids[k] = c;
+}
+
+// floor(a * b / c) without 32-bit overflow for a, b < 2^32 (a < c).
+fn u64_mul_div(a: u32, b: u32, c: u32) -> f32 {
+    return floor(f32(a) * (f32(b) / f32(c)));
+}
+
+// --- Alg. 1 line 5: the grid over the centroids. Step 1: bounds of the valid centroids.
+@compute @workgroup_size(64)
+fn grid_bounds(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let k = chunk_item(gid, nwg);
+    if k == INVALID || k >= params.k {
+        return;
+    }
+    let c = centroids[k];
+    if c.pos.w <= 0.0 {
+        return;
+    }
+    for (var a = 0u; a < 3u; a++) {
+        atomicMin(&bounds[a], float_key(c.pos[a]));
+        atomicMax(&bounds[3u + a], float_key(c.pos[a]));
+    }
+}
+
+// Step 2 (one invocation): cell size from the centroids' spread. Centroids lie on surfaces, so the
+// cell edge is 1.5x the spacing of K points spread over the bounds' surface area; at most 64 cells per
+// axis. Also resets the bounds for the next iteration.
+@compute @workgroup_size(1)
+fn grid_setup() {
+    var lo = vec3<f32>(0.0);
+    var hi = vec3<f32>(0.0);
+    for (var a = 0u; a < 3u; a++) {
+        lo[a] = key_float(atomicLoad(&bounds[a]));
+        hi[a] = key_float(atomicLoad(&bounds[3u + a]));
+        atomicStore(&bounds[a], 0xffffffffu);
+        atomicStore(&bounds[3u + a], 0u);
+    }
+    if !(lo.x <= hi.x) {
+        // No valid centroid: one cell.
+        lo = params.lo.xyz;
+        hi = params.lo.xyz + params.ext.xyz;
+    }
+    let e = max(hi - lo, vec3<f32>(0.0));
+    let area = 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x);
+    let spacing = sqrt(area / f32(max(params.k, 1u)));
+    let emax = max(e.x, max(e.y, e.z));
+    let floor_cell = max(emax / f32(MAX_DIM), 1e-7 * max(params.ext.w, 1e-30));
+    let cell = max(1.5 * spacing, floor_cell);
+    let dims = clamp(vec3<u32>(ceil(e / cell)), vec3<u32>(1u), vec3<u32>(MAX_DIM));
+    grid.origin = lo;
+    grid.cell = cell;
+    grid.dims = dims;
+    grid.num_cells = dims.x * dims.y * dims.z;
+}
+
+// Step 3: clear the per-cell counters (3 x num_cells words).
+@compute @workgroup_size(64)
+fn grid_clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = chunk_item(gid, nwg);
+    if i == INVALID || i >= 3u * MAX_DIM * MAX_DIM * MAX_DIM {
+        return;
+    }
+    atomicStore(&cells[i], 0u);
+}
+
+// Step 4: count centroids per cell.
+@compute @workgroup_size(64)
+fn grid_count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let k = chunk_item(gid, nwg);
+    if k == INVALID || k >= params.k {
+        return;
+    }
+    let c = centroids[k];
+    if c.pos.w <= 0.0 {
+        return;
+    }
+    atomicAdd(&cells[cell_index(cell_coord(c.pos.xyz))], 1u);
+}
+
+// Step 5 (one workgroup): exclusive prefix sum of the counts into the offsets.
+var<workgroup> partial: array<u32, 256>;
+
+@compute @workgroup_size(256)
+fn grid_scan(@builtin(local_invocation_index) t: u32) {
+    let n = grid.num_cells;
+    let per = (n + 255u) / 256u;
+    let a = t * per;
+    let b = min(a + per, n);
+    var s = 0u;
+    for (var i = a; i < b; i++) {
+        s += atomicLoad(&cells[i]);
+    }
+    partial[t] = s;
+    workgroupBarrier();
+    if t == 0u {
+        var run = 0u;
+        for (var i = 0u; i < 256u; i++) {
+            let v = partial[i];
+            partial[i] = run;
+            run += v;
+        }
+    }
+    workgroupBarrier();
+    var run = partial[t];
+    for (var i = a; i < b; i++) {
+        atomicStore(&cells[n + i], run);
+        run += atomicLoad(&cells[i]);
+    }
+}
+
+// Step 6: scatter centroid indices into their cells' ranges.
+@compute @workgroup_size(64)
+fn grid_scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let k = chunk_item(gid, nwg);
+    if k == INVALID || k >= params.k {
+        return;
+    }
+    let c = centroids[k];
+    if c.pos.w <= 0.0 {
+        return;
+    }
+    let cell = cell_index(cell_coord(c.pos.xyz));
+    let n = grid.num_cells;
+    let slot = atomicLoad(&cells[n + cell]) + atomicAdd(&cells[2u * n + cell], 1u);
+    cell_items[slot] = k;
+}
+
+// The F nearest centroids of a point by Eq. (7) among the 27 cells around it (Alg. 2 lines 4-17).
+// Falls back, in order, to: rings of cells further out until a centroid passes the threshold; then
+// the nearest centroid by position alone (ignoring n_t), so no point is ever left unassigned.
+struct Nearest {
+    idx: array<u32, MAX_F>,
+    dist: array<f32, MAX_F>,
+    count: u32,
+}
+
+// Candidates are ordered by (distance, index), so the result does not depend on the order in which
+// the cells' centroids are visited (the scatter's order is not deterministic).
+fn before(r: f32, k: u32, rd: f32, rk: u32) -> bool {
+    return r < rd || (r == rd && k < rk);
+}
+
+fn insert(best: ptr<function, Nearest>, k: u32, r: f32, f: u32) {
+    var j = (*best).count;
+    // Alg. 2 line 10: find the slot; lines 12-17: shift the farther ones down.
+    if j == f && !before(r, k, (*best).dist[f - 1u], (*best).idx[f - 1u]) {
+        return;
+    }
+    if j < f {
+        (*best).count += 1u;
+    } else {
+        j = f - 1u;
+    }
+    while j > 0u && before(r, k, (*best).dist[j - 1u], (*best).idx[j - 1u]) {
+        (*best).dist[j] = (*best).dist[j - 1u];
+        (*best).idx[j] = (*best).idx[j - 1u];
+        j -= 1u;
+    }
+    (*best).dist[j] = r;
+    (*best).idx[j] = k;
+}
+
+// Scans the cells at Chebyshev distance exactly `ring` from `c` (ring 1 includes the centre: 27 cells).
+fn scan_ring(best: ptr<function, Nearest>, p: vec3<f32>, n: vec3<f32>, c: vec3<i32>, ring: i32, f: u32, use_normals: bool) {
+    let d = vec3<i32>(grid.dims);
+    let lo = max(c - vec3<i32>(ring), vec3<i32>(0));
+    let hi = min(c + vec3<i32>(ring), d - 1);
+    let total = grid.num_cells;
+    for (var z = lo.z; z <= hi.z; z++) {
+        for (var y = lo.y; y <= hi.y; y++) {
+            for (var x = lo.x; x <= hi.x; x++) {
+                let q = vec3<i32>(x, y, z);
+                let cheb = max(abs(q.x - c.x), max(abs(q.y - c.y), abs(q.z - c.z)));
+                if ring > 1 && cheb != ring {
+                    continue;
+                }
+                let cell = cell_index(q);
+                let start = atomicLoad(&cells[total + cell]);
+                let count = atomicLoad(&cells[cell]);
+                for (var i = start; i < start + count; i++) {
+                    let k = cell_items[i];
+                    let ck = centroids[k];
+                    var r: f32;
+                    if use_normals {
+                        r = dist7(p, n, ck);
+                    } else {
+                        r = length(p - ck.pos.xyz);
+                    }
+                    if r < BIG {
+                        insert(best, k, r, f);
+                    }
+                }
+            }
+        }
+    }
+}
+
+fn nearest(p: vec3<f32>, n: vec3<f32>, f: u32) -> Nearest {
+    var best: Nearest;
+    best.count = 0u;
+    let c = cell_coord(p);
+    scan_ring(&best, p, n, c, 1, f, true);
+    if best.count == 0u {
+        let maxr = i32(max(grid.dims.x, max(grid.dims.y, grid.dims.z)));
+        for (var ring = 2; ring <= maxr && best.count == 0u; ring++) {
+            scan_ring(&best, p, n, c, ring, f, true);
+        }
+        if best.count == 0u {
+            for (var ring = 1; ring <= maxr && best.count == 0u; ring++) {
+                scan_ring(&best, p, n, c, ring, 1u, false);
+            }
+        }
+    }
+    return best;
+}
+
+// --- Alg. 1 lines 6-11: assign each sampled point to its nearest centroid.
+@compute @workgroup_size(64)
+fn assign_sampled(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let s = chunk_item(gid, nwg);
+    if s == INVALID || s >= params.num_sampled {
+        return;
+    }
+    let m = sample_index(s);
+    let p = point_pos(m);
+    var k = INVALID;
+    if p.w > 0.0 {
+        let b = nearest(p.xyz, point_nrm(m), 1u);
+        if b.count > 0u {
+            k = b.idx[0];
+        }
+    }
+    sample_assign[s] = k;
+}
+
+// 64-bit unsigned add into words (i, i + 1) from 32-bit atomics: a carry is exact because atomicAdd
+// returns the value it added to.
+fn add64(i: u32, v: u32) {
+    let old = atomicAdd(&sums[i], v);
+    if old > 0xffffffffu - v {
+        atomicAdd(&sums[i + 1u], 1u);
+    }
+}
+
+// --- Alg. 1 lines 12-16: accumulate member positions and normals in fixed point.
+@compute @workgroup_size(64)
+fn accumulate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let s = chunk_item(gid, nwg);
+    if s == INVALID || s >= params.num_sampled {
+        return;
+    }
+    let k = sample_assign[s];
+    if k == INVALID {
+        return;
+    }
+    let m = sample_index(s);
+    let rel = clamp((point_pos(m).xyz - params.lo.xyz) / params.ext.xyz, vec3<f32>(0.0), vec3<f32>(1.0));
+    let q = vec3<u32>(rel * POS_SCALE);
+    let nq = vec3<u32>(clamp(point_nrm(m) + 1.0, vec3<f32>(0.0), vec3<f32>(2.0)) * NRM_SCALE);
+    let base = k * WORDS;
+    for (var a = 0u; a < 3u; a++) {
+        add64(base + 2u * a, q[a]);
+        add64(base + 6u + 2u * a, nq[a]);
+    }
+    atomicAdd(&sums[base + 12u], 1u);
+}
+
+fn mean64(i: u32, count: u32) -> f32 {
+    let lo = atomicLoad(&sums[i]);
+    let hi = atomicLoad(&sums[i + 1u]);
+    return (f32(hi) * 4294967296.0 + f32(lo)) / f32(count);
+}
+
+// --- Alg. 1 lines 17-18: centroids = mean position and normalised mean normal; clears the sums.
+// An empty cluster keeps its centroid but is marked empty (w = 0) and drops out of the grid.
+@compute @workgroup_size(64)
+fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let k = chunk_item(gid, nwg);
+    if k == INVALID || k >= params.k {
+        return;
+    }
+    let base = k * WORDS;
+    let count = atomicLoad(&sums[base + 12u]);
+    var c = centroids[k];
+    if count > 0u {
+        let rel = vec3<f32>(mean64(base, count), mean64(base + 2u, count), mean64(base + 4u, count)) / POS_SCALE;
+        let nrm = vec3<f32>(mean64(base + 6u, count), mean64(base + 8u, count), mean64(base + 10u, count)) / NRM_SCALE - 1.0;
+        c.pos = vec4<f32>(params.lo.xyz + rel * params.ext.xyz, 1.0);
+        let l = length(nrm);
+        if l > 1e-6 {
+            c.nrm = vec4<f32>(nrm / l, 0.0);
+        }
+    } else {
+        c.pos.w = 0.0;
+    }
+    centroids[k] = c;
+    for (var i = 0u; i < WORDS; i++) {
+        atomicStore(&sums[base + i], 0u);
+    }
+}
+
+// --- Alg. 2: every data point to its F nearest centroids with normalised inverse-distance weights
+// (Eq. 10). A point on a centroid (distance 0) takes that cluster's whole weight.
+@compute @workgroup_size(64)
+fn final_assign(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let m = chunk_item(gid, nwg);
+    if m == INVALID || m >= params.num_points {
+        return;
+    }
+    let f = clamp(params.f, 1u, MAX_F);
+    let p = point_pos(m);
+    var b: Nearest;
+    b.count = 0u;
+    if p.w > 0.0 {
+        b = nearest(p.xyz, point_nrm(m), f);
+    }
+    var zero = INVALID;
+    var wsum = 0.0;
+    for (var j = 0u; j < b.count; j++) {
+        if b.dist[j] <= 0.0 && zero == INVALID {
+            zero = j;
+        }
+        wsum += 1.0 / max(b.dist[j], 1e-30);
+    }
+    for (var j = 0u; j < f; j++) {
+        var k = INVALID;
+        var w = 0.0;
+        if j < b.count {
+            k = b.idx[j];
+            if zero != INVALID {
+                w = select(0.0, 1.0, j == zero);
+            } else {
+                w = (1.0 / b.dist[j]) / wsum;
+            }
+        }
+        assign[m * f + j] = k;
+        weights[m * f + j] = w;
+    }
+}
+
+// --- Representatives on real surfaces: the member (in any of its F slots) nearest to the centroid.
+// Step 1: clear. reps[2k] = smallest distance (float bits), reps[2k + 1] = member index.
+@compute @workgroup_size(64)
+fn rep_clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let k = chunk_item(gid, nwg);
+    if k == INVALID || k >= params.k {
+        return;
+    }
+    atomicStore(&reps[2u * k], 0xffffffffu);
+    atomicStore(&reps[2u * k + 1u], 0xffffffffu);
+}
+
+fn member_dist(m: u32, k: u32) -> f32 {
+    return length(point_pos(m).xyz - centroids[k].pos.xyz);
+}
+
+// Step 2: smallest member distance per cluster (non-negative floats order like their bits).
+@compute @workgroup_size(64)
+fn rep_min(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let m = chunk_item(gid, nwg);
+    if m == INVALID || m >= params.num_points {
+        return;
+    }
+    let f = clamp(params.f, 1u, MAX_F);
+    for (var j = 0u; j < f; j++) {
+        let k = assign[m * f + j];
+        if k != INVALID {
+            atomicMin(&reps[2u * k], bitcast<u32>(member_dist(m, k)));
+        }
+    }
+}
+
+// Step 3: the lowest-index member at that distance.
+@compute @workgroup_size(64)
+fn rep_pick(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let m = chunk_item(gid, nwg);
+    if m == INVALID || m >= params.num_points {
+        return;
+    }
+    let f = clamp(params.f, 1u, MAX_F);
+    for (var j = 0u; j < f; j++) {
+        let k = assign[m * f + j];
+        if k != INVALID && bitcast<u32>(member_dist(m, k)) == atomicLoad(&reps[2u * k]) {
+            atomicMin(&reps[2u * k + 1u], m);
+        }
+    }
+}

@@ -1,0 +1,57 @@
+// Step 5: one shadow ray per (SP-cluster representative, light representative) pair, stored as a bit
+// matrix: bit c of row k is V(p_k, p_c). Lights are VPL-cluster representatives (or the VPLs
+// themselves when VPLs are not clustered). Each invocation fills one 32-bit word of a row.
+#import common/bvh.wgsl
+#import common/chunk.wgsl
+#import common/gbuffer.wgsl
+#import common/vpl.wgsl
+
+struct VisParams {
+    num_sp_clusters: u32,
+    num_lights: u32,
+    // Words per row: ceil(num_lights / 32).
+    words: u32,
+    _a: u32,
+}
+
+@group(1) @binding(1) var<uniform> params: VisParams;
+@group(1) @binding(2) var<storage, read> gbuffer: array<ShadingPoint>;
+// SP-cluster representatives: reps[2k + 1] is the member pixel (INVALID for an unused cluster).
+@group(1) @binding(3) var<storage, read> sp_reps: array<u32>;
+@group(1) @binding(4) var<storage, read> lights_in: array<Vpl>;
+@group(1) @binding(5) var<storage, read_write> bits: array<u32>;
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = chunk_item(gid, nwg);
+    if i == INVALID {
+        return;
+    }
+    let k = i / params.words;
+    let w = i % params.words;
+    let rep = sp_reps[2u * k + 1u];
+    var word = 0u;
+    if rep != INVALID {
+        let sp = gbuffer[rep];
+        let p = sp.pos.xyz;
+        let n = sp.nrm.xyz;
+        let c0 = w * 32u;
+        let c1 = min(c0 + 32u, params.num_lights);
+        for (var c = c0; c < c1; c++) {
+            let l = lights_in[c];
+            // Only pairs that can exchange light need a ray (both cosines positive).
+            let d = l.pos.xyz - p;
+            if dot(n, d) <= 0.0 || dot(l.nrm.xyz, d) >= 0.0 {
+                continue;
+            }
+            let o = offset_origin(p, n);
+            let t = offset_origin(l.pos.xyz, l.nrm.xyz);
+            let dd = t - o;
+            let dist = length(dd);
+            if dist > 0.0 && !trace_any(Ray(o, dd / dist, 0.0, dist * (1.0 - 1e-4))) {
+                word |= 1u << (c - c0);
+            }
+        }
+    }
+    bits[i] = word;
+}

@@ -1,0 +1,326 @@
+//! CPU twin of `shaders-wgsl/kmeans.wgsl` (Alg. 1 and 2): the same sampling, initial centroids, grid,
+//! metric (Eq. 7), fixed-point sums, fallbacks and tie-breaking, in plain sequential Rust.
+
+use glam::Vec3;
+
+use crate::gi::kmeans::{KmParams, MAX_DIM};
+
+const POS_SCALE: f32 = 16777216.0;
+const NRM_SCALE: f32 = 8388608.0;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Point {
+    pub pos: Vec3,
+    pub valid: bool,
+    pub nrm: Vec3,
+}
+
+impl Point {
+    /// Reads point `m` of a GPU array with `stride` vec4s per point.
+    pub fn from_vec4s(data: &[[f32; 4]], m: usize, stride: usize) -> Point {
+        let p = data[m * stride];
+        let n = data[m * stride + 1];
+        Point {
+            pos: Vec3::new(p[0], p[1], p[2]),
+            valid: p[3] > 0.0,
+            nrm: Vec3::new(n[0], n[1], n[2]),
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Centroid {
+    pub pos: Vec3,
+    pub valid: bool,
+    pub nrm: Vec3,
+}
+
+#[derive(Clone, Debug)]
+pub struct CpuClustering {
+    pub centroids: Vec<Centroid>,
+    pub sample_assign: Vec<u32>,
+    /// M × F.
+    pub assign: Vec<u32>,
+    pub weights: Vec<f32>,
+    /// Per cluster: representative member index (u32::MAX when unused).
+    pub reps: Vec<u32>,
+}
+
+pub fn sample_index(p: &KmParams, s: u32) -> u32 {
+    let g = p.gamma.max(1);
+    let h = (s
+        .wrapping_mul(747796405)
+        .wrapping_add(p.seed.wrapping_mul(2891336453)))
+        ^ (s >> 7);
+    (s * g + (h >> 8) % g).min(p.num_points - 1)
+}
+
+/// Eq. (7).
+pub fn dist7(p: &Point, c: &Centroid, n_t: f32) -> f32 {
+    if p.nrm.dot(c.nrm) > n_t {
+        (p.pos - c.pos).length()
+    } else {
+        f32::MAX
+    }
+}
+
+struct Grid {
+    origin: Vec3,
+    cell: f32,
+    dims: [u32; 3],
+    /// Centroid indices per cell.
+    cells: Vec<Vec<u32>>,
+}
+
+impl Grid {
+    fn build(p: &KmParams, cs: &[Centroid]) -> Grid {
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for c in cs.iter().filter(|c| c.valid) {
+            lo = lo.min(c.pos);
+            hi = hi.max(c.pos);
+        }
+        if lo.x > hi.x {
+            lo = Vec3::from_slice(&p.lo[..3]);
+            hi = lo + Vec3::from_slice(&p.ext[..3]);
+        }
+        let e = (hi - lo).max(Vec3::ZERO);
+        let area = 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x);
+        let spacing = (area / p.k.max(1) as f32).sqrt();
+        let emax = e.max_element();
+        let floor_cell = (emax / MAX_DIM as f32).max(1e-7 * p.ext[3].max(1e-30));
+        let cell = (1.5 * spacing).max(floor_cell);
+        let dims = [e.x, e.y, e.z].map(|x| ((x / cell).ceil() as u32).clamp(1, MAX_DIM));
+        let mut g = Grid {
+            origin: lo,
+            cell,
+            dims,
+            cells: vec![Vec::new(); (dims[0] * dims[1] * dims[2]) as usize],
+        };
+        for (k, c) in cs.iter().enumerate() {
+            if c.valid {
+                let i = g.index(g.coord(c.pos));
+                g.cells[i].push(k as u32);
+            }
+        }
+        g
+    }
+
+    fn coord(&self, p: Vec3) -> [i32; 3] {
+        let c = ((p - self.origin) / self.cell).floor();
+        [0, 1, 2].map(|a| c[a].clamp(0.0, self.dims[a] as f32 - 1.0) as i32)
+    }
+
+    fn index(&self, c: [i32; 3]) -> usize {
+        ((c[2] as u32 * self.dims[1] + c[1] as u32) * self.dims[0] + c[0] as u32) as usize
+    }
+}
+
+fn before(r: f32, k: u32, rd: f32, rk: u32) -> bool {
+    r < rd || (r == rd && k < rk)
+}
+
+/// The F nearest centroids by Eq. (7) in the 27 cells around the point, with the shader's fallbacks.
+fn nearest(g: &Grid, cs: &[Centroid], pt: &Point, n_t: f32, f: usize) -> Vec<(u32, f32)> {
+    let mut best: Vec<(u32, f32)> = Vec::new();
+    let c = g.coord(pt.pos);
+    let scan = |best: &mut Vec<(u32, f32)>, ring: i32, f: usize, normals: bool| {
+        let lo = [0, 1, 2].map(|a| (c[a] - ring).max(0));
+        let hi = [0, 1, 2].map(|a| (c[a] + ring).min(g.dims[a] as i32 - 1));
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                for x in lo[0]..=hi[0] {
+                    let cheb = (x - c[0]).abs().max((y - c[1]).abs()).max((z - c[2]).abs());
+                    if ring > 1 && cheb != ring {
+                        continue;
+                    }
+                    for &k in &g.cells[g.index([x, y, z])] {
+                        let r = if normals {
+                            dist7(pt, &cs[k as usize], n_t)
+                        } else {
+                            (pt.pos - cs[k as usize].pos).length()
+                        };
+                        if r < f32::MAX {
+                            if best.len() == f {
+                                let (lk, lr) = best[f - 1];
+                                if !before(r, k, lr, lk) {
+                                    continue;
+                                }
+                                best.pop();
+                            }
+                            let at = best
+                                .iter()
+                                .position(|&(bk, br)| before(r, k, br, bk))
+                                .unwrap_or(best.len());
+                            best.insert(at, (k, r));
+                        }
+                    }
+                }
+            }
+        }
+    };
+    scan(&mut best, 1, f, true);
+    let maxr = *g.dims.iter().max().unwrap() as i32;
+    let mut ring = 2;
+    while best.is_empty() && ring <= maxr {
+        scan(&mut best, ring, f, true);
+        ring += 1;
+    }
+    let mut ring = 1;
+    while best.is_empty() && ring <= maxr {
+        scan(&mut best, ring, 1, false);
+        ring += 1;
+    }
+    best
+}
+
+/// Alg. 1 + Alg. 2 on the CPU, mirroring the shader step by step.
+pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering {
+    let k = p.k as usize;
+    let f = p.f as usize;
+    let s_n = p.num_sampled;
+    let n_t = p.normal_threshold;
+    // Initial centroids: the first valid sampled point of each stratum.
+    let mut cs: Vec<Centroid> = (0..p.k)
+        .map(|kk| {
+            let s0 = (kk as f32 * (s_n as f32 / p.k as f32)).floor() as u32;
+            let s1 = (((kk + 1) as f32 * (s_n as f32 / p.k as f32)).floor() as u32).max(s0 + 1);
+            (s0..s1.min(s_n))
+                .map(|s| points[sample_index(p, s) as usize])
+                .find(|pt| pt.valid)
+                .map_or(
+                    Centroid {
+                        pos: Vec3::ZERO,
+                        valid: false,
+                        nrm: Vec3::Z,
+                    },
+                    |pt| Centroid {
+                        pos: pt.pos,
+                        valid: true,
+                        nrm: pt.nrm,
+                    },
+                )
+        })
+        .collect();
+    let lo = Vec3::from_slice(&p.lo[..3]);
+    let ext = Vec3::from_slice(&p.ext[..3]);
+    let mut sample_assign = vec![u32::MAX; s_n as usize];
+    for _ in 0..iterations {
+        let g = Grid::build(p, &cs);
+        for s in 0..s_n {
+            let pt = points[sample_index(p, s) as usize];
+            sample_assign[s as usize] = if pt.valid {
+                nearest(&g, &cs, &pt, n_t, 1)
+                    .first()
+                    .map_or(u32::MAX, |b| b.0)
+            } else {
+                u32::MAX
+            };
+        }
+        let mut sums = vec![[0u64; 6]; k];
+        let mut counts = vec![0u32; k];
+        for s in 0..s_n {
+            let kk = sample_assign[s as usize];
+            if kk == u32::MAX {
+                continue;
+            }
+            let pt = points[sample_index(p, s) as usize];
+            let rel = ((pt.pos - lo) / ext).clamp(Vec3::ZERO, Vec3::ONE);
+            let nq = (pt.nrm + 1.0).clamp(Vec3::ZERO, Vec3::splat(2.0)) * NRM_SCALE;
+            for a in 0..3 {
+                sums[kk as usize][a] += (rel[a] * POS_SCALE) as u32 as u64;
+                sums[kk as usize][3 + a] += nq[a] as u32 as u64;
+            }
+            counts[kk as usize] += 1;
+        }
+        for kk in 0..k {
+            let count = counts[kk];
+            if count == 0 {
+                cs[kk].valid = false;
+                continue;
+            }
+            let mean =
+                |v: u64| ((v >> 32) as u32 as f32 * 4294967296.0 + v as u32 as f32) / count as f32;
+            let sm = sums[kk];
+            let rel = Vec3::new(mean(sm[0]), mean(sm[1]), mean(sm[2])) / POS_SCALE;
+            let nrm = Vec3::new(mean(sm[3]), mean(sm[4]), mean(sm[5])) / NRM_SCALE - 1.0;
+            cs[kk].pos = lo + rel * ext;
+            cs[kk].valid = true;
+            let l = nrm.length();
+            if l > 1e-6 {
+                cs[kk].nrm = nrm / l;
+            }
+        }
+    }
+    let g = Grid::build(p, &cs);
+    let m = p.num_points as usize;
+    let mut assign = vec![u32::MAX; m * f];
+    let mut weights = vec![0f32; m * f];
+    for (i, pt) in points.iter().enumerate().take(m) {
+        let b = if pt.valid {
+            nearest(&g, &cs, pt, n_t, f)
+        } else {
+            Vec::new()
+        };
+        let zero = b.iter().position(|x| x.1 <= 0.0);
+        let wsum: f32 = b.iter().map(|x| 1.0 / x.1.max(1e-30)).sum();
+        for (j, &(kk, r)) in b.iter().enumerate() {
+            assign[i * f + j] = kk;
+            weights[i * f + j] = match zero {
+                Some(z) => (j == z) as u32 as f32,
+                None => (1.0 / r) / wsum,
+            };
+        }
+    }
+    // Representatives: the member nearest to its centroid, lowest index on ties.
+    let mut rep_d = vec![u32::MAX; k];
+    let mut reps = vec![u32::MAX; k];
+    for i in 0..m {
+        for j in 0..f {
+            let kk = assign[i * f + j];
+            if kk != u32::MAX {
+                let d = (points[i].pos - cs[kk as usize].pos).length().to_bits();
+                if d < rep_d[kk as usize]
+                    || (d == rep_d[kk as usize] && (i as u32) < reps[kk as usize])
+                {
+                    rep_d[kk as usize] = d;
+                    reps[kk as usize] = i as u32;
+                }
+            }
+        }
+    }
+    CpuClustering {
+        centroids: cs,
+        sample_assign,
+        assign,
+        weights,
+        reps,
+    }
+}
+
+/// The exact nearest valid centroid by Eq. (7) over all centroids (no grid), or u32::MAX.
+pub fn exact_nearest(pt: &Point, cs: &[Centroid], n_t: f32) -> u32 {
+    let mut best = (u32::MAX, f32::MAX);
+    for (k, c) in cs.iter().enumerate() {
+        if !c.valid {
+            continue;
+        }
+        let r = dist7(pt, c, n_t);
+        if r < f32::MAX && before(r, k as u32, best.1, best.0) {
+            best = (k as u32, r);
+        }
+    }
+    best.0
+}
+
+/// The k-means objective: mean squared distance of sampled points to their assigned centroid.
+pub fn objective(points: &[Point], p: &KmParams, sample_assign: &[u32], cs: &[Centroid]) -> f64 {
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for (s, &k) in sample_assign.iter().enumerate() {
+        if k != u32::MAX {
+            let pt = points[sample_index(p, s as u32) as usize];
+            sum += (pt.pos - cs[k as usize].pos).length_squared() as f64;
+            n += 1;
+        }
+    }
+    sum / n.max(1) as f64
+}

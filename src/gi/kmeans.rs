@@ -1,0 +1,212 @@
+//! Steps 2 and 4: the paper's GPU k-means (Alg. 1) and final fuzzy assignment (Alg. 2) of surface
+//! points, one implementation for shading points and VPLs (`shaders-wgsl/kmeans.wgsl`). CPU twin:
+//! `cpu::kmeans`.
+//!
+//! Centroid sums are 64-bit fixed point built from 32-bit atomics (`add64`): positions in the scene's
+//! bounds frame with 2^-24 of the extent per step, normals (n + 1) with 2^-23. A cluster can take up to
+//! 2^32 − 1 points (the u32 count) before overflow; the 64-bit sums would take 2^40. Sums are exact
+//! integers, so the result does not depend on the order of the atomic adds.
+
+use anyhow::Result;
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+use super::dispatch::Kernel;
+use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
+use crate::gpu::{GpuContext, profiler::Profiler};
+
+pub const MAX_F: u32 = 16;
+pub const MAX_DIM: u32 = 64;
+const WORDS: u64 = 13;
+
+/// Alg. 1 parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KMeansSettings {
+    /// K: clusters.
+    pub k: u32,
+    /// F: clusters per point in the final assignment (1 = hard).
+    pub f: u32,
+    /// γ: downsampling factor (one sampled point per γ data points).
+    pub gamma: u32,
+    /// n_t of Eq. (7), a cosine.
+    pub normal_threshold: f32,
+    pub iterations: u32,
+    pub seed: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct KmParams {
+    pub num_points: u32,
+    pub stride: u32,
+    pub gamma: u32,
+    pub num_sampled: u32,
+    pub k: u32,
+    pub f: u32,
+    pub normal_threshold: f32,
+    pub seed: u32,
+    pub lo: [f32; 4],
+    pub ext: [f32; 4],
+}
+
+impl KmParams {
+    /// `frame`: bounds (lo, hi) containing every point (the scene's bounds).
+    pub fn new(num_points: u32, stride: u32, s: &KMeansSettings, frame: (Vec3, Vec3)) -> Self {
+        let gamma = s.gamma.max(1);
+        let ext = (frame.1 - frame.0).max(Vec3::splat(1e-30));
+        KmParams {
+            num_points,
+            stride,
+            gamma,
+            num_sampled: num_points.div_ceil(gamma),
+            k: s.k.max(1),
+            f: s.f.clamp(1, MAX_F),
+            normal_threshold: s.normal_threshold,
+            seed: s.seed,
+            lo: frame.0.extend(0.0).into(),
+            ext: [ext.x, ext.y, ext.z, ext.length()],
+        }
+    }
+}
+
+/// The result of one clustering, resident on the GPU.
+pub struct Clustering {
+    pub params: KmParams,
+    /// K centroids (pos xyz + valid w, normal).
+    pub centroids: wgpu::Buffer,
+    /// M × F cluster indices (u32::MAX where fewer than F were found).
+    pub assign: wgpu::Buffer,
+    /// M × F normalised inverse-distance weights (Eq. 10).
+    pub weights: wgpu::Buffer,
+    /// Per cluster: (smallest member distance bits, member index); index u32::MAX when unused.
+    pub reps: wgpu::Buffer,
+    /// The sampled points' assignment of the last iteration (for tests).
+    pub sample_assign: wgpu::Buffer,
+}
+
+impl Clustering {
+    pub fn k(&self) -> u32 {
+        self.params.k
+    }
+    pub fn f(&self) -> u32 {
+        self.params.f
+    }
+}
+
+const ENTRIES: &[&str] = &[
+    "init_centroids",
+    "grid_bounds",
+    "grid_setup",
+    "grid_clear",
+    "grid_count",
+    "grid_scan",
+    "grid_scatter",
+    "assign_sampled",
+    "accumulate",
+    "update",
+    "final_assign",
+    "rep_clear",
+    "rep_min",
+    "rep_pick",
+];
+
+pub struct KMeans {
+    kernel: Kernel,
+}
+
+impl KMeans {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let mut entries = vec![uniform_layout(1), storage_layout(2, true)];
+        entries.extend((3..=12).map(|b| storage_layout(b, false)));
+        KMeans {
+            kernel: Kernel::with_entries(ctx, None, "kmeans", ENTRIES, &entries, &[]),
+        }
+    }
+
+    /// Clusters `num_points` points of `data` (`stride` vec4s each: position with w > 0 when valid,
+    /// then normal), timing every step under `label`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        scene: &SceneGpu,
+        profiler: &mut Profiler,
+        label: &str,
+        data: &wgpu::Buffer,
+        num_points: u32,
+        stride: u32,
+        settings: &KMeansSettings,
+        frame: (Vec3, Vec3),
+    ) -> Result<Clustering> {
+        let p = KmParams::new(num_points, stride, settings, frame);
+        let k = p.k as u64;
+        let m = num_points as u64;
+        let f = p.f as u64;
+        let params = ctx.uniform("kmeans params", &p);
+        let centroids = ctx.storage("centroids", k * 32);
+        let sums = ctx.storage("centroid sums", k * WORDS * 4);
+        let bounds = ctx.storage_init(
+            "centroid bounds",
+            &[u32::MAX, u32::MAX, u32::MAX, 0, 0, 0, 0, 0],
+        );
+        let grid = ctx.storage("grid", 32);
+        let cells = ctx.storage("grid cells", 3 * (MAX_DIM as u64).pow(3) * 4);
+        let cell_items = ctx.storage("grid items", k * 4);
+        let sample_assign = ctx.storage("sample assign", p.num_sampled as u64 * 4);
+        let assign = ctx.storage("assign", m * f * 4);
+        let weights = ctx.storage("weights", m * f * 4);
+        let reps = ctx.storage("representatives", k * 8);
+        let bg = self.kernel.bind_group(
+            ctx,
+            &[
+                (1, &params),
+                (2, data),
+                (3, &centroids),
+                (4, &sums),
+                (5, &bounds),
+                (6, &grid),
+                (7, &cells),
+                (8, &cell_items),
+                (9, &sample_assign),
+                (10, &assign),
+                (11, &weights),
+                (12, &reps),
+            ],
+        );
+        let seed = settings.seed;
+        let mut run = |entry: &str, n: u32| {
+            self.kernel
+                .run_entry(ctx, profiler, label, scene, &bg, entry, n, seed)
+        };
+        let kk = p.k;
+        let cell_words = 3 * MAX_DIM * MAX_DIM * MAX_DIM;
+        let build_grid = |run: &mut dyn FnMut(&str, u32)| {
+            run("grid_bounds", kk);
+            run("grid_setup", 1);
+            run("grid_clear", cell_words);
+            run("grid_count", kk);
+            run("grid_scan", 1);
+            run("grid_scatter", kk);
+        };
+        run("init_centroids", kk);
+        for _ in 0..settings.iterations {
+            build_grid(&mut run);
+            run("assign_sampled", p.num_sampled);
+            run("accumulate", p.num_sampled);
+            run("update", kk);
+        }
+        build_grid(&mut run);
+        run("final_assign", num_points);
+        run("rep_clear", kk);
+        run("rep_min", num_points);
+        run("rep_pick", num_points);
+        Ok(Clustering {
+            params: p,
+            centroids,
+            assign,
+            weights,
+            reps,
+            sample_assign,
+        })
+    }
+}
