@@ -72,7 +72,7 @@ fn box_points(n: usize, seed: u64) -> Vec<[f32; 4]> {
         let a = face / 2;
         let mut p = Vec3::new(r.f32(), r.f32(), r.f32()) * ext;
         let mut nrm = Vec3::ZERO;
-        if face % 2 == 0 {
+        if face.is_multiple_of(2) {
             p[a] = 0.0;
             nrm[a] = 1.0;
         } else {
