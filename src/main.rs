@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::{Args, Parser, Subcommand};
 
-use fuzzy_vpl::gi::pipeline::{FrameSettings, Renderer};
+use fuzzy_vpl::gi::pipeline::{FrameSettings, Renderer, Weighting};
 use fuzzy_vpl::gpu::GpuContext;
 use fuzzy_vpl::scene::{self, Scene, extra_lights};
 use fuzzy_vpl::{export, metrics, stats};
@@ -106,6 +106,28 @@ struct RenderArgs {
     /// (Eq. 5; the paper's reference).
     #[arg(long)]
     reference: bool,
+    /// K of the VPL clustering (0 = no VPL clustering; off when ≥ --vpls).
+    #[arg(long, default_value_t = 1024)]
+    vpl_clusters: u32,
+    /// K of the shading-point clustering (0 = no SP clustering; off when ≥ the pixel count).
+    #[arg(long, default_value_t = 3072)]
+    sp_clusters: u32,
+    /// F: SP clusters per pixel (fuzziness), 1..16.
+    #[arg(long, default_value_t = 6)]
+    fuzziness: u32,
+    /// γ: SP downsampling factor for the k-means iterations.
+    #[arg(long, default_value_t = 4)]
+    gamma: u32,
+    /// n_t of Eq. (7): cosine of the largest normal angle within a cluster.
+    #[arg(long, default_value_t = 0.866, allow_hyphen_values = true)]
+    normal_threshold: f32,
+    /// k-means iterations.
+    #[arg(long, default_value_t = 10)]
+    iterations: u32,
+    /// How a pixel's F clusters combine visibility: hard (F = 1), uniform (Eq. 8), inverse-distance
+    /// (Eq. 9).
+    #[arg(long, value_enum, default_value_t = Weighting::InverseDistance)]
+    weighting: Weighting,
     /// G-term clamp: the VPL distance in 1/d² is at least CLAMP × scene diagonal (scale-free).
     #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_CLAMP)]
     clamp: f32,
@@ -260,6 +282,21 @@ fn render(a: RenderArgs) -> Result<()> {
     };
     let ctx = GpuContext::new_headless()?;
     let mut renderer = Renderer::new(&ctx, &scene)?;
+    if !(1..=16).contains(&a.fuzziness) {
+        return Err(bad(format!("--fuzziness {}: must be 1..16", a.fuzziness)));
+    }
+    if a.gamma == 0 {
+        return Err(bad("--gamma must be at least 1"));
+    }
+    if !(a.normal_threshold.is_finite() && (-1.0..=1.0).contains(&a.normal_threshold)) {
+        return Err(bad(format!(
+            "--normal-threshold {}: must be a cosine in [-1, 1]",
+            a.normal_threshold
+        )));
+    }
+    if a.iterations > 1000 {
+        return Err(bad(format!("--iterations {}: at most 1000", a.iterations)));
+    }
     if !(a.clamp.is_finite() && a.clamp >= 0.0 && a.clamp < 1.0) {
         return Err(bad(format!("--clamp {}: must be in [0, 1)", a.clamp)));
     }
@@ -278,6 +315,13 @@ fn render(a: RenderArgs) -> Result<()> {
         direct_samples: a.direct_samples.max(1),
         vpls: a.vpls,
         reference: a.reference,
+        vpl_clusters: a.vpl_clusters,
+        sp_clusters: a.sp_clusters,
+        fuzziness: a.fuzziness,
+        gamma: a.gamma,
+        normal_threshold: a.normal_threshold,
+        iterations: a.iterations,
+        weighting: a.weighting,
         clamp: a.clamp,
         progress: true,
     };
@@ -354,12 +398,13 @@ fn render(a: RenderArgs) -> Result<()> {
             adapter: ctx.adapter_name.clone(),
             settings: stats::Settings {
                 vpls: frame.vpls,
-                vpl_clusters: 0,
-                sp_clusters: 0,
-                fuzziness: 1,
-                gamma: 1,
-                normal_threshold: 0.866,
-                weighting: "hard".into(),
+                vpl_clusters: settings.vpl_clusters,
+                sp_clusters: settings.sp_clusters,
+                fuzziness: settings.f(),
+                gamma: settings.gamma,
+                normal_threshold: settings.normal_threshold,
+                iterations: settings.iterations,
+                weighting: settings.weighting.name().into(),
                 reference: a.reference,
                 seed: a.seed,
                 direct_samples: settings.direct_samples,
@@ -370,6 +415,8 @@ fn render(a: RenderArgs) -> Result<()> {
             counts: stats::Counts {
                 triangles: scene.triangles.len() as u64,
                 vpls: frame.vpls as u64,
+                sp_clusters_used: frame.sp_clusters_used as u64,
+                vpl_clusters_used: frame.vpl_clusters_used as u64,
                 shading_points: frame.shading_points as u64,
                 shadow_rays: frame.shadow_rays,
                 emissive_triangles: renderer.gpu.emitters.len() as u64,

@@ -12,6 +12,7 @@ pub struct Settings {
     pub fuzziness: u32,
     pub gamma: u32,
     pub normal_threshold: f32,
+    pub iterations: u32,
     pub weighting: String,
     pub reference: bool,
     pub seed: u32,
@@ -68,6 +69,7 @@ pub const TIMING_KEYS: &[&str] = &[
     "shade",
     "direct",
     "reference",
+    "gather",
     "frame",
 ];
 

@@ -10,4 +10,7 @@ pub mod primary;
 pub mod raycast;
 pub mod reference;
 pub mod scene_gpu;
+pub mod shade;
+pub mod visibility;
+pub mod vpl_cluster;
 pub mod vpl_trace;

@@ -1,21 +1,52 @@
 //! The frame graph: the one place that decides which passes run for a scene and its settings, in what
-//! order, and collects their GPU times.
+//! order, and collects their GPU times (the paper's Fig. 2).
 //!
-//! Resident (per scene): BVH and scene buffers; VPLs (per VPL count and seed).
-//! Per frame: primary → direct (+ emission) → indirect (`reference`: Eq. 5 over every VPL).
+//! Resident (per scene / light change): BVH and scene buffers; VPLs (step 1) and their clusters
+//! (step 2), rebuilt only when their inputs change.
+//! Per frame: primary (step 3) → direct + emission → indirect, one of
+//! - `reference`: every pixel × every VPL (Eq. 5), the paper's "no clustering";
+//! - `gather`: every pixel × every light, the lights being VPL clusters ("VPLs only");
+//! - `sp_cluster` (step 4) → `visibility` (step 5) → `shade` (step 6, Eq. 6 with Eq. 8 or 9), the lights
+//!   being VPL clusters ("both") or the VPLs ("SPs only").
 
 use std::collections::BTreeMap;
 
 use anyhow::Result;
 
 use super::direct::Direct;
+use super::kmeans::{KMeans, KMeansSettings};
 use super::primary::{CameraParams, Primary, SP_BYTES};
 use super::reference::Reference;
 use super::scene_gpu::SceneGpu;
+use super::shade::{Shade, ShadeInputs, ShadeParams};
+use super::visibility::Visibility;
+use super::vpl_cluster::{self, LightList};
 use super::vpl_trace::{VplSet, VplTrace};
 use crate::bvh::SceneBvh;
 use crate::gpu::{GpuContext, profiler::Profiler};
 use crate::scene::{Camera, Scene};
+
+/// How a pixel's F SP clusters combine their visibility.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Weighting {
+    /// F = 1: the nearest cluster only.
+    Hard,
+    /// Eq. (8): the mean over the F nearest clusters.
+    Uniform,
+    /// Eq. (9) with Eq. (10): inverse-distance weights.
+    InverseDistance,
+}
+
+impl Weighting {
+    pub fn name(self) -> &'static str {
+        match self {
+            Weighting::Hard => "hard",
+            Weighting::Uniform => "uniform",
+            Weighting::InverseDistance => "inverse-distance",
+        }
+    }
+}
 
 /// What a frame is rendered with.
 #[derive(Clone, Debug)]
@@ -27,8 +58,20 @@ pub struct FrameSettings {
     pub direct_samples: u32,
     /// VPLs to trace (resident; 0 = no indirect light).
     pub vpls: u32,
-    /// Indirect light by the unclustered reference (Eq. 5, every pixel × every VPL).
+    /// No clustering at all (Eq. 5 per pixel and VPL).
     pub reference: bool,
+    /// K of the VPL clustering (0 or ≥ VPLs: off).
+    pub vpl_clusters: u32,
+    /// K of the SP clustering (0 or ≥ pixels: off).
+    pub sp_clusters: u32,
+    /// F: SP clusters per pixel (forced to 1 by `Weighting::Hard`).
+    pub fuzziness: u32,
+    /// γ: SP downsampling factor for the k-means iterations.
+    pub gamma: u32,
+    /// n_t of Eq. (7), a cosine.
+    pub normal_threshold: f32,
+    pub iterations: u32,
+    pub weighting: Weighting,
     /// G-term clamp: 1/d² uses d ≥ clamp × scene diagonal (scale-free; see docs/reference.md).
     pub clamp: f32,
     /// Print progress of long passes on stderr.
@@ -44,14 +87,78 @@ impl Default for FrameSettings {
             direct_samples: 16,
             vpls: 8192,
             reference: false,
+            vpl_clusters: 1024,
+            sp_clusters: 3072,
+            fuzziness: 6,
+            gamma: 4,
+            normal_threshold: 0.866,
+            iterations: 10,
+            weighting: Weighting::InverseDistance,
             clamp: DEFAULT_CLAMP,
             progress: false,
         }
     }
 }
 
+impl FrameSettings {
+    /// F in effect.
+    pub fn f(&self) -> u32 {
+        if self.weighting == Weighting::Hard {
+            1
+        } else {
+            self.fuzziness.clamp(1, super::kmeans::MAX_F)
+        }
+    }
+}
+
 /// Default G-term clamp as a fraction of the scene diagonal.
 pub const DEFAULT_CLAMP: f32 = 0.02;
+
+/// Which indirect path a frame takes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Plan {
+    pub indirect: bool,
+    pub vpl_clustering: bool,
+    pub sp_clustering: bool,
+}
+
+impl Plan {
+    pub fn new(scene: &Scene, s: &FrameSettings) -> Plan {
+        let indirect = s.vpls > 0 && scene.has_light();
+        Plan {
+            indirect,
+            vpl_clustering: indirect
+                && !s.reference
+                && s.vpl_clusters > 0
+                && s.vpl_clusters < s.vpls,
+            sp_clustering: indirect
+                && !s.reference
+                && s.sp_clusters > 0
+                && s.sp_clusters < s.width * s.height,
+        }
+    }
+
+    pub fn passes(&self) -> Vec<&'static str> {
+        let mut p = vec![];
+        if self.indirect {
+            p.push("vpl_trace");
+        }
+        if self.vpl_clustering {
+            p.push("vpl_cluster");
+        }
+        p.extend(["primary", "direct"]);
+        if self.indirect {
+            if self.sp_clustering {
+                p.extend(["sp_cluster", "visibility", "shade"]);
+            } else if self.vpl_clustering {
+                p.push("gather");
+            } else {
+                p.push("reference");
+            }
+        }
+        p
+    }
+}
 
 /// A rendered frame: linear radiance per pixel, row-major from the top-left.
 #[derive(Clone, Debug)]
@@ -67,11 +174,15 @@ pub struct Frame {
     pub vpls: u32,
     /// Passes that ran, in order.
     pub passes: Vec<&'static str>,
-    /// GPU milliseconds per pass (summed over its dispatches).
+    /// GPU milliseconds per pass (summed over its dispatches); `frame` excludes resident VPL work.
     pub timings_ms: BTreeMap<String, f64>,
     pub shading_points: u32,
     pub shadow_rays: u64,
+    pub sp_clusters_used: u32,
+    pub vpl_clusters_used: u32,
 }
+
+type LightKey = (u32, u32, u32, u32, u32);
 
 /// Everything resident for one scene on one device.
 pub struct Renderer<'a> {
@@ -84,9 +195,16 @@ pub struct Renderer<'a> {
     direct: Direct,
     vpl_trace: VplTrace,
     reference: Reference,
+    kmeans: KMeans,
+    visibility: Visibility,
+    shade: Shade,
     gbuffer: Option<(wgpu::Buffer, u32)>,
     /// Resident VPLs with the (count, seed) they were traced for and the GPU ms it took.
     pub vpl_set: Option<(VplSet, (u32, u32), f64)>,
+    /// Resident light list (VPL clusters or the VPLs), its key and the clustering's GPU ms.
+    pub lights: Option<(LightList, LightKey, f64)>,
+    /// The last frame's SP clustering (for views and tests).
+    pub sp_clustering: Option<super::kmeans::Clustering>,
 }
 
 impl<'a> Renderer<'a> {
@@ -100,28 +218,22 @@ impl<'a> Renderer<'a> {
             direct: Direct::new(ctx, &gpu),
             vpl_trace: VplTrace::new(ctx, &gpu),
             reference: Reference::new(ctx, &gpu),
+            kmeans: KMeans::new(ctx),
+            visibility: Visibility::new(ctx, &gpu),
+            shade: Shade::new(ctx, &gpu),
+            profiler: Profiler::new(ctx),
             gbuffer: None,
             vpl_set: None,
-            profiler: Profiler::new(ctx),
+            lights: None,
+            sp_clustering: None,
             bvh,
             gpu,
         })
     }
 
     /// The passes a frame with these settings runs, in order (also what `info` prints).
-    /// Direct light runs even without lights: it writes emission and clears the image, with the light
-    /// paths compiled out by override constants.
     pub fn passes_for(scene: &Scene, s: &FrameSettings) -> Vec<&'static str> {
-        let mut p = vec![];
-        let indirect = s.reference && s.vpls > 0 && scene.has_light();
-        if indirect {
-            p.push("vpl_trace");
-        }
-        p.extend(["primary", "direct"]);
-        if indirect {
-            p.push("reference");
-        }
-        p
+        Plan::new(scene, s).passes()
     }
 
     /// Traces the VPLs unless the resident ones match (count, seed).
@@ -139,8 +251,55 @@ impl<'a> Renderer<'a> {
             )?;
             let ms: f64 = self.profiler.collect(self.ctx)?.values().sum();
             self.vpl_set = Some((set, key, ms));
+            self.lights = None;
         }
         Ok(&self.vpl_set.as_ref().unwrap().0)
+    }
+
+    /// Builds the light list (VPL clusters, or the VPLs themselves) unless the resident one matches.
+    fn ensure_lights(&mut self, s: &FrameSettings, plan: &Plan) -> Result<()> {
+        self.ensure_vpls(s.vpls, s.seed)?;
+        let k = if plan.vpl_clustering {
+            s.vpl_clusters
+        } else {
+            0
+        };
+        let key = (
+            k,
+            s.normal_threshold.to_bits(),
+            s.iterations,
+            s.seed,
+            s.vpls,
+        );
+        if self.lights.as_ref().map(|l| l.1) == Some(key) {
+            return Ok(());
+        }
+        let vpls = &self.vpl_set.as_ref().unwrap().0;
+        let _ = self.profiler.collect(self.ctx)?;
+        let list = if plan.vpl_clustering {
+            let ks = KMeansSettings {
+                k,
+                f: 1,
+                gamma: 1,
+                normal_threshold: s.normal_threshold,
+                iterations: s.iterations,
+                seed: s.seed,
+            };
+            vpl_cluster::cluster(
+                self.ctx,
+                &self.gpu,
+                &self.kmeans,
+                &mut self.profiler,
+                vpls,
+                &ks,
+                self.scene.bounds(),
+            )?
+        } else {
+            vpl_cluster::unclustered(self.ctx, vpls)
+        };
+        let ms: f64 = self.profiler.collect(self.ctx)?.values().sum();
+        self.lights = Some((list, key, ms));
+        Ok(())
     }
 
     /// The last frame's shading points, 4 × vec4 each (`common/gbuffer.wgsl`), for tests and views.
@@ -154,13 +313,15 @@ impl<'a> Renderer<'a> {
     pub fn render(&mut self, camera: &Camera, s: &FrameSettings) -> Result<Frame> {
         let ctx = self.ctx;
         let n = s.width * s.height;
+        let plan = Plan::new(self.scene, s);
+        let passes = plan.passes();
+        if plan.indirect {
+            self.ensure_lights(s, &plan)?;
+        }
         let gbuffer = ctx.storage("gbuffer", n as u64 * SP_BYTES);
         let radiance = ctx.storage("radiance", n as u64 * 16);
+        let indirect = ctx.storage("indirect", n as u64 * 16);
         let cam = CameraParams::new(camera, s.width, s.height);
-        let passes = Self::passes_for(self.scene, s);
-        if passes.contains(&"vpl_trace") {
-            self.ensure_vpls(s.vpls, s.seed)?;
-        }
         self.primary
             .record(ctx, &self.gpu, &mut self.profiler, &cam, &gbuffer);
         // With no light at all the direct pass still runs to write emission (zero) and clear the image.
@@ -179,50 +340,118 @@ impl<'a> Renderer<'a> {
             spp,
             s.seed,
         );
-        let indirect = ctx.storage("indirect", n as u64 * 16);
-        let mut reference_rays = 0u64;
-        let mut num_vpls = 0;
-        if passes.contains(&"reference") {
-            let (set, _, _) = self.vpl_set.as_ref().unwrap();
-            num_vpls = set.vpls.len() as u32;
-            let d_min = s.clamp * self.scene.extent();
-            let show = s.progress;
-            let mut last = 0u64;
-            self.reference.record(
-                ctx,
-                &self.gpu,
-                &mut self.profiler,
-                &gbuffer,
-                &set.buffer,
-                num_vpls,
-                &indirect,
-                n,
-                d_min,
-                &mut |done, all| {
-                    let pct = done * 100 / all.max(1);
-                    if show && (pct >= last + 5 || done == all) {
-                        last = pct;
-                        eprint!("\rreference: {pct:3}% ({done}/{all} dispatches)");
-                        if done == all {
-                            eprintln!();
+        let d_min = s.clamp * self.scene.extent();
+        let mut indirect_rays = 0u64;
+        let mut sp_used = 0;
+        let mut num_lights = 0;
+        self.sp_clustering = None;
+        if plan.indirect {
+            let lights = &self.lights.as_ref().unwrap().0;
+            num_lights = lights.lights.len() as u32;
+            if plan.sp_clustering {
+                let ks = KMeansSettings {
+                    k: s.sp_clusters,
+                    f: s.f(),
+                    gamma: s.gamma,
+                    normal_threshold: s.normal_threshold,
+                    iterations: s.iterations,
+                    seed: s.seed,
+                };
+                let c = self.kmeans.run(
+                    ctx,
+                    &self.gpu,
+                    &mut self.profiler,
+                    "sp_cluster",
+                    &gbuffer,
+                    n,
+                    4,
+                    &ks,
+                    self.scene.bounds(),
+                )?;
+                let (bits, words) = self.visibility.record(
+                    ctx,
+                    &self.gpu,
+                    &mut self.profiler,
+                    &gbuffer,
+                    &c.reps,
+                    &lights.buffer,
+                    num_lights,
+                    c.k(),
+                );
+                self.shade.record(
+                    ctx,
+                    &self.gpu,
+                    &mut self.profiler,
+                    &ShadeInputs {
+                        gbuffer: &gbuffer,
+                        lights: &lights.buffer,
+                        bits: &bits,
+                        assign: &c.assign,
+                        weights: &c.weights,
+                        indirect: &indirect,
+                        pixels: n,
+                        params: ShadeParams {
+                            num_lights,
+                            words,
+                            f: c.f(),
+                            weighted: (s.weighting == Weighting::InverseDistance) as u32,
+                            d_min2: d_min * d_min,
+                            _pad: [0; 3],
+                        },
+                    },
+                );
+                let reps: Vec<u32> = ctx.read_buffer(&c.reps, c.k() as usize * 2)?;
+                sp_used = reps.chunks(2).filter(|r| r[1] != u32::MAX).count() as u32;
+                indirect_rays = sp_used as u64 * num_lights as u64;
+                self.sp_clustering = Some(c);
+            } else {
+                let label = if plan.vpl_clustering {
+                    "gather"
+                } else {
+                    "reference"
+                };
+                let show = s.progress;
+                let mut last = 0u64;
+                self.reference.record(
+                    ctx,
+                    &self.gpu,
+                    &mut self.profiler,
+                    &gbuffer,
+                    &lights.buffer,
+                    num_lights,
+                    &indirect,
+                    n,
+                    d_min,
+                    label,
+                    &mut |done, all| {
+                        let pct = done * 100 / all.max(1);
+                        if show && all > 1 && (pct >= last + 5 || done == all) {
+                            last = pct;
+                            eprint!("\r{label}: {pct:3}% ({done}/{all} dispatches)");
+                            if done == all {
+                                eprintln!();
+                            }
                         }
-                    }
-                },
-            );
-            reference_rays = n as u64 * num_vpls as u64;
+                    },
+                );
+            }
         }
         let mut timings_ms = self.profiler.collect(ctx)?;
         let frame_ms: f64 = timings_ms.values().sum();
         timings_ms.insert("frame".into(), frame_ms);
-        if let Some((_, _, ms)) = &self.vpl_set
-            && passes.contains(&"vpl_trace")
-        {
-            timings_ms.insert("vpl_trace".into(), *ms);
+        if plan.indirect {
+            timings_ms.insert("vpl_trace".into(), self.vpl_set.as_ref().unwrap().2);
+        }
+        if plan.vpl_clustering {
+            timings_ms.insert("vpl_cluster".into(), self.lights.as_ref().unwrap().2);
         }
         let px: Vec<[f32; 4]> = ctx.read_buffer(&radiance, n as usize)?;
         let ind: Vec<[f32; 4]> = ctx.read_buffer(&indirect, n as usize)?;
         let sps: Vec<[f32; 4]> = ctx.read_buffer(&gbuffer, n as usize * 4)?;
         let valid = sps.chunks(4).filter(|sp| sp[0][3] > 0.0).count() as u32;
+        if plan.indirect && !plan.sp_clustering {
+            indirect_rays = valid as u64 * num_lights as u64;
+        }
         self.gbuffer = Some((gbuffer, n));
         let direct: Vec<[f32; 3]> = px.iter().map(|p| [p[0], p[1], p[2]]).collect();
         let indirect: Vec<[f32; 3]> = ind.iter().map(|p| [p[0], p[1], p[2]]).collect();
@@ -237,12 +466,14 @@ impl<'a> Renderer<'a> {
             radiance,
             direct,
             indirect,
-            vpls: num_vpls,
+            vpls: self.vpl_set.as_ref().map_or(0, |v| v.0.vpls.len() as u32),
             passes,
             timings_ms,
             shading_points: valid,
             shadow_rays: valid as u64 * (spp as u64 + self.gpu.info.num_lights as u64)
-                + reference_rays,
+                + indirect_rays,
+            sp_clusters_used: sp_used,
+            vpl_clusters_used: if plan.vpl_clustering { num_lights } else { 0 },
         })
     }
 }

@@ -1,5 +1,6 @@
 //! The unclustered reference (Eq. 5, `shaders-wgsl/reference.wgsl`): every shading point gathers every
-//! VPL with its own shadow ray, in bounded dispatches over pixel ranges × VPL ranges.
+//! VPL with its own shadow ray, in bounded dispatches over pixel ranges × VPL ranges. With VPL clusters
+//! as the lights and no SP clustering it is also the paper's "VPLs only" mode (label `gather`).
 
 use bytemuck::{Pod, Zeroable};
 
@@ -47,6 +48,7 @@ impl Reference {
         indirect: &wgpu::Buffer,
         pixels: u32,
         d_min: f32,
+        label: &str,
         progress: &mut dyn FnMut(u64, u64),
     ) {
         if num_vpls == 0 || pixels == 0 {
@@ -67,7 +69,7 @@ impl Reference {
         self.kernel.run_2d(
             ctx,
             profiler,
-            "reference",
+            label,
             scene,
             &bg,
             (pixels, px_chunk),

@@ -1,0 +1,81 @@
+//! Step 6: Eq. (6) per pixel with Ṽ of Eq. (8) or (9) (`shaders-wgsl/shade.wgsl`); CPU twin in
+//! `cpu::shade`.
+
+use bytemuck::{Pod, Zeroable};
+
+use super::dispatch::Kernel;
+use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
+use crate::gpu::{GpuContext, profiler::Profiler};
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ShadeParams {
+    pub num_lights: u32,
+    pub words: u32,
+    pub f: u32,
+    pub weighted: u32,
+    pub d_min2: f32,
+    pub _pad: [u32; 3],
+}
+
+/// The inputs of one shading dispatch.
+pub struct ShadeInputs<'a> {
+    pub gbuffer: &'a wgpu::Buffer,
+    pub lights: &'a wgpu::Buffer,
+    pub bits: &'a wgpu::Buffer,
+    pub assign: &'a wgpu::Buffer,
+    pub weights: &'a wgpu::Buffer,
+    pub indirect: &'a wgpu::Buffer,
+    pub pixels: u32,
+    pub params: ShadeParams,
+}
+
+pub struct Shade {
+    kernel: Kernel,
+}
+
+impl Shade {
+    pub fn new(ctx: &GpuContext, scene: &SceneGpu) -> Self {
+        let mut entries = vec![uniform_layout(1)];
+        entries.extend((2..=6).map(|b| storage_layout(b, true)));
+        entries.push(storage_layout(7, false));
+        Shade {
+            kernel: Kernel::new(ctx, scene, "shade", &entries, &[]),
+        }
+    }
+
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        scene: &SceneGpu,
+        profiler: &mut Profiler,
+        i: &ShadeInputs,
+    ) {
+        let params = ctx.uniform("shade params", &i.params);
+        let bg = self.kernel.bind_group(
+            ctx,
+            &[
+                (1, &params),
+                (2, i.gbuffer),
+                (3, i.lights),
+                (4, i.bits),
+                (5, i.assign),
+                (6, i.weights),
+                (7, i.indirect),
+            ],
+        );
+        // About 2^22 light terms per submission.
+        let per = ((1u32 << 22) / i.params.num_lights.max(1)).max(64);
+        self.kernel.run(
+            ctx,
+            profiler,
+            "shade",
+            scene,
+            &bg,
+            i.pixels,
+            per,
+            0,
+            &mut |_, _| {},
+        );
+    }
+}

@@ -1,0 +1,85 @@
+//! Step 5: a shadow ray per (SP-cluster representative, light) pair into a bit matrix
+//! (`shaders-wgsl/visibility.wgsl`).
+
+use bytemuck::{Pod, Zeroable};
+
+use super::dispatch::Kernel;
+use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
+use crate::gpu::{GpuContext, profiler::Profiler};
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct VisParams {
+    num_sp_clusters: u32,
+    num_lights: u32,
+    words: u32,
+    _pad: u32,
+}
+
+pub struct Visibility {
+    kernel: Kernel,
+}
+
+impl Visibility {
+    pub fn new(ctx: &GpuContext, scene: &SceneGpu) -> Self {
+        let entries = [
+            uniform_layout(1),
+            storage_layout(2, true),
+            storage_layout(3, true),
+            storage_layout(4, true),
+            storage_layout(5, false),
+        ];
+        Visibility {
+            kernel: Kernel::new(ctx, scene, "visibility", &entries, &[]),
+        }
+    }
+
+    /// Returns the bit matrix (`k_sp` rows of ceil(num_lights / 32) words) and the words per row.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        scene: &SceneGpu,
+        profiler: &mut Profiler,
+        gbuffer: &wgpu::Buffer,
+        sp_reps: &wgpu::Buffer,
+        lights: &wgpu::Buffer,
+        num_lights: u32,
+        k_sp: u32,
+    ) -> (wgpu::Buffer, u32) {
+        let words = num_lights.div_ceil(32).max(1);
+        let params = ctx.uniform(
+            "visibility params",
+            &VisParams {
+                num_sp_clusters: k_sp,
+                num_lights,
+                words,
+                _pad: 0,
+            },
+        );
+        let bits = ctx.storage("visibility bits", k_sp as u64 * words as u64 * 4);
+        let bg = self.kernel.bind_group(
+            ctx,
+            &[
+                (1, &params),
+                (2, gbuffer),
+                (3, sp_reps),
+                (4, lights),
+                (5, &bits),
+            ],
+        );
+        // About 2^20 rays per submission (32 per item).
+        self.kernel.run(
+            ctx,
+            profiler,
+            "visibility",
+            scene,
+            &bg,
+            k_sp * words,
+            1 << 15,
+            0,
+            &mut |_, _| {},
+        );
+        (bits, words)
+    }
+}

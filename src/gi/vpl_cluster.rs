@@ -1,0 +1,79 @@
+//! Step 2: VPL clustering (Alg. 1 with F = 1 on the VPLs' positions and normals) and the light list
+//! the frame uses: per cluster its representative VPL (a member, on a real surface) carrying the
+//! summed flux of all members. Resident: rebuilt only when the VPLs or K change.
+
+use anyhow::Result;
+use glam::Vec3;
+
+use super::kmeans::{KMeans, KMeansSettings};
+use super::scene_gpu::SceneGpu;
+use super::vpl_trace::{Vpl, VplSet};
+use crate::gpu::{GpuContext, profiler::Profiler};
+
+pub struct LightList {
+    pub buffer: wgpu::Buffer,
+    pub lights: Vec<Vpl>,
+}
+
+/// The raw VPLs as the light list (VPL clustering off).
+pub fn unclustered(ctx: &GpuContext, vpls: &VplSet) -> LightList {
+    LightList {
+        buffer: ctx.storage_init("lights", &vpls.vpls),
+        lights: vpls.vpls.clone(),
+    }
+}
+
+/// Clusters the VPLs on the GPU and builds the light list. The flux sums are done on the CPU in f64
+/// from the GPU's assignment (N values, once per scene): exact and independent of the order of
+/// additions, so the same seed gives the same image.
+#[allow(clippy::too_many_arguments)]
+pub fn cluster(
+    ctx: &GpuContext,
+    scene: &SceneGpu,
+    kmeans: &KMeans,
+    profiler: &mut Profiler,
+    vpls: &VplSet,
+    settings: &KMeansSettings,
+    frame: (Vec3, Vec3),
+) -> Result<LightList> {
+    let n = vpls.vpls.len() as u32;
+    let s = KMeansSettings { f: 1, ..*settings };
+    let c = kmeans.run(
+        ctx,
+        scene,
+        profiler,
+        "vpl_cluster",
+        &vpls.buffer,
+        n,
+        3,
+        &s,
+        frame,
+    )?;
+    let assign: Vec<u32> = ctx.read_buffer(&c.assign, n as usize)?;
+    let reps: Vec<u32> = ctx.read_buffer(&c.reps, c.k() as usize * 2)?;
+    let mut flux = vec![[0f64; 3]; c.k() as usize];
+    for (v, &k) in vpls.vpls.iter().zip(&assign) {
+        if k != u32::MAX {
+            for a in 0..3 {
+                flux[k as usize][a] += v.flux[a] as f64;
+            }
+        }
+    }
+    let lights: Vec<Vpl> = (0..c.k() as usize)
+        .filter_map(|k| {
+            let rep = reps[2 * k + 1];
+            (rep != u32::MAX).then(|| {
+                let r = vpls.vpls[rep as usize];
+                Vpl {
+                    pos: r.pos,
+                    nrm: r.nrm,
+                    flux: [flux[k][0] as f32, flux[k][1] as f32, flux[k][2] as f32, 0.0],
+                }
+            })
+        })
+        .collect();
+    Ok(LightList {
+        buffer: ctx.storage_init("vpl cluster lights", &lights),
+        lights,
+    })
+}
