@@ -54,8 +54,8 @@ pub fn cluster(
     let mut flux = vec![[0f64; 3]; c.k() as usize];
     for (v, &k) in vpls.vpls.iter().zip(&assign) {
         if k != u32::MAX {
-            for a in 0..3 {
-                flux[k as usize][a] += v.flux[a] as f64;
+            for (sum, &x) in flux[k as usize].iter_mut().zip(&v.flux) {
+                *sum += x as f64;
             }
         }
     }
