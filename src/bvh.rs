@@ -1,5 +1,6 @@
 //! BVH: built on the CPU with `obvhs` (BVH2, PLOC + reinsertion + leaf collapse), flattened into a
-//! 32-byte node layout the WGSL traversal reads (`shaders-wgsl/common/bvh.wgsl`).
+//! 32-byte node layout the WGSL traversal reads (`shaders-wgsl/common/bvh.wgsl`) as two 16-byte texels
+//! of a texture (triangles: three texels), which is what makes it fast on lavapipe (`docs/bvh.md`).
 //!
 //! Triangles are reordered into BVH leaf order ("slots") so a leaf's `first_index..first_index+count`
 //! indexes the triangle arrays directly, on the CPU and the GPU alike. `slot_to_triangle` maps back to
@@ -71,6 +72,13 @@ impl SceneBvh {
         let bvh = build_bvh2_from_tris(&tris, BvhBuildParams::medium_build(), &mut core);
         let slot_to_triangle = bvh.primitive_indices.clone();
         let tris: Vec<OTri> = slot_to_triangle.iter().map(|&i| tris[i as usize]).collect();
+        // In the traversal's data textures a triangle takes 3 texels and each of the < 2n nodes 2.
+        if 4 * tris.len() > crate::gi::scene_gpu::MAX_TEXELS {
+            anyhow::bail!(
+                "{} triangles exceed the GPU traversal's texture capacity",
+                tris.len()
+            );
+        }
         let depth = depth_of(&bvh);
         if depth >= MAX_GPU_DEPTH {
             anyhow::bail!("BVH depth {depth} exceeds {MAX_GPU_DEPTH}");
@@ -88,6 +96,7 @@ impl SceneBvh {
     /// An inner node's first child is the next node and `skip` is where traversal goes when the ray
     /// misses it; a leaf is always followed by the next node. Traversal needs no stack: on SIMD software
     /// drivers (lavapipe) a per-lane stack array turns every push and pop into a gather or scatter.
+    /// Nodes per-octant ordered (8 preorders) measured no faster on lavapipe (docs/bvh.md).
     pub fn gpu_nodes(&self) -> Vec<GpuNode> {
         fn emit(nodes: &[obvhs::bvh2::node::Bvh2Node], i: usize, out: &mut Vec<GpuNode>) {
             let n = &nodes[i];

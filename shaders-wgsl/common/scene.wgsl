@@ -16,6 +16,7 @@ struct SceneInfo {
 
 // BVH2 in depth-first preorder with skip links (src/bvh.rs): an inner node's first child follows it;
 // `index` is the inner node's skip link (next node after its subtree) or the leaf's first triangle slot.
+// Stored as two texels of `bvh_texels` (min | prim_count, max | index); see bvh.wgsl for why textures.
 struct BvhNode {
     min: vec3<f32>,
     prim_count: u32,
@@ -67,7 +68,7 @@ struct Light {
 }
 
 @group(0) @binding(0) var<uniform> scene: SceneInfo;
-@group(0) @binding(1) var<storage, read> bvh_nodes: array<BvhNode>;
+@group(0) @binding(1) var bvh_texels: texture_2d<u32>;
 @group(0) @binding(2) var<storage, read> tris: array<Tri>;
 @group(0) @binding(3) var<storage, read> tri_shade: array<TriShade>;
 @group(0) @binding(4) var<storage, read> materials: array<Material>;
@@ -75,6 +76,8 @@ struct Light {
 @group(0) @binding(6) var<storage, read> texels: array<u32>;
 @group(0) @binding(7) var<storage, read> emitters: array<Emitter>;
 @group(0) @binding(8) var<storage, read> lights: array<Light>;
+// The triangles again for the traversal, 3 texels (v0, v1, v2) each.
+@group(0) @binding(9) var tri_texels: texture_2d<f32>;
 
 // Pipeline-overridable switches: a scene without textures or punctual lights compiles those paths out.
 override HAS_TEXTURES: bool = true;

@@ -155,6 +155,61 @@ pub fn storage_layout(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEnt
     e
 }
 
+/// Width in texels of the BVH data textures: texel i is at (i % W, i / W) (`texel_xy` in bvh.wgsl).
+pub const TEXEL_ROW: u32 = 4096;
+/// The most texels one data texture holds under WebGPU's default 8192-row limit.
+pub const MAX_TEXELS: usize = TEXEL_ROW as usize * 8192;
+
+fn texture_layout(
+    binding: u32,
+    sample_type: wgpu::TextureSampleType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+/// A 2D texture of 16-byte texels holding `bytes` row by row (`TEXEL_ROW` texels a row, zero padded).
+/// The texel count is checked against the device limit in `SceneBvh::build` (`MAX_TEXELS`).
+fn texture_init(
+    ctx: &GpuContext,
+    label: &str,
+    format: wgpu::TextureFormat,
+    bytes: &[u8],
+) -> wgpu::Texture {
+    use wgpu::util::DeviceExt;
+    let texels = (bytes.len() / 16).max(1) as u32;
+    let rows = texels.div_ceil(TEXEL_ROW);
+    let mut data = bytes.to_vec();
+    data.resize((rows * TEXEL_ROW * 16) as usize, 0);
+    ctx.device.create_texture_with_data(
+        &ctx.queue,
+        &wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: TEXEL_ROW,
+                height: rows,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        &data,
+    )
+}
+
 /// A layout entry for a uniform buffer visible to compute.
 pub fn uniform_layout(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
@@ -245,9 +300,14 @@ impl SceneGpu {
             extent,
             _pad: 0,
         };
-        let entries: Vec<wgpu::BindGroupLayoutEntry> = std::iter::once(uniform_layout(0))
-            .chain((1..=8).map(storage_entry))
-            .collect();
+        let entries: Vec<wgpu::BindGroupLayoutEntry> = [
+            uniform_layout(0),
+            texture_layout(1, wgpu::TextureSampleType::Uint),
+            texture_layout(9, wgpu::TextureSampleType::Float { filterable: false }),
+        ]
+        .into_iter()
+        .chain((2..=8).map(storage_entry))
+        .collect();
         let layout = ctx
             .device
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -255,23 +315,42 @@ impl SceneGpu {
                 entries: &entries,
             });
         let buffers = [
-            ctx.uniform("scene info", &info),
-            ctx.storage_init("bvh nodes", &nodes),
-            ctx.storage_init("triangles", &tris),
-            ctx.storage_init("triangle shading", &shade),
-            ctx.storage_init("materials", &materials),
-            ctx.storage_init("texture info", &tex_info),
-            ctx.storage_init("texels", &texels),
-            ctx.storage_init("emitters", &emitters),
-            ctx.storage_init("lights", &lights),
+            (0, ctx.uniform("scene info", &info)),
+            (2, ctx.storage_init("triangles", &tris)),
+            (3, ctx.storage_init("triangle shading", &shade)),
+            (4, ctx.storage_init("materials", &materials)),
+            (5, ctx.storage_init("texture info", &tex_info)),
+            (6, ctx.storage_init("texels", &texels)),
+            (7, ctx.storage_init("emitters", &emitters)),
+            (8, ctx.storage_init("lights", &lights)),
         ];
+        // The traversal reads nodes and triangles as texels (see shaders-wgsl/common/bvh.wgsl).
+        let texel_views = [
+            (
+                1,
+                wgpu::TextureFormat::Rgba32Uint,
+                bytemuck::cast_slice(&nodes),
+            ),
+            (
+                9,
+                wgpu::TextureFormat::Rgba32Float,
+                bytemuck::cast_slice(&tris),
+            ),
+        ]
+        .map(|(binding, format, bytes)| {
+            let tex = texture_init(ctx, "bvh texels", format, bytes);
+            (binding, tex.create_view(&Default::default()))
+        });
         let bind_entries: Vec<wgpu::BindGroupEntry> = buffers
             .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
+            .map(|(binding, b)| wgpu::BindGroupEntry {
+                binding: *binding,
                 resource: b.as_entire_binding(),
             })
+            .chain(texel_views.iter().map(|(binding, v)| wgpu::BindGroupEntry {
+                binding: *binding,
+                resource: wgpu::BindingResource::TextureView(v),
+            }))
             .collect();
         let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("scene"),

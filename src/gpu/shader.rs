@@ -45,6 +45,15 @@ fn file(path: &str) -> Option<&'static str> {
     FILES.iter().find(|(p, _)| *p == path).map(|(_, s)| *s)
 }
 
+/// A file's source: the built-in copy, or with `FVPL_SHADER_DIR` set (shader development) the file
+/// under that folder, so WGSL edits need no rebuild.
+fn source(path: &str) -> Option<String> {
+    match std::env::var_os("FVPL_SHADER_DIR") {
+        Some(dir) => std::fs::read_to_string(std::path::Path::new(&dir).join(path)).ok(),
+        None => file(path).map(str::to_string),
+    }
+}
+
 /// The composed source of pass `name` (e.g. "primary").
 pub fn compose(name: &str) -> String {
     let mut seen = HashSet::new();
@@ -57,7 +66,7 @@ fn inline(path: &str, seen: &mut HashSet<String>, out: &mut String) {
     if !seen.insert(path.to_string()) {
         return;
     }
-    let src = file(path)
+    let src = source(path)
         .unwrap_or_else(|| panic!("unknown WGSL file {path} (add it to gpu::shader::FILES)"));
     for line in src.lines() {
         if let Some(dep) = line.trim().strip_prefix("#import ") {
