@@ -421,7 +421,6 @@ fn render(a: RenderArgs) -> Result<()> {
                 shadow_rays: frame.shadow_rays,
                 emissive_triangles: renderer.gpu.emitters.len() as u64,
                 punctual_lights: scene.lights.len() as u64,
-                ..Default::default()
             },
             passes: frame.passes.iter().map(|s| s.to_string()).collect(),
             timings_ms,
