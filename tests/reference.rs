@@ -20,7 +20,7 @@ fn reference(w: u32, h: u32, vpls: u32, seed: u32) -> FrameSettings {
         vpls,
         reference: true,
         clamp: DEFAULT_CLAMP,
-        progress: false,
+        ..Default::default()
     }
 }
 
