@@ -66,7 +66,7 @@ fn gpu_primary_and_direct_match_cpu_twin() {
             sp_bad += !same_sp as u32;
             // Direct light from the GPU's own SP, so the two differ only in the shading kernel.
             let l = cpu.direct(&g, px, 7, spp);
-            let gl = Vec3::from(f.radiance[px as usize]);
+            let gl = Vec3::from(f.direct[px as usize]);
             let tol = 1e-3 * (1.0 + l.max_element());
             if (gl - l).abs().max_element() > tol {
                 px_bad += 1;
