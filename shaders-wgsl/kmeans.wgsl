@@ -187,11 +187,11 @@ fn grid_setup() {
     grid.num_cells = dims.x * dims.y * dims.z;
 }
 
-// Step 3: clear the per-cell counters (3 x num_cells words).
+// Step 3: clear the per-cell counters (3 x num_cells words; the dispatch covers the largest grid).
 @compute @workgroup_size(64)
 fn grid_clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = chunk_item(gid, nwg);
-    if i == INVALID || i >= 3u * MAX_DIM * MAX_DIM * MAX_DIM {
+    if i == INVALID || i >= 3u * grid.num_cells {
         return;
     }
     atomicStore(&cells[i], 0u);
