@@ -52,7 +52,7 @@ fn direct_light(sp: ShadingPoint, pixel: u32) -> vec3<f32> {
             if cos_p <= 0.0 || cos_l <= 0.0 || ls.pdf_area <= 0.0 {
                 continue;
             }
-            if visible(p, n, ls.p - ls.n * scene.eps) {
+            if visible(p, n, ls.p + ls.n * scene.eps) {
                 area_sum += ls.le * cos_p * cos_l / (d2 * ls.pdf_area);
             }
         }

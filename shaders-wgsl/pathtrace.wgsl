@@ -1,11 +1,16 @@
 // A diffuse path tracer over the same BVH and materials, to check the VPL reference's own bias
 // (src/gi/pathtrace.rs). Same primary ray per pixel centre as the G-buffer; next-event estimation at
 // every vertex (emitters are not hit by bounce rays: diffuse-only NEE); cosine bounces and the same
-// Russian roulette as the VPL particles; at most max_vertices surface vertices.
+// Russian roulette as the VPL particles; at most max_vertices surface vertices. With NEE off it counts
+// emission where bounce rays land instead.
 #import common/bvh.wgsl
 #import common/lights.wgsl
 #import common/rng.wgsl
 #import common/chunk.wgsl
+
+// false: no next-event estimation; emission is counted where bounce rays hit emitters (BSDF sampling
+// only), an independent estimator used to test the light sampling.
+override NEE: bool = true;
 
 struct PtParams {
     width: u32,
@@ -43,7 +48,7 @@ fn nee(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, u32>) -
             let wi = d * inverseSqrt(d2);
             let cp = dot(n, wi);
             let cl = dot(ls.n, -wi);
-            if cp > 0.0 && cl > 0.0 && ls.pdf_area > 0.0 && shadow_free(p, n, ls.p - ls.n * scene.eps, 1.0 - 1e-4) {
+            if cp > 0.0 && cl > 0.0 && ls.pdf_area > 0.0 && shadow_free(p, n, ls.p + ls.n * scene.eps, 1.0 - 1e-4) {
                 sum += ls.le * cp * cl / (d2 * ls.pdf_area);
             }
         }
@@ -91,10 +96,14 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
             }
             let surf = surface_at(hit.slot, hit.u, hit.v, dir);
             let p = o + hit.t * dir;
-            if v == 0u {
-                total += surf.emission;
+            if NEE {
+                if v == 0u {
+                    total += surf.emission;
+                }
+                total += throughput * nee(p, surf.n, surf.albedo, &rng);
+            } else {
+                total += throughput * surf.emission;
             }
-            total += throughput * nee(p, surf.n, surf.albedo, &rng);
             throughput *= surf.albedo;
             // Russian roulette from the second bounce on, like the VPL particles.
             if v >= 2u {

@@ -102,6 +102,9 @@ struct RenderArgs {
     /// Number of VPLs (traced once, resident).
     #[arg(long, default_value_t = 8192)]
     vpls: u32,
+    /// Indirect bounce budget: the most VPLs a light path deposits (the path tracer gets the same).
+    #[arg(long, default_value_t = fuzzy_vpl::gi::vpl_trace::MAX_DEPTH)]
+    bounces: u32,
     /// Indirect light without any clustering: every pixel gathers every VPL with its own shadow ray
     /// (Eq. 5; the paper's reference).
     #[arg(long)]
@@ -285,6 +288,9 @@ fn render(a: RenderArgs) -> Result<()> {
     if !(1..=16).contains(&a.fuzziness) {
         return Err(bad(format!("--fuzziness {}: must be 1..16", a.fuzziness)));
     }
+    if !(1..=64).contains(&a.bounces) {
+        return Err(bad(format!("--bounces {}: must be 1..64", a.bounces)));
+    }
     if a.gamma == 0 {
         return Err(bad("--gamma must be at least 1"));
     }
@@ -314,6 +320,7 @@ fn render(a: RenderArgs) -> Result<()> {
         seed: a.seed,
         direct_samples: a.direct_samples.max(1),
         vpls: a.vpls,
+        bounces: a.bounces,
         reference: a.reference,
         vpl_clusters: a.vpl_clusters,
         sp_clusters: a.sp_clusters,
@@ -341,6 +348,7 @@ fn render(a: RenderArgs) -> Result<()> {
                 spp.max(1),
                 16,
                 a.seed,
+                a.bounces,
             )?;
             f.passes = vec!["pathtrace"];
             f.timings_ms = renderer.profiler.collect(&ctx)?;

@@ -230,7 +230,7 @@ impl<'a> CpuScene<'a> {
                 if cp <= 0.0 || cl <= 0.0 || pdf <= 0.0 {
                     continue;
                 }
-                if self.visible(p, n, lp - ln * self.info.eps) {
+                if self.visible(p, n, lp + ln * self.info.eps) {
                     area_sum += le * cp * cl / (d2 * pdf);
                 }
             }

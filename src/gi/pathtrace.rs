@@ -7,7 +7,6 @@ use bytemuck::{Pod, Zeroable};
 use super::dispatch::Kernel;
 use super::primary::CameraParams;
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
-use super::vpl_trace::MAX_DEPTH;
 use crate::gpu::{GpuContext, profiler::Profiler};
 
 #[repr(C)]
@@ -28,16 +27,29 @@ pub struct PathTrace {
 }
 
 impl PathTrace {
+    /// The path tracer with next-event estimation (the check of the VPL reference).
     pub fn new(ctx: &GpuContext, scene: &SceneGpu) -> Self {
+        Self::with_nee(ctx, scene, true)
+    }
+
+    /// `nee: false` samples light only by bouncing into emitters: slow to converge but independent of
+    /// the light sampling it tests.
+    pub fn with_nee(ctx: &GpuContext, scene: &SceneGpu, nee: bool) -> Self {
         let entries = [uniform_layout(1), storage_layout(2, false)];
         PathTrace {
-            kernel: Kernel::new(ctx, scene, "pathtrace", &entries, &[]),
+            kernel: Kernel::new(
+                ctx,
+                scene,
+                "pathtrace",
+                &entries,
+                &[("NEE", nee as u32 as f64)],
+            ),
         }
     }
 
     /// Renders `spp` samples per pixel (in passes of `spp_per_pass`) and returns the mean radiance.
-    /// Paths have at most MAX_DEPTH + 1 surface vertices: the light transport the VPLs carry (a VPL
-    /// path has at most MAX_DEPTH reflections before the shading point's own).
+    /// Paths have at most `bounces + 1` surface vertices: the light transport the VPLs carry (a VPL
+    /// path has at most `bounces` reflections before the shading point's own).
     #[allow(clippy::too_many_arguments)]
     pub fn render(
         &self,
@@ -48,6 +60,7 @@ impl PathTrace {
         spp: u32,
         spp_per_pass: u32,
         seed: u32,
+        bounces: u32,
     ) -> Result<Vec<[f32; 3]>> {
         let (w, h) = (cam.size[0], cam.size[1]);
         let n = w * h;
@@ -61,7 +74,7 @@ impl PathTrace {
                 &PtParams {
                     width: w,
                     height: h,
-                    max_vertices: MAX_DEPTH + 1,
+                    max_vertices: bounces + 1,
                     spp: k,
                     eye: cam.eye,
                     right: cam.right,

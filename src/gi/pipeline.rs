@@ -58,6 +58,8 @@ pub struct FrameSettings {
     pub direct_samples: u32,
     /// VPLs to trace (resident; 0 = no indirect light).
     pub vpls: u32,
+    /// The most diffuse reflections a light path deposits VPLs at (the indirect bounce budget).
+    pub bounces: u32,
     /// No clustering at all (Eq. 5 per pixel and VPL).
     pub reference: bool,
     /// K of the VPL clustering (0 or ≥ VPLs: off).
@@ -86,6 +88,7 @@ impl Default for FrameSettings {
             seed: 1,
             direct_samples: 16,
             vpls: 8192,
+            bounces: super::vpl_trace::MAX_DEPTH,
             reference: false,
             vpl_clusters: 1024,
             sp_clusters: 3072,
@@ -199,8 +202,8 @@ pub struct Renderer<'a> {
     visibility: Visibility,
     shade: Shade,
     gbuffer: Option<(wgpu::Buffer, u32)>,
-    /// Resident VPLs with the (count, seed) they were traced for and the GPU ms it took.
-    pub vpl_set: Option<(VplSet, (u32, u32), f64)>,
+    /// Resident VPLs with the (count, seed, bounces) they were traced for and the GPU ms it took.
+    pub vpl_set: Option<(VplSet, (u32, u32, u32), f64)>,
     /// Resident light list (VPL clusters or the VPLs), its key and the clustering's GPU ms.
     pub lights: Option<(LightList, LightKey, f64)>,
     /// The last frame's SP clustering (for views and tests).
@@ -236,9 +239,9 @@ impl<'a> Renderer<'a> {
         Plan::new(scene, s).passes()
     }
 
-    /// Traces the VPLs unless the resident ones match (count, seed).
-    pub fn ensure_vpls(&mut self, n: u32, seed: u32) -> Result<&VplSet> {
-        let key = (n, seed);
+    /// Traces the VPLs unless the resident ones match (count, seed, bounces).
+    pub fn ensure_vpls(&mut self, n: u32, seed: u32, bounces: u32) -> Result<&VplSet> {
+        let key = (n, seed, bounces);
         if self.vpl_set.as_ref().map(|v| v.1) != Some(key) {
             let _ = self.profiler.collect(self.ctx)?;
             let set = self.vpl_trace.trace(
@@ -248,6 +251,7 @@ impl<'a> Renderer<'a> {
                 &mut self.profiler,
                 n,
                 seed,
+                bounces,
             )?;
             let ms: f64 = self.profiler.collect(self.ctx)?.values().sum();
             self.vpl_set = Some((set, key, ms));
@@ -258,7 +262,7 @@ impl<'a> Renderer<'a> {
 
     /// Builds the light list (VPL clusters, or the VPLs themselves) unless the resident one matches.
     fn ensure_lights(&mut self, s: &FrameSettings, plan: &Plan) -> Result<()> {
-        self.ensure_vpls(s.vpls, s.seed)?;
+        self.ensure_vpls(s.vpls, s.seed, s.bounces)?;
         let k = if plan.vpl_clustering {
             s.vpl_clusters
         } else {

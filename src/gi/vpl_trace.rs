@@ -11,7 +11,8 @@ use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
 use crate::gpu::{GpuContext, profiler::Profiler};
 use crate::scene::{LightKind, Scene};
 
-/// The most VPLs one light path leaves (its bounce count); Russian roulette usually ends it earlier.
+/// The default for the most VPLs one light path leaves (its bounce count); Russian roulette usually
+/// ends a path earlier.
 pub const MAX_DEPTH: u32 = 8;
 
 /// A VPL as `common/vpl.wgsl` lays it out.
@@ -100,7 +101,9 @@ impl VplTrace {
         profiler: &mut Profiler,
         n: u32,
         seed: u32,
+        max_depth: u32,
     ) -> Result<VplSet> {
+        let max_depth = max_depth.clamp(1, 64);
         let sources = source_table(scene, gpu);
         let has_power = sources.iter().any(|s| s[1] > 0.0);
         let mut vpls: Vec<Vpl> = Vec::new();
@@ -116,14 +119,14 @@ impl VplTrace {
             let params = ctx.uniform(
                 "vpl trace params",
                 &TraceParams {
-                    max_depth: MAX_DEPTH,
+                    max_depth,
                     num_sources: sources.len() as u32,
                     radius,
                     path_base: base,
                     center: center.extend(0.0).into(),
                 },
             );
-            let out = ctx.storage("wave vpls", wave as u64 * MAX_DEPTH as u64 * 48);
+            let out = ctx.storage("wave vpls", wave as u64 * max_depth as u64 * 48);
             let lens = ctx.storage("path lengths", wave as u64 * 4);
             let bg = self
                 .kernel
@@ -140,14 +143,14 @@ impl VplTrace {
                 &mut |_, _| {},
             );
             let lens: Vec<u32> = ctx.read_buffer(&lens, wave as usize)?;
-            let out: Vec<Vpl> = ctx.read_buffer(&out, (wave * MAX_DEPTH) as usize)?;
+            let out: Vec<Vpl> = ctx.read_buffer(&out, (wave * max_depth) as usize)?;
             for (k, &len) in lens.iter().enumerate() {
                 if vpls.len() as u32 >= n {
                     break;
                 }
                 paths += 1;
-                let take = (len.min(MAX_DEPTH) as usize).min(n as usize - vpls.len());
-                let first = k * MAX_DEPTH as usize;
+                let take = (len.min(max_depth) as usize).min(n as usize - vpls.len());
+                let first = k * max_depth as usize;
                 vpls.extend_from_slice(&out[first..first + take]);
             }
             base += wave;
