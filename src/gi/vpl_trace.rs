@@ -92,6 +92,7 @@ impl VplTrace {
         }
     }
 
+    #[allow(clippy::too_many_arguments)]
     /// Traces light paths until `n` VPLs exist (or the lights reach nothing) and keeps the first `n`.
     pub fn trace(
         &self,
