@@ -3,5 +3,6 @@
 
 pub mod kmeans;
 pub mod rng;
+pub mod shade;
 pub mod shading;
 pub mod vpl;

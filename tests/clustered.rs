@@ -1,0 +1,317 @@
+//! The clustered frame (steps 2, 4, 5, 6) against its CPU twins, the paper's MSE ordering, and the
+//! numerical extremes of DESIGN.md §5.
+
+mod common;
+
+use fuzzy_vpl::cpu::shade;
+use fuzzy_vpl::cpu::shading::{CpuScene, ShadingPoint};
+use fuzzy_vpl::gi::pipeline::{FrameSettings, Renderer, Weighting};
+use fuzzy_vpl::metrics::{mean_luminance, mse};
+use fuzzy_vpl::scene::{self, Scene};
+use glam::{Mat4, Vec3};
+
+fn clustered(w: u32, h: u32) -> FrameSettings {
+    FrameSettings {
+        width: w,
+        height: h,
+        vpls: 1024,
+        vpl_clusters: 128,
+        sp_clusters: 48,
+        fuzziness: 6,
+        gamma: 4,
+        iterations: 8,
+        direct_samples: 4,
+        ..Default::default()
+    }
+}
+
+/// GPU visibility + shading equal the CPU twins given the GPU's clustering and light list.
+#[test]
+fn clustered_shading_matches_cpu_twin() {
+    let ctx = common::gpu();
+    let s = scene::load("builtin:conference").unwrap();
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let (w, h) = (40u32, 30u32);
+    for weighting in [
+        Weighting::Hard,
+        Weighting::Uniform,
+        Weighting::InverseDistance,
+    ] {
+        let fs = FrameSettings {
+            weighting,
+            ..clustered(w, h)
+        };
+        let f = r.render(&s.default_camera(), &fs).unwrap();
+        let gbuf = r.last_gbuffer().unwrap();
+        let sps: Vec<ShadingPoint> = gbuf.chunks(4).map(ShadingPoint::from_gpu).collect();
+        let c = r.sp_clustering.as_ref().unwrap();
+        let (k, nf) = (c.k() as usize, c.f() as usize);
+        let assign: Vec<u32> = ctx.read_buffer(&c.assign, sps.len() * nf).unwrap();
+        let weights: Vec<f32> = ctx.read_buffer(&c.weights, sps.len() * nf).unwrap();
+        let reps: Vec<u32> = ctx.read_buffer(&c.reps, k * 2).unwrap();
+        let reps: Vec<u32> = reps.chunks(2).map(|x| x[1]).collect();
+        let lights = r.lights.as_ref().unwrap().0.lights.clone();
+        let cpu = CpuScene {
+            scene: &s,
+            bvh: &r.bvh,
+            info: r.gpu.info,
+            emitters: &r.gpu.emitters,
+        };
+        let (bits, words) = shade::visibility_bits(&cpu, &sps, &reps, &lights);
+        let d_min = fs.clamp * s.extent();
+        let mut bad = 0;
+        for (m, sp) in sps.iter().enumerate() {
+            let c = shade::shade(
+                sp,
+                &lights,
+                &bits,
+                words,
+                &assign[m * nf..m * nf + nf],
+                &weights[m * nf..m * nf + nf],
+                weighting == Weighting::InverseDistance,
+                d_min * d_min,
+            );
+            let g = Vec3::from(f.indirect[m]);
+            if (c - g).abs().max_element() > 1e-3 * (1.0 + c.max_element()) {
+                bad += 1;
+            }
+        }
+        println!("{weighting:?}: {bad} of {} pixels differ", sps.len());
+        assert!(bad * 100 <= sps.len(), "{weighting:?}: {bad} pixels differ");
+    }
+}
+
+/// The paper's ordering at equal K: weighted ≤ uniform ≤ hard in MSE against the reference, and a
+/// large GPU-time speed-up over it (the held-out check's settings at a smaller size).
+#[test]
+fn mse_order_and_speedup_on_the_conference_room() {
+    let ctx = common::gpu();
+    let s = scene::load("builtin:conference").unwrap();
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let cam = s.default_camera();
+    let (w, h) = (80, 60);
+    let base = FrameSettings {
+        vpls: 2048,
+        vpl_clusters: 256,
+        sp_clusters: 96,
+        ..clustered(w, h)
+    };
+    let reference = r
+        .render(
+            &cam,
+            &FrameSettings {
+                reference: true,
+                ..base.clone()
+            },
+        )
+        .unwrap();
+    let mut errs = Vec::new();
+    for weighting in [
+        Weighting::Hard,
+        Weighting::Uniform,
+        Weighting::InverseDistance,
+    ] {
+        let f = r
+            .render(
+                &cam,
+                &FrameSettings {
+                    weighting,
+                    ..base.clone()
+                },
+            )
+            .unwrap();
+        assert!(common::all_finite(&f.radiance));
+        let e = mse(&f.radiance, &reference.radiance);
+        let speedup = reference.timings_ms["frame"] / f.timings_ms["frame"];
+        println!("{weighting:?}: mse {e:.3e}, speed-up {speedup:.1}x");
+        assert!(speedup > 2.0, "{weighting:?}: speed-up {speedup}");
+        errs.push(e);
+    }
+    assert!(
+        errs[2] <= errs[1] * 1.02 && errs[1] <= errs[0] * 1.02,
+        "MSE order hard, uniform, weighted: {errs:?}"
+    );
+    assert!(errs[2] < 5e-3, "{errs:?}");
+}
+
+fn scaled(mut s: Scene, k: f32) -> Scene {
+    for t in &mut s.triangles {
+        for p in &mut t.p {
+            *p *= k;
+        }
+    }
+    for c in &mut s.cameras {
+        let t = c.transform.w_axis.truncate() * k;
+        c.transform = Mat4::from_cols(
+            c.transform.x_axis,
+            c.transform.y_axis,
+            c.transform.z_axis,
+            t.extend(1.0),
+        );
+    }
+    s
+}
+
+/// DESIGN.md §5 on the whole clustered frame: every output finite and the image sane.
+#[test]
+fn clustered_extremes_stay_finite() {
+    let ctx = common::gpu();
+    let base = scene::load("builtin:cornell").unwrap();
+    let (w, h) = (32, 24);
+    let b = clustered(w, h);
+    let cases: Vec<(&str, FrameSettings)> = vec![
+        (
+            "K_sp=1",
+            FrameSettings {
+                sp_clusters: 1,
+                ..b.clone()
+            },
+        ),
+        (
+            "K_vpl=1",
+            FrameSettings {
+                vpl_clusters: 1,
+                ..b.clone()
+            },
+        ),
+        (
+            "K far above the points",
+            FrameSettings {
+                sp_clusters: w * h - 1,
+                vpl_clusters: 1023,
+                ..b.clone()
+            },
+        ),
+        (
+            "F > K",
+            FrameSettings {
+                sp_clusters: 3,
+                fuzziness: 8,
+                ..b.clone()
+            },
+        ),
+        (
+            "F = 16",
+            FrameSettings {
+                fuzziness: 16,
+                ..b.clone()
+            },
+        ),
+        (
+            "huge gamma",
+            FrameSettings {
+                gamma: 1_000_000,
+                ..b.clone()
+            },
+        ),
+        (
+            "n_t = 1",
+            FrameSettings {
+                normal_threshold: 1.0,
+                ..b.clone()
+            },
+        ),
+        (
+            "n_t = -1",
+            FrameSettings {
+                normal_threshold: -1.0,
+                ..b.clone()
+            },
+        ),
+        (
+            "one VPL",
+            FrameSettings {
+                vpls: 1,
+                vpl_clusters: 1,
+                ..b.clone()
+            },
+        ),
+        (
+            "zero iterations",
+            FrameSettings {
+                iterations: 0,
+                ..b.clone()
+            },
+        ),
+        (
+            "200 iterations",
+            FrameSettings {
+                iterations: 200,
+                ..b.clone()
+            },
+        ),
+        (
+            "SPs only",
+            FrameSettings {
+                vpl_clusters: 0,
+                ..b.clone()
+            },
+        ),
+        (
+            "VPLs only",
+            FrameSettings {
+                sp_clusters: 0,
+                ..b.clone()
+            },
+        ),
+        (
+            "no clamp",
+            FrameSettings {
+                clamp: 0.0,
+                ..b.clone()
+            },
+        ),
+    ];
+    let mut r = Renderer::new(&ctx, &base).unwrap();
+    let cam = base.default_camera();
+    for (name, fs) in cases {
+        let f = r.render(&cam, &fs).unwrap();
+        assert!(common::all_finite(&f.radiance), "{name}: non-finite pixels");
+        let lum = mean_luminance(&f.radiance);
+        println!("{name}: mean luminance {lum:.4}, passes {:?}", f.passes);
+        assert!(lum > 0.05 && lum < 1.0, "{name}: mean luminance {lum}");
+    }
+    // Scenes at 1e-4 and 1e4 scale render the same clustered image.
+    let mut lums = Vec::new();
+    for k in [1.0, 1e-4, 1e4] {
+        let s = scaled(base.clone(), k);
+        let mut r = Renderer::new(&ctx, &s).unwrap();
+        let f = r.render(&s.default_camera(), &b).unwrap();
+        assert!(common::all_finite(&f.radiance), "scale {k}");
+        lums.push(mean_luminance(&f.radiance));
+    }
+    println!("clustered mean luminance at scale 1, 1e-4, 1e4: {lums:?}");
+    for l in &lums[1..] {
+        assert!((l / lums[0] - 1.0).abs() < 0.02, "{lums:?}");
+    }
+}
+
+/// A camera that sees only sky (no valid SP) and a camera inside a block: finite, and black or dim.
+#[test]
+fn no_valid_shading_points() {
+    let ctx = common::gpu();
+    let s = scene::load("builtin:cornell").unwrap();
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let (lo, hi) = s.bounds();
+    let c = 0.5 * (lo + hi);
+    let away = fuzzy_vpl::scene::Camera::look_at(
+        "away",
+        c - Vec3::Z * 5.0,
+        c - Vec3::Z * 10.0,
+        Vec3::Y,
+        0.6,
+    );
+    let f = r.render(&away, &clustered(16, 12)).unwrap();
+    assert_eq!(f.shading_points, 0);
+    assert!(f.radiance.iter().flatten().all(|x| *x == 0.0));
+    // Inside the tall block (≈ x 0.27..0.43, z 0.25..0.41, y 0..0.33 in metres).
+    let inside = fuzzy_vpl::scene::Camera::look_at(
+        "inside",
+        Vec3::new(0.35, 0.15, 0.33),
+        Vec3::new(0.35, 0.15, 0.0),
+        Vec3::Y,
+        0.6,
+    );
+    let f = r.render(&inside, &clustered(16, 12)).unwrap();
+    assert!(common::all_finite(&f.radiance));
+}
