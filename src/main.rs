@@ -73,8 +73,9 @@ struct RenderArgs {
     #[command(flatten)]
     scene: SceneArgs,
     /// Output image: .exr (linear radiance) or .png (exposure, clamp, sRGB).
-    #[arg(short, long)]
-    output: PathBuf,
+    /// Repeat -o to write several files of the same frame (e.g. -o a.exr -o a.png).
+    #[arg(short, long, required = true)]
+    output: Vec<PathBuf>,
     /// Write the stats JSON (DESIGN.md §4) here.
     #[arg(long)]
     stats: Option<PathBuf>,
@@ -234,16 +235,17 @@ fn load_scene(a: &SceneArgs) -> Result<Scene> {
 }
 
 fn render(a: RenderArgs) -> Result<()> {
-    let ext = a
-        .output
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase());
-    if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
-        return Err(bad(format!(
-            "{}: output must end in .exr or .png",
-            a.output.display()
-        )));
+    for out in &a.output {
+        let ext = out
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase());
+        if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
+            return Err(bad(format!(
+                "{}: output must end in .exr or .png",
+                out.display()
+            )));
+        }
     }
     if a.width == 0 || a.height == 0 || a.width > 16384 || a.height > 16384 {
         return Err(bad(format!(
@@ -368,13 +370,9 @@ fn render(a: RenderArgs) -> Result<()> {
     if non_finite > 0 {
         eprintln!("warning: {non_finite} non-finite pixel channels in the output");
     }
-    export::write_image(
-        &a.output,
-        frame.width,
-        frame.height,
-        &frame.radiance,
-        a.exposure,
-    )?;
+    for out in &a.output {
+        export::write_image(out, frame.width, frame.height, &frame.radiance, a.exposure)?;
+    }
     if let (Some(p), Some(r)) = (&a.error_map, &reference) {
         export::write_png_rgb8(
             p,
@@ -396,7 +394,11 @@ fn render(a: RenderArgs) -> Result<()> {
         timings_ms["frame"],
         frame.passes.join(" + "),
         metrics::mean_luminance(&frame.radiance),
-        a.output.display()
+        a.output
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
     );
     if let Some(p) = &a.stats {
         let s = stats::Stats {
