@@ -190,7 +190,10 @@ type LightKey = (u32, u32, u32, u32, u32);
 /// Everything resident for one scene on one device.
 pub struct Renderer<'a> {
     pub ctx: &'a GpuContext,
-    pub scene: &'a Scene,
+    /// The scene as rendered: borrowed, or a copy with its emitters scaled into range
+    /// (`Scene::normalize_emission`), in which case `output_scale` scales the images back.
+    pub scene: std::borrow::Cow<'a, Scene>,
+    pub output_scale: f32,
     pub bvh: SceneBvh,
     pub gpu: SceneGpu,
     pub profiler: Profiler,
@@ -212,11 +215,19 @@ pub struct Renderer<'a> {
 
 impl<'a> Renderer<'a> {
     pub fn new(ctx: &'a GpuContext, scene: &'a Scene) -> Result<Self> {
-        let bvh = SceneBvh::build(scene)?;
-        let gpu = SceneGpu::upload(ctx, scene, &bvh);
+        let mut scene = std::borrow::Cow::Borrowed(scene);
+        let m = scene.max_emission();
+        let output_scale = if m.is_finite() && m > 0.0 && !(1e-6..=1e6).contains(&m) {
+            scene.to_mut().normalize_emission()
+        } else {
+            1.0
+        };
+        let bvh = SceneBvh::build(&scene)?;
+        let gpu = SceneGpu::upload(ctx, &scene, &bvh);
         Ok(Renderer {
             ctx,
             scene,
+            output_scale,
             primary: Primary::new(ctx, &gpu),
             direct: Direct::new(ctx, &gpu),
             vpl_trace: VplTrace::new(ctx, &gpu),
@@ -246,7 +257,7 @@ impl<'a> Renderer<'a> {
             let _ = self.profiler.collect(self.ctx)?;
             let set = self.vpl_trace.trace(
                 self.ctx,
-                self.scene,
+                &self.scene,
                 &self.gpu,
                 &mut self.profiler,
                 n,
@@ -317,7 +328,7 @@ impl<'a> Renderer<'a> {
     pub fn render(&mut self, camera: &Camera, s: &FrameSettings) -> Result<Frame> {
         let ctx = self.ctx;
         let n = s.width * s.height;
-        let plan = Plan::new(self.scene, s);
+        let plan = Plan::new(&self.scene, s);
         let passes = plan.passes();
         if plan.indirect {
             self.ensure_lights(s, &plan)?;
@@ -457,12 +468,15 @@ impl<'a> Renderer<'a> {
             indirect_rays = valid as u64 * num_lights as u64;
         }
         self.gbuffer = Some((gbuffer, n));
-        let direct: Vec<[f32; 3]> = px.iter().map(|p| [p[0], p[1], p[2]]).collect();
-        let indirect: Vec<[f32; 3]> = ind.iter().map(|p| [p[0], p[1], p[2]]).collect();
+        // Scaled back to the scene's own units, saturating at the largest finite f32.
+        let k = self.output_scale;
+        let back = |p: &[f32; 4]| [0, 1, 2].map(|c| (p[c] * k).min(f32::MAX));
+        let direct: Vec<[f32; 3]> = px.iter().map(back).collect();
+        let indirect: Vec<[f32; 3]> = ind.iter().map(back).collect();
         let radiance = direct
             .iter()
             .zip(&indirect)
-            .map(|(a, b)| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
+            .map(|(a, b)| [0, 1, 2].map(|c| (a[c] + b[c]).min(f32::MAX)))
             .collect();
         Ok(Frame {
             width: s.width,

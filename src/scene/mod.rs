@@ -231,6 +231,31 @@ impl Scene {
         }
     }
 
+    /// The largest emitted quantity (emissive radiance component, light colour × intensity).
+    pub fn max_emission(&self) -> f32 {
+        let m = self
+            .materials
+            .iter()
+            .map(|m| m.emissive.max_element())
+            .fold(0.0f32, f32::max);
+        self.lights
+            .iter()
+            .map(|l| (l.color * l.intensity).max_element())
+            .fold(m, f32::max)
+    }
+
+    /// Light transport is linear in emitted power: a scene whose emitters are extreme (beyond 1e±6)
+    /// is rendered with its emitters scaled into range, and the image scaled back by the returned
+    /// factor. This keeps every intermediate (VPL fluxes, sums, products) finite in f32.
+    pub fn normalize_emission(&mut self) -> f32 {
+        let m = self.max_emission();
+        if !(m.is_finite() && m > 0.0) || (1e-6..=1e6).contains(&m) {
+            return 1.0;
+        }
+        self.scale_light_power(1.0 / m);
+        m
+    }
+
     /// Features the scene uses, for `info` and for choosing passes.
     pub fn features(&self) -> Vec<&'static str> {
         let mut f = Vec::new();
