@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::{Args, Parser, Subcommand};
 
+use fuzzy_vpl::bench::{self, sweep};
 use fuzzy_vpl::gi::pipeline::{FrameSettings, Renderer, Weighting};
 use fuzzy_vpl::gpu::GpuContext;
 use fuzzy_vpl::scene::{self, Scene, extra_lights};
@@ -36,6 +37,82 @@ enum Command {
     Info(InfoArgs),
     /// Ray throughput of the WGSL traversal against obvhs on all CPU cores (primary and shadow rays).
     Raybench(RaybenchArgs),
+    /// Error against run time over a sweep of clustering settings: results.csv, plots, summary.md.
+    #[command(after_help = BENCH_HELP)]
+    Bench(BenchArgs),
+}
+
+const BENCH_HELP: &str = "\
+Lists are comma-separated; the sweep is every combination of modes x SP K x VPL K x F x gamma
+(values a mode ignores are dropped: hard has F = 1, vpl-only no SP K, sp-only no VPL K).
+Modes: hard, uniform, weighted (both clusterings, Eqs. 8 / 9), vpl-only, sp-only.
+Each configuration is rendered --repeat times; its times are the mean of the 3 best (GPU timestamps),
+its error is the last image's MSE against the unclustered reference of the same camera.
+--quick: 96x72, 1024 VPLs, 128 VPL clusters, 48 and 96 SP clusters, every mode, repeat 3
+(given options still override it).
+Example: fuzzy-vpl bench builtin:conference --out-dir bench-conf --sp-clusters 768,1536,3072 --vpl-clusters 512,1024";
+
+#[derive(Args)]
+struct BenchArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Directory for results.csv, reference.exr, images/, the plots and summary.md (created).
+    #[arg(long)]
+    out_dir: PathBuf,
+    /// A small sweep at low resolution that finishes in a few minutes on a software driver.
+    #[arg(long)]
+    quick: bool,
+    /// Modes to compare: hard,uniform,weighted,vpl-only,sp-only (default hard,uniform,weighted;
+    /// quick: all five).
+    #[arg(long, value_name = "LIST")]
+    modes: Option<String>,
+    /// SP cluster counts (default 768,1536,3072; quick 48,96).
+    #[arg(long, value_name = "LIST")]
+    sp_clusters: Option<String>,
+    /// VPL cluster counts (default 1024; quick 128).
+    #[arg(long, value_name = "LIST")]
+    vpl_clusters: Option<String>,
+    /// F values, 1..16 (default 6).
+    #[arg(long, value_name = "LIST")]
+    fuzziness: Option<String>,
+    /// γ values (default 4).
+    #[arg(long, value_name = "LIST")]
+    gamma: Option<String>,
+    /// Image width (default 640; quick 96).
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height (default 480; quick 72).
+    #[arg(long)]
+    height: Option<u32>,
+    /// Number of VPLs (default 8192; quick 1024).
+    #[arg(long)]
+    vpls: Option<u32>,
+    /// glTF camera indices, comma-separated (default: the scene's default view); one reference each.
+    #[arg(long, value_name = "LIST")]
+    camera: Option<String>,
+    #[arg(long, default_value_t = 1)]
+    seed: u32,
+    /// Renders per configuration; times are the mean of the 3 best (default 10; quick 3).
+    #[arg(long)]
+    repeat: Option<u32>,
+    /// Renders of the reference (slow on a software driver), timed the same way.
+    #[arg(long, default_value_t = 1)]
+    reference_repeat: u32,
+    /// n_t of Eq. (7): cosine of the largest normal angle within a cluster.
+    #[arg(long, default_value_t = 0.866, allow_hyphen_values = true)]
+    normal_threshold: f32,
+    /// k-means iterations.
+    #[arg(long, default_value_t = 10)]
+    iterations: u32,
+    /// Area-light samples (shadow rays) per pixel for direct light.
+    #[arg(long, default_value_t = 16)]
+    direct_samples: u32,
+    /// G-term clamp as a fraction of the scene diagonal.
+    #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_CLAMP)]
+    clamp: f32,
+    /// Exposure of the PNG images.
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
 }
 
 #[derive(Args)]
@@ -189,6 +266,7 @@ fn main() -> ExitCode {
         Some(Command::Render(a)) => render(a),
         Some(Command::Info(a)) => info(a),
         Some(Command::Raybench(a)) => raybench(a),
+        Some(Command::Bench(a)) => bench(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -536,5 +614,140 @@ fn raybench(a: RaybenchArgs) -> Result<()> {
             Ok(())
         })?;
     }
+    Ok(())
+}
+
+fn bench(a: BenchArgs) -> Result<()> {
+    let base_sweep = if a.quick {
+        sweep::Sweep::quick_default()
+    } else {
+        sweep::Sweep::full_default()
+    };
+    let sweep = sweep::Sweep::parse(
+        &sweep::SweepArgs {
+            modes: a.modes.clone(),
+            sp_clusters: a.sp_clusters.clone(),
+            vpl_clusters: a.vpl_clusters.clone(),
+            fuzziness: a.fuzziness.clone(),
+            gamma: a.gamma.clone(),
+        },
+        base_sweep,
+    )
+    .map_err(bad)?;
+    let q = |quick: u32, full: u32| if a.quick { quick } else { full };
+    let width = a.width.unwrap_or(q(96, 640));
+    let height = a.height.unwrap_or(q(72, 480));
+    let vpls = a.vpls.unwrap_or(q(1024, 8192));
+    let repeat = a.repeat.unwrap_or(q(3, 10));
+    if width == 0 || height == 0 || width > 16384 || height > 16384 {
+        return Err(bad(format!(
+            "--width/--height {width}x{height}: must be 1..16384"
+        )));
+    }
+    if vpls == 0 {
+        return Err(bad("--vpls must be at least 1"));
+    }
+    if repeat == 0 || a.reference_repeat == 0 {
+        return Err(bad("--repeat and --reference-repeat must be at least 1"));
+    }
+    if !(a.normal_threshold.is_finite() && (-1.0..=1.0).contains(&a.normal_threshold)) {
+        return Err(bad(format!(
+            "--normal-threshold {}: must be a cosine in [-1, 1]",
+            a.normal_threshold
+        )));
+    }
+    if a.iterations > 1000 {
+        return Err(bad(format!("--iterations {}: at most 1000", a.iterations)));
+    }
+    if !(a.clamp.is_finite() && a.clamp >= 0.0 && a.clamp < 1.0) {
+        return Err(bad(format!("--clamp {}: must be in [0, 1)", a.clamp)));
+    }
+    if !(a.exposure.is_finite() && a.exposure >= 0.0) {
+        return Err(bad("--exposure must be a finite number >= 0"));
+    }
+    let cam_list: Option<Vec<usize>> = a
+        .camera
+        .as_deref()
+        .map(|c| sweep::parse_list("--camera", c))
+        .transpose()
+        .map_err(bad)?;
+    let scene = load_scene(&a.scene)?;
+    let cameras = match cam_list {
+        None => vec![("default".to_string(), scene.default_camera())],
+        Some(l) => l
+            .into_iter()
+            .map(|i| {
+                scene
+                    .cameras
+                    .get(i)
+                    .cloned()
+                    .map(|c| (i.to_string(), c))
+                    .ok_or_else(|| {
+                        bad(format!(
+                            "{}: --camera {i}: the scene has {} camera(s)",
+                            a.scene.scene,
+                            scene.cameras.len()
+                        ))
+                    })
+            })
+            .collect::<Result<_>>()?,
+    };
+    std::fs::create_dir_all(&a.out_dir)
+        .map_err(|e| bad(format!("{}: cannot create: {e}", a.out_dir.display())))?;
+    let ctx = GpuContext::new_headless()?;
+    let configs = sweep.configs().len();
+    eprintln!(
+        "bench {}: {} configuration(s) x {} camera(s), {width}x{height}, {vpls} VPLs, repeat {repeat} \
+         (reference {}) on {}",
+        a.scene.scene,
+        configs,
+        cameras.len(),
+        a.reference_repeat,
+        ctx.adapter_name
+    );
+    let plan = bench::BenchPlan {
+        scene_name: a.scene.scene.clone(),
+        out_dir: a.out_dir.clone(),
+        base: FrameSettings {
+            width,
+            height,
+            seed: a.seed,
+            direct_samples: a.direct_samples.max(1),
+            vpls,
+            normal_threshold: a.normal_threshold,
+            iterations: a.iterations,
+            clamp: a.clamp,
+            ..FrameSettings::default()
+        },
+        sweep,
+        cameras,
+        repeat,
+        reference_repeat: a.reference_repeat,
+        exposure: a.exposure,
+        progress: true,
+    };
+    let report = bench::run(&ctx, &scene, &plan)?;
+    println!(
+        "{:<8} {:<28} {:>10} {:>10} {:>8} {:>11} {:>11}",
+        "camera", "configuration", "frame ms", "ref ms", "speedup", "MSE", "rel. MSE"
+    );
+    for r in &report.rows {
+        println!(
+            "{:<8} {:<28} {:>10.2} {:>10.1} {:>7.1}x {:>11.3e} {:>11.3e}",
+            r.camera,
+            r.label,
+            r.frame_ms(),
+            r.reference_ms,
+            r.speedup,
+            r.mse,
+            r.rel_mse
+        );
+    }
+    println!(
+        "wrote {} files to {} in {:.1} s: results.csv, summary.md, plots, images/",
+        report.files.len(),
+        a.out_dir.display(),
+        report.wall_s
+    );
     Ok(())
 }

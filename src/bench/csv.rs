@@ -1,0 +1,340 @@
+//! `results.csv`: one row per configuration. A fixed header (the contract a reader indexes by name);
+//! fields are quoted only when they hold a comma, quote or newline (RFC 4180).
+
+use std::collections::BTreeMap;
+
+use anyhow::{Context, Result, bail};
+
+/// The stage timings of a row, in the order of the CSV columns (`frame` last).
+pub const STAGES: &[&str] = &[
+    "vpl_trace",
+    "vpl_cluster",
+    "primary",
+    "sp_cluster",
+    "visibility",
+    "shade",
+    "gather",
+    "direct",
+    "frame",
+];
+
+/// One measured configuration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Row {
+    pub scene: String,
+    /// glTF camera index, or `default` (the scene's default view).
+    pub camera: String,
+    pub width: u32,
+    pub height: u32,
+    pub vpls: u32,
+    pub mode: String,
+    pub vpl_clusters: u32,
+    pub sp_clusters: u32,
+    pub fuzziness: u32,
+    pub gamma: u32,
+    pub normal_threshold: f32,
+    pub iterations: u32,
+    /// GPU ms per stage (mean of the 3 best of `repeat`), keyed by `STAGES`.
+    pub stages_ms: BTreeMap<String, f64>,
+    /// The reference's frame time (same camera), ms.
+    pub reference_ms: f64,
+    /// reference_ms ÷ frame.
+    pub speedup: f64,
+    pub mse: f64,
+    pub rel_mse: f64,
+    pub sp_clusters_used: u32,
+    pub vpl_clusters_used: u32,
+    pub shadow_rays: u64,
+    pub repeat: u32,
+    /// Short name used in plots and the summary (`weighted 48/128 F6 g4`).
+    pub label: String,
+}
+
+impl Row {
+    pub fn stage(&self, k: &str) -> f64 {
+        self.stages_ms.get(k).copied().unwrap_or(0.0)
+    }
+
+    pub fn frame_ms(&self) -> f64 {
+        self.stage("frame")
+    }
+}
+
+/// The header, in order.
+pub fn header() -> Vec<String> {
+    let mut h: Vec<String> = [
+        "scene",
+        "camera",
+        "width",
+        "height",
+        "vpls",
+        "mode",
+        "vpl_clusters",
+        "sp_clusters",
+        "fuzziness",
+        "gamma",
+        "normal_threshold",
+        "iterations",
+    ]
+    .map(String::from)
+    .to_vec();
+    h.extend(STAGES.iter().map(|s| format!("{s}_ms")));
+    h.extend(
+        [
+            "reference_ms",
+            "speedup",
+            "mse",
+            "rel_mse",
+            "sp_clusters_used",
+            "vpl_clusters_used",
+            "shadow_rays",
+            "repeat",
+            "label",
+        ]
+        .map(String::from),
+    );
+    h
+}
+
+fn record(r: &Row) -> Vec<String> {
+    let mut v = vec![
+        r.scene.clone(),
+        r.camera.clone(),
+        r.width.to_string(),
+        r.height.to_string(),
+        r.vpls.to_string(),
+        r.mode.clone(),
+        r.vpl_clusters.to_string(),
+        r.sp_clusters.to_string(),
+        r.fuzziness.to_string(),
+        r.gamma.to_string(),
+        r.normal_threshold.to_string(),
+        r.iterations.to_string(),
+    ];
+    v.extend(STAGES.iter().map(|s| format!("{}", r.stage(s))));
+    v.extend([
+        format!("{}", r.reference_ms),
+        format!("{}", r.speedup),
+        format!("{:e}", r.mse),
+        format!("{:e}", r.rel_mse),
+        r.sp_clusters_used.to_string(),
+        r.vpl_clusters_used.to_string(),
+        r.shadow_rays.to_string(),
+        r.repeat.to_string(),
+        r.label.clone(),
+    ]);
+    v
+}
+
+fn quote(field: &str) -> String {
+    if field.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", field.replace('"', "\"\""))
+    } else {
+        field.to_string()
+    }
+}
+
+/// The whole file: header and rows, `\n` line ends.
+pub fn to_csv(rows: &[Row]) -> String {
+    let line = |f: Vec<String>| f.iter().map(|s| quote(s)).collect::<Vec<_>>().join(",") + "\n";
+    let mut s = line(header());
+    for r in rows {
+        s += &line(record(r));
+    }
+    s
+}
+
+/// Splits one CSV line (no embedded newlines) into fields.
+pub fn split_line(line: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (quoted, c) {
+            (true, '"') if chars.peek() == Some(&'"') => {
+                cur.push('"');
+                chars.next();
+            }
+            (true, '"') => quoted = false,
+            (false, '"') if cur.is_empty() => quoted = true,
+            (false, ',') => out.push(std::mem::take(&mut cur)),
+            _ => cur.push(c),
+        }
+    }
+    out.push(cur);
+    out
+}
+
+/// Reads a file written by `to_csv` back (for tests and tools).
+pub fn from_csv(text: &str) -> Result<Vec<Row>> {
+    let mut lines = text.lines();
+    let head = split_line(lines.next().context("empty CSV")?);
+    if head != header() {
+        bail!("unexpected CSV header: {}", head.join(","));
+    }
+    let col = |name: &str| head.iter().position(|h| h == name).unwrap();
+    let mut rows = Vec::new();
+    for (i, l) in lines.enumerate() {
+        if l.is_empty() {
+            continue;
+        }
+        let f = split_line(l);
+        if f.len() != head.len() {
+            bail!(
+                "line {}: {} fields, expected {}",
+                i + 2,
+                f.len(),
+                head.len()
+            );
+        }
+        let get = |name: &str| f[col(name)].as_str();
+        let num = |name: &str| -> Result<f64> {
+            get(name)
+                .parse::<f64>()
+                .with_context(|| format!("line {}: {name} {:?}", i + 2, get(name)))
+        };
+        rows.push(Row {
+            scene: get("scene").into(),
+            camera: get("camera").into(),
+            width: num("width")? as u32,
+            height: num("height")? as u32,
+            vpls: num("vpls")? as u32,
+            mode: get("mode").into(),
+            vpl_clusters: num("vpl_clusters")? as u32,
+            sp_clusters: num("sp_clusters")? as u32,
+            fuzziness: num("fuzziness")? as u32,
+            gamma: num("gamma")? as u32,
+            normal_threshold: num("normal_threshold")? as f32,
+            iterations: num("iterations")? as u32,
+            stages_ms: STAGES
+                .iter()
+                .map(|s| Ok((s.to_string(), num(&format!("{s}_ms"))?)))
+                .collect::<Result<_>>()?,
+            reference_ms: num("reference_ms")?,
+            speedup: num("speedup")?,
+            mse: num("mse")?,
+            rel_mse: num("rel_mse")?,
+            sp_clusters_used: num("sp_clusters_used")? as u32,
+            vpl_clusters_used: num("vpl_clusters_used")? as u32,
+            shadow_rays: get("shadow_rays").parse().context("shadow_rays")?,
+            repeat: num("repeat")? as u32,
+            label: get("label").into(),
+        });
+    }
+    Ok(rows)
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// A plausible row for tests (time grows with the K's, error falls).
+    pub fn synthetic(mode: &str, sp: u32, vpl: u32) -> Row {
+        let mut stages_ms = BTreeMap::new();
+        let k = (sp + vpl) as f64;
+        for (i, s) in STAGES.iter().enumerate() {
+            stages_ms.insert(s.to_string(), 0.5 + i as f64 * 0.1 + k * 1e-3);
+        }
+        let frame: f64 = [
+            "primary",
+            "sp_cluster",
+            "visibility",
+            "shade",
+            "gather",
+            "direct",
+        ]
+        .iter()
+        .map(|s| stages_ms[*s])
+        .sum();
+        stages_ms.insert("frame".into(), frame);
+        let bias = match mode {
+            "hard" => 2.0,
+            "uniform" => 1.3,
+            _ => 1.0,
+        };
+        Row {
+            scene: "builtin:cornell".into(),
+            camera: "default".into(),
+            width: 96,
+            height: 72,
+            vpls: 1024,
+            mode: mode.into(),
+            vpl_clusters: vpl,
+            sp_clusters: sp,
+            fuzziness: 6,
+            gamma: 4,
+            normal_threshold: 0.866,
+            iterations: 10,
+            stages_ms,
+            reference_ms: 50.0,
+            speedup: 50.0 / frame,
+            mse: bias * 1e-2 / k.sqrt(),
+            rel_mse: bias * 1e-1 / k.sqrt(),
+            sp_clusters_used: sp - 1,
+            vpl_clusters_used: vpl,
+            shadow_rays: 123_456_789_012,
+            repeat: 3,
+            label: format!("{mode} {sp}/{vpl}"),
+        }
+    }
+
+    #[test]
+    fn header_has_the_contract_columns_in_order() {
+        let h = header();
+        let want = [
+            "scene",
+            "camera",
+            "width",
+            "height",
+            "vpls",
+            "mode",
+            "vpl_clusters",
+            "sp_clusters",
+            "fuzziness",
+            "gamma",
+            "normal_threshold",
+            "iterations",
+            "vpl_trace_ms",
+            "vpl_cluster_ms",
+            "primary_ms",
+            "sp_cluster_ms",
+            "visibility_ms",
+            "shade_ms",
+            "gather_ms",
+            "direct_ms",
+            "frame_ms",
+            "reference_ms",
+            "speedup",
+            "mse",
+            "rel_mse",
+            "sp_clusters_used",
+            "vpl_clusters_used",
+            "shadow_rays",
+        ];
+        assert_eq!(&h[..want.len()], &want.map(String::from));
+        let csv = to_csv(&[]);
+        assert_eq!(csv.lines().count(), 1);
+        assert_eq!(split_line(csv.trim_end()), h);
+    }
+
+    #[test]
+    fn a_row_round_trips() {
+        let mut r = synthetic("weighted", 48, 128);
+        r.scene = "dir, with \"comma\"/scene.glb".into();
+        r.mse = 1.234_567_890_123e-7;
+        let csv = to_csv(std::slice::from_ref(&r));
+        assert_eq!(csv.lines().count(), 2);
+        let back = from_csv(&csv).unwrap();
+        assert_eq!(back, vec![r]);
+    }
+
+    #[test]
+    fn bad_csv_is_an_error() {
+        assert!(from_csv("").is_err());
+        assert!(from_csv("a,b\n1,2\n").is_err());
+        let mut csv = to_csv(&[synthetic("hard", 48, 128)]);
+        csv = csv.replace(",hard,", ",hard,extra,");
+        assert!(from_csv(&csv).is_err());
+    }
+}

@@ -1,0 +1,306 @@
+//! `fuzzy-vpl bench`: error against run time over a sweep of clustering settings (the paper's
+//! Figs. 7, 9 and 11). One unclustered reference per camera, then every configuration of the sweep,
+//! each timed `repeat` times (mean of the 3 best, `stats::best_of_runs`); the last run's image is
+//! compared with the reference. Writes `results.csv`, images, plots and `summary.md`.
+
+pub mod csv;
+pub mod plot;
+pub mod summary;
+pub mod sweep;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::gi::pipeline::{Frame, FrameSettings, Renderer};
+use crate::gpu::GpuContext;
+use crate::scene::{Camera, Scene};
+use crate::{export, metrics, stats};
+use csv::{Row, STAGES};
+use summary::{CameraSummary, SummaryInfo};
+use sweep::{Config, Sweep};
+
+/// Everything a bench run needs besides the scene and the device.
+pub struct BenchPlan {
+    /// The scene as named on the command line (written in every row).
+    pub scene_name: String,
+    pub out_dir: PathBuf,
+    /// Size, VPLs, seed, n_t, iterations, clamp, direct samples; the sweep sets the rest.
+    pub base: FrameSettings,
+    pub sweep: Sweep,
+    /// (name written in the rows, camera).
+    pub cameras: Vec<(String, Camera)>,
+    pub repeat: u32,
+    pub reference_repeat: u32,
+    /// PNG exposure.
+    pub exposure: f32,
+    /// Draw the progress bar (it hides itself when stderr is not a terminal).
+    pub progress: bool,
+}
+
+/// What a run produced.
+pub struct BenchReport {
+    pub rows: Vec<Row>,
+    pub files: Vec<PathBuf>,
+    pub wall_s: f64,
+}
+
+fn file_slug(label: &str) -> String {
+    label
+        .chars()
+        .map(|c| match c {
+            '/' => 'x',
+            c if c.is_ascii_alphanumeric() || c == '-' => c,
+            _ => '_',
+        })
+        .collect()
+}
+
+/// Renders `n` frames with `s`, returns the last frame and the per-key mean of the 3 best timings.
+fn timed(
+    renderer: &mut Renderer,
+    camera: &Camera,
+    s: &FrameSettings,
+    n: u32,
+    pb: &ProgressBar,
+) -> Result<(Frame, BTreeMap<String, f64>)> {
+    let mut runs = Vec::new();
+    let mut last = None;
+    for _ in 0..n.max(1) {
+        let f = renderer.render(camera, s)?;
+        runs.push(f.timings_ms.clone());
+        last = Some(f);
+        pb.inc(1);
+    }
+    Ok((last.expect("n >= 1"), stats::best_of_runs(&runs)))
+}
+
+fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
+    let text = csv::to_csv(rows);
+    export::write_atomic(path, |w| {
+        use std::io::Write;
+        w.write_all(text.as_bytes())?;
+        Ok(())
+    })
+}
+
+pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchReport> {
+    let t0 = Instant::now();
+    let out = &plan.out_dir;
+    let img_dir = out.join("images");
+    std::fs::create_dir_all(&img_dir)
+        .with_context(|| format!("{}: cannot create", img_dir.display()))?;
+    let configs: Vec<Config> = plan.sweep.configs();
+    let frames = plan.cameras.len() as u64
+        * (plan.reference_repeat.max(1) as u64 + configs.len() as u64 * plan.repeat.max(1) as u64);
+    let pb = if plan.progress {
+        ProgressBar::new(frames)
+    } else {
+        ProgressBar::hidden()
+    };
+    pb.set_style(
+        ProgressStyle::with_template(
+            "{elapsed_precise} [{bar:32.cyan/blue}] {pos}/{len} frames, eta {eta} — {msg}",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    let say = |line: String| pb.suspend(|| eprintln!("{line}"));
+    let mut renderer = Renderer::new(ctx, scene)?;
+    let base = FrameSettings {
+        progress: false,
+        ..plan.base.clone()
+    };
+    let multi = plan.cameras.len() > 1;
+    let mut rows: Vec<Row> = Vec::new();
+    let mut files = Vec::new();
+    let mut cam_summaries = Vec::new();
+    let csv_path = out.join("results.csv");
+    for (cam_name, camera) in &plan.cameras {
+        let suffix = if multi {
+            format!("_cam{cam_name}")
+        } else {
+            String::new()
+        };
+        // The reference: every pixel × every VPL.
+        pb.set_message(format!("camera {cam_name}: reference"));
+        let ref_settings = FrameSettings {
+            reference: true,
+            ..base.clone()
+        };
+        let (reference, ref_t) = timed(
+            &mut renderer,
+            camera,
+            &ref_settings,
+            plan.reference_repeat,
+            &pb,
+        )?;
+        let reference_ms = ref_t["frame"];
+        let ref_exr = format!("reference{suffix}.exr");
+        export::write_exr(
+            &out.join(&ref_exr),
+            reference.width,
+            reference.height,
+            &reference.radiance,
+        )?;
+        let ref_png = out.join(format!("reference{suffix}.png"));
+        export::write_image(
+            &ref_png,
+            reference.width,
+            reference.height,
+            &reference.radiance,
+            plan.exposure,
+        )?;
+        files.extend([out.join(&ref_exr), ref_png]);
+        say(format!(
+            "camera {cam_name}: reference {:.1} ms GPU ({} VPLs, mean luminance {:.3})",
+            reference_ms,
+            reference.vpls,
+            metrics::mean_luminance(&reference.radiance)
+        ));
+        let mut cam_rows = Vec::new();
+        for (i, c) in configs.iter().enumerate() {
+            let label = c.label();
+            pb.set_message(format!("camera {cam_name}: {label}"));
+            let s = c.settings(&base);
+            let (frame, t) = timed(&mut renderer, camera, &s, plan.repeat, &pb)?;
+            let stages_ms: BTreeMap<String, f64> = STAGES
+                .iter()
+                .map(|k| (k.to_string(), t.get(*k).copied().unwrap_or(0.0)))
+                .collect();
+            let frame_ms = stages_ms["frame"];
+            let row = Row {
+                scene: plan.scene_name.clone(),
+                camera: cam_name.clone(),
+                width: frame.width,
+                height: frame.height,
+                vpls: frame.vpls,
+                mode: c.mode.name().into(),
+                vpl_clusters: c.vpl_clusters,
+                sp_clusters: c.sp_clusters,
+                fuzziness: c.fuzziness,
+                gamma: c.gamma,
+                normal_threshold: s.normal_threshold,
+                iterations: s.iterations,
+                stages_ms,
+                reference_ms,
+                speedup: if frame_ms > 0.0 {
+                    reference_ms / frame_ms
+                } else {
+                    0.0
+                },
+                mse: metrics::mse(&frame.radiance, &reference.radiance),
+                rel_mse: metrics::rel_mse(&frame.radiance, &reference.radiance),
+                sp_clusters_used: frame.sp_clusters_used,
+                vpl_clusters_used: frame.vpl_clusters_used,
+                shadow_rays: frame.shadow_rays,
+                repeat: plan.repeat,
+                label: label.clone(),
+            };
+            let stem = format!("{:02}{suffix}_{}", i + 1, file_slug(&label));
+            let img = format!("images/{stem}.png");
+            let err = format!("images/{stem}_err.png");
+            export::write_image(
+                &out.join(&img),
+                frame.width,
+                frame.height,
+                &frame.radiance,
+                plan.exposure,
+            )?;
+            export::write_png_rgb8(
+                &out.join(&err),
+                frame.width,
+                frame.height,
+                metrics::error_map(&frame.radiance, &reference.radiance),
+            )?;
+            files.extend([out.join(&img), out.join(&err)]);
+            say(format!(
+                "camera {cam_name}: {label:<28} {:>9.2} ms  {:>6.1}x  MSE {:.3e}",
+                frame_ms, row.speedup, row.mse
+            ));
+            rows.push(row.clone());
+            // Rewritten after every configuration, so an interrupted sweep keeps what it measured.
+            write_csv(&csv_path, &rows)?;
+            cam_rows.push((row, img, err));
+        }
+        let just: Vec<Row> = cam_rows.iter().map(|r| r.0.clone()).collect();
+        let title = |what: &str| format!("{} — {what}", plan.scene_name);
+        let mut plots = Vec::new();
+        let stages_png = format!("stages{suffix}.png");
+        plot::stages(
+            &out.join(&stages_png),
+            &title("GPU time per stage and MSE"),
+            &just,
+        )?;
+        plots.push(("Stage times and MSE".to_string(), stages_png));
+        if just.iter().any(|r| r.sp_clusters > 0 && r.vpl_clusters > 0) {
+            let grid_png = format!("grid{suffix}.png");
+            plot::grid(
+                &out.join(&grid_png),
+                &title("time and MSE over K_sp / K_vpl"),
+                &just,
+            )?;
+            plots.push(("SP × VPL clusters: time against MSE".to_string(), grid_png));
+        }
+        let pareto_png = format!("pareto{suffix}.png");
+        plot::pareto(
+            &out.join(&pareto_png),
+            &title("time against MSE by mode, Pareto front"),
+            &just,
+        )?;
+        plots.push((
+            "Modes: Pareto front of time and MSE".to_string(),
+            pareto_png,
+        ));
+        files.extend(plots.iter().map(|p| out.join(&p.1)));
+        cam_summaries.push(CameraSummary {
+            camera: cam_name.clone(),
+            reference_ms,
+            reference_image: ref_exr,
+            plots,
+            rows: cam_rows,
+        });
+    }
+    pb.finish_and_clear();
+    write_csv(&csv_path, &rows)?;
+    files.push(csv_path);
+    let wall_s = t0.elapsed().as_secs_f64();
+    let md = summary::markdown(&SummaryInfo {
+        scene: &plan.scene_name,
+        adapter: &ctx.adapter_name,
+        width: base.width,
+        height: base.height,
+        vpls: base.vpls,
+        seed: base.seed,
+        repeat: plan.repeat,
+        reference_repeat: plan.reference_repeat,
+        cameras: cam_summaries,
+        wall_s,
+    });
+    let md_path = out.join("summary.md");
+    export::write_atomic(&md_path, |w| {
+        use std::io::Write;
+        w.write_all(md.as_bytes())?;
+        Ok(())
+    })?;
+    files.push(md_path);
+    Ok(BenchReport {
+        rows,
+        files,
+        wall_s,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slugs_are_file_names() {
+        assert_eq!(file_slug("weighted 48/128 F6 g4"), "weighted_48x128_F6_g4");
+        assert_eq!(file_slug("vpl-only -/128"), "vpl-only_-x128");
+    }
+}

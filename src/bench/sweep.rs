@@ -1,0 +1,412 @@
+//! The sweep of `fuzzy-vpl bench`: option lists, modes, and the configurations they expand to.
+
+use std::fmt;
+use std::str::FromStr;
+
+use crate::gi::pipeline::{FrameSettings, Weighting};
+
+/// What is clustered, and how a pixel combines its SP clusters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Mode {
+    /// Both clusterings, F = 1 (the nearest SP cluster only).
+    Hard,
+    /// Both clusterings, Eq. (8): the mean over the F nearest SP clusters.
+    Uniform,
+    /// Both clusterings, Eq. (9): inverse-distance weights over the F nearest SP clusters.
+    Weighted,
+    /// VPL clustering only: every pixel gathers every VPL cluster with its own shadow ray.
+    VplOnly,
+    /// SP clustering only (inverse-distance weights): cluster representatives see every VPL.
+    SpOnly,
+}
+
+impl Mode {
+    pub const ALL: [Mode; 5] = [
+        Mode::Hard,
+        Mode::Uniform,
+        Mode::Weighted,
+        Mode::VplOnly,
+        Mode::SpOnly,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Hard => "hard",
+            Mode::Uniform => "uniform",
+            Mode::Weighted => "weighted",
+            Mode::VplOnly => "vpl-only",
+            Mode::SpOnly => "sp-only",
+        }
+    }
+
+    pub fn weighting(self) -> Weighting {
+        match self {
+            Mode::Hard => Weighting::Hard,
+            Mode::Uniform => Weighting::Uniform,
+            Mode::Weighted | Mode::SpOnly => Weighting::InverseDistance,
+            // No SP clusters: the weighting is not used.
+            Mode::VplOnly => Weighting::Hard,
+        }
+    }
+
+    pub fn clusters_sps(self) -> bool {
+        self != Mode::VplOnly
+    }
+
+    pub fn clusters_vpls(self) -> bool {
+        self != Mode::SpOnly
+    }
+
+    /// Whether F (and so the fuzzy weights) matters.
+    pub fn uses_fuzziness(self) -> bool {
+        matches!(self, Mode::Uniform | Mode::Weighted | Mode::SpOnly)
+    }
+}
+
+impl fmt::Display for Mode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Mode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let t = s.trim().to_ascii_lowercase();
+        match t.as_str() {
+            "inverse-distance" => return Ok(Mode::Weighted),
+            "vpl" | "vpls-only" => return Ok(Mode::VplOnly),
+            "sp" | "sps-only" => return Ok(Mode::SpOnly),
+            _ => {}
+        }
+        Mode::ALL
+            .into_iter()
+            .find(|m| m.name() == t)
+            .ok_or_else(|| {
+                format!(
+                    "unknown mode {s:?} (expected one of: {})",
+                    Mode::ALL.map(|m| m.name()).join(", ")
+                )
+            })
+    }
+}
+
+/// Parses a comma-separated list (`"192,768"`), naming `option` in errors. Duplicates are dropped,
+/// order is kept; an empty list is an error.
+pub fn parse_list<T>(option: &str, s: &str) -> Result<Vec<T>, String>
+where
+    T: FromStr + PartialEq,
+{
+    let mut out: Vec<T> = Vec::new();
+    for item in s.split(',') {
+        let item = item.trim();
+        if item.is_empty() {
+            return Err(format!("{option} {s:?}: empty item in the list"));
+        }
+        let v = item
+            .parse::<T>()
+            .map_err(|_| format!("{option} {s:?}: {item:?} is not a valid value"))?;
+        if !out.contains(&v) {
+            out.push(v);
+        }
+    }
+    Ok(out)
+}
+
+/// Parses `--modes`.
+pub fn parse_modes(s: &str) -> Result<Vec<Mode>, String> {
+    let mut out = Vec::new();
+    for item in s.split(',') {
+        if item.trim().is_empty() {
+            return Err(format!("--modes {s:?}: empty item in the list"));
+        }
+        let m: Mode = item.parse().map_err(|e| format!("--modes: {e}"))?;
+        if !out.contains(&m) {
+            out.push(m);
+        }
+    }
+    Ok(out)
+}
+
+/// The lists a sweep multiplies out.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sweep {
+    pub modes: Vec<Mode>,
+    pub sp_clusters: Vec<u32>,
+    pub vpl_clusters: Vec<u32>,
+    pub fuzziness: Vec<u32>,
+    pub gamma: Vec<u32>,
+}
+
+/// The sweep options as typed (`None` = not given).
+#[derive(Clone, Debug, Default)]
+pub struct SweepArgs {
+    pub modes: Option<String>,
+    pub sp_clusters: Option<String>,
+    pub vpl_clusters: Option<String>,
+    pub fuzziness: Option<String>,
+    pub gamma: Option<String>,
+}
+
+impl Sweep {
+    /// The full default sweep: the three shading modes at the render defaults, three SP cluster counts.
+    pub fn full_default() -> Sweep {
+        Sweep {
+            modes: vec![Mode::Hard, Mode::Uniform, Mode::Weighted],
+            sp_clusters: vec![768, 1536, 3072],
+            vpl_clusters: vec![1024],
+            fuzziness: vec![6],
+            gamma: vec![4],
+        }
+    }
+
+    /// `--quick`: every mode at two SP cluster counts and 128 VPL clusters (9 configurations).
+    pub fn quick_default() -> Sweep {
+        Sweep {
+            modes: Mode::ALL.to_vec(),
+            sp_clusters: vec![48, 96],
+            vpl_clusters: vec![128],
+            fuzziness: vec![6],
+            gamma: vec![4],
+        }
+    }
+
+    /// Parses the given lists over `base` and checks every value.
+    pub fn parse(args: &SweepArgs, base: Sweep) -> Result<Sweep, String> {
+        let mut s = base;
+        if let Some(v) = &args.modes {
+            s.modes = parse_modes(v)?;
+        }
+        if let Some(v) = &args.sp_clusters {
+            s.sp_clusters = parse_list("--sp-clusters", v)?;
+        }
+        if let Some(v) = &args.vpl_clusters {
+            s.vpl_clusters = parse_list("--vpl-clusters", v)?;
+        }
+        if let Some(v) = &args.fuzziness {
+            s.fuzziness = parse_list("--fuzziness", v)?;
+        }
+        if let Some(v) = &args.gamma {
+            s.gamma = parse_list("--gamma", v)?;
+        }
+        s.validate()?;
+        Ok(s)
+    }
+
+    pub fn validate(&self) -> Result<(), String> {
+        if self.modes.is_empty()
+            || self.sp_clusters.is_empty()
+            || self.vpl_clusters.is_empty()
+            || self.fuzziness.is_empty()
+            || self.gamma.is_empty()
+        {
+            return Err("every sweep list needs at least one value".into());
+        }
+        if let Some(f) = self.fuzziness.iter().find(|f| !(1..=16).contains(*f)) {
+            return Err(format!("--fuzziness {f}: must be 1..16"));
+        }
+        if self.gamma.contains(&0) {
+            return Err("--gamma 0: must be at least 1".into());
+        }
+        let sp_modes = self.modes.iter().any(|m| m.clusters_sps());
+        if sp_modes && self.sp_clusters.contains(&0) {
+            return Err("--sp-clusters 0: use --modes vpl-only for no SP clustering".into());
+        }
+        let vpl_modes = self.modes.iter().any(|m| m.clusters_vpls());
+        if vpl_modes && self.vpl_clusters.contains(&0) {
+            return Err("--vpl-clusters 0: use --modes sp-only for no VPL clustering".into());
+        }
+        Ok(())
+    }
+
+    /// Every distinct configuration: modes × SP K × VPL K × F × γ, with the values a mode ignores
+    /// dropped (hard has F = 1; vpl-only has no SP K, F, γ; sp-only has no VPL K).
+    pub fn configs(&self) -> Vec<Config> {
+        let mut out: Vec<Config> = Vec::new();
+        for &mode in &self.modes {
+            for &sp in &self.sp_clusters {
+                for &vpl in &self.vpl_clusters {
+                    for &f in &self.fuzziness {
+                        for &g in &self.gamma {
+                            let c = Config {
+                                mode,
+                                sp_clusters: if mode.clusters_sps() { sp } else { 0 },
+                                vpl_clusters: if mode.clusters_vpls() { vpl } else { 0 },
+                                fuzziness: if mode.uses_fuzziness() { f } else { 1 },
+                                gamma: if mode.clusters_sps() { g } else { 0 },
+                            };
+                            if !out.contains(&c) {
+                                out.push(c);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+/// One point of the sweep.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Config {
+    pub mode: Mode,
+    /// 0 = no SP clustering.
+    pub sp_clusters: u32,
+    /// 0 = no VPL clustering.
+    pub vpl_clusters: u32,
+    /// F in effect (1 for hard and vpl-only).
+    pub fuzziness: u32,
+    /// γ (0 where no SP clustering runs).
+    pub gamma: u32,
+}
+
+impl Config {
+    /// `weighted 48/128 F6 γ4`: mode, K_sp/K_vpl ("-" = not clustered), F and γ where they apply.
+    pub fn label(&self) -> String {
+        let k = |v: u32| {
+            if v == 0 {
+                "-".to_string()
+            } else {
+                v.to_string()
+            }
+        };
+        let mut s = format!(
+            "{} {}/{}",
+            self.mode,
+            k(self.sp_clusters),
+            k(self.vpl_clusters)
+        );
+        if self.mode.uses_fuzziness() {
+            s += &format!(" F{}", self.fuzziness);
+        }
+        if self.mode.clusters_sps() {
+            s += &format!(" g{}", self.gamma);
+        }
+        s
+    }
+
+    /// The frame settings of this configuration over `base` (size, VPLs, seed, n_t, iterations...).
+    pub fn settings(&self, base: &FrameSettings) -> FrameSettings {
+        FrameSettings {
+            reference: false,
+            sp_clusters: self.sp_clusters,
+            vpl_clusters: self.vpl_clusters,
+            fuzziness: self.fuzziness.max(1),
+            gamma: self.gamma.max(1),
+            weighting: self.mode.weighting(),
+            ..base.clone()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lists_parse_trim_and_dedup() {
+        assert_eq!(
+            parse_list::<u32>("--sp-clusters", "192, 768,192").unwrap(),
+            vec![192, 768]
+        );
+        assert_eq!(parse_list::<u32>("--gamma", "4").unwrap(), vec![4]);
+        assert_eq!(
+            parse_list::<f32>("--x", "0.5,1").unwrap(),
+            vec![0.5f32, 1.0]
+        );
+    }
+
+    #[test]
+    fn bad_lists_name_the_option_and_value() {
+        let e = parse_list::<u32>("--sp-clusters", "192,abc").unwrap_err();
+        assert!(e.contains("--sp-clusters") && e.contains("abc"), "{e}");
+        let e = parse_list::<u32>("--sp-clusters", "192,,768").unwrap_err();
+        assert!(e.contains("empty"), "{e}");
+        let e = parse_list::<u32>("--vpl-clusters", "-5").unwrap_err();
+        assert!(e.contains("-5"), "{e}");
+        assert!(parse_list::<u32>("--gamma", "").is_err());
+    }
+
+    #[test]
+    fn modes_parse_with_aliases() {
+        assert_eq!(
+            parse_modes("hard,uniform,weighted,vpl-only,sp-only").unwrap(),
+            Mode::ALL.to_vec()
+        );
+        assert_eq!(
+            parse_modes("Weighted,inverse-distance").unwrap(),
+            vec![Mode::Weighted]
+        );
+        let e = parse_modes("hard,fuzzy").unwrap_err();
+        assert!(e.contains("fuzzy") && e.contains("vpl-only"), "{e}");
+    }
+
+    #[test]
+    fn invalid_values_are_rejected() {
+        let args = |f: &str| SweepArgs {
+            fuzziness: Some(f.into()),
+            ..Default::default()
+        };
+        assert!(Sweep::parse(&args("6,17"), Sweep::quick_default()).is_err());
+        assert!(Sweep::parse(&args("0"), Sweep::quick_default()).is_err());
+        assert!(Sweep::parse(&args("1,16"), Sweep::quick_default()).is_ok());
+        let g = SweepArgs {
+            gamma: Some("0".into()),
+            ..Default::default()
+        };
+        assert!(Sweep::parse(&g, Sweep::quick_default()).is_err());
+        let k = SweepArgs {
+            sp_clusters: Some("0".into()),
+            ..Default::default()
+        };
+        assert!(Sweep::parse(&k, Sweep::quick_default()).is_err());
+        // ... but fine where no mode clusters SPs.
+        let k = SweepArgs {
+            sp_clusters: Some("0".into()),
+            modes: Some("vpl-only".into()),
+            ..Default::default()
+        };
+        assert!(Sweep::parse(&k, Sweep::quick_default()).is_ok());
+    }
+
+    #[test]
+    fn configs_multiply_out_and_drop_what_a_mode_ignores() {
+        let s = Sweep {
+            modes: Mode::ALL.to_vec(),
+            sp_clusters: vec![48, 96],
+            vpl_clusters: vec![128, 256],
+            fuzziness: vec![4, 6],
+            gamma: vec![4],
+        };
+        let c = s.configs();
+        let count = |m: Mode| c.iter().filter(|c| c.mode == m).count();
+        assert_eq!(count(Mode::Hard), 4); // F is 1
+        assert_eq!(count(Mode::Uniform), 8);
+        assert_eq!(count(Mode::Weighted), 8);
+        assert_eq!(count(Mode::VplOnly), 2); // one per VPL K
+        assert_eq!(count(Mode::SpOnly), 4); // SP K × F
+        assert!(
+            c.iter()
+                .filter(|c| c.mode == Mode::VplOnly)
+                .all(|c| c.sp_clusters == 0)
+        );
+        assert!(
+            c.iter()
+                .filter(|c| c.mode == Mode::SpOnly)
+                .all(|c| c.vpl_clusters == 0)
+        );
+        assert_eq!(Sweep::quick_default().configs().len(), 9);
+        let w = c.iter().find(|c| c.mode == Mode::Weighted).unwrap();
+        assert_eq!(w.label(), "weighted 48/128 F4 g4");
+        let v = c.iter().find(|c| c.mode == Mode::VplOnly).unwrap();
+        assert_eq!(v.label(), "vpl-only -/128");
+        let st = w.settings(&FrameSettings::default());
+        assert_eq!(st.weighting, Weighting::InverseDistance);
+        assert_eq!(
+            (st.sp_clusters, st.vpl_clusters, st.fuzziness),
+            (48, 128, 4)
+        );
+        assert!(!st.reference);
+    }
+}
