@@ -19,7 +19,7 @@ import struct
 
 # Emissive strength (KHR_materials_emissive_strength) of the Cornell box ceiling light. The emitted
 # radiance is emissiveFactor (max component 1) times this value. Knob for the overall light level.
-CORNELL_LIGHT_STRENGTH = 17.0
+CORNELL_LIGHT_STRENGTH = 27.0
 
 # Emissive strength of each of the conference room's ceiling panels.
 CONFERENCE_LIGHT_STRENGTH = 8.0
