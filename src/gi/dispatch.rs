@@ -24,6 +24,88 @@ pub struct Chunk {
     pub _pad2: [u32; 2],
 }
 
+/// A group 1 layout entry for a 2D data texture (`textureLoad` only) visible to compute.
+pub fn data_texture_layout(
+    binding: u32,
+    sample_type: wgpu::TextureSampleType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+/// Width in texels of the per-frame data textures (as the scene's, `TEXEL_ROW`).
+pub const DATA_ROW: u32 = super::scene_gpu::TEXEL_ROW;
+
+/// A `DATA_ROW`-wide 2D texture of `format` (16-byte texels) holding the first `bytes` bytes of
+/// `src` texel by texel, copied on the GPU by `enc`. Texel i is at (i % DATA_ROW, i / DATA_ROW).
+pub fn buffer_texture(
+    ctx: &GpuContext,
+    enc: &mut wgpu::CommandEncoder,
+    label: &str,
+    format: wgpu::TextureFormat,
+    src: &wgpu::Buffer,
+    bytes: u64,
+) -> wgpu::Texture {
+    let texels = (bytes / 16).max(1) as u32;
+    let rows = texels.div_ceil(DATA_ROW);
+    let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: DATA_ROW,
+            height: rows,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let row_bytes = DATA_ROW * 16;
+    // Whole rows, then the partial last row.
+    let full = texels / DATA_ROW;
+    let rest = texels % DATA_ROW;
+    let copy = |enc: &mut wgpu::CommandEncoder, y: u32, w: u32, h: u32| {
+        enc.copy_buffer_to_texture(
+            wgpu::TexelCopyBufferInfo {
+                buffer: src,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: y as u64 * row_bytes as u64,
+                    bytes_per_row: Some(row_bytes),
+                    rows_per_image: None,
+                },
+            },
+            wgpu::TexelCopyTextureInfo {
+                texture: &tex,
+                mip_level: 0,
+                origin: wgpu::Origin3d { x: 0, y, z: 0 },
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+    };
+    if full > 0 {
+        copy(enc, 0, DATA_ROW, full);
+    }
+    if rest > 0 && src.size() >= full as u64 * row_bytes as u64 + rest as u64 * 16 {
+        copy(enc, full, rest, 1);
+    }
+    tex
+}
+
 pub struct Kernel {
     pub name: &'static str,
     /// One pipeline per entry point of the shader, in the order given; the first is `run`'s.
@@ -115,6 +197,16 @@ impl Kernel {
         ctx: &GpuContext,
         buffers: &[(u32, &wgpu::Buffer)],
     ) -> wgpu::BindGroup {
+        self.bind_group_with_textures(ctx, buffers, &[])
+    }
+
+    /// Like `bind_group`, with texture views (binding, view) as well.
+    pub fn bind_group_with_textures(
+        &self,
+        ctx: &GpuContext,
+        buffers: &[(u32, &wgpu::Buffer)],
+        textures: &[(u32, &wgpu::TextureView)],
+    ) -> wgpu::BindGroup {
         let mut entries = vec![wgpu::BindGroupEntry {
             binding: 0,
             resource: self.chunk.as_entire_binding(),
@@ -123,6 +215,12 @@ impl Kernel {
             entries.push(wgpu::BindGroupEntry {
                 binding: *b,
                 resource: buf.as_entire_binding(),
+            });
+        }
+        for (b, view) in textures {
+            entries.push(wgpu::BindGroupEntry {
+                binding: *b,
+                resource: wgpu::BindingResource::TextureView(view),
             });
         }
         ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
