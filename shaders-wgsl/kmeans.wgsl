@@ -187,14 +187,18 @@ fn grid_setup() {
     grid.num_cells = dims.x * dims.y * dims.z;
 }
 
-// Step 3: clear the per-cell counters (3 x num_cells words; the dispatch covers the largest grid).
+// Step 3: clear the per-cell counters (3 x num_cells words), striding by the dispatch's size
+// (GRID_CLEAR_ITEMS in src/gi/kmeans.rs) so a small grid costs a small dispatch.
 @compute @workgroup_size(64)
 fn grid_clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let i = chunk_item(gid, nwg);
-    if i == INVALID || i >= 3u * grid.num_cells {
+    let i0 = chunk_item(gid, nwg);
+    if i0 == INVALID {
         return;
     }
-    atomicStore(&cells[i], 0u);
+    let stride = nwg.x * nwg.y * 64u;
+    for (var i = i0; i < 3u * grid.num_cells; i += stride) {
+        atomicStore(&cells[i], 0u);
+    }
 }
 
 // Step 4: count centroids per cell.

@@ -290,6 +290,57 @@ impl Kernel {
         );
     }
 
+    /// Runs several small steps `(entry, items)` in order in one submission (one compute pass each,
+    /// timed under `label`), then waits. The chunk covers every invocation (offset 0, no count
+    /// limit): each entry point must bound its items itself. For light work only (k-means steps).
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_entries(
+        &self,
+        ctx: &GpuContext,
+        profiler: &mut Profiler,
+        label: &str,
+        scene: &SceneGpu,
+        group: &wgpu::BindGroup,
+        steps: &[(&str, u32)],
+        seed: u32,
+    ) {
+        let c = Chunk {
+            offset: 0,
+            count: u32::MAX,
+            seed,
+            _pad: 0,
+            sub_offset: 0,
+            sub_count: 1,
+            _pad2: [0; 2],
+        };
+        ctx.queue
+            .write_buffer(&self.chunk, 0, bytemuck::bytes_of(&c));
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        for &(entry, total) in steps {
+            let index = self
+                .pipelines
+                .iter()
+                .position(|(e, _)| *e == entry)
+                .unwrap_or_else(|| panic!("{}: no entry point {entry}", self.name));
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(label),
+                timestamp_writes: profiler.pass(label),
+            });
+            pass.set_pipeline(&self.pipelines[index].1);
+            if self.uses_scene {
+                pass.set_bind_group(0, &scene.bind_group, &[]);
+            }
+            pass.set_bind_group(1, group, &[]);
+            let groups = total.div_ceil(WORKGROUP).max(1);
+            pass.dispatch_workgroups(groups.min(MAX_GROUPS_X), groups.div_ceil(MAX_GROUPS_X), 1);
+        }
+        ctx.queue.submit([enc.finish()]);
+        let _ = ctx.device.poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        });
+    }
+
     /// Like `run`, over items × a second range (`sub`: total, per chunk), e.g. pixels × VPLs. Each
     /// submission covers one item range and one sub range; `progress` gets (chunks done, chunks).
     #[allow(clippy::too_many_arguments)]

@@ -18,6 +18,8 @@ use crate::gpu::{GpuContext, profiler::Profiler};
 pub const MAX_F: u32 = 16;
 pub const MAX_DIM: u32 = 64;
 const WORDS: u64 = 13;
+/// Invocations of `grid_clear` (it loops over the live grid's cells with this stride).
+const GRID_CLEAR_ITEMS: u32 = 4096;
 
 /// Alg. 1 parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -174,32 +176,40 @@ impl KMeans {
             ],
         );
         let seed = settings.seed;
-        let mut run = |entry: &str, n: u32| {
-            self.kernel
-                .run_entry(ctx, profiler, label, scene, &bg, entry, n, seed)
-        };
         let kk = p.k;
-        let cell_words = 3 * MAX_DIM * MAX_DIM * MAX_DIM;
-        let build_grid = |run: &mut dyn FnMut(&str, u32)| {
-            run("grid_bounds", kk);
-            run("grid_setup", 1);
-            run("grid_clear", cell_words);
-            run("grid_count", kk);
-            run("grid_scan", 1);
-            run("grid_scatter", kk);
+        // The grid's steps (grid_clear covers any grid with a fixed, strided dispatch).
+        let grid = [
+            ("grid_bounds", kk),
+            ("grid_setup", 1),
+            ("grid_clear", GRID_CLEAR_ITEMS),
+            ("grid_count", kk),
+            ("grid_scan", 1),
+            ("grid_scatter", kk),
+        ];
+        // Small steps share a submission: one per iteration, then the final assignment and the
+        // representatives (each bounded by the point count).
+        let mut run = |steps: &[(&str, u32)]| {
+            self.kernel
+                .run_entries(ctx, profiler, label, scene, &bg, steps, seed)
         };
-        run("init_centroids", kk);
+        run(&[("init_centroids", kk)]);
         for _ in 0..settings.iterations {
-            build_grid(&mut run);
-            run("assign_sampled", p.num_sampled);
-            run("accumulate", p.num_sampled);
-            run("update", kk);
+            let mut steps = grid.to_vec();
+            steps.extend([
+                ("assign_sampled", p.num_sampled),
+                ("accumulate", p.num_sampled),
+                ("update", kk),
+            ]);
+            run(&steps);
         }
-        build_grid(&mut run);
-        run("final_assign", num_points);
-        run("rep_clear", kk);
-        run("rep_min", num_points);
-        run("rep_pick", num_points);
+        let mut steps = grid.to_vec();
+        steps.push(("final_assign", num_points));
+        run(&steps);
+        run(&[
+            ("rep_clear", kk),
+            ("rep_min", num_points),
+            ("rep_pick", num_points),
+        ]);
         Ok(Clustering {
             params: p,
             centroids,
