@@ -44,19 +44,16 @@ pub fn data_texture_layout(
 /// Width in texels of the per-frame data textures (as the scene's, `TEXEL_ROW`).
 pub const DATA_ROW: u32 = super::scene_gpu::TEXEL_ROW;
 
-/// A `DATA_ROW`-wide 2D texture of `format` (16-byte texels) holding the first `bytes` bytes of
-/// `src` texel by texel, copied on the GPU by `enc`. Texel i is at (i % DATA_ROW, i / DATA_ROW).
-pub fn buffer_texture(
+/// A `DATA_ROW`-wide 2D texture of `format` (an uncompressed colour format) with room for `texels`
+/// texels; texel i is at (i % DATA_ROW, i / DATA_ROW). Fill it with `copy_to_texture`.
+pub fn data_texture(
     ctx: &GpuContext,
-    enc: &mut wgpu::CommandEncoder,
     label: &str,
     format: wgpu::TextureFormat,
-    src: &wgpu::Buffer,
-    bytes: u64,
+    texels: u64,
 ) -> wgpu::Texture {
-    let texels = (bytes / 16).max(1) as u32;
-    let rows = texels.div_ceil(DATA_ROW);
-    let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
+    let rows = (texels.max(1) as u32).div_ceil(DATA_ROW);
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
             width: DATA_ROW,
@@ -69,12 +66,23 @@ pub fn buffer_texture(
         format,
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
-    });
-    let row_bytes = DATA_ROW * 16;
+    })
+}
+
+/// Records a copy of the first `bytes` bytes of `src` into `tex` (a `data_texture`), texel by texel.
+pub fn copy_to_texture(
+    enc: &mut wgpu::CommandEncoder,
+    src: &wgpu::Buffer,
+    tex: &wgpu::Texture,
+    bytes: u64,
+) {
+    let texel_bytes = tex.format().block_copy_size(None).expect("a colour format");
+    let texels = (bytes / texel_bytes as u64) as u32;
+    let row_bytes = DATA_ROW * texel_bytes;
     // Whole rows, then the partial last row.
     let full = texels / DATA_ROW;
     let rest = texels % DATA_ROW;
-    let copy = |enc: &mut wgpu::CommandEncoder, y: u32, w: u32, h: u32| {
+    let mut copy = |y: u32, w: u32, h: u32| {
         enc.copy_buffer_to_texture(
             wgpu::TexelCopyBufferInfo {
                 buffer: src,
@@ -85,7 +93,7 @@ pub fn buffer_texture(
                 },
             },
             wgpu::TexelCopyTextureInfo {
-                texture: &tex,
+                texture: tex,
                 mip_level: 0,
                 origin: wgpu::Origin3d { x: 0, y, z: 0 },
                 aspect: wgpu::TextureAspect::All,
@@ -98,12 +106,11 @@ pub fn buffer_texture(
         );
     };
     if full > 0 {
-        copy(enc, 0, DATA_ROW, full);
+        copy(0, DATA_ROW, full);
     }
-    if rest > 0 && src.size() >= full as u64 * row_bytes as u64 + rest as u64 * 16 {
-        copy(enc, full, rest, 1);
+    if rest > 0 {
+        copy(full, rest, 1);
     }
-    tex
 }
 
 pub struct Kernel {
@@ -292,7 +299,8 @@ impl Kernel {
 
     /// Runs several small steps `(entry, items)` in order in one submission (one compute pass each,
     /// timed under `label`), then waits. The chunk covers every invocation (offset 0, no count
-    /// limit): each entry point must bound its items itself. For light work only (k-means steps).
+    /// limit): each entry point must bound its items itself. `after(entry, encoder)` may record copies
+    /// after each step. For light work only (k-means steps).
     #[allow(clippy::too_many_arguments)]
     pub fn run_entries(
         &self,
@@ -303,6 +311,7 @@ impl Kernel {
         group: &wgpu::BindGroup,
         steps: &[(&str, u32)],
         seed: u32,
+        after: &dyn Fn(&str, &mut wgpu::CommandEncoder),
     ) {
         let c = Chunk {
             offset: 0,
@@ -333,6 +342,8 @@ impl Kernel {
             pass.set_bind_group(1, group, &[]);
             let groups = total.div_ceil(WORKGROUP).max(1);
             pass.dispatch_workgroups(groups.min(MAX_GROUPS_X), groups.div_ceil(MAX_GROUPS_X), 1);
+            drop(pass);
+            after(entry, &mut enc);
         }
         ctx.queue.submit([enc.finish()]);
         let _ = ctx.device.poll(wgpu::PollType::Wait {

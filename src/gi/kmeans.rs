@@ -11,7 +11,7 @@ use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use super::dispatch::Kernel;
+use super::dispatch::{Kernel, copy_to_texture, data_texture, data_texture_layout};
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
 use crate::gpu::{GpuContext, profiler::Profiler};
 
@@ -119,7 +119,9 @@ pub struct KMeans {
 impl KMeans {
     pub fn new(ctx: &GpuContext) -> Self {
         let mut entries = vec![uniform_layout(1), storage_layout(2, true)];
-        entries.extend((3..=12).map(|b| storage_layout(b, false)));
+        entries.extend((3..=14).map(|b| storage_layout(b, false)));
+        entries.push(data_texture_layout(15, wgpu::TextureSampleType::Uint));
+        entries.push(data_texture_layout(16, wgpu::TextureSampleType::Uint));
         KMeans {
             kernel: Kernel::with_entries(ctx, None, "kmeans", ENTRIES, &entries, &[]),
         }
@@ -158,7 +160,22 @@ impl KMeans {
         let assign = ctx.storage("assign", m * f * 4);
         let weights = ctx.storage("weights", m * f * 4);
         let reps = ctx.storage("representatives", k * 8);
-        let bg = self.kernel.bind_group(
+        // The grid for the nearest-centroid search, copied into textures after each grid build
+        // (lavapipe fetches texels with vector code, storage reads per lane with scalar loops):
+        // centroids sorted by cell (2 texels each) and per cell (first slot, count).
+        let sorted = ctx.storage("sorted centroids", k * 32);
+        let max_cells = (MAX_DIM as u64).pow(3);
+        let ranges = ctx.storage("cell ranges", max_cells * 8);
+        let sorted_tex = data_texture(
+            ctx,
+            "sorted centroids",
+            wgpu::TextureFormat::Rgba32Uint,
+            2 * k,
+        );
+        let ranges_tex = data_texture(ctx, "cell ranges", wgpu::TextureFormat::Rg32Uint, max_cells);
+        let sorted_view = sorted_tex.create_view(&Default::default());
+        let ranges_view = ranges_tex.create_view(&Default::default());
+        let bg = self.kernel.bind_group_with_textures(
             ctx,
             &[
                 (1, &params),
@@ -173,8 +190,17 @@ impl KMeans {
                 (10, &assign),
                 (11, &weights),
                 (12, &reps),
+                (13, &sorted),
+                (14, &ranges),
             ],
+            &[(15, &sorted_view), (16, &ranges_view)],
         );
+        let after = |entry: &str, enc: &mut wgpu::CommandEncoder| {
+            if entry == "grid_scatter" {
+                copy_to_texture(enc, &sorted, &sorted_tex, k * 32);
+                copy_to_texture(enc, &ranges, &ranges_tex, max_cells * 8);
+            }
+        };
         let seed = settings.seed;
         let kk = p.k;
         // The grid's steps (grid_clear covers any grid with a fixed, strided dispatch).
@@ -190,7 +216,7 @@ impl KMeans {
         // representatives (each bounded by the point count).
         let mut run = |steps: &[(&str, u32)]| {
             self.kernel
-                .run_entries(ctx, profiler, label, scene, &bg, steps, seed)
+                .run_entries(ctx, profiler, label, scene, &bg, steps, seed, &after)
         };
         run(&[("init_centroids", kk)]);
         for _ in 0..settings.iterations {

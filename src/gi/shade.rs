@@ -3,7 +3,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::dispatch::{Kernel, buffer_texture, data_texture_layout};
+use super::dispatch::{Kernel, copy_to_texture, data_texture, data_texture_layout};
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
 use crate::gpu::{GpuContext, profiler::Profiler};
 
@@ -58,14 +58,9 @@ impl Shade {
         let params = ctx.uniform("shade params", &i.params);
         // The lights as a texture (3 texels each; see shade.wgsl).
         let mut enc = ctx.device.create_command_encoder(&Default::default());
-        let lights = buffer_texture(
-            ctx,
-            &mut enc,
-            "shade lights",
-            wgpu::TextureFormat::Rgba32Float,
-            i.lights,
-            i.params.num_lights as u64 * 48,
-        );
+        let n = i.params.num_lights as u64;
+        let lights = data_texture(ctx, "shade lights", wgpu::TextureFormat::Rgba32Float, 3 * n);
+        copy_to_texture(&mut enc, i.lights, &lights, 48 * n);
         ctx.queue.submit([enc.finish()]);
         let lights_view = lights.create_view(&Default::default());
         let bg = self.kernel.bind_group_with_textures(
