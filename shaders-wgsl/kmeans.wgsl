@@ -63,6 +63,20 @@ struct Centroid {
 // Representatives: per cluster the smallest member distance (float bits) and the member index.
 @group(1) @binding(12) var<storage, read_write> reps: array<atomic<u32>>;
 
+// The grid as the nearest-centroid search reads it: grid_scatter writes the valid centroids sorted by
+// cell (2 texels a slot, as float bits: position with w = the centroid's index, normal), grid_scan each cell's
+// (first slot, count); src/gi/kmeans.rs copies both into the textures below before the search, as
+// lavapipe fetches a texel per lane with vector code but reads storage per lane in a scalar loop.
+@group(1) @binding(13) var<storage, read_write> sorted: array<vec4<u32>>;
+@group(1) @binding(14) var<storage, read_write> ranges: array<vec2<u32>>;
+@group(1) @binding(15) var sorted_tex: texture_2d<u32>;
+@group(1) @binding(16) var ranges_tex: texture_2d<u32>;
+
+// Texel i of a data texture: 4096 texels a row (DATA_ROW in src/gi/dispatch.rs).
+fn texel_xy(i: u32) -> vec2<u32> {
+    return vec2<u32>(i & 4095u, i >> 12u);
+}
+
 const WORDS: u32 = 13u;
 
 fn point_pos(m: u32) -> vec4<f32> {
@@ -187,14 +201,18 @@ fn grid_setup() {
     grid.num_cells = dims.x * dims.y * dims.z;
 }
 
-// Step 3: clear the per-cell counters (3 x num_cells words; the dispatch covers the largest grid).
+// Step 3: clear the per-cell counters (3 x num_cells words), striding by the dispatch's size
+// (GRID_CLEAR_ITEMS in src/gi/kmeans.rs) so a small grid costs a small dispatch.
 @compute @workgroup_size(64)
 fn grid_clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let i = chunk_item(gid, nwg);
-    if i == INVALID || i >= 3u * grid.num_cells {
+    let i0 = chunk_item(gid, nwg);
+    if i0 == INVALID {
         return;
     }
-    atomicStore(&cells[i], 0u);
+    let stride = nwg.x * nwg.y * 64u;
+    for (var i = i0; i < 3u * grid.num_cells; i += stride) {
+        atomicStore(&cells[i], 0u);
+    }
 }
 
 // Step 4: count centroids per cell.
@@ -237,8 +255,10 @@ fn grid_scan(@builtin(local_invocation_index) t: u32) {
     workgroupBarrier();
     var run = partial[t];
     for (var i = a; i < b; i++) {
+        let count = atomicLoad(&cells[i]);
         atomicStore(&cells[n + i], run);
-        run += atomicLoad(&cells[i]);
+        ranges[i] = vec2<u32>(run, count);
+        run += count;
     }
 }
 
@@ -257,6 +277,8 @@ fn grid_scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     let n = grid.num_cells;
     let slot = atomicLoad(&cells[n + cell]) + atomicAdd(&cells[2u * n + cell], 1u);
     cell_items[slot] = k;
+    sorted[2u * slot] = vec4<u32>(bitcast<vec3<u32>>(c.pos.xyz), k);
+    sorted[2u * slot + 1u] = bitcast<vec4<u32>>(c.nrm);
 }
 
 // The F nearest centroids of a point by Eq. (7) among the 27 cells around it (Alg. 2 lines 4-17).
@@ -299,7 +321,6 @@ fn scan_ring(best: ptr<function, Nearest>, p: vec3<f32>, n: vec3<f32>, c: vec3<i
     let d = vec3<i32>(grid.dims);
     let lo = max(c - vec3<i32>(ring), vec3<i32>(0));
     let hi = min(c + vec3<i32>(ring), d - 1);
-    let total = grid.num_cells;
     for (var z = lo.z; z <= hi.z; z++) {
         for (var y = lo.y; y <= hi.y; y++) {
             for (var x = lo.x; x <= hi.x; x++) {
@@ -308,12 +329,12 @@ fn scan_ring(best: ptr<function, Nearest>, p: vec3<f32>, n: vec3<f32>, c: vec3<i
                 if ring > 1 && cheb != ring {
                     continue;
                 }
-                let cell = cell_index(q);
-                let start = atomicLoad(&cells[total + cell]);
-                let count = atomicLoad(&cells[cell]);
-                for (var i = start; i < start + count; i++) {
-                    let k = cell_items[i];
-                    let ck = centroids[k];
+                let range = textureLoad(ranges_tex, texel_xy(cell_index(q)), 0).xy;
+                for (var i = range.x; i < range.x + range.y; i++) {
+                    let a = textureLoad(sorted_tex, texel_xy(2u * i), 0);
+                    let k = a.w;
+                    let nk = bitcast<vec4<f32>>(textureLoad(sorted_tex, texel_xy(2u * i + 1u), 0));
+                    let ck = Centroid(vec4<f32>(bitcast<vec3<f32>>(a.xyz), 1.0), nk);
                     var r: f32;
                     if use_normals {
                         r = dist7(p, n, ck);

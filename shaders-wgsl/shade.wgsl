@@ -19,7 +19,9 @@ struct ShadeParams {
 
 @group(1) @binding(1) var<uniform> params: ShadeParams;
 @group(1) @binding(2) var<storage, read> gbuffer: array<ShadingPoint>;
-@group(1) @binding(3) var<storage, read> lights_in: array<Vpl>;
+// Lights as 3 texels each (pos, nrm, flux), DATA_ROW (4096) texels a row: on lavapipe a texel fetch
+// gathers a whole texel per lane with vector code, a storage read is a branchy scalar loop per lane.
+@group(1) @binding(3) var lights_tex: texture_2d<f32>;
 @group(1) @binding(4) var<storage, read> bits: array<u32>;
 @group(1) @binding(5) var<storage, read> assign: array<u32>;
 @group(1) @binding(6) var<storage, read> weights: array<f32>;
@@ -27,17 +29,12 @@ struct ShadeParams {
 
 const MAX_F: u32 = 16u;
 
-// Ṽ(p, p_c) of Eq. (8) / (9) for light c.
-fn approx_visibility(c: u32, rows: ptr<function, array<u32, MAX_F>>, w: ptr<function, array<f32, MAX_F>>, nf: u32) -> f32 {
-    var v = 0.0;
-    let word = c / 32u;
-    let bit = 1u << (c % 32u);
-    for (var j = 0u; j < nf; j++) {
-        if (bits[(*rows)[j] * params.words + word] & bit) != 0u {
-            v += (*w)[j];
-        }
-    }
-    return v;
+fn light_texel(i: u32) -> vec4<f32> {
+    return textureLoad(lights_tex, vec2<u32>(i & 4095u, i >> 12u), 0);
+}
+
+fn load_light(c: u32) -> Vpl {
+    return Vpl(light_texel(3u * c), light_texel(3u * c + 1u), light_texel(3u * c + 2u));
 }
 
 @compute @workgroup_size(64)
@@ -68,11 +65,30 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
             w[j] = 1.0 / f32(nf);
         }
     }
+    // Lights 32 at a time: one bit word per row serves 32 lights, and a light no row sees (Ṽ = 0,
+    // which would add exactly zero) is skipped. Lights are still summed in increasing order and Ṽ
+    // over j in order, so the sum is the same as a plain loop over all lights.
     var sum = vec3<f32>(0.0);
-    for (var c = 0u; c < params.num_lights; c++) {
-        let t = vpl_term(sp.pos.xyz, sp.nrm.xyz, sp.albedo.xyz, lights_in[c], params.d_min2);
-        if any(t > vec3<f32>(0.0)) {
-            sum += t * approx_visibility(c, &rows, &w, nf);
+    var rw: array<u32, MAX_F>;
+    for (var wd = 0u; wd < params.words; wd++) {
+        var seen = 0u;
+        for (var j = 0u; j < nf; j++) {
+            rw[j] = bits[rows[j] * params.words + wd];
+            seen |= rw[j];
+        }
+        while seen != 0u {
+            let b = firstTrailingBit(seen);
+            seen &= seen - 1u;
+            let t = vpl_term(sp.pos.xyz, sp.nrm.xyz, sp.albedo.xyz, load_light(wd * 32u + b), params.d_min2);
+            if any(t > vec3<f32>(0.0)) {
+                var v = 0.0;
+                for (var j = 0u; j < nf; j++) {
+                    if ((rw[j] >> b) & 1u) != 0u {
+                        v += w[j];
+                    }
+                }
+                sum += t * v;
+            }
         }
     }
     indirect[m] = vec4<f32>(sum, 0.0);

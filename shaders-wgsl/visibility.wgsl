@@ -18,7 +18,13 @@ struct VisParams {
 @group(1) @binding(2) var<storage, read> gbuffer: array<ShadingPoint>;
 // SP-cluster representatives: reps[2k + 1] is the member pixel (INVALID for an unused cluster).
 @group(1) @binding(3) var<storage, read> sp_reps: array<u32>;
-@group(1) @binding(4) var<storage, read> lights_in: array<Vpl>;
+// Lights as 3 texels each (pos, nrm, flux), 4096 texels a row (texel fetches are vector code on
+// lavapipe, per-lane storage reads scalar loops; see shade.wgsl).
+@group(1) @binding(4) var lights_tex: texture_2d<f32>;
+
+fn light_texel(i: u32) -> vec4<f32> {
+    return textureLoad(lights_tex, vec2<u32>(i & 4095u, i >> 12u), 0);
+}
 @group(1) @binding(5) var<storage, read_write> bits: array<u32>;
 
 @compute @workgroup_size(64)
@@ -38,7 +44,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         let c0 = w * 32u;
         let c1 = min(c0 + 32u, params.num_lights);
         for (var c = c0; c < c1; c++) {
-            let l = lights_in[c];
+            let l = Vpl(light_texel(3u * c), light_texel(3u * c + 1u), vec4<f32>(0.0));
             // Only pairs that can exchange light need a ray (both cosines positive).
             let d = l.pos.xyz - p;
             if dot(n, d) <= 0.0 || dot(l.nrm.xyz, d) >= 0.0 {

@@ -24,6 +24,95 @@ pub struct Chunk {
     pub _pad2: [u32; 2],
 }
 
+/// A group 1 layout entry for a 2D data texture (`textureLoad` only) visible to compute.
+pub fn data_texture_layout(
+    binding: u32,
+    sample_type: wgpu::TextureSampleType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+/// Width in texels of the per-frame data textures (as the scene's, `TEXEL_ROW`).
+pub const DATA_ROW: u32 = super::scene_gpu::TEXEL_ROW;
+
+/// A `DATA_ROW`-wide 2D texture of `format` (an uncompressed colour format) with room for `texels`
+/// texels; texel i is at (i % DATA_ROW, i / DATA_ROW). Fill it with `copy_to_texture`.
+pub fn data_texture(
+    ctx: &GpuContext,
+    label: &str,
+    format: wgpu::TextureFormat,
+    texels: u64,
+) -> wgpu::Texture {
+    let rows = (texels.max(1) as u32).div_ceil(DATA_ROW);
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: DATA_ROW,
+            height: rows,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    })
+}
+
+/// Records a copy of the first `bytes` bytes of `src` into `tex` (a `data_texture`), texel by texel.
+pub fn copy_to_texture(
+    enc: &mut wgpu::CommandEncoder,
+    src: &wgpu::Buffer,
+    tex: &wgpu::Texture,
+    bytes: u64,
+) {
+    let texel_bytes = tex.format().block_copy_size(None).expect("a colour format");
+    let texels = (bytes / texel_bytes as u64) as u32;
+    let row_bytes = DATA_ROW * texel_bytes;
+    // Whole rows, then the partial last row.
+    let full = texels / DATA_ROW;
+    let rest = texels % DATA_ROW;
+    let mut copy = |y: u32, w: u32, h: u32| {
+        enc.copy_buffer_to_texture(
+            wgpu::TexelCopyBufferInfo {
+                buffer: src,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: y as u64 * row_bytes as u64,
+                    bytes_per_row: Some(row_bytes),
+                    rows_per_image: None,
+                },
+            },
+            wgpu::TexelCopyTextureInfo {
+                texture: tex,
+                mip_level: 0,
+                origin: wgpu::Origin3d { x: 0, y, z: 0 },
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+    };
+    if full > 0 {
+        copy(0, DATA_ROW, full);
+    }
+    if rest > 0 {
+        copy(full, rest, 1);
+    }
+}
+
 pub struct Kernel {
     pub name: &'static str,
     /// One pipeline per entry point of the shader, in the order given; the first is `run`'s.
@@ -115,6 +204,16 @@ impl Kernel {
         ctx: &GpuContext,
         buffers: &[(u32, &wgpu::Buffer)],
     ) -> wgpu::BindGroup {
+        self.bind_group_with_textures(ctx, buffers, &[])
+    }
+
+    /// Like `bind_group`, with texture views (binding, view) as well.
+    pub fn bind_group_with_textures(
+        &self,
+        ctx: &GpuContext,
+        buffers: &[(u32, &wgpu::Buffer)],
+        textures: &[(u32, &wgpu::TextureView)],
+    ) -> wgpu::BindGroup {
         let mut entries = vec![wgpu::BindGroupEntry {
             binding: 0,
             resource: self.chunk.as_entire_binding(),
@@ -123,6 +222,12 @@ impl Kernel {
             entries.push(wgpu::BindGroupEntry {
                 binding: *b,
                 resource: buf.as_entire_binding(),
+            });
+        }
+        for (b, view) in textures {
+            entries.push(wgpu::BindGroupEntry {
+                binding: *b,
+                resource: wgpu::BindingResource::TextureView(view),
             });
         }
         ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -190,6 +295,61 @@ impl Kernel {
             seed,
             0,
         );
+    }
+
+    /// Runs several small steps `(entry, items)` in order in one submission (one compute pass each,
+    /// timed under `label`), then waits. The chunk covers every invocation (offset 0, no count
+    /// limit): each entry point must bound its items itself. `after(entry, encoder)` may record copies
+    /// after each step. For light work only (k-means steps).
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_entries(
+        &self,
+        ctx: &GpuContext,
+        profiler: &mut Profiler,
+        label: &str,
+        scene: &SceneGpu,
+        group: &wgpu::BindGroup,
+        steps: &[(&str, u32)],
+        seed: u32,
+        after: &dyn Fn(&str, &mut wgpu::CommandEncoder),
+    ) {
+        let c = Chunk {
+            offset: 0,
+            count: u32::MAX,
+            seed,
+            _pad: 0,
+            sub_offset: 0,
+            sub_count: 1,
+            _pad2: [0; 2],
+        };
+        ctx.queue
+            .write_buffer(&self.chunk, 0, bytemuck::bytes_of(&c));
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        for &(entry, total) in steps {
+            let index = self
+                .pipelines
+                .iter()
+                .position(|(e, _)| *e == entry)
+                .unwrap_or_else(|| panic!("{}: no entry point {entry}", self.name));
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(label),
+                timestamp_writes: profiler.pass(label),
+            });
+            pass.set_pipeline(&self.pipelines[index].1);
+            if self.uses_scene {
+                pass.set_bind_group(0, &scene.bind_group, &[]);
+            }
+            pass.set_bind_group(1, group, &[]);
+            let groups = total.div_ceil(WORKGROUP).max(1);
+            pass.dispatch_workgroups(groups.min(MAX_GROUPS_X), groups.div_ceil(MAX_GROUPS_X), 1);
+            drop(pass);
+            after(entry, &mut enc);
+        }
+        ctx.queue.submit([enc.finish()]);
+        let _ = ctx.device.poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        });
     }
 
     /// Like `run`, over items × a second range (`sub`: total, per chunk), e.g. pixels × VPLs. Each

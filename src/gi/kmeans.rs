@@ -11,13 +11,15 @@ use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use super::dispatch::Kernel;
+use super::dispatch::{Kernel, copy_to_texture, data_texture, data_texture_layout};
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
 use crate::gpu::{GpuContext, profiler::Profiler};
 
 pub const MAX_F: u32 = 16;
 pub const MAX_DIM: u32 = 64;
 const WORDS: u64 = 13;
+/// Invocations of `grid_clear` (it loops over the live grid's cells with this stride).
+const GRID_CLEAR_ITEMS: u32 = 4096;
 
 /// Alg. 1 parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -117,7 +119,9 @@ pub struct KMeans {
 impl KMeans {
     pub fn new(ctx: &GpuContext) -> Self {
         let mut entries = vec![uniform_layout(1), storage_layout(2, true)];
-        entries.extend((3..=12).map(|b| storage_layout(b, false)));
+        entries.extend((3..=14).map(|b| storage_layout(b, false)));
+        entries.push(data_texture_layout(15, wgpu::TextureSampleType::Uint));
+        entries.push(data_texture_layout(16, wgpu::TextureSampleType::Uint));
         KMeans {
             kernel: Kernel::with_entries(ctx, None, "kmeans", ENTRIES, &entries, &[]),
         }
@@ -156,7 +160,22 @@ impl KMeans {
         let assign = ctx.storage("assign", m * f * 4);
         let weights = ctx.storage("weights", m * f * 4);
         let reps = ctx.storage("representatives", k * 8);
-        let bg = self.kernel.bind_group(
+        // The grid for the nearest-centroid search, copied into textures after each grid build
+        // (lavapipe fetches texels with vector code, storage reads per lane with scalar loops):
+        // centroids sorted by cell (2 texels each) and per cell (first slot, count).
+        let sorted = ctx.storage("sorted centroids", k * 32);
+        let max_cells = (MAX_DIM as u64).pow(3);
+        let ranges = ctx.storage("cell ranges", max_cells * 8);
+        let sorted_tex = data_texture(
+            ctx,
+            "sorted centroids",
+            wgpu::TextureFormat::Rgba32Uint,
+            2 * k,
+        );
+        let ranges_tex = data_texture(ctx, "cell ranges", wgpu::TextureFormat::Rg32Uint, max_cells);
+        let sorted_view = sorted_tex.create_view(&Default::default());
+        let ranges_view = ranges_tex.create_view(&Default::default());
+        let bg = self.kernel.bind_group_with_textures(
             ctx,
             &[
                 (1, &params),
@@ -171,35 +190,52 @@ impl KMeans {
                 (10, &assign),
                 (11, &weights),
                 (12, &reps),
+                (13, &sorted),
+                (14, &ranges),
             ],
+            &[(15, &sorted_view), (16, &ranges_view)],
         );
+        let after = |entry: &str, enc: &mut wgpu::CommandEncoder| {
+            if entry == "grid_scatter" {
+                copy_to_texture(enc, &sorted, &sorted_tex, k * 32);
+                copy_to_texture(enc, &ranges, &ranges_tex, max_cells * 8);
+            }
+        };
         let seed = settings.seed;
-        let mut run = |entry: &str, n: u32| {
-            self.kernel
-                .run_entry(ctx, profiler, label, scene, &bg, entry, n, seed)
-        };
         let kk = p.k;
-        let cell_words = 3 * MAX_DIM * MAX_DIM * MAX_DIM;
-        let build_grid = |run: &mut dyn FnMut(&str, u32)| {
-            run("grid_bounds", kk);
-            run("grid_setup", 1);
-            run("grid_clear", cell_words);
-            run("grid_count", kk);
-            run("grid_scan", 1);
-            run("grid_scatter", kk);
+        // The grid's steps (grid_clear covers any grid with a fixed, strided dispatch).
+        let grid = [
+            ("grid_bounds", kk),
+            ("grid_setup", 1),
+            ("grid_clear", GRID_CLEAR_ITEMS),
+            ("grid_count", kk),
+            ("grid_scan", 1),
+            ("grid_scatter", kk),
+        ];
+        // Small steps share a submission: one per iteration, then the final assignment and the
+        // representatives (each bounded by the point count).
+        let mut run = |steps: &[(&str, u32)]| {
+            self.kernel
+                .run_entries(ctx, profiler, label, scene, &bg, steps, seed, &after)
         };
-        run("init_centroids", kk);
+        run(&[("init_centroids", kk)]);
         for _ in 0..settings.iterations {
-            build_grid(&mut run);
-            run("assign_sampled", p.num_sampled);
-            run("accumulate", p.num_sampled);
-            run("update", kk);
+            let mut steps = grid.to_vec();
+            steps.extend([
+                ("assign_sampled", p.num_sampled),
+                ("accumulate", p.num_sampled),
+                ("update", kk),
+            ]);
+            run(&steps);
         }
-        build_grid(&mut run);
-        run("final_assign", num_points);
-        run("rep_clear", kk);
-        run("rep_min", num_points);
-        run("rep_pick", num_points);
+        let mut steps = grid.to_vec();
+        steps.push(("final_assign", num_points));
+        run(&steps);
+        run(&[
+            ("rep_clear", kk),
+            ("rep_min", num_points),
+            ("rep_pick", num_points),
+        ]);
         Ok(Clustering {
             params: p,
             centroids,

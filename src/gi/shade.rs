@@ -3,7 +3,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::dispatch::Kernel;
+use super::dispatch::{Kernel, copy_to_texture, data_texture, data_texture_layout};
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
 use crate::gpu::{GpuContext, profiler::Profiler};
 
@@ -36,8 +36,12 @@ pub struct Shade {
 
 impl Shade {
     pub fn new(ctx: &GpuContext, scene: &SceneGpu) -> Self {
-        let mut entries = vec![uniform_layout(1)];
-        entries.extend((2..=6).map(|b| storage_layout(b, true)));
+        let mut entries = vec![
+            uniform_layout(1),
+            storage_layout(2, true),
+            data_texture_layout(3, wgpu::TextureSampleType::Float { filterable: false }),
+        ];
+        entries.extend((4..=6).map(|b| storage_layout(b, true)));
         entries.push(storage_layout(7, false));
         Shade {
             kernel: Kernel::new(ctx, scene, "shade", &entries, &[]),
@@ -52,17 +56,24 @@ impl Shade {
         i: &ShadeInputs,
     ) {
         let params = ctx.uniform("shade params", &i.params);
-        let bg = self.kernel.bind_group(
+        // The lights as a texture (3 texels each; see shade.wgsl).
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        let n = i.params.num_lights as u64;
+        let lights = data_texture(ctx, "shade lights", wgpu::TextureFormat::Rgba32Float, 3 * n);
+        copy_to_texture(&mut enc, i.lights, &lights, 48 * n);
+        ctx.queue.submit([enc.finish()]);
+        let lights_view = lights.create_view(&Default::default());
+        let bg = self.kernel.bind_group_with_textures(
             ctx,
             &[
                 (1, &params),
                 (2, i.gbuffer),
-                (3, i.lights),
                 (4, i.bits),
                 (5, i.assign),
                 (6, i.weights),
                 (7, i.indirect),
             ],
+            &[(3, &lights_view)],
         );
         // About 2^22 light terms per submission.
         let per = ((1u32 << 22) / i.params.num_lights.max(1)).max(64);

@@ -3,7 +3,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::dispatch::Kernel;
+use super::dispatch::{Kernel, copy_to_texture, data_texture, data_texture_layout};
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
 use crate::gpu::{GpuContext, profiler::Profiler};
 
@@ -26,7 +26,7 @@ impl Visibility {
             uniform_layout(1),
             storage_layout(2, true),
             storage_layout(3, true),
-            storage_layout(4, true),
+            data_texture_layout(4, wgpu::TextureSampleType::Float { filterable: false }),
             storage_layout(5, false),
         ];
         Visibility {
@@ -58,15 +58,22 @@ impl Visibility {
             },
         );
         let bits = ctx.storage("visibility bits", k_sp as u64 * words as u64 * 4);
-        let bg = self.kernel.bind_group(
+        // The lights as a texture (3 texels each; see visibility.wgsl).
+        let n = num_lights as u64;
+        let tex = data_texture(
             ctx,
-            &[
-                (1, &params),
-                (2, gbuffer),
-                (3, sp_reps),
-                (4, lights),
-                (5, &bits),
-            ],
+            "visibility lights",
+            wgpu::TextureFormat::Rgba32Float,
+            3 * n,
+        );
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        copy_to_texture(&mut enc, lights, &tex, 48 * n);
+        ctx.queue.submit([enc.finish()]);
+        let view = tex.create_view(&Default::default());
+        let bg = self.kernel.bind_group_with_textures(
+            ctx,
+            &[(1, &params), (2, gbuffer), (3, sp_reps), (5, &bits)],
+            &[(4, &view)],
         );
         // About 2^20 rays per submission (32 per item).
         self.kernel.run(
