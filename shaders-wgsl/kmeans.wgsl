@@ -540,3 +540,42 @@ fn rep_pick(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
         }
     }
 }
+
+// Optional step 4, Eq. (10) as the paper's text states it: w'_f = 1 / dist(p, p_f) with p_f the
+// representative of cluster f (a real shading point) instead of its centroid (Alg. 2's W). Replaces the
+// weights of final_assign; the same exact case (distance 0 takes the whole weight).
+@compute @workgroup_size(64)
+fn rep_weights(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let m = chunk_item(gid, nwg);
+    if m == INVALID || m >= params.num_points {
+        return;
+    }
+    let f = clamp(params.f, 1u, MAX_F);
+    let p = point_pos(m).xyz;
+    var d: array<f32, MAX_F>;
+    var zero = INVALID;
+    var wsum = 0.0;
+    for (var j = 0u; j < f; j++) {
+        let k = assign[m * f + j];
+        d[j] = -1.0;
+        if k != INVALID {
+            let r = atomicLoad(&reps[2u * k + 1u]);
+            d[j] = length(p - point_pos(r).xyz);
+            if d[j] <= 0.0 && zero == INVALID {
+                zero = j;
+            }
+            wsum += 1.0 / max(d[j], 1e-30);
+        }
+    }
+    for (var j = 0u; j < f; j++) {
+        var w = 0.0;
+        if d[j] >= 0.0 {
+            if zero != INVALID {
+                w = select(0.0, 1.0, j == zero);
+            } else {
+                w = (1.0 / d[j]) / wsum;
+            }
+        }
+        weights[m * f + j] = w;
+    }
+}

@@ -209,6 +209,10 @@ struct RenderArgs {
     /// (Eq. 9).
     #[arg(long, value_enum, default_value_t = Weighting::InverseDistance)]
     weighting: Weighting,
+    /// Eq. (10) weights from the distances to the SP clusters' representatives (the paper's text)
+    /// instead of their centroids (Alg. 2).
+    #[arg(long)]
+    weights_to_reps: bool,
     /// G-term clamp: the VPL distance in 1/d² is at least CLAMP × scene diagonal (scale-free).
     #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_CLAMP)]
     clamp: f32,
@@ -409,6 +413,7 @@ fn render(a: RenderArgs) -> Result<()> {
         normal_threshold: a.normal_threshold,
         iterations: a.iterations,
         weighting: a.weighting,
+        weights_to_reps: a.weights_to_reps,
         clamp: a.clamp,
         progress: true,
     };

@@ -166,6 +166,7 @@ fn settings(k: u32, f: u32, gamma: u32, n_t: f32, iterations: u32) -> KMeansSett
         normal_threshold: n_t,
         iterations,
         seed: 3,
+        weights_to_reps: false,
     }
 }
 
@@ -283,4 +284,31 @@ fn fixed_point_sums_are_exact_at_the_bounds() {
         "{:?}",
         g.centroids[0].pos
     );
+}
+
+/// Eq. (10) with distances to the representatives (`rep_weights`) equals its CPU twin.
+#[test]
+fn representative_weights_match_cpu() {
+    let ctx = common::gpu();
+    let data = box_points(5000, 21);
+    let s = KMeansSettings {
+        weights_to_reps: true,
+        ..settings(48, 6, 4, 0.866, 6)
+    };
+    let g = run_gpu(&ctx, &data, 2, &s, BOX);
+    let pts = points_of(&data, 2);
+    let w = kmeans::rep_weights(&pts, g.params.f as usize, &g.assign, &g.reps);
+    let worst = w
+        .iter()
+        .zip(&g.weights)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0f32, f32::max);
+    println!("representative weights: worst difference {worst:e}");
+    assert!(worst < 1e-5, "{worst}");
+    for m in 0..pts.len() {
+        let row = &g.weights[m * 6..m * 6 + 6];
+        if pts[m].valid {
+            assert!((row.iter().sum::<f32>() - 1.0).abs() < 1e-4);
+        }
+    }
 }

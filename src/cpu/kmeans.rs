@@ -324,3 +324,36 @@ pub fn objective(points: &[Point], p: &KmParams, sample_assign: &[u32], cs: &[Ce
     }
     sum / n.max(1) as f64
 }
+
+/// Twin of `rep_weights`: Eq. (10) with distances to the representatives.
+pub fn rep_weights(points: &[Point], f: usize, assign: &[u32], reps: &[u32]) -> Vec<f32> {
+    let mut out = vec![0f32; assign.len()];
+    for (m, pt) in points.iter().enumerate() {
+        let row = &assign[m * f..m * f + f];
+        let d: Vec<f32> = row
+            .iter()
+            .map(|&k| {
+                if k == u32::MAX {
+                    -1.0
+                } else {
+                    (pt.pos - points[reps[k as usize] as usize].pos).length()
+                }
+            })
+            .collect();
+        let zero = d.iter().position(|&x| (0.0..=0.0).contains(&x));
+        let wsum: f32 = d
+            .iter()
+            .filter(|&&x| x >= 0.0)
+            .map(|x| 1.0 / x.max(1e-30))
+            .sum();
+        for j in 0..f {
+            if d[j] >= 0.0 {
+                out[m * f + j] = match zero {
+                    Some(z) => (j == z) as u32 as f32,
+                    None => (1.0 / d[j]) / wsum,
+                };
+            }
+        }
+    }
+    out
+}

@@ -34,6 +34,9 @@ pub struct KMeansSettings {
     pub normal_threshold: f32,
     pub iterations: u32,
     pub seed: u32,
+    /// Eq. (10) distances to the clusters' representatives (the paper's text) instead of their
+    /// centroids (Alg. 2's W).
+    pub weights_to_reps: bool,
 }
 
 #[repr(C)]
@@ -110,6 +113,7 @@ const ENTRIES: &[&str] = &[
     "rep_clear",
     "rep_min",
     "rep_pick",
+    "rep_weights",
 ];
 
 pub struct KMeans {
@@ -236,6 +240,9 @@ impl KMeans {
             ("rep_min", num_points),
             ("rep_pick", num_points),
         ]);
+        if settings.weights_to_reps && p.f > 1 {
+            run(&[("rep_weights", num_points)]);
+        }
         Ok(Clustering {
             params: p,
             centroids,

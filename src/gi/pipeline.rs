@@ -74,6 +74,8 @@ pub struct FrameSettings {
     pub normal_threshold: f32,
     pub iterations: u32,
     pub weighting: Weighting,
+    /// Eq. (10) distances to the SP clusters' representatives instead of their centroids.
+    pub weights_to_reps: bool,
     /// G-term clamp: 1/d² uses d ≥ clamp × scene diagonal (scale-free; see docs/reference.md).
     pub clamp: f32,
     /// Print progress of long passes on stderr.
@@ -97,6 +99,7 @@ impl Default for FrameSettings {
             normal_threshold: 0.866,
             iterations: 10,
             weighting: Weighting::InverseDistance,
+            weights_to_reps: false,
             clamp: DEFAULT_CLAMP,
             progress: false,
         }
@@ -299,6 +302,7 @@ impl<'a> Renderer<'a> {
                 normal_threshold: s.normal_threshold,
                 iterations: s.iterations,
                 seed: s.seed,
+                weights_to_reps: false,
             };
             vpl_cluster::cluster(
                 self.ctx,
@@ -371,6 +375,7 @@ impl<'a> Renderer<'a> {
                     normal_threshold: s.normal_threshold,
                     iterations: s.iterations,
                     seed: s.seed,
+                    weights_to_reps: s.weights_to_reps,
                 };
                 let c = self.kmeans.run(
                     ctx,
