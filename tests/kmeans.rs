@@ -305,9 +305,9 @@ fn representative_weights_match_cpu() {
         .fold(0f32, f32::max);
     println!("representative weights: worst difference {worst:e}");
     assert!(worst < 1e-5, "{worst}");
-    for m in 0..pts.len() {
+    for (m, pt) in pts.iter().enumerate() {
         let row = &g.weights[m * 6..m * 6 + 6];
-        if pts[m].valid {
+        if pt.valid {
             assert!((row.iter().sum::<f32>() - 1.0).abs() < 1e-4);
         }
     }
