@@ -189,6 +189,9 @@ struct ViewArgs {
     /// Where a scripted run saves the window (PNG, UI included).
     #[arg(long, requires = "frames")]
     screenshot: Option<PathBuf>,
+    /// The view to start in (a scripted run in reference or error computes the reference first).
+    #[arg(long, value_enum, default_value = "final")]
+    view: fuzzy_vpl::app::views::View,
     /// Keep orbiting the camera (to measure frame rates while moving; with --frames).
     #[arg(long, hide = true)]
     animate: bool,
@@ -583,6 +586,7 @@ fn view(a: ViewArgs) -> Result<()> {
         settings,
         frames: a.frames,
         screenshot: a.screenshot,
+        view: a.view,
         animate: a.animate,
         shot_dir: a.shot_dir,
     })

@@ -48,6 +48,8 @@ pub struct ViewOptions {
     /// to `screenshot` and exit.
     pub frames: Option<u32>,
     pub screenshot: Option<PathBuf>,
+    /// The view to start in; a scripted run in `reference` or `error` computes the reference first.
+    pub view: View,
     /// Keep orbiting the camera (for measuring frame rates while moving).
     pub animate: bool,
     /// Where panel screenshots go.
@@ -289,7 +291,7 @@ impl Viewer {
             home: placeholder,
             start_camera: opts.camera,
             s: opts.settings,
-            view: View::Final,
+            view: opts.view,
             latest: None,
             texture: None,
             image_dirty: false,
@@ -703,21 +705,27 @@ impl Viewer {
             self.image_dirty = true;
         }
         let full = self.full_size();
-        let shown = self
+        let mut shown = self
             .latest
             .as_ref()
             .is_some_and(|r| self.animate || (r.frame.width, r.frame.height) == full)
             && !self.image_dirty;
-        if let Some((left, path)) = &mut self.script {
-            if shown {
-                self.script_started.get_or_insert(now);
-                if *left == 0 {
-                    if self.png_request.is_none() {
-                        self.png_request = Some(path.clone());
-                    }
-                } else {
-                    *left -= 1;
+        if self.script.is_some() && self.view.needs_reference() && shown {
+            if self.reference.is_none() {
+                self.start_reference();
+            }
+            shown = self.live_error.is_some();
+        }
+        if let Some((left, path)) = &mut self.script
+            && shown
+        {
+            self.script_started.get_or_insert(now);
+            if *left == 0 {
+                if self.png_request.is_none() {
+                    self.png_request = Some(path.clone());
                 }
+            } else {
+                *left -= 1;
             }
         }
     }

@@ -10,7 +10,7 @@ use crate::gi::primary::CameraParams;
 use crate::metrics;
 use crate::scene::Camera;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum View {
     Final,
     Direct,
@@ -41,6 +41,10 @@ impl View {
             View::Reference => "reference",
             View::Error => "error",
         }
+    }
+    /// Views that need the reference image.
+    pub fn needs_reference(self) -> bool {
+        matches!(self, View::Reference | View::Error)
     }
     /// A file-name-friendly name.
     pub fn slug(self) -> &'static str {

@@ -13,6 +13,23 @@ use winit::window::{Window, WindowId};
 use super::panel::PANEL_WIDTH;
 use super::{Unavailable, ViewOptions, Viewer};
 
+/// The one-line message for a window that cannot open.
+fn no_display(detail: &str) -> String {
+    let var = |k| std::env::var(k).ok().filter(|v| !v.is_empty());
+    let what = match (var("DISPLAY"), var("WAYLAND_DISPLAY")) {
+        (None, None) => "no display (DISPLAY and WAYLAND_DISPLAY are unset)".to_string(),
+        (Some(d), _) => format!("cannot open a window on DISPLAY={d}"),
+        (None, Some(w)) => format!("cannot open a window on WAYLAND_DISPLAY={w}"),
+    };
+    // winit's errors start with the source location; keep only its last clause.
+    let detail = detail
+        .rsplit(": ")
+        .next()
+        .unwrap_or(detail)
+        .trim_end_matches('.');
+    format!("{what} ({detail}); render headless with `fuzzy-vpl render` instead")
+}
+
 /// The worker's "a reply is waiting".
 #[derive(Debug, Clone, Copy)]
 pub struct Wake;
@@ -42,11 +59,9 @@ struct App {
 }
 
 pub fn run(opts: ViewOptions) -> Result<()> {
-    let event_loop = EventLoop::<Wake>::with_user_event().build().map_err(|e| {
-        Unavailable(format!(
-            "cannot open a window ({e}); render headless with `fuzzy-vpl render`"
-        ))
-    })?;
+    let event_loop = EventLoop::<Wake>::with_user_event()
+        .build()
+        .map_err(|e| Unavailable(no_display(&e.to_string())))?;
     let mut app = App {
         proxy: event_loop.create_proxy(),
         opts: Some(opts),
@@ -93,11 +108,10 @@ impl App {
                 opts.width as f64 + PANEL_WIDTH as f64,
                 opts.height as f64,
             ));
-        let window = Arc::new(el.create_window(attrs).map_err(|e| {
-            Unavailable(format!(
-                "cannot open a window ({e}); render headless with `fuzzy-vpl render`"
-            ))
-        })?);
+        let window = Arc::new(
+            el.create_window(attrs)
+                .map_err(|e| Unavailable(no_display(&e.to_string())))?,
+        );
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
         if std::env::var_os("WGPU_BACKEND").is_none() {
             desc.backends = wgpu::Backends::PRIMARY;
@@ -105,7 +119,7 @@ impl App {
         let instance = wgpu::Instance::new(desc);
         let surface = instance.create_surface(window.clone()).map_err(|e| {
             Unavailable(format!(
-                "cannot draw into the window ({e}); render headless with `fuzzy-vpl render`"
+                "no GPU adapter can draw into the window ({e}); install mesa-vulkan-drivers, or render headless with `fuzzy-vpl render`"
             ))
         })?;
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {

@@ -130,7 +130,20 @@ impl Drop for Worker {
     }
 }
 
+/// Lowers this thread's scheduling priority. On Linux `nice` is per thread and inherited by the
+/// threads it creates, so a software driver's worker threads made for the GI device below run behind
+/// the UI thread and its own driver threads: the window stays responsive while a frame renders.
+fn lower_priority() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: plain syscalls on the calling thread's id; failure only leaves the priority unchanged.
+    unsafe {
+        let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+        let _ = libc::setpriority(libc::PRIO_PROCESS, tid, 10);
+    }
+}
+
 fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) -> Result<()> {
+    lower_priority();
     let ctx = GpuContext::new_headless()?;
     let mut renderer = Renderer::new(&ctx, scene)?;
     send(Reply::Loaded(SceneInfo {
