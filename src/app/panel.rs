@@ -381,6 +381,7 @@ impl Viewer {
         egui::CollapsingHeader::new("Screenshots")
             .default_open(true)
             .show(ui, |ui| {
+                ui.label(RichText::new("keys: F11 EXR · F12 PNG").small().weak());
                 ui.horizontal(|ui| {
                     if ui.button("EXR (radiance)").clicked() {
                         self.save_exr();
@@ -497,6 +498,12 @@ impl Viewer {
             }
             if ui.input(|i| i.key_pressed(Key::R)) {
                 c = self.home;
+            }
+            if ui.input(|i| i.key_pressed(Key::F12)) {
+                self.request_png();
+            }
+            if ui.input(|i| i.key_pressed(Key::F11)) {
+                self.save_exr();
             }
         }
         self.set_camera(c);
