@@ -3,6 +3,7 @@
 //!
 //! Data flows one way: scene → BVH → VPLs → clusters → frame → image.
 
+pub mod app;
 pub mod bench;
 pub mod bvh;
 pub mod cpu;

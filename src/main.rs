@@ -29,6 +29,9 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Open the interactive viewer (the default with no subcommand: builtin:cornell).
+    #[command(after_help = LIGHTS_HELP)]
+    View(ViewArgs),
     /// Render one frame headless to EXR (linear HDR) or PNG (tone-mapped sRGB).
     #[command(after_help = LIGHTS_HELP)]
     Render(RenderArgs),
@@ -226,6 +229,63 @@ struct RenderArgs {
 }
 
 #[derive(Args)]
+struct ViewArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Size of the image area at start, logical pixels (the window adds the side panel).
+    #[arg(long, default_value_t = 640)]
+    width: u32,
+    #[arg(long, default_value_t = 480)]
+    height: u32,
+    /// Start from the Nth glTF camera (0-based).
+    #[arg(long)]
+    camera: Option<usize>,
+    #[arg(long, default_value_t = 1)]
+    seed: u32,
+    #[arg(long, default_value_t = 16)]
+    direct_samples: u32,
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
+    #[arg(long, default_value_t = 8192)]
+    vpls: u32,
+    #[arg(long, default_value_t = 1024)]
+    vpl_clusters: u32,
+    #[arg(long, default_value_t = 3072)]
+    sp_clusters: u32,
+    #[arg(long, default_value_t = 6)]
+    fuzziness: u32,
+    #[arg(long, default_value_t = 4)]
+    gamma: u32,
+    #[arg(long, default_value_t = 0.866, allow_hyphen_values = true)]
+    normal_threshold: f32,
+    #[arg(long, default_value_t = 10)]
+    iterations: u32,
+    #[arg(long, value_enum, default_value_t = Weighting::InverseDistance)]
+    weighting: Weighting,
+    #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_CLAMP)]
+    clamp: f32,
+    /// Render scale of the GI image relative to the image area, 0.1..1.
+    #[arg(long, default_value_t = 1.0)]
+    render_scale: f32,
+    /// Scripted run: draw N window frames once the first full GI frame is shown, save the window to
+    /// --screenshot, exit.
+    #[arg(long, requires = "screenshot")]
+    frames: Option<u32>,
+    /// Where a scripted run saves the window (PNG, UI included).
+    #[arg(long, requires = "frames")]
+    screenshot: Option<PathBuf>,
+    /// The view to start in (a scripted run in reference or error computes the reference first).
+    #[arg(long, value_enum, default_value = "final")]
+    view: fuzzy_vpl::app::views::View,
+    /// Keep orbiting the camera (to measure frame rates while moving; with --frames).
+    #[arg(long, hide = true)]
+    animate: bool,
+    /// Directory for the panel's screenshots.
+    #[arg(long, default_value = ".")]
+    shot_dir: PathBuf,
+}
+
+#[derive(Args)]
 struct InfoArgs {
     #[command(flatten)]
     scene: SceneArgs,
@@ -257,16 +317,8 @@ fn main() -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = Cli::parse();
     let result = match cli.command {
-        None => {
-            println!(
-                "fuzzy-vpl: the interactive viewer is not built yet.\n\
-                 Render headless instead, e.g.:\n  \
-                 fuzzy-vpl render builtin:cornell -o cornell.png\n  \
-                 fuzzy-vpl info builtin:conference\n\
-                 See `fuzzy-vpl --help`."
-            );
-            Ok(())
-        }
+        None => view(ViewArgs::parse_from(["view"])),
+        Some(Command::View(a)) => view(a),
         Some(Command::Render(a)) => render(a),
         Some(Command::Info(a)) => info(a),
         Some(Command::Raybench(a)) => raybench(a),
@@ -276,7 +328,8 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             let is_input = e.downcast_ref::<BadInput>().is_some()
-                || e.downcast_ref::<scene::SceneError>().is_some();
+                || e.downcast_ref::<scene::SceneError>().is_some()
+                || e.downcast_ref::<fuzzy_vpl::app::Unavailable>().is_some();
             eprintln!("error: {e}");
             if is_input {
                 ExitCode::from(2)
@@ -416,6 +469,7 @@ fn render(a: RenderArgs) -> Result<()> {
         weights_to_reps: a.weights_to_reps,
         clamp: a.clamp,
         progress: true,
+        control: None,
     };
     let mut runs = Vec::new();
     let mut frame = None;
@@ -530,6 +584,105 @@ fn render(a: RenderArgs) -> Result<()> {
         })?;
     }
     Ok(())
+}
+
+impl ViewArgs {
+    /// `ViewArgs` with every default (for `fuzzy-vpl` with no arguments).
+    fn parse_from<'a>(args: impl IntoIterator<Item = &'a str>) -> ViewArgs {
+        #[derive(Parser)]
+        struct Wrap {
+            #[command(flatten)]
+            a: ViewArgs,
+        }
+        Wrap::parse_from(args).a
+    }
+}
+
+fn view(a: ViewArgs) -> Result<()> {
+    if a.width == 0 || a.height == 0 || a.width > 16384 || a.height > 16384 {
+        return Err(bad(format!(
+            "--width/--height {}x{}: must be 1..16384",
+            a.width, a.height
+        )));
+    }
+    if !(1..=16).contains(&a.fuzziness) {
+        return Err(bad(format!("--fuzziness {}: must be 1..16", a.fuzziness)));
+    }
+    if a.gamma == 0 {
+        return Err(bad("--gamma must be at least 1"));
+    }
+    if !(a.normal_threshold.is_finite() && (-1.0..=1.0).contains(&a.normal_threshold)) {
+        return Err(bad(format!(
+            "--normal-threshold {}: must be a cosine in [-1, 1]",
+            a.normal_threshold
+        )));
+    }
+    if !(a.exposure.is_finite() && a.exposure > 0.0) {
+        return Err(bad("--exposure must be a finite number > 0"));
+    }
+    if !(a.clamp.is_finite() && a.clamp >= 0.0 && a.clamp < 1.0) {
+        return Err(bad(format!("--clamp {}: must be in [0, 1)", a.clamp)));
+    }
+    if !(0.1..=1.0).contains(&a.render_scale) {
+        return Err(bad(format!(
+            "--render-scale {}: must be in [0.1, 1]",
+            a.render_scale
+        )));
+    }
+    if let Some(p) = &a.screenshot
+        && p.extension().and_then(|e| e.to_str()) != Some("png")
+    {
+        return Err(bad(format!(
+            "{}: --screenshot must end in .png",
+            p.display()
+        )));
+    }
+    let scene = load_scene(&a.scene)?;
+    if let Some(i) = a.camera
+        && i >= scene.cameras.len()
+    {
+        return Err(bad(format!(
+            "{}: --camera {i}: the scene has {} camera(s)",
+            a.scene.scene,
+            scene.cameras.len()
+        )));
+    }
+    let fs = FrameSettings {
+        seed: a.seed,
+        direct_samples: a.direct_samples.max(1),
+        vpls: a.vpls,
+        vpl_clusters: a.vpl_clusters,
+        sp_clusters: a.sp_clusters,
+        fuzziness: a.fuzziness,
+        gamma: a.gamma,
+        normal_threshold: a.normal_threshold,
+        iterations: a.iterations,
+        weighting: a.weighting,
+        clamp: a.clamp,
+        ..Default::default()
+    };
+    let mut settings = fuzzy_vpl::app::UiSettings::from_frame_settings(&fs, a.exposure);
+    settings.render_scale = a.render_scale;
+    let args = a.scene.clone();
+    let loader: fuzzy_vpl::app::worker::Loader = std::sync::Arc::new(move |spec: &str| {
+        let mut sa = args.clone();
+        sa.scene = spec.to_string();
+        load_scene(&sa)
+    });
+    fuzzy_vpl::app::run(fuzzy_vpl::app::ViewOptions {
+        spec: a.scene.scene.clone(),
+        scene,
+        loader,
+        width: a.width,
+        height: a.height,
+        camera: a.camera,
+        settings,
+        frames: a.frames,
+        screenshot: a.screenshot,
+        view: a.view,
+        animate: a.animate,
+        shot_dir: a.shot_dir,
+    })
 }
 
 fn info(a: InfoArgs) -> Result<()> {

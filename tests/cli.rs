@@ -26,10 +26,20 @@ fn error_lines(stderr: &str) -> Vec<&str> {
 }
 
 #[test]
-fn no_arguments_says_how_to_render() {
-    let (code, out, _) = run(&[]);
-    assert_eq!(code, 0);
-    assert!(out.contains("fuzzy-vpl render builtin:cornell"), "{out}");
+fn no_arguments_without_a_display_says_how_to_render() {
+    // No arguments opens the viewer; without any display that is one clear line and exit 2.
+    let o = bin()
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("WAYLAND_SOCKET")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    let lines = error_lines(&err);
+    assert_eq!(lines.len(), 1, "{err}");
+    assert!(lines[0].contains("fuzzy-vpl render"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
 }
 
 #[test]

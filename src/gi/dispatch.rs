@@ -261,7 +261,10 @@ impl Kernel {
             (total, per_chunk),
             (1, 1),
             seed,
-            &mut |done, all| progress(done as u32, all as u32),
+            &mut |done, all| {
+                progress(done as u32, all as u32);
+                true
+            },
         )
     }
 
@@ -353,7 +356,8 @@ impl Kernel {
     }
 
     /// Like `run`, over items × a second range (`sub`: total, per chunk), e.g. pixels × VPLs. Each
-    /// submission covers one item range and one sub range; `progress` gets (chunks done, chunks).
+    /// submission covers one item range and one sub range; `progress` gets (chunks done, chunks) and
+    /// returns whether to go on (false stops before the next submission).
     #[allow(clippy::too_many_arguments)]
     pub fn run_2d(
         &self,
@@ -365,7 +369,7 @@ impl Kernel {
         items: (u32, u32),
         sub: (u32, u32),
         seed: u32,
-        progress: &mut dyn FnMut(u64, u64),
+        progress: &mut dyn FnMut(u64, u64) -> bool,
     ) {
         let (total, per_chunk) = items;
         let per_chunk = per_chunk.clamp(WORKGROUP, WORKGROUP * MAX_GROUPS_X);
@@ -391,7 +395,9 @@ impl Kernel {
                     offset,
                 );
                 done += 1;
-                progress(done, chunks);
+                if !progress(done, chunks) {
+                    return;
+                }
                 sub_offset += sub_count;
                 if sub_offset >= sub_total {
                     break;

@@ -10,6 +10,8 @@
 //!   being VPL clusters ("both") or the VPLs ("SPs only").
 
 use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use anyhow::Result;
 
@@ -80,7 +82,43 @@ pub struct FrameSettings {
     pub clamp: f32,
     /// Print progress of long passes on stderr.
     pub progress: bool,
+    /// Shared with another thread (the viewer): progress of the long gather passes and a cancel flag
+    /// checked between their dispatches.
+    pub control: Option<Arc<Control>>,
 }
+
+/// Progress of a frame's long pass (`reference` / `gather`) and a request to stop it, shared between
+/// the rendering thread and another one. A cancelled frame returns the error `Cancelled`.
+#[derive(Debug, Default)]
+pub struct Control {
+    pub cancel: AtomicBool,
+    /// Dispatches of the long pass done and in all (0 / 0 until it starts).
+    pub done: AtomicU64,
+    pub total: AtomicU64,
+}
+
+impl Control {
+    pub fn cancel(&self) {
+        self.cancel.store(true, Ordering::Relaxed);
+    }
+    pub fn is_cancelled(&self) -> bool {
+        self.cancel.load(Ordering::Relaxed)
+    }
+    /// Fraction of the long pass done, 0..1.
+    pub fn fraction(&self) -> f32 {
+        let all = self.total.load(Ordering::Relaxed);
+        if all == 0 {
+            0.0
+        } else {
+            self.done.load(Ordering::Relaxed) as f32 / all as f32
+        }
+    }
+}
+
+/// The error of a frame stopped through `Control::cancel`.
+#[derive(Debug, thiserror::Error)]
+#[error("frame cancelled")]
+pub struct Cancelled;
 
 impl Default for FrameSettings {
     fn default() -> Self {
@@ -102,6 +140,7 @@ impl Default for FrameSettings {
             weights_to_reps: false,
             clamp: DEFAULT_CLAMP,
             progress: false,
+            control: None,
         }
     }
 }
@@ -431,6 +470,7 @@ impl<'a> Renderer<'a> {
                     "reference"
                 };
                 let show = s.progress;
+                let control = s.control.clone();
                 let mut last = 0u64;
                 self.reference.record(
                     ctx,
@@ -452,8 +492,20 @@ impl<'a> Renderer<'a> {
                                 eprintln!();
                             }
                         }
+                        match &control {
+                            Some(c) => {
+                                c.done.store(done, Ordering::Relaxed);
+                                c.total.store(all, Ordering::Relaxed);
+                                !c.is_cancelled()
+                            }
+                            None => true,
+                        }
                     },
                 );
+                if s.control.as_ref().is_some_and(|c| c.is_cancelled()) {
+                    let _ = self.profiler.collect(ctx)?;
+                    return Err(Cancelled.into());
+                }
             }
         }
         let mut timings_ms = self.profiler.collect(ctx)?;

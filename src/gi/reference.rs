@@ -49,7 +49,7 @@ impl Reference {
         pixels: u32,
         d_min: f32,
         label: &str,
-        progress: &mut dyn FnMut(u64, u64),
+        progress: &mut dyn FnMut(u64, u64) -> bool,
     ) {
         if num_vpls == 0 || pixels == 0 {
             return;

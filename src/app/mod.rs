@@ -1,0 +1,734 @@
+//! The interactive viewer (`fuzzy-vpl view`): winit + egui on the window's own wgpu device, with the
+//! GI renderer on a worker thread (see docs/viewer.md).
+//!
+//! - `window.rs`: event loop, surface, egui rendering, PNG read-back.
+//! - `worker.rs`: the GI thread (own `GpuContext` + `Scene` + `Renderer`), newest-job-wins.
+//! - `panel.rs`: the side panel (settings, stats, reference, plot, screenshots) and the image area.
+//! - `views.rs`: what the image area shows, composed from the last frame.
+//! - `camera.rs`: fly / orbit camera. `settings.rs`: the bookmarks file. `screenshot.rs`: file output.
+
+pub mod camera;
+pub mod panel;
+pub mod screenshot;
+pub mod settings;
+pub mod views;
+pub mod window;
+pub mod worker;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::Result;
+
+use crate::gi::pipeline::{Control, FrameSettings, Weighting};
+use crate::metrics;
+use crate::scene::Scene;
+use camera::ViewCamera;
+use settings::SceneSettings;
+use views::View;
+use worker::{FrameJob, Job, Loader, Rendered, Reply, SceneInfo, Source, Worker};
+
+/// The viewer cannot start here (no display, no adapter): exit code 2, one line.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct Unavailable(pub String);
+
+/// How the viewer starts.
+pub struct ViewOptions {
+    pub spec: String,
+    pub scene: Scene,
+    pub loader: Loader,
+    /// Initial image area in logical pixels (the window adds the panel's width).
+    pub width: u32,
+    pub height: u32,
+    pub camera: Option<usize>,
+    pub settings: UiSettings,
+    /// Scripted run: after this many window frames showing a full-scale GI frame, save the window
+    /// to `screenshot` and exit.
+    pub frames: Option<u32>,
+    pub screenshot: Option<PathBuf>,
+    /// The view to start in; a scripted run in `reference` or `error` computes the reference first.
+    pub view: View,
+    /// Keep orbiting the camera (for measuring frame rates while moving).
+    pub animate: bool,
+    /// Where panel screenshots go.
+    pub shot_dir: PathBuf,
+}
+
+pub fn run(opts: ViewOptions) -> Result<()> {
+    window::run(opts)
+}
+
+/// How a pixel's clusters combine, as the panel offers it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    Hard,
+    Uniform,
+    Weighted,
+}
+
+/// The panel's settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UiSettings {
+    pub sp_clusters: u32,
+    pub vpl_clusters: u32,
+    pub vpls: u32,
+    pub fuzziness: u32,
+    pub gamma: u32,
+    /// n_t as the largest normal angle within a cluster, degrees.
+    pub nt_degrees: f32,
+    pub iterations: u32,
+    pub exposure: f32,
+    pub render_scale: f32,
+    pub mode: Mode,
+    pub sp_on: bool,
+    pub vpl_on: bool,
+    pub direct_on: bool,
+    pub seed: u32,
+    pub direct_samples: u32,
+    pub clamp: f32,
+}
+
+impl UiSettings {
+    pub fn from_frame_settings(f: &FrameSettings, exposure: f32) -> Self {
+        UiSettings {
+            sp_clusters: f.sp_clusters.max(1),
+            vpl_clusters: f.vpl_clusters.max(1),
+            vpls: f.vpls,
+            fuzziness: f.fuzziness,
+            gamma: f.gamma,
+            nt_degrees: f.normal_threshold.clamp(-1.0, 1.0).acos().to_degrees(),
+            iterations: f.iterations,
+            exposure,
+            render_scale: 1.0,
+            mode: match f.weighting {
+                Weighting::Hard => Mode::Hard,
+                Weighting::Uniform => Mode::Uniform,
+                Weighting::InverseDistance => Mode::Weighted,
+            },
+            sp_on: f.sp_clusters > 0,
+            vpl_on: f.vpl_clusters > 0,
+            direct_on: true,
+            seed: f.seed,
+            direct_samples: f.direct_samples,
+            clamp: f.clamp,
+        }
+    }
+
+    pub fn normal_threshold(&self) -> f32 {
+        self.nt_degrees.to_radians().cos()
+    }
+
+    pub fn frame_settings(&self, width: u32, height: u32) -> FrameSettings {
+        FrameSettings {
+            width,
+            height,
+            seed: self.seed,
+            direct_samples: self.direct_samples,
+            vpls: self.vpls,
+            bounces: crate::gi::vpl_trace::MAX_DEPTH,
+            weights_to_reps: false,
+            reference: false,
+            vpl_clusters: if self.vpl_on { self.vpl_clusters } else { 0 },
+            sp_clusters: if self.sp_on { self.sp_clusters } else { 0 },
+            fuzziness: if self.mode == Mode::Hard {
+                1
+            } else {
+                self.fuzziness
+            },
+            gamma: self.gamma,
+            normal_threshold: self.normal_threshold(),
+            iterations: self.iterations,
+            weighting: match self.mode {
+                Mode::Hard => Weighting::Hard,
+                Mode::Uniform => Weighting::Uniform,
+                Mode::Weighted => Weighting::InverseDistance,
+            },
+            clamp: self.clamp,
+            progress: false,
+            control: None,
+        }
+    }
+
+    /// The scatter plot's series: how the indirect light is computed.
+    pub fn mode_label(&self) -> String {
+        match (self.sp_on, self.vpl_on) {
+            (false, false) => "no clustering".into(),
+            (false, true) => "VPL clusters only".into(),
+            (true, _) => {
+                let m = match self.mode {
+                    Mode::Hard => "hard",
+                    Mode::Uniform => "fuzzy uniform",
+                    Mode::Weighted => "fuzzy weighted",
+                };
+                if self.vpl_on {
+                    m.to_string()
+                } else {
+                    format!("{m}, all VPLs")
+                }
+            }
+        }
+    }
+
+    /// The settings in short, for file names and plot tooltips.
+    pub fn short(&self) -> String {
+        let mode = match self.mode {
+            Mode::Hard => "hard",
+            Mode::Uniform => "uniform",
+            Mode::Weighted => "weighted",
+        };
+        let sp = if self.sp_on {
+            format!("K{}", self.sp_clusters)
+        } else {
+            "K0".into()
+        };
+        let vpl = if self.vpl_on {
+            format!("Kv{}", self.vpl_clusters)
+        } else {
+            "Kv0".into()
+        };
+        format!(
+            "{mode}_{sp}_{vpl}_N{}_F{}_g{}_nt{:.0}_it{}",
+            self.vpls, self.fuzziness, self.gamma, self.nt_degrees, self.iterations
+        )
+    }
+}
+
+/// The unclustered reference of one view.
+pub struct RefState {
+    pub job: FrameJob,
+    pub control: Arc<Control>,
+    pub started: Instant,
+    /// Linear radiance once done, with its wall-clock time.
+    pub image: Option<Vec<[f32; 3]>>,
+    pub secs: f64,
+}
+
+/// One (time, error) point of the scatter plot.
+pub struct PlotPoint {
+    pub series: String,
+    pub key: String,
+    pub ms: f64,
+    pub mse: f64,
+}
+
+/// Everything the viewer holds apart from the window and its GPU objects.
+pub struct Viewer {
+    pub spec: String,
+    pub info: Option<SceneInfo>,
+    pub loader: Loader,
+    pub worker: Worker,
+    pub wake: Arc<dyn Fn() + Send + Sync>,
+    pub status: String,
+    pub cam: ViewCamera,
+    pub cam_mode: camera::Mode,
+    pub speed: f32,
+    pub home: ViewCamera,
+    pub start_camera: Option<usize>,
+    pub s: UiSettings,
+    pub view: View,
+    pub latest: Option<Box<Rendered>>,
+    pub texture: Option<egui::TextureHandle>,
+    pub image_dirty: bool,
+    /// What the displayed image depends on besides the frame (view, exposure, …).
+    display_key: String,
+    /// Why the view shows something else (e.g. no reference yet).
+    pub note: Option<&'static str>,
+    last_sent: Option<String>,
+    next_id: u64,
+    pub pending: u64,
+    pub last_motion: Instant,
+    pub last_tick: Instant,
+    /// The image area in physical pixels.
+    pub area_px: [u32; 2],
+    pub reference: Option<RefState>,
+    pub points: Vec<PlotPoint>,
+    pub live_error: Option<(f64, f64)>,
+    pub bookmarks: SceneSettings,
+    pub bookmark_name: String,
+    pub path_field: String,
+    pub dialog: Option<std::sync::mpsc::Receiver<Option<PathBuf>>>,
+    pub shot_dir: PathBuf,
+    pub last_shot: String,
+    pub png_request: Option<PathBuf>,
+    pub ui_dt: f32,
+    pub gi_frames: u64,
+    pub gi_ms_sum: f64,
+    pub ui_frames: u64,
+    /// Window frames since the scripted run's first full GI frame.
+    pub script_frames: u64,
+    pub animate: bool,
+    pub script: Option<(u32, PathBuf)>,
+    pub script_started: Option<Instant>,
+    /// Set when the viewer should close (scripted run done, or failed).
+    pub exit: Option<Result<(), String>>,
+}
+
+impl Viewer {
+    pub fn new(opts: ViewOptions, wake: Arc<dyn Fn() + Send + Sync>) -> Viewer {
+        let w = wake.clone();
+        let worker = Worker::spawn(
+            Source::Loaded(Box::new(opts.scene), opts.spec.clone()),
+            opts.loader.clone(),
+            Box::new(move || w()),
+        );
+        let placeholder = ViewCamera {
+            eye: glam::Vec3::ZERO,
+            yaw: 0.0,
+            pitch: 0.0,
+            yfov: 1.0,
+            distance: 1.0,
+        };
+        Viewer {
+            spec: opts.spec.clone(),
+            info: None,
+            loader: opts.loader,
+            worker,
+            wake,
+            status: String::new(),
+            cam: placeholder,
+            cam_mode: camera::Mode::Fly,
+            speed: 1.0,
+            home: placeholder,
+            start_camera: opts.camera,
+            s: opts.settings,
+            view: opts.view,
+            latest: None,
+            texture: None,
+            image_dirty: false,
+            display_key: String::new(),
+            note: None,
+            last_sent: None,
+            next_id: 1,
+            pending: 0,
+            last_motion: Instant::now() - Duration::from_secs(10),
+            last_tick: Instant::now(),
+            area_px: [opts.width, opts.height],
+            reference: None,
+            points: Vec::new(),
+            live_error: None,
+            bookmarks: SceneSettings::default(),
+            bookmark_name: String::new(),
+            path_field: opts.spec,
+            dialog: None,
+            shot_dir: opts.shot_dir,
+            last_shot: String::new(),
+            png_request: None,
+            ui_dt: 0.0,
+            gi_frames: 0,
+            gi_ms_sum: 0.0,
+            ui_frames: 0,
+            script_frames: 0,
+            animate: opts.animate,
+            script: opts.frames.map(|n| {
+                (
+                    n.max(1),
+                    opts.screenshot
+                        .clone()
+                        .unwrap_or_else(|| PathBuf::from("screenshot.png")),
+                )
+            }),
+            script_started: None,
+            exit: None,
+        }
+    }
+
+    /// Replaces the scene: a new worker loads it (the old one ends after its current job).
+    pub fn open(&mut self, spec: String) {
+        if let Some(r) = self.reference.take() {
+            r.control.cancel();
+        }
+        let w = self.wake.clone();
+        self.worker = Worker::spawn(
+            Source::Spec(spec.clone()),
+            self.loader.clone(),
+            Box::new(move || w()),
+        );
+        self.status = format!("loading {spec} …");
+        self.spec = spec.clone();
+        self.path_field = spec;
+        self.info = None;
+        self.latest = None;
+        self.texture = None;
+        self.last_sent = None;
+        self.points.clear();
+        self.live_error = None;
+        self.start_camera = None;
+    }
+
+    pub fn settings_path(&self) -> Option<PathBuf> {
+        settings::settings_path(&self.spec)
+    }
+
+    pub fn save_bookmarks(&mut self) {
+        if let Some(p) = self.settings_path() {
+            match self.bookmarks.save(&p) {
+                Ok(()) => self.status = format!("bookmarks saved to {}", p.display()),
+                Err(e) => self.status = format!("{e:#}"),
+            }
+        }
+    }
+
+    pub fn reset_camera(&mut self) {
+        self.set_camera(self.home);
+    }
+
+    pub fn set_camera(&mut self, c: ViewCamera) {
+        if c != self.cam {
+            self.cam = c;
+            self.camera_moved();
+        }
+    }
+
+    /// A moving camera renders at a reduced scale and invalidates the reference.
+    pub fn camera_moved(&mut self) {
+        self.last_motion = Instant::now();
+        if let Some(r) = self.reference.take() {
+            r.control.cancel();
+            if r.image.is_none() {
+                self.status = "reference cancelled: the camera moved".into();
+            }
+        }
+        self.points.clear();
+        self.live_error = None;
+    }
+
+    pub fn moving(&self) -> bool {
+        self.last_motion.elapsed() < Duration::from_millis(300)
+    }
+
+    /// The GI image size at full render scale.
+    pub fn full_size(&self) -> (u32, u32) {
+        let s = self.s.render_scale.clamp(0.05, 1.0);
+        (
+            ((self.area_px[0] as f32 * s) as u32).max(8),
+            ((self.area_px[1] as f32 * s) as u32).max(8),
+        )
+    }
+
+    /// Sends a frame job when the camera, settings or size changed (progressive: half scale while
+    /// moving, full scale once the camera rests).
+    pub fn schedule(&mut self) {
+        if self.info.is_none() {
+            return;
+        }
+        let (mut w, mut h) = self.full_size();
+        if self.moving() {
+            w = (w / 2).max(8);
+            h = (h / 2).max(8);
+        }
+        let job = FrameJob {
+            id: self.next_id,
+            camera: self.cam.to_camera(),
+            settings: self.s.frame_settings(w, h),
+            want_sp_ids: self.view == View::SpClusters,
+        };
+        let key = format!("{:?} {:?} {}", job.camera, job.settings, job.want_sp_ids);
+        if self.last_sent.as_deref() != Some(key.as_str()) {
+            self.last_sent = Some(key);
+            self.pending = job.id;
+            self.next_id += 1;
+            self.worker.send(Job::Frame(job));
+        }
+    }
+
+    /// Starts the reference of the current view at full scale.
+    pub fn start_reference(&mut self) {
+        if let Some(r) = self.reference.take() {
+            r.control.cancel();
+        }
+        let (w, h) = self.full_size();
+        let control = worker::control();
+        let mut settings = self.s.frame_settings(w, h);
+        settings.reference = true;
+        settings.control = Some(control.clone());
+        let job = FrameJob {
+            id: self.next_id,
+            camera: self.cam.to_camera(),
+            settings,
+            want_sp_ids: false,
+        };
+        self.next_id += 1;
+        self.worker.send(Job::Reference(job.clone()));
+        self.reference = Some(RefState {
+            job,
+            control,
+            started: Instant::now(),
+            image: None,
+            secs: 0.0,
+        });
+        self.points.clear();
+        self.status.clear();
+    }
+
+    pub fn cancel_reference(&mut self) {
+        if let Some(r) = self.reference.take() {
+            r.control.cancel();
+        }
+    }
+
+    /// Whether a frame is comparable with the finished reference (same view, size and VPLs).
+    fn reference_for(&self, r: &Rendered) -> Option<&[[f32; 3]]> {
+        let rs = self.reference.as_ref()?;
+        let img = rs.image.as_ref()?;
+        let (a, b) = (&rs.job.settings, &r.job.settings);
+        (rs.job.camera == r.job.camera
+            && (
+                a.width,
+                a.height,
+                a.vpls,
+                a.seed,
+                a.clamp.to_bits(),
+                a.direct_samples,
+            ) == (
+                b.width,
+                b.height,
+                b.vpls,
+                b.seed,
+                b.clamp.to_bits(),
+                b.direct_samples,
+            ))
+            .then_some(img.as_slice())
+    }
+
+    fn record_error(&mut self) {
+        let Some(r) = &self.latest else { return };
+        let Some(reference) = self.reference_for(r) else {
+            self.live_error = None;
+            return;
+        };
+        let img = r.frame.radiance.as_slice();
+        let (mse, rel) = (
+            metrics::mse(img, reference),
+            metrics::rel_mse(img, reference),
+        );
+        let ms = r.frame.timings_ms.get("frame").copied().unwrap_or(0.0);
+        self.live_error = Some((mse, rel));
+        let key = self.s.short();
+        let series = self.s.mode_label();
+        self.points.retain(|p| p.key != key);
+        self.points.push(PlotPoint {
+            series,
+            key,
+            ms,
+            mse,
+        });
+    }
+
+    /// Handles the worker's replies; returns whether anything changed.
+    pub fn poll(&mut self) -> bool {
+        let mut changed = false;
+        while let Ok(reply) = self.worker.rx.try_recv() {
+            changed = true;
+            match reply {
+                Reply::Loaded(info) => {
+                    let radius = 0.5 * (info.bounds.1 - info.bounds.0).length();
+                    let cam = self
+                        .start_camera
+                        .and_then(|i| info.cameras.get(i).cloned())
+                        .unwrap_or_else(|| info.default_camera.clone());
+                    let centre = 0.5 * (info.bounds.0 + info.bounds.1);
+                    let dist = (centre - cam.eye()).dot(cam.forward()).max(radius * 0.5);
+                    self.home = ViewCamera::from_camera(&cam, dist);
+                    self.cam = self.home;
+                    self.speed = (radius * 0.5).max(1e-6);
+                    self.bookmarks = match self.settings_path() {
+                        Some(p) => SceneSettings::load(&p).unwrap_or_else(|e| {
+                            self.status = format!("{e:#}");
+                            SceneSettings::default()
+                        }),
+                        None => SceneSettings::default(),
+                    };
+                    if self.status.starts_with("loading") {
+                        self.status.clear();
+                    }
+                    if !info.has_light {
+                        self.status =
+                            "the scene has no light; add one with --sun or --point".into();
+                    }
+                    self.info = Some(info);
+                    self.last_sent = None;
+                }
+                Reply::LoadFailed(msg) => {
+                    self.status = msg.clone();
+                    if self.script.is_some() {
+                        self.exit = Some(Err(msg));
+                    }
+                }
+                Reply::Frame(r) => {
+                    self.gi_frames += 1;
+                    self.gi_ms_sum += r.wall_ms;
+                    self.latest = Some(r);
+                    self.image_dirty = true;
+                    self.record_error();
+                }
+                Reply::Reference(r) => {
+                    if let Some(rs) = &mut self.reference
+                        && rs.job.id == r.job.id
+                    {
+                        rs.image = Some(r.frame.radiance.clone());
+                        rs.secs = rs.started.elapsed().as_secs_f64();
+                        self.image_dirty = true;
+                        self.record_error();
+                    }
+                }
+                Reply::ReferenceCancelled => {}
+                Reply::Failed(msg) => {
+                    self.status = msg.clone();
+                    if self.script.is_some() {
+                        self.exit = Some(Err(msg));
+                    }
+                }
+            }
+        }
+        if let Some(rx) = &self.dialog
+            && let Ok(picked) = rx.try_recv()
+        {
+            self.dialog = None;
+            if let Some(p) = picked {
+                self.open(p.to_string_lossy().into_owned());
+            }
+        }
+        changed
+    }
+
+    /// The RGBA8 image of the current view, its size, and a note when it cannot be shown.
+    pub fn compose(&self) -> Option<(u32, u32, Vec<u8>, Option<&'static str>)> {
+        let r = self.latest.as_ref()?;
+        let (w, h) = (r.frame.width, r.frame.height);
+        let e = self.s.exposure;
+        let fin = || views::final_image(&r.frame.direct, &r.frame.indirect, self.s.direct_on);
+        let reference = self.reference_for(r);
+        let (img, note) = match self.view {
+            View::Final => (views::tonemap(&fin(), e), None),
+            View::Direct => (views::tonemap(&r.frame.direct, e), None),
+            View::Indirect => (views::tonemap(&r.frame.indirect, e), None),
+            View::SpClusters => match &r.sp_ids {
+                Some(ids) => (views::sp_clusters(ids, &r.frame.radiance, e), None),
+                None => (
+                    views::tonemap(&fin(), e),
+                    Some("no SP clustering in this frame"),
+                ),
+            },
+            View::VplPoints => {
+                let base = views::tonemap(&fin(), e);
+                (
+                    views::vpl_points(
+                        &base,
+                        &r.job.camera,
+                        w,
+                        h,
+                        &r.vpls,
+                        &r.lights,
+                        r.lights_clustered,
+                    ),
+                    None,
+                )
+            }
+            View::Reference => match reference {
+                Some(img) => (views::tonemap(img, e), None),
+                None => (
+                    views::tonemap(&fin(), e),
+                    Some("no reference for this view yet: press \"compute reference\""),
+                ),
+            },
+            View::Error => match reference {
+                Some(img) => (views::error(&r.frame.radiance, img), None),
+                None => (
+                    views::tonemap(&fin(), e),
+                    Some("no reference for this view yet: press \"compute reference\""),
+                ),
+            },
+        };
+        Some((w, h, img, note))
+    }
+
+    /// Writes the current view's linear radiance (as displayed: direct toggle applied) as EXR.
+    pub fn save_exr(&mut self) {
+        let Some(r) = &self.latest else {
+            self.last_shot = "no frame yet".into();
+            return;
+        };
+        let img = match self.view {
+            View::Direct => r.frame.direct.clone(),
+            View::Indirect => r.frame.indirect.clone(),
+            View::Reference => match self.reference_for(r) {
+                Some(i) => i.to_vec(),
+                None => r.frame.radiance.clone(),
+            },
+            _ => views::final_image(&r.frame.direct, &r.frame.indirect, self.s.direct_on),
+        };
+        let path = screenshot::unique_path(
+            &self.shot_dir,
+            &screenshot::scene_stem(&self.spec),
+            &format!("{}_{}", self.s.short(), self.view.slug()),
+            "exr",
+        );
+        self.last_shot = match crate::export::write_exr(&path, r.frame.width, r.frame.height, &img)
+        {
+            Ok(()) => format!("saved {}", path.display()),
+            Err(e) => format!("{e:#}"),
+        };
+    }
+
+    pub fn request_png(&mut self) {
+        self.png_request = Some(screenshot::unique_path(
+            &self.shot_dir,
+            &screenshot::scene_stem(&self.spec),
+            &format!("{}_{}", self.s.short(), self.view.slug()),
+            "png",
+        ));
+    }
+
+    /// Per window frame: camera input has been applied; schedules work and drives a scripted run.
+    pub fn tick(&mut self) {
+        let now = Instant::now();
+        self.ui_dt = now.duration_since(self.last_tick).as_secs_f32();
+        self.last_tick = now;
+        self.ui_frames += 1;
+        if self.animate && self.info.is_some() {
+            let c = self.cam;
+            let mut c2 = c;
+            c2.orbit(0.6 * self.ui_dt.min(0.2), 0.0);
+            self.set_camera(c2);
+        }
+        self.schedule();
+        let dk = format!(
+            "{:?} {} {} {} {}",
+            self.view,
+            self.s.exposure,
+            self.s.direct_on,
+            self.reference.as_ref().is_some_and(|r| r.image.is_some()),
+            self.live_error.is_some()
+        );
+        if dk != self.display_key {
+            self.display_key = dk;
+            self.image_dirty = true;
+        }
+        let full = self.full_size();
+        let mut shown = self
+            .latest
+            .as_ref()
+            .is_some_and(|r| self.animate || (r.frame.width, r.frame.height) == full)
+            && !self.image_dirty;
+        if self.script.is_some() && self.view.needs_reference() && shown {
+            if self.reference.is_none() {
+                self.start_reference();
+            }
+            shown = self.live_error.is_some();
+        }
+        if let Some((left, path)) = &mut self.script
+            && shown
+        {
+            self.script_started.get_or_insert(now);
+            if *left == 0 {
+                if self.png_request.is_none() {
+                    self.png_request = Some(path.clone());
+                }
+            } else {
+                *left -= 1;
+            }
+        }
+    }
+}

@@ -1,0 +1,514 @@
+//! The side panel (scene, camera, settings, stats, reference and error plot, screenshots) and the
+//! image area with its camera input.
+
+use std::sync::atomic::Ordering;
+
+use egui::{Color32, Key, PointerButton, RichText, Sense, Slider, Ui};
+use egui_plot::{Legend, Plot, Points};
+
+use super::camera::Mode as CamMode;
+use super::settings::Bookmark;
+use super::views::View;
+use super::{Mode, Viewer};
+
+pub const PANEL_WIDTH: f32 = 310.0;
+
+impl Viewer {
+    /// The whole window's UI.
+    pub fn ui(&mut self, ui: &mut Ui) {
+        egui::Panel::left("panel")
+            .resizable(false)
+            .exact_size(PANEL_WIDTH)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| self.panel(ui));
+            });
+        egui::CentralPanel::no_frame()
+            .frame(egui::Frame::NONE.fill(Color32::from_gray(20)))
+            .show(ui, |ui| self.image_area(ui));
+    }
+
+    fn panel(&mut self, ui: &mut Ui) {
+        ui.heading("fuzzy-vpl");
+        match &self.info {
+            Some(i) => {
+                ui.label(format!("{} — {} triangles", i.spec, i.triangles));
+                ui.label(RichText::new(&i.adapter).small().weak());
+            }
+            None => {
+                ui.horizontal(|ui| {
+                    ui.spinner();
+                    ui.label(format!("loading {}", self.spec));
+                });
+            }
+        }
+        if !self.status.is_empty() {
+            ui.colored_label(Color32::from_rgb(255, 170, 60), &self.status);
+        }
+        self.scene_section(ui);
+        self.camera_section(ui);
+        self.settings_section(ui);
+        self.stats_section(ui);
+        self.reference_section(ui);
+        self.screenshot_section(ui);
+    }
+
+    fn scene_section(&mut self, ui: &mut Ui) {
+        egui::CollapsingHeader::new("Scene")
+            .default_open(false)
+            .show(ui, |ui| {
+                ui.horizontal(|ui| {
+                    let field = ui.add(
+                        egui::TextEdit::singleline(&mut self.path_field)
+                            .desired_width(PANEL_WIDTH - 110.0)
+                            .hint_text("path.glb or builtin:NAME"),
+                    );
+                    let enter = field.lost_focus() && ui.input(|i| i.key_pressed(Key::Enter));
+                    if ui.button("Load").clicked() || enter {
+                        let p = self.path_field.trim().to_string();
+                        if !p.is_empty() {
+                            self.open(p);
+                        }
+                    }
+                });
+                ui.horizontal(|ui| {
+                    if ui
+                        .add_enabled(self.dialog.is_none(), egui::Button::new("Open…"))
+                        .clicked()
+                    {
+                        self.open_dialog();
+                    }
+                    for b in ["builtin:cornell", "builtin:conference"] {
+                        if ui.small_button(&b[8..]).clicked() {
+                            self.open(b.to_string());
+                        }
+                    }
+                });
+                ui.label(RichText::new("or drop a .gltf / .glb on the window").weak());
+            });
+    }
+
+    /// The system file dialog on its own thread (rfd; xdg portal, else zenity). Where neither exists
+    /// it returns nothing and the path field is the way in.
+    fn open_dialog(&mut self) {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let wake = self.wake.clone();
+        std::thread::spawn(move || {
+            let picked = rfd::FileDialog::new()
+                .add_filter("glTF", &["gltf", "glb"])
+                .pick_file();
+            let _ = tx.send(picked);
+            wake();
+        });
+        self.dialog = Some(rx);
+        self.status =
+            "file dialog open (if none appears, no portal/zenity: type a path above)".into();
+    }
+
+    fn camera_section(&mut self, ui: &mut Ui) {
+        egui::CollapsingHeader::new("Camera")
+            .default_open(true)
+            .show(ui, |ui| {
+                ui.horizontal(|ui| {
+                    ui.selectable_value(&mut self.cam_mode, CamMode::Fly, "fly");
+                    ui.selectable_value(&mut self.cam_mode, CamMode::Orbit, "orbit");
+                    if ui.button("reset").clicked() {
+                        self.reset_camera();
+                    }
+                });
+                ui.label(
+                    RichText::new(match self.cam_mode {
+                        CamMode::Fly => "right-drag: look · WASD/QE: move · wheel: speed",
+                        CamMode::Orbit => "right/left-drag: orbit · wheel: zoom · WASD: move",
+                    })
+                    .small()
+                    .weak(),
+                );
+                ui.add(
+                    Slider::new(&mut self.speed, 1e-4..=1e4)
+                        .logarithmic(true)
+                        .text("speed /s"),
+                );
+                let cams: Vec<_> = self
+                    .info
+                    .as_ref()
+                    .map(|i| i.cameras.clone())
+                    .unwrap_or_default();
+                if !cams.is_empty() {
+                    ui.horizontal_wrapped(|ui| {
+                        ui.label("glTF:");
+                        for (i, c) in cams.iter().enumerate() {
+                            let name = if c.name.is_empty() {
+                                format!("#{i}")
+                            } else {
+                                c.name.clone()
+                            };
+                            if ui.small_button(name).clicked() {
+                                let d = self.cam.distance;
+                                self.set_camera(super::camera::ViewCamera::from_camera(c, d));
+                            }
+                        }
+                    });
+                }
+                ui.horizontal(|ui| {
+                    ui.add(
+                        egui::TextEdit::singleline(&mut self.bookmark_name)
+                            .desired_width(150.0)
+                            .hint_text("bookmark name"),
+                    );
+                    if ui.button("add bookmark").clicked() {
+                        let name = if self.bookmark_name.trim().is_empty() {
+                            format!("view {}", self.bookmarks.bookmarks.len() + 1)
+                        } else {
+                            self.bookmark_name.trim().to_string()
+                        };
+                        self.bookmarks
+                            .bookmarks
+                            .push(Bookmark::new(name, &self.cam));
+                        self.bookmark_name.clear();
+                        self.save_bookmarks();
+                    }
+                });
+                let mut go = None;
+                let mut delete = None;
+                for (i, b) in self.bookmarks.bookmarks.iter().enumerate() {
+                    ui.horizontal(|ui| {
+                        if ui.small_button("go").clicked() {
+                            go = Some(b.camera());
+                        }
+                        if ui.small_button("✖").clicked() {
+                            delete = Some(i);
+                        }
+                        ui.label(&b.name);
+                    });
+                }
+                if let Some(c) = go {
+                    self.set_camera(c);
+                }
+                if let Some(i) = delete {
+                    self.bookmarks.bookmarks.remove(i);
+                    self.save_bookmarks();
+                }
+            });
+    }
+
+    fn settings_section(&mut self, ui: &mut Ui) {
+        egui::CollapsingHeader::new("View & clustering")
+            .default_open(true)
+            .show(ui, |ui| {
+                ui.horizontal_wrapped(|ui| {
+                    for v in View::ALL {
+                        ui.selectable_value(&mut self.view, v, v.name());
+                    }
+                });
+                ui.separator();
+                let s = &mut self.s;
+                ui.horizontal(|ui| {
+                    ui.selectable_value(&mut s.mode, Mode::Hard, "hard");
+                    ui.selectable_value(&mut s.mode, Mode::Uniform, "fuzzy (uniform)");
+                    ui.selectable_value(&mut s.mode, Mode::Weighted, "weighted");
+                });
+                ui.horizontal(|ui| {
+                    ui.checkbox(&mut s.sp_on, "SP clustering");
+                    ui.checkbox(&mut s.vpl_on, "VPL clustering");
+                    ui.checkbox(&mut s.direct_on, "direct");
+                });
+                ui.add_enabled(
+                    s.sp_on,
+                    Slider::new(&mut s.sp_clusters, 1..=16384)
+                        .logarithmic(true)
+                        .text("K (SP clusters)"),
+                );
+                ui.add_enabled(
+                    s.vpl_on,
+                    Slider::new(&mut s.vpl_clusters, 1..=16384)
+                        .logarithmic(true)
+                        .text("K_VPL"),
+                );
+                ui.add(
+                    Slider::new(&mut s.vpls, 0..=65536)
+                        .logarithmic(true)
+                        .text("VPLs"),
+                );
+                ui.add_enabled(
+                    s.mode != Mode::Hard,
+                    Slider::new(&mut s.fuzziness, 1..=16).text("F (fuzziness)"),
+                );
+                ui.add(Slider::new(&mut s.gamma, 1..=16).text("γ (downsampling)"));
+                let cos = s.normal_threshold();
+                ui.add(
+                    Slider::new(&mut s.nt_degrees, 0.0..=180.0)
+                        .suffix("°")
+                        .text(format!("n_t (cos {cos:.3})")),
+                );
+                ui.add(Slider::new(&mut s.iterations, 0..=50).text("k-means iterations"));
+                ui.separator();
+                ui.add(
+                    Slider::new(&mut s.exposure, 0.01..=64.0)
+                        .logarithmic(true)
+                        .text("exposure"),
+                );
+                ui.add(Slider::new(&mut s.render_scale, 0.1..=1.0).text("render scale"));
+            });
+    }
+
+    fn stats_section(&mut self, ui: &mut Ui) {
+        egui::CollapsingHeader::new("Stats")
+            .default_open(true)
+            .show(ui, |ui| {
+                let fps = if self.ui_dt > 0.0 {
+                    1.0 / self.ui_dt
+                } else {
+                    0.0
+                };
+                ui.label(format!("UI {fps:.0} fps"));
+                let Some(r) = &self.latest else {
+                    ui.label("no GI frame yet");
+                    return;
+                };
+                let f = &r.frame;
+                let busy = self.pending != r.job.id;
+                ui.label(format!(
+                    "GI {}×{}: {:.0} ms GPU, {:.0} ms wall{}",
+                    f.width,
+                    f.height,
+                    f.timings_ms.get("frame").copied().unwrap_or(0.0),
+                    r.wall_ms,
+                    if busy { " (next one rendering…)" } else { "" }
+                ));
+                if let Some((mse, rel)) = self.live_error {
+                    ui.label(
+                        RichText::new(format!("MSE {mse:.3e} · rel MSE {rel:.3e}"))
+                            .color(Color32::LIGHT_GREEN),
+                    );
+                }
+                egui::Grid::new("timings").striped(true).show(ui, |ui| {
+                    for p in f
+                        .passes
+                        .iter()
+                        .copied()
+                        .chain(["frame"])
+                        .filter(|p| f.timings_ms.contains_key(*p))
+                    {
+                        ui.label(p);
+                        ui.label(format!("{:.1} ms", f.timings_ms[p]));
+                        ui.end_row();
+                    }
+                });
+                ui.label(format!(
+                    "VPLs {} · SPs {} · SP clusters {} · VPL clusters {}",
+                    f.vpls, f.shading_points, f.sp_clusters_used, f.vpl_clusters_used
+                ));
+                ui.label(format!("shadow rays {}", f.shadow_rays));
+            });
+    }
+
+    fn reference_section(&mut self, ui: &mut Ui) {
+        egui::CollapsingHeader::new("Reference & error")
+            .default_open(true)
+            .show(ui, |ui| {
+                let running = self.reference.as_ref().filter(|r| r.image.is_none());
+                match running {
+                    Some(r) => {
+                        let frac = r.control.fraction();
+                        let done = r.control.done.load(Ordering::Relaxed);
+                        let all = r.control.total.load(Ordering::Relaxed);
+                        let secs = r.started.elapsed().as_secs_f32();
+                        ui.add(egui::ProgressBar::new(frac).text(format!(
+                            "reference {:.0}% ({done}/{all}) {secs:.0} s",
+                            frac * 100.0
+                        )));
+                        ui.ctx()
+                            .request_repaint_after(std::time::Duration::from_millis(250));
+                        if ui.button("cancel").clicked() {
+                            self.cancel_reference();
+                        }
+                    }
+                    None => {
+                        let label = if self.reference.is_some() {
+                            "recompute reference"
+                        } else {
+                            "compute reference (unclustered)"
+                        };
+                        if ui
+                            .add_enabled(self.info.is_some(), egui::Button::new(label))
+                            .clicked()
+                        {
+                            self.start_reference();
+                        }
+                        if let Some(r) = &self.reference {
+                            ui.label(format!(
+                                "reference {}×{} in {:.1} s (moving the camera drops it)",
+                                r.job.settings.width, r.job.settings.height, r.secs
+                            ));
+                        }
+                    }
+                }
+                if !self.points.is_empty() {
+                    let mut series: Vec<&str> =
+                        self.points.iter().map(|p| p.series.as_str()).collect();
+                    series.sort();
+                    series.dedup();
+                    let items: Vec<Points> = series
+                        .iter()
+                        .map(|name| {
+                            let pts: Vec<[f64; 2]> = self
+                                .points
+                                .iter()
+                                .filter(|p| p.series == *name)
+                                .map(|p| [p.ms, p.mse])
+                                .collect();
+                            Points::new(*name, pts).radius(4.0)
+                        })
+                        .collect();
+                    Plot::new("error_plot")
+                        .height(180.0)
+                        .legend(Legend::default())
+                        .x_axis_label("GPU ms")
+                        .y_axis_label("MSE")
+                        .show(ui, |p| {
+                            for it in items {
+                                p.points(it);
+                            }
+                        });
+                    if ui.small_button("clear plot").clicked() {
+                        self.points.clear();
+                    }
+                }
+            });
+    }
+
+    fn screenshot_section(&mut self, ui: &mut Ui) {
+        egui::CollapsingHeader::new("Screenshots")
+            .default_open(true)
+            .show(ui, |ui| {
+                ui.label(RichText::new("keys: F11 EXR · F12 PNG").small().weak());
+                ui.horizontal(|ui| {
+                    if ui.button("EXR (radiance)").clicked() {
+                        self.save_exr();
+                    }
+                    if ui.button("PNG (window)").clicked() {
+                        self.request_png();
+                    }
+                });
+                let line = if self.last_shot.is_empty() {
+                    format!("files go to {}", self.shot_dir.display())
+                } else {
+                    self.last_shot.clone()
+                };
+                ui.label(RichText::new(line).small());
+            });
+    }
+
+    /// The GI image, filling the central area, and the camera input over it.
+    fn image_area(&mut self, ui: &mut Ui) {
+        let ppp = ui.ctx().pixels_per_point();
+        let size = ui.available_size();
+        let px = [
+            ((size.x * ppp) as u32).max(8),
+            ((size.y * ppp) as u32).max(8),
+        ];
+        if px != self.area_px {
+            self.area_px = px;
+        }
+        if self.image_dirty {
+            self.image_dirty = false;
+            if let Some((w, h, rgba, note)) = self.compose() {
+                self.note = note;
+                let img = egui::ColorImage::from_rgba_unmultiplied([w as usize, h as usize], &rgba);
+                match &mut self.texture {
+                    Some(t) => t.set(img, egui::TextureOptions::LINEAR),
+                    None => {
+                        self.texture = Some(ui.ctx().load_texture(
+                            "gi",
+                            img,
+                            egui::TextureOptions::LINEAR,
+                        ))
+                    }
+                }
+            }
+        }
+        let (rect, response) = ui.allocate_exact_size(size, Sense::click_and_drag());
+        if let Some(t) = &self.texture {
+            ui.painter().image(
+                t.id(),
+                rect,
+                egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
+                Color32::WHITE,
+            );
+        }
+        if let Some(note) = self.note {
+            ui.painter().text(
+                rect.left_top() + egui::vec2(8.0, 8.0),
+                egui::Align2::LEFT_TOP,
+                note,
+                egui::FontId::proportional(14.0),
+                Color32::YELLOW,
+            );
+        }
+        self.camera_input(ui, &response);
+    }
+
+    fn camera_input(&mut self, ui: &mut Ui, response: &egui::Response) {
+        let dt = self.ui_dt.clamp(0.0, 0.1);
+        let mut c = self.cam;
+        let turn = 0.004;
+        let drag = response.drag_delta();
+        match self.cam_mode {
+            CamMode::Fly => {
+                if response.dragged_by(PointerButton::Secondary) {
+                    c.look(-drag.x * turn, -drag.y * turn);
+                }
+            }
+            CamMode::Orbit => {
+                if response.dragged_by(PointerButton::Secondary)
+                    || response.dragged_by(PointerButton::Primary)
+                {
+                    c.orbit(-drag.x * turn, -drag.y * turn);
+                }
+            }
+        }
+        if response.hovered() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+            if scroll != 0.0 {
+                let f = 1.0015f32.powf(scroll);
+                match self.cam_mode {
+                    CamMode::Fly => self.speed = (self.speed * f).clamp(1e-4, 1e4),
+                    CamMode::Orbit => c.zoom(1.0 / f),
+                }
+            }
+        }
+        if !ui.ctx().egui_wants_keyboard_input() {
+            let (mut m, fast) = ui.input(|i| {
+                let k = |key| if i.key_down(key) { 1.0 } else { 0.0 };
+                (
+                    glam::Vec3::new(
+                        k(Key::D) - k(Key::A),
+                        k(Key::E) - k(Key::Q),
+                        k(Key::W) - k(Key::S),
+                    ),
+                    i.modifiers.shift,
+                )
+            });
+            if m != glam::Vec3::ZERO {
+                if fast {
+                    m *= 4.0;
+                }
+                c.fly(m * self.speed * dt);
+                ui.ctx().request_repaint();
+            }
+            if ui.input(|i| i.key_pressed(Key::R)) {
+                c = self.home;
+            }
+            if ui.input(|i| i.key_pressed(Key::F12)) {
+                self.request_png();
+            }
+            if ui.input(|i| i.key_pressed(Key::F11)) {
+                self.save_exr();
+            }
+        }
+        self.set_camera(c);
+        if self.moving() {
+            ui.ctx().request_repaint();
+        }
+    }
+}

@@ -1,0 +1,137 @@
+//! Screenshots: the current view's linear radiance as EXR, and what the window shows (UI included) as
+//! PNG, read back from an offscreen copy of the window's last egui render. File names carry the scene
+//! and the settings and never overwrite an existing file (a counter is added).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, anyhow};
+
+/// `DIR/STEM_SETTINGS_NNN.EXT`, the first NNN (from 1) that names no existing file.
+pub fn unique_path(dir: &Path, scene: &str, settings: &str, ext: &str) -> PathBuf {
+    let stem = sanitize(scene);
+    let settings = sanitize(settings);
+    (1..)
+        .map(|i| dir.join(format!("{stem}_{settings}_{i:03}.{ext}")))
+        .find(|p| !p.exists())
+        .expect("an unused counter")
+}
+
+/// A scene spec reduced to a short file-name part: `builtin:cornell` → `cornell`, `a/b/room.glb` →
+/// `room`.
+pub fn scene_stem(spec: &str) -> String {
+    if let Some(n) = spec.strip_prefix("builtin:") {
+        return n.to_string();
+    }
+    Path::new(spec)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into())
+}
+
+fn sanitize(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "-.=".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// Reads an RGBA8 / BGRA8 texture (COPY_SRC) back as RGB8.
+pub fn read_texture_rgb8(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+) -> Result<(u32, u32, Vec<u8>)> {
+    let (w, h) = (texture.width(), texture.height());
+    let bgra = matches!(
+        texture.format(),
+        wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
+    );
+    let row =
+        (w * 4).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("screenshot readback"),
+        size: row as u64 * h as u64,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = device.create_command_encoder(&Default::default());
+    enc.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(h),
+            },
+        },
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+    );
+    queue.submit([enc.finish()]);
+    let slice = buffer.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    device
+        .poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        })
+        .map_err(|e| anyhow!("GPU wait failed: {e}"))?;
+    rx.recv()
+        .context("readback callback dropped")?
+        .map_err(|e| anyhow!("mapping the screenshot failed: {e}"))?;
+    let view = slice
+        .get_mapped_range()
+        .map_err(|e| anyhow!("reading the screenshot failed: {e}"))?;
+    let mut rgb = Vec::with_capacity((w * h * 3) as usize);
+    for y in 0..h as usize {
+        let r = &view[y * row as usize..][..w as usize * 4];
+        for p in r.chunks(4) {
+            if bgra {
+                rgb.extend_from_slice(&[p[2], p[1], p[0]]);
+            } else {
+                rgb.extend_from_slice(&p[..3]);
+            }
+        }
+    }
+    drop(view);
+    buffer.unmap();
+    Ok((w, h, rgb))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_never_overwrite() {
+        let dir = std::env::temp_dir().join(format!("fuzzy-vpl-shots-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let a = unique_path(
+            &dir,
+            &scene_stem("builtin:cornell"),
+            "weighted K=3072",
+            "png",
+        );
+        assert_eq!(
+            a.file_name().unwrap().to_str().unwrap(),
+            "cornell_weighted_K=3072_001.png"
+        );
+        std::fs::write(&a, b"x").unwrap();
+        let b = unique_path(&dir, "cornell", "weighted K=3072", "png");
+        assert_ne!(a, b);
+        assert_eq!(scene_stem("/x/y/room.glb"), "room");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

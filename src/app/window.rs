@@ -1,0 +1,408 @@
+//! The window: winit event loop, the window's own wgpu device and surface, egui input and rendering,
+//! and the PNG screenshot (egui rendered a second time into an offscreen texture and read back).
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::{Result, anyhow};
+use winit::application::ApplicationHandler;
+use winit::event::WindowEvent;
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy};
+use winit::window::{Window, WindowId};
+
+use super::panel::PANEL_WIDTH;
+use super::{Unavailable, ViewOptions, Viewer};
+
+/// The one-line message for a window that cannot open.
+fn no_display(detail: &str) -> String {
+    let var = |k| std::env::var(k).ok().filter(|v| !v.is_empty());
+    let what = match (var("DISPLAY"), var("WAYLAND_DISPLAY")) {
+        (None, None) => "no display (DISPLAY and WAYLAND_DISPLAY are unset)".to_string(),
+        (Some(d), _) => format!("cannot open a window on DISPLAY={d}"),
+        (None, Some(w)) => format!("cannot open a window on WAYLAND_DISPLAY={w}"),
+    };
+    // winit's errors start with the source location; keep only its last clause.
+    let detail = detail
+        .rsplit(": ")
+        .next()
+        .unwrap_or(detail)
+        .trim_end_matches('.');
+    format!("{what} ({detail}); render headless with `fuzzy-vpl render` instead")
+}
+
+/// The worker's "a reply is waiting".
+#[derive(Debug, Clone, Copy)]
+pub struct Wake;
+
+/// Frames are paced to at most this rate, leaving the CPU to the GI worker on software drivers.
+const MIN_FRAME: Duration = Duration::from_millis(16);
+
+struct Gfx {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    config: wgpu::SurfaceConfiguration,
+    egui: egui::Context,
+    state: egui_winit::State,
+    renderer: egui_wgpu::Renderer,
+}
+
+struct App {
+    opts: Option<ViewOptions>,
+    proxy: EventLoopProxy<Wake>,
+    gfx: Option<Gfx>,
+    viewer: Option<Viewer>,
+    result: Result<()>,
+    last_frame: Instant,
+    redraw_at: Option<Instant>,
+}
+
+pub fn run(opts: ViewOptions) -> Result<()> {
+    let event_loop = EventLoop::<Wake>::with_user_event()
+        .build()
+        .map_err(|e| Unavailable(no_display(&e.to_string())))?;
+    let mut app = App {
+        proxy: event_loop.create_proxy(),
+        opts: Some(opts),
+        gfx: None,
+        viewer: None,
+        result: Ok(()),
+        last_frame: Instant::now(),
+        redraw_at: None,
+    };
+    event_loop.run_app(&mut app).map_err(|e| {
+        Unavailable(format!(
+            "the window's event loop failed ({e}); render headless with `fuzzy-vpl render`"
+        ))
+    })?;
+    let viewer = app.viewer.take();
+    if let Some(v) = &viewer
+        && v.script.is_some()
+    {
+        let secs = v.script_started.map_or(0.0, |t| t.elapsed().as_secs_f64());
+        eprintln!(
+            "view: {} window frames ({:.1} fps over the last {secs:.1} s), {} GI frames, mean {:.0} ms wall",
+            v.ui_frames,
+            v.script_frames as f64 / secs.max(1e-9),
+            v.gi_frames,
+            v.gi_ms_sum / v.gi_frames.max(1) as f64
+        );
+    }
+    // The worker may be inside a long frame: leave without waiting for it.
+    std::mem::forget(viewer);
+    app.result
+}
+
+impl App {
+    fn fail(&mut self, el: &ActiveEventLoop, e: anyhow::Error) {
+        self.result = Err(e);
+        el.exit();
+    }
+
+    fn init(&mut self, el: &ActiveEventLoop) -> Result<()> {
+        let opts = self.opts.take().expect("init once");
+        let attrs = Window::default_attributes()
+            .with_title(format!("fuzzy-vpl — {}", opts.spec))
+            .with_inner_size(winit::dpi::LogicalSize::new(
+                opts.width as f64 + PANEL_WIDTH as f64,
+                opts.height as f64,
+            ));
+        let window = Arc::new(
+            el.create_window(attrs)
+                .map_err(|e| Unavailable(no_display(&e.to_string())))?,
+        );
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        if std::env::var_os("WGPU_BACKEND").is_none() {
+            desc.backends = wgpu::Backends::PRIMARY;
+        }
+        let instance = wgpu::Instance::new(desc);
+        let surface = instance.create_surface(window.clone()).map_err(|e| {
+            Unavailable(format!(
+                "no GPU adapter can draw into the window ({e}); install mesa-vulkan-drivers, or render headless with `fuzzy-vpl render`"
+            ))
+        })?;
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: Some(&surface),
+            apply_limit_buckets: false,
+        }))
+        .map_err(|e| {
+            Unavailable(format!(
+                "no GPU adapter for the window ({e}); install mesa-vulkan-drivers, or render headless with `fuzzy-vpl render`"
+            ))
+        })?;
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("fuzzy-vpl window"),
+            ..Default::default()
+        }))
+        .map_err(|e| {
+            Unavailable(format!(
+                "cannot open the window's GPU device ({e}); render headless with `fuzzy-vpl render`"
+            ))
+        })?;
+        let caps = surface.get_capabilities(&adapter);
+        let format = caps
+            .formats
+            .iter()
+            .copied()
+            .find(|f| {
+                matches!(
+                    f,
+                    wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Rgba8Unorm
+                )
+            })
+            .or_else(|| caps.formats.first().copied())
+            .ok_or_else(|| Unavailable("the window's surface offers no format".into()))?;
+        let size = window.inner_size();
+        let config = wgpu::SurfaceConfiguration {
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            format,
+            width: size.width.max(1),
+            height: size.height.max(1),
+            present_mode: wgpu::PresentMode::AutoVsync,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: caps.alpha_modes[0],
+            view_formats: vec![],
+            color_space: wgpu::SurfaceColorSpace::Auto,
+        };
+        surface.configure(&device, &config);
+        let egui = egui::Context::default();
+        let state = egui_winit::State::new(
+            egui.clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(device.limits().max_texture_dimension_2d as usize),
+        );
+        let renderer = egui_wgpu::Renderer::new(&device, format, Default::default());
+        let proxy = self.proxy.clone();
+        let wake: Arc<dyn Fn() + Send + Sync> = Arc::new(move || {
+            let _ = proxy.send_event(Wake);
+        });
+        let ppp = window.scale_factor() as f32;
+        let mut viewer = Viewer::new(opts, wake);
+        viewer.area_px = [
+            (viewer.area_px[0] as f32 * ppp) as u32,
+            (viewer.area_px[1] as f32 * ppp) as u32,
+        ];
+        self.viewer = Some(viewer);
+        self.gfx = Some(Gfx {
+            window,
+            surface,
+            device,
+            queue,
+            config,
+            egui,
+            state,
+            renderer,
+        });
+        Ok(())
+    }
+
+    fn redraw(&mut self, el: &ActiveEventLoop) -> Result<()> {
+        let (Some(g), Some(v)) = (&mut self.gfx, &mut self.viewer) else {
+            return Ok(());
+        };
+        self.last_frame = Instant::now();
+        self.redraw_at = None;
+        v.poll();
+        let input = g.state.take_egui_input(&g.window);
+        let out = g.egui.run_ui(input, |ui| v.ui(ui));
+        v.tick();
+        if v.script_started.is_some() {
+            v.script_frames += 1;
+        }
+        g.state
+            .handle_platform_output(&g.window, out.platform_output);
+        let repaint = out
+            .viewport_output
+            .get(&egui::ViewportId::ROOT)
+            .map(|o| o.repaint_delay)
+            .unwrap_or(Duration::MAX);
+        let jobs = g.egui.tessellate(out.shapes, out.pixels_per_point);
+        let frame = match g.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                g.surface.configure(&g.device, &g.config);
+                g.window.request_redraw();
+                return Ok(());
+            }
+            _ => {
+                g.window.request_redraw();
+                return Ok(());
+            }
+        };
+        for (id, deltas) in &out.textures_delta.set {
+            for delta in deltas {
+                g.renderer.update_texture(&g.device, &g.queue, *id, delta);
+            }
+        }
+        let sd = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [g.config.width, g.config.height],
+            pixels_per_point: out.pixels_per_point,
+        };
+        let mut enc = g.device.create_command_encoder(&Default::default());
+        let cmds = g
+            .renderer
+            .update_buffers(&g.device, &g.queue, &mut enc, &jobs, &sd);
+        let view = frame.texture.create_view(&Default::default());
+        let shot = v.png_request.take().map(|path| {
+            let tex = g.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("screenshot"),
+                size: wgpu::Extent3d {
+                    width: g.config.width,
+                    height: g.config.height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: g.config.format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            });
+            (path, tex)
+        });
+        let shot_view = shot
+            .as_ref()
+            .map(|(_, t)| t.create_view(&Default::default()));
+        for target in std::iter::once(&view).chain(shot_view.as_ref()) {
+            let mut pass = enc
+                .begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("egui"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: target,
+                        resolve_target: None,
+                        depth_slice: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                })
+                .forget_lifetime();
+            g.renderer.render(&mut pass, &jobs, &sd);
+        }
+        g.queue
+            .submit(cmds.into_iter().chain(std::iter::once(enc.finish())));
+        g.window.pre_present_notify();
+        g.queue.present(frame);
+        for id in &out.textures_delta.free {
+            g.renderer.free_texture(id);
+        }
+        if let Some((path, tex)) = shot {
+            let saved = super::screenshot::read_texture_rgb8(&g.device, &g.queue, &tex)
+                .and_then(|(w, h, rgb)| crate::export::write_png_rgb8(&path, w, h, rgb));
+            let scripted = v
+                .script
+                .as_ref()
+                .is_some_and(|(left, p)| *left == 0 && *p == path);
+            match saved {
+                Ok(()) => {
+                    v.last_shot = format!("saved {}", path.display());
+                    if scripted {
+                        v.exit = Some(Ok(()));
+                    }
+                }
+                Err(e) => {
+                    v.last_shot = format!("{e:#}");
+                    if scripted {
+                        v.exit = Some(Err(format!("{e:#}")));
+                    }
+                }
+            }
+        }
+        if let Some(done) = v.exit.take() {
+            if let Err(e) = done {
+                return Err(anyhow!(e));
+            }
+            el.exit();
+            return Ok(());
+        }
+        // Scripted runs and moving cameras draw continuously; otherwise egui says when.
+        let delay = if v.animate || v.moving() || v.script_started.is_some() {
+            Duration::ZERO
+        } else if v.script.is_some() {
+            repaint.min(Duration::from_millis(100))
+        } else {
+            repaint
+        };
+        if delay < Duration::from_secs(3600) {
+            self.redraw_at = Some(Instant::now() + delay);
+        }
+        Ok(())
+    }
+}
+
+impl ApplicationHandler<Wake> for App {
+    fn resumed(&mut self, el: &ActiveEventLoop) {
+        if self.gfx.is_none()
+            && self.opts.is_some()
+            && let Err(e) = self.init(el)
+        {
+            self.fail(el, e);
+        }
+    }
+
+    fn user_event(&mut self, _el: &ActiveEventLoop, _e: Wake) {
+        if let Some(g) = &self.gfx {
+            g.window.request_redraw();
+        }
+    }
+
+    fn window_event(&mut self, el: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let Some(g) = &mut self.gfx else { return };
+        let resp = g.state.on_window_event(&g.window, &event);
+        match event {
+            WindowEvent::CloseRequested => el.exit(),
+            WindowEvent::Resized(size) => {
+                g.config.width = size.width.max(1);
+                g.config.height = size.height.max(1);
+                g.surface.configure(&g.device, &g.config);
+                g.window.request_redraw();
+            }
+            WindowEvent::DroppedFile(path) => {
+                if let Some(v) = &mut self.viewer {
+                    v.open(path.to_string_lossy().into_owned());
+                }
+                g.window.request_redraw();
+            }
+            WindowEvent::RedrawRequested => {
+                if let Err(e) = self.redraw(el) {
+                    self.fail(el, e);
+                }
+            }
+            _ => {
+                if resp.repaint {
+                    g.window.request_redraw();
+                }
+            }
+        }
+    }
+
+    fn about_to_wait(&mut self, el: &ActiveEventLoop) {
+        match self.redraw_at {
+            Some(t) => {
+                let t = t.max(self.last_frame + MIN_FRAME);
+                if Instant::now() >= t {
+                    self.redraw_at = None;
+                    if let Some(g) = &self.gfx {
+                        g.window.request_redraw();
+                    }
+                    el.set_control_flow(ControlFlow::Wait);
+                } else {
+                    el.set_control_flow(ControlFlow::WaitUntil(t));
+                }
+            }
+            None => el.set_control_flow(ControlFlow::Wait),
+        }
+    }
+}

@@ -1,0 +1,280 @@
+//! The GI worker thread. It owns its own `GpuContext`, `Scene` and `Renderer` (the renderer borrows
+//! the other two, so all three are made inside the thread) and renders the jobs the UI sends. Jobs
+//! queue in a channel; the worker takes the newest frame job and drops the stale ones, so the UI can
+//! send one per camera change without falling behind. A reference job runs first and is stopped
+//! between dispatches through its `Control`.
+
+use std::sync::Arc;
+use std::sync::mpsc::{self, Receiver, Sender};
+use std::thread::JoinHandle;
+use std::time::Instant;
+
+use anyhow::Result;
+use glam::Vec3;
+
+use crate::gi::pipeline::{Cancelled, Control, Frame, FrameSettings, Renderer};
+use crate::gpu::GpuContext;
+use crate::scene::{Camera, Scene};
+
+/// Loads a scene by its spec, with the command line's added lights.
+pub type Loader = Arc<dyn Fn(&str) -> Result<Scene> + Send + Sync>;
+
+/// What the UI needs to know about the worker's scene.
+#[derive(Clone, Debug)]
+pub struct SceneInfo {
+    pub spec: String,
+    pub cameras: Vec<Camera>,
+    pub default_camera: Camera,
+    pub bounds: (Vec3, Vec3),
+    pub triangles: usize,
+    pub has_light: bool,
+    pub adapter: String,
+}
+
+#[derive(Clone, Debug)]
+pub struct FrameJob {
+    pub id: u64,
+    pub camera: Camera,
+    pub settings: FrameSettings,
+    /// Read back the SP clustering's nearest cluster per pixel.
+    pub want_sp_ids: bool,
+}
+
+pub enum Job {
+    Frame(FrameJob),
+    /// The unclustered reference of this view; `settings.control` must be set.
+    Reference(FrameJob),
+}
+
+/// A finished frame and what the views draw besides the images.
+pub struct Rendered {
+    pub job: FrameJob,
+    pub frame: Frame,
+    /// Nearest SP cluster per pixel (u32::MAX: none), when asked for and SP clustering ran.
+    pub sp_ids: Option<Vec<u32>>,
+    /// VPL positions.
+    pub vpls: Arc<Vec<Vec3>>,
+    /// The light list's positions: VPL-cluster representatives, or the VPLs when not clustered.
+    pub lights: Arc<Vec<Vec3>>,
+    pub lights_clustered: bool,
+    /// Wall-clock time of the render call, readbacks included.
+    pub wall_ms: f64,
+}
+
+pub enum Reply {
+    Loaded(SceneInfo),
+    LoadFailed(String),
+    Frame(Box<Rendered>),
+    Reference(Box<Rendered>),
+    ReferenceCancelled,
+    Failed(String),
+}
+
+pub struct Worker {
+    tx: Option<Sender<Job>>,
+    pub rx: Receiver<Reply>,
+    handle: Option<JoinHandle<()>>,
+}
+
+pub enum Source {
+    Loaded(Box<Scene>, String),
+    Spec(String),
+}
+
+impl Worker {
+    /// Starts a worker on `source`; `wake` is called after each reply.
+    pub fn spawn(source: Source, loader: Loader, wake: Box<dyn Fn() + Send>) -> Worker {
+        let (tx, jobs) = mpsc::channel::<Job>();
+        let (reply_tx, rx) = mpsc::channel::<Reply>();
+        let handle = std::thread::Builder::new()
+            .name("gi-worker".into())
+            .spawn(move || {
+                let send = |r: Reply| {
+                    let _ = reply_tx.send(r);
+                    wake();
+                };
+                let (scene, spec) = match source {
+                    Source::Loaded(s, spec) => (*s, spec),
+                    Source::Spec(spec) => match loader(&spec) {
+                        Ok(s) => (s, spec),
+                        Err(e) => return send(Reply::LoadFailed(format!("{spec}: {e:#}"))),
+                    },
+                };
+                if let Err(e) = serve(&scene, &spec, &jobs, &send) {
+                    send(Reply::LoadFailed(format!("{spec}: {e:#}")));
+                }
+            })
+            .expect("spawning the GI worker thread");
+        Worker {
+            tx: Some(tx),
+            rx,
+            handle: Some(handle),
+        }
+    }
+
+    pub fn send(&self, job: Job) {
+        if let Some(tx) = &self.tx {
+            let _ = tx.send(job);
+        }
+    }
+}
+
+impl Drop for Worker {
+    fn drop(&mut self) {
+        // Closing the channel ends the worker's loop after its current job.
+        self.tx = None;
+        if let Some(h) = self.handle.take() {
+            // Detach: a frame in flight may take seconds on a software driver; never block the UI on it.
+            drop(h);
+        }
+    }
+}
+
+/// Lowers this thread's scheduling priority. On Linux `nice` is per thread and inherited by the
+/// threads it creates, so a software driver's worker threads made for the GI device below run behind
+/// the UI thread and its own driver threads: the window stays responsive while a frame renders.
+fn lower_priority() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: plain syscalls on the calling thread's id; failure only leaves the priority unchanged.
+    unsafe {
+        let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+        let _ = libc::setpriority(libc::PRIO_PROCESS, tid, 10);
+    }
+}
+
+fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) -> Result<()> {
+    lower_priority();
+    let ctx = GpuContext::new_headless()?;
+    let mut renderer = Renderer::new(&ctx, scene)?;
+    send(Reply::Loaded(SceneInfo {
+        spec: spec.to_string(),
+        cameras: scene.cameras.clone(),
+        default_camera: scene.default_camera(),
+        bounds: scene.bounds(),
+        triangles: scene.triangles.len(),
+        has_light: scene.has_light(),
+        adapter: ctx.adapter_name.clone(),
+    }));
+    let mut cache = PointCache::default();
+    let mut reference: Option<FrameJob> = None;
+    let mut frame: Option<FrameJob> = None;
+    loop {
+        if reference.is_none() && frame.is_none() {
+            match jobs.recv() {
+                Ok(j) => take(j, &mut reference, &mut frame),
+                Err(_) => return Ok(()),
+            }
+        }
+        // Drop stale jobs: only the newest of each kind matters.
+        loop {
+            match jobs.try_recv() {
+                Ok(j) => take(j, &mut reference, &mut frame),
+                Err(mpsc::TryRecvError::Empty) => break,
+                Err(mpsc::TryRecvError::Disconnected) => return Ok(()),
+            }
+        }
+        if let Some(job) = reference.take() {
+            if job
+                .settings
+                .control
+                .as_ref()
+                .is_some_and(|c| c.is_cancelled())
+            {
+                send(Reply::ReferenceCancelled);
+                continue;
+            }
+            match render(&ctx, &mut renderer, &mut cache, job) {
+                Ok(r) => send(Reply::Reference(Box::new(r))),
+                Err(e) if e.is::<Cancelled>() => send(Reply::ReferenceCancelled),
+                Err(e) => send(Reply::Failed(format!("reference: {e:#}"))),
+            }
+            continue;
+        }
+        if let Some(job) = frame.take() {
+            match render(&ctx, &mut renderer, &mut cache, job) {
+                Ok(r) => send(Reply::Frame(Box::new(r))),
+                Err(e) => send(Reply::Failed(format!("{e:#}"))),
+            }
+        }
+    }
+}
+
+fn take(j: Job, reference: &mut Option<FrameJob>, frame: &mut Option<FrameJob>) {
+    match j {
+        Job::Frame(f) => *frame = Some(f),
+        Job::Reference(f) => {
+            if let Some(old) = reference.replace(f)
+                && let Some(c) = &old.settings.control
+            {
+                c.cancel();
+            }
+        }
+    }
+}
+
+/// VPL and light positions, recomputed only when the resident sets change.
+#[derive(Default)]
+struct PointCache {
+    vpl_key: Option<(u32, u32, u32)>,
+    vpls: Arc<Vec<Vec3>>,
+    light_key: Option<(u32, u32, u32, u32, u32)>,
+    lights: Arc<Vec<Vec3>>,
+}
+
+fn render(
+    ctx: &GpuContext,
+    renderer: &mut Renderer,
+    cache: &mut PointCache,
+    job: FrameJob,
+) -> Result<Rendered> {
+    let t = Instant::now();
+    let frame = renderer.render(&job.camera, &job.settings)?;
+    let sp_ids = match (&renderer.sp_clustering, job.want_sp_ids) {
+        (Some(c), true) => {
+            let n = (frame.width * frame.height) as usize;
+            let f = c.f().max(1) as usize;
+            let all: Vec<u32> = ctx.read_buffer(&c.assign, n * f)?;
+            Some(all.iter().step_by(f).copied().collect())
+        }
+        _ => None,
+    };
+    let wall_ms = t.elapsed().as_secs_f64() * 1e3;
+    let pos = |p: &[f32; 4]| Vec3::new(p[0], p[1], p[2]);
+    match &renderer.vpl_set {
+        Some((set, key, _)) if cache.vpl_key != Some(*key) => {
+            cache.vpl_key = Some(*key);
+            cache.vpls = Arc::new(set.vpls.iter().map(|v| pos(&v.pos)).collect());
+        }
+        None => {
+            cache.vpl_key = None;
+            cache.vpls = Arc::default();
+        }
+        _ => {}
+    }
+    match &renderer.lights {
+        Some((list, key, _)) if cache.light_key != Some(*key) => {
+            cache.light_key = Some(*key);
+            cache.lights = Arc::new(list.lights.iter().map(|v| pos(&v.pos)).collect());
+        }
+        None => {
+            cache.light_key = None;
+            cache.lights = Arc::default();
+        }
+        _ => {}
+    }
+    let lights_clustered = frame.vpl_clusters_used > 0;
+    Ok(Rendered {
+        job,
+        frame,
+        sp_ids,
+        vpls: cache.vpls.clone(),
+        lights: cache.lights.clone(),
+        lights_clustered,
+        wall_ms,
+    })
+}
+
+/// A fresh control for a reference job.
+pub fn control() -> Arc<Control> {
+    Arc::new(Control::default())
+}

@@ -1,0 +1,121 @@
+//! The viewer in a real window: a scripted run under Xvfb (started here when no DISPLAY is set) must
+//! exit 0 and save a window screenshot with several distinct colours.
+
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// An Xvfb server we started (killed on drop), or None when a DISPLAY exists already.
+struct Xvfb(Option<Child>, String);
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        if let Some(c) = &mut self.0 {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
+fn display() -> Xvfb {
+    if let Some(d) = std::env::var_os("DISPLAY").filter(|d| !d.is_empty()) {
+        return Xvfb(None, d.to_string_lossy().into_owned());
+    }
+    let found = Command::new("Xvfb")
+        .arg("-help")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok();
+    assert!(
+        found,
+        "Xvfb is not installed: the viewer test needs a display; apt-get install xvfb"
+    );
+    // A display number with no lock file and no socket, then wait for the socket to appear.
+    for n in 90..200 {
+        let lock = PathBuf::from(format!("/tmp/.X{n}-lock"));
+        let sock = PathBuf::from(format!("/tmp/.X11-unix/X{n}"));
+        if lock.exists() || sock.exists() {
+            continue;
+        }
+        let mut child = Command::new("Xvfb")
+            .args([
+                format!(":{n}").as_str(),
+                "-screen",
+                "0",
+                "1280x1024x24",
+                "-nolisten",
+                "tcp",
+            ])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("starting Xvfb");
+        let t = Instant::now();
+        while t.elapsed() < Duration::from_secs(10) {
+            if sock.exists() {
+                return Xvfb(Some(child), format!(":{n}"));
+            }
+            if let Ok(Some(_)) = child.try_wait() {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        let _ = child.kill();
+        let _ = child.wait();
+    }
+    panic!("could not start Xvfb on any display :90..:199");
+}
+
+#[test]
+fn scripted_view_saves_a_window_screenshot() {
+    let x = display();
+    let dir = std::env::temp_dir().join(format!("fuzzy-vpl-viewer-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let png = dir.join("view.png");
+    let out = Command::new(env!("CARGO_BIN_EXE_fuzzy-vpl"))
+        .env("DISPLAY", &x.1)
+        .env_remove("WAYLAND_DISPLAY")
+        // Bookmarks of built-in scenes go to the config dir: keep the test's out of the user's.
+        .env("XDG_CONFIG_HOME", &dir)
+        .args([
+            "view",
+            "builtin:cornell",
+            "--frames",
+            "5",
+            "--screenshot",
+            png.to_str().unwrap(),
+            "--width",
+            "320",
+            "--height",
+            "240",
+            "--vpls",
+            "1024",
+            "--sp-clusters",
+            "256",
+            "--vpl-clusters",
+            "128",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    let img = image::open(&png).expect("the screenshot").into_rgb8();
+    let (w, h) = img.dimensions();
+    assert!(w >= 320 && h >= 240, "{w}x{h}");
+    let colours: std::collections::HashSet<[u8; 3]> = img.pixels().map(|p| p.0).collect();
+    assert!(
+        colours.len() > 50,
+        "only {} distinct colours",
+        colours.len()
+    );
+    // The GI image (right of the panel) is lit, not black.
+    let right: Vec<u32> = img
+        .enumerate_pixels()
+        .filter(|(x, _, _)| *x > w - 100)
+        .map(|(_, _, p)| p.0.iter().map(|c| *c as u32).sum())
+        .collect();
+    let mean = right.iter().sum::<u32>() as f64 / right.len() as f64;
+    assert!(mean > 30.0, "image area mean {mean}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
