@@ -394,6 +394,24 @@ fn render(a: RenderArgs) -> Result<()> {
     if !(a.exposure.is_finite() && a.exposure >= 0.0) {
         return Err(bad("--exposure must be a finite number >= 0"));
     }
+    check_fuzziness(a.fuzziness)?;
+    if !(1..=64).contains(&a.bounces) {
+        return Err(bad(format!("--bounces {}: must be 1..64", a.bounces)));
+    }
+    if a.gamma == 0 {
+        return Err(bad("--gamma must be at least 1"));
+    }
+    check_normal_threshold(a.normal_threshold)?;
+    check_iterations(a.iterations)?;
+    check_clamp(a.clamp)?;
+    if let Some(p) = &a.error_map
+        && p.extension().and_then(|e| e.to_str()) != Some("png")
+    {
+        return Err(bad(format!(
+            "{}: --error-map must end in .png",
+            p.display()
+        )));
+    }
     let reference = match &a.compare {
         Some(p) => {
             let (w, h, px) = export::read_exr(p).map_err(|e| bad(format!("{e:#}")))?;
@@ -422,35 +440,6 @@ fn render(a: RenderArgs) -> Result<()> {
     };
     let ctx = GpuContext::new_headless()?;
     let mut renderer = Renderer::new(&ctx, &scene)?;
-    if !(1..=16).contains(&a.fuzziness) {
-        return Err(bad(format!("--fuzziness {}: must be 1..16", a.fuzziness)));
-    }
-    if !(1..=64).contains(&a.bounces) {
-        return Err(bad(format!("--bounces {}: must be 1..64", a.bounces)));
-    }
-    if a.gamma == 0 {
-        return Err(bad("--gamma must be at least 1"));
-    }
-    if !(a.normal_threshold.is_finite() && (-1.0..=1.0).contains(&a.normal_threshold)) {
-        return Err(bad(format!(
-            "--normal-threshold {}: must be a cosine in [-1, 1]",
-            a.normal_threshold
-        )));
-    }
-    if a.iterations > 1000 {
-        return Err(bad(format!("--iterations {}: at most 1000", a.iterations)));
-    }
-    if !(a.clamp.is_finite() && a.clamp >= 0.0 && a.clamp < 1.0) {
-        return Err(bad(format!("--clamp {}: must be in [0, 1)", a.clamp)));
-    }
-    if let Some(p) = &a.error_map
-        && p.extension().and_then(|e| e.to_str()) != Some("png")
-    {
-        return Err(bad(format!(
-            "{}: --error-map must end in .png",
-            p.display()
-        )));
-    }
     let settings = FrameSettings {
         width: a.width,
         height: a.height,
@@ -605,24 +594,15 @@ fn view(a: ViewArgs) -> Result<()> {
             a.width, a.height
         )));
     }
-    if !(1..=16).contains(&a.fuzziness) {
-        return Err(bad(format!("--fuzziness {}: must be 1..16", a.fuzziness)));
-    }
+    check_fuzziness(a.fuzziness)?;
     if a.gamma == 0 {
         return Err(bad("--gamma must be at least 1"));
     }
-    if !(a.normal_threshold.is_finite() && (-1.0..=1.0).contains(&a.normal_threshold)) {
-        return Err(bad(format!(
-            "--normal-threshold {}: must be a cosine in [-1, 1]",
-            a.normal_threshold
-        )));
-    }
+    check_normal_threshold(a.normal_threshold)?;
     if !(a.exposure.is_finite() && a.exposure > 0.0) {
         return Err(bad("--exposure must be a finite number > 0"));
     }
-    if !(a.clamp.is_finite() && a.clamp >= 0.0 && a.clamp < 1.0) {
-        return Err(bad(format!("--clamp {}: must be in [0, 1)", a.clamp)));
-    }
+    check_clamp(a.clamp)?;
     if !(0.1..=1.0).contains(&a.render_scale) {
         return Err(bad(format!(
             "--render-scale {}: must be in [0.1, 1]",
@@ -808,18 +788,9 @@ fn bench(a: BenchArgs) -> Result<()> {
     if repeat == 0 || a.reference_repeat == 0 {
         return Err(bad("--repeat and --reference-repeat must be at least 1"));
     }
-    if !(a.normal_threshold.is_finite() && (-1.0..=1.0).contains(&a.normal_threshold)) {
-        return Err(bad(format!(
-            "--normal-threshold {}: must be a cosine in [-1, 1]",
-            a.normal_threshold
-        )));
-    }
-    if a.iterations > 1000 {
-        return Err(bad(format!("--iterations {}: at most 1000", a.iterations)));
-    }
-    if !(a.clamp.is_finite() && a.clamp >= 0.0 && a.clamp < 1.0) {
-        return Err(bad(format!("--clamp {}: must be in [0, 1)", a.clamp)));
-    }
+    check_normal_threshold(a.normal_threshold)?;
+    check_iterations(a.iterations)?;
+    check_clamp(a.clamp)?;
     if !(a.exposure.is_finite() && a.exposure >= 0.0) {
         return Err(bad("--exposure must be a finite number >= 0"));
     }
@@ -907,5 +878,35 @@ fn bench(a: BenchArgs) -> Result<()> {
         a.out_dir.display(),
         report.wall_s
     );
+    Ok(())
+}
+
+fn check_normal_threshold(nt: f32) -> Result<()> {
+    if !(nt.is_finite() && (-1.0..=1.0).contains(&nt)) {
+        return Err(bad(format!(
+            "--normal-threshold {nt}: must be a cosine in [-1, 1]"
+        )));
+    }
+    Ok(())
+}
+
+fn check_clamp(c: f32) -> Result<()> {
+    if !(c.is_finite() && (0.0..1.0).contains(&c)) {
+        return Err(bad(format!("--clamp {c}: must be in [0, 1)")));
+    }
+    Ok(())
+}
+
+fn check_iterations(i: u32) -> Result<()> {
+    if i > 1000 {
+        return Err(bad(format!("--iterations {i}: at most 1000")));
+    }
+    Ok(())
+}
+
+fn check_fuzziness(f: u32) -> Result<()> {
+    if !(1..=16).contains(&f) {
+        return Err(bad(format!("--fuzziness {f}: must be 1..16")));
+    }
     Ok(())
 }

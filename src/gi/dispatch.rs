@@ -281,11 +281,7 @@ impl Kernel {
         total: u32,
         seed: u32,
     ) {
-        let index = self
-            .pipelines
-            .iter()
-            .position(|(e, _)| *e == entry)
-            .unwrap_or_else(|| panic!("{}: no entry point {entry}", self.name));
+        let index = self.entry_index(entry);
         self.submit(
             ctx,
             profiler,
@@ -329,30 +325,12 @@ impl Kernel {
             .write_buffer(&self.chunk, 0, bytemuck::bytes_of(&c));
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         for &(entry, total) in steps {
-            let index = self
-                .pipelines
-                .iter()
-                .position(|(e, _)| *e == entry)
-                .unwrap_or_else(|| panic!("{}: no entry point {entry}", self.name));
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(label),
-                timestamp_writes: profiler.pass(label),
-            });
-            pass.set_pipeline(&self.pipelines[index].1);
-            if self.uses_scene {
-                pass.set_bind_group(0, &scene.bind_group, &[]);
-            }
-            pass.set_bind_group(1, group, &[]);
-            let groups = total.div_ceil(WORKGROUP).max(1);
-            pass.dispatch_workgroups(groups.min(MAX_GROUPS_X), groups.div_ceil(MAX_GROUPS_X), 1);
-            drop(pass);
+            let index = self.entry_index(entry);
+            self.record_pass(&mut enc, profiler, label, scene, group, index, total);
             after(entry, &mut enc);
         }
         ctx.queue.submit([enc.finish()]);
-        let _ = ctx.device.poll(wgpu::PollType::Wait {
-            submission_index: None,
-            timeout: None,
-        });
+        let _ = ctx.wait();
     }
 
     /// Like `run`, over items × a second range (`sub`: total, per chunk), e.g. pixels × VPLs. Each
@@ -434,24 +412,41 @@ impl Kernel {
         ctx.queue
             .write_buffer(&self.chunk, 0, bytemuck::bytes_of(&c));
         let mut enc = ctx.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(label),
-                timestamp_writes: profiler.pass(label),
-            });
-            pass.set_pipeline(&self.pipelines[index].1);
-            if self.uses_scene {
-                pass.set_bind_group(0, &scene.bind_group, &[]);
-            }
-            pass.set_bind_group(1, group, &[]);
-            let groups = count.div_ceil(WORKGROUP).max(1);
-            pass.dispatch_workgroups(groups.min(MAX_GROUPS_X), groups.div_ceil(MAX_GROUPS_X), 1);
-        }
+        self.record_pass(&mut enc, profiler, label, scene, group, index, count);
         ctx.queue.submit([enc.finish()]);
         // Waiting keeps each submission short and bounded on software drivers.
-        let _ = ctx.device.poll(wgpu::PollType::Wait {
-            submission_index: None,
-            timeout: None,
+        let _ = ctx.wait();
+    }
+
+    fn entry_index(&self, entry: &str) -> usize {
+        self.pipelines
+            .iter()
+            .position(|(e, _)| *e == entry)
+            .unwrap_or_else(|| panic!("{}: no entry point {entry}", self.name))
+    }
+
+    /// One timed compute pass of pipeline `index` over `count` invocations (rows of 65535 groups).
+    #[allow(clippy::too_many_arguments)]
+    fn record_pass(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        profiler: &mut Profiler,
+        label: &str,
+        scene: &SceneGpu,
+        group: &wgpu::BindGroup,
+        index: usize,
+        count: u32,
+    ) {
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(label),
+            timestamp_writes: profiler.pass(label),
         });
+        pass.set_pipeline(&self.pipelines[index].1);
+        if self.uses_scene {
+            pass.set_bind_group(0, &scene.bind_group, &[]);
+        }
+        pass.set_bind_group(1, group, &[]);
+        let groups = count.div_ceil(WORKGROUP).max(1);
+        pass.dispatch_workgroups(groups.min(MAX_GROUPS_X), groups.div_ceil(MAX_GROUPS_X), 1);
     }
 }
