@@ -246,11 +246,12 @@ struct ViewArgs {
     direct_samples: u32,
     #[arg(long, default_value_t = 1.0)]
     exposure: f32,
-    #[arg(long, default_value_t = 8192)]
+    /// VPLs (the viewer starts lighter than `render` so a software driver stays interactive).
+    #[arg(long, default_value_t = 4096)]
     vpls: u32,
-    #[arg(long, default_value_t = 1024)]
+    #[arg(long, default_value_t = 512)]
     vpl_clusters: u32,
-    #[arg(long, default_value_t = 3072)]
+    #[arg(long, default_value_t = 1024)]
     sp_clusters: u32,
     #[arg(long, default_value_t = 6)]
     fuzziness: u32,
@@ -265,7 +266,7 @@ struct ViewArgs {
     #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_CLAMP)]
     clamp: f32,
     /// Render scale of the GI image relative to the image area, 0.1..1.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 0.5)]
     render_scale: f32,
     /// Scripted run: draw N window frames once the first full GI frame is shown, save the window to
     /// --screenshot, exit.
