@@ -24,23 +24,6 @@ pub struct Chunk {
     pub _pad2: [u32; 2],
 }
 
-/// A group 1 layout entry for a 2D data texture (`textureLoad` only) visible to compute.
-pub fn data_texture_layout(
-    binding: u32,
-    sample_type: wgpu::TextureSampleType,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Texture {
-            sample_type,
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
-        count: None,
-    }
-}
-
 /// Width in texels of the per-frame data textures (as the scene's, `TEXEL_ROW`).
 pub const DATA_ROW: u32 = super::scene_gpu::TEXEL_ROW;
 

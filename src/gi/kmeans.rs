@@ -11,8 +11,8 @@ use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use super::dispatch::{Kernel, copy_to_texture, data_texture, data_texture_layout};
-use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
+use super::dispatch::{Kernel, copy_to_texture, data_texture};
+use super::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::{GpuContext, profiler::Profiler};
 
 pub const MAX_F: u32 = 16;

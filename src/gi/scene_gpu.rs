@@ -160,7 +160,8 @@ pub const TEXEL_ROW: u32 = 4096;
 /// The most texels one data texture holds under WebGPU's default 8192-row limit.
 pub const MAX_TEXELS: usize = TEXEL_ROW as usize * 8192;
 
-fn texture_layout(
+/// A layout entry for a 2D data texture (`textureLoad` only) visible to compute.
+pub fn data_texture_layout(
     binding: u32,
     sample_type: wgpu::TextureSampleType,
 ) -> wgpu::BindGroupLayoutEntry {
@@ -302,8 +303,8 @@ impl SceneGpu {
         };
         let entries: Vec<wgpu::BindGroupLayoutEntry> = [
             uniform_layout(0),
-            texture_layout(1, wgpu::TextureSampleType::Uint),
-            texture_layout(9, wgpu::TextureSampleType::Float { filterable: false }),
+            data_texture_layout(1, wgpu::TextureSampleType::Uint),
+            data_texture_layout(9, wgpu::TextureSampleType::Float { filterable: false }),
         ]
         .into_iter()
         .chain((2..=8).map(storage_entry))
