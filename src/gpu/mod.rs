@@ -15,6 +15,11 @@ pub struct GpuContext {
     /// `adapter.get_info().name` plus driver, for stats.
     pub adapter_name: String,
     pub timestamps: bool,
+    /// Multiplier on every heavy pass's work per submission. Software drivers (lavapipe) get 1: their
+    /// submissions stay short so that none is reported as a lost device. A GPU gets 256: a lavapipe-sized
+    /// submission would fill a fraction of its cores and time the launch, not the work. The images
+    /// do not depend on it (tested). `FVPL_WORK_SCALE` overrides it.
+    pub work_scale: u32,
 }
 
 /// Limits requested explicitly: what our passes need, clamped to what the adapter has. lavapipe allows
@@ -86,6 +91,14 @@ impl GpuContext {
             })
             .await
             .context("requesting a wgpu device")?;
+        let work_scale = std::env::var("FVPL_WORK_SCALE")
+            .ok()
+            .and_then(|v| v.parse::<u32>().ok())
+            .filter(|&v| v >= 1)
+            .unwrap_or(match info.device_type {
+                wgpu::DeviceType::Cpu => 1,
+                _ => 256,
+            });
         Ok(GpuContext {
             instance,
             adapter,
@@ -93,6 +106,7 @@ impl GpuContext {
             queue,
             adapter_name,
             timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
+            work_scale,
         })
     }
 
