@@ -28,6 +28,10 @@ struct ShadeParams {
 @group(1) @binding(7) var<storage, read_write> indirect: array<vec4<f32>>;
 
 const MAX_F: u32 = 16u;
+// F of the pipeline (src/gi/shade.rs builds one per F in use). A constant trip count lets the driver
+// unroll the loops over the F slots, so `rows`, `w` and `rw` live in registers; with a run-time F a GPU
+// spills them to local memory and re-reads them for every light.
+override F: u32 = 6u;
 
 fn light_texel(i: u32) -> vec4<f32> {
     return textureLoad(lights_tex, vec2<u32>(i & 4095u, i >> 12u), 0);
@@ -48,21 +52,23 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         indirect[m] = vec4<f32>(0.0);
         return;
     }
-    let f = clamp(params.f, 1u, MAX_F);
+    // Slot j keeps its place; an unused slot (INVALID) has weight 0 and an empty row, so it adds
+    // exactly +0 to Ṽ and the sums are those of a loop over the used slots alone.
     var rows: array<u32, MAX_F>;
     var w: array<f32, MAX_F>;
     var nf = 0u;
-    for (var j = 0u; j < f; j++) {
-        let k = assign[m * f + j];
+    for (var j = 0u; j < F; j++) {
+        let k = assign[m * F + j];
+        rows[j] = k;
+        w[j] = 0.0;
         if k != INVALID {
-            rows[nf] = k;
-            w[nf] = weights[m * f + j];
+            w[j] = weights[m * F + j];
             nf += 1u;
         }
     }
     if params.weighted == 0u {
-        for (var j = 0u; j < nf; j++) {
-            w[j] = 1.0 / f32(nf);
+        for (var j = 0u; j < F; j++) {
+            w[j] = select(0.0, 1.0 / f32(nf), rows[j] != INVALID);
         }
     }
     // Lights 32 at a time: one bit word per row serves 32 lights, and a light no row sees (Ṽ = 0,
@@ -72,8 +78,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     var rw: array<u32, MAX_F>;
     for (var wd = 0u; wd < params.words; wd++) {
         var seen = 0u;
-        for (var j = 0u; j < nf; j++) {
-            rw[j] = bits[rows[j] * params.words + wd];
+        for (var j = 0u; j < F; j++) {
+            rw[j] = 0u;
+            if rows[j] != INVALID {
+                rw[j] = bits[rows[j] * params.words + wd];
+            }
             seen |= rw[j];
         }
         while seen != 0u {
@@ -82,10 +91,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
             let t = vpl_term(sp.pos.xyz, sp.nrm.xyz, sp.albedo.xyz, load_light(wd * 32u + b), params.d_min2);
             if any(t > vec3<f32>(0.0)) {
                 var v = 0.0;
-                for (var j = 0u; j < nf; j++) {
-                    if ((rw[j] >> b) & 1u) != 0u {
-                        v += w[j];
-                    }
+                for (var j = 0u; j < F; j++) {
+                    v += select(0.0, w[j], ((rw[j] >> b) & 1u) != 0u);
                 }
                 sum += t * v;
             }

@@ -276,7 +276,7 @@ impl<'a> Renderer<'a> {
             reference: Reference::new(ctx, &gpu),
             kmeans: KMeans::new(ctx),
             visibility: Visibility::new(ctx, &gpu),
-            shade: Shade::new(ctx, &gpu),
+            shade: Shade::new(),
             profiler: Profiler::new(ctx),
             gbuffer: None,
             vpl_set: None,

@@ -1,6 +1,8 @@
 //! Step 6: Eq. (6) per pixel with Ṽ of Eq. (8) or (9) (`shaders-wgsl/shade.wgsl`); CPU twin in
 //! `cpu::shade`.
 
+use std::cell::OnceCell;
+
 use bytemuck::{Pod, Zeroable};
 
 use super::dispatch::{Kernel, copy_to_texture, data_texture};
@@ -30,22 +32,34 @@ pub struct ShadeInputs<'a> {
     pub params: ShadeParams,
 }
 
+/// The largest F (`MAX_F` in shade.wgsl).
+pub const MAX_F: u32 = 16;
+
+#[derive(Default)]
 pub struct Shade {
-    kernel: Kernel,
+    /// One pipeline per F (the shader's `override F`), built the first time that F is shaded.
+    kernels: [OnceCell<Kernel>; MAX_F as usize],
 }
 
 impl Shade {
-    pub fn new(ctx: &GpuContext, scene: &SceneGpu) -> Self {
-        let mut entries = vec![
-            uniform_layout(1),
-            storage_layout(2, true),
-            data_texture_layout(3, wgpu::TextureSampleType::Float { filterable: false }),
-        ];
-        entries.extend((4..=6).map(|b| storage_layout(b, true)));
-        entries.push(storage_layout(7, false));
+    pub fn new() -> Self {
         Shade {
-            kernel: Kernel::new(ctx, scene, "shade", &entries, &[]),
+            kernels: Default::default(),
         }
+    }
+
+    fn kernel(&self, ctx: &GpuContext, scene: &SceneGpu, f: u32) -> &Kernel {
+        let f = f.clamp(1, MAX_F);
+        self.kernels[f as usize - 1].get_or_init(|| {
+            let mut entries = vec![
+                uniform_layout(1),
+                storage_layout(2, true),
+                data_texture_layout(3, wgpu::TextureSampleType::Float { filterable: false }),
+            ];
+            entries.extend((4..=6).map(|b| storage_layout(b, true)));
+            entries.push(storage_layout(7, false));
+            Kernel::new(ctx, scene, "shade", &entries, &[("F", f as f64)])
+        })
     }
 
     pub fn record(
@@ -63,7 +77,8 @@ impl Shade {
         copy_to_texture(&mut enc, i.lights, &lights, 48 * n);
         ctx.queue.submit([enc.finish()]);
         let lights_view = lights.create_view(&Default::default());
-        let bg = self.kernel.bind_group_with_textures(
+        let kernel = self.kernel(ctx, scene, i.params.f);
+        let bg = kernel.bind_group_with_textures(
             ctx,
             &[
                 (1, &params),
@@ -77,7 +92,7 @@ impl Shade {
         );
         // About 2^22 light terms per submission.
         let per = ((1u32 << 22) / i.params.num_lights.max(1)).max(64);
-        self.kernel.run(
+        kernel.run(
             ctx,
             profiler,
             "shade",
