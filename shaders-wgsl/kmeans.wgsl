@@ -27,6 +27,11 @@ struct KmParams {
     // Fixed-point frame: lo + ext spans every point.
     lo: vec4<f32>,
     ext: vec4<f32>,
+    // p of the fuzzy weights w'_f = dist^-p (Eq. 10 is p = 1; 0 is Eq. 8's plain mean).
+    weight_exponent: f32,
+    _p0: u32,
+    _p1: u32,
+    _p2: u32,
 }
 
 // The grid over the centroids (written by grid_setup).
@@ -369,6 +374,22 @@ fn nearest(p: vec3<f32>, n: vec3<f32>, f: u32) -> Nearest {
     return best;
 }
 
+// Rings searched while iterating (Alg. 1 line 8). A sampled point with no centroid passing n_t within
+// ITER_RINGS rings is at distance ∞ from every centroid near it (Eq. 7) and stays out of this
+// iteration's update; the final assignment still finds it one. Without the bound, a few such points
+// scan the whole grid every iteration and the slowest of them sets the time of the pass on a GPU.
+const ITER_RINGS: i32 = 3;
+
+fn nearest_bounded(p: vec3<f32>, n: vec3<f32>) -> u32 {
+    var best: Nearest;
+    best.count = 0u;
+    let c = cell_coord(p);
+    for (var ring = 1; ring <= ITER_RINGS && best.count == 0u; ring++) {
+        scan_ring(&best, p, n, c, ring, 1u, true);
+    }
+    return select(INVALID, best.idx[0], best.count > 0u);
+}
+
 // --- Alg. 1 lines 6-11: assign each sampled point to its nearest centroid.
 @compute @workgroup_size(64)
 fn assign_sampled(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
@@ -380,10 +401,7 @@ fn assign_sampled(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
     let p = point_pos(m);
     var k = INVALID;
     if p.w > 0.0 {
-        let b = nearest(p.xyz, point_nrm(m), 1u);
-        if b.count > 0u {
-            k = b.idx[0];
-        }
+        k = nearest_bounded(p.xyz, point_nrm(m));
     }
     sample_assign[s] = k;
 }
@@ -454,6 +472,39 @@ fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     }
 }
 
+// Eq. (10), generalised to w'_f = dist_f^-p (the paper's §6 asks for a faster fall-off under a
+// parameter; p = 1 is Eq. 10, p = 0 Eq. 8's mean, large p tends to hard clustering). Computed as
+// (d_min / d_f)^p / Σ (d_min / d_f)^p, ratios in (0, 1]: no overflow for any distance or p. Slots at
+// or past `count` (and negative distances) get 0; a distance of 0 (`zero`) takes the whole weight.
+// CPU twin: cpu::kmeans::inverse_distance_weights.
+fn inverse_distance_weights(d: array<f32, MAX_F>, count: u32, zero: u32) -> array<f32, MAX_F> {
+    var w: array<f32, MAX_F>;
+    var d_min = 3.4e38;
+    for (var j = 0u; j < count; j++) {
+        if d[j] >= 0.0 {
+            d_min = min(d_min, d[j]);
+        }
+    }
+    var wsum = 0.0;
+    for (var j = 0u; j < MAX_F; j++) {
+        w[j] = 0.0;
+        if j < count && d[j] >= 0.0 {
+            if zero != INVALID {
+                w[j] = select(0.0, 1.0, j == zero);
+            } else {
+                w[j] = exp2(params.weight_exponent * log2(d_min / d[j]));
+            }
+            wsum += w[j];
+        }
+    }
+    if zero == INVALID && wsum > 0.0 {
+        for (var j = 0u; j < MAX_F; j++) {
+            w[j] /= wsum;
+        }
+    }
+    return w;
+}
+
 // --- Alg. 2: every data point to its F nearest centroids with normalised inverse-distance weights
 // (Eq. 10). A point on a centroid (distance 0) takes that cluster's whole weight.
 @compute @workgroup_size(64)
@@ -470,26 +521,21 @@ fn final_assign(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         b = nearest(p.xyz, point_nrm(m), f);
     }
     var zero = INVALID;
-    var wsum = 0.0;
+    var dists: array<f32, MAX_F>;
     for (var j = 0u; j < b.count; j++) {
+        dists[j] = b.dist[j];
         if b.dist[j] <= 0.0 && zero == INVALID {
             zero = j;
         }
-        wsum += 1.0 / max(b.dist[j], 1e-30);
     }
+    let w = inverse_distance_weights(dists, b.count, zero);
     for (var j = 0u; j < f; j++) {
         var k = INVALID;
-        var w = 0.0;
         if j < b.count {
             k = b.idx[j];
-            if zero != INVALID {
-                w = select(0.0, 1.0, j == zero);
-            } else {
-                w = (1.0 / b.dist[j]) / wsum;
-            }
         }
         assign[m * f + j] = k;
-        weights[m * f + j] = w;
+        weights[m * f + j] = w[j];
     }
 }
 
@@ -554,7 +600,6 @@ fn rep_weights(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     let p = point_pos(m).xyz;
     var d: array<f32, MAX_F>;
     var zero = INVALID;
-    var wsum = 0.0;
     for (var j = 0u; j < f; j++) {
         let k = assign[m * f + j];
         d[j] = -1.0;
@@ -564,18 +609,10 @@ fn rep_weights(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
             if d[j] <= 0.0 && zero == INVALID {
                 zero = j;
             }
-            wsum += 1.0 / max(d[j], 1e-30);
         }
     }
+    let w = inverse_distance_weights(d, f, zero);
     for (var j = 0u; j < f; j++) {
-        var w = 0.0;
-        if d[j] >= 0.0 {
-            if zero != INVALID {
-                w = select(0.0, 1.0, j == zero);
-            } else {
-                w = (1.0 / d[j]) / wsum;
-            }
-        }
-        weights[m * f + j] = w;
+        weights[m * f + j] = w[j];
     }
 }

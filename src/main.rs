@@ -81,6 +81,10 @@ struct BenchArgs {
     /// γ values (default 4).
     #[arg(long, value_name = "LIST")]
     gamma: Option<String>,
+    /// p values of the inverse-distance weights w'_f = dist^-p, for weighted and sp-only (default 1,
+    /// Eq. 10).
+    #[arg(long, value_name = "LIST")]
+    weight_exponent: Option<String>,
     /// Image width (default 640; quick 96).
     #[arg(long)]
     width: Option<u32>,
@@ -216,6 +220,10 @@ struct RenderArgs {
     /// instead of their centroids (Alg. 2).
     #[arg(long)]
     weights_to_reps: bool,
+    /// p of the inverse-distance weights, w'_f = dist^-p: 1 is Eq. (10); larger p falls off faster
+    /// (the paper's §6 suggestion), 0 is Eq. (8)'s plain mean, 64 is hard clustering.
+    #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_WEIGHT_EXPONENT)]
+    weight_exponent: f32,
     /// G-term clamp: the VPL distance in 1/d² is at least CLAMP × scene diagonal (scale-free).
     #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_CLAMP)]
     clamp: f32,
@@ -263,6 +271,9 @@ struct ViewArgs {
     iterations: u32,
     #[arg(long, value_enum, default_value_t = Weighting::InverseDistance)]
     weighting: Weighting,
+    /// p of the inverse-distance weights (w'_f = dist^-p; Eq. 10: 1).
+    #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_WEIGHT_EXPONENT)]
+    weight_exponent: f32,
     #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_CLAMP)]
     clamp: f32,
     /// Render scale of the GI image relative to the image area, 0.1..1.
@@ -405,6 +416,7 @@ fn render(a: RenderArgs) -> Result<()> {
     check_normal_threshold(a.normal_threshold)?;
     check_iterations(a.iterations)?;
     check_clamp(a.clamp)?;
+    check_weight_exponent(a.weight_exponent)?;
     if let Some(p) = &a.error_map
         && p.extension().and_then(|e| e.to_str()) != Some("png")
     {
@@ -457,6 +469,7 @@ fn render(a: RenderArgs) -> Result<()> {
         iterations: a.iterations,
         weighting: a.weighting,
         weights_to_reps: a.weights_to_reps,
+        weight_exponent: a.weight_exponent,
         clamp: a.clamp,
         progress: true,
         control: None,
@@ -542,6 +555,7 @@ fn render(a: RenderArgs) -> Result<()> {
                 normal_threshold: settings.normal_threshold,
                 iterations: settings.iterations,
                 weighting: settings.weighting.name().into(),
+                weight_exponent: settings.weight_exponent,
                 reference: a.reference,
                 seed: a.seed,
                 direct_samples: settings.direct_samples,
@@ -600,6 +614,7 @@ fn view(a: ViewArgs) -> Result<()> {
         return Err(bad("--gamma must be at least 1"));
     }
     check_normal_threshold(a.normal_threshold)?;
+    check_weight_exponent(a.weight_exponent)?;
     if !(a.exposure.is_finite() && a.exposure > 0.0) {
         return Err(bad("--exposure must be a finite number > 0"));
     }
@@ -639,6 +654,7 @@ fn view(a: ViewArgs) -> Result<()> {
         normal_threshold: a.normal_threshold,
         iterations: a.iterations,
         weighting: a.weighting,
+        weight_exponent: a.weight_exponent,
         clamp: a.clamp,
         ..Default::default()
     };
@@ -769,6 +785,7 @@ fn bench(a: BenchArgs) -> Result<()> {
             vpl_clusters: a.vpl_clusters.clone(),
             fuzziness: a.fuzziness.clone(),
             gamma: a.gamma.clone(),
+            weight_exponent: a.weight_exponent.clone(),
         },
         base_sweep,
     )
@@ -908,6 +925,15 @@ fn check_iterations(i: u32) -> Result<()> {
 fn check_fuzziness(f: u32) -> Result<()> {
     if !(1..=16).contains(&f) {
         return Err(bad(format!("--fuzziness {f}: must be 1..16")));
+    }
+    Ok(())
+}
+
+fn check_weight_exponent(p: f32) -> Result<()> {
+    if !fuzzy_vpl::gi::pipeline::valid_weight_exponent(p) {
+        return Err(bad(format!(
+            "--weight-exponent {p}: must be a number in [0, 64]"
+        )));
     }
     Ok(())
 }

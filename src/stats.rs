@@ -14,6 +14,8 @@ pub struct Settings {
     pub normal_threshold: f32,
     pub iterations: u32,
     pub weighting: String,
+    /// p of the inverse-distance weights (w'_f = dist^-p; Eq. 10: 1).
+    pub weight_exponent: f32,
     pub reference: bool,
     pub seed: u32,
     pub direct_samples: u32,

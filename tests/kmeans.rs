@@ -167,6 +167,7 @@ fn settings(k: u32, f: u32, gamma: u32, n_t: f32, iterations: u32) -> KMeansSett
         iterations,
         seed: 3,
         weights_to_reps: false,
+        weight_exponent: 1.0,
     }
 }
 
@@ -297,7 +298,7 @@ fn representative_weights_match_cpu() {
     };
     let g = run_gpu(&ctx, &data, 2, &s, BOX);
     let pts = points_of(&data, 2);
-    let w = kmeans::rep_weights(&pts, g.params.f as usize, &g.assign, &g.reps);
+    let w = kmeans::rep_weights(&pts, g.params.f as usize, &g.assign, &g.reps, 1.0);
     let worst = w
         .iter()
         .zip(&g.weights)
@@ -311,4 +312,66 @@ fn representative_weights_match_cpu() {
             assert!((row.iter().sum::<f32>() - 1.0).abs() < 1e-4);
         }
     }
+}
+
+/// The weights' exponent p (w'_f = dist^-p): the GPU equals the CPU twin for p = 0, 1, 2.5 and 64 with
+/// the same assignment; p = 0 gives Eq. (8)'s equal weights, a larger p puts more weight on the
+/// nearest cluster, and p = 64 nearly all of it (hard clustering). Every weight finite, every row sums to 1.
+#[test]
+fn weight_exponent_matches_cpu_and_spans_uniform_to_hard() {
+    let ctx = common::gpu();
+    let data = box_points(4000, 5);
+    let pts = points_of(&data, 2);
+    let mut nearest_share = Vec::new();
+    for p in [0.0f32, 1.0, 2.5, 64.0] {
+        let s = KMeansSettings {
+            weight_exponent: p,
+            ..settings(40, 6, 4, 0.866, 5)
+        };
+        let g = run_gpu(&ctx, &data, 2, &s, BOX);
+        let c = kmeans::kmeans(&pts, &g.params, s.iterations);
+        assert_eq!(g.assign, c.assign, "p {p}: assignment differs");
+        let worst = g
+            .weights
+            .iter()
+            .zip(&c.weights)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0f32, f32::max);
+        println!("p {p}: worst weight difference GPU vs CPU {worst:e}");
+        assert!(worst < 1e-5, "p {p}: {worst}");
+        let (mut share, mut rows) = (0.0f64, 0usize);
+        for (m, pt) in pts.iter().enumerate() {
+            let row = &g.weights[m * 6..m * 6 + 6];
+            assert!(
+                row.iter().all(|w| w.is_finite() && *w >= 0.0),
+                "p {p}: {row:?}"
+            );
+            if !pt.valid {
+                continue;
+            }
+            assert!(
+                (row.iter().sum::<f32>() - 1.0).abs() < 1e-4,
+                "p {p}: {row:?}"
+            );
+            let used = g.assign[m * 6..m * 6 + 6]
+                .iter()
+                .filter(|&&k| k != u32::MAX)
+                .count();
+            if used == 6 && row[0] < 1.0 {
+                if p == 0.0 {
+                    assert!(row.iter().all(|w| (w - 1.0 / 6.0).abs() < 1e-6), "{row:?}");
+                }
+                share += row[0] as f64;
+                rows += 1;
+            }
+        }
+        nearest_share.push(share / rows.max(1) as f64);
+    }
+    println!("mean weight of the nearest cluster for p 0, 1, 2.5, 64: {nearest_share:?}");
+    assert!(
+        nearest_share.windows(2).all(|w| w[0] < w[1]),
+        "{nearest_share:?}"
+    );
+    // Nearly all: clusters at almost the same distance still share.
+    assert!(nearest_share[3] > 0.95, "{nearest_share:?}");
 }

@@ -82,6 +82,8 @@ pub struct UiSettings {
     pub exposure: f32,
     pub render_scale: f32,
     pub mode: Mode,
+    /// p of the weighted mode's w'_f = dist^-p (Eq. 10: 1).
+    pub weight_exponent: f32,
     pub sp_on: bool,
     pub vpl_on: bool,
     pub direct_on: bool,
@@ -107,6 +109,7 @@ impl UiSettings {
                 Weighting::Uniform => Mode::Uniform,
                 Weighting::InverseDistance => Mode::Weighted,
             },
+            weight_exponent: f.weight_exponent,
             sp_on: f.sp_clusters > 0,
             vpl_on: f.vpl_clusters > 0,
             direct_on: true,
@@ -129,6 +132,7 @@ impl UiSettings {
             vpls: self.vpls,
             bounces: crate::gi::vpl_trace::MAX_DEPTH,
             weights_to_reps: false,
+            weight_exponent: self.weight_exponent,
             reference: false,
             vpl_clusters: if self.vpl_on { self.vpl_clusters } else { 0 },
             sp_clusters: if self.sp_on { self.sp_clusters } else { 0 },
@@ -158,12 +162,13 @@ impl UiSettings {
             (false, true) => "VPL clusters only".into(),
             (true, _) => {
                 let m = match self.mode {
-                    Mode::Hard => "hard",
-                    Mode::Uniform => "fuzzy uniform",
-                    Mode::Weighted => "fuzzy weighted",
+                    Mode::Hard => "hard".to_string(),
+                    Mode::Uniform => "fuzzy uniform".to_string(),
+                    Mode::Weighted if self.weight_exponent == 1.0 => "fuzzy weighted".to_string(),
+                    Mode::Weighted => format!("fuzzy weighted p{}", self.weight_exponent),
                 };
                 if self.vpl_on {
-                    m.to_string()
+                    m
                 } else {
                     format!("{m}, all VPLs")
                 }
@@ -174,9 +179,10 @@ impl UiSettings {
     /// The settings in short, for file names and plot tooltips.
     pub fn short(&self) -> String {
         let mode = match self.mode {
-            Mode::Hard => "hard",
-            Mode::Uniform => "uniform",
-            Mode::Weighted => "weighted",
+            Mode::Weighted if self.weight_exponent == 1.0 => "weighted".to_string(),
+            Mode::Weighted => format!("weighted-p{}", self.weight_exponent),
+            Mode::Hard => "hard".to_string(),
+            Mode::Uniform => "uniform".to_string(),
         };
         let sp = if self.sp_on {
             format!("K{}", self.sp_clusters)

@@ -233,6 +233,11 @@ impl Viewer {
                     s.mode != Mode::Hard,
                     Slider::new(&mut s.fuzziness, 1..=16).text("F (fuzziness)"),
                 );
+                ui.add_enabled(
+                    s.mode == Mode::Weighted,
+                    Slider::new(&mut s.weight_exponent, 0.0..=8.0)
+                        .text("p (weights ∝ dist^-p; Eq. 10: 1)"),
+                );
                 ui.add(Slider::new(&mut s.gamma, 1..=16).text("γ (downsampling)"));
                 let cos = s.normal_threshold();
                 ui.add(

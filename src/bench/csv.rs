@@ -48,6 +48,8 @@ pub struct Row {
     pub repeat: u32,
     /// Short name used in plots and the summary (`weighted 48/128 F6 g4`).
     pub label: String,
+    /// p of the fuzzy weights (w'_f = dist^-p; Eq. 10: 1). Last column; older files without it read 1.
+    pub weight_exponent: f32,
 }
 
 impl Row {
@@ -90,6 +92,7 @@ pub fn header() -> Vec<String> {
             "shadow_rays",
             "repeat",
             "label",
+            "weight_exponent",
         ]
         .map(String::from),
     );
@@ -122,6 +125,7 @@ fn record(r: &Row) -> Vec<String> {
         r.shadow_rays.to_string(),
         r.repeat.to_string(),
         r.label.clone(),
+        r.weight_exponent.to_string(),
     ]);
     v
 }
@@ -220,6 +224,11 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
             shadow_rays: get("shadow_rays").parse().context("shadow_rays")?,
             repeat: num("repeat")? as u32,
             label: get("label").into(),
+            weight_exponent: if head.iter().any(|h| h == "weight_exponent") {
+                num("weight_exponent")? as f32
+            } else {
+                1.0
+            },
         });
     }
     Ok(rows)
@@ -276,6 +285,7 @@ pub(crate) mod tests {
             shadow_rays: 123_456_789_012,
             repeat: 3,
             label: format!("{mode} {sp}/{vpl}"),
+            weight_exponent: 1.0,
         }
     }
 

@@ -183,6 +183,7 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
                 sp_clusters: c.sp_clusters,
                 fuzziness: c.fuzziness,
                 gamma: c.gamma,
+                weight_exponent: c.weight_exponent,
                 normal_threshold: s.normal_threshold,
                 iterations: s.iterations,
                 stages_ms,

@@ -3,7 +3,9 @@
 use std::fmt;
 use std::str::FromStr;
 
-use crate::gi::pipeline::{FrameSettings, Weighting};
+use crate::gi::pipeline::{
+    DEFAULT_WEIGHT_EXPONENT, FrameSettings, Weighting, valid_weight_exponent,
+};
 
 /// What is clustered, and how a pixel combines its SP clusters.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -58,6 +60,11 @@ impl Mode {
     }
 
     /// Whether F (and so the fuzzy weights) matters.
+    /// Whether the mode weights its F clusters by distance (Eq. 9 / 10, exponent p).
+    pub fn uses_weights(self) -> bool {
+        matches!(self, Mode::Weighted | Mode::SpOnly)
+    }
+
     pub fn uses_fuzziness(self) -> bool {
         matches!(self, Mode::Uniform | Mode::Weighted | Mode::SpOnly)
     }
@@ -136,6 +143,8 @@ pub struct Sweep {
     pub vpl_clusters: Vec<u32>,
     pub fuzziness: Vec<u32>,
     pub gamma: Vec<u32>,
+    /// p of the fuzzy weights (weighted and sp-only modes).
+    pub weight_exponent: Vec<f32>,
 }
 
 /// The sweep options as typed (`None` = not given).
@@ -146,6 +155,7 @@ pub struct SweepArgs {
     pub vpl_clusters: Option<String>,
     pub fuzziness: Option<String>,
     pub gamma: Option<String>,
+    pub weight_exponent: Option<String>,
 }
 
 impl Sweep {
@@ -157,6 +167,7 @@ impl Sweep {
             vpl_clusters: vec![1024],
             fuzziness: vec![6],
             gamma: vec![4],
+            weight_exponent: vec![DEFAULT_WEIGHT_EXPONENT],
         }
     }
 
@@ -168,6 +179,7 @@ impl Sweep {
             vpl_clusters: vec![128],
             fuzziness: vec![6],
             gamma: vec![4],
+            weight_exponent: vec![DEFAULT_WEIGHT_EXPONENT],
         }
     }
 
@@ -189,6 +201,9 @@ impl Sweep {
         if let Some(v) = &args.gamma {
             s.gamma = parse_list("--gamma", v)?;
         }
+        if let Some(v) = &args.weight_exponent {
+            s.weight_exponent = parse_list("--weight-exponent", v)?;
+        }
         s.validate()?;
         Ok(s)
     }
@@ -199,6 +214,7 @@ impl Sweep {
             || self.vpl_clusters.is_empty()
             || self.fuzziness.is_empty()
             || self.gamma.is_empty()
+            || self.weight_exponent.is_empty()
         {
             return Err("every sweep list needs at least one value".into());
         }
@@ -207,6 +223,15 @@ impl Sweep {
         }
         if self.gamma.contains(&0) {
             return Err("--gamma 0: must be at least 1".into());
+        }
+        if let Some(p) = self
+            .weight_exponent
+            .iter()
+            .find(|p| !valid_weight_exponent(**p))
+        {
+            return Err(format!(
+                "--weight-exponent {p}: must be a number in [0, 64]"
+            ));
         }
         let sp_modes = self.modes.iter().any(|m| m.clusters_sps());
         if sp_modes && self.sp_clusters.contains(&0) {
@@ -228,15 +253,18 @@ impl Sweep {
                 for &vpl in &self.vpl_clusters {
                     for &f in &self.fuzziness {
                         for &g in &self.gamma {
-                            let c = Config {
-                                mode,
-                                sp_clusters: if mode.clusters_sps() { sp } else { 0 },
-                                vpl_clusters: if mode.clusters_vpls() { vpl } else { 0 },
-                                fuzziness: if mode.uses_fuzziness() { f } else { 1 },
-                                gamma: if mode.clusters_sps() { g } else { 0 },
-                            };
-                            if !out.contains(&c) {
-                                out.push(c);
+                            for &p in &self.weight_exponent {
+                                let c = Config {
+                                    mode,
+                                    sp_clusters: if mode.clusters_sps() { sp } else { 0 },
+                                    vpl_clusters: if mode.clusters_vpls() { vpl } else { 0 },
+                                    fuzziness: if mode.uses_fuzziness() { f } else { 1 },
+                                    gamma: if mode.clusters_sps() { g } else { 0 },
+                                    weight_exponent: if mode.uses_weights() { p } else { 1.0 },
+                                };
+                                if !out.contains(&c) {
+                                    out.push(c);
+                                }
                             }
                         }
                     }
@@ -248,7 +276,7 @@ impl Sweep {
 }
 
 /// One point of the sweep.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Config {
     pub mode: Mode,
     /// 0 = no SP clustering.
@@ -259,6 +287,8 @@ pub struct Config {
     pub fuzziness: u32,
     /// γ (0 where no SP clustering runs).
     pub gamma: u32,
+    /// p of the fuzzy weights (1 where the mode has none).
+    pub weight_exponent: f32,
 }
 
 impl Config {
@@ -283,6 +313,9 @@ impl Config {
         if self.mode.clusters_sps() {
             s += &format!(" g{}", self.gamma);
         }
+        if self.mode.uses_weights() && self.weight_exponent != 1.0 {
+            s += &format!(" p{}", self.weight_exponent);
+        }
         s
     }
 
@@ -295,6 +328,7 @@ impl Config {
             fuzziness: self.fuzziness.max(1),
             gamma: self.gamma.max(1),
             weighting: self.mode.weighting(),
+            weight_exponent: self.weight_exponent,
             ..base.clone()
         }
     }
@@ -378,14 +412,16 @@ mod tests {
             vpl_clusters: vec![128, 256],
             fuzziness: vec![4, 6],
             gamma: vec![4],
+            weight_exponent: vec![1.0, 2.0],
         };
         let c = s.configs();
         let count = |m: Mode| c.iter().filter(|c| c.mode == m).count();
-        assert_eq!(count(Mode::Hard), 4); // F is 1
-        assert_eq!(count(Mode::Uniform), 8);
-        assert_eq!(count(Mode::Weighted), 8);
+        assert_eq!(count(Mode::Hard), 4); // F is 1, no p
+        assert_eq!(count(Mode::Uniform), 8); // no p
+        assert_eq!(count(Mode::Weighted), 16);
         assert_eq!(count(Mode::VplOnly), 2); // one per VPL K
-        assert_eq!(count(Mode::SpOnly), 4); // SP K × F
+        assert_eq!(count(Mode::SpOnly), 8); // SP K × F × p
+        assert!(c.iter().any(|c| c.label() == "weighted 48/128 F6 g4 p2"));
         assert!(
             c.iter()
                 .filter(|c| c.mode == Mode::VplOnly)

@@ -119,8 +119,20 @@ fn before(r: f32, k: u32, rd: f32, rk: u32) -> bool {
     r < rd || (r == rd && k < rk)
 }
 
-/// The F nearest centroids by Eq. (7) in the 27 cells around the point, with the shader's fallbacks.
-fn nearest(g: &Grid, cs: &[Centroid], pt: &Point, n_t: f32, f: usize) -> Vec<(u32, f32)> {
+/// Rings searched while iterating (`ITER_RINGS` in kmeans.wgsl): a sampled point with no centroid
+/// passing n_t within them stays out of the iteration's update.
+pub const ITER_RINGS: i32 = 3;
+
+/// The F nearest centroids by Eq. (7) in the 27 cells around the point, with the shader's fallbacks
+/// (`bounded`: the iterations' search, `ITER_RINGS` rings and no fallback).
+fn nearest(
+    g: &Grid,
+    cs: &[Centroid],
+    pt: &Point,
+    n_t: f32,
+    f: usize,
+    bounded: bool,
+) -> Vec<(u32, f32)> {
     let mut best: Vec<(u32, f32)> = Vec::new();
     let c = g.coord(pt.pos);
     let scan = |best: &mut Vec<(u32, f32)>, ring: i32, f: usize, normals: bool| {
@@ -159,6 +171,15 @@ fn nearest(g: &Grid, cs: &[Centroid], pt: &Point, n_t: f32, f: usize) -> Vec<(u3
         }
     };
     scan(&mut best, 1, f, true);
+    if bounded {
+        // While iterating: ITER_RINGS rings with the metric, no further fallback.
+        let mut ring = 2;
+        while best.is_empty() && ring <= ITER_RINGS {
+            scan(&mut best, ring, f, true);
+            ring += 1;
+        }
+        return best;
+    }
     let maxr = *g.dims.iter().max().unwrap() as i32;
     let mut ring = 2;
     while best.is_empty() && ring <= maxr {
@@ -209,7 +230,7 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
         for s in 0..s_n {
             let pt = points[sample_index(p, s) as usize];
             sample_assign[s as usize] = if pt.valid {
-                nearest(&g, &cs, &pt, n_t, 1)
+                nearest(&g, &cs, &pt, n_t, 1, true)
                     .first()
                     .map_or(u32::MAX, |b| b.0)
             } else {
@@ -257,18 +278,15 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
     let mut weights = vec![0f32; m * f];
     for (i, pt) in points.iter().enumerate().take(m) {
         let b = if pt.valid {
-            nearest(&g, &cs, pt, n_t, f)
+            nearest(&g, &cs, pt, n_t, f, false)
         } else {
             Vec::new()
         };
-        let zero = b.iter().position(|x| x.1 <= 0.0);
-        let wsum: f32 = b.iter().map(|x| 1.0 / x.1.max(1e-30)).sum();
-        for (j, &(kk, r)) in b.iter().enumerate() {
+        let d: Vec<f32> = b.iter().map(|x| x.1).collect();
+        let w = inverse_distance_weights(&d, p.weight_exponent);
+        for (j, &(kk, _)) in b.iter().enumerate() {
             assign[i * f + j] = kk;
-            weights[i * f + j] = match zero {
-                Some(z) => (j == z) as u32 as f32,
-                None => (1.0 / r) / wsum,
-            };
+            weights[i * f + j] = w[j];
         }
     }
     // Representatives: the member nearest to its centroid, lowest index on ties.
@@ -325,8 +343,36 @@ pub fn objective(points: &[Point], p: &KmParams, sample_assign: &[u32], cs: &[Ce
     sum / n.max(1) as f64
 }
 
-/// Twin of `rep_weights`: Eq. (10) with distances to the representatives.
-pub fn rep_weights(points: &[Point], f: usize, assign: &[u32], reps: &[u32]) -> Vec<f32> {
+/// Eq. (10) generalised to w'_f = d_f^-p (twin of `inverse_distance_weights` in kmeans.wgsl): computed
+/// as (d_min / d_f)^p normalised, so no distance or p overflows. Negative distances mark unused slots
+/// (weight 0); the first distance of 0 takes the whole weight.
+pub fn inverse_distance_weights(d: &[f32], p: f32) -> Vec<f32> {
+    let zero = d.iter().position(|&x| (0.0..=0.0).contains(&x));
+    let d_min = d
+        .iter()
+        .copied()
+        .filter(|&x| x >= 0.0)
+        .fold(f32::MAX, f32::min);
+    let mut w: Vec<f32> = d
+        .iter()
+        .enumerate()
+        .map(|(j, &x)| match zero {
+            _ if x < 0.0 => 0.0,
+            Some(z) => (j == z) as u32 as f32,
+            None => (p * (d_min / x).log2()).exp2(),
+        })
+        .collect();
+    let sum: f32 = w.iter().sum();
+    if zero.is_none() && sum > 0.0 {
+        for x in &mut w {
+            *x /= sum;
+        }
+    }
+    w
+}
+
+/// Twin of `rep_weights`: Eq. (10) (exponent `p`) with distances to the representatives.
+pub fn rep_weights(points: &[Point], f: usize, assign: &[u32], reps: &[u32], p: f32) -> Vec<f32> {
     let mut out = vec![0f32; assign.len()];
     for (m, pt) in points.iter().enumerate() {
         let row = &assign[m * f..m * f + f];
@@ -340,20 +386,8 @@ pub fn rep_weights(points: &[Point], f: usize, assign: &[u32], reps: &[u32]) -> 
                 }
             })
             .collect();
-        let zero = d.iter().position(|&x| (0.0..=0.0).contains(&x));
-        let wsum: f32 = d
-            .iter()
-            .filter(|&&x| x >= 0.0)
-            .map(|x| 1.0 / x.max(1e-30))
-            .sum();
-        for j in 0..f {
-            if d[j] >= 0.0 {
-                out[m * f + j] = match zero {
-                    Some(z) => (j == z) as u32 as f32,
-                    None => (1.0 / d[j]) / wsum,
-                };
-            }
-        }
+        let w = inverse_distance_weights(&d, p);
+        out[m * f..m * f + f].copy_from_slice(&w);
     }
     out
 }

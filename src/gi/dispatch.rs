@@ -307,9 +307,17 @@ impl Kernel {
         ctx.queue
             .write_buffer(&self.chunk, 0, bytemuck::bytes_of(&c));
         let mut enc = ctx.device.create_command_encoder(&Default::default());
+        // FVPL_PROFILE_STEPS=1 times each step under `label.entry` (a diagnosis aid; the frame total
+        // stays the same, the stage's own key is then split).
+        let detail = std::env::var_os("FVPL_PROFILE_STEPS").is_some();
         for &(entry, total) in steps {
             let index = self.entry_index(entry);
-            self.record_pass(&mut enc, profiler, label, scene, group, index, total);
+            let name = if detail {
+                format!("{label}.{entry}")
+            } else {
+                label.to_string()
+            };
+            self.record_pass(&mut enc, profiler, &name, scene, group, index, total);
             after(entry, &mut enc);
         }
         ctx.queue.submit([enc.finish()]);

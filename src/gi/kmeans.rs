@@ -37,6 +37,8 @@ pub struct KMeansSettings {
     /// Eq. (10) distances to the clusters' representatives (the paper's text) instead of their
     /// centroids (Alg. 2's W).
     pub weights_to_reps: bool,
+    /// p of the fuzzy weights w'_f = dist^-p (Eq. 10: p = 1).
+    pub weight_exponent: f32,
 }
 
 #[repr(C)]
@@ -52,6 +54,8 @@ pub struct KmParams {
     pub seed: u32,
     pub lo: [f32; 4],
     pub ext: [f32; 4],
+    pub weight_exponent: f32,
+    pub _pad: [u32; 3],
 }
 
 impl KmParams {
@@ -70,6 +74,8 @@ impl KmParams {
             seed: s.seed,
             lo: frame.0.extend(0.0).into(),
             ext: [ext.x, ext.y, ext.z, ext.length()],
+            weight_exponent: s.weight_exponent,
+            _pad: [0; 3],
         }
     }
 }

@@ -78,6 +78,8 @@ pub struct FrameSettings {
     pub weighting: Weighting,
     /// Eq. (10) distances to the SP clusters' representatives instead of their centroids.
     pub weights_to_reps: bool,
+    /// p of the fuzzy weights w'_f = dist^-p (Eq. 10: p = 1; Eq. 9 with a faster fall-off for p > 1).
+    pub weight_exponent: f32,
     /// G-term clamp: 1/d² uses d ≥ clamp × scene diagonal (scale-free; see docs/reference.md).
     pub clamp: f32,
     /// Print progress of long passes on stderr.
@@ -138,6 +140,7 @@ impl Default for FrameSettings {
             iterations: 10,
             weighting: Weighting::InverseDistance,
             weights_to_reps: false,
+            weight_exponent: DEFAULT_WEIGHT_EXPONENT,
             clamp: DEFAULT_CLAMP,
             progress: false,
             control: None,
@@ -157,6 +160,14 @@ impl FrameSettings {
 }
 
 /// Default G-term clamp as a fraction of the scene diagonal.
+/// p of the fuzzy weights (w'_f = dist^-p) by default: Eq. (10)'s 1.
+pub const DEFAULT_WEIGHT_EXPONENT: f32 = 1.0;
+
+/// Whether `p` is a usable weight exponent: finite, in [0, 64] (64 is already hard clustering).
+pub fn valid_weight_exponent(p: f32) -> bool {
+    (0.0..=64.0).contains(&p)
+}
+
 pub const DEFAULT_CLAMP: f32 = 0.02;
 
 /// Which indirect path a frame takes.
@@ -342,6 +353,7 @@ impl<'a> Renderer<'a> {
                 iterations: s.iterations,
                 seed: s.seed,
                 weights_to_reps: false,
+                weight_exponent: 1.0,
             };
             vpl_cluster::cluster(
                 self.ctx,
@@ -415,6 +427,7 @@ impl<'a> Renderer<'a> {
                     iterations: s.iterations,
                     seed: s.seed,
                     weights_to_reps: s.weights_to_reps,
+                    weight_exponent: s.weight_exponent,
                 };
                 let c = self.kmeans.run(
                     ctx,
