@@ -81,6 +81,10 @@ struct BenchArgs {
     /// γ values (default 4).
     #[arg(long, value_name = "LIST")]
     gamma: Option<String>,
+    /// K_SP/K_VPL pairs to measure instead of every --sp-clusters × --vpl-clusters, e.g. the paper's
+    /// light, intermediate and high settings at 640x480: 461/750,3072/2000,12288/4000.
+    #[arg(long, value_name = "LIST")]
+    pairs: Option<String>,
     /// p values of the inverse-distance weights w'_f = dist^-p, for weighted and sp-only (default 1,
     /// Eq. 10).
     #[arg(long, value_name = "LIST")]
@@ -786,6 +790,7 @@ fn bench(a: BenchArgs) -> Result<()> {
             fuzziness: a.fuzziness.clone(),
             gamma: a.gamma.clone(),
             weight_exponent: a.weight_exponent.clone(),
+            pairs: a.pairs.clone(),
         },
         base_sweep,
     )

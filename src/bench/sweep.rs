@@ -100,6 +100,24 @@ impl FromStr for Mode {
 
 /// Parses a comma-separated list (`"192,768"`), naming `option` in errors. Duplicates are dropped,
 /// order is kept; an empty list is an error.
+/// `--pairs 461/750,3072/2000`: K_SP/K_VPL pairs.
+pub fn parse_pairs(s: &str) -> Result<Vec<(u32, u32)>, String> {
+    s.split(',')
+        .map(|item| {
+            let item = item.trim();
+            let (a, b) = item
+                .split_once('/')
+                .ok_or_else(|| format!("--pairs {s:?}: {item:?} is not K_SP/K_VPL"))?;
+            let n = |v: &str| {
+                v.trim()
+                    .parse::<u32>()
+                    .map_err(|_| format!("--pairs {s:?}: {item:?} is not K_SP/K_VPL"))
+            };
+            Ok((n(a)?, n(b)?))
+        })
+        .collect()
+}
+
 pub fn parse_list<T>(option: &str, s: &str) -> Result<Vec<T>, String>
 where
     T: FromStr + PartialEq,
@@ -145,6 +163,9 @@ pub struct Sweep {
     pub gamma: Vec<u32>,
     /// p of the fuzzy weights (weighted and sp-only modes).
     pub weight_exponent: Vec<f32>,
+    /// (K_SP, K_VPL) pairs measured instead of every SP K × VPL K (`--pairs`: e.g. the paper's
+    /// light / intermediate / high settings without the off-diagonal ones).
+    pub pairs: Option<Vec<(u32, u32)>>,
 }
 
 /// The sweep options as typed (`None` = not given).
@@ -156,6 +177,7 @@ pub struct SweepArgs {
     pub fuzziness: Option<String>,
     pub gamma: Option<String>,
     pub weight_exponent: Option<String>,
+    pub pairs: Option<String>,
 }
 
 impl Sweep {
@@ -168,6 +190,7 @@ impl Sweep {
             fuzziness: vec![6],
             gamma: vec![4],
             weight_exponent: vec![DEFAULT_WEIGHT_EXPONENT],
+            pairs: None,
         }
     }
 
@@ -180,6 +203,7 @@ impl Sweep {
             fuzziness: vec![6],
             gamma: vec![4],
             weight_exponent: vec![DEFAULT_WEIGHT_EXPONENT],
+            pairs: None,
         }
     }
 
@@ -203,6 +227,15 @@ impl Sweep {
         }
         if let Some(v) = &args.weight_exponent {
             s.weight_exponent = parse_list("--weight-exponent", v)?;
+        }
+        if let Some(v) = &args.pairs {
+            if args.sp_clusters.is_some() || args.vpl_clusters.is_some() {
+                return Err(
+                    "--pairs replaces --sp-clusters and --vpl-clusters: give one or the other"
+                        .into(),
+                );
+            }
+            s.pairs = Some(parse_pairs(v)?);
         }
         s.validate()?;
         Ok(s)
@@ -233,12 +266,17 @@ impl Sweep {
                 "--weight-exponent {p}: must be a number in [0, 64]"
             ));
         }
+        let (sps, vpls): (Vec<u32>, Vec<u32>) = match &self.pairs {
+            Some(p) if p.is_empty() => return Err("--pairs needs at least one pair".into()),
+            Some(p) => p.iter().copied().unzip(),
+            None => (self.sp_clusters.clone(), self.vpl_clusters.clone()),
+        };
         let sp_modes = self.modes.iter().any(|m| m.clusters_sps());
-        if sp_modes && self.sp_clusters.contains(&0) {
+        if sp_modes && sps.contains(&0) {
             return Err("--sp-clusters 0: use --modes vpl-only for no SP clustering".into());
         }
         let vpl_modes = self.modes.iter().any(|m| m.clusters_vpls());
-        if vpl_modes && self.vpl_clusters.contains(&0) {
+        if vpl_modes && vpls.contains(&0) {
             return Err("--vpl-clusters 0: use --modes sp-only for no VPL clustering".into());
         }
         Ok(())
@@ -247,24 +285,30 @@ impl Sweep {
     /// Every distinct configuration: modes × SP K × VPL K × F × γ, with the values a mode ignores
     /// dropped (hard has F = 1; vpl-only has no SP K, F, γ; sp-only has no VPL K).
     pub fn configs(&self) -> Vec<Config> {
+        let ks: Vec<(u32, u32)> = match &self.pairs {
+            Some(p) => p.clone(),
+            None => self
+                .sp_clusters
+                .iter()
+                .flat_map(|&sp| self.vpl_clusters.iter().map(move |&vpl| (sp, vpl)))
+                .collect(),
+        };
         let mut out: Vec<Config> = Vec::new();
         for &mode in &self.modes {
-            for &sp in &self.sp_clusters {
-                for &vpl in &self.vpl_clusters {
-                    for &f in &self.fuzziness {
-                        for &g in &self.gamma {
-                            for &p in &self.weight_exponent {
-                                let c = Config {
-                                    mode,
-                                    sp_clusters: if mode.clusters_sps() { sp } else { 0 },
-                                    vpl_clusters: if mode.clusters_vpls() { vpl } else { 0 },
-                                    fuzziness: if mode.uses_fuzziness() { f } else { 1 },
-                                    gamma: if mode.clusters_sps() { g } else { 0 },
-                                    weight_exponent: if mode.uses_weights() { p } else { 1.0 },
-                                };
-                                if !out.contains(&c) {
-                                    out.push(c);
-                                }
+            for &(sp, vpl) in &ks {
+                for &f in &self.fuzziness {
+                    for &g in &self.gamma {
+                        for &p in &self.weight_exponent {
+                            let c = Config {
+                                mode,
+                                sp_clusters: if mode.clusters_sps() { sp } else { 0 },
+                                vpl_clusters: if mode.clusters_vpls() { vpl } else { 0 },
+                                fuzziness: if mode.uses_fuzziness() { f } else { 1 },
+                                gamma: if mode.clusters_sps() { g } else { 0 },
+                                weight_exponent: if mode.uses_weights() { p } else { 1.0 },
+                            };
+                            if !out.contains(&c) {
+                                out.push(c);
                             }
                         }
                     }
@@ -413,6 +457,7 @@ mod tests {
             fuzziness: vec![4, 6],
             gamma: vec![4],
             weight_exponent: vec![1.0, 2.0],
+            pairs: None,
         };
         let c = s.configs();
         let count = |m: Mode| c.iter().filter(|c| c.mode == m).count();
@@ -422,6 +467,42 @@ mod tests {
         assert_eq!(count(Mode::VplOnly), 2); // one per VPL K
         assert_eq!(count(Mode::SpOnly), 8); // SP K × F × p
         assert!(c.iter().any(|c| c.label() == "weighted 48/128 F6 g4 p2"));
+        // --pairs: only the given (K_SP, K_VPL) pairs.
+        let paired = Sweep::parse(
+            &SweepArgs {
+                modes: Some("hard,weighted,vpl-only".into()),
+                pairs: Some("48/128, 96/256".into()),
+                ..Default::default()
+            },
+            Sweep::quick_default(),
+        )
+        .unwrap()
+        .configs();
+        let labels: Vec<String> = paired.iter().map(|c| c.label()).collect();
+        assert_eq!(
+            labels,
+            [
+                "hard 48/128 g4",
+                "hard 96/256 g4",
+                "weighted 48/128 F6 g4",
+                "weighted 96/256 F6 g4",
+                "vpl-only -/128",
+                "vpl-only -/256"
+            ]
+        );
+        for bad in ["48", "48/x", "48/128,", "-1/2"] {
+            let a = SweepArgs {
+                pairs: Some(bad.into()),
+                ..Default::default()
+            };
+            assert!(Sweep::parse(&a, Sweep::quick_default()).is_err(), "{bad}");
+        }
+        let both = SweepArgs {
+            pairs: Some("48/128".into()),
+            sp_clusters: Some("48".into()),
+            ..Default::default()
+        };
+        assert!(Sweep::parse(&both, Sweep::quick_default()).is_err());
         assert!(
             c.iter()
                 .filter(|c| c.mode == Mode::VplOnly)
