@@ -322,6 +322,10 @@ fn bad(msg: impl Into<String>) -> anyhow::Error {
 }
 
 fn main() -> ExitCode {
+    // `fuzzy-vpl info SCENE | head` closes stdout early: end quietly like other command-line tools
+    // instead of panicking on the failed print (Rust ignores SIGPIPE by default).
+    // SAFETY: first thing in main, before any other thread exists.
+    unsafe { libc::signal(libc::SIGPIPE, libc::SIG_DFL) };
     // Mesa's Vulkan loader complains on stderr when XDG_RUNTIME_DIR is unset (headless machines, CI).
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         let dir = std::env::temp_dir().join("fuzzy-vpl-runtime");

@@ -293,3 +293,21 @@ fn info_prints_counts_and_passes() {
     }
     assert!(out.contains("1448"), "{out}");
 }
+
+/// `info SCENE | head -1`: a reader that closes the pipe early ends the program quietly (SIGPIPE), no
+/// panic message.
+#[test]
+fn closed_stdout_is_not_a_panic() {
+    use std::process::Stdio;
+    let mut child = bin()
+        .args(["info", "builtin:conference"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Close the read end before the program writes.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+}
