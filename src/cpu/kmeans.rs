@@ -122,6 +122,9 @@ fn before(r: f32, k: u32, rd: f32, rk: u32) -> bool {
 /// Rings searched while iterating (`ITER_RINGS` in kmeans.wgsl): a sampled point with no centroid
 /// passing n_t within them stays out of the iteration's update.
 pub const ITER_RINGS: i32 = 3;
+/// Rings searched with Eq. (7) in the final assignment before the fallback by position alone
+/// (`FINAL_RINGS` in kmeans.wgsl).
+pub const FINAL_RINGS: i32 = 4;
 
 /// The F nearest centroids by Eq. (7) in the 27 cells around the point, with the shader's fallbacks
 /// (`bounded`: the iterations' search, `ITER_RINGS` rings and no fallback).
@@ -182,7 +185,7 @@ fn nearest(
     }
     let maxr = *g.dims.iter().max().unwrap() as i32;
     let mut ring = 2;
-    while best.is_empty() && ring <= maxr {
+    while best.is_empty() && ring <= FINAL_RINGS.min(maxr) {
         scan(&mut best, ring, f, true);
         ring += 1;
     }

@@ -163,7 +163,7 @@ impl KMeans {
             "centroid bounds",
             &[u32::MAX, u32::MAX, u32::MAX, 0, 0, 0, 0, 0],
         );
-        let grid = ctx.storage("grid", 32);
+        let grid_buf = ctx.storage("grid", 32);
         let cells = ctx.storage("grid cells", 3 * (MAX_DIM as u64).pow(3) * 4);
         let cell_items = ctx.storage("grid items", k * 4);
         let sample_assign = ctx.storage("sample assign", p.num_sampled as u64 * 4);
@@ -193,7 +193,7 @@ impl KMeans {
                 (3, &centroids),
                 (4, &sums),
                 (5, &bounds),
-                (6, &grid),
+                (6, &grid_buf),
                 (7, &cells),
                 (8, &cell_items),
                 (9, &sample_assign),
@@ -248,6 +248,21 @@ impl KMeans {
         ]);
         if settings.weights_to_reps && p.f > 1 {
             run(&[("rep_weights", num_points)]);
+        }
+        if std::env::var_os("FVPL_PROFILE_STEPS").is_some() {
+            // Diagnosis: the last grid (origin xyz, cell, dims xyz, cells) and the centroids per cell.
+            let g: Vec<u32> = ctx.read_buffer(&grid_buf, 8)?;
+            let cell = f32::from_bits(g[3]);
+            let cells = g[7].max(1);
+            eprintln!(
+                "{label}: K {}, grid {}x{}x{} = {} cells of {cell:.4}, {:.1} centroids a cell",
+                p.k,
+                g[4],
+                g[5],
+                g[6],
+                g[7],
+                p.k as f32 / cells as f32
+            );
         }
         Ok(Clustering {
             params: p,
