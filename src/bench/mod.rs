@@ -10,7 +10,7 @@ pub mod sweep;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -60,6 +60,12 @@ fn file_slug(label: &str) -> String {
 }
 
 /// Renders `n` frames with `s`, returns the last frame and the per-key mean of the 3 best timings.
+/// Wall time a GPU renders a configuration untimed before its timed runs: a GPU whose clock was left
+/// to the driver slows down while the bench writes images between configurations, and without this
+/// the first runs of the next one are timed at that lower clock (on the H100, passes identical in every
+/// configuration took up to 40% longer in some). Not on a CPU adapter (lavapipe), whose frames are slow.
+const GPU_WARMUP: Duration = Duration::from_millis(300);
+
 fn timed(
     renderer: &mut Renderer,
     camera: &Camera,
@@ -67,6 +73,15 @@ fn timed(
     n: u32,
     pb: &ProgressBar,
 ) -> Result<(Frame, BTreeMap<String, f64>)> {
+    if renderer.ctx.adapter.get_info().device_type != wgpu::DeviceType::Cpu {
+        let t0 = Instant::now();
+        for _ in 0..50 {
+            renderer.render(camera, s)?;
+            if t0.elapsed() >= GPU_WARMUP {
+                break;
+            }
+        }
+    }
     let mut runs = Vec::new();
     let mut last = None;
     for _ in 0..n.max(1) {

@@ -46,7 +46,8 @@ pub fn markdown(s: &SummaryInfo) -> String {
         m,
         "- adapter: **{}**\n- {}×{} pixels, {} VPLs, seed {}\n- times are **GPU timestamp** durations \
          (wgpu timestamp queries, summed per pass), each the **mean of the 3 best of {}** runs (the \
-         paper's method); the references are timed the same way over {} run(s)\n- `frame` is the whole \
+         paper's method); the references are timed the same way over {} run(s); on a GPU adapter each \
+         configuration first renders untimed for 0.3 s (clock warm-up)\n- `frame` is the whole \
          per-frame GPU time (primary rays, direct light, SP clustering, visibility, shading or gather); \
          VPL tracing and VPL clustering are resident work, built once per setting and listed apart\n\
          - speedup = reference frame time ÷ configuration frame time; MSE is the paper's (RGB clamped \
