@@ -188,6 +188,8 @@ fn grid_setup() {
         atomicStore(&bounds[a], 0xffffffffu);
         atomicStore(&bounds[3u + a], 0u);
     }
+    // The count of changed assignments of the iteration that follows (assign_sampled).
+    atomicStore(&bounds[6], 0u);
     if !(lo.x <= hi.x) {
         // No valid centroid: one cell.
         lo = params.lo.xyz;
@@ -408,6 +410,10 @@ fn assign_sampled(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
     var k = INVALID;
     if p.w > 0.0 {
         k = nearest_bounded(p.xyz, point_nrm(m));
+    }
+    // Alg. 1 stops early when no assignment changed: the centroids would not change either.
+    if sample_assign[s] != k {
+        atomicAdd(&bounds[6], 1u);
     }
     sample_assign[s] = k;
 }

@@ -20,6 +20,7 @@ struct GpuResult {
     weights: Vec<f32>,
     reps: Vec<u32>,
     params: KmParams,
+    iterations_run: u32,
 }
 
 fn run_gpu(
@@ -59,6 +60,7 @@ fn run_gpu(
         weights: ctx.read_buffer(&c.weights, (m * p.f) as usize).unwrap(),
         reps: reps.chunks(2).map(|r| r[1]).collect(),
         params: p,
+        iterations_run: c.iterations_run,
     }
 }
 
@@ -374,4 +376,37 @@ fn weight_exponent_matches_cpu_and_spans_uniform_to_hard() {
     );
     // Nearly all: clusters at almost the same distance still share.
     assert!(nearest_share[3] > 0.95, "{nearest_share:?}");
+}
+
+/// Alg. 1 stops once an iteration changes no assignment, on the GPU after the same iteration as the
+/// CPU twin, with the same result as running every iteration.
+#[test]
+fn kmeans_stops_when_converged() {
+    let ctx = common::gpu();
+    let data = box_points(3000, 9);
+    let pts = points_of(&data, 2);
+    let s = settings(24, 1, 2, 0.866, 200);
+    let g = run_gpu(&ctx, &data, 2, &s, BOX);
+    let c = kmeans::kmeans(&pts, &g.params, s.iterations);
+    println!(
+        "converged after {} iterations (CPU {})",
+        g.iterations_run, c.iterations_run
+    );
+    assert!(
+        g.iterations_run >= 2 && g.iterations_run < 200,
+        "{}",
+        g.iterations_run
+    );
+    assert_eq!(g.iterations_run, c.iterations_run);
+    assert_eq!(g.assign, c.assign);
+    // One iteration more than needed changes nothing.
+    let more = run_gpu(
+        &ctx,
+        &data,
+        2,
+        &settings(24, 1, 2, 0.866, g.iterations_run + 1),
+        BOX,
+    );
+    assert_eq!(more.assign, g.assign);
+    assert_eq!(more.iterations_run, g.iterations_run);
 }

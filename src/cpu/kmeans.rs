@@ -44,6 +44,8 @@ pub struct CpuClustering {
     pub weights: Vec<f32>,
     /// Per cluster: representative member index (u32::MAX when unused).
     pub reps: Vec<u32>,
+    /// Iterations run (fewer than asked when one changed no assignment).
+    pub iterations_run: u32,
 }
 
 pub fn sample_index(p: &KmParams, s: u32) -> u32 {
@@ -228,17 +230,22 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
     let lo = Vec3::from_slice(&p.lo[..3]);
     let ext = Vec3::from_slice(&p.ext[..3]);
     let mut sample_assign = vec![u32::MAX; s_n as usize];
-    for _ in 0..iterations {
+    let mut iterations_run = 0;
+    for it in 0..iterations {
+        iterations_run += 1;
         let g = Grid::build(p, &cs);
+        let mut changed = 0u32;
         for s in 0..s_n {
             let pt = points[sample_index(p, s) as usize];
-            sample_assign[s as usize] = if pt.valid {
+            let k = if pt.valid {
                 nearest(&g, &cs, &pt, n_t, 1, true)
                     .first()
                     .map_or(u32::MAX, |b| b.0)
             } else {
                 u32::MAX
             };
+            changed += (k != sample_assign[s as usize]) as u32;
+            sample_assign[s as usize] = k;
         }
         let mut sums = vec![[0u64; 6]; k];
         let mut counts = vec![0u32; k];
@@ -273,6 +280,10 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
             if l > 1e-6 {
                 cs[kk].nrm = nrm / l;
             }
+        }
+        // Converged: the next iterations would repeat this one (as the GPU stops).
+        if it >= 1 && changed == 0 {
+            break;
         }
     }
     let g = Grid::build(p, &cs);
@@ -310,6 +321,7 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
         }
     }
     CpuClustering {
+        iterations_run,
         centroids: cs,
         sample_assign,
         assign,

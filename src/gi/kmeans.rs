@@ -83,6 +83,8 @@ impl KmParams {
 /// The result of one clustering, resident on the GPU.
 pub struct Clustering {
     pub params: KmParams,
+    /// Iterations of Alg. 1 run: the requested count, or fewer when one changed no assignment.
+    pub iterations_run: u32,
     /// K centroids (pos xyz + valid w, normal).
     pub centroids: wgpu::Buffer,
     /// M × F cluster indices (u32::MAX where fewer than F were found).
@@ -229,7 +231,8 @@ impl KMeans {
                 .run_entries(ctx, profiler, label, scene, &bg, steps, seed, &after)
         };
         run(&[("init_centroids", kk)]);
-        for _ in 0..settings.iterations {
+        let mut iterations_run = 0;
+        for i in 0..settings.iterations {
             let mut steps = grid.to_vec();
             steps.extend([
                 ("assign_sampled", p.num_sampled),
@@ -237,6 +240,15 @@ impl KMeans {
                 ("update", kk),
             ]);
             run(&steps);
+            iterations_run += 1;
+            // Alg. 1 ends early once an iteration changed no assignment: from then on the centroids
+            // stay as they are. (Not after the first: its "previous" assignment was never used.)
+            if i >= 1 {
+                let b: Vec<u32> = ctx.read_buffer(&bounds, 8)?;
+                if b[6] == 0 {
+                    break;
+                }
+            }
         }
         let mut steps = grid.to_vec();
         steps.push(("final_assign", num_points));
@@ -255,7 +267,7 @@ impl KMeans {
             let cell = f32::from_bits(g[3]);
             let cells = g[7].max(1);
             eprintln!(
-                "{label}: K {}, grid {}x{}x{} = {} cells of {cell:.4}, {:.1} centroids a cell",
+                "{label}: {iterations_run} iteration(s), K {}, grid {}x{}x{} = {} cells of {cell:.4}, {:.1} centroids a cell",
                 p.k,
                 g[4],
                 g[5],
@@ -265,6 +277,7 @@ impl KMeans {
             );
         }
         Ok(Clustering {
+            iterations_run,
             params: p,
             centroids,
             assign,
