@@ -99,12 +99,10 @@ fn sample_index(s: u32) -> u32 {
     return min(s * g + (h >> 8u) % g, params.num_points - 1u);
 }
 
-// Eq. (7): Euclidean distance when the normals agree beyond the threshold, else infinite (BIG).
-fn dist7(p: vec3<f32>, n: vec3<f32>, c: Centroid) -> f32 {
-    if dot(n, c.nrm.xyz) > params.normal_threshold {
-        return length(p - c.pos.xyz);
-    }
-    return BIG;
+// Eq. (7): dist(d1, d2) = |p1 - p2| when n1 · n2 > n_t, else ∞. The search (scan_ring) takes the
+// distance first and this test only for a candidate that would enter the list.
+fn eq7_normals_agree(n: vec3<f32>, nc: vec3<f32>) -> bool {
+    return dot(n, nc) > params.normal_threshold;
 }
 
 // Order-preserving map of floats to u32 (for atomicMin/Max on floats).
@@ -340,17 +338,20 @@ fn scan_ring(best: ptr<function, Nearest>, p: vec3<f32>, n: vec3<f32>, c: vec3<i
                 for (var i = range.x; i < range.x + range.y; i++) {
                     let a = textureLoad(sorted_tex, texel_xy(2u * i), 0);
                     let k = a.w;
-                    let nk = bitcast<vec4<f32>>(textureLoad(sorted_tex, texel_xy(2u * i + 1u), 0));
-                    let ck = Centroid(vec4<f32>(bitcast<vec3<f32>>(a.xyz), 1.0), nk);
-                    var r: f32;
+                    let r = length(p - bitcast<vec3<f32>>(a.xyz));
+                    // Eq. (7) is the distance or nothing: a candidate that would not enter the list
+                    // needs no normal (half the texel fetches; the same result as dist7).
+                    let full = (*best).count == f;
+                    if !(r < BIG) || (full && !before(r, k, (*best).dist[f - 1u], (*best).idx[f - 1u])) {
+                        continue;
+                    }
                     if use_normals {
-                        r = dist7(p, n, ck);
-                    } else {
-                        r = length(p - ck.pos.xyz);
+                        let nk = bitcast<vec4<f32>>(textureLoad(sorted_tex, texel_xy(2u * i + 1u), 0));
+                        if !eq7_normals_agree(n, nk.xyz) {
+                            continue;
+                        }
                     }
-                    if r < BIG {
-                        insert(best, k, r, f);
-                    }
+                    insert(best, k, r, f);
                 }
             }
         }
@@ -388,14 +389,49 @@ fn nearest(p: vec3<f32>, n: vec3<f32>, f: u32) -> Nearest {
 // scan the whole grid every iteration and the slowest of them sets the time of the pass on a GPU.
 const ITER_RINGS: i32 = 3;
 
-fn nearest_bounded(p: vec3<f32>, n: vec3<f32>) -> u32 {
-    var best: Nearest;
-    best.count = 0u;
-    let c = cell_coord(p);
-    for (var ring = 1; ring <= ITER_RINGS && best.count == 0u; ring++) {
-        scan_ring(&best, p, n, c, ring, 1u, true);
+// scan_ring for F = 1 with the best candidate in two scalars: the iterations' search (Alg. 1 lines
+// 6-11) runs ten times over the sampled points, and a function-local array indexed at run time (the
+// F-list of `Nearest`) is memory on a GPU and a per-lane scatter on lavapipe. Same candidates, same
+// order (`before`), same result as scan_ring with f = 1.
+fn scan_ring_1(best_k: ptr<function, u32>, best_r: ptr<function, f32>, p: vec3<f32>, n: vec3<f32>, c: vec3<i32>, ring: i32) {
+    let d = vec3<i32>(grid.dims);
+    let lo = max(c - vec3<i32>(ring), vec3<i32>(0));
+    let hi = min(c + vec3<i32>(ring), d - 1);
+    for (var z = lo.z; z <= hi.z; z++) {
+        for (var y = lo.y; y <= hi.y; y++) {
+            for (var x = lo.x; x <= hi.x; x++) {
+                let q = vec3<i32>(x, y, z);
+                let cheb = max(abs(q.x - c.x), max(abs(q.y - c.y), abs(q.z - c.z)));
+                if ring > 1 && cheb != ring {
+                    continue;
+                }
+                let range = textureLoad(ranges_tex, texel_xy(cell_index(q)), 0).xy;
+                for (var i = range.x; i < range.x + range.y; i++) {
+                    let a = textureLoad(sorted_tex, texel_xy(2u * i), 0);
+                    let k = a.w;
+                    let r = length(p - bitcast<vec3<f32>>(a.xyz));
+                    if !(r < BIG) || !before(r, k, *best_r, *best_k) {
+                        continue;
+                    }
+                    let nk = bitcast<vec4<f32>>(textureLoad(sorted_tex, texel_xy(2u * i + 1u), 0));
+                    if eq7_normals_agree(n, nk.xyz) {
+                        *best_k = k;
+                        *best_r = r;
+                    }
+                }
+            }
+        }
     }
-    return select(INVALID, best.idx[0], best.count > 0u);
+}
+
+fn nearest_bounded(p: vec3<f32>, n: vec3<f32>) -> u32 {
+    var best_k = INVALID;
+    var best_r = BIG;
+    let c = cell_coord(p);
+    for (var ring = 1; ring <= ITER_RINGS && best_k == INVALID; ring++) {
+        scan_ring_1(&best_k, &best_r, p, n, c, ring);
+    }
+    return best_k;
 }
 
 // --- Alg. 1 lines 6-11: assign each sampled point to its nearest centroid.
