@@ -8,6 +8,9 @@ const INVALID: u32 = 0xffffffffu;
 const BIG: f32 = 3.4028235e38;
 const MAX_F: u32 = 16u;
 const MAX_DIM: u32 = 64u;
+// F of the pipeline (params.f; src/gi/kmeans.rs builds one pipeline set per F in use): loops over the
+// F slots of a point have a constant trip count, so its list lives in registers.
+override F: u32 = 1u;
 // Fixed point: positions in the data frame scaled by 2^24, normals (n + 1) by 2^23.
 const POS_SCALE: f32 = 16777216.0;
 const NRM_SCALE: f32 = 8388608.0;
@@ -301,24 +304,37 @@ fn before(r: f32, k: u32, rd: f32, rk: u32) -> bool {
     return r < rd || (r == rd && k < rk);
 }
 
-fn insert(best: ptr<function, Nearest>, k: u32, r: f32, f: u32) {
-    var j = (*best).count;
-    // Alg. 2 line 10: find the slot; lines 12-17: shift the farther ones down.
-    if j == f && !before(r, k, (*best).dist[f - 1u], (*best).idx[f - 1u]) {
-        return;
-    }
-    if j < f {
+// Alg. 2 lines 9-17: put candidate (k, r) into the sorted list, the farthest falls off the end. Written
+// as one compare-and-swap per slot over the pipeline's F slots (a constant, see `F`), so the list
+// stays in registers: shifting at a run-time index made it memory on a GPU and a per-lane scatter on
+// lavapipe. `slots` is F, or 1 for the fallback by position alone. Empty slots hold (BIG, INVALID),
+// after every real candidate.
+fn insert(best: ptr<function, Nearest>, k_in: u32, r_in: f32, slots: u32) {
+    var k = k_in;
+    var r = r_in;
+    if (*best).count < slots {
         (*best).count += 1u;
-    } else {
-        j = f - 1u;
     }
-    while j > 0u && before(r, k, (*best).dist[j - 1u], (*best).idx[j - 1u]) {
-        (*best).dist[j] = (*best).dist[j - 1u];
-        (*best).idx[j] = (*best).idx[j - 1u];
-        j -= 1u;
+    for (var j = 0u; j < F; j++) {
+        if j < slots && before(r, k, (*best).dist[j], (*best).idx[j]) {
+            let tk = (*best).idx[j];
+            let tr = (*best).dist[j];
+            (*best).idx[j] = k;
+            (*best).dist[j] = r;
+            k = tk;
+            r = tr;
+        }
     }
-    (*best).dist[j] = r;
-    (*best).idx[j] = k;
+}
+
+fn empty_nearest() -> Nearest {
+    var b: Nearest;
+    b.count = 0u;
+    for (var j = 0u; j < MAX_F; j++) {
+        b.idx[j] = INVALID;
+        b.dist[j] = BIG;
+    }
+    return b;
 }
 
 // Scans the cells at Chebyshev distance exactly `ring` from `c` (ring 1 includes the centre: 27 cells).
@@ -341,8 +357,16 @@ fn scan_ring(best: ptr<function, Nearest>, p: vec3<f32>, n: vec3<f32>, c: vec3<i
                     let r = length(p - bitcast<vec3<f32>>(a.xyz));
                     // Eq. (7) is the distance or nothing: a candidate that would not enter the list
                     // needs no normal (half the texel fetches; the same result as dist7).
-                    let full = (*best).count == f;
-                    if !(r < BIG) || (full && !before(r, k, (*best).dist[f - 1u], (*best).idx[f - 1u])) {
+                    // Would it enter the list? (Slot f - 1 is (BIG, INVALID) while the list is short.)
+                    var last_r = (*best).dist[0];
+                    var last_k = (*best).idx[0];
+                    for (var j = 1u; j < F; j++) {
+                        if j < f {
+                            last_r = (*best).dist[j];
+                            last_k = (*best).idx[j];
+                        }
+                    }
+                    if !(r < BIG) || !before(r, k, last_r, last_k) {
                         continue;
                     }
                     if use_normals {
@@ -365,8 +389,7 @@ fn scan_ring(best: ptr<function, Nearest>, p: vec3<f32>, n: vec3<f32>, c: vec3<i
 const FINAL_RINGS: i32 = 4;
 
 fn nearest(p: vec3<f32>, n: vec3<f32>, f: u32) -> Nearest {
-    var best: Nearest;
-    best.count = 0u;
+    var best = empty_nearest();
     let c = cell_coord(p);
     scan_ring(&best, p, n, c, 1, f, true);
     if best.count == 0u {
@@ -561,18 +584,17 @@ fn final_assign(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if m == INVALID || m >= params.num_points {
         return;
     }
-    let f = clamp(params.f, 1u, MAX_F);
+    let f = F;
     let p = point_pos(m);
-    var b: Nearest;
-    b.count = 0u;
+    var b = empty_nearest();
     if p.w > 0.0 {
         b = nearest(p.xyz, point_nrm(m), f);
     }
     var zero = INVALID;
     var dists: array<f32, MAX_F>;
-    for (var j = 0u; j < b.count; j++) {
+    for (var j = 0u; j < F; j++) {
         dists[j] = b.dist[j];
-        if b.dist[j] <= 0.0 && zero == INVALID {
+        if j < b.count && b.dist[j] <= 0.0 && zero == INVALID {
             zero = j;
         }
     }
@@ -610,7 +632,7 @@ fn rep_min(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroup
     if m == INVALID || m >= params.num_points {
         return;
     }
-    let f = clamp(params.f, 1u, MAX_F);
+    let f = F;
     for (var j = 0u; j < f; j++) {
         let k = assign[m * f + j];
         if k != INVALID {
@@ -626,7 +648,7 @@ fn rep_pick(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     if m == INVALID || m >= params.num_points {
         return;
     }
-    let f = clamp(params.f, 1u, MAX_F);
+    let f = F;
     for (var j = 0u; j < f; j++) {
         let k = assign[m * f + j];
         if k != INVALID && bitcast<u32>(member_dist(m, k)) == atomicLoad(&reps[2u * k]) {
@@ -644,7 +666,7 @@ fn rep_weights(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     if m == INVALID || m >= params.num_points {
         return;
     }
-    let f = clamp(params.f, 1u, MAX_F);
+    let f = F;
     let p = point_pos(m).xyz;
     var d: array<f32, MAX_F>;
     var zero = INVALID;

@@ -33,7 +33,7 @@ fn run_gpu(
     let sc = scene::load("builtin:cornell").unwrap();
     let bvh = SceneBvh::build(&sc).unwrap();
     let gpu = SceneGpu::upload(ctx, &sc, &bvh);
-    let km = KMeans::new(ctx);
+    let km = KMeans::new();
     let mut prof = Profiler::new(ctx);
     let buf = ctx.storage_init("data", data);
     let m = data.len() as u32 / stride;

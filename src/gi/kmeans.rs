@@ -7,6 +7,8 @@
 //! 2^32 − 1 points (the u32 count) before overflow; the 64-bit sums would take 2^40. Sums are exact
 //! integers, so the result does not depend on the order of the atomic adds.
 
+use std::cell::OnceCell;
+
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -124,19 +126,26 @@ const ENTRIES: &[&str] = &[
     "rep_weights",
 ];
 
+#[derive(Default)]
 pub struct KMeans {
-    kernel: Kernel,
+    /// One pipeline set per F (the shader's `override F`), built the first time that F is clustered.
+    kernels: [OnceCell<Kernel>; MAX_F as usize],
 }
 
 impl KMeans {
-    pub fn new(ctx: &GpuContext) -> Self {
-        let mut entries = vec![uniform_layout(1), storage_layout(2, true)];
-        entries.extend((3..=14).map(|b| storage_layout(b, false)));
-        entries.push(data_texture_layout(15, wgpu::TextureSampleType::Uint));
-        entries.push(data_texture_layout(16, wgpu::TextureSampleType::Uint));
-        KMeans {
-            kernel: Kernel::with_entries(ctx, None, "kmeans", ENTRIES, &entries, &[]),
-        }
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn kernel(&self, ctx: &GpuContext, f: u32) -> &Kernel {
+        let f = f.clamp(1, MAX_F);
+        self.kernels[f as usize - 1].get_or_init(|| {
+            let mut entries = vec![uniform_layout(1), storage_layout(2, true)];
+            entries.extend((3..=14).map(|b| storage_layout(b, false)));
+            entries.push(data_texture_layout(15, wgpu::TextureSampleType::Uint));
+            entries.push(data_texture_layout(16, wgpu::TextureSampleType::Uint));
+            Kernel::with_entries(ctx, None, "kmeans", ENTRIES, &entries, &[("F", f as f64)])
+        })
     }
 
     /// Clusters `num_points` points of `data` (`stride` vec4s each: position with w > 0 when valid,
@@ -187,7 +196,8 @@ impl KMeans {
         let ranges_tex = data_texture(ctx, "cell ranges", wgpu::TextureFormat::Rg32Uint, max_cells);
         let sorted_view = sorted_tex.create_view(&Default::default());
         let ranges_view = ranges_tex.create_view(&Default::default());
-        let bg = self.kernel.bind_group_with_textures(
+        let kernel = self.kernel(ctx, p.f);
+        let bg = kernel.bind_group_with_textures(
             ctx,
             &[
                 (1, &params),
@@ -227,8 +237,7 @@ impl KMeans {
         // Small steps share a submission: one per iteration, then the final assignment and the
         // representatives (each bounded by the point count).
         let mut run = |steps: &[(&str, u32)]| {
-            self.kernel
-                .run_entries(ctx, profiler, label, scene, &bg, steps, seed, &after)
+            kernel.run_entries(ctx, profiler, label, scene, &bg, steps, seed, &after)
         };
         run(&[("init_centroids", kk)]);
         let mut iterations_run = 0;

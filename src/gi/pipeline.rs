@@ -285,7 +285,7 @@ impl<'a> Renderer<'a> {
             direct: Direct::new(ctx, &gpu),
             vpl_trace: VplTrace::new(ctx, &gpu),
             reference: Reference::new(ctx, &gpu),
-            kmeans: KMeans::new(ctx),
+            kmeans: KMeans::new(),
             visibility: Visibility::new(ctx, &gpu),
             shade: Shade::new(),
             profiler: Profiler::new(ctx),
