@@ -77,57 +77,78 @@ fn intersect_tri(slot: u32, ray: Ray) -> vec3<f32> {
     return vec3<f32>(INF, 0.0, 0.0);
 }
 
-// Closest hit along the ray; hit.slot == INVALID on a miss. Stackless: nodes are visited in preorder,
-// a missed inner node is skipped with its link.
+// Closest hit along the ray; hit.slot == INVALID on a miss. Stackless preorder with skip links, in
+// the while-while form: walk inner nodes until this ray stands at an entered leaf (or is done), then
+// test the leaf. SIMD lanes that reach a leaf wait for the others, so leaves are tested by more lanes
+// at once.
 fn trace_closest(ray_in: Ray) -> Hit {
     var ray = ray_in;
-    // Misses report INF (the largest finite float): an infinite tmax must not count them as hits.
     ray.tmax = min(ray.tmax, INF);
     var hit = Hit(INF, INVALID, 0.0, 0.0);
     let inv_dir = vec3<f32>(safe_inverse(ray.dir.x), safe_inverse(ray.dir.y), safe_inverse(ray.dir.z));
     var i = 0u;
-    while i < scene.num_nodes {
-        let node = load_node(i);
-        let entered = aabb_entry(node.min, node.max, ray.origin, inv_dir) < ray.tmax;
-        if node.prim_count > 0u {
-            if entered {
-                for (var k = node.index; k < node.index + node.prim_count; k++) {
-                    let r = intersect_tri(k, ray);
-                    if r.x < ray.tmax {
-                        ray.tmax = r.x;
-                        hit = Hit(r.x, k, r.y, r.z);
-                    }
+    loop {
+        var leaf = false;
+        var node: BvhNode;
+        while i < scene.num_nodes {
+            node = load_node(i);
+            let entered = aabb_entry(node.min, node.max, ray.origin, inv_dir) < ray.tmax;
+            if node.prim_count > 0u {
+                if entered {
+                    leaf = true;
+                    break;
                 }
+                i += 1u;
+            } else {
+                i = select(node.index, i + 1u, entered);
             }
-            i += 1u;
-        } else {
-            i = select(node.index, i + 1u, entered);
         }
+        if !leaf {
+            break;
+        }
+        for (var k = node.index; k < node.index + node.prim_count; k++) {
+            let r = intersect_tri(k, ray);
+            if r.x < ray.tmax {
+                ray.tmax = r.x;
+                hit = Hit(r.x, k, r.y, r.z);
+            }
+        }
+        i += 1u;
     }
     return hit;
 }
 
-// Any hit in [tmin, tmax]: true when the segment is blocked.
+// Any hit in [tmin, tmax]: true when the segment is blocked. While-while, as trace_closest.
 fn trace_any(ray_in: Ray) -> bool {
     var ray = ray_in;
     ray.tmax = min(ray.tmax, INF);
     let inv_dir = vec3<f32>(safe_inverse(ray.dir.x), safe_inverse(ray.dir.y), safe_inverse(ray.dir.z));
     var i = 0u;
-    while i < scene.num_nodes {
-        let node = load_node(i);
-        let entered = aabb_entry(node.min, node.max, ray.origin, inv_dir) < ray.tmax;
-        if node.prim_count > 0u {
-            if entered {
-                for (var k = node.index; k < node.index + node.prim_count; k++) {
-                    if intersect_tri(k, ray).x < ray.tmax {
-                        return true;
-                    }
+    loop {
+        var leaf = false;
+        var node: BvhNode;
+        while i < scene.num_nodes {
+            node = load_node(i);
+            let entered = aabb_entry(node.min, node.max, ray.origin, inv_dir) < ray.tmax;
+            if node.prim_count > 0u {
+                if entered {
+                    leaf = true;
+                    break;
                 }
+                i += 1u;
+            } else {
+                i = select(node.index, i + 1u, entered);
             }
-            i += 1u;
-        } else {
-            i = select(node.index, i + 1u, entered);
         }
+        if !leaf {
+            break;
+        }
+        for (var k = node.index; k < node.index + node.prim_count; k++) {
+            if intersect_tri(k, ray).x < ray.tmax {
+                return true;
+            }
+        }
+        i += 1u;
     }
     return false;
 }
