@@ -290,8 +290,9 @@ fn grid_scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
 }
 
 // The F nearest centroids of a point by Eq. (7) among the 27 cells around it (Alg. 2 lines 4-17).
-// Falls back, in order, to: rings of cells further out until a centroid passes the threshold; then
-// the nearest centroid by position alone (ignoring n_t), so no point is ever left unassigned.
+// Falls back, in order, to: rings of cells further out, up to FINAL_RINGS, with the same metric; then
+// the nearest centroid by position alone (ignoring n_t) in the first ring that holds one, so no point
+// is ever left unassigned.
 struct Nearest {
     idx: array<u32, MAX_F>,
     dist: array<f32, MAX_F>,
@@ -548,6 +549,21 @@ fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
 // (d_min / d_f)^p / Σ (d_min / d_f)^p, ratios in (0, 1]: no overflow for any distance or p. Slots at
 // or past `count` (and negative distances) get 0; a distance of 0 (`zero`) takes the whole weight.
 // CPU twin: cpu::kmeans::inverse_distance_weights.
+// A distance at or below this counts as 0 (the point sits on the centroid): below it a GPU may flush
+// the quotient d_min / d to 0 / 0.
+const ZERO_DIST: f32 = 1e-30;
+
+// x^p for x in (0, 1]: exact for p = 1 (Eq. 10) and p = 0, else exp2(p log2 x).
+fn ratio_pow(x: f32, p: f32) -> f32 {
+    if p == 1.0 {
+        return x;
+    }
+    if p == 0.0 {
+        return 1.0;
+    }
+    return exp2(p * log2(x));
+}
+
 fn inverse_distance_weights(d: array<f32, MAX_F>, count: u32, zero: u32) -> array<f32, MAX_F> {
     var w: array<f32, MAX_F>;
     var d_min = 3.4e38;
@@ -563,7 +579,7 @@ fn inverse_distance_weights(d: array<f32, MAX_F>, count: u32, zero: u32) -> arra
             if zero != INVALID {
                 w[j] = select(0.0, 1.0, j == zero);
             } else {
-                w[j] = exp2(params.weight_exponent * log2(d_min / d[j]));
+                w[j] = ratio_pow(d_min / d[j], params.weight_exponent);
             }
             wsum += w[j];
         }
@@ -594,7 +610,7 @@ fn final_assign(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     var dists: array<f32, MAX_F>;
     for (var j = 0u; j < F; j++) {
         dists[j] = b.dist[j];
-        if j < b.count && b.dist[j] <= 0.0 && zero == INVALID {
+        if j < b.count && b.dist[j] <= ZERO_DIST && zero == INVALID {
             zero = j;
         }
     }
@@ -676,7 +692,7 @@ fn rep_weights(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
         if k != INVALID {
             let r = atomicLoad(&reps[2u * k + 1u]);
             d[j] = length(p - point_pos(r).xyz);
-            if d[j] <= 0.0 && zero == INVALID {
+            if d[j] <= ZERO_DIST && zero == INVALID {
                 zero = j;
             }
         }

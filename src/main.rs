@@ -225,7 +225,8 @@ struct RenderArgs {
     #[arg(long)]
     weights_to_reps: bool,
     /// p of the inverse-distance weights, w'_f = dist^-p: 1 is Eq. (10); larger p falls off faster
-    /// (the paper's §6 suggestion), 0 is Eq. (8)'s plain mean, 64 is hard clustering.
+    /// (the paper's §6 suggestion), 0 is Eq. (8)'s plain mean (but a point on a centroid still takes
+    /// it alone), 64 is nearly hard clustering.
     #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_WEIGHT_EXPONENT)]
     weight_exponent: f32,
     /// G-term clamp: the VPL distance in 1/d² is at least CLAMP × scene diagonal (scale-free).
@@ -325,7 +326,10 @@ fn main() -> ExitCode {
     // `fuzzy-vpl info SCENE | head` closes stdout early: end quietly like other command-line tools
     // instead of panicking on the failed print (Rust ignores SIGPIPE by default).
     // SAFETY: first thing in main, before any other thread exists.
-    unsafe { libc::signal(libc::SIGPIPE, libc::SIG_DFL) };
+    #[cfg(unix)]
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL)
+    };
     // Mesa's Vulkan loader complains on stderr when XDG_RUNTIME_DIR is unset (headless machines, CI).
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         let dir = std::env::temp_dir().join("fuzzy-vpl-runtime");

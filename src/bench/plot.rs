@@ -350,7 +350,12 @@ fn short(r: &Row) -> String {
             v.to_string()
         }
     };
-    format!("{}/{}", k(r.sp_clusters), k(r.vpl_clusters))
+    let p = if r.weight_exponent != 1.0 && matches!(r.mode.as_str(), "weighted" | "sp-only") {
+        format!(" p{}", r.weight_exponent)
+    } else {
+        String::new()
+    };
+    format!("{}/{}{p}", k(r.sp_clusters), k(r.vpl_clusters))
 }
 
 #[cfg(test)]

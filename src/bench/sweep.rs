@@ -59,12 +59,12 @@ impl Mode {
         self != Mode::SpOnly
     }
 
-    /// Whether F (and so the fuzzy weights) matters.
     /// Whether the mode weights its F clusters by distance (Eq. 9 / 10, exponent p).
     pub fn uses_weights(self) -> bool {
         matches!(self, Mode::Weighted | Mode::SpOnly)
     }
 
+    /// Whether F (and so the fuzzy weights) matters.
     pub fn uses_fuzziness(self) -> bool {
         matches!(self, Mode::Uniform | Mode::Weighted | Mode::SpOnly)
     }
@@ -98,8 +98,6 @@ impl FromStr for Mode {
     }
 }
 
-/// Parses a comma-separated list (`"192,768"`), naming `option` in errors. Duplicates are dropped,
-/// order is kept; an empty list is an error.
 /// `--pairs 461/750,3072/2000`: K_SP/K_VPL pairs.
 pub fn parse_pairs(s: &str) -> Result<Vec<(u32, u32)>, String> {
     s.split(',')
@@ -118,6 +116,8 @@ pub fn parse_pairs(s: &str) -> Result<Vec<(u32, u32)>, String> {
         .collect()
 }
 
+/// Parses a comma-separated list (`"192,768"`), naming `option` in errors. Duplicates are dropped,
+/// order is kept; an empty list is an error.
 pub fn parse_list<T>(option: &str, s: &str) -> Result<Vec<T>, String>
 where
     T: FromStr + PartialEq,
@@ -271,6 +271,11 @@ impl Sweep {
             Some(p) => p.iter().copied().unzip(),
             None => (self.sp_clusters.clone(), self.vpl_clusters.clone()),
         };
+        if self.pairs.is_some() && (sps.contains(&0) || vpls.contains(&0)) {
+            return Err(
+                "--pairs: a K of 0; use --modes vpl-only or sp-only for no clustering".into(),
+            );
+        }
         let sp_modes = self.modes.iter().any(|m| m.clusters_sps());
         if sp_modes && sps.contains(&0) {
             return Err("--sp-clusters 0: use --modes vpl-only for no SP clustering".into());

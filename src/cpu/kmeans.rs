@@ -358,11 +358,15 @@ pub fn objective(points: &[Point], p: &KmParams, sample_assign: &[u32], cs: &[Ce
     sum / n.max(1) as f64
 }
 
+/// A distance at or below this counts as 0 (`ZERO_DIST` in kmeans.wgsl).
+pub const ZERO_DIST: f32 = 1e-30;
+
 /// Eq. (10) generalised to w'_f = d_f^-p (twin of `inverse_distance_weights` in kmeans.wgsl): computed
-/// as (d_min / d_f)^p normalised, so no distance or p overflows. Negative distances mark unused slots
-/// (weight 0); the first distance of 0 takes the whole weight.
+/// as (d_min / d_f)^p normalised, so no distance or p overflows; exact for p = 1 and 0. Negative
+/// distances mark unused slots (weight 0); the first distance of 0 (≤ `ZERO_DIST`) takes the whole
+/// weight.
 pub fn inverse_distance_weights(d: &[f32], p: f32) -> Vec<f32> {
-    let zero = d.iter().position(|&x| (0.0..=0.0).contains(&x));
+    let zero = d.iter().position(|&x| (0.0..=ZERO_DIST).contains(&x));
     let d_min = d
         .iter()
         .copied()
@@ -374,7 +378,14 @@ pub fn inverse_distance_weights(d: &[f32], p: f32) -> Vec<f32> {
         .map(|(j, &x)| match zero {
             _ if x < 0.0 => 0.0,
             Some(z) => (j == z) as u32 as f32,
-            None => (p * (d_min / x).log2()).exp2(),
+            None => {
+                let r = d_min / x;
+                match p {
+                    1.0 => r,
+                    0.0 => 1.0,
+                    _ => (p * r.log2()).exp2(),
+                }
+            }
         })
         .collect();
     let sum: f32 = w.iter().sum();

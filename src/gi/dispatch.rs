@@ -343,16 +343,14 @@ impl Kernel {
         let (total, per_chunk) = items;
         let per_chunk = per_chunk.clamp(WORKGROUP, WORKGROUP * MAX_GROUPS_X);
         let (sub_total, sub_per) = (sub.0, sub.1.max(1));
-        // Scale the work per submission for this adapter: first the items, then what is left of the
-        // factor on the sub range.
+        // Scale the work per submission for this adapter, on the item range only: a pass that sums
+        // over the sub range (the reference: each VPL range adds to the pixel) keeps its ranges, so
+        // its rounding, and the image, do not depend on the scale.
         let scale = ctx.work_scale.max(1) as u64;
-        let scaled = (per_chunk as u64 * scale)
+        let per_chunk = (per_chunk as u64 * scale)
             .min(total.max(1) as u64)
             .min((WORKGROUP * MAX_GROUPS_X) as u64)
             .max(per_chunk as u64) as u32;
-        let left = (scale * per_chunk as u64 / scaled as u64).max(1);
-        let per_chunk = scaled;
-        let sub_per = (sub_per as u64 * left).min(sub_total.max(1) as u64).max(1) as u32;
         let chunks = total.div_ceil(per_chunk) as u64 * sub_total.div_ceil(sub_per).max(1) as u64;
         let mut done = 0u64;
         let mut offset = 0;

@@ -15,10 +15,11 @@ pub struct GpuContext {
     /// `adapter.get_info().name` plus driver, for stats.
     pub adapter_name: String,
     pub timestamps: bool,
-    /// Multiplier on every heavy pass's work per submission. Software drivers (lavapipe) get 1: their
-    /// submissions stay short so that none is reported as a lost device. A GPU gets 256: a lavapipe-sized
-    /// submission would fill a fraction of its cores and time the launch, not the work. The images
-    /// do not depend on it (tested). `FVPL_WORK_SCALE` overrides it.
+    /// Multiplier on every heavy pass's work per submission (its item ranges). Software drivers
+    /// (lavapipe) get 1: their submissions stay short so that none is reported as a lost device. A
+    /// discrete GPU gets 256 (an integrated one 16): a lavapipe-sized submission would fill a fraction
+    /// of its cores and time the launch, not the work. The images do not depend on it (tested,
+    /// bit-identical). `FVPL_WORK_SCALE` overrides it.
     pub work_scale: u32,
 }
 
@@ -97,7 +98,9 @@ impl GpuContext {
             .filter(|&v| v >= 1)
             .unwrap_or(match info.device_type {
                 wgpu::DeviceType::Cpu => 1,
-                _ => 256,
+                wgpu::DeviceType::DiscreteGpu => 256,
+                // Integrated and unknown GPUs: smaller submissions, well inside an OS GPU watchdog.
+                _ => 16,
             });
         Ok(GpuContext {
             instance,
