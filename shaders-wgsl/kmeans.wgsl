@@ -413,49 +413,13 @@ fn nearest(p: vec3<f32>, n: vec3<f32>, f: u32) -> Nearest {
 // scan the whole grid every iteration and the slowest of them sets the time of the pass on a GPU.
 const ITER_RINGS: i32 = 3;
 
-// scan_ring for F = 1 with the best candidate in two scalars: the iterations' search (Alg. 1 lines
-// 6-11) runs ten times over the sampled points, and a function-local array indexed at run time (the
-// F-list of `Nearest`) is memory on a GPU and a per-lane scatter on lavapipe. Same candidates, same
-// order (`before`), same result as scan_ring with f = 1.
-fn scan_ring_1(best_k: ptr<function, u32>, best_r: ptr<function, f32>, p: vec3<f32>, n: vec3<f32>, c: vec3<i32>, ring: i32) {
-    let d = vec3<i32>(grid.dims);
-    let lo = max(c - vec3<i32>(ring), vec3<i32>(0));
-    let hi = min(c + vec3<i32>(ring), d - 1);
-    for (var z = lo.z; z <= hi.z; z++) {
-        for (var y = lo.y; y <= hi.y; y++) {
-            for (var x = lo.x; x <= hi.x; x++) {
-                let q = vec3<i32>(x, y, z);
-                let cheb = max(abs(q.x - c.x), max(abs(q.y - c.y), abs(q.z - c.z)));
-                if ring > 1 && cheb != ring {
-                    continue;
-                }
-                let range = textureLoad(ranges_tex, texel_xy(cell_index(q)), 0).xy;
-                for (var i = range.x; i < range.x + range.y; i++) {
-                    let a = textureLoad(sorted_tex, texel_xy(2u * i), 0);
-                    let k = a.w;
-                    let r = length(p - bitcast<vec3<f32>>(a.xyz));
-                    if !(r < BIG) || !before(r, k, *best_r, *best_k) {
-                        continue;
-                    }
-                    let nk = bitcast<vec4<f32>>(textureLoad(sorted_tex, texel_xy(2u * i + 1u), 0));
-                    if eq7_normals_agree(n, nk.xyz) {
-                        *best_k = k;
-                        *best_r = r;
-                    }
-                }
-            }
-        }
-    }
-}
-
 fn nearest_bounded(p: vec3<f32>, n: vec3<f32>) -> u32 {
-    var best_k = INVALID;
-    var best_r = BIG;
+    var best = empty_nearest();
     let c = cell_coord(p);
-    for (var ring = 1; ring <= ITER_RINGS && best_k == INVALID; ring++) {
-        scan_ring_1(&best_k, &best_r, p, n, c, ring);
+    for (var ring = 1; ring <= ITER_RINGS && best.count == 0u; ring++) {
+        scan_ring(&best, p, n, c, ring, 1u, true);
     }
-    return best_k;
+    return best.idx[0];
 }
 
 // --- Alg. 1 lines 6-11: assign each sampled point to its nearest centroid.
