@@ -77,35 +77,37 @@ fn intersect_tri(slot: u32, ray: Ray) -> vec3<f32> {
     return vec3<f32>(INF, 0.0, 0.0);
 }
 
-// Closest hit along the ray; hit.slot == INVALID on a miss. Stackless preorder with skip links, in
-// the while-while form: walk inner nodes until this ray stands at an entered leaf (or is done), then
-// test the leaf. SIMD lanes that reach a leaf wait for the others, so leaves are tested by more lanes
-// at once.
+// The while-while form (Aila and Laine 2009) of the stackless preorder walk: first walk inner nodes
+// until the ray stands at an entered leaf (this function), then test the leaf (the callers). SIMD
+// lanes that reach a leaf wait for the others, so leaves are tested by more lanes at once.
+// From node `i`, follow the preorder (a missed inner node is skipped with its link) to the next leaf
+// whose box the ray enters before `tmax`: true with `i` and `leaf` set to it, false when the walk ends.
+fn walk_to_leaf(i: ptr<function, u32>, leaf: ptr<function, BvhNode>, origin: vec3<f32>, inv_dir: vec3<f32>, tmax: f32) -> bool {
+    while *i < scene.num_nodes {
+        let node = load_node(*i);
+        let entered = aabb_entry(node.min, node.max, origin, inv_dir) < tmax;
+        if node.prim_count > 0u {
+            if entered {
+                *leaf = node;
+                return true;
+            }
+            *i += 1u;
+        } else {
+            *i = select(node.index, *i + 1u, entered);
+        }
+    }
+    return false;
+}
+
+// Closest hit along the ray; hit.slot == INVALID on a miss.
 fn trace_closest(ray_in: Ray) -> Hit {
     var ray = ray_in;
     ray.tmax = min(ray.tmax, INF);
     var hit = Hit(INF, INVALID, 0.0, 0.0);
     let inv_dir = vec3<f32>(safe_inverse(ray.dir.x), safe_inverse(ray.dir.y), safe_inverse(ray.dir.z));
     var i = 0u;
-    loop {
-        var leaf = false;
-        var node: BvhNode;
-        while i < scene.num_nodes {
-            node = load_node(i);
-            let entered = aabb_entry(node.min, node.max, ray.origin, inv_dir) < ray.tmax;
-            if node.prim_count > 0u {
-                if entered {
-                    leaf = true;
-                    break;
-                }
-                i += 1u;
-            } else {
-                i = select(node.index, i + 1u, entered);
-            }
-        }
-        if !leaf {
-            break;
-        }
+    var node: BvhNode;
+    while walk_to_leaf(&i, &node, ray.origin, inv_dir, ray.tmax) {
         for (var k = node.index; k < node.index + node.prim_count; k++) {
             let r = intersect_tri(k, ray);
             if r.x < ray.tmax {
@@ -118,31 +120,14 @@ fn trace_closest(ray_in: Ray) -> Hit {
     return hit;
 }
 
-// Any hit in [tmin, tmax]: true when the segment is blocked. While-while, as trace_closest.
+// Any hit in [tmin, tmax]: true when the segment is blocked.
 fn trace_any(ray_in: Ray) -> bool {
     var ray = ray_in;
     ray.tmax = min(ray.tmax, INF);
     let inv_dir = vec3<f32>(safe_inverse(ray.dir.x), safe_inverse(ray.dir.y), safe_inverse(ray.dir.z));
     var i = 0u;
-    loop {
-        var leaf = false;
-        var node: BvhNode;
-        while i < scene.num_nodes {
-            node = load_node(i);
-            let entered = aabb_entry(node.min, node.max, ray.origin, inv_dir) < ray.tmax;
-            if node.prim_count > 0u {
-                if entered {
-                    leaf = true;
-                    break;
-                }
-                i += 1u;
-            } else {
-                i = select(node.index, i + 1u, entered);
-            }
-        }
-        if !leaf {
-            break;
-        }
+    var node: BvhNode;
+    while walk_to_leaf(&i, &node, ray.origin, inv_dir, ray.tmax) {
         for (var k = node.index; k < node.index + node.prim_count; k++) {
             if intersect_tri(k, ray).x < ray.tmax {
                 return true;
