@@ -36,20 +36,10 @@ pub fn data_texture(
     texels: u64,
 ) -> wgpu::Texture {
     let rows = (texels.max(1) as u32).div_ceil(DATA_ROW);
-    ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d {
-            width: DATA_ROW,
-            height: rows,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    })
+    ctx.device
+        .create_texture(&super::scene_gpu::data_texture_descriptor(
+            label, format, rows,
+        ))
 }
 
 /// Records a copy of the first `bytes` bytes of `src` into `tex` (a `data_texture`), texel by texel.

@@ -192,23 +192,34 @@ fn texture_init(
     data.resize((rows * TEXEL_ROW * 16) as usize, 0);
     ctx.device.create_texture_with_data(
         &ctx.queue,
-        &wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width: TEXEL_ROW,
-                height: rows,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        },
+        &data_texture_descriptor(label, format, rows),
         wgpu::util::TextureDataOrder::LayerMajor,
         &data,
     )
+}
+
+/// The descriptor of a data texture: `rows` rows of `TEXEL_ROW` texels of `format`, sampled by
+/// `textureLoad` and filled by a copy (`texture_init` here, `dispatch::data_texture` for per-frame
+/// data).
+pub fn data_texture_descriptor(
+    label: &str,
+    format: wgpu::TextureFormat,
+    rows: u32,
+) -> wgpu::TextureDescriptor<'_> {
+    wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: TEXEL_ROW,
+            height: rows,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    }
 }
 
 /// A layout entry for a uniform buffer visible to compute.
