@@ -73,10 +73,10 @@ struct Centroid {
 
 // The grid as the nearest-centroid search reads it: grid_scatter writes the valid centroids sorted by
 // cell (2 texels a slot, as float bits: position with w = the centroid's index, normal), grid_scan each cell's
-// (first slot, count); src/gi/kmeans.rs copies both into the textures below before the search, as
+// offsets; src/gi/kmeans.rs copies both into the textures below before the search, as
 // lavapipe fetches a texel per lane with vector code but reads storage per lane in a scalar loop.
 @group(1) @binding(13) var<storage, read_write> sorted: array<vec4<u32>>;
-@group(1) @binding(14) var<storage, read_write> ranges: array<vec2<u32>>;
+@group(1) @binding(14) var<storage, read_write> ranges: array<vec4<u32>>;
 @group(1) @binding(15) var sorted_tex: texture_2d<u32>;
 @group(1) @binding(16) var ranges_tex: texture_2d<u32>;
 
@@ -237,8 +237,21 @@ fn grid_count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     atomicAdd(&cells[cell_index(cell_coord(c.pos.xyz))], 1u);
 }
 
-// Step 5 (one workgroup): exclusive prefix sum of the counts into the offsets.
+// Step 5 (one workgroup): exclusive prefix sum of the counts into the offsets off[c], then per cell
+// the texel (off[c - 1], off[c], off[c + 1], off[c + 2]) of `ranges` (off[-1] = 0, off[c] = the
+// total past the last cell): one fetch gives a row run of three cells around c (scan_ring).
 var<workgroup> partial: array<u32, 256>;
+var<workgroup> total: u32;
+
+fn offset_of(j: i32, n: u32) -> u32 {
+    if j < 0 {
+        return 0u;
+    }
+    if u32(j) >= n {
+        return total;
+    }
+    return atomicLoad(&cells[n + u32(j)]);
+}
 
 @compute @workgroup_size(256)
 fn grid_scan(@builtin(local_invocation_index) t: u32) {
@@ -259,14 +272,20 @@ fn grid_scan(@builtin(local_invocation_index) t: u32) {
             partial[i] = run;
             run += v;
         }
+        total = run;
     }
     workgroupBarrier();
     var run = partial[t];
     for (var i = a; i < b; i++) {
         let count = atomicLoad(&cells[i]);
         atomicStore(&cells[n + i], run);
-        ranges[i] = vec2<u32>(run, count);
         run += count;
+    }
+    storageBarrier();
+    workgroupBarrier();
+    for (var i = a; i < b; i++) {
+        let c = i32(i);
+        ranges[i] = vec4<u32>(offset_of(c - 1, n), offset_of(c, n), offset_of(c + 1, n), offset_of(c + 2, n));
     }
 }
 
@@ -338,47 +357,130 @@ fn empty_nearest() -> Nearest {
     return b;
 }
 
-// Scans the cells at Chebyshev distance exactly `ring` from `c` (ring 1 includes the centre: 27 cells).
+struct Slot {
+    r: f32,
+    k: u32,
+}
+
+// Slot f - 1 of the list: the candidate a new one must beat; (BIG, INVALID) while the list is short.
+fn last_slot(best: ptr<function, Nearest>, f: u32) -> Slot {
+    var last = Slot((*best).dist[0], (*best).idx[0]);
+    for (var j = 1u; j < F; j++) {
+        if j < f {
+            last = Slot((*best).dist[j], (*best).idx[j]);
+        }
+    }
+    return last;
+}
+
+// The candidates in sorted slots [a.x, a.y) then [b.x, b.y): runs of cells (cells along x are
+// consecutive in the sorted order, so a run of a row is one range). One loop for both runs: on
+// lavapipe's masked SIMD every copy of this loop costs its lanes' longest trip.
+fn scan_slots(best: ptr<function, Nearest>, p: vec3<f32>, n: vec3<f32>, a: vec2<u32>, b: vec2<u32>, f: u32, use_normals: bool) {
+    let len_a = a.y - a.x;
+    let len = len_a + (b.y - b.x);
+    for (var t = 0u; t < len; t++) {
+        let i = select(b.x + (t - len_a), a.x + t, t < len_a);
+        let c = textureLoad(sorted_tex, texel_xy(2u * i), 0);
+        let k = c.w;
+        let r = length(p - bitcast<vec3<f32>>(c.xyz));
+        // Eq. (7) is the distance or nothing: a candidate that would not enter the list needs no
+        // normal (half the texel fetches; the same result as testing the normal first).
+        // Would it enter the list?
+        let last = last_slot(best, f);
+        if !(r < BIG) || !before(r, k, last.r, last.k) {
+            continue;
+        }
+        if use_normals {
+            let nk = bitcast<vec4<f32>>(textureLoad(sorted_tex, texel_xy(2u * i + 1u), 0));
+            if !eq7_normals_agree(n, nk.xyz) {
+                continue;
+            }
+        }
+        insert(best, k, r, f);
+    }
+}
+
+// Ring 1 (the 27 cells around c) nearest first, skipping every cell whose box is farther from p than
+// the list's last slot: the centre cell, then the two other cells of its row, then the 8 other rows
+// (the 4 sharing a face with the centre first). A skipped cell holds no centroid that could enter the
+// list, so the result is the full scan's; a full list usually needs 3 of the 9 rows. The margin
+// (1e-4 cell) covers the rounding of cell_coord at cell faces.
+fn scan_ring1(best: ptr<function, Nearest>, p: vec3<f32>, n: vec3<f32>, c: vec3<i32>, f: u32, use_normals: bool) {
+    let d = vec3<i32>(grid.dims);
+    let lower = grid.origin + vec3<f32>(c) * grid.cell;
+    // Distance from p to the centre cell's lower and upper faces (0 where p lies outside the grid).
+    let g_lo = max(p - lower, vec3<f32>(0.0));
+    let g_hi = max(lower + grid.cell - p, vec3<f32>(0.0));
+    let margin = 1e-4 * grid.cell;
+    for (var item = 0u; item < 10u; item++) {
+        // Row offsets of items 2..9 as 2-bit codes (0, 1, 2 = -1, 0, +1): (dy, dz) = (-1, 0), (1, 0),
+        // (0, -1), (0, 1), (-1, -1), (1, -1), (-1, 1), (1, 1).
+        let j = 2u * max(item, 2u) - 4u;
+        let dy = select(0, i32((0x8858u >> j) & 3u) - 1, item >= 2u);
+        let dz = select(0, i32((0xa085u >> j) & 3u) - 1, item >= 2u);
+        let y = c.y + dy;
+        let z = c.z + dz;
+        if y < 0 || y >= d.y || z < 0 || z >= d.z {
+            continue;
+        }
+        let gy = select(select(0.0, g_hi.y, dy > 0), g_lo.y, dy < 0);
+        let gz = select(select(0.0, g_hi.z, dz > 0), g_lo.z, dz < 0);
+        let gyz = gy * gy + gz * gz;
+        let cut = last_slot(best, f).r + margin;
+        let cut2 = cut * cut;
+        if gyz > cut2 {
+            continue;
+        }
+        let left = c.x > 0 && gyz + g_lo.x * g_lo.x <= cut2;
+        let right = c.x + 1 < d.x && gyz + g_hi.x * g_hi.x <= cut2;
+        // (off[c - 1], off[c], off[c + 1], off[c + 2]) around the row's centre column.
+        let o = textureLoad(ranges_tex, texel_xy(cell_index(vec3<i32>(c.x, y, z))), 0);
+        var a = vec2<u32>(select(o.y, o.x, left), select(o.z, o.w, right));
+        var b = vec2<u32>(0u);
+        if item == 0u {
+            a = o.yz;
+        } else if item == 1u {
+            a = select(vec2<u32>(0u), o.xy, left);
+            b = select(vec2<u32>(0u), o.zw, right);
+        }
+        scan_slots(best, p, n, a, b, f, use_normals);
+    }
+}
+
+// Scans the cells at Chebyshev distance exactly `ring` from `c` (ring 1 includes the centre: 27 cells)
+// a row at a time: ring 1 is 9 runs of up to 3 cells, each one texel of `ranges_tex` (grid_scan); a
+// larger ring is a full run on the rows of its top, bottom, front and back faces and the two end cells
+// of the other rows. The result does not depend on the visiting order (`before`).
 fn scan_ring(best: ptr<function, Nearest>, p: vec3<f32>, n: vec3<f32>, c: vec3<i32>, ring: i32, f: u32, use_normals: bool) {
     let d = vec3<i32>(grid.dims);
     let lo = max(c - vec3<i32>(ring), vec3<i32>(0));
     let hi = min(c + vec3<i32>(ring), d - 1);
     for (var z = lo.z; z <= hi.z; z++) {
         for (var y = lo.y; y <= hi.y; y++) {
-            for (var x = lo.x; x <= hi.x; x++) {
-                let q = vec3<i32>(x, y, z);
-                let cheb = max(abs(q.x - c.x), max(abs(q.y - c.y), abs(q.z - c.z)));
-                if ring > 1 && cheb != ring {
-                    continue;
+            let row = cell_index(vec3<i32>(0, y, z));
+            var a: vec2<u32>;
+            var b = vec2<u32>(0u);
+            if ring <= 1 {
+                // (off[c - 1], off[c], off[c + 1], off[c + 2]) around the centre's column.
+                let o = textureLoad(ranges_tex, texel_xy(row + u32(c.x)), 0);
+                a = vec2<u32>(select(o.y, o.x, lo.x < c.x), select(o.z, o.w, hi.x > c.x));
+            } else if abs(y - c.y) == ring || abs(z - c.z) == ring {
+                a = vec2<u32>(
+                    textureLoad(ranges_tex, texel_xy(row + u32(lo.x)), 0).y,
+                    textureLoad(ranges_tex, texel_xy(row + u32(hi.x)), 0).z
+                );
+            } else {
+                // The row's two end cells (either may lie outside the grid: an empty run).
+                a = vec2<u32>(0u);
+                if c.x - ring >= 0 {
+                    a = textureLoad(ranges_tex, texel_xy(row + u32(c.x - ring)), 0).yz;
                 }
-                let range = textureLoad(ranges_tex, texel_xy(cell_index(q)), 0).xy;
-                for (var i = range.x; i < range.x + range.y; i++) {
-                    let a = textureLoad(sorted_tex, texel_xy(2u * i), 0);
-                    let k = a.w;
-                    let r = length(p - bitcast<vec3<f32>>(a.xyz));
-                    // Eq. (7) is the distance or nothing: a candidate that would not enter the list
-                    // needs no normal (half the texel fetches; the same result as dist7).
-                    // Would it enter the list? (Slot f - 1 is (BIG, INVALID) while the list is short.)
-                    var last_r = (*best).dist[0];
-                    var last_k = (*best).idx[0];
-                    for (var j = 1u; j < F; j++) {
-                        if j < f {
-                            last_r = (*best).dist[j];
-                            last_k = (*best).idx[j];
-                        }
-                    }
-                    if !(r < BIG) || !before(r, k, last_r, last_k) {
-                        continue;
-                    }
-                    if use_normals {
-                        let nk = bitcast<vec4<f32>>(textureLoad(sorted_tex, texel_xy(2u * i + 1u), 0));
-                        if !eq7_normals_agree(n, nk.xyz) {
-                            continue;
-                        }
-                    }
-                    insert(best, k, r, f);
+                if c.x + ring < d.x {
+                    b = textureLoad(ranges_tex, texel_xy(row + u32(c.x + ring)), 0).yz;
                 }
             }
+            scan_slots(best, p, n, a, b, f, use_normals);
         }
     }
 }
@@ -392,7 +494,7 @@ const FINAL_RINGS: i32 = 4;
 fn nearest(p: vec3<f32>, n: vec3<f32>, f: u32) -> Nearest {
     var best = empty_nearest();
     let c = cell_coord(p);
-    scan_ring(&best, p, n, c, 1, f, true);
+    scan_ring1(&best, p, n, c, f, true);
     if best.count == 0u {
         let maxr = i32(max(grid.dims.x, max(grid.dims.y, grid.dims.z)));
         for (var ring = 2; ring <= min(FINAL_RINGS, maxr) && best.count == 0u; ring++) {
@@ -416,7 +518,8 @@ const ITER_RINGS: i32 = 3;
 fn nearest_bounded(p: vec3<f32>, n: vec3<f32>) -> u32 {
     var best = empty_nearest();
     let c = cell_coord(p);
-    for (var ring = 1; ring <= ITER_RINGS && best.count == 0u; ring++) {
+    scan_ring1(&best, p, n, c, 1u, true);
+    for (var ring = 2; ring <= ITER_RINGS && best.count == 0u; ring++) {
         scan_ring(&best, p, n, c, ring, 1u, true);
     }
     return best.idx[0];

@@ -410,3 +410,33 @@ fn kmeans_stops_when_converged() {
     assert_eq!(more.assign, g.assign);
     assert_eq!(more.iterations_run, g.iterations_run);
 }
+
+/// The GPU's ring-1 search skips cells whose box lies farther than the list's last slot; the CPU twin
+/// scans all 27 cells. Both must give the same lists, bit for bit: surfaces with several centroids a
+/// cell (K large against the point count), points far outside the centroids' bounds (clamped into the
+/// grid's border cells), F from 1 to 8.
+#[test]
+fn pruned_search_equals_full_scan() {
+    let ctx = common::gpu();
+    let mut data = box_points(12000, 21);
+    // A few points well outside the box: their cells are clamped, their faces' distances are 0.
+    let mut r = Rand(5);
+    for _ in 0..300 {
+        let p = Vec3::new(
+            r.f32() * 6.0 - 2.0,
+            r.f32() * 3.0 - 1.0,
+            r.f32() * 4.5 - 1.5,
+        );
+        let n = Vec3::new(r.f32() - 0.5, r.f32() - 0.5, r.f32() - 0.5).normalize_or(Vec3::Z);
+        data.push([p.x, p.y, p.z, 1.0]);
+        data.push([n.x, n.y, n.z, 0.0]);
+    }
+    let pts = points_of(&data, 2);
+    for (k, f) in [(600, 1), (600, 6), (1500, 8), (150, 3)] {
+        let s = settings(k, f, 2, 0.5, 4);
+        let g = run_gpu(&ctx, &data, 2, &s, BOX);
+        let c = kmeans::kmeans(&pts, &g.params, s.iterations);
+        assert_eq!(g.sample_assign, c.sample_assign, "K {k} F {f}: iterations");
+        assert_eq!(g.assign, c.assign, "K {k} F {f}: final assignment");
+    }
+}

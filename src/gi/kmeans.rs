@@ -183,17 +183,23 @@ impl KMeans {
         let reps = ctx.storage("representatives", k * 8);
         // The grid for the nearest-centroid search, copied into textures after each grid build
         // (lavapipe fetches texels with vector code, storage reads per lane with scalar loops):
-        // centroids sorted by cell (2 texels each) and per cell (first slot, count).
+        // centroids sorted by cell (2 texels each) and per cell the sorted offsets of it and its row
+        // neighbours (one texel gives a row run of three cells).
         let sorted = ctx.storage("sorted centroids", k * 32);
         let max_cells = (MAX_DIM as u64).pow(3);
-        let ranges = ctx.storage("cell ranges", max_cells * 8);
+        let ranges = ctx.storage("cell ranges", max_cells * 16);
         let sorted_tex = data_texture(
             ctx,
             "sorted centroids",
             wgpu::TextureFormat::Rgba32Uint,
             2 * k,
         );
-        let ranges_tex = data_texture(ctx, "cell ranges", wgpu::TextureFormat::Rg32Uint, max_cells);
+        let ranges_tex = data_texture(
+            ctx,
+            "cell ranges",
+            wgpu::TextureFormat::Rgba32Uint,
+            max_cells,
+        );
         let sorted_view = sorted_tex.create_view(&Default::default());
         let ranges_view = ranges_tex.create_view(&Default::default());
         let kernel = self.kernel(ctx, p.f);
@@ -220,7 +226,7 @@ impl KMeans {
         let after = |entry: &str, enc: &mut wgpu::CommandEncoder| {
             if entry == "grid_scatter" {
                 copy_to_texture(enc, &sorted, &sorted_tex, k * 32);
-                copy_to_texture(enc, &ranges, &ranges_tex, max_cells * 8);
+                copy_to_texture(enc, &ranges, &ranges_tex, max_cells * 16);
             }
         };
         let seed = settings.seed;
