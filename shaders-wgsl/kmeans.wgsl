@@ -525,7 +525,21 @@ fn nearest_bounded(p: vec3<f32>, n: vec3<f32>) -> u32 {
     return best.idx[0];
 }
 
-// --- Alg. 1 lines 6-11: assign each sampled point to its nearest centroid.
+// Before the first iteration: no sampled point has a cluster yet (its sums are all zero).
+@compute @workgroup_size(64)
+fn init_sampled(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let s = chunk_item(gid, nwg);
+    if s == INVALID || s >= params.num_sampled {
+        return;
+    }
+    sample_assign[s] = INVALID;
+}
+
+// --- Alg. 1 lines 6-11: assign each sampled point to its nearest centroid. Lines 12-16 (the sums of
+// the members' positions and normals) are kept up to date here: a point that changed cluster leaves
+// the old cluster's sums and joins the new one's. Integer sums do not depend on the order of the
+// additions, so they equal summing all members afresh (the CPU twin does that), and an iteration
+// late in the run touches only the few points that moved.
 @compute @workgroup_size(64)
 fn assign_sampled(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let s = chunk_item(gid, nwg);
@@ -538,11 +552,18 @@ fn assign_sampled(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
     if p.w > 0.0 {
         k = nearest_bounded(p.xyz, point_nrm(m));
     }
-    // Alg. 1 stops early when no assignment changed: the centroids would not change either.
-    if sample_assign[s] != k {
+    let old = sample_assign[s];
+    if old != k {
+        // Alg. 1 stops early when no assignment changed: the centroids would not change either.
         atomicAdd(&bounds[6], 1u);
+        if old != INVALID {
+            add_member(old, m, true);
+        }
+        if k != INVALID {
+            add_member(k, m, false);
+        }
+        sample_assign[s] = k;
     }
-    sample_assign[s] = k;
 }
 
 // 64-bit unsigned add into words (i, i + 1) from 32-bit atomics: a carry is exact because atomicAdd
@@ -554,27 +575,35 @@ fn add64(i: u32, v: u32) {
     }
 }
 
-// --- Alg. 1 lines 12-16: accumulate member positions and normals in fixed point.
-@compute @workgroup_size(64)
-fn accumulate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let s = chunk_item(gid, nwg);
-    if s == INVALID || s >= params.num_sampled {
-        return;
+// 64-bit subtract: adds 2^64 - v, i.e. 2^32 - v to the low word (with its carry) and 2^32 - 1 to the
+// high one. Sums wrap modulo 2^64 and end exact once every addition of a pass is in.
+fn sub64(i: u32, v: u32) {
+    if v != 0u {
+        add64(i, 0u - v);
+        atomicAdd(&sums[i + 1u], 0xffffffffu);
     }
-    let k = sample_assign[s];
-    if k == INVALID {
-        return;
-    }
-    let m = sample_index(s);
+}
+
+// Adds (or removes) point m's position and normal to cluster k's fixed-point sums and count.
+fn add_member(k: u32, m: u32, remove: bool) {
     let rel = clamp((point_pos(m).xyz - params.lo.xyz) / params.ext.xyz, vec3<f32>(0.0), vec3<f32>(1.0));
     let q = vec3<u32>(rel * POS_SCALE);
     let nq = vec3<u32>(clamp(point_nrm(m) + 1.0, vec3<f32>(0.0), vec3<f32>(2.0)) * NRM_SCALE);
     let base = k * WORDS;
     for (var a = 0u; a < 3u; a++) {
-        add64(base + 2u * a, q[a]);
-        add64(base + 6u + 2u * a, nq[a]);
+        if remove {
+            sub64(base + 2u * a, q[a]);
+            sub64(base + 6u + 2u * a, nq[a]);
+        } else {
+            add64(base + 2u * a, q[a]);
+            add64(base + 6u + 2u * a, nq[a]);
+        }
     }
-    atomicAdd(&sums[base + 12u], 1u);
+    if remove {
+        atomicSub(&sums[base + 12u], 1u);
+    } else {
+        atomicAdd(&sums[base + 12u], 1u);
+    }
 }
 
 fn mean64(i: u32, count: u32) -> f32 {
@@ -583,8 +612,9 @@ fn mean64(i: u32, count: u32) -> f32 {
     return (f32(hi) * 4294967296.0 + f32(lo)) / f32(count);
 }
 
-// --- Alg. 1 lines 17-18: centroids = mean position and normalised mean normal; clears the sums.
-// An empty cluster keeps its centroid but is marked empty (w = 0) and drops out of the grid.
+// --- Alg. 1 lines 17-18: centroids = mean position and normalised mean normal (the sums stay: the
+// next assignment updates them). An empty cluster keeps its centroid but is marked empty (w = 0) and
+// drops out of the grid.
 @compute @workgroup_size(64)
 fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let k = chunk_item(gid, nwg);
@@ -606,9 +636,6 @@ fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
         c.pos.w = 0.0;
     }
     centroids[k] = c;
-    for (var i = 0u; i < WORDS; i++) {
-        atomicStore(&sums[base + i], 0u);
-    }
 }
 
 // Eq. (10), generalised to w'_f = dist_f^-p (the paper's §6 asks for a faster fall-off under a

@@ -289,6 +289,53 @@ fn fixed_point_sums_are_exact_at_the_bounds() {
     );
 }
 
+/// The sums are kept up to date by moving points (sub64 / add64): 2^18 points near the frame's far
+/// y, z (sums near 2^42, so every add and subtract crosses the low word) leave one cluster for the
+/// other in the second iteration, and both centroids still equal the CPU twin's fresh means. The
+/// points lie on a line (x, 1 - 0.2 x, 1.5), so distances order as x does.
+#[test]
+fn moving_points_keep_the_sums_exact() {
+    let ctx = common::gpu();
+    let n = 1usize << 18;
+    let (y, z) = (|x: f32| 1.0 - 0.2 * x, 1.5);
+    let mut data = Vec::with_capacity(2 * (5 * n + 1));
+    let mut push = |x: f32, count: usize| {
+        for _ in 0..count {
+            data.push([x, y(x), z, 1.0]);
+            data.push([0.0, 0.0, -1.0, 0.0]);
+        }
+    };
+    // Centroid 0 starts on B (x 1.5), centroid 1 on the first W (x 0). Iteration 1: Q (0.9) joins
+    // centroid 0, which moves to ~0.9; F (0.6) joins centroid 1 (0.6 < 0.9), which moves to 0.15.
+    // Iteration 2: F is now nearer centroid 0 (0.3 < 0.45) and moves.
+    push(1.5, 1); // B
+    push(0.0, 3 * n); // W
+    push(0.9, n); // Q
+    push(0.6, n); // F
+    let pts = points_of(&data, 2);
+    let s = settings(2, 1, 1, 0.866, 4);
+    let g = run_gpu(&ctx, &data, 2, &s, BOX);
+    let c = kmeans::kmeans(&pts, &g.params, s.iterations);
+    let f_point = 1 + 4 * n;
+    assert_eq!(
+        g.sample_assign[f_point],
+        g.sample_assign[1 + 3 * n],
+        "F did not join Q"
+    );
+    assert_eq!(g.sample_assign, c.sample_assign);
+    for (a, b) in g.centroids.iter().zip(&c.centroids) {
+        assert_eq!(a.pos, b.pos, "GPU {a:?} CPU {b:?}");
+        assert_eq!(a.nrm, b.nrm);
+    }
+    let expect = (1.5 + 0.9 * n as f32 + 0.6 * n as f32) / (2 * n + 1) as f32;
+    let c0 = g.centroids[g.sample_assign[f_point] as usize].pos;
+    assert!((c0.x - expect).abs() < 1e-5, "{c0:?} vs {expect}");
+    assert!(
+        (c0.y - y(expect)).abs() < 1e-5 && (c0.z - z).abs() < 1e-6,
+        "{c0:?}"
+    );
+}
+
 /// Eq. (10) with distances to the representatives (`rep_weights`) equals its CPU twin.
 #[test]
 fn representative_weights_match_cpu() {

@@ -116,8 +116,8 @@ const ENTRIES: &[&str] = &[
     "grid_count",
     "grid_scan",
     "grid_scatter",
+    "init_sampled",
     "assign_sampled",
-    "accumulate",
     "update",
     "final_assign",
     "rep_clear",
@@ -245,15 +245,11 @@ impl KMeans {
         let mut run = |steps: &[(&str, u32)]| {
             kernel.run_entries(ctx, profiler, label, scene, &bg, steps, seed, &after)
         };
-        run(&[("init_centroids", kk)]);
+        run(&[("init_centroids", kk), ("init_sampled", p.num_sampled)]);
         let mut iterations_run = 0;
         for i in 0..settings.iterations {
             let mut steps = grid.to_vec();
-            steps.extend([
-                ("assign_sampled", p.num_sampled),
-                ("accumulate", p.num_sampled),
-                ("update", kk),
-            ]);
+            steps.extend([("assign_sampled", p.num_sampled), ("update", kk)]);
             run(&steps);
             iterations_run += 1;
             // Alg. 1 ends early once an iteration changed no assignment: from then on the centroids
