@@ -713,6 +713,9 @@ fn final_assign(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         var k = INVALID;
         if j < b.count {
             k = b.idx[j];
+            // Representatives, step 2 (rep_min): the smallest member distance per cluster
+            // (non-negative floats order like their bits). b.dist[j] is member_dist(m, k).
+            atomicMin(&reps[2u * k], bitcast<u32>(b.dist[j]));
         }
         assign[m * f + j] = k;
         weights[m * f + j] = w[j];
@@ -720,7 +723,7 @@ fn final_assign(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
 }
 
 // --- Representatives on real surfaces: the member (in any of its F slots) nearest to the centroid.
-// Step 1: clear. reps[2k] = smallest distance (float bits), reps[2k + 1] = member index.
+// Step 1 (before final_assign): clear. reps[2k] = smallest distance (float bits), reps[2k + 1] = member index.
 @compute @workgroup_size(64)
 fn rep_clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let k = chunk_item(gid, nwg);
@@ -735,23 +738,8 @@ fn member_dist(m: u32, k: u32) -> f32 {
     return length(point_pos(m).xyz - centroids[k].pos.xyz);
 }
 
-// Step 2: smallest member distance per cluster (non-negative floats order like their bits).
-@compute @workgroup_size(64)
-fn rep_min(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let m = chunk_item(gid, nwg);
-    if m == INVALID || m >= params.num_points {
-        return;
-    }
-    let f = F;
-    for (var j = 0u; j < f; j++) {
-        let k = assign[m * f + j];
-        if k != INVALID {
-            atomicMin(&reps[2u * k], bitcast<u32>(member_dist(m, k)));
-        }
-    }
-}
-
-// Step 3: the lowest-index member at that distance.
+// Step 2 is in final_assign. Step 3: the lowest-index member within one ulp of that distance (the ulp:
+// a GPU may round the same distance differently in two kernels; the CPU twin takes the same rule).
 @compute @workgroup_size(64)
 fn rep_pick(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let m = chunk_item(gid, nwg);
@@ -761,7 +749,7 @@ fn rep_pick(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     let f = F;
     for (var j = 0u; j < f; j++) {
         let k = assign[m * f + j];
-        if k != INVALID && bitcast<u32>(member_dist(m, k)) == atomicLoad(&reps[2u * k]) {
+        if k != INVALID && bitcast<u32>(member_dist(m, k)) <= atomicLoad(&reps[2u * k]) + 1u {
             atomicMin(&reps[2u * k + 1u], m);
         }
     }

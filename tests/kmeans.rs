@@ -151,6 +151,11 @@ fn compare(
         agree_f,
         g.reps.len()
     );
+    assert_eq!(
+        rep_agree,
+        g.reps.len(),
+        "{name}: representatives differ from the CPU twin's"
+    );
     if oc > 0.0 {
         assert!(
             (og / oc - 1.0).abs() < 0.01,

@@ -303,20 +303,23 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
             weights[i * f + j] = w[j];
         }
     }
-    // Representatives: the member nearest to its centroid, lowest index on ties.
+    // Representatives: the member nearest to its centroid; among the members within one ulp of that
+    // distance, the lowest index (rep_min in final_assign and rep_pick compute the distance in two
+    // kernels; the ulp keeps a GPU that rounds them differently from losing the representative).
+    let member_dist = |i: usize, kk: u32| (points[i].pos - cs[kk as usize].pos).length().to_bits();
     let mut rep_d = vec![u32::MAX; k];
+    for i in 0..m {
+        for &kk in &assign[i * f..i * f + f] {
+            if kk != u32::MAX {
+                rep_d[kk as usize] = rep_d[kk as usize].min(member_dist(i, kk));
+            }
+        }
+    }
     let mut reps = vec![u32::MAX; k];
     for i in 0..m {
-        for j in 0..f {
-            let kk = assign[i * f + j];
-            if kk != u32::MAX {
-                let d = (points[i].pos - cs[kk as usize].pos).length().to_bits();
-                if d < rep_d[kk as usize]
-                    || (d == rep_d[kk as usize] && (i as u32) < reps[kk as usize])
-                {
-                    rep_d[kk as usize] = d;
-                    reps[kk as usize] = i as u32;
-                }
+        for &kk in &assign[i * f..i * f + f] {
+            if kk != u32::MAX && member_dist(i, kk) <= rep_d[kk as usize].saturating_add(1) {
+                reps[kk as usize] = reps[kk as usize].min(i as u32);
             }
         }
     }

@@ -121,7 +121,6 @@ const ENTRIES: &[&str] = &[
     "update",
     "final_assign",
     "rep_clear",
-    "rep_min",
     "rep_pick",
     "rep_weights",
 ];
@@ -262,13 +261,9 @@ impl KMeans {
             }
         }
         let mut steps = grid.to_vec();
-        steps.push(("final_assign", num_points));
+        steps.extend([("rep_clear", kk), ("final_assign", num_points)]);
         run(&steps);
-        run(&[
-            ("rep_clear", kk),
-            ("rep_min", num_points),
-            ("rep_pick", num_points),
-        ]);
+        run(&[("rep_pick", num_points)]);
         if settings.weights_to_reps && p.f > 1 {
             run(&[("rep_weights", num_points)]);
         }
