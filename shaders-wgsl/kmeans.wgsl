@@ -658,17 +658,20 @@ fn ratio_pow(x: f32, p: f32) -> f32 {
     return exp2(p * log2(x));
 }
 
+// Slots from F on are 0. Every loop runs over the pipeline's F slots (a constant) with the count as a
+// guard, so the arrays stay in registers: a loop to the run-time count indexes them at run time,
+// which put them in memory (on lavapipe a per-lane scatter; final_assign spent more time here than in
+// its search).
 fn inverse_distance_weights(d: array<f32, MAX_F>, count: u32, zero: u32) -> array<f32, MAX_F> {
     var w: array<f32, MAX_F>;
     var d_min = 3.4e38;
-    for (var j = 0u; j < count; j++) {
-        if d[j] >= 0.0 {
+    for (var j = 0u; j < F; j++) {
+        if j < count && d[j] >= 0.0 {
             d_min = min(d_min, d[j]);
         }
     }
     var wsum = 0.0;
-    for (var j = 0u; j < MAX_F; j++) {
-        w[j] = 0.0;
+    for (var j = 0u; j < F; j++) {
         if j < count && d[j] >= 0.0 {
             if zero != INVALID {
                 w[j] = select(0.0, 1.0, j == zero);
@@ -679,7 +682,7 @@ fn inverse_distance_weights(d: array<f32, MAX_F>, count: u32, zero: u32) -> arra
         }
     }
     if zero == INVALID && wsum > 0.0 {
-        for (var j = 0u; j < MAX_F; j++) {
+        for (var j = 0u; j < F; j++) {
             w[j] /= wsum;
         }
     }
