@@ -204,6 +204,25 @@ struct RenderArgs {
     /// K of the shading-point clustering (0 = no SP clustering; off when ≥ the pixel count).
     #[arg(long, default_value_t = 3072)]
     sp_clusters: u32,
+    #[command(flatten)]
+    cluster: ClusterArgs,
+    /// Eq. (10) weights from the distances to the SP clusters' representatives (the paper's text)
+    /// instead of their centroids (Alg. 2).
+    #[arg(long)]
+    weights_to_reps: bool,
+    /// Render with the diffuse path tracer instead (SPP samples per pixel, same bounce budget as the
+    /// VPLs): the check of the VPL reference's own bias.
+    #[arg(long, value_name = "SPP", conflicts_with = "reference")]
+    path_trace: Option<u32>,
+    /// Write a false-colour per-pixel error image against --compare (log10 rel. error, -4..0).
+    #[arg(long, requires = "compare")]
+    error_map: Option<PathBuf>,
+}
+
+/// The clustering settings `render` and `view` share (their K and VPL defaults differ, so those stay
+/// with each command; `bench` takes lists instead).
+#[derive(Args)]
+struct ClusterArgs {
     /// F: SP clusters per pixel (fuzziness), 1..16.
     #[arg(long, default_value_t = 6)]
     fuzziness: u32,
@@ -220,10 +239,6 @@ struct RenderArgs {
     /// (Eq. 9).
     #[arg(long, value_enum, default_value_t = Weighting::InverseDistance)]
     weighting: Weighting,
-    /// Eq. (10) weights from the distances to the SP clusters' representatives (the paper's text)
-    /// instead of their centroids (Alg. 2).
-    #[arg(long)]
-    weights_to_reps: bool,
     /// p of the inverse-distance weights, w'_f = dist^-p: 1 is Eq. (10); larger p falls off faster
     /// (the paper's §6 suggestion), 0 is Eq. (8)'s plain mean (but a point on a centroid still takes
     /// it alone), 64 is nearly hard clustering.
@@ -232,13 +247,34 @@ struct RenderArgs {
     /// G-term clamp: the VPL distance in 1/d² is at least CLAMP × scene diagonal (scale-free).
     #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_CLAMP)]
     clamp: f32,
-    /// Render with the diffuse path tracer instead (SPP samples per pixel, same bounce budget as the
-    /// VPLs): the check of the VPL reference's own bias.
-    #[arg(long, value_name = "SPP", conflicts_with = "reference")]
-    path_trace: Option<u32>,
-    /// Write a false-colour per-pixel error image against --compare (log10 rel. error, -4..0).
-    #[arg(long, requires = "compare")]
-    error_map: Option<PathBuf>,
+}
+
+impl ClusterArgs {
+    /// Refuses settings no clustering can use (exit 2 with one line).
+    fn check(&self) -> Result<()> {
+        check_fuzziness(self.fuzziness)?;
+        if self.gamma == 0 {
+            return Err(bad("--gamma must be at least 1"));
+        }
+        check_normal_threshold(self.normal_threshold)?;
+        check_iterations(self.iterations)?;
+        check_clamp(self.clamp)?;
+        check_weight_exponent(self.weight_exponent)
+    }
+
+    /// `fs` with these settings.
+    fn apply(&self, fs: FrameSettings) -> FrameSettings {
+        FrameSettings {
+            fuzziness: self.fuzziness,
+            gamma: self.gamma,
+            normal_threshold: self.normal_threshold,
+            iterations: self.iterations,
+            weighting: self.weighting,
+            weight_exponent: self.weight_exponent,
+            clamp: self.clamp,
+            ..fs
+        }
+    }
 }
 
 #[derive(Args)]
@@ -266,21 +302,8 @@ struct ViewArgs {
     vpl_clusters: u32,
     #[arg(long, default_value_t = 1024)]
     sp_clusters: u32,
-    #[arg(long, default_value_t = 6)]
-    fuzziness: u32,
-    #[arg(long, default_value_t = 4)]
-    gamma: u32,
-    #[arg(long, default_value_t = 0.866, allow_hyphen_values = true)]
-    normal_threshold: f32,
-    #[arg(long, default_value_t = 10)]
-    iterations: u32,
-    #[arg(long, value_enum, default_value_t = Weighting::InverseDistance)]
-    weighting: Weighting,
-    /// p of the inverse-distance weights (w'_f = dist^-p; Eq. 10: 1).
-    #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_WEIGHT_EXPONENT)]
-    weight_exponent: f32,
-    #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_CLAMP)]
-    clamp: f32,
+    #[command(flatten)]
+    cluster: ClusterArgs,
     /// Render scale of the GI image relative to the image area, 0.1..1.
     #[arg(long, default_value_t = 0.5)]
     render_scale: f32,
@@ -418,17 +441,10 @@ fn render(a: RenderArgs) -> Result<()> {
     if !(a.exposure.is_finite() && a.exposure >= 0.0) {
         return Err(bad("--exposure must be a finite number >= 0"));
     }
-    check_fuzziness(a.fuzziness)?;
+    a.cluster.check()?;
     if !(1..=64).contains(&a.bounces) {
         return Err(bad(format!("--bounces {}: must be 1..64", a.bounces)));
     }
-    if a.gamma == 0 {
-        return Err(bad("--gamma must be at least 1"));
-    }
-    check_normal_threshold(a.normal_threshold)?;
-    check_iterations(a.iterations)?;
-    check_clamp(a.clamp)?;
-    check_weight_exponent(a.weight_exponent)?;
     if let Some(p) = &a.error_map
         && p.extension().and_then(|e| e.to_str()) != Some("png")
     {
@@ -465,7 +481,7 @@ fn render(a: RenderArgs) -> Result<()> {
     };
     let ctx = GpuContext::new_headless()?;
     let mut renderer = Renderer::new(&ctx, &scene)?;
-    let settings = FrameSettings {
+    let settings = a.cluster.apply(FrameSettings {
         width: a.width,
         height: a.height,
         seed: a.seed,
@@ -475,17 +491,11 @@ fn render(a: RenderArgs) -> Result<()> {
         reference: a.reference,
         vpl_clusters: a.vpl_clusters,
         sp_clusters: a.sp_clusters,
-        fuzziness: a.fuzziness,
-        gamma: a.gamma,
-        normal_threshold: a.normal_threshold,
-        iterations: a.iterations,
-        weighting: a.weighting,
         weights_to_reps: a.weights_to_reps,
-        weight_exponent: a.weight_exponent,
-        clamp: a.clamp,
         progress: true,
         control: None,
-    };
+        ..Default::default()
+    });
     let mut runs = Vec::new();
     let mut frame = None;
     for _ in 0..a.repeat {
@@ -573,7 +583,7 @@ fn render(a: RenderArgs) -> Result<()> {
                 direct_samples: settings.direct_samples,
                 light_scale: a.scene.light_scale,
                 exposure: a.exposure,
-                clamp: a.clamp,
+                clamp: settings.clamp,
             },
             counts: stats::Counts {
                 triangles: scene.triangles.len() as u64,
@@ -621,16 +631,10 @@ fn view(a: ViewArgs) -> Result<()> {
             a.width, a.height
         )));
     }
-    check_fuzziness(a.fuzziness)?;
-    if a.gamma == 0 {
-        return Err(bad("--gamma must be at least 1"));
-    }
-    check_normal_threshold(a.normal_threshold)?;
-    check_weight_exponent(a.weight_exponent)?;
+    a.cluster.check()?;
     if !(a.exposure.is_finite() && a.exposure > 0.0) {
         return Err(bad("--exposure must be a finite number > 0"));
     }
-    check_clamp(a.clamp)?;
     if !(0.1..=1.0).contains(&a.render_scale) {
         return Err(bad(format!(
             "--render-scale {}: must be in [0.1, 1]",
@@ -655,21 +659,14 @@ fn view(a: ViewArgs) -> Result<()> {
             scene.cameras.len()
         )));
     }
-    let fs = FrameSettings {
+    let fs = a.cluster.apply(FrameSettings {
         seed: a.seed,
         direct_samples: a.direct_samples.max(1),
         vpls: a.vpls,
         vpl_clusters: a.vpl_clusters,
         sp_clusters: a.sp_clusters,
-        fuzziness: a.fuzziness,
-        gamma: a.gamma,
-        normal_threshold: a.normal_threshold,
-        iterations: a.iterations,
-        weighting: a.weighting,
-        weight_exponent: a.weight_exponent,
-        clamp: a.clamp,
         ..Default::default()
-    };
+    });
     let mut settings = fuzzy_vpl::app::UiSettings::from_frame_settings(&fs, a.exposure);
     settings.render_scale = a.render_scale;
     let args = a.scene.clone();
