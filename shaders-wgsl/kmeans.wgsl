@@ -8,6 +8,7 @@ const INVALID: u32 = 0xffffffffu;
 const BIG: f32 = 3.4028235e38;
 const MAX_F: u32 = 16u;
 const MAX_DIM: u32 = 64u;
+const MAX_CELLS: u32 = MAX_DIM * MAX_DIM * MAX_DIM;
 // F of the pipeline (params.f; src/gi/kmeans.rs builds one pipeline set per F in use): loops over the
 // F slots of a point have a constant trip count, so its list lives in registers.
 override F: u32 = 1u;
@@ -59,7 +60,8 @@ struct Centroid {
 // Centroid bounds as order-preserving float bits: min xyz, max xyz.
 @group(1) @binding(5) var<storage, read_write> bounds: array<atomic<u32>, 8>;
 @group(1) @binding(6) var<storage, read_write> grid: Grid;
-// Cell counts, then exclusive offsets (num_cells each), then a cursor per cell for the scatter.
+// Cell counts (0 outside a grid build), then from MAX_CELLS on each cell's exclusive offset. Fixed
+// places: the next grid may have more cells, and its counts must start at 0.
 @group(1) @binding(7) var<storage, read_write> cells: array<atomic<u32>>;
 // Centroid indices sorted by cell.
 @group(1) @binding(8) var<storage, read_write> cell_items: array<u32>;
@@ -152,6 +154,7 @@ fn init_centroids(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
         }
     }
     centroids[k] = c;
+    add_to_bounds(c);
 }
 
 // floor(a * b / c) without 32-bit overflow for a, b < 2^32 (a < c).
@@ -159,14 +162,9 @@ fn u64_mul_div(a: u32, b: u32, c: u32) -> f32 {
     return floor(f32(a) * (f32(b) / f32(c)));
 }
 
-// --- Alg. 1 line 5: the grid over the centroids. Step 1: bounds of the valid centroids.
-@compute @workgroup_size(64)
-fn grid_bounds(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let k = chunk_item(gid, nwg);
-    if k == INVALID || k >= params.k {
-        return;
-    }
-    let c = centroids[k];
+// --- Alg. 1 line 5: the grid over the centroids. Step 1: bounds of the valid centroids, gathered
+// where the centroids are written (init_centroids, update) so the grid needs no pass of its own.
+fn add_to_bounds(c: Centroid) {
     if c.pos.w <= 0.0 {
         return;
     }
@@ -209,21 +207,8 @@ fn grid_setup() {
     grid.num_cells = dims.x * dims.y * dims.z;
 }
 
-// Step 3: clear the per-cell counters (3 x num_cells words), striding by the dispatch's size
-// (GRID_CLEAR_ITEMS in src/gi/kmeans.rs) so a small grid costs a small dispatch.
-@compute @workgroup_size(64)
-fn grid_clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let i0 = chunk_item(gid, nwg);
-    if i0 == INVALID {
-        return;
-    }
-    let stride = nwg.x * nwg.y * 64u;
-    for (var i = i0; i < 3u * grid.num_cells; i += stride) {
-        atomicStore(&cells[i], 0u);
-    }
-}
-
-// Step 4: count centroids per cell.
+// Step 3: count centroids per cell. The counts are 0 before every grid build: the buffer starts at
+// zero and grid_scatter counts each cell back down to 0 (no clearing pass).
 @compute @workgroup_size(64)
 fn grid_count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let k = chunk_item(gid, nwg);
@@ -237,7 +222,7 @@ fn grid_count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     atomicAdd(&cells[cell_index(cell_coord(c.pos.xyz))], 1u);
 }
 
-// Step 5 (one workgroup): exclusive prefix sum of the counts into the offsets off[c], then per cell
+// Step 4 (one workgroup): exclusive prefix sum of the counts into the offsets off[c], then per cell
 // the texel (off[c - 1], off[c], off[c + 1], off[c + 2]) of `ranges` (off[-1] = 0, off[c] = the
 // total past the last cell): one fetch gives a row run of three cells around c (scan_ring).
 var<workgroup> partial: array<u32, 256>;
@@ -250,7 +235,7 @@ fn offset_of(j: i32, n: u32) -> u32 {
     if u32(j) >= n {
         return total;
     }
-    return atomicLoad(&cells[n + u32(j)]);
+    return atomicLoad(&cells[MAX_CELLS + u32(j)]);
 }
 
 @compute @workgroup_size(256)
@@ -278,7 +263,7 @@ fn grid_scan(@builtin(local_invocation_index) t: u32) {
     var run = partial[t];
     for (var i = a; i < b; i++) {
         let count = atomicLoad(&cells[i]);
-        atomicStore(&cells[n + i], run);
+        atomicStore(&cells[MAX_CELLS + i], run);
         run += count;
     }
     storageBarrier();
@@ -289,7 +274,8 @@ fn grid_scan(@builtin(local_invocation_index) t: u32) {
     }
 }
 
-// Step 6: scatter centroid indices into their cells' ranges.
+// Step 5: scatter centroid indices into their cells' ranges, counting each cell back down to 0 (the
+// order within a cell does not matter: the search orders candidates by (distance, index)).
 @compute @workgroup_size(64)
 fn grid_scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let k = chunk_item(gid, nwg);
@@ -301,8 +287,7 @@ fn grid_scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         return;
     }
     let cell = cell_index(cell_coord(c.pos.xyz));
-    let n = grid.num_cells;
-    let slot = atomicLoad(&cells[n + cell]) + atomicAdd(&cells[2u * n + cell], 1u);
+    let slot = atomicLoad(&cells[MAX_CELLS + cell]) + atomicSub(&cells[cell], 1u) - 1u;
     cell_items[slot] = k;
     sorted[2u * slot] = vec4<u32>(bitcast<vec3<u32>>(c.pos.xyz), k);
     sorted[2u * slot + 1u] = bitcast<vec4<u32>>(c.nrm);
@@ -636,6 +621,7 @@ fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
         c.pos.w = 0.0;
     }
     centroids[k] = c;
+    add_to_bounds(c);
 }
 
 // Eq. (10), generalised to w'_f = dist_f^-p (the paper's §6 asks for a faster fall-off under a

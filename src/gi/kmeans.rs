@@ -20,8 +20,6 @@ use crate::gpu::{GpuContext, profiler::Profiler};
 pub const MAX_F: u32 = 16;
 pub const MAX_DIM: u32 = 64;
 const WORDS: u64 = 13;
-/// Invocations of `grid_clear` (it loops over the live grid's cells with this stride).
-const GRID_CLEAR_ITEMS: u32 = 4096;
 
 /// Alg. 1 parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -110,9 +108,7 @@ impl Clustering {
 
 const ENTRIES: &[&str] = &[
     "init_centroids",
-    "grid_bounds",
     "grid_setup",
-    "grid_clear",
     "grid_count",
     "grid_scan",
     "grid_scatter",
@@ -174,7 +170,7 @@ impl KMeans {
             &[u32::MAX, u32::MAX, u32::MAX, 0, 0, 0, 0, 0],
         );
         let grid_buf = ctx.storage("grid", 32);
-        let cells = ctx.storage("grid cells", 3 * (MAX_DIM as u64).pow(3) * 4);
+        let cells = ctx.storage("grid cells", 2 * (MAX_DIM as u64).pow(3) * 4);
         let cell_items = ctx.storage("grid items", k * 4);
         let sample_assign = ctx.storage("sample assign", p.num_sampled as u64 * 4);
         let assign = ctx.storage("assign", m * f * 4);
@@ -230,11 +226,9 @@ impl KMeans {
         };
         let seed = settings.seed;
         let kk = p.k;
-        // The grid's steps (grid_clear covers any grid with a fixed, strided dispatch).
+        // The grid's steps (the centroids' bounds come from init_centroids and update).
         let grid = [
-            ("grid_bounds", kk),
             ("grid_setup", 1),
-            ("grid_clear", GRID_CLEAR_ITEMS),
             ("grid_count", kk),
             ("grid_scan", 1),
             ("grid_scatter", kk),
