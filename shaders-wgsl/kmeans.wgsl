@@ -104,7 +104,7 @@ fn sample_index(s: u32) -> u32 {
     return min(s * g + (h >> 8u) % g, params.num_points - 1u);
 }
 
-// Eq. (7): dist(d1, d2) = |p1 - p2| when n1 · n2 > n_t, else ∞. The search (scan_ring) takes the
+// Eq. (7): dist(d1, d2) = |p1 - p2| when n1 · n2 > n_t, else ∞. The search (scan_slots) takes the
 // distance first and this test only for a candidate that would enter the list.
 fn eq7_normals_agree(n: vec3<f32>, nc: vec3<f32>) -> bool {
     return dot(n, nc) > params.normal_threshold;
@@ -727,8 +727,11 @@ fn member_dist(m: u32, k: u32) -> f32 {
     return length(point_pos(m).xyz - centroids[k].pos.xyz);
 }
 
-// Step 2 is in final_assign. Step 3: the lowest-index member within one ulp of that distance (the ulp:
-// a GPU may round the same distance differently in two kernels; the CPU twin takes the same rule).
+// Step 2 is in final_assign. Step 3: the lowest-index member within REP_ULPS ulps (1e-6 relative)
+// of that distance. The window: a GPU may round the same distance differently in two kernels (fused
+// multiply-adds), and a pick that found no member would leave a cluster without its representative.
+// The CPU twin takes the same rule.
+const REP_ULPS: u32 = 8u;
 @compute @workgroup_size(64)
 fn rep_pick(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let m = chunk_item(gid, nwg);
@@ -738,7 +741,7 @@ fn rep_pick(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     let f = F;
     for (var j = 0u; j < f; j++) {
         let k = assign[m * f + j];
-        if k != INVALID && bitcast<u32>(member_dist(m, k)) <= atomicLoad(&reps[2u * k]) + 1u {
+        if k != INVALID && bitcast<u32>(member_dist(m, k)) <= atomicLoad(&reps[2u * k]) + REP_ULPS {
             atomicMin(&reps[2u * k + 1u], m);
         }
     }
@@ -762,6 +765,9 @@ fn rep_weights(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
         d[j] = -1.0;
         if k != INVALID {
             let r = atomicLoad(&reps[2u * k + 1u]);
+            if r == INVALID {
+                continue;
+            }
             d[j] = length(p - point_pos(r).xyz);
             if d[j] <= ZERO_DIST && zero == INVALID {
                 zero = j;
