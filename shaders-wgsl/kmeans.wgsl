@@ -81,6 +81,9 @@ struct Centroid {
 @group(1) @binding(14) var<storage, read_write> ranges: array<vec4<u32>>;
 @group(1) @binding(15) var sorted_tex: texture_2d<u32>;
 @group(1) @binding(16) var ranges_tex: texture_2d<u32>;
+// Per point and slot, the bits of the distance final_assign found (read by rep_pick, so the comparison
+// with the cluster's smallest distance is of the same number, whatever a GPU's rounding).
+@group(1) @binding(17) var<storage, read_write> member_dists: array<u32>;
 
 // Texel i of a data texture: 4096 texels a row (DATA_ROW in src/gi/dispatch.rs).
 fn texel_xy(i: u32) -> vec2<u32> {
@@ -703,8 +706,10 @@ fn final_assign(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         if j < b.count {
             k = b.idx[j];
             // Representatives, step 2 (rep_min): the smallest member distance per cluster
-            // (non-negative floats order like their bits). b.dist[j] is member_dist(m, k).
-            atomicMin(&reps[2u * k], bitcast<u32>(b.dist[j]));
+            // (non-negative floats order like their bits).
+            let bits = bitcast<u32>(b.dist[j]);
+            atomicMin(&reps[2u * k], bits);
+            member_dists[m * f + j] = bits;
         }
         assign[m * f + j] = k;
         weights[m * f + j] = w[j];
@@ -723,15 +728,8 @@ fn rep_clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     atomicStore(&reps[2u * k + 1u], 0xffffffffu);
 }
 
-fn member_dist(m: u32, k: u32) -> f32 {
-    return length(point_pos(m).xyz - centroids[k].pos.xyz);
-}
-
-// Step 2 is in final_assign. Step 3: the lowest-index member within REP_ULPS ulps (1e-6 relative)
-// of that distance. The window: a GPU may round the same distance differently in two kernels (fused
-// multiply-adds), and a pick that found no member would leave a cluster without its representative.
-// The CPU twin takes the same rule.
-const REP_ULPS: u32 = 8u;
+// Step 2 is in final_assign. Step 3: the lowest-index member at that distance (the distance as
+// final_assign stored it, not recomputed: a GPU may round one expression differently in two kernels).
 @compute @workgroup_size(64)
 fn rep_pick(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let m = chunk_item(gid, nwg);
@@ -741,7 +739,7 @@ fn rep_pick(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     let f = F;
     for (var j = 0u; j < f; j++) {
         let k = assign[m * f + j];
-        if k != INVALID && bitcast<u32>(member_dist(m, k)) <= atomicLoad(&reps[2u * k]) + REP_ULPS {
+        if k != INVALID && member_dists[m * f + j] == atomicLoad(&reps[2u * k]) {
             atomicMin(&reps[2u * k + 1u], m);
         }
     }

@@ -127,9 +127,6 @@ pub const ITER_RINGS: i32 = 3;
 /// Rings searched with Eq. (7) in the final assignment before the fallback by position alone
 /// (`FINAL_RINGS` in kmeans.wgsl).
 pub const FINAL_RINGS: i32 = 4;
-/// A representative is the lowest-index member within this many ulps (1e-6 relative) of the
-/// nearest member's distance to the centroid (`REP_ULPS` in kmeans.wgsl).
-pub const REP_ULPS: u32 = 8;
 
 /// The F nearest centroids by Eq. (7) in the 27 cells around the point, with the shader's fallbacks
 /// (`bounded`: the iterations' search, `ITER_RINGS` rings and no fallback).
@@ -306,9 +303,7 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
             weights[i * f + j] = w[j];
         }
     }
-    // Representatives: the member nearest to its centroid; among the members within REP_ULPS ulps of
-    // that distance, the lowest index (final_assign and rep_pick compute the distance in two kernels;
-    // the window keeps a GPU that rounds them differently from losing the representative).
+    // Representatives: the member nearest to its centroid, lowest index on ties.
     let member_dist = |i: usize, kk: u32| (points[i].pos - cs[kk as usize].pos).length().to_bits();
     let mut rep_d = vec![u32::MAX; k];
     for i in 0..m {
@@ -321,7 +316,7 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
     let mut reps = vec![u32::MAX; k];
     for i in 0..m {
         for &kk in &assign[i * f..i * f + f] {
-            if kk != u32::MAX && member_dist(i, kk) <= rep_d[kk as usize].saturating_add(REP_ULPS) {
+            if kk != u32::MAX && member_dist(i, kk) == rep_d[kk as usize] {
                 reps[kk as usize] = reps[kk as usize].min(i as u32);
             }
         }

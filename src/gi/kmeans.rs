@@ -139,6 +139,7 @@ impl KMeans {
             entries.extend((3..=14).map(|b| storage_layout(b, false)));
             entries.push(data_texture_layout(15, wgpu::TextureSampleType::Uint));
             entries.push(data_texture_layout(16, wgpu::TextureSampleType::Uint));
+            entries.push(storage_layout(17, false));
             Kernel::with_entries(ctx, None, "kmeans", ENTRIES, &entries, &[("F", f as f64)])
         })
     }
@@ -176,6 +177,7 @@ impl KMeans {
         let assign = ctx.storage("assign", m * f * 4);
         let weights = ctx.storage("weights", m * f * 4);
         let reps = ctx.storage("representatives", k * 8);
+        let member_dists = ctx.storage("member distances", m * f * 4);
         // The grid for the nearest-centroid search, copied into textures after each grid build
         // (lavapipe fetches texels with vector code, storage reads per lane with scalar loops):
         // centroids sorted by cell (2 texels each) and per cell the sorted offsets of it and its row
@@ -215,6 +217,7 @@ impl KMeans {
                 (12, &reps),
                 (13, &sorted),
                 (14, &ranges),
+                (17, &member_dists),
             ],
             &[(15, &sorted_view), (16, &ranges_view)],
         );
