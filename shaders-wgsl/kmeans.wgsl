@@ -63,8 +63,9 @@ struct Centroid {
 // Cell counts (0 outside a grid build), then from MAX_CELLS on each cell's exclusive offset. Fixed
 // places: the next grid may have more cells, and its counts must start at 0.
 @group(1) @binding(7) var<storage, read_write> cells: array<atomic<u32>>;
-// Centroid indices sorted by cell.
-@group(1) @binding(8) var<storage, read_write> cell_items: array<u32>;
+// Per point and slot, the bits of the distance final_assign found (read by rep_pick, so the comparison
+// with the cluster's smallest distance is of the same number, whatever a GPU's rounding).
+@group(1) @binding(8) var<storage, read_write> member_dists: array<u32>;
 // Sampled-point assignment during the iterations (one per sampled point).
 @group(1) @binding(9) var<storage, read_write> sample_assign: array<u32>;
 // Final assignment: F cluster indices per point (INVALID past the ones found) and weights (Eq. 10).
@@ -81,9 +82,6 @@ struct Centroid {
 @group(1) @binding(14) var<storage, read_write> ranges: array<vec4<u32>>;
 @group(1) @binding(15) var sorted_tex: texture_2d<u32>;
 @group(1) @binding(16) var ranges_tex: texture_2d<u32>;
-// Per point and slot, the bits of the distance final_assign found (read by rep_pick, so the comparison
-// with the cluster's smallest distance is of the same number, whatever a GPU's rounding).
-@group(1) @binding(17) var<storage, read_write> member_dists: array<u32>;
 
 // Texel i of a data texture: 4096 texels a row (DATA_ROW in src/gi/dispatch.rs).
 fn texel_xy(i: u32) -> vec2<u32> {
@@ -291,7 +289,6 @@ fn grid_scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     }
     let cell = cell_index(cell_coord(c.pos.xyz));
     let slot = atomicLoad(&cells[MAX_CELLS + cell]) + atomicSub(&cells[cell], 1u) - 1u;
-    cell_items[slot] = k;
     sorted[2u * slot] = vec4<u32>(bitcast<vec3<u32>>(c.pos.xyz), k);
     sorted[2u * slot + 1u] = bitcast<vec4<u32>>(c.nrm);
 }
@@ -436,10 +433,9 @@ fn scan_ring1(best: ptr<function, Nearest>, p: vec3<f32>, n: vec3<f32>, c: vec3<
     }
 }
 
-// Scans the cells at Chebyshev distance exactly `ring` from `c` (ring 1 includes the centre: 27 cells)
-// a row at a time: ring 1 is 9 runs of up to 3 cells, each one texel of `ranges_tex` (grid_scan); a
-// larger ring is a full run on the rows of its top, bottom, front and back faces and the two end cells
-// of the other rows. The result does not depend on the visiting order (`before`).
+// Scans the cells at Chebyshev distance exactly `ring` (2 or more; ring 1 is scan_ring1) from `c` a row
+// at a time: a full run on the rows of its top, bottom, front and back faces and the two end cells of
+// the other rows. The result does not depend on the visiting order (`before`).
 fn scan_ring(best: ptr<function, Nearest>, p: vec3<f32>, n: vec3<f32>, c: vec3<i32>, ring: i32, f: u32, use_normals: bool) {
     let d = vec3<i32>(grid.dims);
     let lo = max(c - vec3<i32>(ring), vec3<i32>(0));
@@ -449,11 +445,7 @@ fn scan_ring(best: ptr<function, Nearest>, p: vec3<f32>, n: vec3<f32>, c: vec3<i
             let row = cell_index(vec3<i32>(0, y, z));
             var a: vec2<u32>;
             var b = vec2<u32>(0u);
-            if ring <= 1 {
-                // (off[c - 1], off[c], off[c + 1], off[c + 2]) around the centre's column.
-                let o = textureLoad(ranges_tex, texel_xy(row + u32(c.x)), 0);
-                a = vec2<u32>(select(o.y, o.x, lo.x < c.x), select(o.z, o.w, hi.x > c.x));
-            } else if abs(y - c.y) == ring || abs(z - c.z) == ring {
+            if abs(y - c.y) == ring || abs(z - c.z) == ring {
                 a = vec2<u32>(
                     textureLoad(ranges_tex, texel_xy(row + u32(lo.x)), 0).y,
                     textureLoad(ranges_tex, texel_xy(row + u32(hi.x)), 0).z
@@ -489,7 +481,8 @@ fn nearest(p: vec3<f32>, n: vec3<f32>, f: u32) -> Nearest {
             scan_ring(&best, p, n, c, ring, f, true);
         }
         if best.count == 0u {
-            for (var ring = 1; ring <= maxr && best.count == 0u; ring++) {
+            scan_ring1(&best, p, n, c, 1u, false);
+            for (var ring = 2; ring <= maxr && best.count == 0u; ring++) {
                 scan_ring(&best, p, n, c, ring, 1u, false);
             }
         }

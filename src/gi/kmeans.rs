@@ -139,7 +139,6 @@ impl KMeans {
             entries.extend((3..=14).map(|b| storage_layout(b, false)));
             entries.push(data_texture_layout(15, wgpu::TextureSampleType::Uint));
             entries.push(data_texture_layout(16, wgpu::TextureSampleType::Uint));
-            entries.push(storage_layout(17, false));
             Kernel::with_entries(ctx, None, "kmeans", ENTRIES, &entries, &[("F", f as f64)])
         })
     }
@@ -172,7 +171,6 @@ impl KMeans {
         );
         let grid_buf = ctx.storage("grid", 32);
         let cells = ctx.storage("grid cells", 2 * (MAX_DIM as u64).pow(3) * 4);
-        let cell_items = ctx.storage("grid items", k * 4);
         let sample_assign = ctx.storage("sample assign", p.num_sampled as u64 * 4);
         let assign = ctx.storage("assign", m * f * 4);
         let weights = ctx.storage("weights", m * f * 4);
@@ -210,14 +208,13 @@ impl KMeans {
                 (5, &bounds),
                 (6, &grid_buf),
                 (7, &cells),
-                (8, &cell_items),
+                (8, &member_dists),
                 (9, &sample_assign),
                 (10, &assign),
                 (11, &weights),
                 (12, &reps),
                 (13, &sorted),
                 (14, &ranges),
-                (17, &member_dists),
             ],
             &[(15, &sorted_view), (16, &ranges_view)],
         );
