@@ -94,6 +94,14 @@ fn points_of(data: &[[f32; 4]], stride: usize) -> Vec<Point> {
         .collect()
 }
 
+/// The largest absolute difference between two weight arrays.
+fn worst_difference(a: &[f32], b: &[f32]) -> f32 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0f32, f32::max)
+}
+
 /// Compares GPU and CPU and checks the invariants; returns (sampled agreement, final agreement).
 fn compare(
     name: &str,
@@ -353,11 +361,7 @@ fn representative_weights_match_cpu() {
     let g = run_gpu(&ctx, &data, 2, &s, BOX);
     let pts = points_of(&data, 2);
     let w = kmeans::rep_weights(&pts, g.params.f as usize, &g.assign, &g.reps, 1.0);
-    let worst = w
-        .iter()
-        .zip(&g.weights)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0f32, f32::max);
+    let worst = worst_difference(&w, &g.weights);
     println!("representative weights: worst difference {worst:e}");
     assert!(worst < 1e-5, "{worst}");
     for (m, pt) in pts.iter().enumerate() {
@@ -385,12 +389,7 @@ fn weight_exponent_matches_cpu_and_spans_uniform_to_hard() {
         let g = run_gpu(&ctx, &data, 2, &s, BOX);
         let c = kmeans::kmeans(&pts, &g.params, s.iterations);
         assert_eq!(g.assign, c.assign, "p {p}: assignment differs");
-        let worst = g
-            .weights
-            .iter()
-            .zip(&c.weights)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0f32, f32::max);
+        let worst = worst_difference(&g.weights, &c.weights);
         println!("p {p}: worst weight difference GPU vs CPU {worst:e}");
         assert!(worst < 1e-5, "p {p}: {worst}");
         let (mut share, mut rows) = (0.0f64, 0usize);
