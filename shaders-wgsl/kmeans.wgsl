@@ -12,6 +12,12 @@ const MAX_CELLS: u32 = MAX_DIM * MAX_DIM * MAX_DIM;
 // F of the pipeline (params.f; src/gi/kmeans.rs builds one pipeline set per F in use): loops over the
 // F slots of a point have a constant trip count, so its list lives in registers.
 override F: u32 = 1u;
+// Where the nearest-centroid search reads the grid (the result is the same). true (software
+// adapters): the textures below, and a candidate's normal only when it would enter the list (lavapipe
+// fetches a texel per lane with vector code but reads storage per lane in a scalar loop, and pays for
+// every fetch). false (GPUs): the storage buffers, the normal loaded with the position (both cached;
+// a thread's chain of dependent loads sets the time there: 13% less in assign_sampled on an H100).
+override TEXTURE_SEARCH: bool = true;
 // Fixed point: positions in the data frame scaled by 2^24, normals (n + 1) by 2^23.
 const POS_SCALE: f32 = 16777216.0;
 const NRM_SCALE: f32 = 8388608.0;
@@ -60,8 +66,9 @@ struct Centroid {
 // Centroid bounds as order-preserving float bits: min xyz, max xyz.
 @group(1) @binding(5) var<storage, read_write> bounds: array<atomic<u32>, 8>;
 @group(1) @binding(6) var<storage, read_write> grid: Grid;
-// Cell counts (0 outside a grid build), then from MAX_CELLS on each cell's exclusive offset. Fixed
-// places: the next grid may have more cells, and its counts must start at 0.
+// Cell counts (0 outside a grid build), then from MAX_CELLS on each cell's offset within its scan
+// block, then from BLOCK_SUMS the blocks' totals. Fixed places: the next grid may have more cells, and
+// its counts must start at 0.
 @group(1) @binding(7) var<storage, read_write> cells: array<atomic<u32>>;
 // Per point and slot, the bits of the distance final_assign found (read by rep_pick, so the comparison
 // with the cluster's smallest distance is of the same number, whatever a GPU's rounding).
@@ -75,7 +82,7 @@ struct Centroid {
 @group(1) @binding(12) var<storage, read_write> reps: array<atomic<u32>>;
 
 // The grid as the nearest-centroid search reads it: grid_scatter writes the valid centroids sorted by
-// cell (2 texels a slot, as float bits: position with w = the centroid's index, normal), grid_scan each cell's
+// cell (2 texels a slot, as float bits: position with w = the centroid's index, normal), grid_scan_ranges each cell's
 // offsets; src/gi/kmeans.rs copies both into the textures below before the search, as
 // lavapipe fetches a texel per lane with vector code but reads storage per lane in a scalar loop.
 @group(1) @binding(13) var<storage, read_write> sorted: array<vec4<u32>>;
@@ -169,9 +176,15 @@ fn add_to_bounds(c: Centroid) {
     if c.pos.w <= 0.0 {
         return;
     }
+    // Only the atomics that can change the bound: K atomics on six words serialise on a GPU.
     for (var a = 0u; a < 3u; a++) {
-        atomicMin(&bounds[a], float_key(c.pos[a]));
-        atomicMax(&bounds[3u + a], float_key(c.pos[a]));
+        let key = float_key(c.pos[a]);
+        if key < atomicLoad(&bounds[a]) {
+            atomicMin(&bounds[a], key);
+        }
+        if key > atomicLoad(&bounds[3u + a]) {
+            atomicMax(&bounds[3u + a], key);
+        }
     }
 }
 
@@ -188,7 +201,7 @@ fn grid_setup() {
         atomicStore(&bounds[a], 0xffffffffu);
         atomicStore(&bounds[3u + a], 0u);
     }
-    // The count of changed assignments of the iteration that follows (assign_sampled).
+    // Whether the iteration that follows (assign_sampled) changes any assignment.
     atomicStore(&bounds[6], 0u);
     if !(lo.x <= hi.x) {
         // No valid centroid: one cell.
@@ -223,55 +236,130 @@ fn grid_count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     atomicAdd(&cells[cell_index(cell_coord(c.pos.xyz))], 1u);
 }
 
-// Step 4 (one workgroup): exclusive prefix sum of the counts into the offsets off[c], then per cell
-// the texel (off[c - 1], off[c], off[c + 1], off[c + 2]) of `ranges` (off[-1] = 0, off[c] = the
-// total past the last cell): one fetch gives a row run of three cells around c (scan_ring).
-var<workgroup> partial: array<u32, 256>;
-var<workgroup> total: u32;
+// Step 4: exclusive prefix sum of the counts into the offsets off[c], in blocks of SCAN_BLOCK cells
+// (256 invocations x 4 cells), then per cell the texel (off[c - 1], off[c], off[c + 1], off[c + 2]) of
+// `ranges` (off[-1] = 0, off[c] = the total past the last cell): one fetch gives a row run of three
+// cells around c (scan_ring1). Two passes; a workgroup takes blocks wid, wid + groups, ..., so any
+// number of workgroups gives the same sums. Only the GPU knows the cell count: the host dispatches
+// about one workgroup a block from an estimate (src/gi/kmeans.rs, scan_groups). A single workgroup
+// walking all cells cost 0.6 ms a grid build at 94k cells on an H100; a fixed 256 workgroups, mostly
+// idle, cost lavapipe 4 ms a grid build at 720 cells.
+const SCAN_BLOCK: u32 = 1024u;
+// Where the blocks' totals go in `cells` (after the counts and the offsets within blocks).
+const BLOCK_SUMS: u32 = 2u * MAX_CELLS;
 
-fn offset_of(j: i32, n: u32) -> u32 {
+var<workgroup> partial: array<u32, 256>;
+var<workgroup> wg_cells: u32;
+
+// The grid's cell count as a workgroup-uniform value (a storage value is not one under WGSL's rules for
+// barriers, and the block loops hold barriers).
+fn workgroup_cells(t: u32) -> u32 {
+    if t == 0u {
+        wg_cells = grid.num_cells;
+    }
+    return workgroupUniformLoad(&wg_cells);
+}
+
+// Inclusive prefix sum of partial[0..256) in place (Hillis-Steele); every invocation of the
+// workgroup calls it.
+fn scan_partial(t: u32) {
+    workgroupBarrier();
+    for (var d = 1u; d < 256u; d <<= 1u) {
+        var v = 0u;
+        if t >= d {
+            v = partial[t - d];
+        }
+        workgroupBarrier();
+        partial[t] += v;
+        workgroupBarrier();
+    }
+}
+
+// Step 4a: each cell's offset within its block (at MAX_CELLS + c) and each block's total (at
+// BLOCK_SUMS + b).
+@compute @workgroup_size(256)
+fn grid_scan_blocks(
+    @builtin(local_invocation_index) t: u32,
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    let n = workgroup_cells(t);
+    for (var block = wid.x; block * SCAN_BLOCK < n; block += groups.x) {
+        let c0 = block * SCAN_BLOCK + 4u * t;
+        var counts = vec4<u32>(0u);
+        for (var i = 0u; i < 4u; i++) {
+            if c0 + i < n {
+                counts[i] = atomicLoad(&cells[c0 + i]);
+            }
+        }
+        let s = counts.x + counts.y + counts.z + counts.w;
+        partial[t] = s;
+        scan_partial(t);
+        var run = partial[t] - s;
+        for (var i = 0u; i < 4u; i++) {
+            if c0 + i < n {
+                atomicStore(&cells[MAX_CELLS + c0 + i], run);
+            }
+            run += counts[i];
+        }
+        if t == 255u {
+            atomicStore(&cells[BLOCK_SUMS + block], partial[255]);
+        }
+        // partial is rewritten by the next block.
+        workgroupBarrier();
+    }
+}
+
+// off[j] once partial holds the inclusive prefix sum of the blocks' totals.
+fn cell_offset(j: i32, n: u32, total: u32) -> u32 {
     if j < 0 {
         return 0u;
     }
-    if u32(j) >= n {
+    let u = u32(j);
+    if u >= n {
         return total;
     }
-    return atomicLoad(&cells[MAX_CELLS + u32(j)]);
+    let block = u / SCAN_BLOCK;
+    var before = 0u;
+    if block > 0u {
+        before = partial[block - 1u];
+    }
+    return atomicLoad(&cells[MAX_CELLS + u]) + before;
 }
 
+// Step 4b: every workgroup sums the blocks' totals itself (at most 256, so no third pass) and writes
+// the texels of its blocks. It only reads the offsets within blocks, so no workgroup waits for another.
 @compute @workgroup_size(256)
-fn grid_scan(@builtin(local_invocation_index) t: u32) {
-    let n = grid.num_cells;
-    let per = (n + 255u) / 256u;
-    let a = t * per;
-    let b = min(a + per, n);
+fn grid_scan_ranges(
+    @builtin(local_invocation_index) t: u32,
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    let n = workgroup_cells(t);
+    if wid.x * SCAN_BLOCK >= n {
+        return;
+    }
+    let blocks = (n + SCAN_BLOCK - 1u) / SCAN_BLOCK;
     var s = 0u;
-    for (var i = a; i < b; i++) {
-        s += atomicLoad(&cells[i]);
+    if t < blocks {
+        s = atomicLoad(&cells[BLOCK_SUMS + t]);
     }
     partial[t] = s;
-    workgroupBarrier();
-    if t == 0u {
-        var run = 0u;
-        for (var i = 0u; i < 256u; i++) {
-            let v = partial[i];
-            partial[i] = run;
-            run += v;
+    scan_partial(t);
+    let total = partial[255];
+    for (var block = wid.x; block < blocks; block += groups.x) {
+        for (var i = 0u; i < 4u; i++) {
+            let c = block * SCAN_BLOCK + i * 256u + t;
+            if c < n {
+                let j = i32(c);
+                ranges[c] = vec4<u32>(
+                    cell_offset(j - 1, n, total),
+                    cell_offset(j, n, total),
+                    cell_offset(j + 1, n, total),
+                    cell_offset(j + 2, n, total)
+                );
+            }
         }
-        total = run;
-    }
-    workgroupBarrier();
-    var run = partial[t];
-    for (var i = a; i < b; i++) {
-        let count = atomicLoad(&cells[i]);
-        atomicStore(&cells[MAX_CELLS + i], run);
-        run += count;
-    }
-    storageBarrier();
-    workgroupBarrier();
-    for (var i = a; i < b; i++) {
-        let c = i32(i);
-        ranges[i] = vec4<u32>(offset_of(c - 1, n), offset_of(c, n), offset_of(c + 1, n), offset_of(c + 2, n));
     }
 }
 
@@ -288,7 +376,7 @@ fn grid_scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         return;
     }
     let cell = cell_index(cell_coord(c.pos.xyz));
-    let slot = atomicLoad(&cells[MAX_CELLS + cell]) + atomicSub(&cells[cell], 1u) - 1u;
+    let slot = ranges[cell].y + atomicSub(&cells[cell], 1u) - 1u;
     sorted[2u * slot] = vec4<u32>(bitcast<vec3<u32>>(c.pos.xyz), k);
     sorted[2u * slot + 1u] = bitcast<vec4<u32>>(c.nrm);
 }
@@ -358,6 +446,14 @@ fn last_slot(best: ptr<function, Nearest>, f: u32) -> Slot {
     return last;
 }
 
+// Cell i's texel (off[i - 1], off[i], off[i + 1], off[i + 2]) (see TEXTURE_SEARCH).
+fn cell_texel(i: u32) -> vec4<u32> {
+    if TEXTURE_SEARCH {
+        return textureLoad(ranges_tex, texel_xy(i), 0);
+    }
+    return ranges[i];
+}
+
 // The candidates in sorted slots [a.x, a.y) then [b.x, b.y): runs of cells (cells along x are
 // consecutive in the sorted order, so a run of a row is one range). One loop for both runs: on
 // lavapipe's masked SIMD every copy of this loop costs its lanes' longest trip.
@@ -366,7 +462,14 @@ fn scan_slots(best: ptr<function, Nearest>, p: vec3<f32>, n: vec3<f32>, a: vec2<
     let len = len_a + (b.y - b.x);
     for (var t = 0u; t < len; t++) {
         let i = select(b.x + (t - len_a), a.x + t, t < len_a);
-        let c = textureLoad(sorted_tex, texel_xy(2u * i), 0);
+        var c: vec4<u32>;
+        var nk: vec4<f32>;
+        if TEXTURE_SEARCH {
+            c = textureLoad(sorted_tex, texel_xy(2u * i), 0);
+        } else {
+            c = sorted[2u * i];
+            nk = bitcast<vec4<f32>>(sorted[2u * i + 1u]);
+        }
         let k = c.w;
         let r = length(p - bitcast<vec3<f32>>(c.xyz));
         // Eq. (7) is the distance or nothing: a candidate that would not enter the list needs no
@@ -377,7 +480,9 @@ fn scan_slots(best: ptr<function, Nearest>, p: vec3<f32>, n: vec3<f32>, a: vec2<
             continue;
         }
         if use_normals {
-            let nk = bitcast<vec4<f32>>(textureLoad(sorted_tex, texel_xy(2u * i + 1u), 0));
+            if TEXTURE_SEARCH {
+                nk = bitcast<vec4<f32>>(textureLoad(sorted_tex, texel_xy(2u * i + 1u), 0));
+            }
             if !eq7_normals_agree(n, nk.xyz) {
                 continue;
             }
@@ -420,7 +525,7 @@ fn scan_ring1(best: ptr<function, Nearest>, p: vec3<f32>, n: vec3<f32>, c: vec3<
         let left = c.x > 0 && gyz + g_lo.x * g_lo.x <= cut2;
         let right = c.x + 1 < d.x && gyz + g_hi.x * g_hi.x <= cut2;
         // (off[c - 1], off[c], off[c + 1], off[c + 2]) around the row's centre column.
-        let o = textureLoad(ranges_tex, texel_xy(cell_index(vec3<i32>(c.x, y, z))), 0);
+        let o = cell_texel(cell_index(vec3<i32>(c.x, y, z)));
         var a = vec2<u32>(select(o.y, o.x, left), select(o.z, o.w, right));
         var b = vec2<u32>(0u);
         if item == 0u {
@@ -447,17 +552,17 @@ fn scan_ring(best: ptr<function, Nearest>, p: vec3<f32>, n: vec3<f32>, c: vec3<i
             var b = vec2<u32>(0u);
             if abs(y - c.y) == ring || abs(z - c.z) == ring {
                 a = vec2<u32>(
-                    textureLoad(ranges_tex, texel_xy(row + u32(lo.x)), 0).y,
-                    textureLoad(ranges_tex, texel_xy(row + u32(hi.x)), 0).z
+                    cell_texel(row + u32(lo.x)).y,
+                    cell_texel(row + u32(hi.x)).z
                 );
             } else {
                 // The row's two end cells (either may lie outside the grid: an empty run).
                 a = vec2<u32>(0u);
                 if c.x - ring >= 0 {
-                    a = textureLoad(ranges_tex, texel_xy(row + u32(c.x - ring)), 0).yz;
+                    a = cell_texel(row + u32(c.x - ring)).yz;
                 }
                 if c.x + ring < d.x {
-                    b = textureLoad(ranges_tex, texel_xy(row + u32(c.x + ring)), 0).yz;
+                    b = cell_texel(row + u32(c.x + ring)).yz;
                 }
             }
             scan_slots(best, p, n, a, b, f, use_normals);
@@ -535,8 +640,12 @@ fn assign_sampled(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
     }
     let old = sample_assign[s];
     if old != k {
-        // Alg. 1 stops early when no assignment changed: the centroids would not change either.
-        atomicAdd(&bounds[6], 1u);
+        // Alg. 1 stops early when no assignment changed: the centroids would not change either. A
+        // flag, set once: an atomicAdd per moved point all on one word serialised the first
+        // iterations on a GPU.
+        if atomicLoad(&bounds[6]) == 0u {
+            atomicStore(&bounds[6], 1u);
+        }
         if old != INVALID {
             add_member(old, m, true);
         }
@@ -701,7 +810,11 @@ fn final_assign(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
             // Representatives, step 2 (rep_min): the smallest member distance per cluster
             // (non-negative floats order like their bits).
             let bits = bitcast<u32>(b.dist[j]);
-            atomicMin(&reps[2u * k], bits);
+            // Only when it can lower the minimum: every member's atomic on its cluster's one word
+            // (4.4M on 1000 words at 1024x720, F 6) serialised the pass on a GPU.
+            if bits < atomicLoad(&reps[2u * k]) {
+                atomicMin(&reps[2u * k], bits);
+            }
             member_dists[m * f + j] = bits;
         }
         assign[m * f + j] = k;

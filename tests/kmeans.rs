@@ -6,7 +6,7 @@ mod common;
 use common::Rand;
 use fuzzy_vpl::bvh::SceneBvh;
 use fuzzy_vpl::cpu::kmeans::{self, Centroid, Point};
-use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KmParams};
+use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KMeansTuning, KmParams, scan_groups};
 use fuzzy_vpl::gi::pipeline::{FrameSettings, Renderer};
 use fuzzy_vpl::gi::scene_gpu::SceneGpu;
 use fuzzy_vpl::gpu::{GpuContext, profiler::Profiler};
@@ -30,10 +30,20 @@ fn run_gpu(
     s: &KMeansSettings,
     frame: (Vec3, Vec3),
 ) -> GpuResult {
+    run_gpu_with(ctx, &KMeans::new(), data, stride, s, frame)
+}
+
+fn run_gpu_with(
+    ctx: &GpuContext,
+    km: &KMeans,
+    data: &[[f32; 4]],
+    stride: u32,
+    s: &KMeansSettings,
+    frame: (Vec3, Vec3),
+) -> GpuResult {
     let sc = scene::load("builtin:cornell").unwrap();
     let bvh = SceneBvh::build(&sc).unwrap();
     let gpu = SceneGpu::upload(ctx, &sc, &bvh);
-    let km = KMeans::new();
     let mut prof = Profiler::new(ctx);
     let buf = ctx.storage_init("data", data);
     let m = data.len() as u32 / stride;
@@ -483,11 +493,100 @@ fn pruned_search_equals_full_scan() {
         data.push([n.x, n.y, n.z, 0.0]);
     }
     let pts = points_of(&data, 2);
-    for (k, f) in [(600, 1), (600, 6), (1500, 8), (150, 3)] {
-        let s = settings(k, f, 2, 0.5, 4);
-        let g = run_gpu(&ctx, &data, 2, &s, BOX);
+    // Both ways of reading the grid (textures: software adapters; storage: GPUs).
+    for texture in [true, false] {
+        let km = KMeans::with_tuning(KMeansTuning {
+            texture_search: Some(texture),
+            ..Default::default()
+        });
+        for (k, f) in [(600, 1), (600, 6), (1500, 8), (150, 3)] {
+            let s = settings(k, f, 2, 0.5, 4);
+            let g = run_gpu_with(&ctx, &km, &data, 2, &s, BOX);
+            let c = kmeans::kmeans(&pts, &g.params, s.iterations);
+            let case = format!("texture search {texture}, K {k} F {f}");
+            assert_eq!(g.sample_assign, c.sample_assign, "{case}: iterations");
+            assert_eq!(g.assign, c.assign, "{case}: final assignment");
+            assert_eq!(g.reps, c.reps, "{case}: representatives");
+        }
+    }
+}
+
+/// Large K: the grid's prefix sum runs in blocks of 1024 cells, each workgroup adding the totals of
+/// the blocks before it; a wrong block offset misplaces every centroid of a later block (the searches
+/// then miss them). With the default workgroups (one a block) and with fewer (a workgroup takes every
+/// n-th block), the lists must equal the CPU twin's full scan, bit for bit.
+#[test]
+fn grid_over_many_scan_blocks_equals_full_scan() {
+    let ctx = common::gpu();
+    let data = box_points(40000, 31);
+    let pts = points_of(&data, 2);
+    let s = settings(9000, 4, 2, 0.866, 3);
+    let groups = |n| {
+        KMeans::with_tuning(KMeansTuning {
+            scan_groups: Some(n),
+            ..Default::default()
+        })
+    };
+    let storage = KMeans::with_tuning(KMeansTuning {
+        scan_groups: Some(2),
+        texture_search: Some(false),
+    });
+    for km in [KMeans::new(), groups(1), groups(3), storage] {
+        let g = run_gpu_with(&ctx, &km, &data, 2, &s, BOX);
         let c = kmeans::kmeans(&pts, &g.params, s.iterations);
-        assert_eq!(g.sample_assign, c.sample_assign, "K {k} F {f}: iterations");
-        assert_eq!(g.assign, c.assign, "K {k} F {f}: final assignment");
+        let cells = kmeans::grid_cells(&g.params, &c.centroids);
+        assert!(
+            cells > 8 * 1024,
+            "only {cells} cells: the test must span many scan blocks"
+        );
+        assert!(
+            cells <= scan_groups(s.k) * 1024,
+            "{cells} cells above the bound"
+        );
+        assert_eq!(g.sample_assign, c.sample_assign, "iterations");
+        assert_eq!(g.assign, c.assign, "final assignment");
+        assert_eq!(g.reps, c.reps, "representatives");
+    }
+}
+
+/// `scan_groups` bounds the cells of the grid over any centroids: boxes of every shape (cubes, slabs,
+/// rods, points) with K from 1 to 200,000, against the CPU twin's grid (the GPU's has the same cells).
+#[test]
+fn scan_groups_bound_every_grid() {
+    let mut r = Rand(9);
+    for case in 0..400 {
+        let k = [1, 7, 100, 1000, 8000, 30000, 200000][case % 7];
+        // Half near-cubes (the most cells for their surface: the bound's main term), half any shape.
+        let e = Vec3::new(r.f32(), r.f32(), r.f32());
+        let ext = if case % 2 == 0 {
+            (Vec3::ONE + 0.05 * e) * 3.0
+        } else {
+            e.powf(4.0) * 10.0
+        };
+        let n = (k as usize).min(3000);
+        let centroids: Vec<Centroid> = (0..n)
+            .map(|i| Centroid {
+                // The corners first, so the bounds are the box's.
+                pos: if i < 8 {
+                    Vec3::new((i & 1) as f32, (i >> 1 & 1) as f32, (i >> 2) as f32) * ext
+                } else {
+                    Vec3::new(r.f32(), r.f32(), r.f32()) * ext
+                },
+                valid: true,
+                nrm: Vec3::Z,
+            })
+            .collect();
+        let p = KmParams::new(
+            n as u32,
+            2,
+            &settings(k, 1, 1, 0.5, 1),
+            (Vec3::ZERO, ext.max(Vec3::splat(1e-3))),
+        );
+        let cells = kmeans::grid_cells(&p, &centroids);
+        assert!(
+            cells <= scan_groups(k) * 1024,
+            "K {k}, extent {ext}: {cells} cells, bound {} blocks",
+            scan_groups(k)
+        );
     }
 }

@@ -74,6 +74,12 @@ struct Grid {
     cells: Vec<Vec<u32>>,
 }
 
+/// Cells of the grid Alg. 1 line 5 builds over these centroids (the GPU's grid has the same; tests use
+/// it to know how many blocks its prefix sum spans).
+pub fn grid_cells(p: &KmParams, cs: &[Centroid]) -> u32 {
+    Grid::build(p, cs).cells.len() as u32
+}
+
 impl Grid {
     fn build(p: &KmParams, cs: &[Centroid]) -> Grid {
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));

@@ -13,13 +13,29 @@ use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use super::dispatch::{Kernel, copy_to_texture, data_texture};
+use super::dispatch::{Kernel, WORKGROUP, copy_to_texture, data_texture};
 use super::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::{GpuContext, profiler::Profiler};
 
 pub const MAX_F: u32 = 16;
 pub const MAX_DIM: u32 = 64;
 const WORDS: u64 = 13;
+const MAX_CELLS: u64 = (MAX_DIM as u64).pow(3);
+/// The most blocks of the grid's prefix sum (1024 cells each, kmeans.wgsl `SCAN_BLOCK`).
+const SCAN_BLOCKS: u64 = MAX_CELLS / 1024;
+
+/// Workgroups for the grid's prefix sum: one per block of cells. Only the GPU knows the cell count
+/// (grid_setup), so this bounds it from K. With cell edge c ≥ 1.5 s, s² = A / K (A: the surface of the
+/// centroids' bounding box) and at most 64 cells an axis (c ≥ e_max / 64), the cells Π ceil(e_a / c)
+/// are at most V / c³ + (A / 2) / c² + Σ e_a / c + 1 ≤ K^1.5 / (3.375 · 6^1.5) + K / 4.5 + 193 (a
+/// cube has the most volume for its surface). Conference K 1000 / 8000 / 30000: 720 / 14,144 /
+/// 94,080 cells in 1 / 14 / 92 blocks, bounds 2 / 17 / 110 (an idle workgroup costs lavapipe
+/// ~15 µs). The scan stays right with fewer workgroups (each takes every n-th block; tested).
+pub fn scan_groups(k: u32) -> u32 {
+    let k = k as f64;
+    let cells = k.powf(1.5) / (3.375 * 6f64.powf(1.5)) + k / 4.5 + 193.0;
+    ((cells / 1024.0).ceil() as u64).clamp(1, SCAN_BLOCKS) as u32
+}
 
 /// Alg. 1 parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -110,7 +126,8 @@ const ENTRIES: &[&str] = &[
     "init_centroids",
     "grid_setup",
     "grid_count",
-    "grid_scan",
+    "grid_scan_blocks",
+    "grid_scan_ranges",
     "grid_scatter",
     "init_sampled",
     "assign_sampled",
@@ -121,15 +138,38 @@ const ENTRIES: &[&str] = &[
     "rep_weights",
 ];
 
+/// How the k-means runs on an adapter; the clusters do not depend on it (tested). `None` picks the
+/// default.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct KMeansTuning {
+    /// Workgroups of the grid's prefix sum (default `scan_groups(K)`).
+    pub scan_groups: Option<u32>,
+    /// The search reads the grid through textures (kmeans.wgsl `TEXTURE_SEARCH`; default on a
+    /// software adapter) instead of storage buffers.
+    pub texture_search: Option<bool>,
+}
+
 #[derive(Default)]
 pub struct KMeans {
     /// One pipeline set per F (the shader's `override F`), built the first time that F is clustered.
     kernels: [OnceCell<Kernel>; MAX_F as usize],
+    tuning: KMeansTuning,
 }
 
 impl KMeans {
     pub fn new() -> Self {
         Self::default()
+    }
+
+    pub fn with_tuning(tuning: KMeansTuning) -> Self {
+        KMeans {
+            tuning,
+            ..Self::default()
+        }
+    }
+
+    fn texture_search(&self, ctx: &GpuContext) -> bool {
+        self.tuning.texture_search.unwrap_or(ctx.software)
     }
 
     fn kernel(&self, ctx: &GpuContext, f: u32) -> &Kernel {
@@ -139,7 +179,15 @@ impl KMeans {
             entries.extend((3..=14).map(|b| storage_layout(b, false)));
             entries.push(data_texture_layout(15, wgpu::TextureSampleType::Uint));
             entries.push(data_texture_layout(16, wgpu::TextureSampleType::Uint));
-            Kernel::with_entries(ctx, None, "kmeans", ENTRIES, &entries, &[("F", f as f64)])
+            let texture = self.texture_search(ctx) as u32 as f64;
+            Kernel::with_entries(
+                ctx,
+                None,
+                "kmeans",
+                ENTRIES,
+                &entries,
+                &[("F", f as f64), ("TEXTURE_SEARCH", texture)],
+            )
         })
     }
 
@@ -170,7 +218,7 @@ impl KMeans {
             &[u32::MAX, u32::MAX, u32::MAX, 0, 0, 0, 0, 0],
         );
         let grid_buf = ctx.storage("grid", 32);
-        let cells = ctx.storage("grid cells", 2 * (MAX_DIM as u64).pow(3) * 4);
+        let cells = ctx.storage("grid cells", (2 * MAX_CELLS + SCAN_BLOCKS) * 4);
         let sample_assign = ctx.storage("sample assign", p.num_sampled as u64 * 4);
         let assign = ctx.storage("assign", m * f * 4);
         let weights = ctx.storage("weights", m * f * 4);
@@ -181,19 +229,21 @@ impl KMeans {
         // centroids sorted by cell (2 texels each) and per cell the sorted offsets of it and its row
         // neighbours (one texel gives a row run of three cells).
         let sorted = ctx.storage("sorted centroids", k * 32);
-        let max_cells = (MAX_DIM as u64).pow(3);
-        let ranges = ctx.storage("cell ranges", max_cells * 16);
+        let ranges = ctx.storage("cell ranges", MAX_CELLS * 16);
+        // (Without the texture search the textures are bound but never read: one texel each.)
+        let texture_search = self.texture_search(ctx);
+        let texels = |n: u64| if texture_search { n } else { 1 };
         let sorted_tex = data_texture(
             ctx,
             "sorted centroids",
             wgpu::TextureFormat::Rgba32Uint,
-            2 * k,
+            texels(2 * k),
         );
         let ranges_tex = data_texture(
             ctx,
             "cell ranges",
             wgpu::TextureFormat::Rgba32Uint,
-            max_cells,
+            texels(MAX_CELLS),
         );
         let sorted_view = sorted_tex.create_view(&Default::default());
         let ranges_view = ranges_tex.create_view(&Default::default());
@@ -219,18 +269,21 @@ impl KMeans {
             &[(15, &sorted_view), (16, &ranges_view)],
         );
         let after = |entry: &str, enc: &mut wgpu::CommandEncoder| {
-            if entry == "grid_scatter" {
+            if entry == "grid_scatter" && texture_search {
                 copy_to_texture(enc, &sorted, &sorted_tex, k * 32);
-                copy_to_texture(enc, &ranges, &ranges_tex, max_cells * 16);
+                copy_to_texture(enc, &ranges, &ranges_tex, MAX_CELLS * 16);
             }
         };
         let seed = settings.seed;
         let kk = p.k;
-        // The grid's steps (the centroids' bounds come from init_centroids and update).
+        // The grid's steps (the centroids' bounds come from init_centroids and update). Every step's
+        // count is of invocations of `WORKGROUP` (the scan's workgroups are 256 wide, one each).
+        let scan = WORKGROUP * self.tuning.scan_groups.unwrap_or_else(|| scan_groups(kk));
         let grid = [
             ("grid_setup", 1),
             ("grid_count", kk),
-            ("grid_scan", 1),
+            ("grid_scan_blocks", scan),
+            ("grid_scan_ranges", scan),
             ("grid_scatter", kk),
         ];
         // Small steps share a submission: one per iteration, then the final assignment and the

@@ -21,6 +21,9 @@ pub struct GpuContext {
     /// of its cores and time the launch, not the work. The images do not depend on it (tested,
     /// bit-identical). `FVPL_WORK_SCALE` overrides it.
     pub work_scale: u32,
+    /// A CPU adapter (lavapipe): passes that can read their data two ways pick the one a software
+    /// driver runs faster (e.g. the k-means search through textures). Results do not depend on it.
+    pub software: bool,
 }
 
 /// Limits requested explicitly: what our passes need, clamped to what the adapter has. lavapipe allows
@@ -110,6 +113,7 @@ impl GpuContext {
             adapter_name,
             timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
             work_scale,
+            software: info.device_type == wgpu::DeviceType::Cpu,
         })
     }
 
