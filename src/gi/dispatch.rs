@@ -12,6 +12,9 @@ pub const WORKGROUP: u32 = 64;
 /// The most workgroups one dispatch row holds (WebGPU's guaranteed minimum per dimension).
 const MAX_GROUPS_X: u32 = 65535;
 
+/// Records copies between the passes of `Kernel::run_entries`.
+pub type RecordCopies<'a> = dyn Fn(&mut wgpu::CommandEncoder) + 'a;
+
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct Chunk {
@@ -269,10 +272,13 @@ impl Kernel {
         );
     }
 
-    /// Runs several small steps `(entry, items)` in order in one submission (one compute pass each,
-    /// timed under `label`), then waits. The chunk covers every invocation (offset 0, no count
-    /// limit): each entry point must bound its items itself. `after(entry, encoder)` may record copies
-    /// after each step. For light work only (k-means steps).
+    /// Runs several small steps `(entry, items)` in order in one submission, then waits. The steps
+    /// are dispatches of one compute pass timed under `label` (wgpu puts a barrier between
+    /// dispatches that share a writable buffer); the pass ends after step `after.0` so that
+    /// `after.1` can record copies, and a new one starts. With `FVPL_PROFILE_STEPS` set each step is
+    /// its own pass timed under `label.entry` (a diagnosis aid: every pass then adds its own start
+    /// and end to the total). The chunk covers every invocation (offset 0, no count limit): each
+    /// entry point must bound its items itself. For light work only (k-means steps).
     #[allow(clippy::too_many_arguments)]
     pub fn run_entries(
         &self,
@@ -283,7 +289,7 @@ impl Kernel {
         group: &wgpu::BindGroup,
         steps: &[(&str, u32)],
         seed: u32,
-        after: &dyn Fn(&str, &mut wgpu::CommandEncoder),
+        after: Option<(&str, &RecordCopies)>,
     ) {
         let c = Chunk {
             offset: 0,
@@ -297,18 +303,32 @@ impl Kernel {
         ctx.queue
             .write_buffer(&self.chunk, 0, bytemuck::bytes_of(&c));
         let mut enc = ctx.device.create_command_encoder(&Default::default());
-        // FVPL_PROFILE_STEPS=1 times each step under `label.entry` (a diagnosis aid; the frame total
-        // stays the same, the stage's own key is then split).
         let detail = std::env::var_os("FVPL_PROFILE_STEPS").is_some();
-        for &(entry, total) in steps {
-            let index = self.entry_index(entry);
+        let ends_pass = |entry: &str| detail || after.is_some_and(|(e, _)| e == entry);
+        let mut first = 0;
+        while first < steps.len() {
+            let mut last = first;
+            while last + 1 < steps.len() && !ends_pass(steps[last].0) {
+                last += 1;
+            }
             let name = if detail {
-                format!("{label}.{entry}")
+                format!("{label}.{}", steps[first].0)
             } else {
                 label.to_string()
             };
-            self.record_pass(&mut enc, profiler, &name, scene, group, index, total);
-            after(entry, &mut enc);
+            {
+                let mut pass = self.begin_pass(&mut enc, profiler, &name, scene, group);
+                for &(entry, total) in &steps[first..=last] {
+                    pass.set_pipeline(&self.pipelines[self.entry_index(entry)].1);
+                    dispatch_items(&mut pass, total);
+                }
+            }
+            if let Some((entry, record)) = after
+                && entry == steps[last].0
+            {
+                record(&mut enc);
+            }
+            first = last + 1;
         }
         ctx.queue.submit([enc.finish()]);
         let _ = ctx.wait();
@@ -414,7 +434,27 @@ impl Kernel {
             .unwrap_or_else(|| panic!("{}: no entry point {entry}", self.name))
     }
 
-    /// One timed compute pass of pipeline `index` over `count` invocations (rows of 65535 groups).
+    /// A compute pass timed under `label` with the scene's and the pass's bind groups set.
+    fn begin_pass<'e>(
+        &self,
+        enc: &'e mut wgpu::CommandEncoder,
+        profiler: &mut Profiler,
+        label: &str,
+        scene: &SceneGpu,
+        group: &wgpu::BindGroup,
+    ) -> wgpu::ComputePass<'e> {
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(label),
+            timestamp_writes: profiler.pass(label),
+        });
+        if self.uses_scene {
+            pass.set_bind_group(0, &scene.bind_group, &[]);
+        }
+        pass.set_bind_group(1, group, &[]);
+        pass
+    }
+
+    /// One timed compute pass of pipeline `index` over `count` invocations.
     #[allow(clippy::too_many_arguments)]
     fn record_pass(
         &self,
@@ -426,16 +466,14 @@ impl Kernel {
         index: usize,
         count: u32,
     ) {
-        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(label),
-            timestamp_writes: profiler.pass(label),
-        });
+        let mut pass = self.begin_pass(enc, profiler, label, scene, group);
         pass.set_pipeline(&self.pipelines[index].1);
-        if self.uses_scene {
-            pass.set_bind_group(0, &scene.bind_group, &[]);
-        }
-        pass.set_bind_group(1, group, &[]);
-        let groups = count.div_ceil(WORKGROUP).max(1);
-        pass.dispatch_workgroups(groups.min(MAX_GROUPS_X), groups.div_ceil(MAX_GROUPS_X), 1);
+        dispatch_items(&mut pass, count);
     }
+}
+
+/// Workgroups for `count` invocations, in rows of 65535 groups.
+fn dispatch_items(pass: &mut wgpu::ComputePass, count: u32) {
+    let groups = count.div_ceil(WORKGROUP).max(1);
+    pass.dispatch_workgroups(groups.min(MAX_GROUPS_X), groups.div_ceil(MAX_GROUPS_X), 1);
 }

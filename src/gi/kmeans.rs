@@ -13,7 +13,7 @@ use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use super::dispatch::{Kernel, WORKGROUP, copy_to_texture, data_texture};
+use super::dispatch::{Kernel, RecordCopies, WORKGROUP, copy_to_texture, data_texture};
 use super::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::{GpuContext, profiler::Profiler};
 
@@ -268,12 +268,12 @@ impl KMeans {
             ],
             &[(15, &sorted_view), (16, &ranges_view)],
         );
-        let after = |entry: &str, enc: &mut wgpu::CommandEncoder| {
-            if entry == "grid_scatter" && texture_search {
-                copy_to_texture(enc, &sorted, &sorted_tex, k * 32);
-                copy_to_texture(enc, &ranges, &ranges_tex, MAX_CELLS * 16);
-            }
+        // After each grid build the search's textures are refreshed (software adapters only).
+        let copy = |enc: &mut wgpu::CommandEncoder| {
+            copy_to_texture(enc, &sorted, &sorted_tex, k * 32);
+            copy_to_texture(enc, &ranges, &ranges_tex, MAX_CELLS * 16);
         };
+        let after = texture_search.then_some(("grid_scatter", &copy as &RecordCopies));
         let seed = settings.seed;
         let kk = p.k;
         // The grid's steps (the centroids' bounds come from init_centroids and update). Every step's
@@ -289,7 +289,7 @@ impl KMeans {
         // Small steps share a submission: one per iteration, then the final assignment and the
         // representatives (each bounded by the point count).
         let mut run = |steps: &[(&str, u32)]| {
-            kernel.run_entries(ctx, profiler, label, scene, &bg, steps, seed, &after)
+            kernel.run_entries(ctx, profiler, label, scene, &bg, steps, seed, after)
         };
         run(&[("init_centroids", kk), ("init_sampled", p.num_sampled)]);
         let mut iterations_run = 0;
