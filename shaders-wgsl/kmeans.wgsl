@@ -82,9 +82,10 @@ struct Centroid {
 @group(1) @binding(12) var<storage, read_write> reps: array<atomic<u32>>;
 
 // The grid as the nearest-centroid search reads it: grid_scatter writes the valid centroids sorted by
-// cell (2 texels a slot, as float bits: position with w = the centroid's index, normal), grid_scan_ranges each cell's
-// offsets; src/gi/kmeans.rs copies both into the textures below before the search, as
-// lavapipe fetches a texel per lane with vector code but reads storage per lane in a scalar loop.
+// cell (2 texels a slot, as float bits: position with w = the centroid's index, normal),
+// grid_scan_ranges each cell's offsets. On a software adapter (TEXTURE_SEARCH) src/gi/kmeans.rs
+// copies both into the textures below after each grid build and the search reads those; on a GPU it
+// reads the storage buffers and the textures are one unused texel each.
 @group(1) @binding(13) var<storage, read_write> sorted: array<vec4<u32>>;
 @group(1) @binding(14) var<storage, read_write> ranges: array<vec4<u32>>;
 @group(1) @binding(15) var sorted_tex: texture_2d<u32>;
@@ -305,8 +306,8 @@ fn grid_scan_blocks(
         if t == 255u {
             atomicStore(&cells[BLOCK_SUMS + block], partial[255]);
         }
-        // partial is rewritten by the next block.
-        workgroupBarrier();
+        // (No barrier needed before the next block: after the scan an invocation reads only its own
+        // slot, and scan_partial begins with one.)
     }
 }
 

@@ -142,7 +142,7 @@ const ENTRIES: &[&str] = &[
 /// default.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct KMeansTuning {
-    /// Workgroups of the grid's prefix sum (default `scan_groups(K)`).
+    /// Workgroups of the grid's prefix sum (default `scan_groups(K)`; clamped to 1..=256).
     pub scan_groups: Option<u32>,
     /// The search reads the grid through textures (kmeans.wgsl `TEXTURE_SEARCH`; default on a
     /// software adapter) instead of storage buffers.
@@ -224,10 +224,10 @@ impl KMeans {
         let weights = ctx.storage("weights", m * f * 4);
         let reps = ctx.storage("representatives", k * 8);
         let member_dists = ctx.storage("member distances", m * f * 4);
-        // The grid for the nearest-centroid search, copied into textures after each grid build
-        // (lavapipe fetches texels with vector code, storage reads per lane with scalar loops):
-        // centroids sorted by cell (2 texels each) and per cell the sorted offsets of it and its row
-        // neighbours (one texel gives a row run of three cells).
+        // The grid for the nearest-centroid search: centroids sorted by cell (2 texels each) and per
+        // cell the sorted offsets of it and its row neighbours (one texel gives a row run of three
+        // cells). On a software adapter they are copied into textures after each grid build
+        // (lavapipe fetches texels with vector code, storage reads per lane with scalar loops).
         let sorted = ctx.storage("sorted centroids", k * 32);
         let ranges = ctx.storage("cell ranges", MAX_CELLS * 16);
         // (Without the texture search the textures are bound but never read: one texel each.)
@@ -278,7 +278,11 @@ impl KMeans {
         let kk = p.k;
         // The grid's steps (the centroids' bounds come from init_centroids and update). Every step's
         // count is of invocations of `WORKGROUP` (the scan's workgroups are 256 wide, one each).
-        let scan = WORKGROUP * self.tuning.scan_groups.unwrap_or_else(|| scan_groups(kk));
+        let groups = self
+            .tuning
+            .scan_groups
+            .map_or_else(|| scan_groups(kk), |g| g.clamp(1, SCAN_BLOCKS as u32));
+        let scan = WORKGROUP * groups;
         let grid = [
             ("grid_setup", 1),
             ("grid_count", kk),
