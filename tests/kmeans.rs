@@ -112,6 +112,79 @@ fn worst_difference(a: &[f32], b: &[f32]) -> f32 {
         .fold(0f32, f32::max)
 }
 
+/// On a software adapter (lavapipe, CI) the GPU computes every distance bit for bit as the CPU twin
+/// does, and the results must be equal. A GPU's `length` or division may differ in the last bits, and
+/// then a near-tie (two candidates within `TIE` of each other) may break the other way: on a GPU only
+/// those differences are allowed (an H100 breaks a few in the tests below).
+const TIE: f32 = 1e-5;
+
+/// Near-tie: within `TIE` relative, or a few ulps of the test data's coordinates (at most ~6, ulp
+/// 5e-7) for distances near 0.
+fn near(a: f32, b: f32) -> bool {
+    (a - b).abs() <= TIE * a.abs().max(b.abs()) + 4e-6
+}
+
+/// Final-assignment slots (F a point) where the GPU differs from the CPU twin: every difference on a
+/// software adapter, only the ones that are not near-ties of Eq. (7) distance on a GPU.
+fn assign_mismatches(
+    ctx: &GpuContext,
+    g: &[u32],
+    c: &[u32],
+    pts: &[Point],
+    cs: &[Centroid],
+    f: usize,
+    n_t: f32,
+) -> usize {
+    g.iter()
+        .zip(c)
+        .enumerate()
+        .filter(|&(i, (&a, &b))| {
+            a != b
+                && (ctx.software
+                    || a == u32::MAX
+                    || b == u32::MAX
+                    || !near(
+                        kmeans::dist7(&pts[i / f], &cs[a as usize], n_t),
+                        kmeans::dist7(&pts[i / f], &cs[b as usize], n_t),
+                    ))
+        })
+        .count()
+}
+
+/// Clusters whose representative differs from the CPU twin's. On a GPU, where a near-tie at the F-th
+/// slot may give a cluster other members than the twin's, the representative is checked against the
+/// GPU's own members instead: the member nearest to the centroid, up to a near-tie.
+fn rep_mismatches(
+    ctx: &GpuContext,
+    g: &GpuResult,
+    c: &[u32],
+    pts: &[Point],
+    cs: &[Centroid],
+) -> usize {
+    if ctx.software {
+        return g.reps.iter().zip(c).filter(|(a, b)| a != b).count();
+    }
+    let f = g.params.f as usize;
+    let d = |m: usize, k: usize| (pts[m].pos - cs[k].pos).length();
+    let mut nearest = vec![f32::INFINITY; cs.len()];
+    for (i, &k) in g.assign.iter().enumerate() {
+        if k != u32::MAX {
+            nearest[k as usize] = nearest[k as usize].min(d(i / f, k as usize));
+        }
+    }
+    g.reps
+        .iter()
+        .enumerate()
+        .filter(|&(k, &r)| {
+            if r == u32::MAX {
+                nearest[k].is_finite()
+            } else {
+                !near(d(r as usize, k), nearest[k])
+            }
+        })
+        .count()
+}
+
 /// Compares GPU and CPU and checks the invariants; returns (sampled agreement, final agreement).
 fn compare(
     name: &str,
@@ -162,7 +235,7 @@ fn compare(
     }
     let og = kmeans::objective(&pts, p, &g.sample_assign, &g.centroids);
     let oc = kmeans::objective(&pts, p, &c.sample_assign, &c.centroids);
-    let rep_agree = g.reps.iter().zip(&c.reps).filter(|(a, b)| a == b).count();
+    let rep_agree = g.reps.len() - rep_mismatches(ctx, &g, &c.reps, &pts, &c.centroids);
     println!(
         "{name}: sampled agreement {:.4}, final {:.4}, objective GPU {og:.6e} CPU {oc:.6e}, reps equal {rep_agree}/{}",
         agree_s,
@@ -174,12 +247,11 @@ fn compare(
         g.reps.len(),
         "{name}: representatives differ from the CPU twin's"
     );
-    if oc > 0.0 {
-        assert!(
-            (og / oc - 1.0).abs() < 0.01,
-            "{name}: objective {og} vs {oc}"
-        );
-    }
+    // Within 1%, or both nothing but rounding (K above the point count: every point on a centroid).
+    assert!(
+        (og - oc).abs() <= 0.01 * oc + 1e-12,
+        "{name}: objective {og} vs {oc}"
+    );
     (agree_s, agree_f)
 }
 
@@ -398,10 +470,17 @@ fn weight_exponent_matches_cpu_and_spans_uniform_to_hard() {
         };
         let g = run_gpu(&ctx, &data, 2, &s, BOX);
         let c = kmeans::kmeans(&pts, &g.params, s.iterations);
-        assert_eq!(g.assign, c.assign, "p {p}: assignment differs");
+        let n = assign_mismatches(&ctx, &g.assign, &c.assign, &pts, &c.centroids, 6, 0.866);
+        assert_eq!(n, 0, "p {p}: assignment differs");
         let worst = worst_difference(&g.weights, &c.weights);
         println!("p {p}: worst weight difference GPU vs CPU {worst:e}");
-        assert!(worst < 1e-5, "p {p}: {worst}");
+        // (d_min / d)^p = exp2(p log2(d_min / d)): a GPU's exp2 and log2 errors grow with p.
+        let tolerance = if ctx.software {
+            1e-5
+        } else {
+            1e-5 * p.max(1.0)
+        };
+        assert!(worst < tolerance, "p {p}: {worst}");
         let (mut share, mut rows) = (0.0f64, 0usize);
         for (m, pt) in pts.iter().enumerate() {
             let row = &g.weights[m * 6..m * 6 + 6];
@@ -505,8 +584,18 @@ fn pruned_search_equals_full_scan() {
             let c = kmeans::kmeans(&pts, &g.params, s.iterations);
             let case = format!("texture search {texture}, K {k} F {f}");
             assert_eq!(g.sample_assign, c.sample_assign, "{case}: iterations");
-            assert_eq!(g.assign, c.assign, "{case}: final assignment");
-            assert_eq!(g.reps, c.reps, "{case}: representatives");
+            let n = assign_mismatches(
+                &ctx,
+                &g.assign,
+                &c.assign,
+                &pts,
+                &c.centroids,
+                f as usize,
+                0.5,
+            );
+            assert_eq!(n, 0, "{case}: final assignment");
+            let n = rep_mismatches(&ctx, &g, &c.reps, &pts, &c.centroids);
+            assert_eq!(n, 0, "{case}: representatives");
         }
     }
 }
@@ -556,8 +645,14 @@ fn grid_over_many_scan_blocks_equals_full_scan() {
                 "sampled assignments",
                 differ(&g.sample_assign, &c.sample_assign),
             ),
-            ("final assignments", differ(&g.assign, &c.assign)),
-            ("representatives", differ(&g.reps, &c.reps)),
+            (
+                "final assignments",
+                assign_mismatches(&ctx, &g.assign, &c.assign, &pts, &c.centroids, 4, 0.866),
+            ),
+            (
+                "representatives",
+                rep_mismatches(&ctx, &g, &c.reps, &pts, &c.centroids),
+            ),
         ] {
             if n > 0 {
                 failures.push(format!("{name}: {n} {what} differ from the CPU twin's"));

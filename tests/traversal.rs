@@ -50,6 +50,10 @@ fn check_scene(name: &str) {
     let rays = random_rays(&s, 0x1234_5678_9abc_def1, false);
     let hits = rc.closest(&ctx, &gpu, &mut prof, &rays).unwrap();
     let (mut disagree, mut hit_count, mut worst_rel) = (0usize, 0usize, 0f32);
+    // Hit distances agree within 1e-4 relative, or a few ulps of the scene's size for hits close to
+    // the origin: a GPU that fuses the intersection's multiply-adds (an H100) lands up to 3.5e-4
+    // relative off there, where lavapipe computes as the CPU does.
+    let slack = 1e-6 * s.extent();
     for (ray, h) in rays.iter().zip(&hits) {
         let o = Vec3::new(ray.o[0], ray.o[1], ray.o[2]);
         let d = Vec3::new(ray.d[0], ray.d[1], ray.d[2]);
@@ -57,7 +61,7 @@ fn check_scene(name: &str) {
         match (cpu, h.slot != u32::MAX) {
             (Some(c), true) => {
                 hit_count += 1;
-                let rel = (c.t - h.t).abs() / c.t.max(1e-30);
+                let rel = ((c.t - h.t).abs() - slack).max(0.0) / c.t.max(1e-30);
                 let gpu_tri = bvh.slot_to_triangle[h.slot as usize];
                 if gpu_tri != c.triangle && rel > 1e-4 {
                     disagree += 1;
