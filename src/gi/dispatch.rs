@@ -291,17 +291,7 @@ impl Kernel {
         seed: u32,
         after: Option<(&str, &RecordCopies)>,
     ) {
-        let c = Chunk {
-            offset: 0,
-            count: u32::MAX,
-            seed,
-            _pad: 0,
-            sub_offset: 0,
-            sub_count: 1,
-            _pad2: [0; 2],
-        };
-        ctx.queue
-            .write_buffer(&self.chunk, 0, bytemuck::bytes_of(&c));
+        self.write_chunk(ctx, 0, u32::MAX, (0, 1), seed);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         let detail = std::env::var_os("FVPL_PROFILE_STEPS").is_some();
         let ends_pass = |entry: &str| detail || after.is_some_and(|(e, _)| e == entry);
@@ -409,6 +399,17 @@ impl Kernel {
         seed: u32,
         offset: u32,
     ) {
+        self.write_chunk(ctx, offset, count, sub, seed);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        self.record_pass(&mut enc, profiler, label, scene, group, index, count);
+        ctx.queue.submit([enc.finish()]);
+        // Waiting keeps each submission short and bounded on software drivers.
+        let _ = ctx.wait();
+    }
+
+    /// Sets the `Chunk` uniform the next submission's passes read: items `offset..offset + count`,
+    /// sub range `sub` (offset, count).
+    fn write_chunk(&self, ctx: &GpuContext, offset: u32, count: u32, sub: (u32, u32), seed: u32) {
         let c = Chunk {
             offset,
             count,
@@ -420,11 +421,6 @@ impl Kernel {
         };
         ctx.queue
             .write_buffer(&self.chunk, 0, bytemuck::bytes_of(&c));
-        let mut enc = ctx.device.create_command_encoder(&Default::default());
-        self.record_pass(&mut enc, profiler, label, scene, group, index, count);
-        ctx.queue.submit([enc.finish()]);
-        // Waiting keeps each submission short and bounded on software drivers.
-        let _ = ctx.wait();
     }
 
     fn entry_index(&self, entry: &str) -> usize {
