@@ -1,5 +1,5 @@
 // Direct light per shading point: stratified area-light samples (emitters chosen by power) and every
-// punctual light, each with its own shadow ray; emission is added. Mirrored by src/cpu/direct.rs.
+// punctual light, each with its own shadow ray; emission is added. CPU twin: `CpuScene::direct` (src/cpu/shading.rs).
 #import common/bvh.wgsl
 #import common/lights.wgsl
 #import common/rng.wgsl
@@ -30,15 +30,30 @@ fn visible(p: vec3<f32>, n: vec3<f32>, q: vec3<f32>) -> bool {
     return !trace_any(ray);
 }
 
+// Random numbers restart every RNG_BLOCK samples from a stream seeded by the block, so a sub range that
+// starts at a block boundary needs no earlier draws (src/gi/direct.rs splits the samples that way).
+// With at most RNG_BLOCK samples the stream is the single one of block 0.
+const RNG_BLOCK: u32 = 64u;
+
+// This chunk's share of the direct light: the area-light samples and punctual lights in its sub range
+// [chunk.sub_offset, + chunk.sub_count) of (spp area samples, then num_lights lights). Each invocation
+// walks a bounded range: lavapipe ends every loop of a SIMD batch after 65,535 trips in all
+// (LP_MAX_TGSI_LOOP_ITERATIONS), so thousands of samples in one invocation silently lost most of them.
 fn direct_light(sp: ShadingPoint, pixel: u32) -> vec3<f32> {
     let p = sp.pos.xyz;
     let n = sp.nrm.xyz;
     var sum = vec3<f32>(0.0);
+    let first = chunk.sub_offset;
+    let end = chunk.sub_offset + chunk.sub_count;
+    // Area samples [0, spp), then the punctual lights (the host sets spp = 0 without emitters).
+    let spp = params.spp;
     if HAS_EMITTERS && scene.num_emitters > 0u {
-        var rng = rng_seed(pixel, chunk.seed, 0x9e3779b9u);
-        let spp = max(params.spp, 1u);
+        var rng = 0u;
         var area_sum = vec3<f32>(0.0);
-        for (var s = 0u; s < spp; s++) {
+        for (var s = first; s < min(end, spp); s++) {
+            if s % RNG_BLOCK == 0u || s == first {
+                rng = rng_seed(pixel, chunk.seed, 0x9e3779b9u + s / RNG_BLOCK);
+            }
             let u0 = (f32(s) + rng_next(&rng)) / f32(spp);
             let ls = sample_emitter(min(u0, 0.99999994), rng_next(&rng), rng_next(&rng));
             let d = ls.p - p;
@@ -56,10 +71,10 @@ fn direct_light(sp: ShadingPoint, pixel: u32) -> vec3<f32> {
                 area_sum += ls.le * cos_p * cos_l / (d2 * ls.pdf_area);
             }
         }
-        sum += area_sum / f32(spp);
+        sum += area_sum / f32(max(spp, 1u));
     }
     if HAS_PUNCTUAL {
-        for (var l = 0u; l < scene.num_lights; l++) {
+        for (var l = max(first, spp) - spp; l < min(max(end, spp) - spp, scene.num_lights); l++) {
             let ps = punctual_sample(l, p);
             let cos_p = dot(n, ps.wi);
             if cos_p <= 0.0 || all(ps.e == vec3<f32>(0.0)) {
@@ -87,7 +102,15 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let sp = gbuffer[i];
     var c = vec3<f32>(0.0);
     if sp.pos.w > 0.0 {
-        c = sp.emission.xyz + direct_light(sp, i);
+        c = direct_light(sp, i);
     }
-    radiance[i] = vec4<f32>(c, 1.0);
+    // The first sub range writes the pixel (with its emission), the others add to it.
+    if chunk.sub_offset == 0u {
+        if sp.pos.w > 0.0 {
+            c = sp.emission.xyz + c;
+        }
+        radiance[i] = vec4<f32>(c, 1.0);
+    } else {
+        radiance[i] += vec4<f32>(c, 0.0);
+    }
 }

@@ -9,6 +9,9 @@ use crate::gi::primary::CameraParams;
 use crate::gi::scene_gpu::{GpuEmitter, SceneInfo};
 use crate::scene::{LightKind, Scene, Texture};
 
+/// Samples per random stream in the direct light (`RNG_BLOCK` in direct.wgsl).
+const RNG_BLOCK: u32 = crate::gi::direct::SAMPLES_PER_DISPATCH;
+
 /// A shading point as `common/gbuffer.wgsl` lays it out (w components: valid flag, material).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadingPoint {
@@ -199,7 +202,8 @@ impl<'a> CpuScene<'a> {
         lo
     }
 
-    /// Twin of `direct.wgsl`: emission + direct light of one shading point.
+    /// Twin of `direct.wgsl`: emission + direct light of one shading point (summed in one loop; the
+    /// shader sums sub ranges of `SAMPLES_PER_DISPATCH` samples in turn, which rounds differently).
     pub fn direct(&self, sp: &ShadingPoint, pixel: u32, seed: u32, spp: u32) -> Vec3 {
         if !sp.valid {
             return Vec3::ZERO;
@@ -207,10 +211,14 @@ impl<'a> CpuScene<'a> {
         let (p, n) = (sp.pos, sp.normal);
         let mut sum = Vec3::ZERO;
         if !self.emitters.is_empty() {
-            let mut rng = rng_seed(pixel, seed, 0x9e3779b9);
+            let mut rng = 0;
             let spp = spp.max(1);
             let mut area_sum = Vec3::ZERO;
             for s in 0..spp {
+                // A fresh stream every RNG_BLOCK samples (direct.wgsl).
+                if s % RNG_BLOCK == 0 {
+                    rng = rng_seed(pixel, seed, 0x9e3779b9u32.wrapping_add(s / RNG_BLOCK));
+                }
                 let u0 = (s as f32 + rng_next(&mut rng)) / spp as f32;
                 let (u1, u2) = (rng_next(&mut rng), rng_next(&mut rng));
                 let e = self.emitters[self.emitter_index(u0.min(0.99999994))];

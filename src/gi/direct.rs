@@ -13,6 +13,10 @@ pub struct DirectParams {
     pub _pad: [u32; 3],
 }
 
+/// Shadow rays one invocation traces at most per dispatch: a multiple of the shader's `RNG_BLOCK` (64),
+/// so every sub range starts a fresh random stream.
+pub const SAMPLES_PER_DISPATCH: u32 = 64;
+
 pub struct Direct {
     kernel: Kernel,
 }
@@ -46,18 +50,22 @@ impl Direct {
         let bg = self
             .kernel
             .bind_group(ctx, &[(1, &params), (2, gbuffer), (3, radiance)]);
-        // About 2^20 shadow rays per submission.
-        let per_chunk = ((1u32 << 20) / (spp.max(1) + scene.info.num_lights)).max(1024);
-        self.kernel.run(
+        // The samples (spp area samples, then the punctual lights) in sub ranges of at most
+        // SAMPLES_PER_DISPATCH a pixel: lavapipe stops all loops of a SIMD batch after 65,535 trips
+        // (direct.wgsl). About 2^20 shadow rays per submission.
+        let samples = spp + scene.info.num_lights;
+        let per_dispatch = samples.clamp(1, SAMPLES_PER_DISPATCH);
+        let per_chunk = ((1u32 << 20) / per_dispatch).max(1024);
+        self.kernel.run_2d(
             ctx,
             profiler,
             "direct",
             scene,
             &bg,
-            count,
-            per_chunk,
+            (count, per_chunk),
+            (samples.max(1), per_dispatch),
             seed,
-            &mut |_, _| {},
+            &mut |_, _| true,
         );
     }
 }

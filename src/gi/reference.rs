@@ -10,6 +10,8 @@ use crate::gpu::{GpuContext, profiler::Profiler};
 
 /// Shadow rays per submission: about a second of lavapipe work.
 pub const RAYS_PER_SUBMISSION: u32 = 1 << 20;
+/// The most VPLs one invocation gathers per dispatch (the sub range of `run_2d`).
+pub const VPLS_PER_DISPATCH: u32 = 64;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -65,7 +67,10 @@ impl Reference {
             .kernel
             .bind_group(ctx, &[(1, &params), (2, gbuffer), (3, vpls), (4, indirect)]);
         let px_chunk = pixels.min(1 << 14);
-        let vpl_chunk = (RAYS_PER_SUBMISSION / px_chunk).clamp(1, num_vpls);
+        // At most VPLS_PER_DISPATCH shadow rays an invocation: lavapipe stops all loops of a SIMD
+        // batch after 65,535 trips (direct.wgsl), and a small image would otherwise give each pixel
+        // thousands of VPLs per dispatch.
+        let vpl_chunk = (RAYS_PER_SUBMISSION / px_chunk).clamp(1, num_vpls.min(VPLS_PER_DISPATCH));
         self.kernel.run_2d(
             ctx,
             profiler,
