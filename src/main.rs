@@ -226,10 +226,12 @@ struct ClusterArgs {
     /// F: SP clusters per pixel (fuzziness), 1..16.
     #[arg(long, default_value_t = 6)]
     fuzziness: u32,
-    /// γ: SP downsampling factor for the k-means iterations.
+    /// γ: SP downsampling factor for the k-means iterations (at most pixels / K, so that at least K
+    /// points are sampled).
     #[arg(long, default_value_t = 4)]
     gamma: u32,
-    /// n_t of Eq. (7): cosine of the largest normal angle within a cluster.
+    /// n_t of Eq. (7): cosine of the largest normal angle within a cluster, in [-1, 1] (Eq. 7's test
+    /// is strict, so 1 is read as 1 - 2^-20: the same normal only).
     #[arg(long, default_value_t = 0.866, allow_hyphen_values = true)]
     normal_threshold: f32,
     /// k-means iterations.

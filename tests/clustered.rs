@@ -264,12 +264,23 @@ fn clustered_extremes_stay_finite() {
     ];
     let mut r = Renderer::new(&ctx, &base).unwrap();
     let cam = base.default_camera();
+    let ind0 = mean_luminance(&r.render(&cam, &b).unwrap().indirect);
     for (name, fs) in cases {
         let f = r.render(&cam, &fs).unwrap();
         assert!(common::all_finite(&f.radiance), "{name}: non-finite pixels");
         let lum = mean_luminance(&f.radiance);
-        println!("{name}: mean luminance {lum:.4}, passes {:?}", f.passes);
+        let ind = mean_luminance(&f.indirect);
+        println!(
+            "{name}: mean luminance {lum:.4}, indirect {ind:.4} (default settings {ind0:.4}), passes {:?}",
+            f.passes
+        );
         assert!(lum > 0.05 && lum < 1.0, "{name}: mean luminance {lum}");
+        // Consistent: every case still lights the room indirectly (a γ near the pixel count and
+        // n_t = 1 once left no cluster, hence no indirect light, silently).
+        assert!(
+            ind > 0.5 * ind0 && ind < 2.0 * ind0,
+            "{name}: indirect light {ind} against {ind0} with the default settings"
+        );
     }
     // Scenes at 1e-4 and 1e4 scale render the same clustered image.
     let mut lums = Vec::new();

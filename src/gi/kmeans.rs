@@ -57,6 +57,22 @@ pub struct KMeansSettings {
     pub weight_exponent: f32,
 }
 
+/// γ as Alg. 1 uses it: at least 1, and at most M / K, so that the sampled set holds at least K points
+/// (a γ near the point count would leave a single sampled point, often in the sky, and no cluster).
+pub fn effective_gamma(gamma: u32, num_points: u32, k: u32) -> u32 {
+    gamma.clamp(1, (num_points / k.max(1)).max(1))
+}
+
+/// The largest n_t Eq. (7) can use: its test n1 · n2 > n_t is strict, so n_t = 1 would accept no pair
+/// at all (not even a point and a centroid with the same normal), every cluster would empty in the
+/// first iteration and no point would get one. n_t = 1 is read as the tightest threshold an f32
+/// cosine resolves (about 0.08°).
+pub const MAX_NORMAL_THRESHOLD: f32 = 1.0 - 1.0 / (1 << 20) as f32;
+
+pub fn effective_normal_threshold(n_t: f32) -> f32 {
+    n_t.min(MAX_NORMAL_THRESHOLD)
+}
+
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct KmParams {
@@ -77,16 +93,17 @@ pub struct KmParams {
 impl KmParams {
     /// `frame`: bounds (lo, hi) containing every point (the scene's bounds).
     pub fn new(num_points: u32, stride: u32, s: &KMeansSettings, frame: (Vec3, Vec3)) -> Self {
-        let gamma = s.gamma.max(1);
+        let k = s.k.max(1);
+        let gamma = effective_gamma(s.gamma, num_points, k);
         let ext = (frame.1 - frame.0).max(Vec3::splat(1e-30));
         KmParams {
             num_points,
             stride,
             gamma,
             num_sampled: num_points.div_ceil(gamma),
-            k: s.k.max(1),
+            k,
             f: s.f.clamp(1, MAX_F),
-            normal_threshold: s.normal_threshold,
+            normal_threshold: effective_normal_threshold(s.normal_threshold),
             seed: s.seed,
             lo: frame.0.extend(0.0).into(),
             ext: [ext.x, ext.y, ext.z, ext.length()],
