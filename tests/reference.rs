@@ -113,6 +113,25 @@ fn reference_of_a_tiny_image_with_many_vpls_matches_cpu_twin() {
     assert!(lit * 2 > w * h, "only {lit} pixels lit");
 }
 
+/// A light far outside the scene: almost no light path reaches a surface, so the VPL tracer's waves
+/// grow, and a wave's output must still fit one storage binding (it asked for 384 MiB and wgpu
+/// panicked before the waves were capped by the device's limit).
+#[test]
+fn a_light_far_outside_the_scene_traces_without_a_panic() {
+    let ctx = common::gpu();
+    let mut s = scene::load("builtin:cornell").unwrap();
+    for m in &mut s.materials {
+        m.emissive = Vec3::ZERO;
+    }
+    s.lights
+        .push(fuzzy_vpl::scene::extra_lights::parse_point("1000,0.3,0.3,5").unwrap());
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let f = r
+        .render(&s.default_camera(), &reference(8, 6, 4096, 1))
+        .unwrap();
+    assert!(common::all_finite(&f.radiance));
+}
+
 /// The VPL reference against a converged path tracer with the same bounce budget. The remaining
 /// difference is VPL noise (splotches) plus the clamp's energy loss in corners: docs/reference.md
 /// measures it. Measured here: rel_mse 0.0012 and mean luminance within 0.7%; the bounds are about

@@ -113,7 +113,12 @@ impl VplTrace {
         let center = 0.5 * (lo + hi);
         let radius = (0.5 * (hi - lo).length()).max(1e-30);
         let cdf = ctx.storage_init("source cdf", &sources);
-        let mut wave = (n / 2).max(256);
+        // A wave's output (max_depth VPLs of 48 bytes a path) must fit one storage binding: with few
+        // paths reaching a surface (a light far outside the scene) the next wave grows to 2^20 paths,
+        // 384 MiB at 8 bounces, which the device refuses.
+        let binding = ctx.device.limits().max_storage_buffer_binding_size;
+        let max_wave = (binding / (max_depth as u64 * 48)).clamp(1, 1 << 20) as u32;
+        let mut wave = (n / 2).max(256).min(max_wave);
         let mut base = 0u32;
         // Give up when 64 paths per requested VPL found nothing (lights that hit no surface).
         while has_power && (vpls.len() as u32) < n && base < n.saturating_mul(64).max(1 << 16) {
@@ -157,7 +162,8 @@ impl VplTrace {
             base += wave;
             let per_path = vpls.len().max(1) as f32 / paths.max(1) as f32;
             wave = (((n as usize).saturating_sub(vpls.len()) as f32 / per_path * 1.1) as u32)
-                .clamp(256, 1 << 20);
+                .clamp(256, 1 << 20)
+                .min(max_wave);
         }
         let inv = 1.0 / paths.max(1) as f32;
         for v in &mut vpls {
