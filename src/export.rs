@@ -7,6 +7,40 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use image::{ImageBuffer, ImageFormat, Rgb};
 
+/// Checks, before any work, that `path` can be written the way `write_atomic` writes it: its folder
+/// exists and takes a new file, and the path is not a folder. The error names `path` and the reason.
+pub fn check_writable(path: &Path) -> std::result::Result<(), String> {
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if path.is_dir() {
+        return Err(format!(
+            "{}: cannot write: it is a directory",
+            path.display()
+        ));
+    }
+    if !dir.is_dir() {
+        return Err(format!(
+            "{}: cannot write: no directory {}",
+            path.display(),
+            dir.display()
+        ));
+    }
+    let probe = dir.join(format!(".fuzzy-vpl-probe-{}", std::process::id()));
+    match std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => Err(format!("{}: cannot write: {e}", path.display())),
+    }
+}
+
 /// Writes `bytes_fn`'s output to `path` atomically (temp file + rename).
 pub fn write_atomic(
     path: &Path,
@@ -22,8 +56,13 @@ pub fn write_atomic(
         .to_string_lossy();
     let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
     let result = (|| -> Result<()> {
-        let f = std::fs::File::create(&tmp)
-            .with_context(|| format!("{}: cannot create", tmp.display()))?;
+        let f = std::fs::File::create(&tmp).with_context(|| {
+            format!(
+                "{}: cannot write (temporary file {})",
+                path.display(),
+                tmp.display()
+            )
+        })?;
         let mut w = BufWriter::new(f);
         write(&mut w)?;
         w.flush()?;

@@ -364,7 +364,33 @@ fn main() -> ExitCode {
         }
     }
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
-    let cli = Cli::parse();
+    // Bad arguments get one line and exit code 2 (DESIGN.md §4); help and version print in full.
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            match e.kind() {
+                ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => {
+                    let _ = e.print();
+                    return ExitCode::SUCCESS;
+                }
+                ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+                    let _ = e.print();
+                    return ExitCode::from(2);
+                }
+                _ => {}
+            }
+            // The message and its details (e.g. the missing arguments) up to the first blank line.
+            let text = e.render().to_string();
+            let line: Vec<&str> = text
+                .lines()
+                .map(str::trim)
+                .take_while(|l| !l.is_empty())
+                .collect();
+            eprintln!("{} (see --help)", line.join(" "));
+            return ExitCode::from(2);
+        }
+    };
     let result = match cli.command {
         None => view(ViewArgs::parse_from(["view"])),
         Some(Command::View(a)) => view(a),
@@ -455,9 +481,19 @@ fn render(a: RenderArgs) -> Result<()> {
             p.display()
         )));
     }
+    // Every output can be written: checked before the (possibly long) render.
+    for p in a.output.iter().chain(&a.stats).chain(&a.error_map) {
+        export::check_writable(p).map_err(bad)?;
+    }
     let reference = match &a.compare {
         Some(p) => {
             let (w, h, px) = export::read_exr(p).map_err(|e| bad(format!("{e:#}")))?;
+            if let Some(i) = px.iter().position(|c| c.iter().any(|x| !x.is_finite())) {
+                return Err(bad(format!(
+                    "{}: reference has a non-finite pixel (NaN or infinity) at pixel {i}",
+                    p.display()
+                )));
+            }
             if (w, h) != (a.width, a.height) {
                 return Err(bad(format!(
                     "{}: reference is {w}x{h}, the render is {}x{}",

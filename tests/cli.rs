@@ -228,6 +228,54 @@ fn bad_input_exits_2_with_one_line() {
     assert!(!out.exists());
 }
 
+/// Bad arguments, outputs that cannot be written and a reference with NaN are refused before any
+/// rendering: exit 2 and stderr is exactly one line naming the option or file.
+#[test]
+fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
+    let d = common::scratch("cli-bad-args");
+    let out = d.join("o.exr");
+    let nan_ref = d.join("nan.exr");
+    let mut px = vec![[0.5f32; 3]; 16];
+    px[5][1] = f32::NAN;
+    fuzzy_vpl::export::write_image(&nan_ref, 4, 4, &px, 1.0).unwrap();
+    let o = out.display().to_string();
+    let nodir = d.join("nodir").join("x.exr").display().to_string();
+    let dir = d.display().to_string();
+    let nan = nan_ref.display().to_string();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["render", "-o", &o, "--fuzziness", "2.5"],
+            "--fuzziness",
+        ),
+        (vec!["render", "-o", &o, "--seed=-1"], "--seed"),
+        (
+            vec!["render", "-o", &o, "--width", "3", "--width", "4"],
+            "--width",
+        ),
+        (
+            vec!["render", "-o", &o, "--error-map", "e.png"],
+            "--compare",
+        ),
+        (
+            vec!["render", "-o", &o, "--no-such-option"],
+            "--no-such-option",
+        ),
+        (vec!["render", "-o", &nodir], "nodir"),
+        (vec!["render", "-o", &o, "--stats", &dir], &dir),
+        (vec!["render", "-o", &o, "--compare", &nan], "nan.exr"),
+    ];
+    for (a, needle) in cases {
+        let (code, _, err) = run(&a);
+        assert_eq!(code, 2, "{a:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{a:?}: {err}");
+        assert!(
+            err.starts_with("error: ") && err.contains(needle),
+            "{a:?}: {err}"
+        );
+    }
+    assert!(!out.exists());
+}
+
 /// A valid scene without any light renders black with a warning, exit 0.
 #[test]
 fn scene_without_light_renders_black() {
