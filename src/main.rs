@@ -434,7 +434,15 @@ fn load_scene(a: &SceneArgs) -> Result<Scene> {
             a.light_scale
         )));
     }
-    s.scale_light_power(a.light_scale);
+    // The scaled emitters and the image they light must stay within f32 (3.4e38).
+    let brightest = s.max_emission() * a.light_scale as f64;
+    if brightest > 1e36 {
+        return Err(bad(format!(
+            "{}: the brightest emitter emits {brightest:.3e} with --light-scale {}; above 1e36 the image would not fit in f32",
+            a.scene, a.light_scale
+        )));
+    }
+    s.scale_light_power(a.light_scale as f64);
     if !s.has_light() {
         eprintln!(
             "warning: {}: the scene has no light (no emissive material, no punctual light); it renders black. Add one with --sun or --point.",

@@ -263,6 +263,10 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
         (vec!["render", "-o", &nodir], "nodir"),
         (vec!["render", "-o", &o, "--stats", &dir], &dir),
         (vec!["render", "-o", &o, "--compare", &nan], "nan.exr"),
+        (
+            vec!["render", "-o", &o, "--light-scale", "5e37"],
+            "--light-scale",
+        ),
     ];
     for (a, needle) in cases {
         let (code, _, err) = run(&a);

@@ -152,3 +152,55 @@ fn rendering_is_scale_free() {
         assert!((l / lums[0] - 1.0).abs() < 0.02, "{lums:?}");
     }
 }
+
+/// Light transport is linear in the emitted power: emitters scaled by 1e-40 (below f32's normal range,
+/// where 1 / power overflowed and the image came out at f32::MAX) and by 1e30 give the same image
+/// scaled by the factor, finite; so does a point light whose colour is 1e-40 (its intensity is folded into
+/// the colour when normalised).
+#[test]
+fn extreme_light_power_scales_the_image_linearly() {
+    let ctx = common::gpu();
+    let s = FrameSettings {
+        vpls: 256,
+        vpl_clusters: 64,
+        sp_clusters: 48,
+        ..settings(24, 18, 4)
+    };
+    let lum = |scene: &Scene| {
+        let f = Renderer::new(&ctx, scene)
+            .unwrap()
+            .render(&scene.default_camera(), &s)
+            .unwrap();
+        assert!(common::all_finite(&f.radiance));
+        mean_luminance(&f.radiance) as f64
+    };
+    let base = scene::load("builtin:cornell").unwrap();
+    let lum0 = lum(&base);
+    for k in [1e-40f64, 1e30] {
+        let mut sk = base.clone();
+        sk.scale_light_power(k);
+        let ratio = lum(&sk) / (lum0 * k);
+        println!("area light x {k:e}: luminance ratio {ratio}");
+        assert!(
+            (ratio - 1.0).abs() < 1e-2,
+            "area light x {k:e}: ratio {ratio}"
+        );
+    }
+    let point = |colour: &str| {
+        let mut s = base.clone();
+        for m in &mut s.materials {
+            m.emissive = Vec3::ZERO;
+        }
+        s.lights.push(
+            fuzzy_vpl::scene::extra_lights::parse_point(&format!("0.28,0.45,0.28,3,{colour}"))
+                .unwrap(),
+        );
+        lum(&s)
+    };
+    let ratio = point("1e-40,1e-40,1e-40") / (point("1,1,1") * 1e-40);
+    println!("point light of colour 1e-40: luminance ratio {ratio}");
+    assert!(
+        (ratio - 1.0).abs() < 1e-2,
+        "point light of colour 1e-40: ratio {ratio}"
+    );
+}

@@ -269,8 +269,7 @@ pub struct Renderer<'a> {
 impl<'a> Renderer<'a> {
     pub fn new(ctx: &'a GpuContext, scene: &'a Scene) -> Result<Self> {
         let mut scene = std::borrow::Cow::Borrowed(scene);
-        let m = scene.max_emission();
-        let output_scale = if m.is_finite() && m > 0.0 && !(1e-6..=1e6).contains(&m) {
+        let output_scale = if scene.emission_out_of_range() {
             scene.to_mut().normalize_emission()
         } else {
             1.0

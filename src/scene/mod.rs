@@ -222,38 +222,62 @@ impl Scene {
     }
 
     /// Multiplies every emitter (emissive materials and punctual lights) by `factor`.
-    pub fn scale_light_power(&mut self, factor: f32) {
+    /// Multiplies every emitter by `factor` (in f64, so a factor below f32's normal range still
+    /// scales emitters whose product is representable).
+    pub fn scale_light_power(&mut self, factor: f64) {
         for m in &mut self.materials {
-            m.emissive *= factor;
+            m.emissive = (m.emissive.as_dvec3() * factor).as_vec3();
         }
         for l in &mut self.lights {
-            l.intensity *= factor;
+            let i = l.intensity as f64 * factor;
+            if (i as f32).is_finite() && (i == 0.0 || (i as f32).is_normal()) {
+                l.intensity = i as f32;
+            } else {
+                // The intensity alone leaves f32's normal range (a tiny colour scaled up, a huge
+                // one down): keep the product, with the colour's largest component at 1.
+                let e = l.color.as_dvec3() * i;
+                let peak = e.max_element();
+                if peak > 0.0 {
+                    l.color = (e / peak).as_vec3();
+                    l.intensity = peak as f32;
+                } else {
+                    l.intensity = 0.0;
+                }
+            }
         }
     }
 
-    /// The largest emitted quantity (emissive radiance component, light colour × intensity).
-    pub fn max_emission(&self) -> f32 {
+    /// The largest emitted quantity (emissive radiance component, light colour × intensity), in f64:
+    /// it may lie beyond f32's range.
+    pub fn max_emission(&self) -> f64 {
         let m = self
             .materials
             .iter()
-            .map(|m| m.emissive.max_element())
-            .fold(0.0f32, f32::max);
+            .map(|m| m.emissive.as_dvec3().max_element())
+            .fold(0.0f64, f64::max);
         self.lights
             .iter()
-            .map(|l| (l.color * l.intensity).max_element())
-            .fold(m, f32::max)
+            .map(|l| (l.color.as_dvec3() * l.intensity as f64).max_element())
+            .fold(m, f64::max)
+    }
+
+    /// Whether the emitters need `normalize_emission`: their largest is outside 1e-6..1e6.
+    pub fn emission_out_of_range(&self) -> bool {
+        let m = self.max_emission();
+        m.is_finite() && m > 0.0 && !(1e-6..=1e6).contains(&m)
     }
 
     /// Light transport is linear in emitted power: a scene whose emitters are extreme (beyond 1e±6)
     /// is rendered with its emitters scaled into range, and the image scaled back by the returned
-    /// factor. This keeps every intermediate (VPL fluxes, sums, products) finite in f32.
+    /// factor. This keeps every intermediate (VPL fluxes, sums, products) finite in f32. The scaling
+    /// runs in f64: 1 / m overflows f32 for m below 2.9e-39.
     pub fn normalize_emission(&mut self) -> f32 {
-        let m = self.max_emission();
-        if !(m.is_finite() && m > 0.0) || (1e-6..=1e6).contains(&m) {
+        if !self.emission_out_of_range() {
             return 1.0;
         }
+        let m = self.max_emission();
         self.scale_light_power(1.0 / m);
-        m
+        m as f32
     }
 
     /// Features the scene uses, for `info` and for choosing passes.
