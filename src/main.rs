@@ -545,26 +545,10 @@ fn render(a: RenderArgs) -> Result<()> {
     let mut runs = Vec::new();
     let mut frame = None;
     for _ in 0..a.repeat {
-        let mut f = renderer.render(&camera, &settings)?;
-        if let Some(spp) = a.path_trace {
-            let pt = fuzzy_vpl::gi::pathtrace::PathTrace::new(&ctx, &renderer.gpu);
-            let cam = fuzzy_vpl::gi::primary::CameraParams::new(&camera, a.width, a.height);
-            let _ = renderer.profiler.collect(&ctx)?;
-            f.radiance = pt.render(
-                &ctx,
-                &renderer.gpu,
-                &mut renderer.profiler,
-                &cam,
-                spp.max(1),
-                16,
-                a.seed,
-                a.bounces,
-            )?;
-            f.passes = vec!["pathtrace"];
-            f.timings_ms = renderer.profiler.collect(&ctx)?;
-            let ms: f64 = f.timings_ms.values().sum();
-            f.timings_ms.insert("frame".into(), ms);
-        }
+        let f = match a.path_trace {
+            Some(spp) => renderer.path_trace(&camera, &settings, spp)?,
+            None => renderer.render(&camera, &settings)?,
+        };
         runs.push(f.timings_ms.clone());
         frame = Some(f);
     }

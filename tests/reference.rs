@@ -200,3 +200,28 @@ fn light_sampling_matches_bsdf_sampling() {
     println!("direct pass {a:.5}, BSDF-sampled {b:.5}");
     assert!((a / b - 1.0).abs() < 0.015, "direct light {a} vs {b}");
 }
+
+/// `--path-trace` renders the path tracer alone (no VPL frame first: `vpl_set` stays empty) and in the
+/// scene's own units: emitters scaled by 1e5 (normalised inside the renderer) give the image x 1e5.
+#[test]
+fn path_trace_alone_in_scene_units() {
+    let ctx = common::gpu();
+    let s = scene::load("builtin:cornell").unwrap();
+    let fs = reference(16, 12, 256, 3);
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let f = r.path_trace(&s.default_camera(), &fs, 8).unwrap();
+    assert_eq!(f.passes, vec!["pathtrace"]);
+    assert!(r.vpl_set.is_none(), "the VPL frame ran as well");
+    assert!(common::all_finite(&f.radiance));
+    let mut bright = s.clone();
+    bright.scale_light_power(1e5);
+    let mut rb = Renderer::new(&ctx, &bright).unwrap();
+    assert!(
+        rb.output_scale != 1.0,
+        "1e5 x the emitters should be normalised"
+    );
+    let fb = rb.path_trace(&bright.default_camera(), &fs, 8).unwrap();
+    let ratio = mean_luminance(&fb.radiance) as f64 / (mean_luminance(&f.radiance) as f64 * 1e5);
+    println!("path trace x 1e5: luminance ratio {ratio}");
+    assert!((ratio - 1.0).abs() < 1e-3, "ratio {ratio}");
+}

@@ -379,6 +379,50 @@ impl<'a> Renderer<'a> {
         }
     }
 
+    /// The diffuse path tracer (`--path-trace`, the check of the VPL reference's own bias) instead of
+    /// the VPL frame: `spp` samples a pixel with the settings' bounce budget and seed, in the scene's
+    /// own units (scaled back like `render`). Nothing of the VPL frame runs.
+    pub fn path_trace(&mut self, camera: &Camera, s: &FrameSettings, spp: u32) -> Result<Frame> {
+        let ctx = self.ctx;
+        let pt = super::pathtrace::PathTrace::new(ctx, &self.gpu);
+        let cam = CameraParams::new(camera, s.width, s.height);
+        let _ = self.profiler.collect(ctx)?;
+        let img = pt.render(
+            ctx,
+            &self.gpu,
+            &mut self.profiler,
+            &cam,
+            spp.max(1),
+            16,
+            s.seed,
+            s.bounces,
+        )?;
+        let mut timings_ms = self.profiler.collect(ctx)?;
+        let ms: f64 = timings_ms.values().sum();
+        timings_ms.insert("frame".into(), ms);
+        let k = self.output_scale;
+        let radiance: Vec<[f32; 3]> = img
+            .iter()
+            .map(|p| [0, 1, 2].map(|c| (p[c] * k).min(f32::MAX)))
+            .collect();
+        let n = radiance.len();
+        Ok(Frame {
+            width: s.width,
+            height: s.height,
+            // The path tracer does not separate direct from indirect light: all of it is here.
+            direct: radiance.clone(),
+            indirect: vec![[0.0; 3]; n],
+            radiance,
+            vpls: 0,
+            passes: vec!["pathtrace"],
+            timings_ms,
+            shading_points: 0,
+            shadow_rays: 0,
+            sp_clusters_used: 0,
+            vpl_clusters_used: 0,
+        })
+    }
+
     pub fn render(&mut self, camera: &Camera, s: &FrameSettings) -> Result<Frame> {
         let ctx = self.ctx;
         let n = s.width * s.height;
