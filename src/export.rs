@@ -27,18 +27,35 @@ pub fn check_writable(path: &Path) -> std::result::Result<(), String> {
             dir.display()
         ));
     }
-    let probe = dir.join(format!(".fuzzy-vpl-probe-{}", std::process::id()));
-    match std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&probe)
-    {
-        Ok(_) => {
-            let _ = std::fs::remove_file(&probe);
-            Ok(())
+    // A fresh name (process, clock, attempt): a probe left by a killed run, or another run's, only
+    // means another name.
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos());
+    let mut last = None;
+    for attempt in 0..8 {
+        let probe = dir.join(format!(
+            ".fuzzy-vpl-probe-{}-{nanos}-{attempt}",
+            std::process::id()
+        ));
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&probe)
+        {
+            Ok(_) => {
+                let _ = std::fs::remove_file(&probe);
+                return Ok(());
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(e),
+            Err(e) => return Err(format!("{}: cannot write: {e}", path.display())),
         }
-        Err(e) => Err(format!("{}: cannot write: {e}", path.display())),
     }
+    Err(format!(
+        "{}: cannot write: {}",
+        path.display(),
+        last.map_or_else(String::new, |e| e.to_string())
+    ))
 }
 
 /// Writes `bytes_fn`'s output to `path` atomically (temp file + rename).

@@ -436,6 +436,12 @@ fn load_scene(a: &SceneArgs) -> Result<Scene> {
     }
     // The scaled emitters and the image they light must stay within f32 (3.4e38).
     let brightest = s.max_emission() * a.light_scale as f64;
+    if brightest > 0.0 && brightest < 1e-44 {
+        return Err(bad(format!(
+            "{}: the brightest emitter emits {brightest:.3e} with --light-scale {}; below 1e-44 the image would round to 0 in f32",
+            a.scene, a.light_scale
+        )));
+    }
     if brightest > 1e36 {
         return Err(bad(format!(
             "{}: the brightest emitter emits {brightest:.3e} with --light-scale {}; above 1e36 the image would not fit in f32",
@@ -614,6 +620,16 @@ fn render(a: RenderArgs) -> Result<()> {
                 light_scale: a.scene.light_scale,
                 exposure: a.exposure,
                 clamp: settings.clamp,
+                gamma_used: fuzzy_vpl::gi::kmeans::effective_gamma(
+                    settings.gamma,
+                    settings.width * settings.height,
+                    settings.sp_clusters,
+                ),
+                normal_threshold_used: fuzzy_vpl::gi::kmeans::effective_normal_threshold(
+                    settings.normal_threshold,
+                ),
+                bounces: settings.bounces,
+                path_trace_spp: a.path_trace.map(|n| n.max(1)),
             },
             counts: stats::Counts {
                 triangles: scene.triangles.len() as u64,

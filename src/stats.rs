@@ -23,6 +23,16 @@ pub struct Settings {
     pub exposure: f32,
     /// G-term clamp as a fraction of the scene diagonal.
     pub clamp: f32,
+    /// γ and n_t as the SP k-means used them (`kmeans::effective_gamma`,
+    /// `effective_normal_threshold`): γ is at most pixels / K, n_t at most 1 − 2⁻²⁰.
+    pub gamma_used: u32,
+    pub normal_threshold_used: f32,
+    /// The indirect bounce budget.
+    pub bounces: u32,
+    /// Samples per pixel of `--path-trace` (the frame is the path tracer's alone; the VPL and
+    /// clustering settings above were not used).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub path_trace_spp: Option<u32>,
 }
 
 #[derive(Clone, Debug, Default, Serialize)]

@@ -97,6 +97,20 @@ fn render_cornell_128_exr_with_stats() {
     }
     assert!(j["timings_ms"]["frame"].as_f64().unwrap() > 0.0);
     assert_eq!(j["counts"]["triangles"], 32);
+    // The contract's settings, and the values the k-means used (γ at most pixels / K).
+    for k in [
+        "vpls",
+        "vpl_clusters",
+        "sp_clusters",
+        "fuzziness",
+        "gamma",
+        "normal_threshold",
+    ] {
+        assert!(j["settings"][k].is_number(), "settings lack {k}");
+    }
+    assert!(j["settings"]["gamma_used"].as_u64().unwrap() >= 1);
+    assert!(j["settings"]["normal_threshold_used"].as_f64().unwrap() < 1.0);
+    assert!(j["settings"].get("path_trace_spp").is_none());
     assert!(j.get("error").is_none());
     // No temporary files left beside the outputs.
     let names: Vec<_> = std::fs::read_dir(&d)

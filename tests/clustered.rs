@@ -212,6 +212,22 @@ fn clustered_extremes_stay_finite() {
             },
         ),
         (
+            "n_t = 1, one SP cluster",
+            FrameSettings {
+                sp_clusters: 1,
+                normal_threshold: 1.0,
+                ..b.clone()
+            },
+        ),
+        (
+            "n_t = 1, one VPL cluster",
+            FrameSettings {
+                vpl_clusters: 1,
+                normal_threshold: 1.0,
+                ..b.clone()
+            },
+        ),
+        (
             "n_t = -1",
             FrameSettings {
                 normal_threshold: -1.0,
@@ -275,8 +291,8 @@ fn clustered_extremes_stay_finite() {
             f.passes
         );
         assert!(lum > 0.05 && lum < 1.0, "{name}: mean luminance {lum}");
-        // Consistent: every case still lights the room indirectly (a γ near the pixel count and
-        // n_t = 1 once left no cluster, hence no indirect light, silently).
+        // Consistent: every case still lights the room indirectly (a γ near the pixel count, and
+        // n_t = 1 with one cluster, once left no cluster, hence no indirect light, silently).
         assert!(
             ind > 0.5 * ind0 && ind < 2.0 * ind0,
             "{name}: indirect light {ind} against {ind0} with the default settings"

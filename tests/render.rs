@@ -204,3 +204,63 @@ fn extreme_light_power_scales_the_image_linearly() {
         "point light of colour 1e-40: ratio {ratio}"
     );
 }
+
+/// Direct light in sub ranges that cross from area samples into punctual lights, and lights alone
+/// (no emitters), equals the CPU twin on every pixel: each sub range takes its own share of the
+/// samples and lights once (a mutant that lets every sub range take all lights fails here).
+#[test]
+fn direct_light_sub_ranges_with_many_lights_match_cpu_twin() {
+    let ctx = common::gpu();
+    let cases = [
+        (true, 100u32, 70u32),
+        (false, 1, 150),
+        (true, 16, 60),
+        (true, 64, 1),
+        (true, 130, 3),
+    ];
+    for (with_area, spp, nl) in cases {
+        let mut s = scene::load("builtin:cornell").unwrap();
+        if !with_area {
+            for m in &mut s.materials {
+                m.emissive = Vec3::ZERO;
+            }
+        }
+        for i in 0..nl {
+            let x = 0.05 + 0.45 * ((i % 7) as f32 / 6.0);
+            let z = 0.05 + 0.45 * (((i / 7) % 7) as f32 / 6.0);
+            let y = 0.1 + 0.4 * ((i / 49) as f32 / 3.0);
+            let spec = format!("{x},{y},{z},{}", 0.002 * (1 + i) as f32);
+            s.lights
+                .push(fuzzy_vpl::scene::extra_lights::parse_point(&spec).unwrap());
+        }
+        let mut r = Renderer::new(&ctx, &s).unwrap();
+        let (w, h) = (8u32, 6u32);
+        let cam = s.default_camera();
+        let fs = FrameSettings {
+            vpls: 0,
+            ..settings(w, h, spp)
+        };
+        let f = r.render(&cam, &fs).unwrap();
+        let gbuf = r.last_gbuffer().unwrap();
+        let cpu = CpuScene {
+            scene: &s,
+            bvh: &r.bvh,
+            info: r.gpu.info,
+            emitters: &r.gpu.emitters,
+        };
+        let (mut bad, mut lit) = (0, 0);
+        for px in 0..w * h {
+            let g = ShadingPoint::from_gpu(&gbuf[px as usize * 4..px as usize * 4 + 4]);
+            let l = cpu.direct(&g, px, 7, spp);
+            let gl = Vec3::from(f.direct[px as usize]);
+            lit += (l.max_element() > 0.01) as u32;
+            bad += ((gl - l).abs().max_element() > 1e-3 * (1.0 + l.max_element())) as u32;
+        }
+        println!("area {with_area}, {spp} samples, {nl} lights: {bad} pixels differ, {lit} lit");
+        assert!(
+            bad == 0,
+            "area {with_area}, {spp} samples, {nl} lights: {bad} pixels differ"
+        );
+        assert!(lit * 2 > w * h, "only {lit} pixels lit");
+    }
+}

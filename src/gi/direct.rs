@@ -53,7 +53,7 @@ impl Direct {
         // The samples (spp area samples, then the punctual lights) in sub ranges of at most
         // SAMPLES_PER_DISPATCH a pixel: lavapipe stops all loops of a SIMD batch after 65,535 trips
         // (direct.wgsl). About 2^20 shadow rays per submission.
-        let samples = spp + scene.info.num_lights;
+        let samples = spp.saturating_add(scene.info.num_lights);
         let per_dispatch = samples.clamp(1, SAMPLES_PER_DISPATCH);
         let per_chunk = ((1u32 << 20) / per_dispatch).max(1024);
         self.kernel.run_2d(
