@@ -76,7 +76,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     // over j in order, so the sum is the same as a plain loop over all lights.
     var sum = vec3<f32>(0.0);
     var rw: array<u32, MAX_F>;
-    for (var wd = 0u; wd < params.words; wd++) {
+    // This dispatch's words [chunk.sub_offset, + chunk.sub_count) (src/gi/shade.rs bounds them:
+    // lavapipe ends all loops of a SIMD batch after 65,535 trips, and this walk takes one a light).
+    for (var wd = chunk.sub_offset; wd < min(chunk.sub_offset + chunk.sub_count, params.words); wd++) {
         var seen = 0u;
         for (var j = 0u; j < F; j++) {
             rw[j] = 0u;
@@ -98,5 +100,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
             }
         }
     }
-    indirect[m] = vec4<f32>(sum, 0.0);
+    // The first range of words writes the pixel, the others add to it.
+    if chunk.sub_offset == 0u {
+        indirect[m] = vec4<f32>(sum, 0.0);
+    } else {
+        indirect[m] += vec4<f32>(sum, 0.0);
+    }
 }

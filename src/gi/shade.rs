@@ -35,6 +35,10 @@ pub struct ShadeInputs<'a> {
 /// The largest F (`MAX_F` in shade.wgsl).
 pub const MAX_F: u32 = 16;
 
+/// The most bit words (32 lights each) one invocation walks per dispatch: 16,384 lights, so the
+/// paper's settings (at most 8,192 lights) shade in one dispatch per pixel range as before.
+pub const WORDS_PER_DISPATCH: u32 = 512;
+
 #[derive(Default)]
 pub struct Shade {
     /// One pipeline per F (the shader's `override F`), built the first time that F is shaded.
@@ -90,18 +94,24 @@ impl Shade {
             ],
             &[(3, &lights_view)],
         );
-        // About 2^22 light terms per submission.
-        let per = ((1u32 << 22) / i.params.num_lights.max(1)).max(64);
-        kernel.run(
+        // At most WORDS_PER_DISPATCH bit words (32 lights each) a pixel per dispatch: lavapipe ends
+        // all loops of a SIMD batch after 65,535 trips (docs/architecture.md), and the walk over the
+        // lights takes one a light; 131,072 lights in one dispatch lost the last ones. About 2^22
+        // light terms per submission.
+        let words = i.params.words.max(1);
+        let per_dispatch = words.min(WORDS_PER_DISPATCH);
+        let lights = i.params.num_lights.clamp(1, per_dispatch * 32);
+        let per = ((1u32 << 22) / lights).max(64);
+        kernel.run_2d(
             ctx,
             profiler,
             "shade",
             scene,
             &bg,
-            i.pixels,
-            per,
+            (i.pixels, per),
+            (words, per_dispatch),
             0,
-            &mut |_, _| {},
+            &mut |_, _| true,
         );
     }
 }
