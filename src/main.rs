@@ -415,6 +415,18 @@ fn main() -> ExitCode {
     }
 }
 
+/// The most VPLs this device holds: the VPL buffer (48 bytes a VPL) is one storage binding.
+fn check_vpls(ctx: &GpuContext, vpls: u32) -> Result<()> {
+    let binding = ctx.device.limits().max_storage_buffer_binding_size;
+    let most = binding / 48;
+    if vpls as u64 > most {
+        return Err(bad(format!(
+            "--vpls {vpls}: at most {most} on this adapter (48 bytes a VPL in one {binding}-byte storage binding)"
+        )));
+    }
+    Ok(())
+}
+
 fn load_scene(a: &SceneArgs) -> Result<Scene> {
     let mut s = scene::load(&a.scene)?;
     for w in &s.report.warnings {
@@ -480,6 +492,9 @@ fn render(a: RenderArgs) -> Result<()> {
     if a.repeat == 0 {
         return Err(bad("--repeat must be at least 1"));
     }
+    if a.path_trace == Some(0) {
+        return Err(bad("--path-trace 0: must be at least 1 sample a pixel"));
+    }
     if !(a.exposure.is_finite() && a.exposure >= 0.0) {
         return Err(bad("--exposure must be a finite number >= 0"));
     }
@@ -532,6 +547,7 @@ fn render(a: RenderArgs) -> Result<()> {
         None => scene.default_camera(),
     };
     let ctx = GpuContext::new_headless()?;
+    check_vpls(&ctx, a.vpls)?;
     let mut renderer = Renderer::new(&ctx, &scene)?;
     let settings = a.cluster.apply(FrameSettings {
         width: a.width,
@@ -620,11 +636,13 @@ fn render(a: RenderArgs) -> Result<()> {
                 light_scale: a.scene.light_scale,
                 exposure: a.exposure,
                 clamp: settings.clamp,
-                gamma_used: fuzzy_vpl::gi::kmeans::effective_gamma(
-                    settings.gamma,
-                    settings.width * settings.height,
-                    settings.sp_clusters,
-                ),
+                gamma_used: frame.passes.contains(&"sp_cluster").then(|| {
+                    fuzzy_vpl::gi::kmeans::effective_gamma(
+                        settings.gamma,
+                        settings.width * settings.height,
+                        settings.sp_clusters,
+                    )
+                }),
                 normal_threshold_used: fuzzy_vpl::gi::kmeans::effective_normal_threshold(
                     settings.normal_threshold,
                 ),
@@ -694,6 +712,9 @@ fn view(a: ViewArgs) -> Result<()> {
             "{}: --screenshot must end in .png",
             p.display()
         )));
+    }
+    if let Some(p) = &a.screenshot {
+        export::check_writable(p).map_err(bad)?;
     }
     let scene = load_scene(&a.scene)?;
     if let Some(i) = a.camera
@@ -897,7 +918,19 @@ fn bench(a: BenchArgs) -> Result<()> {
     };
     std::fs::create_dir_all(&a.out_dir)
         .map_err(|e| bad(format!("{}: cannot create: {e}", a.out_dir.display())))?;
+    // The folder takes new files, and its images folder can be made: checked before any work.
+    export::check_writable(&a.out_dir.join("results.csv")).map_err(bad)?;
+    let images = a.out_dir.join("images");
+    if images.exists() && !images.is_dir() {
+        return Err(bad(format!(
+            "{}: cannot create: not a directory",
+            images.display()
+        )));
+    }
     let ctx = GpuContext::new_headless()?;
+    check_vpls(&ctx, vpls)?;
+    std::fs::create_dir_all(&images)
+        .map_err(|e| bad(format!("{}: cannot create: {e}", images.display())))?;
     let configs = sweep.configs().len();
     eprintln!(
         "bench {}: {} configuration(s) x {} camera(s), {width}x{height}, {vpls} VPLs, repeat {repeat} \

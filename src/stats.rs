@@ -24,8 +24,10 @@ pub struct Settings {
     /// G-term clamp as a fraction of the scene diagonal.
     pub clamp: f32,
     /// γ and n_t as the SP k-means used them (`kmeans::effective_gamma`,
-    /// `effective_normal_threshold`): γ is at most pixels / K, n_t at most 1 − 2⁻²⁰.
-    pub gamma_used: u32,
+    /// `effective_normal_threshold`): γ is at most pixels / K (absent when no SP clustering ran),
+    /// n_t at most 1 − 2⁻²⁰.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gamma_used: Option<u32>,
     pub normal_threshold_used: f32,
     /// The indirect bounce budget.
     pub bounces: u32,

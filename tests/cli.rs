@@ -254,6 +254,7 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
     fuzzy_vpl::export::write_image(&nan_ref, 4, 4, &px, 1.0).unwrap();
     let o = out.display().to_string();
     let nodir = d.join("nodir").join("x.exr").display().to_string();
+    let nodir_png = d.join("nodir").join("v.png").display().to_string();
     let dir = d.display().to_string();
     let nan = nan_ref.display().to_string();
     let cases: Vec<(Vec<&str>, &str)> = vec![
@@ -280,6 +281,15 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
         (
             vec!["render", "-o", &o, "--light-scale", "5e37"],
             "--light-scale",
+        ),
+        (
+            vec!["render", "-o", &o, "--path-trace", "0"],
+            "--path-trace",
+        ),
+        (vec!["render", "-o", &o, "--vpls", "100000000"], "--vpls"),
+        (
+            vec!["view", "--frames", "1", "--screenshot", &nodir_png],
+            "nodir",
         ),
     ];
     for (a, needle) in cases {
