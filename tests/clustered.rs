@@ -5,7 +5,7 @@ mod common;
 
 use fuzzy_vpl::cpu::shade;
 use fuzzy_vpl::cpu::shading::{CpuScene, ShadingPoint};
-use fuzzy_vpl::gi::pipeline::{FrameSettings, Renderer, Weighting};
+use fuzzy_vpl::gi::pipeline::{Frame, FrameSettings, Renderer, Weighting};
 use fuzzy_vpl::metrics::{mean_luminance, mse};
 use fuzzy_vpl::scene::{self, Scene};
 use glam::{Mat4, Vec3};
@@ -25,6 +25,50 @@ fn clustered(w: u32, h: u32) -> FrameSettings {
     }
 }
 
+/// (CPU twin, GPU) indirect light of every pixel of the clustered frame `f` that `r` rendered with
+/// `fs`: the CPU twins of visibility and shading run on the GPU's own clustering and light list.
+fn shading_pairs(
+    ctx: &fuzzy_vpl::gpu::GpuContext,
+    r: &Renderer,
+    s: &Scene,
+    f: &Frame,
+    fs: &FrameSettings,
+) -> Vec<(Vec3, Vec3)> {
+    let gbuf = r.last_gbuffer().unwrap();
+    let sps: Vec<ShadingPoint> = gbuf.chunks(4).map(ShadingPoint::from_gpu).collect();
+    let c = r.sp_clustering.as_ref().unwrap();
+    let (k, nf) = (c.k() as usize, c.f() as usize);
+    let assign: Vec<u32> = ctx.read_buffer(&c.assign, sps.len() * nf).unwrap();
+    let weights: Vec<f32> = ctx.read_buffer(&c.weights, sps.len() * nf).unwrap();
+    let reps: Vec<u32> = ctx.read_buffer(&c.reps, k * 2).unwrap();
+    let reps: Vec<u32> = reps.chunks(2).map(|x| x[1]).collect();
+    let lights = &r.lights.as_ref().unwrap().0.lights;
+    let cpu = CpuScene {
+        scene: s,
+        bvh: &r.bvh,
+        info: r.gpu.info,
+        emitters: &r.gpu.emitters,
+    };
+    let (bits, words) = shade::visibility_bits(&cpu, &sps, &reps, lights);
+    let d_min = fs.clamp * s.extent();
+    sps.iter()
+        .enumerate()
+        .map(|(m, sp)| {
+            let c = shade::shade(
+                sp,
+                lights,
+                &bits,
+                words,
+                &assign[m * nf..m * nf + nf],
+                &weights[m * nf..m * nf + nf],
+                fs.weighting == Weighting::InverseDistance,
+                d_min * d_min,
+            );
+            (c, Vec3::from(f.indirect[m]))
+        })
+        .collect()
+}
+
 /// GPU visibility + shading equal the CPU twins given the GPU's clustering and light list.
 #[test]
 fn clustered_shading_matches_cpu_twin() {
@@ -42,42 +86,16 @@ fn clustered_shading_matches_cpu_twin() {
             ..clustered(w, h)
         };
         let f = r.render(&s.default_camera(), &fs).unwrap();
-        let gbuf = r.last_gbuffer().unwrap();
-        let sps: Vec<ShadingPoint> = gbuf.chunks(4).map(ShadingPoint::from_gpu).collect();
-        let c = r.sp_clustering.as_ref().unwrap();
-        let (k, nf) = (c.k() as usize, c.f() as usize);
-        let assign: Vec<u32> = ctx.read_buffer(&c.assign, sps.len() * nf).unwrap();
-        let weights: Vec<f32> = ctx.read_buffer(&c.weights, sps.len() * nf).unwrap();
-        let reps: Vec<u32> = ctx.read_buffer(&c.reps, k * 2).unwrap();
-        let reps: Vec<u32> = reps.chunks(2).map(|x| x[1]).collect();
-        let lights = r.lights.as_ref().unwrap().0.lights.clone();
-        let cpu = CpuScene {
-            scene: &s,
-            bvh: &r.bvh,
-            info: r.gpu.info,
-            emitters: &r.gpu.emitters,
-        };
-        let (bits, words) = shade::visibility_bits(&cpu, &sps, &reps, &lights);
-        let d_min = fs.clamp * s.extent();
-        let mut bad = 0;
-        for (m, sp) in sps.iter().enumerate() {
-            let c = shade::shade(
-                sp,
-                &lights,
-                &bits,
-                words,
-                &assign[m * nf..m * nf + nf],
-                &weights[m * nf..m * nf + nf],
-                weighting == Weighting::InverseDistance,
-                d_min * d_min,
-            );
-            let g = Vec3::from(f.indirect[m]);
-            if (c - g).abs().max_element() > 1e-3 * (1.0 + c.max_element()) {
-                bad += 1;
-            }
-        }
-        println!("{weighting:?}: {bad} of {} pixels differ", sps.len());
-        assert!(bad * 100 <= sps.len(), "{weighting:?}: {bad} pixels differ");
+        let pairs = shading_pairs(&ctx, &r, &s, &f, &fs);
+        let bad = pairs
+            .iter()
+            .filter(|(c, g)| (*c - *g).abs().max_element() > 1e-3 * (1.0 + c.max_element()))
+            .count();
+        println!("{weighting:?}: {bad} of {} pixels differ", pairs.len());
+        assert!(
+            bad * 100 <= pairs.len(),
+            "{weighting:?}: {bad} pixels differ"
+        );
     }
 }
 
@@ -97,36 +115,8 @@ fn shading_131072_lights_matches_cpu_twin() {
         ..clustered(8, 6)
     };
     let f = r.render(&s.default_camera(), &fs).unwrap();
-    let gbuf = r.last_gbuffer().unwrap();
-    let sps: Vec<ShadingPoint> = gbuf.chunks(4).map(ShadingPoint::from_gpu).collect();
-    let c = r.sp_clustering.as_ref().unwrap();
-    let (k, nf) = (c.k() as usize, c.f() as usize);
-    let assign: Vec<u32> = ctx.read_buffer(&c.assign, sps.len() * nf).unwrap();
-    let weights: Vec<f32> = ctx.read_buffer(&c.weights, sps.len() * nf).unwrap();
-    let reps: Vec<u32> = ctx.read_buffer(&c.reps, k * 2).unwrap();
-    let reps: Vec<u32> = reps.chunks(2).map(|x| x[1]).collect();
-    let lights = r.lights.as_ref().unwrap().0.lights.clone();
-    assert_eq!(lights.len(), 131_072);
-    let cpu = CpuScene {
-        scene: &s,
-        bvh: &r.bvh,
-        info: r.gpu.info,
-        emitters: &r.gpu.emitters,
-    };
-    let (bits, words) = shade::visibility_bits(&cpu, &sps, &reps, &lights);
-    let d_min = fs.clamp * s.extent();
-    for (m, sp) in sps.iter().enumerate() {
-        let c = shade::shade(
-            sp,
-            &lights,
-            &bits,
-            words,
-            &assign[m * nf..m * nf + nf],
-            &weights[m * nf..m * nf + nf],
-            true,
-            d_min * d_min,
-        );
-        let g = Vec3::from(f.indirect[m]);
+    assert_eq!(r.lights.as_ref().unwrap().0.lights.len(), 131_072);
+    for (m, (c, g)) in shading_pairs(&ctx, &r, &s, &f, &fs).into_iter().enumerate() {
         assert!(
             (c - g).abs().max_element() <= 1e-3 * (1.0 + c.max_element()),
             "pixel {m}: GPU {g} against CPU {c}"

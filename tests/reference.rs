@@ -5,7 +5,7 @@ mod common;
 
 use fuzzy_vpl::cpu::shading::{CpuScene, ShadingPoint};
 use fuzzy_vpl::gi::pathtrace::PathTrace;
-use fuzzy_vpl::gi::pipeline::{DEFAULT_CLAMP, FrameSettings, Renderer};
+use fuzzy_vpl::gi::pipeline::{DEFAULT_CLAMP, Frame, FrameSettings, Renderer};
 use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::metrics::{mean_luminance, rel_mse};
 use fuzzy_vpl::scene;
@@ -22,6 +22,26 @@ fn reference(w: u32, h: u32, vpls: u32, seed: u32) -> FrameSettings {
         clamp: DEFAULT_CLAMP,
         ..Default::default()
     }
+}
+
+/// (CPU twin, GPU) indirect light of every pixel of the last reference frame `f` of `r`.
+fn reference_pairs(r: &Renderer, s: &fuzzy_vpl::scene::Scene, f: &Frame) -> Vec<(Vec3, Vec3)> {
+    let gbuf = r.last_gbuffer().unwrap();
+    let vpls = &r.vpl_set.as_ref().unwrap().0.vpls;
+    let cpu = CpuScene {
+        scene: s,
+        bvh: &r.bvh,
+        info: r.gpu.info,
+        emitters: &r.gpu.emitters,
+    };
+    let d_min = DEFAULT_CLAMP * s.extent();
+    (0..f.indirect.len())
+        .map(|px| {
+            let sp = ShadingPoint::from_gpu(&gbuf[px * 4..px * 4 + 4]);
+            let c = cpu.reference_indirect(&sp, vpls, d_min * d_min);
+            (c, Vec3::from(f.indirect[px]))
+        })
+        .collect()
 }
 
 #[test]
@@ -55,20 +75,8 @@ fn reference_matches_cpu_twin() {
     let cam = s.default_camera();
     let (w, h) = (24, 18);
     let f = r.render(&cam, &reference(w, h, 256, 3)).unwrap();
-    let gbuf = r.last_gbuffer().unwrap();
-    let vpls = r.vpl_set.as_ref().unwrap().0.vpls.clone();
-    let cpu = CpuScene {
-        scene: &s,
-        bvh: &r.bvh,
-        info: r.gpu.info,
-        emitters: &r.gpu.emitters,
-    };
-    let d_min = DEFAULT_CLAMP * s.extent();
     let mut bad = 0;
-    for px in 0..(w * h) as usize {
-        let sp = ShadingPoint::from_gpu(&gbuf[px * 4..px * 4 + 4]);
-        let c = cpu.reference_indirect(&sp, &vpls, d_min * d_min);
-        let g = Vec3::from(f.indirect[px]);
+    for (c, g) in reference_pairs(&r, &s, &f) {
         if (c - g).abs().max_element() > 1e-3 * (1.0 + c.max_element()) {
             bad += 1;
         }
@@ -89,21 +97,9 @@ fn reference_of_a_tiny_image_with_many_vpls_matches_cpu_twin() {
     let cam = s.default_camera();
     let (w, h) = (6, 4);
     let f = r.render(&cam, &reference(w, h, 4096, 5)).unwrap();
-    let gbuf = r.last_gbuffer().unwrap();
-    let vpls = r.vpl_set.as_ref().unwrap().0.vpls.clone();
-    assert_eq!(vpls.len(), 4096);
-    let cpu = CpuScene {
-        scene: &s,
-        bvh: &r.bvh,
-        info: r.gpu.info,
-        emitters: &r.gpu.emitters,
-    };
-    let d_min = DEFAULT_CLAMP * s.extent();
+    assert_eq!(r.vpl_set.as_ref().unwrap().0.vpls.len(), 4096);
     let mut lit = 0;
-    for px in 0..(w * h) as usize {
-        let sp = ShadingPoint::from_gpu(&gbuf[px * 4..px * 4 + 4]);
-        let c = cpu.reference_indirect(&sp, &vpls, d_min * d_min);
-        let g = Vec3::from(f.indirect[px]);
+    for (px, (c, g)) in reference_pairs(&r, &s, &f).into_iter().enumerate() {
         lit += (c.max_element() > 0.0) as u32;
         assert!(
             (c - g).abs().max_element() <= 1e-3 * (1.0 + c.max_element()),

@@ -3,7 +3,7 @@
 mod common;
 
 use fuzzy_vpl::cpu::shading::{CpuScene, ShadingPoint};
-use fuzzy_vpl::gi::pipeline::{FrameSettings, Renderer};
+use fuzzy_vpl::gi::pipeline::{Frame, FrameSettings, Renderer};
 use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::metrics::mean_luminance;
 use fuzzy_vpl::scene::{self, Scene};
@@ -17,6 +17,24 @@ fn settings(w: u32, h: u32, spp: u32) -> FrameSettings {
         direct_samples: spp,
         ..Default::default()
     }
+}
+
+/// (CPU twin, GPU) direct light of every pixel of frame `f` of `r`, rendered with seed 7 and `spp`
+/// samples (the CPU twin shades the GPU's own shading points).
+fn direct_pairs(r: &Renderer, s: &Scene, f: &Frame, spp: u32) -> Vec<(Vec3, Vec3)> {
+    let gbuf = r.last_gbuffer().unwrap();
+    let cpu = CpuScene {
+        scene: s,
+        bvh: &r.bvh,
+        info: r.gpu.info,
+        emitters: &r.gpu.emitters,
+    };
+    (0..f.direct.len())
+        .map(|px| {
+            let g = ShadingPoint::from_gpu(&gbuf[px * 4..px * 4 + 4]);
+            (cpu.direct(&g, px as u32, 7, spp), Vec3::from(f.direct[px]))
+        })
+        .collect()
 }
 
 #[test]
@@ -94,18 +112,8 @@ fn direct_light_with_thousands_of_samples_matches_cpu_twin() {
     let (w, h, spp) = (8u32, 6u32, 8192u32);
     let cam = s.default_camera();
     let f = r.render(&cam, &settings(w, h, spp)).unwrap();
-    let gbuf = r.last_gbuffer().unwrap();
-    let cpu = CpuScene {
-        scene: &s,
-        bvh: &r.bvh,
-        info: r.gpu.info,
-        emitters: &r.gpu.emitters,
-    };
     let mut lit = 0;
-    for px in 0..w * h {
-        let g = ShadingPoint::from_gpu(&gbuf[px as usize * 4..px as usize * 4 + 4]);
-        let l = cpu.direct(&g, px, 7, spp);
-        let gl = Vec3::from(f.direct[px as usize]);
+    for (px, (l, gl)) in direct_pairs(&r, &s, &f, spp).into_iter().enumerate() {
         lit += (l.max_element() > 0.01) as u32;
         assert!(
             (gl - l).abs().max_element() <= 1e-3 * (1.0 + l.max_element()),
@@ -241,18 +249,8 @@ fn direct_light_sub_ranges_with_many_lights_match_cpu_twin() {
             ..settings(w, h, spp)
         };
         let f = r.render(&cam, &fs).unwrap();
-        let gbuf = r.last_gbuffer().unwrap();
-        let cpu = CpuScene {
-            scene: &s,
-            bvh: &r.bvh,
-            info: r.gpu.info,
-            emitters: &r.gpu.emitters,
-        };
         let (mut bad, mut lit) = (0, 0);
-        for px in 0..w * h {
-            let g = ShadingPoint::from_gpu(&gbuf[px as usize * 4..px as usize * 4 + 4]);
-            let l = cpu.direct(&g, px, 7, spp);
-            let gl = Vec3::from(f.direct[px as usize]);
+        for (l, gl) in direct_pairs(&r, &s, &f, spp) {
             lit += (l.max_element() > 0.01) as u32;
             bad += ((gl - l).abs().max_element() > 1e-3 * (1.0 + l.max_element())) as u32;
         }
