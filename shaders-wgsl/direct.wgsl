@@ -51,7 +51,7 @@ fn direct_light(sp: ShadingPoint, pixel: u32) -> vec3<f32> {
         var rng = 0u;
         var area_sum = vec3<f32>(0.0);
         for (var s = first; s < min(end, spp); s++) {
-            if s % RNG_BLOCK == 0u || s == first {
+            if s % RNG_BLOCK == 0u {
                 rng = rng_seed(pixel, chunk.seed, 0x9e3779b9u + s / RNG_BLOCK);
             }
             let u0 = (f32(s) + rng_next(&rng)) / f32(spp);

@@ -7,13 +7,17 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use image::{ImageBuffer, ImageFormat, Rgb};
 
+/// The folder `path` is written in (`.` for a bare file name).
+fn folder_of(path: &Path) -> &Path {
+    path.parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+}
+
 /// Checks, before any work, that `path` can be written the way `write_atomic` writes it: its folder
 /// exists and takes a new file, and the path is not a folder. The error names `path` and the reason.
 pub fn check_writable(path: &Path) -> std::result::Result<(), String> {
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
+    let dir = folder_of(path);
     if path.is_dir() {
         return Err(format!(
             "{}: cannot write: it is a directory",
@@ -63,10 +67,7 @@ pub fn write_atomic(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<std::fs::File>) -> Result<()>,
 ) -> Result<()> {
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
+    let dir = folder_of(path);
     let name = path
         .file_name()
         .with_context(|| format!("{}: not a file name", path.display()))?

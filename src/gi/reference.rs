@@ -68,7 +68,7 @@ impl Reference {
             .bind_group(ctx, &[(1, &params), (2, gbuffer), (3, vpls), (4, indirect)]);
         let px_chunk = pixels.min(1 << 14);
         // At most VPLS_PER_DISPATCH shadow rays an invocation: lavapipe stops all loops of a SIMD
-        // batch after 65,535 trips (direct.wgsl), and a small image would otherwise give each pixel
+        // batch after 65,535 trips (docs/architecture.md), and a small image would otherwise give each pixel
         // thousands of VPLs per dispatch.
         let vpl_chunk = (RAYS_PER_SUBMISSION / px_chunk).clamp(1, num_vpls.min(VPLS_PER_DISPATCH));
         self.kernel.run_2d(

@@ -24,6 +24,9 @@ pub struct Vpl {
     pub flux: [f32; 4],
 }
 
+/// Bytes of one `Vpl` on the GPU.
+pub const VPL_BYTES: u64 = std::mem::size_of::<Vpl>() as u64;
+
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct TraceParams {
@@ -117,7 +120,7 @@ impl VplTrace {
         // paths reaching a surface (a light far outside the scene) the next wave grows to 2^20 paths,
         // 384 MiB at 8 bounces, which the device refuses.
         let binding = ctx.device.limits().max_storage_buffer_binding_size;
-        let max_wave = (binding / (max_depth as u64 * 48)).clamp(1, 1 << 20) as u32;
+        let max_wave = (binding / (max_depth as u64 * VPL_BYTES)).clamp(1, 1 << 20) as u32;
         let mut wave = (n / 2).max(256).min(max_wave);
         let mut base = 0u32;
         // Give up when 64 paths per requested VPL found nothing (lights that hit no surface).
@@ -132,7 +135,7 @@ impl VplTrace {
                     center: center.extend(0.0).into(),
                 },
             );
-            let out = ctx.storage("wave vpls", wave as u64 * max_depth as u64 * 48);
+            let out = ctx.storage("wave vpls", wave as u64 * max_depth as u64 * VPL_BYTES);
             let lens = ctx.storage("path lengths", wave as u64 * 4);
             let bg = self
                 .kernel

@@ -221,8 +221,7 @@ impl Scene {
         Camera::look_at("default", center + dir * dist, center, Vec3::Y, yfov)
     }
 
-    /// Multiplies every emitter (emissive materials and punctual lights) by `factor`.
-    /// Multiplies every emitter by `factor` (in f64, so a factor below f32's normal range still
+    /// Multiplies every emitter (emissive materials and punctual lights) by `factor` (in f64, so a factor below f32's normal range still
     /// scales emitters whose product is representable).
     pub fn scale_light_power(&mut self, factor: f64) {
         for m in &mut self.materials {
@@ -263,8 +262,7 @@ impl Scene {
 
     /// Whether the emitters need `normalize_emission`: their largest is outside 1e-6..1e6.
     pub fn emission_out_of_range(&self) -> bool {
-        let m = self.max_emission();
-        m.is_finite() && m > 0.0 && !(1e-6..=1e6).contains(&m)
+        out_of_range(self.max_emission())
     }
 
     /// Light transport is linear in emitted power: a scene whose emitters are extreme (beyond 1e±6)
@@ -272,10 +270,10 @@ impl Scene {
     /// factor. This keeps every intermediate (VPL fluxes, sums, products) finite in f32. The scaling
     /// runs in f64: 1 / m overflows f32 for m below 2.9e-39.
     pub fn normalize_emission(&mut self) -> f32 {
-        if !self.emission_out_of_range() {
+        let m = self.max_emission();
+        if !out_of_range(m) {
             return 1.0;
         }
-        let m = self.max_emission();
         self.scale_light_power(1.0 / m);
         m as f32
     }
@@ -307,6 +305,11 @@ impl Scene {
         }
         f
     }
+}
+
+/// A largest emission that `Scene::normalize_emission` scales into 1e-6..1e6.
+fn out_of_range(m: f64) -> bool {
+    m.is_finite() && m > 0.0 && !(1e-6..=1e6).contains(&m)
 }
 
 /// A scene that could not be used: names the file and the problem in one line.
