@@ -632,13 +632,7 @@ fn render(a: RenderArgs) -> Result<()> {
                 light_scale: a.scene.light_scale,
                 exposure: a.exposure,
                 clamp: settings.clamp,
-                gamma_used: frame.passes.contains(&"sp_cluster").then(|| {
-                    fuzzy_vpl::gi::kmeans::effective_gamma(
-                        settings.gamma,
-                        settings.width * settings.height,
-                        settings.sp_clusters,
-                    )
-                }),
+                gamma_used: frame.gamma_used,
                 normal_threshold_used: fuzzy_vpl::gi::kmeans::effective_normal_threshold(
                     settings.normal_threshold,
                 ),

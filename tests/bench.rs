@@ -76,6 +76,69 @@ fn quick_bench_writes_csv_plots_and_summary() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
+/// The rows and images say what ran: a K_sp at or above the pixel count runs without SP clustering
+/// and is labelled so, γ is reported as Alg. 1 used it, and a rerun leaves no image of an earlier
+/// run's configurations (other files in images/ stay).
+#[test]
+fn bench_rows_say_what_ran_and_reruns_leave_no_stale_images() {
+    let d = common::scratch("bench-ran");
+    std::fs::create_dir_all(d.join("images")).unwrap();
+    std::fs::write(d.join("images/07_weighted_99x99_F6_g4.png"), b"old").unwrap();
+    std::fs::write(d.join("images/notes.txt"), b"mine").unwrap();
+    // 16 x 12 = 192 pixels: K_sp 8 with γ 64 samples with γ 192 / 8 = 24; K_sp 400 is not below 192.
+    let (code, _, err) = run(&[
+        "bench",
+        "builtin:cornell",
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--vpls",
+        "64",
+        "--modes",
+        "hard",
+        "--sp-clusters",
+        "8,400",
+        "--vpl-clusters",
+        "16",
+        "--gamma",
+        "64",
+        "--repeat",
+        "1",
+        "--out-dir",
+        d.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let rows = csv::from_csv(&std::fs::read_to_string(d.join("results.csv")).unwrap()).unwrap();
+    assert_eq!(rows.len(), 2, "{rows:?}");
+    let (clustered, off) = (&rows[0], &rows[1]);
+    assert_eq!((clustered.sp_clusters, clustered.gamma), (8, 64));
+    assert_eq!(clustered.gamma_used, Some(24), "{clustered:?}");
+    assert_eq!(clustered.label, "hard 8/16 g24");
+    assert_eq!(off.sp_clusters, 400);
+    assert_eq!((off.sp_clusters_used, off.gamma_used), (0, None), "{off:?}");
+    assert_eq!(off.stage("sp_cluster"), 0.0);
+    assert_eq!(off.label, "hard -/16 (K_sp off)");
+    let mut names: Vec<String> = std::fs::read_dir(d.join("images"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            "01_hard_8x16_g24.png",
+            "01_hard_8x16_g24_err.png",
+            "02_hard_-x16__K_sp_off_.png",
+            "02_hard_-x16__K_sp_off__err.png",
+            "notes.txt",
+        ]
+    );
+    let md = std::fs::read_to_string(d.join("summary.md")).unwrap();
+    assert!(md.contains("| 64 → 24 |"), "{md}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 #[test]
 fn bad_sweep_options_exit_2_with_one_line() {
     let d = common::scratch("bench-bad");

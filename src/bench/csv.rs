@@ -48,8 +48,11 @@ pub struct Row {
     pub repeat: u32,
     /// Short name used in plots and the summary (`weighted 48/128 F6 g4`).
     pub label: String,
-    /// p of the fuzzy weights (w'_f = dist^-p; Eq. 10: 1). Last column; older files without it read 1.
+    /// p of the fuzzy weights (w'_f = dist^-p; Eq. 10: 1). Older files without it read 1.
     pub weight_exponent: f32,
+    /// γ Alg. 1 sampled with (`gamma` is the one asked; at most pixels / K): empty in the file
+    /// when no SP clustering ran. Last column; older files without it read empty.
+    pub gamma_used: Option<u32>,
 }
 
 impl Row {
@@ -93,6 +96,7 @@ pub fn header() -> Vec<String> {
             "repeat",
             "label",
             "weight_exponent",
+            "gamma_used",
         ]
         .map(String::from),
     );
@@ -126,6 +130,7 @@ fn record(r: &Row) -> Vec<String> {
         r.repeat.to_string(),
         r.label.clone(),
         r.weight_exponent.to_string(),
+        r.gamma_used.map_or(String::new(), |g| g.to_string()),
     ]);
     v
 }
@@ -174,7 +179,11 @@ pub fn split_line(line: &str) -> Vec<String> {
 pub fn from_csv(text: &str) -> Result<Vec<Row>> {
     let mut lines = text.lines();
     let head = split_line(lines.next().context("empty CSV")?);
-    if head != header() {
+    // The columns through `label` are required; a file from an older version may stop after any of
+    // the later ones (they were added at the end).
+    let full = header();
+    let required = full.iter().position(|h| h == "label").unwrap() + 1;
+    if head.len() < required || head.len() > full.len() || head[..] != full[..head.len()] {
         bail!("unexpected CSV header: {}", head.join(","));
     }
     let col = |name: &str| head.iter().position(|h| h == name).unwrap();
@@ -228,6 +237,10 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
                 num("weight_exponent")? as f32
             } else {
                 1.0
+            },
+            gamma_used: match head.iter().any(|h| h == "gamma_used") {
+                true if !get("gamma_used").is_empty() => Some(num("gamma_used")? as u32),
+                _ => None,
             },
         });
     }
@@ -286,6 +299,7 @@ pub(crate) mod tests {
             repeat: 3,
             label: format!("{mode} {sp}/{vpl}"),
             weight_exponent: 1.0,
+            gamma_used: Some(4),
         }
     }
 
@@ -337,6 +351,32 @@ pub(crate) mod tests {
         assert_eq!(csv.lines().count(), 2);
         let back = from_csv(&csv).unwrap();
         assert_eq!(back, vec![r]);
+    }
+
+    #[test]
+    fn older_files_without_the_last_columns_read() {
+        let mut r = synthetic("hard", 48, 128);
+        r.gamma_used = None;
+        let csv = to_csv(std::slice::from_ref(&r));
+        assert_eq!(from_csv(&csv).unwrap(), vec![r.clone()]);
+        // Drop the two columns added last (weight_exponent, gamma_used) from header and row.
+        let cut = |l: &str| {
+            let f = split_line(l);
+            f[..f.len() - 2]
+                .iter()
+                .map(|x| quote(x))
+                .collect::<Vec<_>>()
+                .join(",")
+        };
+        let old: String = csv.lines().map(|l| cut(l) + "\n").collect();
+        let back = from_csv(&old).unwrap();
+        assert_eq!(back[0].weight_exponent, 1.0);
+        assert_eq!(back[0].gamma_used, None);
+        assert_eq!(back[0].label, r.label);
+        // Not a prefix of the header, or short of `label`: refused.
+        assert!(from_csv(&old.replacen("scene,camera", "camera,scene", 1)).is_err());
+        let short: String = old.lines().map(|l| cut(l) + "\n").collect();
+        assert!(from_csv(&short).is_err());
     }
 
     #[test]

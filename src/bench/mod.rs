@@ -93,6 +93,32 @@ fn timed(
     Ok((last.expect("n >= 1"), stats::best_of_runs(&runs)))
 }
 
+/// Whether `name` is a configuration's image as `run` names them: `NN[_camC]_<label>.png` or its
+/// `_err.png` (two or more digits, an underscore, a label).
+fn is_config_image(name: &str) -> bool {
+    let digits = name.bytes().take_while(u8::is_ascii_digit).count();
+    digits >= 2
+        && name[digits..].starts_with('_')
+        && name.len() > digits + 5
+        && name.ends_with(".png")
+}
+
+/// Removes the configuration images an earlier run left in `images/`, so that the folder holds the
+/// images of the rows of this run's `results.csv` and nothing else (a rerun with fewer or other
+/// configurations used to leave the old ones beside the new). Other files are left alone.
+fn remove_old_images(img_dir: &Path) -> Result<()> {
+    let entries = std::fs::read_dir(img_dir)
+        .with_context(|| format!("{}: cannot list", img_dir.display()))?;
+    for e in entries.flatten() {
+        let name = e.file_name();
+        if name.to_str().is_some_and(is_config_image) && e.path().is_file() {
+            std::fs::remove_file(e.path())
+                .with_context(|| format!("{}: cannot remove", e.path().display()))?;
+        }
+    }
+    Ok(())
+}
+
 fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     let text = csv::to_csv(rows);
     export::write_atomic(path, |w| {
@@ -108,6 +134,7 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
     let img_dir = out.join("images");
     std::fs::create_dir_all(&img_dir)
         .with_context(|| format!("{}: cannot create", img_dir.display()))?;
+    remove_old_images(&img_dir)?;
     let configs: Vec<Config> = plan.sweep.configs();
     let frames = plan.cameras.len() as u64
         * (plan.reference_repeat.max(1) as u64 + configs.len() as u64 * plan.repeat.max(1) as u64);
@@ -178,10 +205,14 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
         ));
         let mut cam_rows = Vec::new();
         for (i, c) in configs.iter().enumerate() {
-            let label = c.label();
-            pb.set_message(format!("camera {cam_name}: {label}"));
+            pb.set_message(format!("camera {cam_name}: {}", c.label()));
             let s = c.settings(&base);
             let (frame, t) = timed(&mut renderer, camera, &s, plan.repeat, &pb)?;
+            let label = c.label_ran(
+                frame.passes.contains(&"sp_cluster"),
+                frame.passes.contains(&"vpl_cluster"),
+                frame.gamma_used,
+            );
             let stages_ms: BTreeMap<String, f64> = STAGES
                 .iter()
                 .map(|k| (k.to_string(), t.get(*k).copied().unwrap_or(0.0)))
@@ -198,6 +229,7 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
                 sp_clusters: c.sp_clusters,
                 fuzziness: c.fuzziness,
                 gamma: c.gamma,
+                gamma_used: frame.gamma_used,
                 weight_exponent: c.weight_exponent,
                 normal_threshold: s.normal_threshold,
                 iterations: s.iterations,
@@ -313,6 +345,17 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn only_configuration_images_count_as_old() {
+        assert!(is_config_image("01_hard_192x512_g4.png"));
+        assert!(is_config_image("12_cam0_weighted_48x128_F6_g4_err.png"));
+        assert!(is_config_image("100_uniform_8x8_F6_g4.png"));
+        assert!(!is_config_image("reference.png"));
+        assert!(!is_config_image("1_hard.png"));
+        assert!(!is_config_image("01_notes.txt"));
+        assert!(!is_config_image("ab_hard.png"));
+    }
 
     #[test]
     fn slugs_are_file_names() {

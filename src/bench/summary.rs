@@ -88,7 +88,7 @@ pub fn markdown(s: &SummaryInfo) -> String {
                 r.sp_clusters,
                 r.vpl_clusters,
                 r.fuzziness,
-                r.gamma,
+                gamma_cell(r),
                 fmt_ms(r.frame_ms()),
                 fmt_ms(r.stage("sp_cluster")),
                 fmt_ms(r.stage("visibility")),
@@ -107,7 +107,10 @@ pub fn markdown(s: &SummaryInfo) -> String {
         }
         let _ = writeln!(
             m,
-            "\n★ = on the Pareto front of frame time and MSE. K = 0 means not clustered; F = 1 for hard.\n"
+            "\n★ = on the Pareto front of frame time and MSE. K = 0 means not clustered; F = 1 for hard; \
+             γ as asked → as used (at most pixels / K_sp), – where no SP clustering ran. A label's \
+             \"(K_sp off)\" or \"(K_vpl off)\": that K was not below the pixel or VPL count, so that \
+             clustering did not run.\n"
         );
     }
     let _ = writeln!(
@@ -116,6 +119,16 @@ pub fn markdown(s: &SummaryInfo) -> String {
          are only comparable within one run; the ratios (speedup) are what carries over."
     );
     m
+}
+
+/// The γ column: the γ asked, "asked → used" where Alg. 1 sampled with less (γ at most pixels /
+/// K_sp), "–" where no SP clustering ran.
+fn gamma_cell(r: &Row) -> String {
+    match r.gamma_used {
+        None => "–".into(),
+        Some(g) if g != r.gamma => format!("{} → {g}", r.gamma),
+        Some(g) => g.to_string(),
+    }
 }
 
 #[cfg(test)]

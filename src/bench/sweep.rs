@@ -359,11 +359,36 @@ impl Config {
         if self.mode.uses_fuzziness() {
             s += &format!(" F{}", self.fuzziness);
         }
-        if self.mode.clusters_sps() {
+        if self.mode.clusters_sps() && self.sp_clusters > 0 {
             s += &format!(" g{}", self.gamma);
         }
         if self.mode.uses_weights() && self.weight_exponent != 1.0 {
             s += &format!(" p{}", self.weight_exponent);
+        }
+        s
+    }
+
+    /// The label of what ran (`label` is of what was asked): a K the renderer turned off (at or
+    /// above the pixel or VPL count) shows as "-" with a note, and γ as Alg. 1 used it
+    /// (`kmeans::effective_gamma`, at most pixels / K).
+    pub fn label_ran(&self, sp_ran: bool, vpl_ran: bool, gamma_used: Option<u32>) -> String {
+        let ran = Config {
+            sp_clusters: if sp_ran { self.sp_clusters } else { 0 },
+            vpl_clusters: if vpl_ran { self.vpl_clusters } else { 0 },
+            gamma: gamma_used.unwrap_or(self.gamma),
+            ..*self
+        };
+        let mut s = ran.label();
+        let off: Vec<&str> = [
+            (self.sp_clusters > 0 && !sp_ran, "K_sp"),
+            (self.vpl_clusters > 0 && !vpl_ran, "K_vpl"),
+        ]
+        .iter()
+        .filter(|x| x.0)
+        .map(|x| x.1)
+        .collect();
+        if !off.is_empty() {
+            s += &format!(" ({} off)", off.join(", "));
         }
         s
     }

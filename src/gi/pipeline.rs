@@ -236,6 +236,8 @@ pub struct Frame {
     pub shadow_rays: u64,
     pub sp_clusters_used: u32,
     pub vpl_clusters_used: u32,
+    /// γ Alg. 1 sampled with (`kmeans::effective_gamma`); `None` when no SP clustering ran.
+    pub gamma_used: Option<u32>,
 }
 
 type LightKey = (u32, u32, u32, u32, u32);
@@ -428,6 +430,7 @@ impl<'a> Renderer<'a> {
             shadow_rays: 0,
             sp_clusters_used: 0,
             vpl_clusters_used: 0,
+            gamma_used: None,
         })
     }
 
@@ -464,6 +467,7 @@ impl<'a> Renderer<'a> {
         let d_min = s.clamp * self.scene.extent();
         let mut indirect_rays = 0u64;
         let mut sp_used = 0;
+        let mut gamma_used = None;
         let mut num_lights = 0;
         self.sp_clustering = None;
         if plan.indirect {
@@ -526,6 +530,7 @@ impl<'a> Renderer<'a> {
                 let reps: Vec<u32> = ctx.read_buffer(&c.reps, c.k() as usize * 2)?;
                 sp_used = reps.chunks(2).filter(|r| r[1] != u32::MAX).count() as u32;
                 indirect_rays = sp_used as u64 * num_lights as u64;
+                gamma_used = Some(c.params.gamma);
                 self.sp_clustering = Some(c);
             } else {
                 let label = if plan.vpl_clustering {
@@ -613,6 +618,7 @@ impl<'a> Renderer<'a> {
                 + indirect_rays,
             sp_clusters_used: sp_used,
             vpl_clusters_used: if plan.vpl_clustering { num_lights } else { 0 },
+            gamma_used,
         })
     }
 }
