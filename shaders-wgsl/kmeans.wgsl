@@ -39,7 +39,8 @@ struct KmParams {
     ext: vec4<f32>,
     // p of the fuzzy weights w'_f = dist^-p (Eq. 10 is p = 1; 0 is Eq. 8's plain mean).
     weight_exponent: f32,
-    _p0: u32,
+    // The plane gate of the final assignment: sin of its angle, 2 when off (src/gi/kmeans.rs).
+    plane_gate: f32,
     _p1: u32,
     _p2: u32,
 }
@@ -781,6 +782,16 @@ fn inverse_distance_weights(d: array<f32, MAX_F>, count: u32, zero: u32) -> arra
     return w;
 }
 
+// The plane gate (off unless asked; not in the paper): slot j >= 2 keeps cluster k only when its
+// centroid lies within the gate's angle of the point's tangent plane, seen from the point. Eq. (7)
+// gates on normals alone, so a pixel's F nearest clusters include parallel surfaces above or below
+// it (a chair seat over the floor), whose visibility differs. The first slot is always kept, and a
+// centroid on the point (|d| = 0) passes. CPU twin: cpu::kmeans::plane_gate_keeps.
+fn plane_gate_keeps(p: vec3<f32>, n: vec3<f32>, k: u32) -> bool {
+    let d = centroids[k].pos.xyz - p;
+    return abs(dot(n, d)) <= params.plane_gate * length(d);
+}
+
 // --- Alg. 2: every data point to its F nearest centroids with normalised inverse-distance weights
 // (Eq. 10). A point on a centroid (distance 0) takes that cluster's whole weight.
 @compute @workgroup_size(64)
@@ -797,8 +808,16 @@ fn final_assign(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     }
     var zero = INVALID;
     var dists: array<f32, MAX_F>;
+    var kept: array<bool, MAX_F>;
+    let n = point_nrm(m);
     for (var j = 0u; j < F; j++) {
         dists[j] = b.dist[j];
+        kept[j] = j < b.count;
+        if j > 0u && j < b.count && !plane_gate_keeps(p.xyz, n, b.idx[j]) {
+            kept[j] = false;
+            // A negative distance has weight 0 (inverse_distance_weights).
+            dists[j] = -1.0;
+        }
         if j < b.count && b.dist[j] <= ZERO_DIST && zero == INVALID {
             zero = j;
         }
@@ -806,7 +825,7 @@ fn final_assign(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     let w = inverse_distance_weights(dists, b.count, zero);
     for (var j = 0u; j < f; j++) {
         var k = INVALID;
-        if j < b.count {
+        if kept[j] {
             k = b.idx[j];
             // Representatives, step 2 (rep_min): the smallest member distance per cluster
             // (non-negative floats order like their bits).

@@ -89,6 +89,10 @@ struct BenchArgs {
     /// Eq. 10).
     #[arg(long, value_name = "LIST")]
     weight_exponent: Option<String>,
+    /// Plane gates of the fuzzy modes' F lists: `off` (the paper, default) or angles in degrees,
+    /// e.g. off,20 (see render --plane-gate).
+    #[arg(long, value_name = "LIST")]
+    plane_gate: Option<String>,
     /// Image width (default 640; quick 96).
     #[arg(long)]
     width: Option<u32>,
@@ -246,6 +250,12 @@ struct ClusterArgs {
     /// it alone), 64 is nearly hard clustering.
     #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_WEIGHT_EXPONENT)]
     weight_exponent: f32,
+    /// Not in the paper (off by default): the fuzzy modes' slots 2..F keep only SP clusters whose
+    /// centroid lies within DEG degrees of the pixel's tangent plane, seen from the pixel. Eq. (7)
+    /// gates on normals alone, so without it a floor pixel's F clusters include a chair seat above
+    /// it (docs/clustering.md, "The plane gate"). (0, 90].
+    #[arg(long, value_name = "DEG")]
+    plane_gate: Option<f32>,
     /// G-term clamp: the VPL distance in 1/d² is at least CLAMP × scene diagonal (scale-free).
     #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_CLAMP)]
     clamp: f32,
@@ -261,7 +271,13 @@ impl ClusterArgs {
         check_normal_threshold(self.normal_threshold)?;
         check_iterations(self.iterations)?;
         check_clamp(self.clamp)?;
-        check_weight_exponent(self.weight_exponent)
+        check_weight_exponent(self.weight_exponent)?;
+        match self.plane_gate {
+            Some(g) if !fuzzy_vpl::gi::kmeans::valid_plane_gate(g) => Err(bad(format!(
+                "--plane-gate {g}: must be an angle in (0, 90] degrees"
+            ))),
+            _ => Ok(()),
+        }
     }
 
     /// `fs` with these settings.
@@ -273,6 +289,7 @@ impl ClusterArgs {
             iterations: self.iterations,
             weighting: self.weighting,
             weight_exponent: self.weight_exponent,
+            plane_gate_deg: self.plane_gate,
             clamp: self.clamp,
             ..fs
         }
@@ -638,6 +655,9 @@ fn render(a: RenderArgs) -> Result<()> {
                 ),
                 bounces: settings.bounces,
                 path_trace_spp: a.path_trace.map(|n| n.max(1)),
+                plane_gate_deg: settings
+                    .plane_gate_deg
+                    .filter(|_| frame.gamma_used.is_some() && settings.f() > 1),
             },
             counts: stats::Counts {
                 triangles: scene.triangles.len() as u64,
@@ -852,6 +872,7 @@ fn bench(a: BenchArgs) -> Result<()> {
             fuzziness: a.fuzziness.clone(),
             gamma: a.gamma.clone(),
             weight_exponent: a.weight_exponent.clone(),
+            plane_gate: a.plane_gate.clone(),
             pairs: a.pairs.clone(),
         },
         base_sweep,

@@ -35,6 +35,10 @@ pub struct Settings {
     /// clustering settings above were not used).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub path_trace_spp: Option<u32>,
+    /// The plane gate of the fuzzy F lists in degrees (`--plane-gate`; not in the paper): absent
+    /// when off or when it had nothing to gate (no SP clustering, or F = 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub plane_gate_deg: Option<f32>,
 }
 
 #[derive(Clone, Debug, Default, Serialize)]

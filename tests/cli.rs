@@ -111,6 +111,7 @@ fn render_cornell_128_exr_with_stats() {
     assert!(j["settings"]["gamma_used"].as_u64().unwrap() >= 1);
     assert!(j["settings"]["normal_threshold_used"].as_f64().unwrap() < 1.0);
     assert!(j["settings"].get("path_trace_spp").is_none());
+    assert!(j["settings"].get("plane_gate_deg").is_none());
     assert!(j.get("error").is_none());
     // No temporary files left beside the outputs.
     let names: Vec<_> = std::fs::read_dir(&d)
@@ -288,6 +289,18 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
         ),
         (vec!["render", "-o", &o, "--vpls", "100000000"], "--vpls"),
         (
+            vec!["render", "-o", &o, "--plane-gate", "0"],
+            "--plane-gate",
+        ),
+        (
+            vec!["render", "-o", &o, "--plane-gate", "91"],
+            "--plane-gate",
+        ),
+        (
+            vec!["render", "-o", &o, "--plane-gate", "NaN"],
+            "--plane-gate",
+        ),
+        (
             vec!["view", "--frames", "1", "--screenshot", &nodir_png],
             "nodir",
         ),
@@ -386,4 +399,47 @@ fn closed_stdout_is_not_a_panic() {
     let out = child.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!err.contains("panicked"), "{err}");
+}
+
+/// `--plane-gate`: the stats name it when it gated a fuzzy frame, not for hard clustering (F = 1, no
+/// slot to gate); the gated image is finite and differs from the ungated one.
+#[test]
+fn plane_gate_is_reported_where_it_applies() {
+    let d = common::scratch("cli-gate");
+    let render = |name: &str, extra: &[&str]| {
+        let exr = d.join(format!("{name}.exr"));
+        let stats = d.join(format!("{name}.json"));
+        let mut a = vec![
+            "render",
+            "builtin:conference",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--vpls",
+            "512",
+            "--vpl-clusters",
+            "128",
+            "--sp-clusters",
+            "48",
+            "-o",
+            exr.to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+        ];
+        a.extend_from_slice(extra);
+        let (code, _, err) = run(&a);
+        assert_eq!(code, 0, "{err}");
+        let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+        let px = fuzzy_vpl::export::read_exr(&exr).unwrap().2;
+        assert!(common::all_finite(&px), "{name}");
+        (j, px)
+    };
+    let (j_off, px_off) = render("off", &["--weighting", "uniform"]);
+    let (j_on, px_on) = render("on", &["--weighting", "uniform", "--plane-gate", "20"]);
+    let (j_hard, _) = render("hard", &["--weighting", "hard", "--plane-gate", "20"]);
+    assert!(j_off["settings"].get("plane_gate_deg").is_none());
+    assert_eq!(j_on["settings"]["plane_gate_deg"].as_f64(), Some(20.0));
+    assert!(j_hard["settings"].get("plane_gate_deg").is_none());
+    assert!(px_on != px_off, "the gate changed nothing");
 }

@@ -265,6 +265,7 @@ fn settings(k: u32, f: u32, gamma: u32, n_t: f32, iterations: u32) -> KMeansSett
         seed: 3,
         weights_to_reps: false,
         weight_exponent: 1.0,
+        plane_gate_deg: None,
     }
 }
 
@@ -702,4 +703,153 @@ fn scan_groups_bound_every_grid() {
             scan_groups(k)
         );
     }
+}
+
+/// A floor (z = 0, 2 m × 2 m) with a seat 0.45 m above its middle, normals all +z: Eq. (7) sees
+/// only normals, so floor points near the seat take seat clusters in their F list. The plane gate
+/// (20°) drops every slot after the first whose centroid is off the point's plane, keeps the first
+/// and the clustering itself (slot 1 and the centroids are those of the ungated run), and matches
+/// the CPU twin slot for slot.
+#[test]
+fn plane_gate_drops_parallel_surfaces_and_matches_cpu() {
+    let ctx = common::gpu();
+    let mut data = Vec::new();
+    let mut push = |x: f32, y: f32, z: f32| {
+        data.push([x, y, z, 1.0]);
+        data.push([0.0, 0.0, 1.0, 0.0]);
+    };
+    for i in 0..48 {
+        for j in 0..48 {
+            push(i as f32 / 47.0 * 2.0, j as f32 / 47.0 * 2.0, 0.0);
+        }
+    }
+    for i in 0..24 {
+        for j in 0..24 {
+            push(
+                0.6 + i as f32 / 23.0 * 0.8,
+                0.6 + j as f32 / 23.0 * 0.8,
+                0.45,
+            );
+        }
+    }
+    let frame = (Vec3::ZERO, Vec3::new(2.0, 2.0, 0.5));
+    let off = settings(24, 6, 1, 0.866, 10);
+    let on = KMeansSettings {
+        plane_gate_deg: Some(20.0),
+        ..off
+    };
+    let pts = points_of(&data, 2);
+    let floor = 48 * 48;
+    // Slots after the first whose centroid is more than 20° off a floor point's plane.
+    let off_plane = |g: &GpuResult| -> usize {
+        (0..floor)
+            .map(|m| {
+                g.assign[m * 6 + 1..m * 6 + 6]
+                    .iter()
+                    .filter(|&&k| {
+                        k != u32::MAX
+                            && !kmeans::plane_gate_keeps(
+                                &pts[m],
+                                &g.centroids[k as usize],
+                                20f32.to_radians().sin(),
+                            )
+                    })
+                    .count()
+            })
+            .sum()
+    };
+    let g_off = run_gpu(&ctx, &data, 2, &off, frame);
+    let g_on = run_gpu(&ctx, &data, 2, &on, frame);
+    let before = off_plane(&g_off);
+    println!(
+        "floor slots on the seat: {before} ungated, {} gated",
+        off_plane(&g_on)
+    );
+    assert!(
+        before > 100,
+        "the case does not exercise the gate: {before}"
+    );
+    assert_eq!(off_plane(&g_on), 0);
+    assert_eq!(g_on.sample_assign, g_off.sample_assign);
+    for m in 0..pts.len() {
+        assert_eq!(
+            g_on.assign[m * 6],
+            g_off.assign[m * 6],
+            "slot 1 of point {m}"
+        );
+        let w = &g_on.weights[m * 6..m * 6 + 6];
+        assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-4, "{m}: {w:?}");
+        for (k, wj) in g_on.assign[m * 6..m * 6 + 6].iter().zip(w) {
+            if *k == u32::MAX {
+                assert_eq!(*wj, 0.0, "{m}: a dropped slot has weight");
+            }
+        }
+    }
+    let c = kmeans::kmeans(&pts, &g_on.params, on.iterations);
+    let rows_equal = (0..pts.len())
+        .filter(|&m| g_on.assign[m * 6..m * 6 + 6] == c.assign[m * 6..m * 6 + 6])
+        .count();
+    println!(
+        "gated rows equal to the CPU twin's: {rows_equal} of {}",
+        pts.len()
+    );
+    assert!(rows_equal * 1000 >= pts.len() * 999, "{rows_equal}");
+    let worst = worst_difference(&g_on.weights, &c.weights);
+    assert!(
+        worst < 1e-5,
+        "weights differ from the CPU twin's by {worst}"
+    );
+    assert_eq!(g_on.reps, c.reps);
+}
+
+/// The gate on shading points from a real render: the GPU against its CPU twin (compare's checks).
+#[test]
+fn plane_gate_matches_cpu_on_shading_points() {
+    let ctx = common::gpu();
+    let sc = scene::load("builtin:conference").unwrap();
+    let mut r = Renderer::new(&ctx, &sc).unwrap();
+    let fs = FrameSettings {
+        width: 96,
+        height: 72,
+        ..Default::default()
+    };
+    r.render(&sc.default_camera(), &fs).unwrap();
+    let gbuf = r.last_gbuffer().unwrap();
+    let s = KMeansSettings {
+        plane_gate_deg: Some(20.0),
+        ..settings(96, 6, 4, 0.866, 10)
+    };
+    let (a, f) = compare("conference SPs, gated", &ctx, &gbuf, 4, &s, sc.bounds());
+    assert!(a >= 0.99 && f >= 0.99, "agreement {a} {f}");
+    // Every slot, not only the first: the GPU's gated rows are the twin's, and the gate dropped
+    // slots the ungated twin keeps.
+    let g = run_gpu(&ctx, &gbuf, 4, &s, sc.bounds());
+    let pts = points_of(&gbuf, 4);
+    let c = kmeans::kmeans(&pts, &g.params, s.iterations);
+    let ungated = kmeans::kmeans(
+        &pts,
+        &KmParams::new(
+            pts.len() as u32,
+            4,
+            &settings(96, 6, 4, 0.866, 10),
+            sc.bounds(),
+        ),
+        s.iterations,
+    );
+    let row = |a: &[u32], m: usize| a[m * 6..m * 6 + 6].to_vec();
+    let n = pts.len();
+    let equal = (0..n)
+        .filter(|&m| row(&g.assign, m) == row(&c.assign, m))
+        .count();
+    let gated = (0..n)
+        .filter(|&m| row(&c.assign, m) != row(&ungated.assign, m))
+        .count();
+    println!("gated rows equal to the twin's: {equal} of {n}; rows the gate changed: {gated}");
+    assert!(equal * 100 >= n * 99, "{equal} of {n}");
+    assert!(gated * 20 >= n, "the gate changed only {gated} of {n} rows");
+    let worst = worst_difference(&g.weights, &c.weights);
+    assert!(
+        worst < 1e-4,
+        "weights differ from the CPU twin's by {worst}"
+    );
 }

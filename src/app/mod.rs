@@ -21,6 +21,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::Result;
 
+use crate::gi::kmeans::DEFAULT_PLANE_GATE_DEG;
 use crate::gi::pipeline::{Control, FrameSettings, Weighting};
 use crate::metrics;
 use crate::scene::Scene;
@@ -84,6 +85,9 @@ pub struct UiSettings {
     pub mode: Mode,
     /// p of the weighted mode's w'_f = dist^-p (Eq. 10: 1).
     pub weight_exponent: f32,
+    /// The plane gate of the fuzzy F lists (off: the paper) and its angle, degrees.
+    pub plane_gate_on: bool,
+    pub plane_gate_deg: f32,
     pub sp_on: bool,
     pub vpl_on: bool,
     pub direct_on: bool,
@@ -110,6 +114,8 @@ impl UiSettings {
                 Weighting::InverseDistance => Mode::Weighted,
             },
             weight_exponent: f.weight_exponent,
+            plane_gate_on: f.plane_gate_deg.is_some(),
+            plane_gate_deg: f.plane_gate_deg.unwrap_or(DEFAULT_PLANE_GATE_DEG),
             sp_on: f.sp_clusters > 0,
             vpl_on: f.vpl_clusters > 0,
             direct_on: true,
@@ -117,6 +123,11 @@ impl UiSettings {
             direct_samples: f.direct_samples,
             clamp: f.clamp,
         }
+    }
+
+    /// The gate's angle when it is on and applies (fuzzy modes).
+    pub fn plane_gate(&self) -> Option<f32> {
+        (self.plane_gate_on && self.mode != Mode::Hard).then_some(self.plane_gate_deg)
     }
 
     pub fn normal_threshold(&self) -> f32 {
@@ -133,6 +144,7 @@ impl UiSettings {
             bounces: crate::gi::vpl_trace::MAX_DEPTH,
             weights_to_reps: false,
             weight_exponent: self.weight_exponent,
+            plane_gate_deg: self.plane_gate(),
             reference: false,
             vpl_clusters: if self.vpl_on { self.vpl_clusters } else { 0 },
             sp_clusters: if self.sp_on { self.sp_clusters } else { 0 },
@@ -167,6 +179,10 @@ impl UiSettings {
                     Mode::Weighted if self.weight_exponent == 1.0 => "fuzzy weighted".to_string(),
                     Mode::Weighted => format!("fuzzy weighted p{}", self.weight_exponent),
                 };
+                let m = match self.plane_gate() {
+                    Some(g) => format!("{m}, gate {g:.0}°"),
+                    None => m,
+                };
                 if self.vpl_on {
                     m
                 } else {
@@ -194,8 +210,11 @@ impl UiSettings {
         } else {
             "Kv0".into()
         };
+        let gate = self
+            .plane_gate()
+            .map_or(String::new(), |g| format!("_gate{g:.0}"));
         format!(
-            "{mode}_{sp}_{vpl}_N{}_F{}_g{}_nt{:.0}_it{}",
+            "{mode}_{sp}_{vpl}_N{}_F{}_g{}_nt{:.0}_it{}{gate}",
             self.vpls, self.fuzziness, self.gamma, self.nt_degrees, self.iterations
         )
     }

@@ -238,6 +238,19 @@ impl Viewer {
                     Slider::new(&mut s.weight_exponent, 0.0..=8.0)
                         .text("p (weights ∝ dist^-p; Eq. 10: 1)"),
                 );
+                ui.add_enabled_ui(s.mode != Mode::Hard, |ui| {
+                    ui.horizontal(|ui| {
+                        ui.checkbox(&mut s.plane_gate_on, "plane gate")
+                            .on_hover_text(
+                                "Not in the paper: slots 2..F keep only SP clusters whose centroid \
+                                 lies within this angle of the pixel's tangent plane",
+                            );
+                        ui.add_enabled(
+                            s.plane_gate_on,
+                            Slider::new(&mut s.plane_gate_deg, 1.0..=90.0).suffix("°"),
+                        );
+                    });
+                });
                 ui.add(Slider::new(&mut s.gamma, 1..=16).text("γ (downsampling)"));
                 let cos = s.normal_threshold();
                 ui.add(

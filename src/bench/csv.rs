@@ -53,6 +53,9 @@ pub struct Row {
     /// γ Alg. 1 sampled with (`gamma` is the one asked; at most pixels / K): empty in the file
     /// when no SP clustering ran. Last column; older files without it read empty.
     pub gamma_used: Option<u32>,
+    /// The plane gate of the F lists in degrees (`bench --plane-gate`), empty when off. Last column;
+    /// older files without it read off.
+    pub plane_gate_deg: Option<f32>,
 }
 
 impl Row {
@@ -97,6 +100,7 @@ pub fn header() -> Vec<String> {
             "label",
             "weight_exponent",
             "gamma_used",
+            "plane_gate_deg",
         ]
         .map(String::from),
     );
@@ -131,6 +135,7 @@ fn record(r: &Row) -> Vec<String> {
         r.label.clone(),
         r.weight_exponent.to_string(),
         r.gamma_used.map_or(String::new(), |g| g.to_string()),
+        r.plane_gate_deg.map_or(String::new(), |g| g.to_string()),
     ]);
     v
 }
@@ -242,6 +247,10 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
                 true if !get("gamma_used").is_empty() => Some(num("gamma_used")? as u32),
                 _ => None,
             },
+            plane_gate_deg: match head.iter().any(|h| h == "plane_gate_deg") {
+                true if !get("plane_gate_deg").is_empty() => Some(num("plane_gate_deg")? as f32),
+                _ => None,
+            },
         });
     }
     Ok(rows)
@@ -300,6 +309,7 @@ pub(crate) mod tests {
             label: format!("{mode} {sp}/{vpl}"),
             weight_exponent: 1.0,
             gamma_used: Some(4),
+            plane_gate_deg: None,
         }
     }
 
@@ -359,10 +369,10 @@ pub(crate) mod tests {
         r.gamma_used = None;
         let csv = to_csv(std::slice::from_ref(&r));
         assert_eq!(from_csv(&csv).unwrap(), vec![r.clone()]);
-        // Drop the two columns added last (weight_exponent, gamma_used) from header and row.
+        // Drop the three columns added last (weight_exponent, gamma_used, plane_gate_deg).
         let cut = |l: &str| {
             let f = split_line(l);
-            f[..f.len() - 2]
+            f[..f.len() - 3]
                 .iter()
                 .map(|x| quote(x))
                 .collect::<Vec<_>>()
@@ -372,6 +382,7 @@ pub(crate) mod tests {
         let back = from_csv(&old).unwrap();
         assert_eq!(back[0].weight_exponent, 1.0);
         assert_eq!(back[0].gamma_used, None);
+        assert_eq!(back[0].plane_gate_deg, None);
         assert_eq!(back[0].label, r.label);
         // Not a prefix of the header, or short of `label`: refused.
         assert!(from_csv(&old.replacen("scene,camera", "camera,scene", 1)).is_err());

@@ -230,6 +230,7 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
                 fuzziness: c.fuzziness,
                 gamma: c.gamma,
                 gamma_used: frame.gamma_used,
+                plane_gate_deg: c.plane_gate_deg,
                 weight_exponent: c.weight_exponent,
                 normal_threshold: s.normal_threshold,
                 iterations: s.iterations,

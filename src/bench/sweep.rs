@@ -3,6 +3,7 @@
 use std::fmt;
 use std::str::FromStr;
 
+use crate::gi::kmeans::valid_plane_gate;
 use crate::gi::pipeline::{
     DEFAULT_WEIGHT_EXPONENT, FrameSettings, Weighting, valid_weight_exponent,
 };
@@ -138,6 +139,20 @@ where
     Ok(out)
 }
 
+/// One item of `--plane-gate`: `off` (the paper) or an angle in degrees.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlaneGate(pub Option<f32>);
+
+impl FromStr for PlaneGate {
+    type Err = ();
+    fn from_str(s: &str) -> Result<Self, ()> {
+        if s.eq_ignore_ascii_case("off") {
+            return Ok(PlaneGate(None));
+        }
+        s.parse::<f32>().map(|d| PlaneGate(Some(d))).map_err(|_| ())
+    }
+}
+
 /// Parses `--modes`.
 pub fn parse_modes(s: &str) -> Result<Vec<Mode>, String> {
     let mut out = Vec::new();
@@ -163,6 +178,8 @@ pub struct Sweep {
     pub gamma: Vec<u32>,
     /// p of the fuzzy weights (weighted and sp-only modes).
     pub weight_exponent: Vec<f32>,
+    /// Plane gates of the fuzzy modes' F lists (`None`: off, the paper).
+    pub plane_gate: Vec<Option<f32>>,
     /// (K_SP, K_VPL) pairs measured instead of every SP K × VPL K (`--pairs`: e.g. the paper's
     /// light / intermediate / high settings without the off-diagonal ones).
     pub pairs: Option<Vec<(u32, u32)>>,
@@ -177,6 +194,7 @@ pub struct SweepArgs {
     pub fuzziness: Option<String>,
     pub gamma: Option<String>,
     pub weight_exponent: Option<String>,
+    pub plane_gate: Option<String>,
     pub pairs: Option<String>,
 }
 
@@ -190,6 +208,7 @@ impl Sweep {
             fuzziness: vec![6],
             gamma: vec![4],
             weight_exponent: vec![DEFAULT_WEIGHT_EXPONENT],
+            plane_gate: vec![None],
             pairs: None,
         }
     }
@@ -203,6 +222,7 @@ impl Sweep {
             fuzziness: vec![6],
             gamma: vec![4],
             weight_exponent: vec![DEFAULT_WEIGHT_EXPONENT],
+            plane_gate: vec![None],
             pairs: None,
         }
     }
@@ -228,6 +248,12 @@ impl Sweep {
         if let Some(v) = &args.weight_exponent {
             s.weight_exponent = parse_list("--weight-exponent", v)?;
         }
+        if let Some(v) = &args.plane_gate {
+            s.plane_gate = parse_list::<PlaneGate>("--plane-gate", v)?
+                .into_iter()
+                .map(|g| g.0)
+                .collect();
+        }
         if let Some(v) = &args.pairs {
             if args.sp_clusters.is_some() || args.vpl_clusters.is_some() {
                 return Err(
@@ -248,6 +274,7 @@ impl Sweep {
             || self.fuzziness.is_empty()
             || self.gamma.is_empty()
             || self.weight_exponent.is_empty()
+            || self.plane_gate.is_empty()
         {
             return Err("every sweep list needs at least one value".into());
         }
@@ -264,6 +291,16 @@ impl Sweep {
         {
             return Err(format!(
                 "--weight-exponent {p}: must be a number in [0, 64]"
+            ));
+        }
+        if let Some(g) = self
+            .plane_gate
+            .iter()
+            .flatten()
+            .find(|g| !valid_plane_gate(**g))
+        {
+            return Err(format!(
+                "--plane-gate {g}: must be off or an angle in (0, 90] degrees"
             ));
         }
         let (sps, vpls): (Vec<u32>, Vec<u32>) = match &self.pairs {
@@ -304,16 +341,19 @@ impl Sweep {
                 for &f in &self.fuzziness {
                     for &g in &self.gamma {
                         for &p in &self.weight_exponent {
-                            let c = Config {
-                                mode,
-                                sp_clusters: if mode.clusters_sps() { sp } else { 0 },
-                                vpl_clusters: if mode.clusters_vpls() { vpl } else { 0 },
-                                fuzziness: if mode.uses_fuzziness() { f } else { 1 },
-                                gamma: if mode.clusters_sps() { g } else { 0 },
-                                weight_exponent: if mode.uses_weights() { p } else { 1.0 },
-                            };
-                            if !out.contains(&c) {
-                                out.push(c);
+                            for &gate in &self.plane_gate {
+                                let c = Config {
+                                    mode,
+                                    sp_clusters: if mode.clusters_sps() { sp } else { 0 },
+                                    vpl_clusters: if mode.clusters_vpls() { vpl } else { 0 },
+                                    fuzziness: if mode.uses_fuzziness() { f } else { 1 },
+                                    gamma: if mode.clusters_sps() { g } else { 0 },
+                                    weight_exponent: if mode.uses_weights() { p } else { 1.0 },
+                                    plane_gate_deg: if mode.uses_fuzziness() { gate } else { None },
+                                };
+                                if !out.contains(&c) {
+                                    out.push(c);
+                                }
                             }
                         }
                     }
@@ -338,6 +378,8 @@ pub struct Config {
     pub gamma: u32,
     /// p of the fuzzy weights (1 where the mode has none).
     pub weight_exponent: f32,
+    /// The plane gate of the F lists, degrees (`None`: off, and where the mode has no F).
+    pub plane_gate_deg: Option<f32>,
 }
 
 impl Config {
@@ -364,6 +406,9 @@ impl Config {
         }
         if self.mode.uses_weights() && self.weight_exponent != 1.0 {
             s += &format!(" p{}", self.weight_exponent);
+        }
+        if let Some(g) = self.plane_gate_deg {
+            s += &format!(" gate{g}");
         }
         s
     }
@@ -403,6 +448,7 @@ impl Config {
             gamma: self.gamma.max(1),
             weighting: self.mode.weighting(),
             weight_exponent: self.weight_exponent,
+            plane_gate_deg: self.plane_gate_deg,
             ..base.clone()
         }
     }
@@ -434,6 +480,42 @@ mod tests {
         let e = parse_list::<u32>("--vpl-clusters", "-5").unwrap_err();
         assert!(e.contains("-5"), "{e}");
         assert!(parse_list::<u32>("--gamma", "").is_err());
+    }
+
+    #[test]
+    fn plane_gates_expand_for_the_fuzzy_modes_only() {
+        let a = SweepArgs {
+            modes: Some("hard,uniform,weighted".into()),
+            sp_clusters: Some("48".into()),
+            plane_gate: Some("off, 20,OFF".into()),
+            ..Default::default()
+        };
+        let s = Sweep::parse(&a, Sweep::quick_default()).unwrap();
+        assert_eq!(s.plane_gate, vec![None, Some(20.0)]);
+        let labels: Vec<String> = s.configs().iter().map(Config::label).collect();
+        assert_eq!(
+            labels,
+            [
+                "hard 48/128 g4",
+                "uniform 48/128 F6 g4",
+                "uniform 48/128 F6 g4 gate20",
+                "weighted 48/128 F6 g4",
+                "weighted 48/128 F6 g4 gate20",
+            ]
+        );
+        let c = s.configs()[2];
+        assert_eq!(
+            c.settings(&FrameSettings::default()).plane_gate_deg,
+            Some(20.0)
+        );
+        for bad in ["0", "90.5", "-3", "nan", "on", "20,"] {
+            let a = SweepArgs {
+                plane_gate: Some(bad.into()),
+                ..Default::default()
+            };
+            let e = Sweep::parse(&a, Sweep::quick_default()).unwrap_err();
+            assert!(e.contains("--plane-gate"), "{bad}: {e}");
+        }
     }
 
     #[test]
@@ -487,6 +569,7 @@ mod tests {
             fuzziness: vec![4, 6],
             gamma: vec![4],
             weight_exponent: vec![1.0, 2.0],
+            plane_gate: vec![None],
             pairs: None,
         };
         let c = s.configs();

@@ -302,10 +302,22 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
         } else {
             Vec::new()
         };
-        let d: Vec<f32> = b.iter().map(|x| x.1).collect();
+        // The plane gate (slots 2..F): a dropped slot has distance -1 (weight 0) and no cluster.
+        let kept: Vec<bool> = b
+            .iter()
+            .enumerate()
+            .map(|(j, &(kk, _))| j == 0 || plane_gate_keeps(pt, &cs[kk as usize], p.plane_gate))
+            .collect();
+        let d: Vec<f32> = b
+            .iter()
+            .zip(&kept)
+            .map(|(x, &keep)| if keep { x.1 } else { -1.0 })
+            .collect();
         let w = inverse_distance_weights(&d, p.weight_exponent);
         for (j, &(kk, _)) in b.iter().enumerate() {
-            assign[i * f + j] = kk;
+            if kept[j] {
+                assign[i * f + j] = kk;
+            }
             weights[i * f + j] = w[j];
         }
     }
@@ -335,6 +347,13 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
         weights,
         reps,
     }
+}
+
+/// Twin of `plane_gate_keeps` in kmeans.wgsl: the centroid lies within the gate's angle of the
+/// point's tangent plane (`sine`: `gi::kmeans::plane_gate_sine`).
+pub fn plane_gate_keeps(pt: &Point, c: &Centroid, sine: f32) -> bool {
+    let d = c.pos - pt.pos;
+    pt.nrm.dot(d).abs() <= sine * d.length()
 }
 
 /// The exact nearest valid centroid by Eq. (7) over all centroids (no grid), or u32::MAX.

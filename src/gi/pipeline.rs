@@ -80,6 +80,9 @@ pub struct FrameSettings {
     pub weights_to_reps: bool,
     /// p of the fuzzy weights w'_f = dist^-p (Eq. 10: p = 1; Eq. 9 with a faster fall-off for p > 1).
     pub weight_exponent: f32,
+    /// The plane gate of the SP clusters' F lists, in degrees (`None`: off, the paper; see
+    /// `kmeans::plane_gate_sine`).
+    pub plane_gate_deg: Option<f32>,
     /// G-term clamp: 1/d² uses d ≥ clamp × scene diagonal (scale-free; see docs/reference.md).
     pub clamp: f32,
     /// Print progress of long passes on stderr.
@@ -141,6 +144,7 @@ impl Default for FrameSettings {
             weighting: Weighting::InverseDistance,
             weights_to_reps: false,
             weight_exponent: DEFAULT_WEIGHT_EXPONENT,
+            plane_gate_deg: None,
             clamp: DEFAULT_CLAMP,
             progress: false,
             control: None,
@@ -355,6 +359,7 @@ impl<'a> Renderer<'a> {
                 seed: s.seed,
                 weights_to_reps: false,
                 weight_exponent: 1.0,
+                plane_gate_deg: None,
             };
             vpl_cluster::cluster(
                 self.ctx,
@@ -483,6 +488,7 @@ impl<'a> Renderer<'a> {
                     seed: s.seed,
                     weights_to_reps: s.weights_to_reps,
                     weight_exponent: s.weight_exponent,
+                    plane_gate_deg: s.plane_gate_deg,
                 };
                 let c = self.kmeans.run(
                     ctx,
