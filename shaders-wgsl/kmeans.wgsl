@@ -205,6 +205,8 @@ fn grid_setup() {
     }
     // Whether the iteration that follows (assign_sampled) changes any assignment.
     atomicStore(&bounds[6], 0u);
+    // Grid builds so far: the iteration's number (1 in the first) for the re-seeding draw.
+    atomicAdd(&bounds[7], 1u);
     if !(lo.x <= hi.x) {
         // No valid centroid: one cell.
         lo = params.lo.xyz;
@@ -640,6 +642,9 @@ fn assign_sampled(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
     if p.w > 0.0 {
         k = nearest_bounded(p.xyz, point_nrm(m));
     }
+    if p.w > 0.0 && k == INVALID {
+        propose_reseed(s);
+    }
     let old = sample_assign[s];
     if old != k {
         // Alg. 1 stops early when no assignment changed: the centroids would not change either. A
@@ -704,9 +709,35 @@ fn mean64(i: u32, count: u32) -> f32 {
     return (f32(hi) * 4294967296.0 + f32(lo)) / f32(count);
 }
 
+// --- Empty clusters and orphans. A sampled point with no centroid passing n_t within ITER_RINGS is
+// an orphan: Eq. (7) puts it at distance ∞ from every centroid near it. Alg. 1 only moves the
+// centroids it starts with, so a surface no initial centroid fell on (a narrow face, a small object)
+// would keep none and its pixels would get the fallback's clusters, on surfaces facing elsewhere
+// (docs/clustering.md, "Surfaces without a cluster"). So an empty cluster is re-seeded at an orphan,
+// as k-means implementations re-seed empty clusters: each orphan proposes itself to one cluster
+// drawn from its index and the iteration (a hash; another draw each iteration), the cluster keeps
+// the lowest-index proposal (an atomic max of ~s: deterministic, whatever the order), and `update`
+// re-seeds the cluster there if it is empty. The proposals live in reps[2k], free until the final
+// assignment (rep_clear), as ~s with 0 for none (the buffer starts at 0). CPU twin:
+// cpu::kmeans::reseed_target and the loop in cpu::kmeans::kmeans.
+fn reseed_target(s: u32) -> u32 {
+    var h = s * 747796405u + atomicLoad(&bounds[7]) * 2891336453u + params.seed * 1442695041u;
+    h = ((h >> ((h >> 28u) + 4u)) ^ h) * 277803737u;
+    h = (h >> 22u) ^ h;
+    return h % params.k;
+}
+
+fn propose_reseed(s: u32) {
+    let t = reseed_target(s);
+    let key = ~s;
+    if key > atomicLoad(&reps[2u * t]) {
+        atomicMax(&reps[2u * t], key);
+    }
+}
+
 // --- Alg. 1 lines 17-18: centroids = mean position and normalised mean normal (the sums stay: the
-// next assignment updates them). An empty cluster keeps its centroid but is marked empty (w = 0) and
-// drops out of the grid.
+// next assignment updates them). An empty cluster is re-seeded at the orphan proposed to it (above),
+// else keeps its centroid but is marked empty (w = 0) and drops out of the grid.
 @compute @workgroup_size(64)
 fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let k = chunk_item(gid, nwg);
@@ -725,8 +756,17 @@ fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
             c.nrm = vec4<f32>(nrm / l, 0.0);
         }
     } else {
-        c.pos.w = 0.0;
+        let proposal = atomicLoad(&reps[2u * k]);
+        if proposal != 0u {
+            // Its sums are exactly zero (every member left), so the points that join add from 0.
+            let m = sample_index(~proposal);
+            c.pos = vec4<f32>(point_pos(m).xyz, 1.0);
+            c.nrm = vec4<f32>(point_nrm(m), 0.0);
+        } else {
+            c.pos.w = 0.0;
+        }
     }
+    atomicStore(&reps[2u * k], 0u);
     centroids[k] = c;
     add_to_bounds(c);
 }

@@ -853,3 +853,72 @@ fn plane_gate_matches_cpu_on_shading_points() {
         "weights differ from the CPU twin's by {worst}"
     );
 }
+
+/// A surface no initial centroid falls on gets clusters: a 2 m floor (normal +z) with a small
+/// vertical face (normal +x) whose points sit between the strata's first points, and two strata of
+/// invalid points whose clusters start empty. The face's points pass n_t with no centroid, so they
+/// are orphans; the empty clusters are re-seeded at them, the face's points end assigned to clusters
+/// of their own orientation (not the fallback's floor clusters), and the GPU equals the CPU twin.
+#[test]
+fn empty_clusters_are_reseeded_at_orphans() {
+    let ctx = common::gpu();
+    let mut data = Vec::new();
+    let mut push = |p: [f32; 3], n: [f32; 3], valid: bool| {
+        data.push([p[0], p[1], p[2], if valid { 1.0 } else { 0.0 }]);
+        data.push([n[0], n[1], n[2], 0.0]);
+    };
+    let floor = |i: usize| {
+        [
+            (i % 40) as f32 / 39.0 * 2.0,
+            (i / 40) as f32 / 39.0 * 2.0,
+            0.0,
+        ]
+    };
+    push(floor(0), [0.0, 0.0, 1.0], true);
+    let face = 1..21;
+    for i in 0..20 {
+        let p = [
+            1.0,
+            0.9 + (i % 5) as f32 * 0.05,
+            0.05 + (i / 5) as f32 * 0.05,
+        ];
+        push(p, [1.0, 0.0, 0.0], true);
+    }
+    for i in 1..1600 {
+        push(floor(i), [0.0, 0.0, 1.0], true);
+    }
+    for _ in 0..200 {
+        push([0.0; 3], [0.0, 0.0, 1.0], false);
+    }
+    let frame = (Vec3::ZERO, Vec3::new(2.0, 2.0, 0.3));
+    let s = settings(20, 1, 1, 0.866, 10);
+    let g = run_gpu(&ctx, &data, 2, &s, frame);
+    let pts = points_of(&data, 2);
+    let p = &g.params;
+    // The case: no stratum starts on the face, and the last two strata are all invalid.
+    let starts: Vec<usize> = (0..p.k)
+        .map(|k| (k as f32 * (p.num_sampled as f32 / p.k as f32)).floor() as usize)
+        .collect();
+    assert!(starts.iter().all(|s| !face.contains(s)), "{starts:?}");
+    assert!(starts[18] >= 1620 && starts[19] >= 1620, "{starts:?}");
+    for m in face.clone() {
+        let k = g.sample_assign[m];
+        assert!(k != u32::MAX, "face point {m} has no cluster");
+        let c = g.assign[m] as usize;
+        assert!(
+            g.centroids[c].nrm.dot(pts[m].nrm) > 0.866,
+            "face point {m} in cluster {c} facing {:?}",
+            g.centroids[c].nrm
+        );
+    }
+    let c = kmeans::kmeans(&pts, p, s.iterations);
+    assert_eq!(g.sample_assign, c.sample_assign);
+    assert_eq!(g.assign, c.assign);
+    assert_eq!(g.iterations_run, c.iterations_run);
+    for (a, b) in g.centroids.iter().zip(&c.centroids) {
+        assert_eq!(a.valid, b.valid);
+        if a.valid {
+            assert!((a.pos - b.pos).length() < 1e-5 && (a.nrm - b.nrm).length() < 1e-5);
+        }
+    }
+}

@@ -57,6 +57,18 @@ pub fn sample_index(p: &KmParams, s: u32) -> u32 {
     (s * g + (h >> 8) % g).min(p.num_points - 1)
 }
 
+/// The cluster sampled point `s` proposes itself to for re-seeding in iteration `iteration` (1 in
+/// the first; the grid builds so far): twin of `reseed_target` in kmeans.wgsl.
+pub fn reseed_target(p: &KmParams, s: u32, iteration: u32) -> u32 {
+    let mut h = s
+        .wrapping_mul(747796405)
+        .wrapping_add(iteration.wrapping_mul(2891336453))
+        .wrapping_add(p.seed.wrapping_mul(1442695041));
+    h = ((h >> ((h >> 28) + 4)) ^ h).wrapping_mul(277803737);
+    h = (h >> 22) ^ h;
+    h % p.k.max(1)
+}
+
 /// Eq. (7).
 pub fn dist7(p: &Point, c: &Centroid, n_t: f32) -> f32 {
     if p.nrm.dot(c.nrm) > n_t {
@@ -236,6 +248,7 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
     let lo = Vec3::from_slice(&p.lo[..3]);
     let ext = Vec3::from_slice(&p.ext[..3]);
     let mut sample_assign = vec![u32::MAX; s_n as usize];
+    let mut proposals = vec![u32::MAX; k];
     let mut iterations_run = 0;
     for it in 0..iterations {
         iterations_run += 1;
@@ -252,6 +265,12 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
             };
             changed += (k != sample_assign[s as usize]) as u32;
             sample_assign[s as usize] = k;
+            // An orphan (no centroid passing n_t near it) proposes itself for re-seeding; a
+            // cluster keeps the lowest index proposed to it.
+            if pt.valid && k == u32::MAX {
+                let t = reseed_target(p, s, it + 1) as usize;
+                proposals[t] = proposals[t].min(s);
+            }
         }
         let mut sums = vec![[0u64; 6]; k];
         let mut counts = vec![0u32; k];
@@ -271,8 +290,20 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
         }
         for kk in 0..k {
             let count = counts[kk];
+            let proposal = std::mem::replace(&mut proposals[kk], u32::MAX);
             if count == 0 {
-                cs[kk].valid = false;
+                // Empty: re-seeded at the orphan proposed to it, else out of the grid.
+                match proposal {
+                    u32::MAX => cs[kk].valid = false,
+                    s => {
+                        let pt = points[sample_index(p, s) as usize];
+                        cs[kk] = Centroid {
+                            pos: pt.pos,
+                            valid: true,
+                            nrm: pt.nrm,
+                        };
+                    }
+                }
                 continue;
             }
             let mean =
