@@ -279,11 +279,10 @@ fn gpu_kmeans_matches_cpu_on_random_surfaces() {
     assert!(s >= 0.99 && f >= 0.99, "agreement {s} {f}");
 }
 
-#[test]
-fn gpu_kmeans_matches_cpu_on_shading_points() {
-    let ctx = common::gpu();
+/// The conference room and its shading points (G-buffer) at 96×72.
+fn conference_sps(ctx: &GpuContext) -> (scene::Scene, Vec<[f32; 4]>) {
     let sc = scene::load("builtin:conference").unwrap();
-    let mut r = Renderer::new(&ctx, &sc).unwrap();
+    let mut r = Renderer::new(ctx, &sc).unwrap();
     let fs = FrameSettings {
         width: 96,
         height: 72,
@@ -291,6 +290,13 @@ fn gpu_kmeans_matches_cpu_on_shading_points() {
     };
     r.render(&sc.default_camera(), &fs).unwrap();
     let gbuf = r.last_gbuffer().unwrap();
+    (sc, gbuf)
+}
+
+#[test]
+fn gpu_kmeans_matches_cpu_on_shading_points() {
+    let ctx = common::gpu();
+    let (sc, gbuf) = conference_sps(&ctx);
     let (s, f) = compare(
         "conference SPs",
         &ctx,
@@ -806,15 +812,7 @@ fn plane_gate_drops_parallel_surfaces_and_matches_cpu() {
 #[test]
 fn plane_gate_matches_cpu_on_shading_points() {
     let ctx = common::gpu();
-    let sc = scene::load("builtin:conference").unwrap();
-    let mut r = Renderer::new(&ctx, &sc).unwrap();
-    let fs = FrameSettings {
-        width: 96,
-        height: 72,
-        ..Default::default()
-    };
-    r.render(&sc.default_camera(), &fs).unwrap();
-    let gbuf = r.last_gbuffer().unwrap();
+    let (sc, gbuf) = conference_sps(&ctx);
     let s = KMeansSettings {
         plane_gate_deg: Some(20.0),
         ..settings(96, 6, 4, 0.866, 10)
