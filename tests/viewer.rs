@@ -119,3 +119,69 @@ fn scripted_view_saves_a_window_screenshot() {
     assert!(mean > 30.0, "image area mean {mean}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Runs `fuzzy-vpl view ARGS` on the display `x`, its config dir in `dir`.
+fn view(x: &Xvfb, dir: &std::path::Path, args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_fuzzy-vpl"))
+        .env("DISPLAY", &x.1)
+        .env_remove("WAYLAND_DISPLAY")
+        .env("XDG_CONFIG_HOME", dir)
+        .arg("view")
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// The lines of stderr that are ours (drivers and X libraries may print their own).
+fn error_lines(stderr: &str) -> Vec<&str> {
+    stderr
+        .lines()
+        .filter(|l| l.starts_with("error: "))
+        .collect()
+}
+
+/// A window wider than 8192 px (wgpu's default texture limit) presents: the window device asks for
+/// the adapter's own limit. One wider than the adapter can present is refused with one line, exit 2.
+#[test]
+fn windows_wider_than_8192_px_present_and_wider_than_the_adapter_are_refused() {
+    let x = display();
+    let dir = std::env::temp_dir().join(format!("fuzzy-vpl-viewer-wide-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let png = dir.join("wide.png");
+    let small = [
+        "--render-scale",
+        "0.1",
+        "--vpls",
+        "64",
+        "--sp-clusters",
+        "16",
+        "--vpl-clusters",
+        "8",
+        "--frames",
+        "1",
+        "--screenshot",
+        png.to_str().unwrap(),
+    ];
+    let mut args = vec!["builtin:cornell", "--width", "7883", "--height", "16"];
+    args.extend(small);
+    let out = view(&x, &dir, &args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    let (w, h) = image::image_dimensions(&png).expect("the screenshot");
+    assert!(w > 8192 && h >= 16, "{w}x{h}");
+    std::fs::remove_file(&png).unwrap();
+    let mut args = vec!["builtin:cornell", "--width", "16384", "--height", "16"];
+    args.extend(small);
+    let out = view(&x, &dir, &args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    let lines = error_lines(&err);
+    assert_eq!(lines.len(), 1, "{err}");
+    assert!(
+        lines[0].contains("--width") && lines[0].contains("16384"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!png.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -30,6 +30,16 @@ fn no_display(detail: &str) -> String {
     format!("{what} ({detail}); render headless with `fuzzy-vpl render` instead")
 }
 
+/// The surface size for a window of `size` physical pixels on a device whose textures are at most
+/// `max_side` px a side: configuring a surface beyond the device's limit is a wgpu panic, so a
+/// larger window is drawn only in its top-left part.
+pub fn surface_size(size: winit::dpi::PhysicalSize<u32>, max_side: u32) -> (u32, u32) {
+    (
+        size.width.clamp(1, max_side.max(1)),
+        size.height.clamp(1, max_side.max(1)),
+    )
+}
+
 /// The worker's "a reply is waiting".
 #[derive(Debug, Clone, Copy)]
 pub struct Wake;
@@ -133,8 +143,20 @@ impl App {
                 "no GPU adapter for the window ({e}); install mesa-vulkan-drivers, or render headless with `fuzzy-vpl render`"
             ))
         })?;
+        // The default limits cap textures, and so the surface, at 8192 px a side: ask for the
+        // adapter's real size limit (lavapipe: 16384) so wide windows (or several monitors) present.
+        let max_side = adapter.limits().max_texture_dimension_2d;
+        let size = window.inner_size();
+        if size.width > max_side || size.height > max_side {
+            return Err(Unavailable(format!(
+                "--width/--height {}x{}: the window would be {}x{} px (with the {PANEL_WIDTH} px panel), more than the {max_side} px a side this adapter can present",
+                opts.width, opts.height, size.width, size.height
+            ))
+            .into());
+        }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("fuzzy-vpl window"),
+            required_limits: wgpu::Limits::default().using_resolution(adapter.limits()),
             ..Default::default()
         }))
         .map_err(|e| {
@@ -155,12 +177,12 @@ impl App {
             })
             .or_else(|| caps.formats.first().copied())
             .ok_or_else(|| Unavailable("the window's surface offers no format".into()))?;
-        let size = window.inner_size();
+        let (width, height) = surface_size(size, device.limits().max_texture_dimension_2d);
         let config = wgpu::SurfaceConfiguration {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
             format,
-            width: size.width.max(1),
-            height: size.height.max(1),
+            width,
+            height,
             present_mode: wgpu::PresentMode::AutoVsync,
             desired_maximum_frame_latency: 2,
             alpha_mode: caps.alpha_modes[0],
@@ -364,8 +386,16 @@ impl ApplicationHandler<Wake> for App {
         match event {
             WindowEvent::CloseRequested => el.exit(),
             WindowEvent::Resized(size) => {
-                g.config.width = size.width.max(1);
-                g.config.height = size.height.max(1);
+                let max_side = g.device.limits().max_texture_dimension_2d;
+                (g.config.width, g.config.height) = surface_size(size, max_side);
+                if let Some(v) = &mut self.viewer
+                    && (size.width > max_side || size.height > max_side)
+                {
+                    v.status = format!(
+                        "the window ({}x{} px) is larger than the {max_side} px a side this adapter presents: only the top-left {}x{} px are drawn",
+                        size.width, size.height, g.config.width, g.config.height
+                    );
+                }
                 g.surface.configure(&g.device, &g.config);
                 g.window.request_redraw();
             }
@@ -404,5 +434,22 @@ impl ApplicationHandler<Wake> for App {
             }
             None => el.set_control_flow(ControlFlow::Wait),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use winit::dpi::PhysicalSize;
+
+    #[test]
+    fn surface_size_stays_within_the_device_limit() {
+        assert_eq!(surface_size(PhysicalSize::new(640, 480), 8192), (640, 480));
+        assert_eq!(surface_size(PhysicalSize::new(0, 0), 8192), (1, 1));
+        assert_eq!(surface_size(PhysicalSize::new(8193, 72), 8192), (8192, 72));
+        assert_eq!(
+            surface_size(PhysicalSize::new(20000, 30000), 16384),
+            (16384, 16384)
+        );
     }
 }
