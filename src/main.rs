@@ -445,6 +445,19 @@ fn check_vpls(ctx: &GpuContext, vpls: u32) -> Result<()> {
     Ok(())
 }
 
+/// The largest image this device renders: each per-pixel buffer is one storage binding.
+fn check_size(ctx: &GpuContext, width: u32, height: u32, bytes_per_pixel: u64) -> Result<()> {
+    fuzzy_vpl::gi::pipeline::check_frame_size(ctx, width, height, bytes_per_pixel).map_err(|e| {
+        bad(format!(
+            "--width/--height {width}x{height}: {} pixels, at most {} on this adapter ({} bytes a pixel in one {}-byte storage binding)",
+            width as u64 * height as u64,
+            e.most,
+            e.bytes,
+            e.binding
+        ))
+    })
+}
+
 fn load_scene(a: &SceneArgs) -> Result<Scene> {
     let mut s = scene::load(&a.scene)?;
     for w in &s.report.warnings {
@@ -561,6 +574,11 @@ fn render(a: RenderArgs) -> Result<()> {
     };
     let ctx = GpuContext::new_headless()?;
     check_vpls(&ctx, a.vpls)?;
+    let bytes = match a.path_trace {
+        Some(_) => fuzzy_vpl::gi::pipeline::PATH_TRACE_PIXEL_BYTES,
+        None => fuzzy_vpl::gi::pipeline::PIXEL_BYTES,
+    };
+    check_size(&ctx, a.width, a.height, bytes)?;
     let mut renderer = Renderer::new(&ctx, &scene)?;
     let settings = a.cluster.apply(FrameSettings {
         width: a.width,
@@ -940,6 +958,7 @@ fn bench(a: BenchArgs) -> Result<()> {
     }
     let ctx = GpuContext::new_headless()?;
     check_vpls(&ctx, vpls)?;
+    check_size(&ctx, width, height, fuzzy_vpl::gi::pipeline::PIXEL_BYTES)?;
     std::fs::create_dir_all(&images)
         .map_err(|e| bad(format!("{}: cannot create: {e}", images.display())))?;
     let configs = sweep.configs().len();

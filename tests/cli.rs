@@ -257,6 +257,7 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
     let nodir = d.join("nodir").join("x.exr").display().to_string();
     let nodir_png = d.join("nodir").join("v.png").display().to_string();
     let dir = d.display().to_string();
+    let bench_dir = d.join("bench").display().to_string();
     let nan = nan_ref.display().to_string();
     let cases: Vec<(Vec<&str>, &str)> = vec![
         (
@@ -303,6 +304,24 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
         (
             vec!["view", "--frames", "1", "--screenshot", &nodir_png],
             "nodir",
+        ),
+        // 64 bytes a pixel in one storage binding: lavapipe's 128 MiB holds 2,097,152 pixels.
+        (
+            vec!["render", "-o", &o, "--width", "2048", "--height", "1100"],
+            "--width/--height 2048x1100",
+        ),
+        (
+            vec![
+                "bench",
+                "--quick",
+                "--out-dir",
+                &bench_dir,
+                "--width",
+                "2048",
+                "--height",
+                "1100",
+            ],
+            "--width/--height 2048x1100",
         ),
     ];
     for (a, needle) in cases {

@@ -185,3 +185,44 @@ fn windows_wider_than_8192_px_present_and_wider_than_the_adapter_are_refused() {
     assert!(!png.exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A GI frame too large for the worker's device is an error reply (shown in the panel; a scripted
+/// run exits with it), not a worker panic that leaves the UI waiting forever.
+#[test]
+fn worker_replies_with_an_error_for_a_frame_too_large_for_the_device() {
+    use fuzzy_vpl::app::worker::{FrameJob, Job, Loader, Reply, Source, Worker};
+    use fuzzy_vpl::gi::pipeline::FrameSettings;
+    let scene = fuzzy_vpl::scene::load("builtin:cornell").unwrap();
+    let camera = scene.default_camera();
+    let loader: Loader = std::sync::Arc::new(|s: &str| Ok(fuzzy_vpl::scene::load(s)?));
+    let w = Worker::spawn(
+        Source::Loaded(Box::new(scene), "builtin:cornell".into()),
+        loader,
+        Box::new(|| {}),
+    );
+    let t = Duration::from_secs(120);
+    let max = match w.rx.recv_timeout(t).expect("a reply") {
+        Reply::Loaded(i) => i.max_pixels,
+        _ => panic!("expected Loaded"),
+    };
+    assert!(max >= 1 << 16, "{max}");
+    // One row more than the device holds at this width.
+    let width = 2048u32;
+    let height = (max / width as u64 + 1) as u32;
+    w.send(Job::Frame(FrameJob {
+        id: 1,
+        camera,
+        settings: FrameSettings {
+            width,
+            height,
+            vpls: 64,
+            ..Default::default()
+        },
+        want_sp_ids: false,
+    }));
+    match w.rx.recv_timeout(t) {
+        Ok(Reply::Failed(msg)) => assert!(msg.contains(&format!("{width}x{height}")), "{msg}"),
+        Ok(_) => panic!("expected Failed"),
+        Err(e) => panic!("no reply from the worker: {e}"),
+    }
+}

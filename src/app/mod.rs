@@ -220,6 +220,32 @@ impl UiSettings {
     }
 }
 
+/// The GI image size for an image area of `area` px at render scale `scale`, and `Some(lower
+/// scale)` when that many pixels exceed `max_pixels` (a frame's per-pixel buffers are one storage
+/// binding each: 2,097,152 pixels on lavapipe) and the scale had to be lowered to fit.
+pub fn gi_size(area: [u32; 2], scale: f32, max_pixels: u64) -> ((u32, u32), Option<f32>) {
+    let size = |s: f32| {
+        (
+            ((area[0] as f32 * s) as u32).max(8),
+            ((area[1] as f32 * s) as u32).max(8),
+        )
+    };
+    let pixels = |(w, h): (u32, u32)| w as u64 * h as u64;
+    let s = scale.clamp(0.05, 1.0);
+    let full = size(s);
+    if pixels(full) <= max_pixels {
+        return (full, None);
+    }
+    let mut lower = s * (max_pixels as f64 / pixels(full) as f64).sqrt() as f32;
+    loop {
+        let wh = size(lower);
+        if pixels(wh) <= max_pixels || lower < 1e-6 {
+            return (wh, Some(lower));
+        }
+        lower *= 0.995;
+    }
+}
+
 /// The unclustered reference of one view.
 pub struct RefState {
     pub job: FrameJob,
@@ -288,6 +314,8 @@ pub struct Viewer {
     pub script_started: Option<Instant>,
     /// Set when the viewer should close (scripted run done, or failed).
     pub exit: Option<Result<(), String>>,
+    /// The worker has ended (its load failed, or it stopped): no reply will come.
+    pub worker_gone: bool,
 }
 
 impl Viewer {
@@ -356,6 +384,7 @@ impl Viewer {
             }),
             script_started: None,
             exit: None,
+            worker_gone: false,
         }
     }
 
@@ -370,6 +399,7 @@ impl Viewer {
             self.loader.clone(),
             Box::new(move || w()),
         );
+        self.worker_gone = false;
         self.status = format!("loading {spec} …");
         self.spec = spec.clone();
         self.path_field = spec;
@@ -423,13 +453,16 @@ impl Viewer {
         self.last_motion.elapsed() < Duration::from_millis(300)
     }
 
-    /// The GI image size at full render scale.
+    /// The GI image size at full render scale (lowered to what the worker's device holds).
     pub fn full_size(&self) -> (u32, u32) {
-        let s = self.s.render_scale.clamp(0.05, 1.0);
-        (
-            ((self.area_px[0] as f32 * s) as u32).max(8),
-            ((self.area_px[1] as f32 * s) as u32).max(8),
-        )
+        self.gi_size().0
+    }
+
+    /// The GI size at full render scale and, when the device cannot hold that many pixels, the
+    /// lower render scale used instead.
+    pub fn gi_size(&self) -> ((u32, u32), Option<f32>) {
+        let most = self.info.as_ref().map_or(u64::MAX, |i| i.max_pixels);
+        gi_size(self.area_px, self.s.render_scale, most)
     }
 
     /// Sends a frame job when the camera, settings or size changed (progressive: half scale while
@@ -544,7 +577,25 @@ impl Viewer {
     /// Handles the worker's replies; returns whether anything changed.
     pub fn poll(&mut self) -> bool {
         let mut changed = false;
-        while let Ok(reply) = self.worker.rx.try_recv() {
+        loop {
+            let reply = match self.worker.rx.try_recv() {
+                Ok(r) => r,
+                Err(std::sync::mpsc::TryRecvError::Empty) => break,
+                Err(std::sync::mpsc::TryRecvError::Disconnected) => {
+                    // Ended without saying why (it panicked outside a frame): no reply will come.
+                    if !self.worker_gone {
+                        self.worker_gone = true;
+                        changed = true;
+                        let msg =
+                            "the GI worker stopped (see stderr); load the scene again".to_string();
+                        self.status = msg.clone();
+                        if self.script.is_some() {
+                            self.exit = Some(Err(msg));
+                        }
+                    }
+                    break;
+                }
+            };
             changed = true;
             match reply {
                 Reply::Loaded(info) => {
@@ -576,6 +627,7 @@ impl Viewer {
                     self.last_sent = None;
                 }
                 Reply::LoadFailed(msg) => {
+                    self.worker_gone = true;
                     self.status = msg.clone();
                     if self.script.is_some() {
                         self.exit = Some(Err(msg));
@@ -755,5 +807,27 @@ impl Viewer {
                 *left -= 1;
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::gi_size;
+
+    #[test]
+    fn gi_size_lowers_the_render_scale_to_what_the_device_holds() {
+        assert_eq!(gi_size([640, 480], 0.5, 2_097_152), ((320, 240), None));
+        assert_eq!(gi_size([10, 10], 0.1, 2_097_152), ((8, 8), None));
+        // 2048x1100 at scale 1 is 2,252,800 pixels: more than lavapipe's binding holds.
+        let ((w, h), lower) = gi_size([2048, 1100], 1.0, 2_097_152);
+        let lower = lower.expect("lowered");
+        assert!(w as u64 * h as u64 <= 2_097_152, "{w}x{h}");
+        assert!(lower < 1.0 && lower > 0.95, "{lower}");
+        assert!(w > 1900 && h > 1000, "{w}x{h}");
+        let ((w, h), lower) = gi_size([16384, 16384], 1.0, 2_097_152);
+        assert!(
+            w as u64 * h as u64 <= 2_097_152 && lower.is_some(),
+            "{w}x{h}"
+        );
     }
 }

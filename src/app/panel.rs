@@ -34,11 +34,14 @@ impl Viewer {
                 ui.label(format!("{} — {} triangles", i.spec, i.triangles));
                 ui.label(RichText::new(&i.adapter).small().weak());
             }
-            None => {
+            None if !self.worker_gone => {
                 ui.horizontal(|ui| {
                     ui.spinner();
                     ui.label(format!("loading {}", self.spec));
                 });
+            }
+            None => {
+                ui.label(format!("{}: not loaded", self.spec));
             }
         }
         if !self.status.is_empty() {
@@ -266,6 +269,15 @@ impl Viewer {
                         .text("exposure"),
                 );
                 ui.add(Slider::new(&mut s.render_scale, 0.1..=1.0).text("render scale"));
+                if let ((w, h), Some(lower)) = self.gi_size() {
+                    let most = self.info.as_ref().map_or(0, |i| i.max_pixels);
+                    ui.colored_label(
+                        Color32::from_rgb(255, 170, 60),
+                        format!(
+                            "render scale lowered to {lower:.2} ({w}x{h}): the GI device holds at most {most} pixels a frame"
+                        ),
+                    );
+                }
             });
     }
 

@@ -29,6 +29,8 @@ pub struct SceneInfo {
     pub triangles: usize,
     pub has_light: bool,
     pub adapter: String,
+    /// The most pixels a GI frame may have on the worker's device (`pipeline::max_pixels`).
+    pub max_pixels: u64,
 }
 
 #[derive(Clone, Debug)]
@@ -154,6 +156,7 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
         triangles: scene.triangles.len(),
         has_light: scene.has_light(),
         adapter: ctx.adapter_name.clone(),
+        max_pixels: crate::gi::pipeline::max_pixels(&ctx, crate::gi::pipeline::PIXEL_BYTES),
     }));
     let mut cache = PointCache::default();
     let mut reference: Option<FrameJob> = None;
@@ -183,7 +186,7 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
                 send(Reply::ReferenceCancelled);
                 continue;
             }
-            match render(&ctx, &mut renderer, &mut cache, job) {
+            match render_guarded(&ctx, &mut renderer, &mut cache, job) {
                 Ok(r) => send(Reply::Reference(Box::new(r))),
                 Err(e) if e.is::<Cancelled>() => send(Reply::ReferenceCancelled),
                 Err(e) => send(Reply::Failed(format!("reference: {e:#}"))),
@@ -191,7 +194,7 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
             continue;
         }
         if let Some(job) = frame.take() {
-            match render(&ctx, &mut renderer, &mut cache, job) {
+            match render_guarded(&ctx, &mut renderer, &mut cache, job) {
                 Ok(r) => send(Reply::Frame(Box::new(r))),
                 Err(e) => send(Reply::Failed(format!("{e:#}"))),
             }
@@ -219,6 +222,29 @@ struct PointCache {
     vpls: Arc<Vec<Vec3>>,
     light_key: Option<(u32, u32, u32, u32, u32)>,
     lights: Arc<Vec<Vec3>>,
+}
+
+/// `render`, with a panic inside it (a wgpu validation error is one) turned into an error, so the
+/// UI hears of it instead of waiting for a reply that never comes.
+fn render_guarded(
+    ctx: &GpuContext,
+    renderer: &mut Renderer,
+    cache: &mut PointCache,
+    job: FrameJob,
+) -> Result<Rendered> {
+    let (w, h) = (job.settings.width, job.settings.height);
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        render(ctx, renderer, cache, job)
+    }))
+    .unwrap_or_else(|p| {
+        let msg = p
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| p.downcast_ref::<&str>().copied())
+            .unwrap_or("no message");
+        let msg = msg.lines().find(|l| !l.trim().is_empty()).unwrap_or(msg);
+        Err(anyhow::anyhow!("the {w}x{h} GI frame failed: {msg}"))
+    })
 }
 
 fn render(

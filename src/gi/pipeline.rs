@@ -174,6 +174,58 @@ pub fn valid_weight_exponent(p: f32) -> bool {
 
 pub const DEFAULT_CLAMP: f32 = 0.02;
 
+/// Bytes a pixel takes in a frame's largest per-pixel storage binding: the G-buffer (`SP_BYTES`);
+/// the k-means' per-pixel assign and weight lists (F ≤ `MAX_F` words) are no larger. One binding
+/// holds at most `max_storage_buffer_binding_size` bytes (lavapipe: 128 MiB, 2,097,152 pixels).
+pub const PIXEL_BYTES: u64 = if SP_BYTES > super::kmeans::MAX_F as u64 * 4 {
+    SP_BYTES
+} else {
+    super::kmeans::MAX_F as u64 * 4
+};
+
+/// The path tracer's: its accumulation buffer, 16 bytes a pixel.
+pub const PATH_TRACE_PIXEL_BYTES: u64 = 16;
+
+/// The most pixels a frame may have on `ctx` when each takes `bytes_per_pixel` in one binding.
+pub fn max_pixels(ctx: &GpuContext, bytes_per_pixel: u64) -> u64 {
+    ctx.device.limits().max_storage_buffer_binding_size / bytes_per_pixel
+}
+
+/// A frame too large for one storage binding of this adapter (creating its bind groups would be a
+/// wgpu panic).
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "a {width}x{height} frame has {} pixels; this adapter holds at most {most} ({bytes} bytes a pixel in one {binding}-byte storage binding)",
+    *width as u64 * *height as u64
+)]
+pub struct TooLarge {
+    pub width: u32,
+    pub height: u32,
+    pub most: u64,
+    pub bytes: u64,
+    pub binding: u64,
+}
+
+/// Refuses a frame whose per-pixel buffers do not fit in one storage binding of `ctx`.
+pub fn check_frame_size(
+    ctx: &GpuContext,
+    width: u32,
+    height: u32,
+    bytes_per_pixel: u64,
+) -> Result<(), TooLarge> {
+    let most = max_pixels(ctx, bytes_per_pixel);
+    if width as u64 * height as u64 > most {
+        return Err(TooLarge {
+            width,
+            height,
+            most,
+            bytes: bytes_per_pixel,
+            binding: ctx.device.limits().max_storage_buffer_binding_size,
+        });
+    }
+    Ok(())
+}
+
 /// Which indirect path a frame takes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Plan {
@@ -391,6 +443,7 @@ impl<'a> Renderer<'a> {
     /// own units (scaled back like `render`). Nothing of the VPL frame runs.
     pub fn path_trace(&mut self, camera: &Camera, s: &FrameSettings, spp: u32) -> Result<Frame> {
         let ctx = self.ctx;
+        check_frame_size(ctx, s.width, s.height, PATH_TRACE_PIXEL_BYTES)?;
         let pt = super::pathtrace::PathTrace::new(ctx, &self.gpu);
         let cam = CameraParams::new(camera, s.width, s.height);
         let _ = self.profiler.collect(ctx)?;
@@ -441,6 +494,7 @@ impl<'a> Renderer<'a> {
 
     pub fn render(&mut self, camera: &Camera, s: &FrameSettings) -> Result<Frame> {
         let ctx = self.ctx;
+        check_frame_size(ctx, s.width, s.height, PIXEL_BYTES)?;
         let n = s.width * s.height;
         let plan = Plan::new(&self.scene, s);
         let passes = plan.passes();
