@@ -745,6 +745,8 @@ fn view(a: ViewArgs) -> Result<()> {
         export::check_writable(p).map_err(bad)?;
     }
     let scene = load_scene(&a.scene)?;
+    // render's device limits apply to the viewer's GI worker too (it makes its own device).
+    check_vpls(&GpuContext::new_headless()?, a.vpls)?;
     if let Some(i) = a.camera
         && i >= scene.cameras.len()
     {

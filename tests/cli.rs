@@ -258,6 +258,7 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
     let nodir_png = d.join("nodir").join("v.png").display().to_string();
     let dir = d.display().to_string();
     let bench_dir = d.join("bench").display().to_string();
+    let png = d.join("v.png").display().to_string();
     let nan = nan_ref.display().to_string();
     let cases: Vec<(Vec<&str>, &str)> = vec![
         (
@@ -304,6 +305,18 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
         (
             vec!["view", "--frames", "1", "--screenshot", &nodir_png],
             "nodir",
+        ),
+        (
+            vec![
+                "view",
+                "--vpls",
+                "4294967295",
+                "--frames",
+                "1",
+                "--screenshot",
+                &png,
+            ],
+            "--vpls 4294967295",
         ),
         // 64 bytes a pixel in one storage binding: lavapipe's 128 MiB holds 2,097,152 pixels.
         (

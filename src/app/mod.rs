@@ -246,6 +246,36 @@ pub fn gi_size(area: [u32; 2], scale: f32, max_pixels: u64) -> ((u32, u32), Opti
     }
 }
 
+/// The panel sliders' ranges: their usual ones, extended to take the values the viewer started
+/// with (egui clamps a slider's value into its range, which silently changed command-line values
+/// such as `--vpls 100000` to 65536).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SliderRanges {
+    pub sp_clusters: u32,
+    pub vpl_clusters: u32,
+    pub vpls: u32,
+    pub gamma: u32,
+    pub iterations: u32,
+    pub weight_exponent: f32,
+    pub exposure: (f32, f32),
+    pub plane_gate_min: f32,
+}
+
+impl SliderRanges {
+    pub fn new(s: &UiSettings) -> Self {
+        SliderRanges {
+            sp_clusters: s.sp_clusters.max(16384),
+            vpl_clusters: s.vpl_clusters.max(16384),
+            vpls: s.vpls.max(65536),
+            gamma: s.gamma.max(16),
+            iterations: s.iterations.max(50),
+            weight_exponent: s.weight_exponent.max(8.0),
+            exposure: (s.exposure.min(0.01), s.exposure.max(64.0)),
+            plane_gate_min: s.plane_gate_deg.min(1.0),
+        }
+    }
+}
+
 /// The unclustered reference of one view.
 pub struct RefState {
     pub job: FrameJob,
@@ -278,6 +308,8 @@ pub struct Viewer {
     pub home: ViewCamera,
     pub start_camera: Option<usize>,
     pub s: UiSettings,
+    /// The sliders' ranges (which include the start settings).
+    pub ranges: SliderRanges,
     pub view: View,
     pub latest: Option<Box<Rendered>>,
     pub texture: Option<egui::TextureHandle>,
@@ -345,6 +377,7 @@ impl Viewer {
             speed: 1.0,
             home: placeholder,
             start_camera: opts.camera,
+            ranges: SliderRanges::new(&opts.settings),
             s: opts.settings,
             view: opts.view,
             latest: None,
@@ -812,7 +845,60 @@ impl Viewer {
 
 #[cfg(test)]
 mod tests {
-    use super::gi_size;
+    use super::*;
+
+    /// A viewer on builtin:cornell with `s`, without a window (its worker starts on lavapipe).
+    fn viewer(s: UiSettings) -> Viewer {
+        let loader: Loader = Arc::new(|spec: &str| Ok(crate::scene::load(spec)?));
+        let opts = ViewOptions {
+            spec: "builtin:cornell".into(),
+            scene: crate::scene::load("builtin:cornell").unwrap(),
+            loader,
+            width: 64,
+            height: 48,
+            camera: None,
+            settings: s,
+            frames: None,
+            screenshot: None,
+            view: View::Final,
+            animate: false,
+            shot_dir: std::env::temp_dir(),
+        };
+        Viewer::new(opts, Arc::new(|| {}))
+    }
+
+    /// One egui frame of the whole window's UI.
+    fn draw(v: &mut Viewer) {
+        let ctx = egui::Context::default();
+        let input = egui::RawInput {
+            screen_rect: Some(egui::Rect::from_min_size(
+                egui::Pos2::ZERO,
+                egui::vec2(1200.0, 2000.0),
+            )),
+            ..Default::default()
+        };
+        let _ = ctx.run_ui(input, |ui| v.ui(ui));
+    }
+
+    #[test]
+    fn command_line_values_beyond_the_sliders_survive_the_panel() {
+        let fs = FrameSettings {
+            vpls: 100_000,
+            sp_clusters: 20_000,
+            vpl_clusters: 20_000,
+            gamma: 100,
+            iterations: 1000,
+            weight_exponent: 20.0,
+            plane_gate_deg: Some(0.5),
+            ..Default::default()
+        };
+        let mut s = UiSettings::from_frame_settings(&fs, 100.0);
+        s.mode = Mode::Weighted;
+        let mut v = viewer(s.clone());
+        draw(&mut v);
+        draw(&mut v);
+        assert_eq!(v.s, s);
+    }
 
     #[test]
     fn gi_size_lowers_the_render_scale_to_what_the_device_holds() {

@@ -205,6 +205,7 @@ impl Viewer {
                 });
                 ui.separator();
                 let s = &mut self.s;
+                let r = &self.ranges;
                 ui.horizontal(|ui| {
                     ui.selectable_value(&mut s.mode, Mode::Hard, "hard");
                     ui.selectable_value(&mut s.mode, Mode::Uniform, "fuzzy (uniform)");
@@ -217,18 +218,18 @@ impl Viewer {
                 });
                 ui.add_enabled(
                     s.sp_on,
-                    Slider::new(&mut s.sp_clusters, 1..=16384)
+                    Slider::new(&mut s.sp_clusters, 1..=r.sp_clusters)
                         .logarithmic(true)
                         .text("K (SP clusters)"),
                 );
                 ui.add_enabled(
                     s.vpl_on,
-                    Slider::new(&mut s.vpl_clusters, 1..=16384)
+                    Slider::new(&mut s.vpl_clusters, 1..=r.vpl_clusters)
                         .logarithmic(true)
                         .text("K_VPL"),
                 );
                 ui.add(
-                    Slider::new(&mut s.vpls, 0..=65536)
+                    Slider::new(&mut s.vpls, 0..=r.vpls)
                         .logarithmic(true)
                         .text("VPLs"),
                 );
@@ -238,7 +239,7 @@ impl Viewer {
                 );
                 ui.add_enabled(
                     s.mode == Mode::Weighted,
-                    Slider::new(&mut s.weight_exponent, 0.0..=8.0)
+                    Slider::new(&mut s.weight_exponent, 0.0..=r.weight_exponent)
                         .text("p (weights ∝ dist^-p; Eq. 10: 1)"),
                 );
                 ui.add_enabled_ui(s.mode != Mode::Hard, |ui| {
@@ -250,21 +251,21 @@ impl Viewer {
                             );
                         ui.add_enabled(
                             s.plane_gate_on,
-                            Slider::new(&mut s.plane_gate_deg, 1.0..=90.0).suffix("°"),
+                            Slider::new(&mut s.plane_gate_deg, r.plane_gate_min..=90.0).suffix("°"),
                         );
                     });
                 });
-                ui.add(Slider::new(&mut s.gamma, 1..=16).text("γ (downsampling)"));
+                ui.add(Slider::new(&mut s.gamma, 1..=r.gamma).text("γ (downsampling)"));
                 let cos = s.normal_threshold();
                 ui.add(
                     Slider::new(&mut s.nt_degrees, 0.0..=180.0)
                         .suffix("°")
                         .text(format!("n_t (cos {cos:.3})")),
                 );
-                ui.add(Slider::new(&mut s.iterations, 0..=50).text("k-means iterations"));
+                ui.add(Slider::new(&mut s.iterations, 0..=r.iterations).text("k-means iterations"));
                 ui.separator();
                 ui.add(
-                    Slider::new(&mut s.exposure, 0.01..=64.0)
+                    Slider::new(&mut s.exposure, r.exposure.0..=r.exposure.1)
                         .logarithmic(true)
                         .text("exposure"),
                 );
