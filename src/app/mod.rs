@@ -348,6 +348,8 @@ pub struct Viewer {
     pub exit: Option<Result<(), String>>,
     /// The worker has ended (its load failed, or it stopped): no reply will come.
     pub worker_gone: bool,
+    /// A scene being opened, with its worker: it replaces the open one only once it has loaded.
+    pub loading: Option<(String, Worker)>,
 }
 
 impl Viewer {
@@ -418,31 +420,87 @@ impl Viewer {
             script_started: None,
             exit: None,
             worker_gone: false,
+            loading: None,
         }
     }
 
-    /// Replaces the scene: a new worker loads it (the old one ends after its current job).
+    /// Opens another scene: a new worker loads it while the open scene stays on screen, and
+    /// replaces it once loaded (`poll`); when loading fails the open scene and its worker stay.
     pub fn open(&mut self, spec: String) {
-        if let Some(r) = self.reference.take() {
-            r.control.cancel();
-        }
         let w = self.wake.clone();
-        self.worker = Worker::spawn(
+        let worker = Worker::spawn(
             Source::Spec(spec.clone()),
             self.loader.clone(),
             Box::new(move || w()),
         );
-        self.worker_gone = false;
-        self.status = format!("loading {spec} …");
-        self.spec = spec.clone();
+        // A load still running is dropped (its worker ends after loading).
+        self.loading = Some((spec.clone(), worker));
         self.path_field = spec;
-        self.info = None;
-        self.latest = None;
-        self.texture = None;
+    }
+
+    /// The loading worker's first reply: swap it in when its scene loaded, else keep the open one.
+    fn poll_loading(&mut self) -> bool {
+        let Some((spec, w)) = &self.loading else {
+            return false;
+        };
+        let failed = match w.rx.try_recv() {
+            Err(std::sync::mpsc::TryRecvError::Empty) => return false,
+            Ok(Reply::Loaded(info)) => {
+                let (spec, worker) = self.loading.take().expect("loading");
+                if let Some(r) = self.reference.take() {
+                    r.control.cancel();
+                }
+                // The old worker ends after its current job.
+                self.worker = worker;
+                self.worker_gone = false;
+                self.spec = spec;
+                self.latest = None;
+                self.texture = None;
+                self.points.clear();
+                self.live_error = None;
+                self.start_camera = None;
+                self.status.clear();
+                self.loaded(info);
+                return true;
+            }
+            Ok(Reply::LoadFailed(msg)) => msg,
+            Ok(_) => format!("{spec}: the loading worker sent no scene"),
+            Err(std::sync::mpsc::TryRecvError::Disconnected) => {
+                format!("{spec}: loading stopped (see stderr)")
+            }
+        };
+        self.loading = None;
+        self.status = format!("{failed} (kept {})", self.spec);
+        true
+    }
+
+    /// The worker's scene is ready: start camera, bookmarks, status.
+    fn loaded(&mut self, info: SceneInfo) {
+        let radius = 0.5 * (info.bounds.1 - info.bounds.0).length();
+        let cam = self
+            .start_camera
+            .and_then(|i| info.cameras.get(i).cloned())
+            .unwrap_or_else(|| info.default_camera.clone());
+        let centre = 0.5 * (info.bounds.0 + info.bounds.1);
+        let dist = (centre - cam.eye()).dot(cam.forward()).max(radius * 0.5);
+        self.home = ViewCamera::from_camera(&cam, dist);
+        self.cam = self.home;
+        self.speed = (radius * 0.5).max(1e-6);
+        self.bookmarks = match self.settings_path() {
+            Some(p) => SceneSettings::load(&p).unwrap_or_else(|e| {
+                self.status = format!("{e:#}");
+                SceneSettings::default()
+            }),
+            None => SceneSettings::default(),
+        };
+        if self.status.starts_with("loading") {
+            self.status.clear();
+        }
+        if !info.has_light {
+            self.status = "the scene has no light; add one with --sun or --point".into();
+        }
+        self.info = Some(info);
         self.last_sent = None;
-        self.points.clear();
-        self.live_error = None;
-        self.start_camera = None;
     }
 
     pub fn settings_path(&self) -> Option<PathBuf> {
@@ -609,7 +667,7 @@ impl Viewer {
 
     /// Handles the worker's replies; returns whether anything changed.
     pub fn poll(&mut self) -> bool {
-        let mut changed = false;
+        let mut changed = self.poll_loading();
         loop {
             let reply = match self.worker.rx.try_recv() {
                 Ok(r) => r,
@@ -631,34 +689,7 @@ impl Viewer {
             };
             changed = true;
             match reply {
-                Reply::Loaded(info) => {
-                    let radius = 0.5 * (info.bounds.1 - info.bounds.0).length();
-                    let cam = self
-                        .start_camera
-                        .and_then(|i| info.cameras.get(i).cloned())
-                        .unwrap_or_else(|| info.default_camera.clone());
-                    let centre = 0.5 * (info.bounds.0 + info.bounds.1);
-                    let dist = (centre - cam.eye()).dot(cam.forward()).max(radius * 0.5);
-                    self.home = ViewCamera::from_camera(&cam, dist);
-                    self.cam = self.home;
-                    self.speed = (radius * 0.5).max(1e-6);
-                    self.bookmarks = match self.settings_path() {
-                        Some(p) => SceneSettings::load(&p).unwrap_or_else(|e| {
-                            self.status = format!("{e:#}");
-                            SceneSettings::default()
-                        }),
-                        None => SceneSettings::default(),
-                    };
-                    if self.status.starts_with("loading") {
-                        self.status.clear();
-                    }
-                    if !info.has_light {
-                        self.status =
-                            "the scene has no light; add one with --sun or --point".into();
-                    }
-                    self.info = Some(info);
-                    self.last_sent = None;
-                }
+                Reply::Loaded(info) => self.loaded(info),
                 Reply::LoadFailed(msg) => {
                     self.worker_gone = true;
                     self.status = msg.clone();
@@ -878,6 +909,59 @@ mod tests {
             ..Default::default()
         };
         let _ = ctx.run_ui(input, |ui| v.ui(ui));
+    }
+
+    /// Polls until `done` holds (the worker replies on lavapipe within seconds).
+    fn poll_until(v: &mut Viewer, done: impl Fn(&Viewer) -> bool) {
+        let t = Instant::now();
+        while !done(v) {
+            assert!(t.elapsed() < Duration::from_secs(120), "timed out");
+            v.poll();
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    fn scratch(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("fuzzy-vpl-app-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn a_scene_that_fails_to_load_keeps_the_open_one() {
+        let d = scratch("trunc");
+        // A GLB header that promises more bytes than the file has.
+        let glb = d.join("trunc.glb");
+        let mut bytes = b"glTF".to_vec();
+        bytes.extend(2u32.to_le_bytes());
+        bytes.extend(1000u32.to_le_bytes());
+        bytes.extend(b"{\"asset\"");
+        std::fs::write(&glb, &bytes).unwrap();
+        let fs = FrameSettings::default();
+        let mut v = viewer(UiSettings::from_frame_settings(&fs, 1.0));
+        poll_until(&mut v, |v| v.info.is_some());
+        let cam = v.cam;
+        v.open(glb.display().to_string());
+        assert!(v.loading.is_some());
+        poll_until(&mut v, |v| v.loading.is_none());
+        assert_eq!(v.spec, "builtin:cornell");
+        assert_eq!(
+            v.info.as_ref().map(|i| i.spec.as_str()),
+            Some("builtin:cornell")
+        );
+        assert_eq!(v.cam, cam);
+        assert!(!v.worker_gone);
+        assert!(v.status.contains("trunc.glb"), "{}", v.status);
+        // The open scene's worker still renders.
+        v.schedule();
+        poll_until(&mut v, |v| v.latest.is_some());
+        // A scene that loads replaces it.
+        v.open("builtin:conference".into());
+        poll_until(&mut v, |v| v.loading.is_none());
+        assert_eq!(v.spec, "builtin:conference");
+        assert!(v.info.is_some() && v.latest.is_none());
+        assert!(v.status.is_empty(), "{}", v.status);
+        std::fs::remove_dir_all(&d).unwrap();
     }
 
     #[test]

@@ -44,6 +44,12 @@ impl Viewer {
                 ui.label(format!("{}: not loaded", self.spec));
             }
         }
+        if let Some((spec, _)) = &self.loading {
+            ui.horizontal(|ui| {
+                ui.spinner();
+                ui.label(format!("loading {spec}"));
+            });
+        }
         if !self.status.is_empty() {
             ui.colored_label(Color32::from_rgb(255, 170, 60), &self.status);
         }
