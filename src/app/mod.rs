@@ -329,6 +329,8 @@ pub struct Viewer {
     pub points: Vec<PlotPoint>,
     pub live_error: Option<(f64, f64)>,
     pub bookmarks: SceneSettings,
+    /// The scene's settings file exists but failed to load: never save over it.
+    pub bookmarks_unreadable: bool,
     pub bookmark_name: String,
     pub path_field: String,
     pub dialog: Option<std::sync::mpsc::Receiver<Option<PathBuf>>>,
@@ -397,6 +399,7 @@ impl Viewer {
             points: Vec::new(),
             live_error: None,
             bookmarks: SceneSettings::default(),
+            bookmarks_unreadable: false,
             bookmark_name: String::new(),
             path_field: opts.spec,
             dialog: None,
@@ -486,9 +489,11 @@ impl Viewer {
         self.home = ViewCamera::from_camera(&cam, dist);
         self.cam = self.home;
         self.speed = (radius * 0.5).max(1e-6);
+        self.bookmarks_unreadable = false;
         self.bookmarks = match self.settings_path() {
             Some(p) => SceneSettings::load(&p).unwrap_or_else(|e| {
-                self.status = format!("{e:#}");
+                self.status = format!("{e:#} (kept; moved aside on the next save)");
+                self.bookmarks_unreadable = true;
                 SceneSettings::default()
             }),
             None => SceneSettings::default(),
@@ -497,7 +502,12 @@ impl Viewer {
             self.status.clear();
         }
         if !info.has_light {
-            self.status = "the scene has no light; add one with --sun or --point".into();
+            let dark = "the scene has no light; add one with --sun or --point";
+            self.status = if self.status.is_empty() {
+                dark.into()
+            } else {
+                format!("{} · {dark}", self.status)
+            };
         }
         self.info = Some(info);
         self.last_sent = None;
@@ -507,10 +517,23 @@ impl Viewer {
         settings::settings_path(&self.spec)
     }
 
+    /// Saves the bookmarks; a settings file that failed to load is moved aside first, never
+    /// overwritten.
     pub fn save_bookmarks(&mut self) {
         if let Some(p) = self.settings_path() {
-            match self.bookmarks.save(&p) {
-                Ok(()) => self.status = format!("bookmarks saved to {}", p.display()),
+            match self.bookmarks.save_keeping(&p, self.bookmarks_unreadable) {
+                Ok(moved) => {
+                    self.bookmarks_unreadable = false;
+                    self.status = match moved {
+                        Some(m) => format!(
+                            "{} could not be read: moved to {}; bookmarks saved to {}",
+                            p.display(),
+                            m.display(),
+                            p.display()
+                        ),
+                        None => format!("bookmarks saved to {}", p.display()),
+                    }
+                }
                 Err(e) => self.status = format!("{e:#}"),
             }
         }
@@ -961,6 +984,51 @@ mod tests {
         assert_eq!(v.spec, "builtin:conference");
         assert!(v.info.is_some() && v.latest.is_none());
         assert!(v.status.is_empty(), "{}", v.status);
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn a_bookmarks_file_that_fails_to_load_is_moved_aside_not_overwritten() {
+        let d = scratch("bookmarks");
+        // One triangle, lit by nothing: it only has to load.
+        let pos: [f32; 9] = [-1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 0.0];
+        let bytes: Vec<u8> = pos.iter().flat_map(|f| f.to_le_bytes()).collect();
+        std::fs::write(d.join("t.bin"), &bytes).unwrap();
+        let gltf = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+          "meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
+          "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[-1,-1,0],"max":[1,1,0]}],
+          "bufferViews":[{"buffer":0,"byteLength":36}],"buffers":[{"uri":"t.bin","byteLength":36}]}"#;
+        let scene = d.join("t.gltf");
+        std::fs::write(&scene, gltf).unwrap();
+        let settings = d.join("t.gltf.fuzzy-vpl.json");
+        std::fs::write(&settings, "{ \"bookmarks\": [ truncated").unwrap();
+        let mut v = viewer(UiSettings::from_frame_settings(
+            &FrameSettings::default(),
+            1.0,
+        ));
+        poll_until(&mut v, |v| v.info.is_some());
+        v.open(scene.display().to_string());
+        poll_until(&mut v, |v| v.loading.is_none());
+        assert_eq!(v.spec, scene.display().to_string());
+        assert!(
+            v.status.contains("not a fuzzy-vpl settings file"),
+            "{}",
+            v.status
+        );
+        v.bookmarks
+            .bookmarks
+            .push(settings::Bookmark::new("door".into(), &v.cam));
+        v.save_bookmarks();
+        let aside = d.join("t.gltf.fuzzy-vpl.json.bad-1");
+        assert_eq!(
+            std::fs::read_to_string(&aside).unwrap(),
+            "{ \"bookmarks\": [ truncated"
+        );
+        assert!(v.status.contains("moved to"), "{}", v.status);
+        assert_eq!(SceneSettings::load(&settings).unwrap(), v.bookmarks);
+        // Later saves write the (now readable) file in place.
+        v.save_bookmarks();
+        assert!(!d.join("t.gltf.fuzzy-vpl.json.bad-2").exists());
         std::fs::remove_dir_all(&d).unwrap();
     }
 

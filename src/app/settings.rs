@@ -73,6 +73,30 @@ impl SceneSettings {
         }
     }
 
+    /// Saves to `path` without losing a file there that failed to load (`unreadable`): that file is
+    /// first moved aside to `PATH.bad-N` (the first free N), which is returned.
+    pub fn save_keeping(&self, path: &Path, unreadable: bool) -> Result<Option<PathBuf>> {
+        let moved = if unreadable && std::fs::symlink_metadata(path).is_ok() {
+            let name = path.file_name().unwrap_or_default().to_string_lossy();
+            let aside = (1..)
+                .map(|n| path.with_file_name(format!("{name}.bad-{n}")))
+                .find(|p| std::fs::symlink_metadata(p).is_err())
+                .expect("a free name");
+            std::fs::rename(path, &aside).with_context(|| {
+                format!(
+                    "{}: could not be read and cannot be moved aside to {}; bookmarks not saved",
+                    path.display(),
+                    aside.display()
+                )
+            })?;
+            Some(aside)
+        } else {
+            None
+        };
+        self.save(path)?;
+        Ok(moved)
+    }
+
     pub fn save(&self, path: &Path) -> Result<()> {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir)
