@@ -817,10 +817,15 @@ impl Viewer {
         let img = match self.view {
             View::Direct => r.frame.direct.clone(),
             View::Indirect => r.frame.indirect.clone(),
-            View::Reference => match self.reference_for(r) {
-                Some(i) => i.to_vec(),
-                None => r.frame.radiance.clone(),
-            },
+            // Without a reference these views show the clustered frame: saving that under a
+            // `_reference_` / `_error_` name would mislabel it.
+            View::Reference | View::Error if self.reference_for(r).is_none() => {
+                self.last_shot =
+                    "no reference for this view yet: nothing saved (press \"compute reference\")"
+                        .into();
+                return;
+            }
+            View::Reference => self.reference_for(r).expect("checked").to_vec(),
             _ => views::final_image(&r.frame.direct, &r.frame.indirect, self.s.direct_on),
         };
         let path = screenshot::unique_path(
@@ -1029,6 +1034,29 @@ mod tests {
         // Later saves write the (now readable) file in place.
         v.save_bookmarks();
         assert!(!d.join("t.gltf.fuzzy-vpl.json.bad-2").exists());
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn exr_of_the_reference_view_without_a_reference_is_refused() {
+        let d = scratch("refshot");
+        let mut s = UiSettings::from_frame_settings(&FrameSettings::default(), 1.0);
+        s.vpls = 256;
+        s.vpl_clusters = 32;
+        s.sp_clusters = 64;
+        let mut v = viewer(s);
+        v.shot_dir = d.clone();
+        v.view = View::Reference;
+        poll_until(&mut v, |v| v.info.is_some());
+        v.schedule();
+        poll_until(&mut v, |v| v.latest.is_some());
+        v.save_exr();
+        assert!(v.last_shot.contains("no reference"), "{}", v.last_shot);
+        assert_eq!(std::fs::read_dir(&d).unwrap().count(), 0);
+        // The final view saves under its own name.
+        v.view = View::Final;
+        v.save_exr();
+        assert!(v.last_shot.contains("_final_"), "{}", v.last_shot);
         std::fs::remove_dir_all(&d).unwrap();
     }
 
