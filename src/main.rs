@@ -119,7 +119,7 @@ struct BenchArgs {
     /// k-means iterations.
     #[arg(long, default_value_t = 10)]
     iterations: u32,
-    /// Area-light samples (shadow rays) per pixel for direct light.
+    /// Area-light samples (shadow rays) per pixel for direct light, 1..=65536.
     #[arg(long, default_value_t = 16)]
     direct_samples: u32,
     /// G-term clamp as a fraction of the scene diagonal.
@@ -183,7 +183,7 @@ struct RenderArgs {
     camera: Option<usize>,
     #[arg(long, default_value_t = 1)]
     seed: u32,
-    /// Area-light samples (shadow rays) per pixel for direct light.
+    /// Area-light samples (shadow rays) per pixel for direct light, 1..=65536.
     #[arg(long, default_value_t = 16)]
     direct_samples: u32,
     /// Exposure multiplier for PNG output (EXR stays unscaled radiance).
@@ -310,6 +310,7 @@ struct ViewArgs {
     camera: Option<usize>,
     #[arg(long, default_value_t = 1)]
     seed: u32,
+    /// Area-light samples (shadow rays) per pixel for direct light, 1..=65536.
     #[arg(long, default_value_t = 16)]
     direct_samples: u32,
     #[arg(long, default_value_t = 1.0)]
@@ -525,6 +526,7 @@ fn render(a: RenderArgs) -> Result<()> {
         return Err(bad("--exposure must be a finite number >= 0"));
     }
     a.cluster.check()?;
+    check_direct_samples(a.direct_samples)?;
     if !(1..=64).contains(&a.bounces) {
         return Err(bad(format!("--bounces {}: must be 1..64", a.bounces)));
     }
@@ -584,7 +586,7 @@ fn render(a: RenderArgs) -> Result<()> {
         width: a.width,
         height: a.height,
         seed: a.seed,
-        direct_samples: a.direct_samples.max(1),
+        direct_samples: a.direct_samples,
         vpls: a.vpls,
         bounces: a.bounces,
         reference: a.reference,
@@ -724,6 +726,7 @@ fn view(a: ViewArgs) -> Result<()> {
         )));
     }
     a.cluster.check()?;
+    check_direct_samples(a.direct_samples)?;
     if !(a.exposure.is_finite() && a.exposure > 0.0) {
         return Err(bad("--exposure must be a finite number > 0"));
     }
@@ -758,7 +761,7 @@ fn view(a: ViewArgs) -> Result<()> {
     }
     let fs = a.cluster.apply(FrameSettings {
         seed: a.seed,
-        direct_samples: a.direct_samples.max(1),
+        direct_samples: a.direct_samples,
         vpls: a.vpls,
         vpl_clusters: a.vpl_clusters,
         sp_clusters: a.sp_clusters,
@@ -917,6 +920,7 @@ fn bench(a: BenchArgs) -> Result<()> {
     check_normal_threshold(a.normal_threshold)?;
     check_iterations(a.iterations)?;
     check_clamp(a.clamp)?;
+    check_direct_samples(a.direct_samples)?;
     if !(a.exposure.is_finite() && a.exposure >= 0.0) {
         return Err(bad("--exposure must be a finite number >= 0"));
     }
@@ -980,7 +984,7 @@ fn bench(a: BenchArgs) -> Result<()> {
             width,
             height,
             seed: a.seed,
-            direct_samples: a.direct_samples.max(1),
+            direct_samples: a.direct_samples,
             vpls,
             normal_threshold: a.normal_threshold,
             iterations: a.iterations,
@@ -1017,6 +1021,19 @@ fn bench(a: BenchArgs) -> Result<()> {
         a.out_dir.display(),
         report.wall_s
     );
+    Ok(())
+}
+
+/// The most area-light samples a pixel (the default is 16): far beyond any useful count, while
+/// without a bound --direct-samples 4294967295 blocked for hours.
+const MAX_DIRECT_SAMPLES: u32 = 65536;
+
+fn check_direct_samples(n: u32) -> Result<()> {
+    if !(1..=MAX_DIRECT_SAMPLES).contains(&n) {
+        return Err(bad(format!(
+            "--direct-samples {n}: must be 1..={MAX_DIRECT_SAMPLES}"
+        )));
+    }
     Ok(())
 }
 

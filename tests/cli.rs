@@ -318,6 +318,37 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
             ],
             "--vpls 4294967295",
         ),
+        (
+            vec!["render", "-o", &o, "--direct-samples", "4294967295"],
+            "--direct-samples 4294967295",
+        ),
+        (
+            vec!["render", "-o", &o, "--direct-samples", "0"],
+            "--direct-samples 0",
+        ),
+        (
+            vec![
+                "view",
+                "--direct-samples",
+                "65537",
+                "--frames",
+                "1",
+                "--screenshot",
+                &png,
+            ],
+            "--direct-samples 65537",
+        ),
+        (
+            vec![
+                "bench",
+                "--quick",
+                "--out-dir",
+                &bench_dir,
+                "--direct-samples",
+                "70000",
+            ],
+            "--direct-samples 70000",
+        ),
         // 64 bytes a pixel in one storage binding: lavapipe's 128 MiB holds 2,097,152 pixels.
         (
             vec!["render", "-o", &o, "--width", "2048", "--height", "1100"],
