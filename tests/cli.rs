@@ -506,3 +506,52 @@ fn plane_gate_is_reported_where_it_applies() {
     assert!(j_hard["settings"].get("plane_gate_deg").is_none());
     assert!(px_on != px_off, "the gate changed nothing");
 }
+
+/// A scene path (or a file it names) that is not a regular file is refused at once: a FIFO used to
+/// block forever, /dev/zero to be read until memory ran out.
+#[test]
+fn scene_files_that_are_not_regular_files_are_refused() {
+    let d = common::scratch("cli-fifo");
+    let fifo = d.join("fifo.glb");
+    let made = Command::new("mkfifo").arg(&fifo).status().unwrap();
+    assert!(made.success());
+    std::fs::create_dir_all(d.join("dir.glb")).unwrap();
+    // A glTF whose buffer is the FIFO.
+    let gltf = d.join("buf.gltf");
+    std::fs::write(
+        &gltf,
+        r#"{"asset":{"version":"2.0"},"buffers":[{"uri":"fifo.glb","byteLength":36}]}"#,
+    )
+    .unwrap();
+    let cases = [
+        (fifo.display().to_string(), "FIFO"),
+        ("/dev/zero".to_string(), "device"),
+        (d.join("dir.glb").display().to_string(), "directory"),
+        (gltf.display().to_string(), "FIFO"),
+    ];
+    for (path, kind) in cases {
+        let mut child = bin()
+            .args(["info", &path])
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let t = std::time::Instant::now();
+        while child.try_wait().unwrap().is_none() {
+            if t.elapsed() > std::time::Duration::from_secs(30) {
+                let _ = child.kill();
+                let _ = child.wait();
+                panic!("info {path}: still running after 30 s");
+            }
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        let o = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{path}: {err}");
+        assert_eq!(err.lines().count(), 1, "{path}: {err}");
+        assert!(
+            err.contains("not a regular file") && err.contains(kind),
+            "{path}: {err}"
+        );
+    }
+}

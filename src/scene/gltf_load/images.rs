@@ -30,9 +30,8 @@ pub(super) fn encoded_bytes(
         }
         gltf::image::Source::Uri { uri, .. } => match uri::resolve(uri, base)? {
             Resolved::Data(bytes) => Ok(bytes),
-            Resolved::File(path) => {
-                std::fs::read(&path).map_err(|e| format!("cannot read '{}': {e}", uri::short(uri)))
-            }
+            Resolved::File(path) => super::read_regular(&path)
+                .map_err(|e| format!("cannot read '{}': {e}", uri::short(uri))),
         },
     }
 }
