@@ -737,7 +737,10 @@ fn view(a: ViewArgs) -> Result<()> {
         )));
     }
     if let Some(p) = &a.screenshot
-        && p.extension().and_then(|e| e.to_str()) != Some("png")
+        && !p
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("png"))
     {
         return Err(bad(format!(
             "{}: --screenshot must end in .png",
@@ -747,6 +750,15 @@ fn view(a: ViewArgs) -> Result<()> {
     if let Some(p) = &a.screenshot {
         export::check_writable(p).map_err(bad)?;
     }
+    // The panel's screenshots go there: found out at start, not at the first F11.
+    if !a.shot_dir.is_dir() {
+        return Err(bad(format!(
+            "--shot-dir {}: not a directory",
+            a.shot_dir.display()
+        )));
+    }
+    export::check_writable(&a.shot_dir.join("screenshot.png"))
+        .map_err(|e| bad(format!("--shot-dir {e}")))?;
     let scene = load_scene(&a.scene)?;
     // render's device limits apply to the viewer's GI worker too (it makes its own device).
     check_vpls(&GpuContext::new_headless()?, a.vpls)?;

@@ -259,6 +259,7 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
     let dir = d.display().to_string();
     let bench_dir = d.join("bench").display().to_string();
     let png = d.join("v.png").display().to_string();
+    let nodir_dir = d.join("nodir").display().to_string();
     let nan = nan_ref.display().to_string();
     let cases: Vec<(Vec<&str>, &str)> = vec![
         (
@@ -349,6 +350,8 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
             ],
             "--direct-samples 70000",
         ),
+        (vec!["view", "--shot-dir", &nodir_dir], "--shot-dir"),
+        (vec!["view", "--shot-dir", &o], "--shot-dir"),
         // 64 bytes a pixel in one storage binding: lavapipe's 128 MiB holds 2,097,152 pixels.
         (
             vec!["render", "-o", &o, "--width", "2048", "--height", "1100"],

@@ -147,7 +147,8 @@ fn windows_wider_than_8192_px_present_and_wider_than_the_adapter_are_refused() {
     let x = display();
     let dir = std::env::temp_dir().join(format!("fuzzy-vpl-viewer-wide-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let png = dir.join("wide.png");
+    // Upper-case .PNG is a PNG too (as render takes -o x.PNG).
+    let png = dir.join("wide.PNG");
     let small = [
         "--render-scale",
         "0.1",

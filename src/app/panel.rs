@@ -184,7 +184,7 @@ impl Viewer {
                         if ui.small_button("go").clicked() {
                             go = Some(b.camera());
                         }
-                        if ui.small_button("✖").clicked() {
+                        if ui.small_button("x").clicked() {
                             delete = Some(i);
                         }
                         ui.label(&b.name);
@@ -246,7 +246,7 @@ impl Viewer {
                 ui.add_enabled(
                     s.mode == Mode::Weighted,
                     Slider::new(&mut s.weight_exponent, 0.0..=r.weight_exponent)
-                        .text("p (weights ∝ dist^-p; Eq. 10: 1)"),
+                        .text("p (weights = dist^-p; Eq. 10: 1)"),
                 );
                 ui.add_enabled_ui(s.mode != Mode::Hard, |ui| {
                     ui.horizontal(|ui| {
