@@ -3,14 +3,36 @@
 
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
+use std::sync::{Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
-/// An Xvfb server we started (killed on drop), or None when a DISPLAY exists already.
-struct Xvfb(Option<Child>, String);
+/// An Xvfb server we started (killed on drop), or None when a DISPLAY exists already. It holds
+/// `DISPLAY_LOCK` until dropped: the tests of this file run in parallel, and two of them probing for
+/// a free display number at once could both take the same one, the second using the first's server
+/// and losing its connection when the first test ends and kills it.
+struct Xvfb(
+    Option<Child>,
+    String,
+    #[allow(dead_code)] MutexGuard<'static, ()>,
+);
+
+static DISPLAY_LOCK: Mutex<()> = Mutex::new(());
 
 impl Drop for Xvfb {
     fn drop(&mut self) {
         if let Some(c) = &mut self.0 {
+            // SIGTERM, so that Xvfb removes its /tmp/.X<n>-lock (a kill leaves it, and the search
+            // for a free display number would creep up run after run).
+            unsafe {
+                libc::kill(c.id() as libc::pid_t, libc::SIGTERM);
+            }
+            let t = Instant::now();
+            while t.elapsed() < Duration::from_secs(5) {
+                if let Ok(Some(_)) = c.try_wait() {
+                    return;
+                }
+                std::thread::sleep(Duration::from_millis(20));
+            }
             let _ = c.kill();
             let _ = c.wait();
         }
@@ -18,8 +40,10 @@ impl Drop for Xvfb {
 }
 
 fn display() -> Xvfb {
+    // A test that panicked while holding the lock left nothing to repair: take it anyway.
+    let guard = DISPLAY_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     if let Some(d) = std::env::var_os("DISPLAY").filter(|d| !d.is_empty()) {
-        return Xvfb(None, d.to_string_lossy().into_owned());
+        return Xvfb(None, d.to_string_lossy().into_owned(), guard);
     }
     let found = Command::new("Xvfb")
         .arg("-help")
@@ -54,7 +78,7 @@ fn display() -> Xvfb {
         let t = Instant::now();
         while t.elapsed() < Duration::from_secs(10) {
             if sock.exists() {
-                return Xvfb(Some(child), format!(":{n}"));
+                return Xvfb(Some(child), format!(":{n}"), guard);
             }
             if let Ok(Some(_)) = child.try_wait() {
                 break;
