@@ -490,7 +490,7 @@ fn load_scene(a: &SceneArgs) -> Result<Scene> {
     s.scale_light_power(a.light_scale as f64);
     if !s.has_light() {
         eprintln!(
-            "warning: {}: the scene has no light (no emissive material, no punctual light); it renders black. Add one with --sun or --point.",
+            "warning: {}: the scene has no light (no emissive material, no punctual light of non-zero power); it renders black. Add one with --sun or --point.",
             a.scene
         );
     }

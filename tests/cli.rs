@@ -431,6 +431,23 @@ fn scene_without_light_renders_black() {
     assert!(px.iter().any(|p| p[0] > 0.0));
 }
 
+/// Lights of zero power are no light: `info` warns and lists no VPL pass, as it does for a scene
+/// whose emitters are all scaled to 0 (a point light given on the command line included).
+#[test]
+fn zero_power_lights_are_no_light() {
+    for extra in [
+        &["--light-scale", "0"][..],
+        &["--point", "0.3,0.3,0.3,5", "--light-scale", "0"],
+    ] {
+        let mut a = vec!["info", "builtin:cornell"];
+        a.extend_from_slice(extra);
+        let (code, out, err) = run(&a);
+        assert_eq!(code, 0, "{extra:?}: {err}");
+        assert!(err.contains("no light"), "{extra:?}: {err}");
+        assert!(!out.contains("vpl_trace"), "{extra:?}: {out}");
+    }
+}
+
 #[test]
 fn info_prints_counts_and_passes() {
     let (code, out, err) = run(&["info", "builtin:conference"]);

@@ -196,8 +196,13 @@ impl Scene {
             .count()
     }
 
+    /// Whether anything emits: an emissive triangle or a punctual light of non-zero power (a light
+    /// scaled to 0 with `--light-scale 0`, or given intensity 0, is none).
     pub fn has_light(&self) -> bool {
-        !self.lights.is_empty() || self.emissive_triangle_count() > 0
+        self.lights
+            .iter()
+            .any(|l| (l.color * l.intensity).max_element() > 0.0)
+            || self.emissive_triangle_count() > 0
     }
 
     pub fn uses_textures(&self) -> bool {
