@@ -597,6 +597,10 @@ fn render(a: RenderArgs) -> Result<()> {
         control: None,
         ..Default::default()
     });
+    if a.path_trace.is_none() {
+        let plan = fuzzy_vpl::gi::pipeline::Plan::new(&scene, &settings);
+        fuzzy_vpl::gi::pipeline::check_visibility_size(&ctx, &plan, &settings).map_err(bad)?;
+    }
     let mut runs = Vec::new();
     let mut frame = None;
     for _ in 0..a.repeat {
@@ -979,16 +983,6 @@ fn bench(a: BenchArgs) -> Result<()> {
     check_size(&ctx, width, height, fuzzy_vpl::gi::pipeline::PIXEL_BYTES)?;
     std::fs::create_dir_all(&images)
         .map_err(|e| bad(format!("{}: cannot create: {e}", images.display())))?;
-    let configs = sweep.configs().len();
-    eprintln!(
-        "bench {}: {} configuration(s) x {} camera(s), {width}x{height}, {vpls} VPLs, repeat {repeat} \
-         (reference {}) on {}",
-        a.scene.scene,
-        configs,
-        cameras.len(),
-        a.reference_repeat,
-        ctx.adapter_name
-    );
     let plan = bench::BenchPlan {
         scene_name: a.scene.scene.clone(),
         out_dir: a.out_dir.clone(),
@@ -1010,6 +1004,22 @@ fn bench(a: BenchArgs) -> Result<()> {
         exposure: a.exposure,
         progress: true,
     };
+    // Every configuration's visibility matrix fits the adapter: checked before any work.
+    for c in plan.sweep.configs() {
+        let s = c.settings(&plan.base);
+        let p = fuzzy_vpl::gi::pipeline::Plan::new(&scene, &s);
+        fuzzy_vpl::gi::pipeline::check_visibility_size(&ctx, &p, &s).map_err(bad)?;
+    }
+    let configs = plan.sweep.configs().len();
+    eprintln!(
+        "bench {}: {} configuration(s) x {} camera(s), {width}x{height}, {vpls} VPLs, repeat {repeat} \
+         (reference {}) on {}",
+        a.scene.scene,
+        configs,
+        plan.cameras.len(),
+        a.reference_repeat,
+        ctx.adapter_name
+    );
     let report = bench::run(&ctx, &scene, &plan)?;
     println!(
         "{:<8} {:<28} {:>10} {:>10} {:>8} {:>11} {:>11}",

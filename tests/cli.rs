@@ -295,6 +295,19 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
             vec!["render", "-o", &o, "--plane-gate", "0"],
             "--plane-gate",
         ),
+        // 200,000 SP clusters x 8192 VPLs: a 205 MB visibility matrix (lavapipe binds 128 MiB).
+        (
+            vec![
+                "render",
+                "-o",
+                &o,
+                "--sp-clusters",
+                "200000",
+                "--vpl-clusters",
+                "0",
+            ],
+            "--sp-clusters 200000",
+        ),
         (
             vec!["render", "-o", &o, "--plane-gate", "91"],
             "--plane-gate",
@@ -369,6 +382,18 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
                 "1100",
             ],
             "--width/--height 2048x1100",
+        ),
+        (
+            vec![
+                "bench",
+                "--out-dir",
+                &bench_dir,
+                "--modes",
+                "sp-only",
+                "--sp-clusters",
+                "200000",
+            ],
+            "--sp-clusters 200000",
         ),
     ];
     for (a, needle) in cases {

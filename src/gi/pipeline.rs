@@ -226,6 +226,49 @@ pub fn check_frame_size(
     Ok(())
 }
 
+/// Bytes of the visibility bit matrix a frame records (0 when it clusters no SPs): one row per SP
+/// cluster, one bit per light, the lights being the VPL clusters or, unclustered, every VPL (an
+/// upper bound: fewer may be traced or used). It is one storage binding.
+pub fn visibility_bytes(plan: &Plan, s: &FrameSettings) -> u64 {
+    if !plan.sp_clustering {
+        return 0;
+    }
+    s.sp_clusters as u64 * visibility_lights(plan, s).div_ceil(32).max(1) as u64 * 4
+}
+
+fn visibility_lights(plan: &Plan, s: &FrameSettings) -> u32 {
+    if plan.vpl_clustering {
+        s.vpl_clusters
+    } else {
+        s.vpls
+    }
+}
+
+/// Refuses a frame whose visibility bit matrix does not fit in one storage binding of `ctx` (K_sp ×
+/// lights / 8 bytes: 200,000 SP clusters × 8192 VPLs is 205 MB, lavapipe binds 128 MiB): the message
+/// names the options.
+pub fn check_visibility_size(
+    ctx: &GpuContext,
+    plan: &Plan,
+    s: &FrameSettings,
+) -> Result<(), String> {
+    let bytes = visibility_bytes(plan, s);
+    let binding = ctx.device.limits().max_storage_buffer_binding_size;
+    if bytes > binding {
+        let lights = visibility_lights(plan, s);
+        let what = if plan.vpl_clustering {
+            "VPL clusters"
+        } else {
+            "VPLs"
+        };
+        return Err(format!(
+            "--sp-clusters {} with {lights} {what}: the visibility bit matrix (a bit per SP cluster and light) takes {bytes} bytes, more than the {binding} bytes of one storage binding on this adapter; use fewer SP clusters or cluster the VPLs",
+            s.sp_clusters
+        ));
+    }
+    Ok(())
+}
+
 /// Which indirect path a frame takes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Plan {
@@ -497,6 +540,7 @@ impl<'a> Renderer<'a> {
         check_frame_size(ctx, s.width, s.height, PIXEL_BYTES)?;
         let n = s.width * s.height;
         let plan = Plan::new(&self.scene, s);
+        check_visibility_size(ctx, &plan, s).map_err(anyhow::Error::msg)?;
         let passes = plan.passes();
         if plan.indirect {
             self.ensure_lights(s, &plan)?;
