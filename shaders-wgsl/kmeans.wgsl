@@ -18,6 +18,9 @@ override F: u32 = 1u;
 // every fetch). false (GPUs): the storage buffers, the normal loaded with the position (both cached;
 // a thread's chain of dependent loads sets the time there: 13% less in assign_sampled on an H100).
 override TEXTURE_SEARCH: bool = true;
+// Whether final_assign applies the plane gate (params.plane_gate <= 1; src/gi/kmeans.rs builds the
+// pipelines with it on only when asked, so the default frame pays nothing for it).
+override PLANE_GATE: bool = false;
 // Fixed point: positions in the data frame scaled by 2^24, normals (n + 1) by 2^23.
 const POS_SCALE: f32 = 16777216.0;
 const NRM_SCALE: f32 = 8388608.0;
@@ -843,19 +846,18 @@ fn final_assign(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     let f = F;
     let p = point_pos(m);
     var b = empty_nearest();
+    var n = vec3<f32>(0.0);
     if p.w > 0.0 {
-        b = nearest(p.xyz, point_nrm(m), f);
+        n = point_nrm(m);
+        b = nearest(p.xyz, n, f);
     }
     var zero = INVALID;
+    // A slot the plane gate drops gets distance -1: weight 0 (inverse_distance_weights) and no
+    // cluster below. (Off, the pipeline is built without the test: see PLANE_GATE.)
     var dists: array<f32, MAX_F>;
-    var kept: array<bool, MAX_F>;
-    let n = point_nrm(m);
     for (var j = 0u; j < F; j++) {
         dists[j] = b.dist[j];
-        kept[j] = j < b.count;
-        if j > 0u && j < b.count && !plane_gate_keeps(p.xyz, n, b.idx[j]) {
-            kept[j] = false;
-            // A negative distance has weight 0 (inverse_distance_weights).
+        if PLANE_GATE && j > 0u && j < b.count && !plane_gate_keeps(p.xyz, n, b.idx[j]) {
             dists[j] = -1.0;
         }
         if j < b.count && b.dist[j] <= ZERO_DIST && zero == INVALID {
@@ -865,7 +867,7 @@ fn final_assign(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     let w = inverse_distance_weights(dists, b.count, zero);
     for (var j = 0u; j < f; j++) {
         var k = INVALID;
-        if kept[j] {
+        if j < b.count && dists[j] >= 0.0 {
             k = b.idx[j];
             // Representatives, step 2 (rep_min): the smallest member distance per cluster
             // (non-negative floats order like their bits).

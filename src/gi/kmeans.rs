@@ -193,8 +193,9 @@ pub struct KMeansTuning {
 
 #[derive(Default)]
 pub struct KMeans {
-    /// One pipeline set per F (the shader's `override F`), built the first time that F is clustered.
-    kernels: [OnceCell<Kernel>; MAX_F as usize],
+    /// One pipeline set per F (the shader's `override F`) and plane gate off / on (`override
+    /// PLANE_GATE`), built the first time that pair is clustered.
+    kernels: [[OnceCell<Kernel>; 2]; MAX_F as usize],
     tuning: KMeansTuning,
 }
 
@@ -214,9 +215,9 @@ impl KMeans {
         self.tuning.texture_search.unwrap_or(ctx.software)
     }
 
-    fn kernel(&self, ctx: &GpuContext, f: u32) -> &Kernel {
+    fn kernel(&self, ctx: &GpuContext, f: u32, gate: bool) -> &Kernel {
         let f = f.clamp(1, MAX_F);
-        self.kernels[f as usize - 1].get_or_init(|| {
+        self.kernels[f as usize - 1][gate as usize].get_or_init(|| {
             let mut entries = vec![uniform_layout(1), storage_layout(2, true)];
             entries.extend((3..=14).map(|b| storage_layout(b, false)));
             entries.push(data_texture_layout(15, wgpu::TextureSampleType::Uint));
@@ -228,7 +229,11 @@ impl KMeans {
                 "kmeans",
                 ENTRIES,
                 &entries,
-                &[("F", f as f64), ("TEXTURE_SEARCH", texture)],
+                &[
+                    ("F", f as f64),
+                    ("TEXTURE_SEARCH", texture),
+                    ("PLANE_GATE", gate as u32 as f64),
+                ],
             )
         })
     }
@@ -289,7 +294,7 @@ impl KMeans {
         );
         let sorted_view = sorted_tex.create_view(&Default::default());
         let ranges_view = ranges_tex.create_view(&Default::default());
-        let kernel = self.kernel(ctx, p.f);
+        let kernel = self.kernel(ctx, p.f, p.f > 1 && p.plane_gate <= 1.0);
         let bg = kernel.bind_group_with_textures(
             ctx,
             &[
