@@ -17,14 +17,6 @@ fn run(args: &[&str]) -> (i32, String, String) {
     )
 }
 
-/// The lines of stderr that are ours (drivers may print their own).
-fn error_lines(stderr: &str) -> Vec<&str> {
-    stderr
-        .lines()
-        .filter(|l| l.starts_with("error: "))
-        .collect()
-}
-
 #[test]
 fn no_arguments_without_a_display_says_how_to_render() {
     // No arguments opens the viewer; without any display that is one clear line and exit 2.
@@ -36,7 +28,7 @@ fn no_arguments_without_a_display_says_how_to_render() {
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
-    let lines = error_lines(&err);
+    let lines = common::error_lines(&err);
     assert_eq!(lines.len(), 1, "{err}");
     assert!(lines[0].contains("fuzzy-vpl render"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
@@ -235,7 +227,7 @@ fn bad_input_exits_2_with_one_line() {
         let a: Vec<&str> = args.iter().map(|s| s.as_str()).collect();
         let (code, _, err) = run(&a);
         assert_eq!(code, 2, "{a:?}: {err}");
-        let lines = error_lines(&err);
+        let lines = common::error_lines(&err);
         assert_eq!(lines.len(), 1, "{a:?}: {err}");
         assert!(lines[0].contains(needle), "{a:?}: {err}");
         assert!(!err.contains("panicked"), "{a:?}: {err}");

@@ -4,7 +4,7 @@
 mod common;
 
 use fuzzy_vpl::cpu::shade;
-use fuzzy_vpl::cpu::shading::{CpuScene, ShadingPoint};
+use fuzzy_vpl::cpu::shading::ShadingPoint;
 use fuzzy_vpl::gi::pipeline::{Frame, FrameSettings, Renderer, Weighting};
 use fuzzy_vpl::metrics::{mean_luminance, mse};
 use fuzzy_vpl::scene::{self, Scene};
@@ -43,12 +43,7 @@ fn shading_pairs(
     let reps: Vec<u32> = ctx.read_buffer(&c.reps, k * 2).unwrap();
     let reps: Vec<u32> = reps.chunks(2).map(|x| x[1]).collect();
     let lights = &r.lights.as_ref().unwrap().0.lights;
-    let cpu = CpuScene {
-        scene: s,
-        bvh: &r.bvh,
-        info: r.gpu.info,
-        emitters: &r.gpu.emitters,
-    };
+    let cpu = common::cpu_scene(r, s);
     let (bits, words) = shade::visibility_bits(&cpu, &sps, &reps, lights);
     let d_min = fs.clamp * s.extent();
     sps.iter()

@@ -3,7 +3,7 @@
 
 mod common;
 
-use fuzzy_vpl::cpu::shading::{CpuScene, ShadingPoint};
+use fuzzy_vpl::cpu::shading::ShadingPoint;
 use fuzzy_vpl::gi::pathtrace::PathTrace;
 use fuzzy_vpl::gi::pipeline::{DEFAULT_CLAMP, Frame, FrameSettings, Renderer};
 use fuzzy_vpl::gi::primary::CameraParams;
@@ -28,12 +28,7 @@ fn reference(w: u32, h: u32, vpls: u32, seed: u32) -> FrameSettings {
 fn reference_pairs(r: &Renderer, s: &fuzzy_vpl::scene::Scene, f: &Frame) -> Vec<(Vec3, Vec3)> {
     let gbuf = r.last_gbuffer().unwrap();
     let vpls = &r.vpl_set.as_ref().unwrap().0.vpls;
-    let cpu = CpuScene {
-        scene: s,
-        bvh: &r.bvh,
-        info: r.gpu.info,
-        emitters: &r.gpu.emitters,
-    };
+    let cpu = common::cpu_scene(r, s);
     let d_min = DEFAULT_CLAMP * s.extent();
     (0..f.indirect.len())
         .map(|px| {

@@ -2,7 +2,7 @@
 
 mod common;
 
-use fuzzy_vpl::cpu::shading::{CpuScene, ShadingPoint};
+use fuzzy_vpl::cpu::shading::ShadingPoint;
 use fuzzy_vpl::gi::pipeline::{Frame, FrameSettings, Renderer};
 use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::metrics::mean_luminance;
@@ -23,12 +23,7 @@ fn settings(w: u32, h: u32, spp: u32) -> FrameSettings {
 /// samples (the CPU twin shades the GPU's own shading points).
 fn direct_pairs(r: &Renderer, s: &Scene, f: &Frame, spp: u32) -> Vec<(Vec3, Vec3)> {
     let gbuf = r.last_gbuffer().unwrap();
-    let cpu = CpuScene {
-        scene: s,
-        bvh: &r.bvh,
-        info: r.gpu.info,
-        emitters: &r.gpu.emitters,
-    };
+    let cpu = common::cpu_scene(r, s);
     (0..f.direct.len())
         .map(|px| {
             let g = ShadingPoint::from_gpu(&gbuf[px * 4..px * 4 + 4]);
@@ -63,12 +58,7 @@ fn gpu_primary_and_direct_match_cpu_twin() {
         let cam = s.default_camera();
         let f = r.render(&cam, &settings(w, h, spp)).unwrap();
         let gbuf = r.last_gbuffer().unwrap();
-        let cpu = CpuScene {
-            scene: &s,
-            bvh: &r.bvh,
-            info: r.gpu.info,
-            emitters: &r.gpu.emitters,
-        };
+        let cpu = common::cpu_scene(&r, &s);
         let cp = CameraParams::new(&cam, w, h);
         let ext = s.extent();
         let (mut sp_bad, mut px_bad) = (0, 0);

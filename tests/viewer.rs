@@ -1,6 +1,8 @@
 //! The viewer in a real window: a scripted run under Xvfb (started here when no DISPLAY is set) must
 //! exit 0 and save a window screenshot with several distinct colours.
 
+mod common;
+
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::sync::{Mutex, MutexGuard};
@@ -156,14 +158,6 @@ fn view(x: &Xvfb, dir: &std::path::Path, args: &[&str]) -> std::process::Output 
         .unwrap()
 }
 
-/// The lines of stderr that are ours (drivers and X libraries may print their own).
-fn error_lines(stderr: &str) -> Vec<&str> {
-    stderr
-        .lines()
-        .filter(|l| l.starts_with("error: "))
-        .collect()
-}
-
 /// A window wider than 8192 px (wgpu's default texture limit) presents: the window device asks for
 /// the adapter's own limit. One wider than the adapter can present is refused with one line, exit 2.
 #[test]
@@ -200,7 +194,7 @@ fn windows_wider_than_8192_px_present_and_wider_than_the_adapter_are_refused() {
     let out = view(&x, &dir, &args);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
-    let lines = error_lines(&err);
+    let lines = common::error_lines(&err);
     assert_eq!(lines.len(), 1, "{err}");
     assert!(
         lines[0].contains("--width") && lines[0].contains("16384"),

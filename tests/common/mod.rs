@@ -1,7 +1,10 @@
 //! Shared helpers for GPU tests (they run on lavapipe in CI: `apt-get install mesa-vulkan-drivers`).
 #![allow(dead_code)]
 
+use fuzzy_vpl::cpu::shading::CpuScene;
+use fuzzy_vpl::gi::pipeline::Renderer;
 use fuzzy_vpl::gpu::GpuContext;
+use fuzzy_vpl::scene::Scene;
 
 pub fn gpu() -> GpuContext {
     GpuContext::new_headless().unwrap_or_else(|e| {
@@ -33,4 +36,23 @@ pub fn scratch(name: &str) -> std::path::PathBuf {
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
+}
+
+/// The CPU twins' view of what `r` uploaded for scene `s` (the scene as loaded: the twins shade in
+/// its units, as the frames come back in them).
+pub fn cpu_scene<'a>(r: &'a Renderer<'_>, s: &'a Scene) -> CpuScene<'a> {
+    CpuScene {
+        scene: s,
+        bvh: &r.bvh,
+        info: r.gpu.info,
+        emitters: &r.gpu.emitters,
+    }
+}
+
+/// The lines of stderr that are ours (drivers and X libraries may print their own).
+pub fn error_lines(stderr: &str) -> Vec<&str> {
+    stderr
+        .lines()
+        .filter(|l| l.starts_with("error: "))
+        .collect()
 }
