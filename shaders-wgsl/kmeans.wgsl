@@ -67,8 +67,9 @@ struct Centroid {
 @group(1) @binding(3) var<storage, read_write> centroids: array<Centroid>;
 // Per cluster: 6 components x (lo, hi) words of 64-bit fixed-point sums, then the count (13 words).
 @group(1) @binding(4) var<storage, read_write> sums: array<atomic<u32>>;
-// Centroid bounds as order-preserving float bits: min xyz, max xyz.
-@group(1) @binding(5) var<storage, read_write> bounds: array<atomic<u32>, 8>;
+// Centroid bounds as order-preserving float bits: min xyz, max xyz; then per iteration whether the
+// centroids changed (6), the iteration's number (7) and whether it found an orphan (8).
+@group(1) @binding(5) var<storage, read_write> bounds: array<atomic<u32>, 9>;
 @group(1) @binding(6) var<storage, read_write> grid: Grid;
 // Cell counts (0 outside a grid build), then from MAX_CELLS on each cell's offset within its scan
 // block, then from BLOCK_SUMS the blocks' totals. Fixed places: the next grid may have more cells, and
@@ -206,8 +207,10 @@ fn grid_setup() {
         atomicStore(&bounds[a], 0xffffffffu);
         atomicStore(&bounds[3u + a], 0u);
     }
-    // Whether the iteration that follows (assign_sampled) changes any assignment.
+    // Whether the iteration that follows changes any assignment (assign_sampled) or re-seeds a
+    // cluster (update), and whether it finds an orphan.
     atomicStore(&bounds[6], 0u);
+    atomicStore(&bounds[8], 0u);
     // Grid builds so far: the iteration's number (1 in the first) for the re-seeding draw.
     atomicAdd(&bounds[7], 1u);
     if !(lo.x <= hi.x) {
@@ -653,9 +656,7 @@ fn assign_sampled(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
         // Alg. 1 stops early when no assignment changed: the centroids would not change either. A
         // flag, set once: an atomicAdd per moved point all on one word serialised the first
         // iterations on a GPU.
-        if atomicLoad(&bounds[6]) == 0u {
-            atomicStore(&bounds[6], 1u);
-        }
+        set_flag(6u);
         if old != INVALID {
             add_member(old, m, true);
         }
@@ -663,6 +664,14 @@ fn assign_sampled(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
             add_member(k, m, false);
         }
         sample_assign[s] = k;
+    }
+}
+
+// Sets flag word i of `bounds` to 1. Loaded first: an atomic per point all on one word serialised
+// the first iterations on a GPU.
+fn set_flag(i: u32) {
+    if atomicLoad(&bounds[i]) == 0u {
+        atomicStore(&bounds[i], 1u);
     }
 }
 
@@ -721,16 +730,31 @@ fn mean64(i: u32, count: u32) -> f32 {
 // drawn from its index and the iteration (a hash; another draw each iteration), the cluster keeps
 // the lowest-index proposal (an atomic max of ~s: deterministic, whatever the order), and `update`
 // re-seeds the cluster there if it is empty. The proposals live in reps[2k], free until the final
-// assignment (rep_clear), as ~s with 0 for none (the buffer starts at 0). CPU twin:
-// cpu::kmeans::reseed_target and the loop in cpu::kmeans::kmeans.
-fn reseed_target(s: u32) -> u32 {
-    var h = s * 747796405u + atomicLoad(&bounds[7]) * 2891336453u + params.seed * 1442695041u;
+// assignment (rep_clear), as ~s with 0 for none (the buffer starts at 0).
+//
+// An iteration that finds no orphan re-seeds its empty clusters at sampled points drawn from the
+// cluster's index and the iteration (`reseed_draw`; a draw that falls on an invalid point, the
+// background, leaves the cluster empty until a later iteration). So K clusters are K clusters: the
+// strata of the initial centroids that lie on the background, and clusters that lose every member,
+// are put to use (the Cornell box at 640x480, K 3072, kept 491 empty). While orphans remain, the
+// empty clusters wait for them. CPU twin: cpu::kmeans::reseed_target, reseed_draw and the loop in
+// cpu::kmeans::kmeans.
+fn reseed_mix(x: u32) -> u32 {
+    var h = x + atomicLoad(&bounds[7]) * 2891336453u + params.seed * 1442695041u;
     h = ((h >> ((h >> 28u) + 4u)) ^ h) * 277803737u;
-    h = (h >> 22u) ^ h;
-    return h % params.k;
+    return (h >> 22u) ^ h;
+}
+
+fn reseed_target(s: u32) -> u32 {
+    return reseed_mix(s * 747796405u) % params.k;
+}
+
+fn reseed_draw(k: u32) -> u32 {
+    return reseed_mix(k * 2654435761u + 1013904223u) % params.num_sampled;
 }
 
 fn propose_reseed(s: u32) {
+    set_flag(8u);
     let t = reseed_target(s);
     let key = ~s;
     if key > atomicLoad(&reps[2u * t]) {
@@ -739,8 +763,9 @@ fn propose_reseed(s: u32) {
 }
 
 // --- Alg. 1 lines 17-18: centroids = mean position and normalised mean normal (the sums stay: the
-// next assignment updates them). An empty cluster is re-seeded at the orphan proposed to it (above),
-// else keeps its centroid but is marked empty (w = 0) and drops out of the grid.
+// next assignment updates them). An empty cluster is re-seeded at the orphan proposed to it, or where
+// no orphan was found at a drawn sampled point (above), else keeps its centroid but is marked empty
+// (w = 0) and drops out of the grid. A re-seed counts as a change for Alg. 1's early end.
 @compute @workgroup_size(64)
 fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let k = chunk_item(gid, nwg);
@@ -759,12 +784,21 @@ fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
             c.nrm = vec4<f32>(nrm / l, 0.0);
         }
     } else {
+        // Its sums are exactly zero (every member left), so the points that join add from 0.
         let proposal = atomicLoad(&reps[2u * k]);
+        var m = INVALID;
         if proposal != 0u {
-            // Its sums are exactly zero (every member left), so the points that join add from 0.
-            let m = sample_index(~proposal);
+            m = sample_index(~proposal);
+        } else if atomicLoad(&bounds[8]) == 0u {
+            m = sample_index(reseed_draw(k));
+            if point_pos(m).w <= 0.0 {
+                m = INVALID;
+            }
+        }
+        if m != INVALID {
             c.pos = vec4<f32>(point_pos(m).xyz, 1.0);
             c.nrm = vec4<f32>(point_nrm(m), 0.0);
+            set_flag(6u);
         } else {
             c.pos.w = 0.0;
         }

@@ -920,3 +920,59 @@ fn empty_clusters_are_reseeded_at_orphans() {
         }
     }
 }
+
+/// K clusters are K clusters: with no orphan to wait for, the clusters whose strata lie on the
+/// background (invalid points: the first and last quarter of the data, the frame's black border)
+/// are re-seeded at drawn valid sampled points and end with members, where Alg. 1 alone leaves them
+/// empty; and the GPU equals the CPU twin. Alg. 1's early end waits for the re-seeded clusters: the
+/// run does not stop in the iteration that re-seeds them.
+#[test]
+fn empty_clusters_are_put_to_use_without_orphans() {
+    let ctx = common::gpu();
+    let mut data = Vec::new();
+    let mut push = |p: [f32; 3], valid: bool| {
+        data.push([p[0], p[1], p[2], if valid { 1.0 } else { 0.0 }]);
+        data.push([0.0, 0.0, 1.0, 0.0]);
+    };
+    for _ in 0..500 {
+        push([0.0; 3], false);
+    }
+    for i in 0..1000 {
+        push(
+            [(i % 40) as f32 / 39.0 * 2.0, (i / 40) as f32 / 24.0, 0.0],
+            true,
+        );
+    }
+    for _ in 0..500 {
+        push([0.0; 3], false);
+    }
+    let frame = (Vec3::ZERO, Vec3::new(2.0, 1.0, 0.1));
+    let s = settings(24, 1, 1, 0.866, 10);
+    let g = run_gpu(&ctx, &data, 2, &s, frame);
+    let p = &g.params;
+    // The case: half the strata start on the background.
+    let on_background = (0..p.k)
+        .map(|k| (k as f32 * (p.num_sampled as f32 / p.k as f32)).floor() as usize)
+        .filter(|&s| !(500..1500).contains(&s))
+        .count();
+    assert!(on_background >= 10, "{on_background} strata on the background");
+    let mut members = vec![0u32; p.k as usize];
+    for &k in g.sample_assign.iter().filter(|&&k| k != u32::MAX) {
+        members[k as usize] += 1;
+    }
+    assert!(
+        members.iter().all(|&n| n > 0) && g.centroids.iter().all(|c| c.valid),
+        "clusters without members: {members:?}"
+    );
+    assert!(g.iterations_run >= 3, "{} iterations", g.iterations_run);
+    let c = kmeans::kmeans(&points_of(&data, 2), p, s.iterations);
+    assert_eq!(g.sample_assign, c.sample_assign);
+    assert_eq!(g.assign, c.assign);
+    assert_eq!(g.iterations_run, c.iterations_run);
+    for (a, b) in g.centroids.iter().zip(&c.centroids) {
+        assert_eq!(a.valid, b.valid);
+        if a.valid {
+            assert!((a.pos - b.pos).length() < 1e-5, "{a:?} {b:?}");
+        }
+    }
+}

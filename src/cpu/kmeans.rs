@@ -60,13 +60,22 @@ pub fn sample_index(p: &KmParams, s: u32) -> u32 {
 /// The cluster sampled point `s` proposes itself to for re-seeding in iteration `iteration` (1 in
 /// the first; the grid builds so far): twin of `reseed_target` in kmeans.wgsl.
 pub fn reseed_target(p: &KmParams, s: u32, iteration: u32) -> u32 {
-    let mut h = s
-        .wrapping_mul(747796405)
+    reseed_mix(p, s.wrapping_mul(747796405), iteration) % p.k.max(1)
+}
+
+/// The sampled point an empty cluster `k` is re-seeded at in an iteration without orphans (the
+/// cluster stays empty when it is invalid): twin of `reseed_draw` in kmeans.wgsl.
+pub fn reseed_draw(p: &KmParams, k: u32, iteration: u32) -> u32 {
+    let x = k.wrapping_mul(2654435761).wrapping_add(1013904223);
+    reseed_mix(p, x, iteration) % p.num_sampled.max(1)
+}
+
+fn reseed_mix(p: &KmParams, x: u32, iteration: u32) -> u32 {
+    let mut h = x
         .wrapping_add(iteration.wrapping_mul(2891336453))
         .wrapping_add(p.seed.wrapping_mul(1442695041));
     h = ((h >> ((h >> 28) + 4)) ^ h).wrapping_mul(277803737);
-    h = (h >> 22) ^ h;
-    h % p.k.max(1)
+    (h >> 22) ^ h
 }
 
 /// Eq. (7).
@@ -254,6 +263,7 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
         iterations_run += 1;
         let g = Grid::build(p, &cs);
         let mut changed = 0u32;
+        let mut orphans = false;
         for s in 0..s_n {
             let pt = points[sample_index(p, s) as usize];
             let k = if pt.valid {
@@ -268,6 +278,7 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
             // An orphan (no centroid passing n_t near it) proposes itself for re-seeding; a
             // cluster keeps the lowest index proposed to it.
             if pt.valid && k == u32::MAX {
+                orphans = true;
                 let t = reseed_target(p, s, it + 1) as usize;
                 proposals[t] = proposals[t].min(s);
             }
@@ -292,11 +303,20 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
             let count = counts[kk];
             let proposal = std::mem::replace(&mut proposals[kk], u32::MAX);
             if count == 0 {
-                // Empty: re-seeded at the orphan proposed to it, else out of the grid.
-                match proposal {
-                    u32::MAX => cs[kk].valid = false,
-                    s => {
-                        let pt = points[sample_index(p, s) as usize];
+                // Empty: re-seeded at the orphan proposed to it, or (no orphan this iteration) at
+                // a drawn valid sampled point, else out of the grid.
+                let seed_at = match proposal {
+                    u32::MAX if orphans => None,
+                    u32::MAX => {
+                        Some(points[sample_index(p, reseed_draw(p, kk as u32, it + 1)) as usize])
+                            .filter(|pt| pt.valid)
+                    }
+                    s => Some(points[sample_index(p, s) as usize]),
+                };
+                match seed_at {
+                    None => cs[kk].valid = false,
+                    Some(pt) => {
+                        changed += 1;
                         cs[kk] = Centroid {
                             pos: pt.pos,
                             valid: true,

@@ -262,7 +262,7 @@ impl KMeans {
         let sums = ctx.storage("centroid sums", k * WORDS * 4);
         let bounds = ctx.storage_init(
             "centroid bounds",
-            &[u32::MAX, u32::MAX, u32::MAX, 0, 0, 0, 0, 0],
+            &[u32::MAX, u32::MAX, u32::MAX, 0, 0, 0, 0, 0, 0],
         );
         let grid_buf = ctx.storage("grid", 32);
         let cells = ctx.storage("grid cells", (2 * MAX_CELLS + SCAN_BLOCKS) * 4);
@@ -349,8 +349,9 @@ impl KMeans {
             steps.extend([("assign_sampled", p.num_sampled), ("update", kk)]);
             run(&steps);
             iterations_run += 1;
-            // Alg. 1 ends early once an iteration changed no assignment: from then on the centroids
-            // stay as they are. (Not after the first: its "previous" assignment was never used.)
+            // Alg. 1 ends early once an iteration changed no assignment and re-seeded no cluster:
+            // from then on the centroids stay as they are. (Not after the first: its "previous"
+            // assignment was never used.)
             if i >= 1 {
                 let b: Vec<u32> = ctx.read_buffer(&bounds, 8)?;
                 if b[6] == 0 {
