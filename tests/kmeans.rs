@@ -955,7 +955,10 @@ fn empty_clusters_are_put_to_use_without_orphans() {
         .map(|k| (k as f32 * (p.num_sampled as f32 / p.k as f32)).floor() as usize)
         .filter(|&s| !(500..1500).contains(&s))
         .count();
-    assert!(on_background >= 10, "{on_background} strata on the background");
+    assert!(
+        on_background >= 10,
+        "{on_background} strata on the background"
+    );
     let mut members = vec![0u32; p.k as usize];
     for &k in g.sample_assign.iter().filter(|&&k| k != u32::MAX) {
         members[k as usize] += 1;
