@@ -436,7 +436,7 @@ fn main() -> ExitCode {
 /// The most VPLs this device holds: the VPL buffer is one storage binding.
 fn check_vpls(ctx: &GpuContext, vpls: u32) -> Result<()> {
     use fuzzy_vpl::gi::vpl_trace::VPL_BYTES;
-    let binding = ctx.device.limits().max_storage_buffer_binding_size;
+    let binding = ctx.max_binding();
     let most = binding / VPL_BYTES;
     if vpls as u64 > most {
         return Err(bad(format!(

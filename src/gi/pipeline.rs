@@ -188,7 +188,7 @@ pub const PATH_TRACE_PIXEL_BYTES: u64 = 16;
 
 /// The most pixels a frame may have on `ctx` when each takes `bytes_per_pixel` in one binding.
 pub fn max_pixels(ctx: &GpuContext, bytes_per_pixel: u64) -> u64 {
-    ctx.device.limits().max_storage_buffer_binding_size / bytes_per_pixel
+    ctx.max_binding() / bytes_per_pixel
 }
 
 /// A frame too large for one storage binding of this adapter (creating its bind groups would be a
@@ -220,7 +220,7 @@ pub fn check_frame_size(
             height,
             most,
             bytes: bytes_per_pixel,
-            binding: ctx.device.limits().max_storage_buffer_binding_size,
+            binding: ctx.max_binding(),
         });
     }
     Ok(())
@@ -253,7 +253,7 @@ pub fn check_visibility_size(
     s: &FrameSettings,
 ) -> Result<(), String> {
     let bytes = visibility_bytes(plan, s);
-    let binding = ctx.device.limits().max_storage_buffer_binding_size;
+    let binding = ctx.max_binding();
     if bytes > binding {
         let lights = visibility_lights(plan, s);
         let what = if plan.vpl_clustering {

@@ -119,7 +119,7 @@ impl VplTrace {
         // A wave's output (max_depth VPLs of 48 bytes a path) must fit one storage binding: with few
         // paths reaching a surface (a light far outside the scene) the next wave grows to 2^20 paths,
         // 384 MiB at 8 bounces, which the device refuses.
-        let binding = ctx.device.limits().max_storage_buffer_binding_size;
+        let binding = ctx.max_binding();
         let max_wave = (binding / (max_depth as u64 * VPL_BYTES)).clamp(1, 1 << 20) as u32;
         let mut wave = (n / 2).max(256).min(max_wave);
         let mut base = 0u32;

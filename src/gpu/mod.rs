@@ -44,6 +44,13 @@ pub fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
 }
 
 impl GpuContext {
+    /// The most bytes one storage binding of this device holds (lavapipe: 128 MiB). Every buffer the
+    /// shaders bind whole (VPLs, per-pixel lists, the visibility bit matrix, a VPL wave) is bounded
+    /// by it.
+    pub fn max_binding(&self) -> u64 {
+        self.device.limits().max_storage_buffer_binding_size
+    }
+
     /// Creates a headless context on the first adapter (any backend wgpu finds: Vulkan on lavapipe here).
     pub fn new_headless() -> Result<Self> {
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
