@@ -68,8 +68,9 @@ struct Centroid {
 // Per cluster: 6 components x (lo, hi) words of 64-bit fixed-point sums, then the count (13 words).
 @group(1) @binding(4) var<storage, read_write> sums: array<atomic<u32>>;
 // Centroid bounds as order-preserving float bits: min xyz, max xyz; then per iteration whether the
-// centroids changed (6), the iteration's number (7) and whether it found an orphan (8).
-@group(1) @binding(5) var<storage, read_write> bounds: array<atomic<u32>, 9>;
+// centroids changed (6), the iteration's number (7), whether it found an orphan (8), and the empty
+// cluster an update left (9 + the iteration's parity; k + 1, 0 for none: `last_empty`).
+@group(1) @binding(5) var<storage, read_write> bounds: array<atomic<u32>, 11>;
 @group(1) @binding(6) var<storage, read_write> grid: Grid;
 // Cell counts (0 outside a grid build), then from MAX_CELLS on each cell's offset within its scan
 // block, then from BLOCK_SUMS the blocks' totals. Fixed places: the next grid may have more cells, and
@@ -167,6 +168,9 @@ fn init_centroids(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
             break;
         }
     }
+    if c.pos.w == 0.0 {
+        name_empty(k, 0u);
+    }
     centroids[k] = c;
     add_to_bounds(c);
 }
@@ -212,7 +216,9 @@ fn grid_setup() {
     atomicStore(&bounds[6], 0u);
     atomicStore(&bounds[8], 0u);
     // Grid builds so far: the iteration's number (1 in the first) for the re-seeding draw.
-    atomicAdd(&bounds[7], 1u);
+    let iteration = atomicAdd(&bounds[7], 1u) + 1u;
+    // The empty cluster this iteration's update will name (the previous update's stays readable).
+    atomicStore(&bounds[9u + (iteration & 1u)], 0u);
     if !(lo.x <= hi.x) {
         // No valid centroid: one cell.
         lo = params.lo.xyz;
@@ -753,12 +759,37 @@ fn reseed_draw(k: u32) -> u32 {
     return reseed_mix(k * 2654435761u + 1013904223u) % params.num_sampled;
 }
 
-fn propose_reseed(s: u32) {
-    set_flag(8u);
-    let t = reseed_target(s);
+fn propose(t: u32, s: u32) {
     let key = ~s;
     if key > atomicLoad(&reps[2u * t]) {
         atomicMax(&reps[2u * t], key);
+    }
+}
+
+// Besides its drawn cluster, every orphan proposes itself to the empty cluster the last update (or
+// init_centroids) named, so that one empty cluster a round goes to an orphan however few of either
+// there are (a draw among K clusters rarely hits one of a few empty ones).
+fn propose_reseed(s: u32) {
+    set_flag(8u);
+    let t = reseed_target(s);
+    propose(t, s);
+    let e = last_empty();
+    if e != INVALID && e != t {
+        propose(e, s);
+    }
+}
+
+// The highest-index cluster left empty by the last update (by init_centroids before the first
+// iteration), INVALID for none. Iteration i's update names its own in word 9 + (i & 1), which
+// grid_setup cleared; this reads the other.
+fn last_empty() -> u32 {
+    return atomicLoad(&bounds[9u + ((atomicLoad(&bounds[7]) + 1u) & 1u)]) - 1u;
+}
+
+fn name_empty(k: u32, iteration: u32) {
+    let i = 9u + (iteration & 1u);
+    if k + 1u > atomicLoad(&bounds[i]) {
+        atomicMax(&bounds[i], k + 1u);
     }
 }
 
@@ -801,6 +832,7 @@ fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
             set_flag(6u);
         } else {
             c.pos.w = 0.0;
+            name_empty(k, atomicLoad(&bounds[7]));
         }
     }
     atomicStore(&reps[2u * k], 0u);

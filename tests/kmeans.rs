@@ -979,3 +979,67 @@ fn empty_clusters_are_put_to_use_without_orphans() {
         }
     }
 }
+
+/// One orphan and one empty cluster meet even when the orphan's draws never hit it: a floor, one
+/// sampled point on a small vertical face (no centroid of its orientation), and a last stratum of
+/// invalid points (one cluster starts empty). The seed is chosen so that none of the orphan's ten
+/// draws among the 16 clusters is the empty one; the orphan also proposes itself to the empty
+/// cluster the last update named, gets it in the first iteration, and ends in a cluster facing its
+/// way. GPU equals the CPU twin.
+#[test]
+fn an_orphan_finds_the_one_empty_cluster() {
+    let ctx = common::gpu();
+    let mut data = Vec::new();
+    let mut push = |p: [f32; 3], n: [f32; 3], valid: bool| {
+        data.push([p[0], p[1], p[2], if valid { 1.0 } else { 0.0 }]);
+        data.push([n[0], n[1], n[2], 0.0]);
+    };
+    let floor = |i: usize| {
+        [
+            (i % 40) as f32 / 39.0 * 2.0,
+            (i / 40) as f32 / 39.0 * 2.0,
+            0.0,
+        ]
+    };
+    push(floor(0), [0.0, 0.0, 1.0], true);
+    let orphan = 1;
+    push([1.0, 0.95, 0.1], [1.0, 0.0, 0.0], true);
+    for i in 1..1600 {
+        push(floor(i), [0.0, 0.0, 1.0], true);
+    }
+    for _ in 0..122 {
+        push([0.0; 3], [0.0, 0.0, 1.0], false);
+    }
+    let frame = (Vec3::ZERO, Vec3::new(2.0, 2.0, 0.3));
+    let n = (data.len() / 2) as u32;
+    let empty = 15;
+    // The case: a seed whose ten draws for the orphan all miss the empty cluster.
+    let s = (1..1000)
+        .map(|seed| KMeansSettings {
+            seed,
+            ..settings(16, 1, 1, 0.866, 10)
+        })
+        .find(|s| {
+            let p = KmParams::new(n, 2, s, frame);
+            (1..=10).all(|it| kmeans::reseed_target(&p, orphan, it) != empty)
+        })
+        .unwrap();
+    let g = run_gpu(&ctx, &data, 2, &s, frame);
+    let p = &g.params;
+    let starts: Vec<usize> = (0..p.k)
+        .map(|k| (k as f32 * (p.num_sampled as f32 / p.k as f32)).floor() as usize)
+        .collect();
+    assert!(!starts.contains(&(orphan as usize)), "{starts:?}");
+    assert!(starts[empty as usize] >= 1601, "{starts:?}");
+    let k = g.sample_assign[orphan as usize];
+    assert!(k != u32::MAX, "the orphan has no cluster");
+    assert!(
+        g.centroids[k as usize].nrm.x > 0.866,
+        "the orphan is in cluster {k} facing {:?}",
+        g.centroids[k as usize].nrm
+    );
+    let c = kmeans::kmeans(&points_of(&data, 2), p, s.iterations);
+    assert_eq!(g.sample_assign, c.sample_assign);
+    assert_eq!(g.assign, c.assign);
+    assert_eq!(g.iterations_run, c.iterations_run);
+}

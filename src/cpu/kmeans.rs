@@ -258,6 +258,9 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
     let ext = Vec3::from_slice(&p.ext[..3]);
     let mut sample_assign = vec![u32::MAX; s_n as usize];
     let mut proposals = vec![u32::MAX; k];
+    // The highest-index cluster the last update (here: the initial centroids) left empty; every
+    // orphan also proposes itself to it.
+    let mut last_empty = cs.iter().rposition(|c| !c.valid);
     let mut iterations_run = 0;
     for it in 0..iterations {
         iterations_run += 1;
@@ -281,6 +284,9 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
                 orphans = true;
                 let t = reseed_target(p, s, it + 1) as usize;
                 proposals[t] = proposals[t].min(s);
+                if let Some(e) = last_empty {
+                    proposals[e] = proposals[e].min(s);
+                }
             }
         }
         let mut sums = vec![[0u64; 6]; k];
@@ -299,6 +305,7 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
             }
             counts[kk as usize] += 1;
         }
+        last_empty = None;
         for kk in 0..k {
             let count = counts[kk];
             let proposal = std::mem::replace(&mut proposals[kk], u32::MAX);
@@ -314,7 +321,10 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
                     s => Some(points[sample_index(p, s) as usize]),
                 };
                 match seed_at {
-                    None => cs[kk].valid = false,
+                    None => {
+                        cs[kk].valid = false;
+                        last_empty = Some(kk);
+                    }
                     Some(pt) => {
                         changed += 1;
                         cs[kk] = Centroid {

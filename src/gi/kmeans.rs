@@ -262,7 +262,7 @@ impl KMeans {
         let sums = ctx.storage("centroid sums", k * WORDS * 4);
         let bounds = ctx.storage_init(
             "centroid bounds",
-            &[u32::MAX, u32::MAX, u32::MAX, 0, 0, 0, 0, 0, 0],
+            &[u32::MAX, u32::MAX, u32::MAX, 0, 0, 0, 0, 0, 0, 0, 0],
         );
         let grid_buf = ctx.storage("grid", 32);
         let cells = ctx.storage("grid cells", (2 * MAX_CELLS + SCAN_BLOCKS) * 4);
