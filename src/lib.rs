@@ -11,6 +11,7 @@ pub mod export;
 pub mod gi;
 pub mod gpu;
 pub mod metrics;
+pub mod panic_guard;
 pub mod raybench;
 pub mod scene;
 pub mod stats;

@@ -224,8 +224,9 @@ struct PointCache {
     lights: Arc<Vec<Vec3>>,
 }
 
-/// `render`, with a panic inside it (a wgpu validation error is one) turned into an error, so the
-/// UI hears of it instead of waiting for a reply that never comes.
+/// `render`, with a panic inside it (a wgpu validation error is one) turned into a one-line error
+/// (nothing printed on stderr), so the UI hears of it instead of waiting for a reply that never
+/// comes.
 fn render_guarded(
     ctx: &GpuContext,
     renderer: &mut Renderer,
@@ -233,18 +234,8 @@ fn render_guarded(
     job: FrameJob,
 ) -> Result<Rendered> {
     let (w, h) = (job.settings.width, job.settings.height);
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        render(ctx, renderer, cache, job)
-    }))
-    .unwrap_or_else(|p| {
-        let msg = p
-            .downcast_ref::<String>()
-            .map(String::as_str)
-            .or_else(|| p.downcast_ref::<&str>().copied())
-            .unwrap_or("no message");
-        let msg = msg.lines().find(|l| !l.trim().is_empty()).unwrap_or(msg);
-        Err(anyhow::anyhow!("the {w}x{h} GI frame failed: {msg}"))
-    })
+    crate::panic_guard::quietly(|| render(ctx, renderer, cache, job))
+        .unwrap_or_else(|msg| Err(anyhow::anyhow!("the {w}x{h} GI frame failed: {msg}")))
 }
 
 fn render(

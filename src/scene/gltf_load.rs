@@ -17,9 +17,9 @@ mod uri;
 use super::{
     Camera, LightKind, LoadReport, Material, PunctualLight, Scene, SceneError, Texture, Triangle,
 };
+use crate::panic_guard::one_line;
 use glam::{Affine2, DMat3, Mat4, Quat, Vec2, Vec3, Vec4};
 use gltf::json::validation::Validate;
-use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
 use std::collections::hash_map::Entry;
 use std::path::Path;
@@ -117,57 +117,16 @@ pub fn load_slice(bytes: &[u8], name: &str) -> Result<Scene, SceneError> {
 // ---------------------------------------------------------------------------------------------
 // Panic guard
 
-thread_local! {
-    /// Set while a guarded load runs on this thread: the panic hook then records instead of printing.
-    static QUIET_PANICS: Cell<bool> = const { Cell::new(false) };
-    static PANIC_MESSAGE: RefCell<Option<String>> = const { RefCell::new(None) };
-}
-
-/// Installs (once) a panic hook that stays silent for panics inside a guarded load on the current
-/// thread and defers to the previously installed hook for everything else.
-fn install_quiet_hook() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    ONCE.call_once(|| {
-        let previous = std::panic::take_hook();
-        std::panic::set_hook(Box::new(move |info| {
-            if QUIET_PANICS.with(Cell::get) {
-                let msg = info.payload_as_str().unwrap_or("unknown panic").to_string();
-                let at = info
-                    .location()
-                    .map(|l| format!(" at {}:{}", l.file(), l.line()))
-                    .unwrap_or_default();
-                PANIC_MESSAGE.with(|m| *m.borrow_mut() = Some(format!("{msg}{at}")));
-            } else {
-                previous(info)
-            }
-        }));
-    });
-}
-
 /// Runs a load, turning `Err(problem)` and any panic into a one-line `SceneError` for `file`.
 fn guarded(file: &str, load: impl FnOnce() -> Result<Scene, String>) -> Result<Scene, SceneError> {
-    install_quiet_hook();
-    let was_quiet = QUIET_PANICS.with(|q| q.replace(true));
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(load));
-    QUIET_PANICS.with(|q| q.set(was_quiet));
-    match result {
+    match crate::panic_guard::quietly(load) {
         Ok(Ok(scene)) => Ok(scene),
         Ok(Err(problem)) => Err(SceneError::new(file, one_line(&problem))),
-        Err(_) => {
-            let msg = PANIC_MESSAGE
-                .with(|m| m.borrow_mut().take())
-                .unwrap_or_else(|| "unknown panic".into());
-            Err(SceneError::new(
-                file,
-                one_line(&format!("internal error while loading ({msg})")),
-            ))
-        }
+        Err(msg) => Err(SceneError::new(
+            file,
+            one_line(&format!("internal error while loading ({msg})")),
+        )),
     }
-}
-
-/// Collapses all whitespace (newlines included) to single spaces.
-fn one_line(s: &str) -> String {
-    s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -455,14 +414,11 @@ impl TextureCache<'_> {
         let index = *self.decoded.entry(image.index()).or_insert_with(|| {
             let label = images::image_name(&image);
             // A decoder crash on a hostile image costs the texture, not the scene.
-            let decoded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let decoded = crate::panic_guard::quietly(|| {
                 images::encoded_bytes(&image, self.buffers, self.base)
                     .and_then(|bytes| images::decode(&bytes, &label))
-            }))
-            .unwrap_or_else(|_| {
-                let msg = PANIC_MESSAGE.with(|m| m.borrow_mut().take());
-                Err(format!("the image decoder crashed: {}", msg.unwrap_or_default()))
-            });
+            })
+            .unwrap_or_else(|msg| Err(format!("the image decoder crashed: {msg}")));
             match decoded {
                 Ok(t) => {
                     self.textures.push(t);
@@ -1125,7 +1081,7 @@ mod tests {
         assert!(!msg.contains('\n'));
         // The guard is released: ordinary panics still propagate to catch_unwind callers.
         assert!(std::panic::catch_unwind(|| panic!("outside")).is_err());
-        assert!(!QUIET_PANICS.with(Cell::get));
+        assert!(!crate::panic_guard::is_quiet());
     }
 
     #[test]
