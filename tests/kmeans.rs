@@ -852,6 +852,46 @@ fn plane_gate_matches_cpu_on_shading_points() {
     );
 }
 
+/// Appends a point as the k-means reads it (stride 2): position with w = 1 when valid, normal.
+fn push_point(data: &mut Vec<[f32; 4]>, p: [f32; 3], n: [f32; 3], valid: bool) {
+    data.push([p[0], p[1], p[2], if valid { 1.0 } else { 0.0 }]);
+    data.push([n[0], n[1], n[2], 0.0]);
+}
+
+/// Point i of a 40 × 40 grid over a 2 m floor (z = 0).
+fn floor(i: usize) -> [f32; 3] {
+    [
+        (i % 40) as f32 / 39.0 * 2.0,
+        (i / 40) as f32 / 39.0 * 2.0,
+        0.0,
+    ]
+}
+
+/// The sampled point each initial centroid's stratum starts at (init_centroids: stratum k of the
+/// sampled points in order).
+fn strata_starts(p: &KmParams) -> Vec<usize> {
+    (0..p.k)
+        .map(|k| (k as f32 * (p.num_sampled as f32 / p.k as f32)).floor() as usize)
+        .collect()
+}
+
+/// The GPU's clustering equals the CPU twin's: assignments, iterations and centroids.
+fn assert_equals_twin(g: &GpuResult, pts: &[Point], iterations: u32) {
+    let c = kmeans::kmeans(pts, &g.params, iterations);
+    assert_eq!(g.sample_assign, c.sample_assign);
+    assert_eq!(g.assign, c.assign);
+    assert_eq!(g.iterations_run, c.iterations_run);
+    for (a, b) in g.centroids.iter().zip(&c.centroids) {
+        assert_eq!(a.valid, b.valid);
+        if a.valid {
+            assert!(
+                (a.pos - b.pos).length() < 1e-5 && (a.nrm - b.nrm).length() < 1e-5,
+                "{a:?} {b:?}"
+            );
+        }
+    }
+}
+
 /// A surface no initial centroid falls on gets clusters: a 2 m floor (normal +z) with a small
 /// vertical face (normal +x) whose points sit between the strata's first points, and two strata of
 /// invalid points whose clusters start empty. The face's points pass n_t with no centroid, so they
@@ -861,17 +901,7 @@ fn plane_gate_matches_cpu_on_shading_points() {
 fn empty_clusters_are_reseeded_at_orphans() {
     let ctx = common::gpu();
     let mut data = Vec::new();
-    let mut push = |p: [f32; 3], n: [f32; 3], valid: bool| {
-        data.push([p[0], p[1], p[2], if valid { 1.0 } else { 0.0 }]);
-        data.push([n[0], n[1], n[2], 0.0]);
-    };
-    let floor = |i: usize| {
-        [
-            (i % 40) as f32 / 39.0 * 2.0,
-            (i / 40) as f32 / 39.0 * 2.0,
-            0.0,
-        ]
-    };
+    let mut push = |p, n, valid| push_point(&mut data, p, n, valid);
     push(floor(0), [0.0, 0.0, 1.0], true);
     let face = 1..21;
     for i in 0..20 {
@@ -894,9 +924,7 @@ fn empty_clusters_are_reseeded_at_orphans() {
     let pts = points_of(&data, 2);
     let p = &g.params;
     // The case: no stratum starts on the face, and the last two strata are all invalid.
-    let starts: Vec<usize> = (0..p.k)
-        .map(|k| (k as f32 * (p.num_sampled as f32 / p.k as f32)).floor() as usize)
-        .collect();
+    let starts = strata_starts(p);
     assert!(starts.iter().all(|s| !face.contains(s)), "{starts:?}");
     assert!(starts[18] >= 1620 && starts[19] >= 1620, "{starts:?}");
     for m in face.clone() {
@@ -909,16 +937,7 @@ fn empty_clusters_are_reseeded_at_orphans() {
             g.centroids[c].nrm
         );
     }
-    let c = kmeans::kmeans(&pts, p, s.iterations);
-    assert_eq!(g.sample_assign, c.sample_assign);
-    assert_eq!(g.assign, c.assign);
-    assert_eq!(g.iterations_run, c.iterations_run);
-    for (a, b) in g.centroids.iter().zip(&c.centroids) {
-        assert_eq!(a.valid, b.valid);
-        if a.valid {
-            assert!((a.pos - b.pos).length() < 1e-5 && (a.nrm - b.nrm).length() < 1e-5);
-        }
-    }
+    assert_equals_twin(&g, &pts, s.iterations);
 }
 
 /// K clusters are K clusters: with no orphan to wait for, the clusters whose strata lie on the
@@ -930,10 +949,7 @@ fn empty_clusters_are_reseeded_at_orphans() {
 fn empty_clusters_are_put_to_use_without_orphans() {
     let ctx = common::gpu();
     let mut data = Vec::new();
-    let mut push = |p: [f32; 3], valid: bool| {
-        data.push([p[0], p[1], p[2], if valid { 1.0 } else { 0.0 }]);
-        data.push([0.0, 0.0, 1.0, 0.0]);
-    };
+    let mut push = |p, valid| push_point(&mut data, p, [0.0, 0.0, 1.0], valid);
     for _ in 0..500 {
         push([0.0; 3], false);
     }
@@ -951,8 +967,8 @@ fn empty_clusters_are_put_to_use_without_orphans() {
     let g = run_gpu(&ctx, &data, 2, &s, frame);
     let p = &g.params;
     // The case: half the strata start on the background.
-    let on_background = (0..p.k)
-        .map(|k| (k as f32 * (p.num_sampled as f32 / p.k as f32)).floor() as usize)
+    let on_background = strata_starts(p)
+        .into_iter()
         .filter(|&s| !(500..1500).contains(&s))
         .count();
     assert!(
@@ -968,16 +984,7 @@ fn empty_clusters_are_put_to_use_without_orphans() {
         "clusters without members: {members:?}"
     );
     assert!(g.iterations_run >= 3, "{} iterations", g.iterations_run);
-    let c = kmeans::kmeans(&points_of(&data, 2), p, s.iterations);
-    assert_eq!(g.sample_assign, c.sample_assign);
-    assert_eq!(g.assign, c.assign);
-    assert_eq!(g.iterations_run, c.iterations_run);
-    for (a, b) in g.centroids.iter().zip(&c.centroids) {
-        assert_eq!(a.valid, b.valid);
-        if a.valid {
-            assert!((a.pos - b.pos).length() < 1e-5, "{a:?} {b:?}");
-        }
-    }
+    assert_equals_twin(&g, &points_of(&data, 2), s.iterations);
 }
 
 /// One orphan and one empty cluster meet even when the orphan's draws never hit it: a floor, one
@@ -990,17 +997,7 @@ fn empty_clusters_are_put_to_use_without_orphans() {
 fn an_orphan_finds_the_one_empty_cluster() {
     let ctx = common::gpu();
     let mut data = Vec::new();
-    let mut push = |p: [f32; 3], n: [f32; 3], valid: bool| {
-        data.push([p[0], p[1], p[2], if valid { 1.0 } else { 0.0 }]);
-        data.push([n[0], n[1], n[2], 0.0]);
-    };
-    let floor = |i: usize| {
-        [
-            (i % 40) as f32 / 39.0 * 2.0,
-            (i / 40) as f32 / 39.0 * 2.0,
-            0.0,
-        ]
-    };
+    let mut push = |p, n, valid| push_point(&mut data, p, n, valid);
     push(floor(0), [0.0, 0.0, 1.0], true);
     let orphan = 1;
     push([1.0, 0.95, 0.1], [1.0, 0.0, 0.0], true);
@@ -1026,9 +1023,7 @@ fn an_orphan_finds_the_one_empty_cluster() {
         .unwrap();
     let g = run_gpu(&ctx, &data, 2, &s, frame);
     let p = &g.params;
-    let starts: Vec<usize> = (0..p.k)
-        .map(|k| (k as f32 * (p.num_sampled as f32 / p.k as f32)).floor() as usize)
-        .collect();
+    let starts = strata_starts(p);
     assert!(!starts.contains(&(orphan as usize)), "{starts:?}");
     assert!(starts[empty as usize] >= 1601, "{starts:?}");
     let k = g.sample_assign[orphan as usize];
@@ -1038,8 +1033,5 @@ fn an_orphan_finds_the_one_empty_cluster() {
         "the orphan is in cluster {k} facing {:?}",
         g.centroids[k as usize].nrm
     );
-    let c = kmeans::kmeans(&points_of(&data, 2), p, s.iterations);
-    assert_eq!(g.sample_assign, c.sample_assign);
-    assert_eq!(g.assign, c.assign);
-    assert_eq!(g.iterations_run, c.iterations_run);
+    assert_equals_twin(&g, &points_of(&data, 2), s.iterations);
 }
