@@ -740,7 +740,7 @@ fn mean64(i: u32, count: u32) -> f32 {
 //
 // An iteration that finds no orphan re-seeds its empty clusters at sampled points drawn from the
 // cluster's index and the iteration (`reseed_draw`; a draw that falls on an invalid point, the
-// background, leaves the cluster empty until a later iteration). So K clusters are K clusters: the
+// background, or on a cluster's only member leaves the cluster empty until a later iteration). So K clusters are K clusters: the
 // strata of the initial centroids that lie on the background, and clusters that lose every member,
 // are put to use (the Cornell box at 640x480, K 3072, kept 491 empty). While orphans remain, the
 // empty clusters wait for them. CPU twin: cpu::kmeans::reseed_target, reseed_draw and the loop in
@@ -821,9 +821,14 @@ fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
         if proposal != 0u {
             m = sample_index(~proposal);
         } else if atomicLoad(&bounds[8]) == 0u {
-            m = sample_index(reseed_draw(k));
-            if point_pos(m).w <= 0.0 {
-                m = INVALID;
+            // The draw must split a cluster: an invalid point has none (in an iteration without
+            // orphans every valid sampled point has one), and a cluster's only member would get a
+            // second centroid on it, which with K above the valid points re-seeded every empty
+            // cluster onto a duplicate every iteration (each then traced its own visibility).
+            let s = reseed_draw(k);
+            let owner = sample_assign[s];
+            if owner != INVALID && atomicLoad(&sums[owner * WORDS + 12u]) > 1u {
+                m = sample_index(s);
             }
         }
         if m != INVALID {

@@ -1035,3 +1035,39 @@ fn an_orphan_finds_the_one_empty_cluster() {
     );
     assert_equals_twin(&g, &points_of(&data, 2), s.iterations);
 }
+
+/// With K above the valid points (100 valid, 200 on the background, K 150) every valid point can
+/// have a cluster of its own but no more: a re-seed must split a cluster, so no draw puts a second
+/// centroid on a cluster's only member. Ends with no two valid centroids on one place, every valid
+/// centroid holding a point in the final assignment, and the GPU equal to the CPU twin.
+#[test]
+fn re_seeds_never_duplicate_a_centroid() {
+    let ctx = common::gpu();
+    let mut data = Vec::new();
+    for i in 0..300 {
+        let valid = i % 3 == 0;
+        push_point(&mut data, floor(i * 5), [0.0, 0.0, 1.0], valid);
+    }
+    let frame = (Vec3::ZERO, Vec3::new(2.0, 2.0, 0.1));
+    let s = settings(150, 1, 1, 0.866, 10);
+    let g = run_gpu(&ctx, &data, 2, &s, frame);
+    let valid: Vec<&Centroid> = g.centroids.iter().filter(|c| c.valid).collect();
+    assert!(valid.len() <= 100, "{} valid centroids", valid.len());
+    for (i, a) in valid.iter().enumerate() {
+        for b in &valid[i + 1..] {
+            assert!(
+                (a.pos - b.pos).length() > 1e-6,
+                "two centroids at {:?}",
+                a.pos
+            );
+        }
+    }
+    let mut members = vec![0u32; s.k as usize];
+    for &k in g.assign.iter().filter(|&&k| k != u32::MAX) {
+        members[k as usize] += 1;
+    }
+    for (k, c) in g.centroids.iter().enumerate() {
+        assert!(!c.valid || members[k] > 0, "cluster {k} is valid and empty");
+    }
+    assert_equals_twin(&g, &points_of(&data, 2), s.iterations);
+}

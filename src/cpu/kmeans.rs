@@ -311,12 +311,18 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
             let proposal = std::mem::replace(&mut proposals[kk], u32::MAX);
             if count == 0 {
                 // Empty: re-seeded at the orphan proposed to it, or (no orphan this iteration) at
-                // a drawn valid sampled point, else out of the grid.
+                // a drawn sampled point of a cluster with two or more, else out of the grid.
                 let seed_at = match proposal {
                     u32::MAX if orphans => None,
                     u32::MAX => {
-                        Some(points[sample_index(p, reseed_draw(p, kk as u32, it + 1)) as usize])
-                            .filter(|pt| pt.valid)
+                        // Only a draw that splits a cluster (not an invalid point, not a cluster's
+                        // only member).
+                        let s = reseed_draw(p, kk as u32, it + 1);
+                        match sample_assign[s as usize] {
+                            u32::MAX => None,
+                            owner if counts[owner as usize] <= 1 => None,
+                            _ => Some(points[sample_index(p, s) as usize]),
+                        }
                     }
                     s => Some(points[sample_index(p, s) as usize]),
                 };
