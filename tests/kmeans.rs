@@ -875,6 +875,15 @@ fn strata_starts(p: &KmParams) -> Vec<usize> {
         .collect()
 }
 
+/// Points per cluster in an assignment (entries u32::MAX: none).
+fn members(assign: &[u32], k: u32) -> Vec<u32> {
+    let mut n = vec![0u32; k as usize];
+    for &c in assign.iter().filter(|&&c| c != u32::MAX) {
+        n[c as usize] += 1;
+    }
+    n
+}
+
 /// The GPU's clustering equals the CPU twin's: assignments, iterations and centroids.
 fn assert_equals_twin(g: &GpuResult, pts: &[Point], iterations: u32) {
     let c = kmeans::kmeans(pts, &g.params, iterations);
@@ -975,10 +984,7 @@ fn empty_clusters_are_put_to_use_without_orphans() {
         on_background >= 10,
         "{on_background} strata on the background"
     );
-    let mut members = vec![0u32; p.k as usize];
-    for &k in g.sample_assign.iter().filter(|&&k| k != u32::MAX) {
-        members[k as usize] += 1;
-    }
+    let members = members(&g.sample_assign, p.k);
     assert!(
         members.iter().all(|&n| n > 0) && g.centroids.iter().all(|c| c.valid),
         "clusters without members: {members:?}"
@@ -1062,10 +1068,7 @@ fn re_seeds_never_duplicate_a_centroid() {
             );
         }
     }
-    let mut members = vec![0u32; s.k as usize];
-    for &k in g.assign.iter().filter(|&&k| k != u32::MAX) {
-        members[k as usize] += 1;
-    }
+    let members = members(&g.assign, s.k);
     for (k, c) in g.centroids.iter().enumerate() {
         assert!(!c.valid || members[k] > 0, "cluster {k} is valid and empty");
     }
