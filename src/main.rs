@@ -78,7 +78,8 @@ struct BenchArgs {
     /// F values, 1..16 (default 6).
     #[arg(long, value_name = "LIST")]
     fuzziness: Option<String>,
-    /// γ values (default 4).
+    /// γ values: `auto` (the default: the largest γ in 4..16 that keeps 40 sampled points a cluster
+    /// and 19,200 in all) or factors of at least 1, e.g. auto,4,16.
     #[arg(long, value_name = "LIST")]
     gamma: Option<String>,
     /// K_SP/K_VPL pairs to measure instead of every --sp-clusters × --vpl-clusters, e.g. the paper's
@@ -230,9 +231,10 @@ struct ClusterArgs {
     /// F: SP clusters per pixel (fuzziness), 1..16.
     #[arg(long, default_value_t = 6)]
     fuzziness: u32,
-    /// γ: SP downsampling factor for the k-means iterations (at most pixels / K, so that at least K
-    /// points are sampled).
-    #[arg(long, default_value_t = 4)]
+    /// γ: SP downsampling factor for the k-means iterations, or `auto`: the largest γ in 4..16 that
+    /// keeps 40 sampled points a cluster and 19,200 in all. Either way at most pixels / K, so that at
+    /// least K points are sampled.
+    #[arg(long, default_value = "auto", value_parser = fuzzy_vpl::gi::kmeans::parse_gamma)]
     gamma: u32,
     /// n_t of Eq. (7): cosine of the largest normal angle within a cluster, in [-1, 1] (Eq. 7's test
     /// is strict, so 1 is read as 1 - 2^-20: the same normal only).
@@ -265,9 +267,6 @@ impl ClusterArgs {
     /// Refuses settings no clustering can use (exit 2 with one line).
     fn check(&self) -> Result<()> {
         check_fuzziness(self.fuzziness)?;
-        if self.gamma == 0 {
-            return Err(bad("--gamma must be at least 1"));
-        }
         check_normal_threshold(self.normal_threshold)?;
         check_iterations(self.iterations)?;
         check_clamp(self.clamp)?;
@@ -662,7 +661,12 @@ fn render(a: RenderArgs) -> Result<()> {
                 vpl_clusters: settings.vpl_clusters,
                 sp_clusters: settings.sp_clusters,
                 fuzziness: settings.f(),
-                gamma: settings.gamma,
+                gamma: fuzzy_vpl::gi::kmeans::resolve_gamma(
+                    settings.gamma,
+                    frame.width * frame.height,
+                    settings.sp_clusters,
+                ),
+                gamma_auto: settings.gamma == fuzzy_vpl::gi::kmeans::AUTO_GAMMA,
                 normal_threshold: settings.normal_threshold,
                 iterations: settings.iterations,
                 weighting: settings.weighting.name().into(),

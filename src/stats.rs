@@ -10,7 +10,10 @@ pub struct Settings {
     pub vpl_clusters: u32,
     pub sp_clusters: u32,
     pub fuzziness: u32,
+    /// γ asked; with `gamma_auto` the auto rule's choice for this size and K (`kmeans::resolve_gamma`).
     pub gamma: u32,
+    /// γ was `auto` (the default): `gamma` is what the rule chose.
+    pub gamma_auto: bool,
     pub normal_threshold: f32,
     pub iterations: u32,
     pub weighting: String,

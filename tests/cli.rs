@@ -101,6 +101,9 @@ fn render_cornell_128_exr_with_stats() {
         assert!(j["settings"][k].is_number(), "settings lack {k}");
     }
     assert!(j["settings"]["gamma_used"].as_u64().unwrap() >= 1);
+    // γ defaults to auto: 16,384 pixels are below the rule's 19,200 sampled points, so γ 4.
+    assert_eq!(j["settings"]["gamma_auto"], true);
+    assert_eq!(j["settings"]["gamma"], 4);
     assert!(j["settings"]["normal_threshold_used"].as_f64().unwrap() < 1.0);
     assert!(j["settings"].get("path_trace_spp").is_none());
     assert!(j["settings"].get("plane_gate_deg").is_none());
@@ -591,4 +594,54 @@ fn scene_files_that_are_not_regular_files_are_refused() {
             "{path}: {err}"
         );
     }
+}
+
+/// `--gamma auto` (the default) writes the rule's γ for the frame's size and K into the stats, and the
+/// k-means samples with it; a γ asked is written as asked.
+#[test]
+fn auto_gamma_is_written_as_chosen() {
+    let d = common::scratch("auto-gamma");
+    let o = d.join("a.png");
+    let stats = d.join("a.json");
+    let render = |extra: &[&str]| -> serde_json::Value {
+        let mut args = vec![
+            "render",
+            "builtin:cornell",
+            "-o",
+            o.to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+            "--width",
+            "400",
+            "--height",
+            "300",
+            "--sp-clusters",
+            "100",
+            "--vpls",
+            "512",
+            "--vpl-clusters",
+            "64",
+            "--direct-samples",
+            "1",
+        ];
+        args.extend_from_slice(extra);
+        let (code, _, err) = run(&args);
+        assert_eq!(code, 0, "{extra:?}: {err}");
+        serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap()
+    };
+    // 120,000 pixels, K 100: 40 a cluster allows 30, 19,200 in all allows 6.
+    for extra in [&[][..], &["--gamma", "auto"][..]] {
+        let j = render(extra);
+        assert_eq!(j["settings"]["gamma_auto"], true, "{extra:?}");
+        assert_eq!(j["settings"]["gamma"], 6, "{extra:?}");
+        assert_eq!(j["settings"]["gamma_used"], 6, "{extra:?}");
+    }
+    let j = render(&["--gamma", "3"]);
+    assert_eq!(j["settings"]["gamma_auto"], false);
+    assert_eq!(j["settings"]["gamma"], 3);
+    assert_eq!(j["settings"]["gamma_used"], 3);
+    let (code, _, err) = run(&["render", "-o", o.to_str().unwrap(), "--gamma", "0"]);
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(common::error_lines(&err).len(), 1, "{err}");
+    assert!(err.contains("--gamma"), "{err}");
 }

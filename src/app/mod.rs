@@ -21,7 +21,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::Result;
 
-use crate::gi::kmeans::DEFAULT_PLANE_GATE_DEG;
+use crate::gi::kmeans::{AUTO_GAMMA, AUTO_GAMMA_MIN, DEFAULT_PLANE_GATE_DEG};
 use crate::gi::pipeline::{Control, FrameSettings, Weighting};
 use crate::metrics;
 use crate::scene::Scene;
@@ -76,7 +76,10 @@ pub struct UiSettings {
     pub vpl_clusters: u32,
     pub vpls: u32,
     pub fuzziness: u32,
+    /// γ of the slider, used when `gamma_auto` is off.
     pub gamma: u32,
+    /// γ by `kmeans::auto_gamma` (the default).
+    pub gamma_auto: bool,
     /// n_t as the largest normal angle within a cluster, degrees.
     pub nt_degrees: f32,
     pub iterations: u32,
@@ -103,7 +106,12 @@ impl UiSettings {
             vpl_clusters: f.vpl_clusters.max(1),
             vpls: f.vpls,
             fuzziness: f.fuzziness,
-            gamma: f.gamma,
+            gamma: if f.gamma == AUTO_GAMMA {
+                AUTO_GAMMA_MIN
+            } else {
+                f.gamma
+            },
+            gamma_auto: f.gamma == AUTO_GAMMA,
             nt_degrees: f.normal_threshold.clamp(-1.0, 1.0).acos().to_degrees(),
             iterations: f.iterations,
             exposure,
@@ -153,7 +161,11 @@ impl UiSettings {
             } else {
                 self.fuzziness
             },
-            gamma: self.gamma,
+            gamma: if self.gamma_auto {
+                AUTO_GAMMA
+            } else {
+                self.gamma
+            },
             normal_threshold: self.normal_threshold(),
             iterations: self.iterations,
             weighting: match self.mode {
@@ -213,9 +225,14 @@ impl UiSettings {
         let gate = self
             .plane_gate()
             .map_or(String::new(), |g| format!("_gate{g:.0}"));
+        let gamma = crate::gi::kmeans::gamma_name(if self.gamma_auto {
+            AUTO_GAMMA
+        } else {
+            self.gamma
+        });
         format!(
-            "{mode}_{sp}_{vpl}_N{}_F{}_g{}_nt{:.0}_it{}{gate}",
-            self.vpls, self.fuzziness, self.gamma, self.nt_degrees, self.iterations
+            "{mode}_{sp}_{vpl}_N{}_F{}_g{gamma}_nt{:.0}_it{}{gate}",
+            self.vpls, self.fuzziness, self.nt_degrees, self.iterations
         )
     }
 }

@@ -261,7 +261,16 @@ impl Viewer {
                         );
                     });
                 });
-                ui.add(Slider::new(&mut s.gamma, 1..=r.gamma).text("γ (downsampling)"));
+                ui.horizontal(|ui| {
+                    ui.checkbox(&mut s.gamma_auto, "auto γ").on_hover_text(
+                        "γ from the pixels and K: the largest in 4..16 that keeps 40 sampled \
+                         points a cluster and 19,200 in all (docs/clustering.md)",
+                    );
+                    ui.add_enabled(
+                        !s.gamma_auto,
+                        Slider::new(&mut s.gamma, 1..=r.gamma).text("γ (downsampling)"),
+                    );
+                });
                 let cos = s.normal_threshold();
                 ui.add(
                     Slider::new(&mut s.nt_degrees, 0.0..=180.0)
@@ -335,6 +344,9 @@ impl Viewer {
                     "VPLs {} · SPs {} · SP clusters {} · VPL clusters {}",
                     f.vpls, f.shading_points, f.sp_clusters_used, f.vpl_clusters_used
                 ));
+                if let Some(g) = f.gamma_used {
+                    ui.label(format!("γ used {g}"));
+                }
                 ui.label(format!("shadow rays {}", f.shadow_rays));
             });
     }

@@ -3,6 +3,7 @@
 
 use std::collections::BTreeMap;
 
+use crate::gi::kmeans::{gamma_name, parse_gamma};
 use anyhow::{Context, Result, bail};
 
 /// The stage timings of a row, in the order of the CSV columns (`frame` last).
@@ -31,6 +32,7 @@ pub struct Row {
     pub vpl_clusters: u32,
     pub sp_clusters: u32,
     pub fuzziness: u32,
+    /// γ asked (`kmeans::AUTO_GAMMA` for `auto`, written so in the file).
     pub gamma: u32,
     pub normal_threshold: f32,
     pub iterations: u32,
@@ -118,7 +120,7 @@ fn record(r: &Row) -> Vec<String> {
         r.vpl_clusters.to_string(),
         r.sp_clusters.to_string(),
         r.fuzziness.to_string(),
-        r.gamma.to_string(),
+        gamma_name(r.gamma),
         r.normal_threshold.to_string(),
         r.iterations.to_string(),
     ];
@@ -222,7 +224,7 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
             vpl_clusters: num("vpl_clusters")? as u32,
             sp_clusters: num("sp_clusters")? as u32,
             fuzziness: num("fuzziness")? as u32,
-            gamma: num("gamma")? as u32,
+            gamma: parse_gamma(get("gamma")).or_else(|_| num("gamma").map(|g| g as u32))?,
             normal_threshold: num("normal_threshold")? as f32,
             iterations: num("iterations")? as u32,
             stages_ms: STAGES
@@ -360,7 +362,12 @@ pub(crate) mod tests {
         let csv = to_csv(std::slice::from_ref(&r));
         assert_eq!(csv.lines().count(), 2);
         let back = from_csv(&csv).unwrap();
-        assert_eq!(back, vec![r]);
+        assert_eq!(back, vec![r.clone()]);
+        // γ auto is written as the word and read back.
+        r.gamma = crate::gi::kmeans::AUTO_GAMMA;
+        let csv = to_csv(std::slice::from_ref(&r));
+        assert!(csv.contains(",auto,"), "{csv}");
+        assert_eq!(from_csv(&csv).unwrap(), vec![r]);
     }
 
     #[test]

@@ -3,7 +3,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use crate::gi::kmeans::valid_plane_gate;
+use crate::gi::kmeans::{AUTO_GAMMA, gamma_name, parse_gamma, valid_plane_gate};
 use crate::gi::pipeline::{
     DEFAULT_WEIGHT_EXPONENT, FrameSettings, Weighting, valid_weight_exponent,
 };
@@ -153,6 +153,17 @@ impl FromStr for PlaneGate {
     }
 }
 
+/// A `--gamma` item: `auto` or a factor of at least 1 (`kmeans::parse_gamma`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Gamma(pub u32);
+
+impl FromStr for Gamma {
+    type Err = ();
+    fn from_str(s: &str) -> Result<Self, ()> {
+        parse_gamma(s).map(Gamma).map_err(|_| ())
+    }
+}
+
 /// Parses `--modes`.
 pub fn parse_modes(s: &str) -> Result<Vec<Mode>, String> {
     let mut out = Vec::new();
@@ -206,7 +217,7 @@ impl Sweep {
             sp_clusters: vec![768, 1536, 3072],
             vpl_clusters: vec![1024],
             fuzziness: vec![6],
-            gamma: vec![4],
+            gamma: vec![AUTO_GAMMA],
             weight_exponent: vec![DEFAULT_WEIGHT_EXPONENT],
             plane_gate: vec![None],
             pairs: None,
@@ -220,7 +231,7 @@ impl Sweep {
             sp_clusters: vec![48, 96],
             vpl_clusters: vec![128],
             fuzziness: vec![6],
-            gamma: vec![4],
+            gamma: vec![AUTO_GAMMA],
             weight_exponent: vec![DEFAULT_WEIGHT_EXPONENT],
             plane_gate: vec![None],
             pairs: None,
@@ -243,7 +254,10 @@ impl Sweep {
             s.fuzziness = parse_list("--fuzziness", v)?;
         }
         if let Some(v) = &args.gamma {
-            s.gamma = parse_list("--gamma", v)?;
+            s.gamma = parse_list::<Gamma>("--gamma", v)?
+                .into_iter()
+                .map(|g| g.0)
+                .collect();
         }
         if let Some(v) = &args.weight_exponent {
             s.weight_exponent = parse_list("--weight-exponent", v)?;
@@ -280,9 +294,6 @@ impl Sweep {
         }
         if let Some(f) = self.fuzziness.iter().find(|f| !(1..=16).contains(*f)) {
             return Err(format!("--fuzziness {f}: must be 1..16"));
-        }
-        if self.gamma.contains(&0) {
-            return Err("--gamma 0: must be at least 1".into());
         }
         if let Some(p) = self
             .weight_exponent
@@ -347,7 +358,7 @@ impl Sweep {
                                     sp_clusters: if mode.clusters_sps() { sp } else { 0 },
                                     vpl_clusters: if mode.clusters_vpls() { vpl } else { 0 },
                                     fuzziness: if mode.uses_fuzziness() { f } else { 1 },
-                                    gamma: if mode.clusters_sps() { g } else { 0 },
+                                    gamma: if mode.clusters_sps() { g } else { AUTO_GAMMA },
                                     weight_exponent: if mode.uses_weights() { p } else { 1.0 },
                                     plane_gate_deg: if mode.uses_fuzziness() { gate } else { None },
                                 };
@@ -374,7 +385,7 @@ pub struct Config {
     pub vpl_clusters: u32,
     /// F in effect (1 for hard and vpl-only).
     pub fuzziness: u32,
-    /// γ (0 where no SP clustering runs).
+    /// γ (`AUTO_GAMMA`: the auto rule; also where no SP clustering runs).
     pub gamma: u32,
     /// p of the fuzzy weights (1 where the mode has none).
     pub weight_exponent: f32,
@@ -402,7 +413,7 @@ impl Config {
             s += &format!(" F{}", self.fuzziness);
         }
         if self.mode.clusters_sps() && self.sp_clusters > 0 {
-            s += &format!(" g{}", self.gamma);
+            s += &format!(" g{}", gamma_name(self.gamma));
         }
         if self.mode.uses_weights() && self.weight_exponent != 1.0 {
             s += &format!(" p{}", self.weight_exponent);
@@ -445,7 +456,7 @@ impl Config {
             sp_clusters: self.sp_clusters,
             vpl_clusters: self.vpl_clusters,
             fuzziness: self.fuzziness.max(1),
-            gamma: self.gamma.max(1),
+            gamma: self.gamma,
             weighting: self.mode.weighting(),
             weight_exponent: self.weight_exponent,
             plane_gate_deg: self.plane_gate_deg,
@@ -496,11 +507,11 @@ mod tests {
         assert_eq!(
             labels,
             [
-                "hard 48/128 g4",
-                "uniform 48/128 F6 g4",
-                "uniform 48/128 F6 g4 gate20",
-                "weighted 48/128 F6 g4",
-                "weighted 48/128 F6 g4 gate20",
+                "hard 48/128 gauto",
+                "uniform 48/128 F6 gauto",
+                "uniform 48/128 F6 gauto gate20",
+                "weighted 48/128 F6 gauto",
+                "weighted 48/128 F6 gauto gate20",
             ]
         );
         let c = s.configs()[2];
@@ -546,6 +557,26 @@ mod tests {
             ..Default::default()
         };
         assert!(Sweep::parse(&g, Sweep::quick_default()).is_err());
+        // γ: auto (the default) and factors, auto reaching the frame settings as it is.
+        let g = SweepArgs {
+            gamma: Some("auto,8".into()),
+            ..Default::default()
+        };
+        let sw = Sweep::parse(&g, Sweep::quick_default()).unwrap();
+        assert_eq!(sw.gamma, vec![AUTO_GAMMA, 8]);
+        assert_eq!(Sweep::quick_default().gamma, vec![AUTO_GAMMA]);
+        let c = sw.configs();
+        let weighted: Vec<_> = c.iter().filter(|c| c.mode == Mode::Weighted).collect();
+        assert_eq!(weighted[0].label(), "weighted 48/128 F6 gauto");
+        assert_eq!(
+            weighted[0].settings(&FrameSettings::default()).gamma,
+            AUTO_GAMMA
+        );
+        assert_eq!(
+            weighted[0].label_ran(true, true, Some(5)),
+            "weighted 48/128 F6 g5"
+        );
+        assert_eq!(weighted[1].settings(&FrameSettings::default()).gamma, 8);
         let k = SweepArgs {
             sp_clusters: Some("0".into()),
             ..Default::default()
@@ -595,10 +626,10 @@ mod tests {
         assert_eq!(
             labels,
             [
-                "hard 48/128 g4",
-                "hard 96/256 g4",
-                "weighted 48/128 F6 g4",
-                "weighted 96/256 F6 g4",
+                "hard 48/128 gauto",
+                "hard 96/256 gauto",
+                "weighted 48/128 F6 gauto",
+                "weighted 96/256 F6 gauto",
                 "vpl-only -/128",
                 "vpl-only -/256"
             ]

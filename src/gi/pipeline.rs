@@ -70,7 +70,8 @@ pub struct FrameSettings {
     pub sp_clusters: u32,
     /// F: SP clusters per pixel (forced to 1 by `Weighting::Hard`).
     pub fuzziness: u32,
-    /// γ: SP downsampling factor for the k-means iterations.
+    /// γ: SP downsampling factor for the k-means iterations; `kmeans::AUTO_GAMMA` (the default) lets
+    /// `kmeans::auto_gamma` choose it from the pixels and K.
     pub gamma: u32,
     /// n_t of Eq. (7), a cosine.
     pub normal_threshold: f32,
@@ -138,7 +139,7 @@ impl Default for FrameSettings {
             vpl_clusters: 1024,
             sp_clusters: 3072,
             fuzziness: 6,
-            gamma: 4,
+            gamma: super::kmeans::AUTO_GAMMA,
             normal_threshold: 0.866,
             iterations: 10,
             weighting: Weighting::InverseDistance,
