@@ -1078,6 +1078,25 @@ mod tests {
     }
 
     #[test]
+    fn auto_gamma_reaches_the_frame_and_the_file_names() {
+        let s = UiSettings::from_frame_settings(&FrameSettings::default(), 1.0);
+        assert!(s.gamma_auto);
+        assert_eq!(s.frame_settings(64, 48).gamma, AUTO_GAMMA);
+        assert!(s.short().contains("_gauto_"), "{}", s.short());
+        // Unticked, the slider's γ is used (a γ from the command line arrives unticked).
+        let fixed = FrameSettings {
+            gamma: 8,
+            ..Default::default()
+        };
+        let mut s = UiSettings::from_frame_settings(&fixed, 1.0);
+        assert!(!s.gamma_auto);
+        assert_eq!(s.frame_settings(64, 48).gamma, 8);
+        assert!(s.short().contains("_g8_"), "{}", s.short());
+        s.gamma_auto = true;
+        assert_eq!(s.frame_settings(64, 48).gamma, AUTO_GAMMA);
+    }
+
+    #[test]
     fn command_line_values_beyond_the_sliders_survive_the_panel() {
         let fs = FrameSettings {
             vpls: 100_000,

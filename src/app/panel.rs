@@ -210,6 +210,8 @@ impl Viewer {
                     }
                 });
                 ui.separator();
+                // The γ the last frame sampled with: the slider starts there when auto is unticked.
+                let gamma_used = self.latest.as_ref().and_then(|l| l.frame.gamma_used);
                 let s = &mut self.s;
                 let r = &self.ranges;
                 ui.horizontal(|ui| {
@@ -262,10 +264,16 @@ impl Viewer {
                     });
                 });
                 ui.horizontal(|ui| {
-                    ui.checkbox(&mut s.gamma_auto, "auto γ").on_hover_text(
+                    let auto = ui.checkbox(&mut s.gamma_auto, "auto γ").on_hover_text(
                         "γ from the pixels and K: the largest in 4..16 that keeps 40 sampled \
                          points a cluster and 19,200 in all (docs/clustering.md)",
                     );
+                    if auto.changed()
+                        && !s.gamma_auto
+                        && let Some(g) = gamma_used
+                    {
+                        s.gamma = g.clamp(1, r.gamma);
+                    }
                     ui.add_enabled(
                         !s.gamma_auto,
                         Slider::new(&mut s.gamma, 1..=r.gamma).text("γ (downsampling)"),
