@@ -138,6 +138,15 @@ impl UiSettings {
         (self.plane_gate_on && self.mode != Mode::Hard).then_some(self.plane_gate_deg)
     }
 
+    /// γ as the frame settings take it: `AUTO_GAMMA` when auto is ticked, else the slider's.
+    pub fn gamma_setting(&self) -> u32 {
+        if self.gamma_auto {
+            AUTO_GAMMA
+        } else {
+            self.gamma
+        }
+    }
+
     pub fn normal_threshold(&self) -> f32 {
         self.nt_degrees.to_radians().cos()
     }
@@ -161,11 +170,7 @@ impl UiSettings {
             } else {
                 self.fuzziness
             },
-            gamma: if self.gamma_auto {
-                AUTO_GAMMA
-            } else {
-                self.gamma
-            },
+            gamma: self.gamma_setting(),
             normal_threshold: self.normal_threshold(),
             iterations: self.iterations,
             weighting: match self.mode {
@@ -225,11 +230,7 @@ impl UiSettings {
         let gate = self
             .plane_gate()
             .map_or(String::new(), |g| format!("_gate{g:.0}"));
-        let gamma = crate::gi::kmeans::gamma_name(if self.gamma_auto {
-            AUTO_GAMMA
-        } else {
-            self.gamma
-        });
+        let gamma = crate::gi::kmeans::gamma_name(self.gamma_setting());
         format!(
             "{mode}_{sp}_{vpl}_N{}_F{}_g{gamma}_nt{:.0}_it{}{gate}",
             self.vpls, self.fuzziness, self.nt_degrees, self.iterations
