@@ -8,6 +8,7 @@
 //! - `camera.rs`: fly / orbit camera. `settings.rs`: the bookmarks file. `screenshot.rs`: file output.
 
 pub mod camera;
+pub mod lights;
 pub mod motion;
 pub mod panel;
 pub mod reproject;
@@ -390,6 +391,10 @@ pub struct Viewer {
     composed: Option<(u64, String, Vec<u8>, Option<&'static str>)>,
     /// The camera the image area shows.
     pub shown_camera: Option<crate::scene::Camera>,
+    /// The lights as the panel edits them (the scene's until changed).
+    pub lights: lights::LightSet,
+    /// GPU ms of the last light change: (VPL trace, VPL clustering).
+    pub last_relight: Option<(f64, f64)>,
     pub script_started: Option<Instant>,
     /// Set when the viewer should close (scripted run done, or failed).
     pub exit: Option<Result<(), String>>,
@@ -466,6 +471,11 @@ impl Viewer {
             motion: motion::Motion::default(),
             composed: None,
             shown_camera: None,
+            lights: lights::LightSet {
+                lights: Vec::new(),
+                emitter_scale: 1.0,
+            },
+            last_relight: None,
             script_started: None,
             exit: None,
             worker_gone: false,
@@ -509,7 +519,7 @@ impl Viewer {
                 self.live_error = None;
                 self.start_camera = None;
                 self.status.clear();
-                self.loaded(info);
+                self.loaded(*info);
                 return true;
             }
             Ok(Reply::LoadFailed(msg)) => msg,
@@ -547,8 +557,13 @@ impl Viewer {
         if self.status.starts_with("loading") {
             self.status.clear();
         }
+        self.lights = lights::LightSet {
+            lights: info.lights.clone(),
+            emitter_scale: 1.0,
+        };
+        self.last_relight = None;
         if !info.has_light {
-            let dark = "the scene has no light; add one with --sun or --point";
+            let dark = "the scene has no light; add one in the Lights section (or --sun, --point)";
             self.status = if self.status.is_empty() {
                 dark.into()
             } else {
@@ -766,7 +781,7 @@ impl Viewer {
             };
             changed = true;
             match reply {
-                Reply::Loaded(info) => self.loaded(info),
+                Reply::Loaded(info) => self.loaded(*info),
                 Reply::LoadFailed(msg) => {
                     self.worker_gone = true;
                     self.status = msg.clone();
@@ -775,6 +790,9 @@ impl Viewer {
                     }
                 }
                 Reply::Frame(r) => {
+                    if r.relit.is_some() {
+                        self.last_relight = r.relit;
+                    }
                     self.gi_frames += 1;
                     self.gi_ms_sum += r.wall_ms;
                     let gpu_ms = r.frame.timings_ms.get("frame").copied().unwrap_or(0.0);
@@ -988,6 +1006,21 @@ impl Viewer {
             || (self.s.temporal
                 && self.latest.is_some()
                 && self.shown_camera.as_ref() != Some(&self.cam.to_camera()))
+    }
+
+    /// The shortest time between window frames: while the worker renders on the same CPU cores
+    /// (a software adapter), window frames are paced to 25 a second so that they leave it most of
+    /// the cores; otherwise 60.
+    pub fn min_frame(&self) -> Duration {
+        let busy = self
+            .latest
+            .as_ref()
+            .is_none_or(|r| r.job.id != self.pending);
+        if busy && self.info.as_ref().is_some_and(|i| i.software) {
+            Duration::from_millis(40)
+        } else {
+            Duration::from_millis(16)
+        }
     }
 
     /// A window frame was presented at `now`: the camera change it shows is measured.
@@ -1270,6 +1303,43 @@ mod tests {
         v.save_exr();
         assert!(v.last_shot.contains("_final_"), "{}", v.last_shot);
         std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn lights_move_without_a_restart() {
+        let mut s = UiSettings::from_frame_settings(&FrameSettings::default(), 1.0);
+        (s.vpls, s.vpl_clusters, s.sp_clusters, s.temporal) = (256, 32, 64, true);
+        let mut v = viewer(s);
+        poll_until(&mut v, |v| v.info.is_some());
+        v.schedule();
+        poll_until(&mut v, |v| v.latest.is_some());
+        let lum = |v: &Viewer| metrics::mean_luminance(&v.latest.as_ref().unwrap().frame.radiance);
+        let before = lum(&v);
+        // The ceiling light off, a point light in the middle of the box.
+        let bounds = v.info.as_ref().unwrap().bounds;
+        let mut set = v.lights.clone();
+        set.emitter_scale = 0.0;
+        set.lights.push(lights::new_point(bounds));
+        v.set_lights(set);
+        assert!(v.status.is_empty(), "{}", v.status);
+        v.schedule();
+        poll_until(&mut v, |v| v.last_relight.is_some());
+        let r = v.latest.as_ref().unwrap();
+        assert!(r.frame.radiance.iter().flatten().all(|c| c.is_finite()));
+        assert!(r.frame.vpls > 0);
+        let (trace, cluster) = v.last_relight.unwrap();
+        assert!(trace > 0.0 && cluster > 0.0, "{trace} {cluster}");
+        assert!(
+            (lum(&v) - before).abs() > 1e-3 * before,
+            "{} vs {before}",
+            lum(&v)
+        );
+        // Nothing left that emits: the panel says so.
+        v.set_lights(lights::LightSet {
+            lights: vec![],
+            emitter_scale: 0.0,
+        });
+        assert!(v.status.contains("no light"), "{}", v.status);
     }
 
     #[test]

@@ -44,9 +44,6 @@ pub fn surface_size(size: winit::dpi::PhysicalSize<u32>, max_side: u32) -> (u32,
 #[derive(Debug, Clone, Copy)]
 pub struct Wake;
 
-/// Frames are paced to at most this rate, leaving the CPU to the GI worker on software drivers.
-const MIN_FRAME: Duration = Duration::from_millis(16);
-
 struct Gfx {
     window: Arc<Window>,
     surface: wgpu::Surface<'static>,
@@ -436,7 +433,11 @@ impl ApplicationHandler<Wake> for App {
     fn about_to_wait(&mut self, el: &ActiveEventLoop) {
         match self.redraw_at {
             Some(t) => {
-                let t = t.max(self.last_frame + MIN_FRAME);
+                let min = self
+                    .viewer
+                    .as_ref()
+                    .map_or(Duration::from_millis(16), |v| v.min_frame());
+                let t = t.max(self.last_frame + min);
                 if Instant::now() >= t {
                     self.redraw_at = None;
                     if let Some(g) = &self.gfx {

@@ -28,7 +28,12 @@ pub struct SceneInfo {
     pub bounds: (Vec3, Vec3),
     pub triangles: usize,
     pub has_light: bool,
+    /// The scene's punctual lights and emissive triangles (the panel edits the lights).
+    pub lights: Vec<crate::scene::PunctualLight>,
+    pub emissive_triangles: usize,
     pub adapter: String,
+    /// The worker's adapter runs on the CPU (lavapipe): window frames share its cores.
+    pub software: bool,
     /// The most pixels a GI frame may have on the worker's device (`pipeline::max_pixels`).
     pub max_pixels: u64,
 }
@@ -46,6 +51,9 @@ pub struct FrameJob {
 
 pub enum Job {
     Frame(FrameJob),
+    /// Lights that move: the scene's punctual lights and the factor on its emissive materials
+    /// (`Renderer::set_lights`), applied before the next frame.
+    Lights(Vec<crate::scene::PunctualLight>, f32),
     /// The unclustered reference of this view; `settings.control` must be set.
     Reference(FrameJob),
 }
@@ -65,10 +73,12 @@ pub struct Rendered {
     pub wall_ms: f64,
     /// The direct light accumulated at rest: (estimates, samples a pixel, GPU ms of the last one).
     pub refined: Option<(u32, u64, f64)>,
+    /// GPU ms of (VPL trace, VPL clustering) when this frame traced new VPLs (a light change).
+    pub relit: Option<(f64, f64)>,
 }
 
 pub enum Reply {
-    Loaded(SceneInfo),
+    Loaded(Box<SceneInfo>),
     LoadFailed(String),
     Frame(Box<Rendered>),
     /// The direct light (emission + direct) of frame `id` averaged over `estimates` renders of it
@@ -161,20 +171,24 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
     lower_priority();
     let ctx = GpuContext::new_headless()?;
     let mut renderer = Renderer::new(&ctx, scene)?;
-    send(Reply::Loaded(SceneInfo {
+    send(Reply::Loaded(Box::new(SceneInfo {
         spec: spec.to_string(),
         cameras: scene.cameras.clone(),
         default_camera: scene.default_camera(),
         bounds: scene.bounds(),
         triangles: scene.triangles.len(),
         has_light: scene.has_light(),
+        lights: scene.lights.clone(),
+        emissive_triangles: scene.emissive_triangle_count(),
         adapter: ctx.adapter_name.clone(),
+        software: ctx.software,
         max_pixels: crate::gi::pipeline::max_pixels(&ctx, crate::gi::pipeline::PIXEL_BYTES),
-    }));
+    })));
     let mut cache = PointCache::default();
     let mut reference: Option<FrameJob> = None;
     let mut frame: Option<FrameJob> = None;
     let mut accumulation: Option<Accumulation> = None;
+    let mut lights: Option<(Vec<crate::scene::PunctualLight>, f32)> = None;
     loop {
         if reference.is_none() && frame.is_none() {
             // Idle: refine the direct light of the frame at rest, or wait for a job.
@@ -183,7 +197,7 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
                 .filter(|a| a.estimates < MAX_ESTIMATES)
             {
                 Some(a) => match jobs.try_recv() {
-                    Ok(j) => take(j, &mut reference, &mut frame),
+                    Ok(j) => take(j, &mut reference, &mut frame, &mut lights),
                     Err(mpsc::TryRecvError::Empty) => {
                         match crate::panic_guard::quietly(|| a.refine(&mut renderer)) {
                             Ok(Ok(reply)) => send(reply),
@@ -201,7 +215,7 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
                     Err(mpsc::TryRecvError::Disconnected) => return Ok(()),
                 },
                 None => match jobs.recv() {
-                    Ok(j) => take(j, &mut reference, &mut frame),
+                    Ok(j) => take(j, &mut reference, &mut frame, &mut lights),
                     Err(_) => return Ok(()),
                 },
             }
@@ -210,10 +224,15 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
         // Drop stale jobs: only the newest of each kind matters.
         loop {
             match jobs.try_recv() {
-                Ok(j) => take(j, &mut reference, &mut frame),
+                Ok(j) => take(j, &mut reference, &mut frame, &mut lights),
                 Err(mpsc::TryRecvError::Empty) => break,
                 Err(mpsc::TryRecvError::Disconnected) => return Ok(()),
             }
+        }
+        if let Some((l, scale)) = lights.take()
+            && let Err(msg) = crate::panic_guard::quietly(|| renderer.set_lights(&l, scale))
+        {
+            send(Reply::Failed(format!("changing the lights: {msg}")));
         }
         if let Some(job) = reference.take() {
             if job
@@ -246,9 +265,15 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
     }
 }
 
-fn take(j: Job, reference: &mut Option<FrameJob>, frame: &mut Option<FrameJob>) {
+fn take(
+    j: Job,
+    reference: &mut Option<FrameJob>,
+    frame: &mut Option<FrameJob>,
+    lights: &mut Option<(Vec<crate::scene::PunctualLight>, f32)>,
+) {
     match j {
         Job::Frame(f) => *frame = Some(f),
+        Job::Lights(l, scale) => *lights = Some((l, scale)),
         Job::Reference(f) => {
             if let Some(old) = reference.replace(f)
                 && let Some(c) = &old.settings.control
@@ -347,6 +372,13 @@ fn render(
         _ => None,
     };
     let wall_ms = t.elapsed().as_secs_f64() * 1e3;
+    let relit = match &renderer.vpl_set {
+        Some((_, key, _)) if cache.vpl_key.is_some_and(|k| k != *key) => {
+            let ms = |k: &str| frame.timings_ms.get(k).copied().unwrap_or(0.0);
+            Some((ms("vpl_trace"), ms("vpl_cluster")))
+        }
+        _ => None,
+    };
     let pos = |p: &[f32; 4]| Vec3::new(p[0], p[1], p[2]);
     match &renderer.vpl_set {
         Some((set, key, _)) if cache.vpl_key != Some(*key) => {
@@ -380,6 +412,7 @@ fn render(
         lights_clustered,
         wall_ms,
         refined: None,
+        relit,
     })
 }
 
