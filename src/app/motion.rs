@@ -21,7 +21,7 @@ pub struct Motion {
     pub rest: Option<(f64, u32, u32)>,
 }
 
-/// `motion` and `rest` of the viewer's stats JSON (the DESIGN.md contract).
+/// `motion` and `rest` of the viewer's stats JSON (docs/design.md, "Contracts added later").
 #[derive(Debug, Serialize, PartialEq)]
 pub struct MotionStats {
     pub image_latency_ms_p95: f64,
