@@ -1306,6 +1306,45 @@ mod tests {
     }
 
     #[test]
+    fn the_direct_light_accumulates_at_rest() {
+        let mut s = UiSettings::from_frame_settings(&FrameSettings::default(), 1.0);
+        (s.vpls, s.vpl_clusters, s.sp_clusters, s.temporal) = (256, 32, 64, true);
+        s.direct_samples = 2;
+        let mut v = viewer(s);
+        poll_until(&mut v, |v| v.info.is_some());
+        v.schedule();
+        poll_until(&mut v, |v| {
+            v.latest
+                .as_ref()
+                .and_then(|r| r.refined)
+                .is_some_and(|(n, ..)| n >= 3)
+        });
+        let r = v.latest.as_ref().unwrap();
+        let (n, spp, ms) = r.refined.unwrap();
+        assert_eq!(spp, n as u64 * 2);
+        assert!(ms > 0.0);
+        // The image shown is the running mean plus the frame's indirect light.
+        for ((p, d), i) in r
+            .frame
+            .radiance
+            .iter()
+            .zip(&r.frame.direct)
+            .zip(&r.frame.indirect)
+        {
+            assert_eq!(*p, [d[0] + i[0], d[1] + i[1], d[2] + i[2]]);
+        }
+        // A change starts a new frame, which accumulates from its own first estimate.
+        v.s.seed += 1;
+        v.schedule();
+        let id = v.pending;
+        poll_until(&mut v, |v| {
+            v.latest
+                .as_ref()
+                .is_some_and(|r| r.job.id == id && r.refined.is_some())
+        });
+    }
+
+    #[test]
     fn lights_move_without_a_restart() {
         let mut s = UiSettings::from_frame_settings(&FrameSettings::default(), 1.0);
         (s.vpls, s.vpl_clusters, s.sp_clusters, s.temporal) = (256, 32, 64, true);
