@@ -10,7 +10,9 @@ struct VisParams {
     num_lights: u32,
     // Words per row: ceil(num_lights / 32).
     words: u32,
-    _a: u32,
+    // Rows of the previous frame's matrix (same lights) whose kept representatives may be copied
+    // instead of traced: 0 for none (temporal reuse off, or the lights changed).
+    reuse_rows: u32,
 }
 
 @group(1) @binding(1) var<uniform> params: VisParams;
@@ -25,6 +27,8 @@ fn light_texel(i: u32) -> vec4<f32> {
     return textureLoad(lights_tex, vec2<u32>(i & 4095u, i >> 12u), 0);
 }
 @group(1) @binding(5) var<storage, read_write> bits: array<u32>;
+// The previous frame's matrix (one word when not reused).
+@group(1) @binding(6) var<storage, read> prev_bits: array<u32>;
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
@@ -35,6 +39,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let k = i / params.words;
     let w = i % params.words;
     let rep = rep_points[2u * k];
+    // A representative the warm start kept (normal w = 1) with the same lights sees what it saw.
+    if k < params.reuse_rows && rep.w > 0.0 && rep_points[2u * k + 1u].w == 1.0 {
+        bits[i] = prev_bits[i];
+        return;
+    }
     var word = 0u;
     if rep.w > 0.0 {
         let p = rep.xyz;

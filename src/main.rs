@@ -724,6 +724,7 @@ fn render(a: RenderArgs) -> Result<()> {
                 punctual_lights: scene.lights.len() as u64,
                 sp_iterations: frame.sp_iterations,
                 sp_warm_kept: frame.sp_warm_kept,
+                visibility_rows_reused: frame.visibility_rows_reused,
             },
             passes: frame.passes.iter().map(|s| s.to_string()).collect(),
             timings_ms,

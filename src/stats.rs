@@ -61,6 +61,8 @@ pub struct Counts {
     /// SP centroids a temporal warm start kept from the previous render (absent: a cold start).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sp_warm_kept: Option<u32>,
+    /// Rows of the visibility matrix copied from the previous render (kept representatives).
+    pub visibility_rows_reused: u32,
 }
 
 #[derive(Clone, Debug, Serialize)]

@@ -359,6 +359,9 @@ pub struct Frame {
     pub sp_iterations: u32,
     /// SP centroids a temporal warm start kept from the previous frame (`None`: a cold start).
     pub sp_warm_kept: Option<u32>,
+    /// Rows of the visibility matrix copied from the previous frame instead of traced (kept
+    /// representatives, same lights).
+    pub visibility_rows_reused: u32,
 }
 
 /// What a light list was built for: (K, n_t bits, iterations, seed, VPLs, the VPL set's trace).
@@ -395,6 +398,8 @@ pub struct Renderer<'a> {
     pub lights: Option<(LightList, LightKey, f64)>,
     /// The last frame's SP clustering (for views and tests).
     pub sp_clustering: Option<super::kmeans::Clustering>,
+    /// The last frame's visibility matrix and the light list it was traced against.
+    last_visibility: Option<(super::visibility::Previous, LightKey)>,
 }
 
 impl<'a> Renderer<'a> {
@@ -425,6 +430,7 @@ impl<'a> Renderer<'a> {
             vpl_traces: 0,
             lights: None,
             sp_clustering: None,
+            last_visibility: None,
             bvh,
             gpu,
         })
@@ -583,6 +589,13 @@ impl<'a> Renderer<'a> {
         ))
     }
 
+    /// The last clustered frame's visibility bit matrix and its words per row (for tests).
+    pub fn last_visibility(&self) -> Option<(&wgpu::Buffer, u32)> {
+        self.last_visibility
+            .as_ref()
+            .map(|(p, _)| (&p.bits, p.words))
+    }
+
     /// The last frame's shading points, 4 × vec4 each (`common/gbuffer.wgsl`), for tests and views.
     pub fn last_gbuffer(&self) -> Result<Vec<[f32; 4]>> {
         match &self.gbuffer {
@@ -645,6 +658,7 @@ impl<'a> Renderer<'a> {
             positions: Vec::new(),
             sp_iterations: 0,
             sp_warm_kept: None,
+            visibility_rows_reused: 0,
         })
     }
 
@@ -685,7 +699,7 @@ impl<'a> Renderer<'a> {
         let mut sp_used = 0;
         let mut gamma_used = None;
         let mut num_lights = 0;
-        let (mut sp_iterations, mut sp_warm_kept) = (0, None);
+        let (mut sp_iterations, mut sp_warm_kept, mut rows_reused) = (0, None, 0);
         let previous = self.sp_clustering.take().filter(|_| s.temporal);
         if plan.indirect {
             let lights = &self.lights.as_ref().unwrap().0;
@@ -722,6 +736,11 @@ impl<'a> Renderer<'a> {
                 )?;
                 sp_iterations = c.iterations_run;
                 sp_warm_kept = c.warm_kept;
+                let light_key = self.lights.as_ref().unwrap().1;
+                let previous = self
+                    .last_visibility
+                    .take()
+                    .filter(|(_, key)| s.temporal && c.warm_kept.is_some() && *key == light_key);
                 let (bits, words) = self.visibility.record(
                     ctx,
                     &self.gpu,
@@ -730,6 +749,7 @@ impl<'a> Renderer<'a> {
                     &lights.buffer,
                     num_lights,
                     c.k(),
+                    previous.as_ref().map(|p| &p.0),
                 );
                 self.shade.record(
                     ctx,
@@ -755,7 +775,27 @@ impl<'a> Renderer<'a> {
                 );
                 let reps: Vec<u32> = ctx.read_buffer(&c.reps, c.k() as usize * 2)?;
                 sp_used = reps.chunks(2).filter(|r| r[1] != u32::MAX).count() as u32;
-                indirect_rays = sp_used as u64 * num_lights as u64;
+                if let Some((p, _)) = &previous
+                    && p.words == words
+                {
+                    // Rows copied, not traced: kept representatives below the previous row count.
+                    let points: Vec<[f32; 4]> =
+                        ctx.read_buffer(&c.rep_points, c.k() as usize * 2)?;
+                    rows_reused = points
+                        .chunks(2)
+                        .take(p.rows as usize)
+                        .filter(|r| r[0][3] > 0.0 && r[1][3] == 1.0)
+                        .count() as u32;
+                }
+                indirect_rays = (sp_used - rows_reused) as u64 * num_lights as u64;
+                self.last_visibility = Some((
+                    super::visibility::Previous {
+                        bits,
+                        rows: c.k(),
+                        words,
+                    },
+                    light_key,
+                ));
                 gamma_used = Some(c.params.gamma);
                 self.sp_clustering = Some(c);
             } else {
@@ -848,6 +888,7 @@ impl<'a> Renderer<'a> {
             positions: sps.chunks(4).map(|sp| sp[0]).collect(),
             sp_iterations,
             sp_warm_kept,
+            visibility_rows_reused: rows_reused,
         })
     }
 }
