@@ -252,3 +252,110 @@ fn direct_light_sub_ranges_with_many_lights_match_cpu_twin() {
         assert!(lit * 2 > w * h, "only {lit} pixels lit");
     }
 }
+
+/// A closed room (the cube −1..1, two triangles a wall) lit by a point light, and in front of the
+/// back wall a quad (a square turned 45°) split along its vertical diagonal x = 0. At an odd width the
+/// centre pixel column's rays have x exactly 0 (the camera sits on x = 0 looking down −z): they run
+/// exactly through the quad's shared edge. A non-watertight triangle test (Möller–Trumbore as before,
+/// which also rejected −0.0 barycentrics) left a dotted black crack there; every primary ray must hit
+/// and every pixel be lit.
+#[test]
+fn quad_diagonal_on_the_centre_line_has_no_crack() {
+    use fuzzy_vpl::scene::{LightKind, Material, PunctualLight, Triangle};
+    let ctx = common::gpu();
+    let mut triangles = Vec::new();
+    let mut quad = |a: Vec3, b: Vec3, c: Vec3, d: Vec3| {
+        for p in [[a, b, c], [a, c, d]] {
+            let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
+            triangles.push(Triangle {
+                p,
+                n: [n; 3],
+                uv: [glam::Vec2::ZERO; 3],
+                material: 0,
+            });
+        }
+    };
+    let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    // The room's six walls, facing inwards.
+    quad(
+        v(-1., -1., -1.),
+        v(1., -1., -1.),
+        v(1., 1., -1.),
+        v(-1., 1., -1.),
+    );
+    quad(
+        v(-1., -1., 1.),
+        v(-1., 1., 1.),
+        v(1., 1., 1.),
+        v(1., -1., 1.),
+    );
+    quad(
+        v(-1., -1., -1.),
+        v(-1., 1., -1.),
+        v(-1., 1., 1.),
+        v(-1., -1., 1.),
+    );
+    quad(
+        v(1., -1., -1.),
+        v(1., -1., 1.),
+        v(1., 1., 1.),
+        v(1., 1., -1.),
+    );
+    quad(
+        v(-1., -1., -1.),
+        v(-1., -1., 1.),
+        v(1., -1., 1.),
+        v(1., -1., -1.),
+    );
+    quad(
+        v(-1., 1., -1.),
+        v(1., 1., -1.),
+        v(1., 1., 1.),
+        v(-1., 1., 1.),
+    );
+    // The quad: its first two triangles share the edge from (0, −0.5) to (0, 0.5).
+    quad(
+        v(0., -0.5, -0.5),
+        v(0.5, 0., -0.5),
+        v(0., 0.5, -0.5),
+        v(-0.5, 0., -0.5),
+    );
+    let s = Scene {
+        name: "crack-room".into(),
+        triangles,
+        materials: vec![Material::default()],
+        lights: vec![PunctualLight {
+            kind: LightKind::Point,
+            position: v(0.3, 0.6, 0.5),
+            direction: Vec3::NEG_Z,
+            color: Vec3::ONE,
+            intensity: 1.0,
+        }],
+        ..Default::default()
+    };
+    let cam = fuzzy_vpl::scene::Camera::look_at("c", v(0., 0., 0.9), v(0., 0., -1.), Vec3::Y, 1.2);
+    let (w, h) = (161u32, 121u32);
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let fs = FrameSettings {
+        vpls: 1024,
+        ..settings(w, h, 4)
+    };
+    let f = r.render(&cam, &fs).unwrap();
+    assert!(common::all_finite(&f.radiance));
+    let gbuf = r.last_gbuffer().unwrap();
+    let misses: Vec<u32> = (0..w * h)
+        .filter(|&px| !ShadingPoint::from_gpu(&gbuf[px as usize * 4..px as usize * 4 + 4]).valid)
+        .collect();
+    assert!(
+        misses.is_empty(),
+        "{} primary rays miss (cracks), e.g. pixels {:?}",
+        misses.len(),
+        &misses[..misses.len().min(8)]
+    );
+    let black = f
+        .radiance
+        .iter()
+        .filter(|c| c[0] + c[1] + c[2] <= 0.0)
+        .count();
+    assert_eq!(black, 0, "{black} black pixels");
+}
