@@ -645,3 +645,26 @@ fn auto_gamma_is_written_as_chosen() {
     assert_eq!(common::error_lines(&err).len(), 1, "{err}");
     assert!(err.contains("--gamma"), "{err}");
 }
+
+/// A 1 TiB sparse file as the scene is refused with exit 2 and one line at once (it used to abort
+/// with exit 134 reserving 1 TiB). Asserted under 1 s for the whole process (measured: ~3 ms).
+#[test]
+fn a_terabyte_scene_file_is_refused_at_once() {
+    let d = common::scratch("cli-sparse");
+    for name in ["huge.glb", "huge.gltf"] {
+        let p = d.join(name);
+        std::fs::File::create(&p).unwrap().set_len(1 << 40).unwrap();
+        let t = std::time::Instant::now();
+        let (code, _, err) = run(&["info", p.to_str().unwrap()]);
+        let secs = t.elapsed().as_secs_f64();
+        assert_eq!(code, 2, "{err}");
+        let lines = common::error_lines(&err);
+        assert_eq!(lines.len(), 1, "{err}");
+        assert!(
+            lines[0].contains(name) && lines[0].contains("larger than"),
+            "{err}"
+        );
+        assert!(secs < 1.0, "{name}: {secs} s");
+        std::fs::remove_file(&p).unwrap();
+    }
+}

@@ -12,6 +12,7 @@
 
 mod accessor;
 mod images;
+pub mod read;
 mod uri;
 
 use super::{
@@ -41,55 +42,11 @@ const DEGENERATE_AREA_REL: f64 = 1e-12;
 /// collinear vertices: its height is below f32 precision relative to its length).
 const DEGENERATE_SLIVER_REL: f64 = 1e-7;
 
-/// Reads a file a scene is made of (the scene, its external buffers and images). Anything but a
-/// regular file is refused: a FIFO would block forever, `/dev/zero` never ends, a directory is no
-/// file. Opened non-blocking so that a FIFO without a writer does not block before the check.
-pub(crate) fn read_regular(path: &Path) -> Result<Vec<u8>, String> {
-    use std::io::Read;
-    let mut opts = std::fs::OpenOptions::new();
-    opts.read(true);
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::OpenOptionsExt;
-        opts.custom_flags(libc::O_NONBLOCK);
-    }
-    let mut f = opts.open(path).map_err(|e| e.to_string())?;
-    let meta = f.metadata().map_err(|e| e.to_string())?;
-    if !meta.is_file() {
-        let t = meta.file_type();
-        #[cfg(unix)]
-        let kind = {
-            use std::os::unix::fs::FileTypeExt;
-            if t.is_dir() {
-                "a directory"
-            } else if t.is_fifo() {
-                "a FIFO"
-            } else if t.is_socket() {
-                "a socket"
-            } else if t.is_char_device() || t.is_block_device() {
-                "a device"
-            } else {
-                "not a file"
-            }
-        };
-        #[cfg(not(unix))]
-        let kind = if t.is_dir() {
-            "a directory"
-        } else {
-            "not a file"
-        };
-        return Err(format!("not a regular file ({kind})"));
-    }
-    let mut out = Vec::with_capacity(meta.len() as usize);
-    f.read_to_end(&mut out).map_err(|e| e.to_string())?;
-    Ok(out)
-}
-
 /// Loads a `.gltf` (external files resolved relative to it, or `data:` URIs) or `.glb` file.
 pub fn load_path(path: &Path) -> Result<Scene, SceneError> {
     let file = path.display().to_string();
     guarded(&file, || {
-        let bytes = read_regular(path).map_err(|e| format!("cannot read file: {e}"))?;
+        let bytes = read::read_scene_file(path).map_err(|e| format!("cannot read file: {e}"))?;
         let base = match path.parent() {
             Some(p) if !p.as_os_str().is_empty() => p,
             _ => Path::new("."),
@@ -317,7 +274,7 @@ fn load_buffers(
                 };
                 let data = match uri::resolve(u, base).map_err(|e| format!("buffer {i}: {e}"))? {
                     uri::Resolved::Data(d) => d,
-                    uri::Resolved::File(p) => read_regular(&p)
+                    uri::Resolved::File(p) => read::read_buffer_file(&p, buffer.length() as u64)
                         .map_err(|e| format!("buffer {i}: cannot read '{}': {e}", p.display()))?,
                 };
                 (data, label)
