@@ -350,6 +350,29 @@ struct InfoArgs {
     scene: SceneArgs,
 }
 
+/// The command line with every option that takes a value accepting a negative number as that value
+/// (`--light-scale -1` is then refused by the option's own check, with its range, rather than read
+/// as an unknown flag `-1`).
+fn command() -> clap::Command {
+    fn negatives(c: clap::Command) -> clap::Command {
+        let ids: Vec<clap::Id> = c
+            .get_arguments()
+            .filter(|a| !a.is_positional() && a.get_action().takes_values())
+            .map(|a| a.get_id().clone())
+            .collect();
+        let c = ids
+            .iter()
+            .fold(c, |c, id| c.mut_arg(id, |a| a.allow_negative_numbers(true)));
+        let subs: Vec<String> = c
+            .get_subcommands()
+            .map(|s| s.get_name().to_string())
+            .collect();
+        subs.iter()
+            .fold(c, |c, name| c.mut_subcommand(name, negatives))
+    }
+    negatives(<Cli as clap::CommandFactory>::command())
+}
+
 /// An error that is the user's input: exit code 2.
 #[derive(Debug)]
 struct BadInput(String);
@@ -382,7 +405,10 @@ fn main() -> ExitCode {
     }
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     // Bad arguments get one line and exit code 2 (DESIGN.md §4); help and version print in full.
-    let cli = match Cli::try_parse() {
+    let cli = match command()
+        .try_get_matches()
+        .and_then(|m| <Cli as clap::FromArgMatches>::from_arg_matches(&m))
+    {
         Ok(c) => c,
         Err(e) => {
             use clap::error::ErrorKind;

@@ -403,6 +403,67 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
     assert!(!out.exists());
 }
 
+/// A negative number given to an option is read as that option's value and refused with the
+/// option's own message (clap used to read `-1` as an unknown flag: "unexpected argument '-1'");
+/// an output named as a directory (`-o dir/`) is refused before rendering. Exit 2, one line.
+#[test]
+fn negative_values_and_directory_outputs_get_clear_messages() {
+    let d = common::scratch("cli-negative");
+    let o = d.join("o.png").display().to_string();
+    let dir_slash = format!("{}/", d.display());
+    let dir_png = d.join("sub.png");
+    std::fs::create_dir_all(&dir_png).unwrap();
+    let dir_png = dir_png.display().to_string();
+    let bench_dir = d.join("bench").display().to_string();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["render", "-o", &o, "--light-scale", "-1"],
+            "--light-scale -1: must be a finite number >= 0",
+        ),
+        (vec!["render", "-o", &o, "--exposure", "-2"], "--exposure"),
+        (vec!["render", "-o", &o, "--clamp", "-0.5"], "--clamp -0.5"),
+        (
+            vec!["render", "-o", &o, "--width", "-5"],
+            "'--width <WIDTH>'",
+        ),
+        (
+            vec!["render", "-o", &o, "--vpls", "-1e3"],
+            "'--vpls <VPLS>'",
+        ),
+        (
+            vec![
+                "view",
+                "--render-scale",
+                "-1",
+                "--frames",
+                "1",
+                "--screenshot",
+                &o,
+            ],
+            "--render-scale",
+        ),
+        (
+            vec!["bench", "--out-dir", &bench_dir, "--light-scale", "-3"],
+            "--light-scale -3",
+        ),
+        (vec!["info", "--light-scale", "-1"], "--light-scale -1"),
+        (
+            vec!["render", "-o", &dir_slash],
+            "output must end in .exr or .png",
+        ),
+        (vec!["render", "-o", &dir_png], "it is a directory"),
+    ];
+    for (a, needle) in cases {
+        let (code, _, err) = run(&a);
+        assert_eq!(code, 2, "{a:?}: {err}");
+        let lines = common::error_lines(&err);
+        assert_eq!(lines.len(), 1, "{a:?}: {err}");
+        assert!(lines[0].contains(needle), "{a:?}: {err}");
+        assert!(!err.contains("unexpected argument"), "{a:?}: {err}");
+    }
+    assert!(!d.join("o.png").exists());
+}
+
 /// A valid scene without any light renders black with a warning, exit 0.
 #[test]
 fn scene_without_light_renders_black() {

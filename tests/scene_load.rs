@@ -1439,3 +1439,91 @@ fn other_formats_named_gltf_say_what_they_are() {
     std::fs::write(&p, png_bytes(2, 2, [1, 2, 3, 255])).unwrap();
     assert_err(gltf_load::load_path(&p), "picture.glb", "PNG image");
 }
+
+/// A mesh translated to 1e38 collapses in f32 (1e38 + 1 == 1e38): the error names the node and its
+/// distance instead of only "no triangles … degenerate"; one far node among others is a warning.
+#[test]
+fn a_node_too_far_for_f32_is_named() {
+    let dir = temp_dir("far");
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m, "translation": [1e38, 0, 0]}), true);
+    let p = d.write_gltf(&dir, "far");
+    let e = assert_err(
+        gltf_load::load_path(&p),
+        "far.gltf",
+        "node 0 lies 1.000e38 from the origin",
+    );
+    assert!(e.contains("no triangles"), "{e}");
+    // The same mesh also at the origin: the scene is then 1e38 across and the near triangle is
+    // degenerate relative to it too; the error still names the far node.
+    d.node(json!({"mesh": m}), true);
+    let p = d.write_gltf(&dir, "farandnear");
+    assert_err(
+        gltf_load::load_path(&p),
+        "farandnear.gltf",
+        "node 0 lies 1.000e38",
+    );
+    // 1e5 away and 1 across: the mesh spans 1.41 / (1e5 x 1.19e-7) = 119 f32 spacings: no warning;
+    // at 3e6: 4 spacings, a warning naming it (the triangle, exact at spacing 0.25, is kept).
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m, "translation": [1e5, 0, 0]}), true);
+    let s = load_ok(&d.write_gltf(&dir, "near"));
+    assert!(s.report.warnings.is_empty(), "{:?}", s.report.warnings);
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m, "translation": [3e6, 0, 0]}), true);
+    let s = load_ok(&d.write_gltf(&dir, "quantised"));
+    assert_eq!(s.triangles.len(), 1);
+    assert!(
+        s.report
+            .warnings
+            .iter()
+            .any(|w| w.contains("node 0 lies 3.000e6") && w.contains("quantised")),
+        "{:?}",
+        s.report.warnings
+    );
+}
+
+/// A zero quaternion on a camera's or a light's node is no rotation: the identity is used and a
+/// warning names the node and what it carries.
+#[test]
+fn zero_quaternions_on_cameras_and_lights_warn() {
+    let dir = temp_dir("zeroquat");
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m}), true);
+    d.json["cameras"] = json!([
+        {"type": "perspective", "name": "cam", "perspective": {"yfov": 0.8, "znear": 0.1}}
+    ]);
+    d.json["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+    d.json["extensions"] = json!({"KHR_lights_punctual": {"lights": [
+        {"type": "spot", "name": "spot", "intensity": 10.0, "spot": {"outerConeAngle": 0.6}}
+    ]}});
+    d.node(
+        json!({"camera": 0, "translation": [0, 0, 5], "rotation": [0, 0, 0, 0]}),
+        true,
+    );
+    d.node(
+        json!({"rotation": [0, 0, 0, 0], "extensions": {"KHR_lights_punctual": {"light": 0}}}),
+        true,
+    );
+    let s = load_ok(&d.write_gltf(&dir, "zeroquat"));
+    let w = &s.report.warnings;
+    assert!(
+        w.iter()
+            .any(|w| w.contains("node 1 (camera 'cam')") && w.contains("zero")),
+        "{w:?}"
+    );
+    assert!(
+        w.iter()
+            .any(|w| w.contains("node 2 (light 'spot')") && w.contains("zero")),
+        "{w:?}"
+    );
+    // The identity: the camera looks down -Z, the spot points down -Z.
+    assert_eq!(s.cameras.len(), 1);
+    assert!((s.cameras[0].forward() - Vec3::NEG_Z).length() < 1e-6);
+    assert_eq!(s.lights.len(), 1);
+    assert!((s.lights[0].direction - Vec3::NEG_Z).length() < 1e-6);
+}

@@ -774,6 +774,77 @@ fn emit(
     Ok(())
 }
 
+/// A mesh instance placed so far from the origin, for its size, that f32 positions cannot resolve it.
+struct FarNode {
+    node: usize,
+    /// The largest coordinate magnitude of its vertices (world units, computed in f64).
+    far: f64,
+    /// Its bounding-box diagonal (world units, f64).
+    size: f64,
+}
+
+impl FarNode {
+    fn describe(&self) -> String {
+        format!(
+            "node {} lies {:.3e} from the origin, where f32 positions are {:.1e} apart, and its mesh is only {:.3e} across",
+            self.node,
+            self.far,
+            self.far * f32::EPSILON as f64,
+            self.size
+        )
+    }
+}
+
+/// `Some` when an instance of `prim` under `world` spans fewer than 10 f32 spacings at its distance
+/// from the origin (its shape is then quantised to a few positions or collapses to nothing).
+fn too_far_for_f32(prim: &Primitive, world: &Mat4, node: usize) -> Option<FarNode> {
+    let Primitive::Triangles { positions, .. } = prim else {
+        return None;
+    };
+    let w = world.as_dmat4();
+    let mut lo = glam::DVec3::splat(f64::INFINITY);
+    let mut hi = glam::DVec3::splat(f64::NEG_INFINITY);
+    for p in positions {
+        let q = w.transform_point3(p.as_dvec3());
+        lo = lo.min(q);
+        hi = hi.max(q);
+    }
+    let far = lo.abs().max(hi.abs()).max_element();
+    let size = (hi - lo).length();
+    (size > 0.0 && far * (f32::EPSILON as f64) > 0.1 * size).then_some(FarNode { node, far, size })
+}
+
+/// A warning for a node whose TRS rotation is no rotation (a zero or non-finite quaternion; the
+/// identity is used, `local_matrix`), naming what the node carries.
+fn zero_rotation_warning(node: &gltf::Node) -> Option<String> {
+    let gltf::scene::Transform::Decomposed { rotation, .. } = node.transform() else {
+        return None;
+    };
+    let q = Quat::from_array(rotation);
+    if q.is_finite() && q.length_squared() > 0.0 {
+        return None;
+    }
+    let mut what = Vec::new();
+    if let Some(c) = node.camera() {
+        what.push(format!("camera '{}'", c.name().unwrap_or("")));
+    }
+    if let Some(l) = node.light() {
+        what.push(format!("light '{}'", l.name().unwrap_or("")));
+    }
+    if node.mesh().is_some() {
+        what.push("a mesh".to_string());
+    }
+    let what = if what.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", what.join(", "))
+    };
+    Some(format!(
+        "node {}{what}: rotation {rotation:?} is a zero or non-finite quaternion, not a rotation; the identity is used for it",
+        node.index()
+    ))
+}
+
 /// Whether a triangle has (numerically) no area, relative to the scene and to its own size.
 fn is_degenerate(t: &Triangle, extent_sq: f64) -> bool {
     let p = t.p.map(|v| v.as_dvec3());
@@ -942,9 +1013,13 @@ fn load_bytes(bytes: &[u8], base: Option<&Path>, glb_name: bool) -> Result<Scene
     let mut lights = Vec::new();
     let mut cameras = Vec::new();
     let mut warned_skin = false;
+    let mut far_nodes: Vec<FarNode> = Vec::new();
     let nodes: Vec<gltf::Node> = doc.nodes().collect();
     for (i, world) in flatten_nodes(&doc)? {
         let node = &nodes[i];
+        if let Some(w) = zero_rotation_warning(node) {
+            report.warnings.push(w);
+        }
         if let Some(mesh) = node.mesh() {
             if !warned_skin && (node.skin().is_some() || mesh.weights().is_some()) {
                 warned_skin = true;
@@ -965,6 +1040,9 @@ fn load_bytes(bytes: &[u8], base: Option<&Path>, glb_name: bool) -> Result<Scene
                     )?),
                 };
                 emit(decoded, &world, i, &table.uv_transform, &mut triangles)?;
+                if let Some(far) = too_far_for_f32(decoded, &world, i) {
+                    far_nodes.push(far);
+                }
             }
         }
         if let Some(light) = node.light()
@@ -1006,10 +1084,25 @@ fn load_bytes(bytes: &[u8], base: Option<&Path>, glb_name: bool) -> Result<Scene
         }
     }
 
+    if triangles.is_empty()
+        && let Some(f) = far_nodes.first()
+    {
+        return Err(format!(
+            "the scene has no triangles to render: {} (and {} degenerate triangles dropped)",
+            f.describe(),
+            report.dropped_degenerate
+        ));
+    }
     if triangles.is_empty() {
         return Err(format!(
             "the scene has no triangles to render ({} non-triangle primitives skipped, {} degenerate triangles dropped)",
             report.skipped_primitives, report.dropped_degenerate
+        ));
+    }
+    for f in &far_nodes {
+        report.warnings.push(format!(
+            "{}: its shape is quantised to that spacing",
+            f.describe()
         ));
     }
 
