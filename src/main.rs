@@ -7,6 +7,7 @@ use anyhow::Result;
 use clap::{Args, Parser, Subcommand};
 
 use fuzzy_vpl::bench::{self, sweep};
+use fuzzy_vpl::exposure::Exposure;
 use fuzzy_vpl::gi::pipeline::{FrameSettings, Renderer, Weighting};
 use fuzzy_vpl::gpu::GpuContext;
 use fuzzy_vpl::scene::{self, Scene, extra_lights};
@@ -126,9 +127,10 @@ struct BenchArgs {
     /// G-term clamp as a fraction of the scene diagonal.
     #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_CLAMP)]
     clamp: f32,
-    /// Exposure of the PNG images.
-    #[arg(long, default_value_t = 1.0)]
-    exposure: f32,
+    /// Exposure of the PNG images: `auto` (the default: the reference's log-average luminance shown
+    /// as middle grey 0.18, Reinhard et al. 2002, for every image of a camera) or a factor >= 0.
+    #[arg(long, default_value = "auto", value_parser = Exposure::parse)]
+    exposure: Exposure,
 }
 
 #[derive(Args)]
@@ -187,9 +189,10 @@ struct RenderArgs {
     /// Area-light samples (shadow rays) per pixel for direct light, 1..=65536.
     #[arg(long, default_value_t = 16)]
     direct_samples: u32,
-    /// Exposure multiplier for PNG output (EXR stays unscaled radiance).
-    #[arg(long, default_value_t = 1.0)]
-    exposure: f32,
+    /// PNG exposure: `auto` (the default: the image's log-average luminance is shown as middle grey
+    /// 0.18, Reinhard et al. 2002) or a factor >= 0. EXR stays linear, unscaled radiance.
+    #[arg(long, default_value = "auto", value_parser = Exposure::parse)]
+    exposure: Exposure,
     /// Render N times; timings are the mean of the 3 best (the paper's method).
     #[arg(long, default_value_t = 1)]
     repeat: u32,
@@ -312,8 +315,10 @@ struct ViewArgs {
     /// Area-light samples (shadow rays) per pixel for direct light, 1..=65536.
     #[arg(long, default_value_t = 16)]
     direct_samples: u32,
-    #[arg(long, default_value_t = 1.0)]
-    exposure: f32,
+    /// Display exposure: `auto` (the default: each frame's log-average luminance shown as middle grey
+    /// 0.18) or a factor > 0.
+    #[arg(long, default_value = "auto", value_parser = Exposure::parse)]
+    exposure: Exposure,
     /// VPLs (the viewer starts lighter than `render` so a software driver stays interactive).
     #[arg(long, default_value_t = 4096)]
     vpls: u32,
@@ -547,9 +552,6 @@ fn render(a: RenderArgs) -> Result<()> {
     if a.path_trace == Some(0) {
         return Err(bad("--path-trace 0: must be at least 1 sample a pixel"));
     }
-    if !(a.exposure.is_finite() && a.exposure >= 0.0) {
-        return Err(bad("--exposure must be a finite number >= 0"));
-    }
     a.cluster.check()?;
     check_direct_samples(a.direct_samples)?;
     if !(1..=64).contains(&a.bounces) {
@@ -646,8 +648,9 @@ fn render(a: RenderArgs) -> Result<()> {
     if non_finite > 0 {
         eprintln!("warning: {non_finite} non-finite pixel channels in the output");
     }
+    let exposure = a.exposure.resolve(&frame.radiance);
     for out in &a.output {
-        export::write_image(out, frame.width, frame.height, &frame.radiance, a.exposure)?;
+        export::write_image(out, frame.width, frame.height, &frame.radiance, exposure)?;
     }
     if let (Some(p), Some(r)) = (&a.error_map, &reference) {
         export::write_png_rgb8(
@@ -701,7 +704,8 @@ fn render(a: RenderArgs) -> Result<()> {
                 seed: a.seed,
                 direct_samples: settings.direct_samples,
                 light_scale: a.scene.light_scale,
-                exposure: a.exposure,
+                exposure,
+                exposure_auto: a.exposure.is_auto(),
                 clamp: settings.clamp,
                 gamma_used: frame.gamma_used,
                 normal_threshold_used: fuzzy_vpl::gi::kmeans::effective_normal_threshold(
@@ -761,8 +765,10 @@ fn view(a: ViewArgs) -> Result<()> {
     }
     a.cluster.check()?;
     check_direct_samples(a.direct_samples)?;
-    if !(a.exposure.is_finite() && a.exposure > 0.0) {
-        return Err(bad("--exposure must be a finite number > 0"));
+    if a.exposure == Exposure::Fixed(0.0) {
+        return Err(bad(
+            "--exposure 0: the viewer needs an exposure > 0 (or auto)",
+        ));
     }
     if !(0.1..=1.0).contains(&a.render_scale) {
         return Err(bad(format!(
@@ -813,7 +819,12 @@ fn view(a: ViewArgs) -> Result<()> {
         sp_clusters: a.sp_clusters,
         ..Default::default()
     });
-    let mut settings = fuzzy_vpl::app::UiSettings::from_frame_settings(&fs, a.exposure);
+    let fixed = match a.exposure {
+        Exposure::Fixed(e) => e,
+        Exposure::Auto => 1.0,
+    };
+    let mut settings = fuzzy_vpl::app::UiSettings::from_frame_settings(&fs, fixed);
+    settings.exposure_auto = a.exposure.is_auto();
     settings.render_scale = a.render_scale;
     let args = a.scene.clone();
     let loader: fuzzy_vpl::app::worker::Loader = std::sync::Arc::new(move |spec: &str| {
@@ -967,9 +978,6 @@ fn bench(a: BenchArgs) -> Result<()> {
     check_iterations(a.iterations)?;
     check_clamp(a.clamp)?;
     check_direct_samples(a.direct_samples)?;
-    if !(a.exposure.is_finite() && a.exposure >= 0.0) {
-        return Err(bad("--exposure must be a finite number >= 0"));
-    }
     let cam_list: Option<Vec<usize>> = a
         .camera
         .as_deref()

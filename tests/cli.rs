@@ -729,3 +729,74 @@ fn a_terabyte_scene_file_is_refused_at_once() {
         std::fs::remove_file(&p).unwrap();
     }
 }
+
+/// PNG exposure is automatic by default: the stats' `settings.exposure` is the exposure the PNG was
+/// written with, `exposure::auto_exposure` of the frame (checked against the EXR of the same frame),
+/// and the PNG is exactly that exposure's tone mapping. The EXR stays unscaled: the same with
+/// `--exposure 2`, which is written as fixed. A scene lit 1000× dimmer gives the same PNG (within one
+/// 8-bit step on average: the image is linear in the emitters).
+#[test]
+fn png_exposure_is_automatic_and_written_in_the_stats() {
+    let d = common::scratch("cli-exposure");
+    let render = |tag: &str, extra: &[&str]| -> (serde_json::Value, Vec<[f32; 3]>, Vec<u8>) {
+        let exr = d.join(format!("{tag}.exr"));
+        let png = d.join(format!("{tag}.png"));
+        let stats = d.join(format!("{tag}.json"));
+        let mut args = vec![
+            "render",
+            "builtin:cornell",
+            "-o",
+            exr.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--vpls",
+            "256",
+            "--vpl-clusters",
+            "32",
+            "--sp-clusters",
+            "64",
+            "--direct-samples",
+            "2",
+        ];
+        args.extend_from_slice(extra);
+        let (code, _, err) = run(&args);
+        assert_eq!(code, 0, "{extra:?}: {err}");
+        let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+        let (_, _, px) = fuzzy_vpl::export::read_exr(&exr).unwrap();
+        assert!(common::all_finite(&px));
+        let rgb = image::open(&png).unwrap().into_rgb8().into_raw();
+        (j, px, rgb)
+    };
+    let (j, px, rgb) = render("auto", &[]);
+    assert_eq!(j["settings"]["exposure_auto"], true);
+    let used = j["settings"]["exposure"].as_f64().unwrap() as f32;
+    let want = fuzzy_vpl::exposure::auto_exposure(&px);
+    assert_eq!(used, want, "stats exposure {used}, auto of the EXR {want}");
+    assert_eq!(rgb, fuzzy_vpl::export::to_srgb8(&px, used));
+    // The key: the log-average luminance × exposure is 0.18 (f64 sums: 1e-6 relative).
+    let la = fuzzy_vpl::exposure::log_average_luminance(&px).unwrap();
+    assert!((la * used as f64 / 0.18 - 1.0).abs() < 1e-6);
+
+    let (j2, px2, rgb2) = render("fixed", &["--exposure", "2"]);
+    assert_eq!(j2["settings"]["exposure_auto"], false);
+    assert_eq!(j2["settings"]["exposure"], 2.0);
+    assert_eq!(px2, px, "the EXR depends on the exposure");
+    assert_eq!(rgb2, fuzzy_vpl::export::to_srgb8(&px, 2.0));
+
+    let (_, px3, rgb3) = render("dim", &["--light-scale", "0.001"]);
+    let mean = |p: &[[f32; 3]]| fuzzy_vpl::metrics::mean_luminance(p);
+    assert!(mean(&px3) < 0.002 * mean(&px), "the dim scene is not dim");
+    let diff: f64 = rgb3
+        .iter()
+        .zip(&rgb)
+        .map(|(a, b)| (*a as f64 - *b as f64).abs())
+        .sum::<f64>()
+        / rgb.len() as f64;
+    assert!(diff <= 1.0, "mean |PNG dim - PNG| = {diff} 8-bit steps");
+}
