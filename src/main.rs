@@ -648,6 +648,14 @@ fn render(a: RenderArgs) -> Result<()> {
     if non_finite > 0 {
         eprintln!("warning: {non_finite} non-finite pixel channels in the output");
     }
+    // Never a silent black image: a lit scene rendering all black says so (no light at all was
+    // warned about when loading).
+    if scene.has_light() && frame.radiance.iter().flatten().all(|&c| c == 0.0) {
+        eprintln!(
+            "warning: {}: the image is black although the scene has light (the camera sees no lit surface)",
+            a.scene.scene
+        );
+    }
     let exposure = a.exposure.resolve(&frame.radiance);
     for out in &a.output {
         export::write_image(out, frame.width, frame.height, &frame.radiance, exposure)?;

@@ -800,3 +800,121 @@ fn png_exposure_is_automatic_and_written_in_the_stats() {
         / rgb.len() as f64;
     assert!(diff <= 1.0, "mean |PNG dim - PNG| = {diff} 8-bit steps");
 }
+
+/// A closed box room (walls 2 across, an emissive panel under the ceiling) as a glTF whose root node
+/// scales it by `k`, with a camera inside as the node's child.
+fn scaled_room(dir: &std::path::Path, name: &str, k: f64) -> std::path::PathBuf {
+    let quad = |a: [f32; 3], b: [f32; 3], c: [f32; 3], d: [f32; 3]| [a, b, c, a, c, d];
+    // Walls facing inwards, then the light panel under the ceiling, facing down.
+    let mut pos: Vec<[f32; 3]> = [
+        quad(
+            [-1., -1., -1.],
+            [1., -1., -1.],
+            [1., 1., -1.],
+            [-1., 1., -1.],
+        ),
+        quad([-1., -1., 1.], [-1., 1., 1.], [1., 1., 1.], [1., -1., 1.]),
+        quad(
+            [-1., -1., -1.],
+            [-1., 1., -1.],
+            [-1., 1., 1.],
+            [-1., -1., 1.],
+        ),
+        quad([1., -1., -1.], [1., -1., 1.], [1., 1., 1.], [1., 1., -1.]),
+        quad(
+            [-1., -1., -1.],
+            [-1., -1., 1.],
+            [1., -1., 1.],
+            [1., -1., -1.],
+        ),
+        quad([-1., 1., -1.], [1., 1., -1.], [1., 1., 1.], [-1., 1., 1.]),
+    ]
+    .concat();
+    let walls = pos.len();
+    pos.extend(quad(
+        [-0.3, 0.95, -0.3],
+        [0.3, 0.95, -0.3],
+        [0.3, 0.95, 0.3],
+        [-0.3, 0.95, 0.3],
+    ));
+    let bytes: Vec<u8> = pos.iter().flatten().flat_map(|f| f.to_le_bytes()).collect();
+    std::fs::write(dir.join(format!("{name}.bin")), &bytes).unwrap();
+    let acc = |first: usize, count: usize| {
+        serde_json::json!({"bufferView": 0, "byteOffset": first * 12, "componentType": 5126,
+            "count": count, "type": "VEC3", "min": [-1, -1, -1], "max": [1, 1, 1]})
+    };
+    let j = serde_json::json!({
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"scale": [k, k, k], "mesh": 0, "children": [1]},
+                  {"camera": 0, "translation": [0.2, 0.1, 0.9]}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 1.2, "znear": 0.01}}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.6, 0.5, 1]}},
+                      {"emissiveFactor": [1, 1, 1], "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 10}}}],
+        "extensionsUsed": ["KHR_materials_emissive_strength"],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "material": 0},
+                                   {"attributes": {"POSITION": 1}, "material": 1}]}],
+        "accessors": [acc(0, walls), acc(walls, pos.len() - walls)],
+        "bufferViews": [{"buffer": 0, "byteLength": bytes.len()}],
+        "buffers": [{"uri": format!("{name}.bin"), "byteLength": bytes.len()}]
+    });
+    let p = dir.join(format!("{name}.gltf"));
+    std::fs::write(&p, serde_json::to_vec(&j).unwrap()).unwrap();
+    p
+}
+
+/// A glTF room scaled by 1e-40 … 1e38 renders the image of the unscaled room (EXR, 48x36: mean
+/// luminance within 0.5%, rel_mse ≤ 1e-3); it used to come out black with exit 0 at 1e±12. Scales
+/// whose vertices do not fit f32 are refused with exit 2 and one line, never rendered black.
+#[test]
+fn a_gltf_room_at_any_finite_scale_renders_the_same_image() {
+    let d = common::scratch("cli-scale");
+    let render = |k: f64| -> (i32, String, Vec<[f32; 3]>) {
+        let p = scaled_room(&d, &format!("room{k:e}"), k);
+        let exr = d.join(format!("room{k:e}.exr"));
+        let (code, _, err) = run(&[
+            "render",
+            p.to_str().unwrap(),
+            "-o",
+            exr.to_str().unwrap(),
+            "--width",
+            "48",
+            "--height",
+            "36",
+            "--vpls",
+            "256",
+            "--vpl-clusters",
+            "32",
+            "--sp-clusters",
+            "48",
+            "--direct-samples",
+            "4",
+        ]);
+        let px = if code == 0 {
+            fuzzy_vpl::export::read_exr(&exr).unwrap().2
+        } else {
+            Vec::new()
+        };
+        (code, err, px)
+    };
+    let (code, err, one) = render(1.0);
+    assert_eq!(code, 0, "{err}");
+    let l1 = fuzzy_vpl::metrics::mean_luminance(&one);
+    assert!(l1 > 0.05, "the unscaled room is dark: {l1}");
+    for k in [1e-40, 1e-15, 1e-12, 1e12, 1e15, 1e38] {
+        let (code, err, px) = render(k);
+        assert_eq!(code, 0, "scale {k}: {err}");
+        assert!(common::all_finite(&px));
+        let lk = fuzzy_vpl::metrics::mean_luminance(&px);
+        let rel = fuzzy_vpl::metrics::rel_mse(&px, &one);
+        println!("room at {k:e}: mean luminance {lk:.5} (1: {l1:.5}), rel_mse {rel:.2e}");
+        assert!((lk / l1 - 1.0).abs() < 5e-3, "scale {k}: {lk} vs {l1}");
+        assert!(rel <= 1e-3, "scale {k}: rel_mse {rel}");
+    }
+    // 1e-46 rounds every vertex to 0 (f32's smallest subnormal is 1.4e-45); 1e39 overflows f32.
+    for k in [1e-46, 1e39] {
+        let (code, err, _) = render(k);
+        println!("room at {k:e}: exit {code}: {err}");
+        assert_eq!(code, 2, "{err}");
+        assert_eq!(common::error_lines(&err).len(), 1, "{err}");
+    }
+}

@@ -359,3 +359,40 @@ fn quad_diagonal_on_the_centre_line_has_no_crack() {
         .count();
     assert_eq!(black, 0, "{black} black pixels");
 }
+
+/// Any finite scale renders the image of the unscaled room: conference and Cornell scaled by 1e-30,
+/// 1e-15, 1e-12, 1e12, 1e15 and 1e30 (used to: black at 1e±12, walls lost at 1e10) against scale 1
+/// (the renderer scales the geometry by a power of two into a unit frame, `Scene::geometry_scale`),
+/// clustered
+/// frame with indirect light. Tolerance: rel_mse ≤ 1e-3 and mean luminance within 0.5% (the scaled
+/// coordinates are rounded to f32, which moves VPLs and samples by an ulp; measured below).
+#[test]
+fn any_finite_scale_renders_the_unscaled_image() {
+    let ctx = common::gpu();
+    for name in ["cornell", "conference"] {
+        let base = scene::load(&format!("builtin:{name}")).unwrap();
+        let fs = FrameSettings {
+            vpls: 512,
+            vpl_clusters: 64,
+            sp_clusters: 96,
+            ..settings(64, 48, 4)
+        };
+        let render = |k: f32| {
+            let s = scaled(base.clone(), k);
+            let mut r = Renderer::new(&ctx, &s).unwrap();
+            let f = r.render(&s.default_camera(), &fs).unwrap();
+            assert!(common::all_finite(&f.radiance), "{name} at {k}");
+            f.radiance
+        };
+        let one = render(1.0);
+        let l1 = mean_luminance(&one);
+        for k in [1e-30f32, 1e-15, 1e-12, 1e12, 1e15, 1e30] {
+            let img = render(k);
+            let lk = mean_luminance(&img);
+            let rel = fuzzy_vpl::metrics::rel_mse(&img, &one);
+            println!("{name} at {k:e}: mean luminance {lk:.5} (1: {l1:.5}), rel_mse {rel:.2e}");
+            assert!((lk / l1 - 1.0).abs() < 5e-3, "{name} at {k}: {lk} vs {l1}");
+            assert!(rel <= 1e-3, "{name} at {k}: rel_mse {rel}");
+        }
+    }
+}

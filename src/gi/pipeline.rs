@@ -345,10 +345,14 @@ type LightKey = (u32, u32, u32, u32, u32);
 /// Everything resident for one scene on one device.
 pub struct Renderer<'a> {
     pub ctx: &'a GpuContext,
-    /// The scene as rendered: borrowed, or a copy with its emitters scaled into range
-    /// (`Scene::normalize_emission`), in which case `output_scale` scales the images back.
+    /// The scene as rendered: borrowed, or a copy with its geometry scaled by a power of two into a
+    /// unit frame (`Scene::normalize_geometry`, `geometry_scale`) and/or its emitters scaled into
+    /// range (`Scene::normalize_emission`, `output_scale` scales the images back).
     pub scene: std::borrow::Cow<'a, Scene>,
     pub output_scale: f32,
+    /// The factor from the caller's units to the rendered scene's (a power of two; 1 for scenes of
+    /// 2^-10..2^10 across): cameras given to `render` and `path_trace` are scaled by it.
+    pub geometry_scale: f64,
     pub bvh: SceneBvh,
     pub gpu: SceneGpu,
     pub profiler: Profiler,
@@ -371,6 +375,10 @@ pub struct Renderer<'a> {
 impl<'a> Renderer<'a> {
     pub fn new(ctx: &'a GpuContext, scene: &'a Scene) -> Result<Self> {
         let mut scene = std::borrow::Cow::Borrowed(scene);
+        let geometry_scale = scene.geometry_scale();
+        if geometry_scale != 1.0 {
+            scene.to_mut().scale_geometry(geometry_scale);
+        }
         let output_scale = if scene.emission_out_of_range() {
             scene.to_mut().normalize_emission()
         } else {
@@ -382,6 +390,7 @@ impl<'a> Renderer<'a> {
             ctx,
             scene,
             output_scale,
+            geometry_scale,
             primary: Primary::new(ctx, &gpu),
             direct: Direct::new(ctx, &gpu),
             vpl_trace: VplTrace::new(ctx, &gpu),
@@ -397,6 +406,17 @@ impl<'a> Renderer<'a> {
             bvh,
             gpu,
         })
+    }
+
+    /// `camera` (in the caller's units) in the rendered scene's units: its eye scaled by
+    /// `geometry_scale`.
+    pub fn to_render_units(&self, camera: &Camera) -> Camera {
+        let mut c = camera.clone();
+        if self.geometry_scale != 1.0 {
+            let eye = c.transform.w_axis.truncate().as_dvec3() * self.geometry_scale;
+            c.transform.w_axis = eye.as_vec3().extend(1.0);
+        }
+        c
     }
 
     /// The passes a frame with these settings runs, in order (also what `info` prints).
@@ -489,7 +509,7 @@ impl<'a> Renderer<'a> {
         let ctx = self.ctx;
         check_frame_size(ctx, s.width, s.height, PATH_TRACE_PIXEL_BYTES)?;
         let pt = super::pathtrace::PathTrace::new(ctx, &self.gpu);
-        let cam = CameraParams::new(camera, s.width, s.height);
+        let cam = CameraParams::new(&self.to_render_units(camera), s.width, s.height);
         let _ = self.profiler.collect(ctx)?;
         // Samples an invocation traces per pass. lavapipe ends all loops of a SIMD batch after
         // 65,535 trips (docs/architecture.md): 16 samples of up to 9 vertices lost up to 2 of them on
@@ -549,7 +569,7 @@ impl<'a> Renderer<'a> {
         let gbuffer = ctx.storage("gbuffer", n as u64 * SP_BYTES);
         let radiance = ctx.storage("radiance", n as u64 * 16);
         let indirect = ctx.storage("indirect", n as u64 * 16);
-        let cam = CameraParams::new(camera, s.width, s.height);
+        let cam = CameraParams::new(&self.to_render_units(camera), s.width, s.height);
         self.primary
             .record(ctx, &self.gpu, &mut self.profiler, &cam, &gbuffer);
         // With no light at all the direct pass still runs to write emission (zero) and clear the image.

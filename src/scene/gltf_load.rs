@@ -878,7 +878,10 @@ fn light_from_node(
         return None;
     }
     let position = world.w_axis.truncate();
-    let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    let direction = (world.as_dmat4())
+        .transform_vector3(glam::DVec3::NEG_Z)
+        .normalize_or_zero()
+        .as_vec3();
     if !position.is_finite() || direction == Vec3::ZERO || !direction.is_finite() {
         report.warnings.push(format!(
             "light '{name}': its node transform is degenerate, light skipped"
@@ -966,8 +969,12 @@ fn camera_from_node(
             .push(format!("camera '{name}': invalid yfov {yfov}; skipped"));
         return None;
     }
-    let (_, rotation, translation) = world.to_scale_rotation_translation();
-    let transform = Mat4::from_rotation_translation(rotation.normalize(), translation);
+    // In f64: under a node scale of 1e-40 (or 1e30) the f32 decomposition is no longer finite.
+    let (_, rotation, translation) = world.as_dmat4().to_scale_rotation_translation();
+    let transform = Mat4::from_rotation_translation(
+        rotation.normalize().as_quat().normalize(),
+        translation.as_vec3(),
+    );
     if !transform.is_finite() {
         report.warnings.push(format!(
             "camera '{name}': its node transform is degenerate; skipped"
@@ -1074,7 +1081,12 @@ fn load_bytes(bytes: &[u8], base: Option<&Path>, glb_name: bool) -> Result<Scene
     report.dropped_degenerate = before - triangles.len();
     for t in &mut triangles {
         if t.n.contains(&Vec3::ZERO) {
-            let face = t.geometric_normal();
+            // In f64: at 1e-20 units the f32 cross product of the edges underflows to zero.
+            let p = t.p.map(|v| v.as_dvec3());
+            let face = (p[1] - p[0])
+                .cross(p[2] - p[0])
+                .normalize_or_zero()
+                .as_vec3();
             for n in &mut t.n {
                 if *n == Vec3::ZERO {
                     *n = face;
