@@ -62,6 +62,17 @@ pub struct Hit {
 
 impl SceneBvh {
     pub fn build(scene: &Scene) -> anyhow::Result<SceneBvh> {
+        // Checked before the build (a minute for millions of triangles): the traversal's data textures
+        // hold 4 texels a triangle (nodes: 2 texels each, fewer than 2 a triangle).
+        let max = crate::gi::scene_gpu::MAX_TRIANGLES;
+        if scene.triangles.len() > max {
+            return Err(crate::gi::scene_gpu::TooBig(format!(
+                "{}: {} triangles, more than the {max} the GPU data textures hold",
+                scene.name,
+                scene.triangles.len()
+            ))
+            .into());
+        }
         let t0 = std::time::Instant::now();
         let tris: Vec<OTri> = scene
             .triangles
@@ -76,13 +87,6 @@ impl SceneBvh {
         let bvh = build_bvh2_from_tris(&tris, BvhBuildParams::medium_build(), &mut core);
         let slot_to_triangle = bvh.primitive_indices.clone();
         let tris: Vec<OTri> = slot_to_triangle.iter().map(|&i| tris[i as usize]).collect();
-        // In the traversal's data textures a triangle takes 3 texels and each of the < 2n nodes 2.
-        if 4 * tris.len() > crate::gi::scene_gpu::MAX_TEXELS {
-            anyhow::bail!(
-                "{} triangles exceed the GPU traversal's texture capacity",
-                tris.len()
-            );
-        }
         let depth = depth_of(&bvh);
         if depth >= MAX_GPU_DEPTH {
             anyhow::bail!("BVH depth {depth} exceeds {MAX_GPU_DEPTH}");

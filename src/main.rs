@@ -452,6 +452,8 @@ fn main() -> ExitCode {
         Err(e) => {
             let is_input = e.downcast_ref::<BadInput>().is_some()
                 || e.downcast_ref::<scene::SceneError>().is_some()
+                || e.downcast_ref::<fuzzy_vpl::gi::scene_gpu::TooBig>()
+                    .is_some()
                 || e.downcast_ref::<fuzzy_vpl::app::Unavailable>().is_some();
             eprintln!("error: {e}");
             if is_input {

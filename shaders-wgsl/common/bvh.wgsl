@@ -47,11 +47,6 @@ fn aabb_entry(bmin: vec3<f32>, bmax: vec3<f32>, origin: vec3<f32>, inv_dir: vec3
     return INF;
 }
 
-// Texel i of a data texture: TEXEL_ROW (4096) texels a row (src/gi/scene_gpu.rs).
-fn texel_xy(i: u32) -> vec2<u32> {
-    return vec2<u32>(i & 4095u, i >> 12u);
-}
-
 fn load_node(i: u32) -> BvhNode {
     let a = textureLoad(bvh_texels, texel_xy(2u * i), 0);
     let b = textureLoad(bvh_texels, texel_xy(2u * i + 1u), 0);

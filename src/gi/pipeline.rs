@@ -374,6 +374,7 @@ pub struct Renderer<'a> {
 
 impl<'a> Renderer<'a> {
     pub fn new(ctx: &'a GpuContext, scene: &'a Scene) -> Result<Self> {
+        super::scene_gpu::check_fits(scene, ctx.max_binding())?;
         let mut scene = std::borrow::Cow::Borrowed(scene);
         let geometry_scale = scene.geometry_scale();
         if geometry_scale != 1.0 {
