@@ -880,21 +880,49 @@ fn info(a: InfoArgs) -> Result<()> {
         kinds(|k| matches!(k, scene::LightKind::Directional)),
     );
     println!("cameras:             {}", s.cameras.len());
+    // Fixed decimals for everyday units, exponents for scenes in other units (1e-15 or 1e12).
+    let num = |x: f32, d: usize| {
+        if x == 0.0 || (1e-3..1e6).contains(&x.abs()) {
+            format!("{x:.d$}")
+        } else {
+            format!("{x:.3e}")
+        }
+    };
     for (i, c) in s.cameras.iter().enumerate() {
         let e = c.eye();
         println!(
-            "  [{i}] {:<16} eye ({:.3}, {:.3}, {:.3}) yfov {:.1} deg",
+            "  [{i}] {:<16} eye ({}, {}, {}) yfov {:.1} deg",
             c.name,
-            e.x,
-            e.y,
-            e.z,
+            num(e.x, 3),
+            num(e.y, 3),
+            num(e.z, 3),
             c.yfov.to_degrees()
         );
     }
     println!(
-        "bounds:              ({:.4}, {:.4}, {:.4}) .. ({:.4}, {:.4}, {:.4})",
-        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+        "bounds:              ({}, {}, {}) .. ({}, {}, {})",
+        num(lo.x, 4),
+        num(lo.y, 4),
+        num(lo.z, 4),
+        num(hi.x, 4),
+        num(hi.y, 4),
+        num(hi.z, 4)
     );
+    let g = s.geometry_scale();
+    if g != 1.0 {
+        println!(
+            "unit frame:          rendered with the geometry scaled by 2^{} (Scene::geometry_scale)",
+            g.log2().round() as i32
+        );
+    }
+    match fuzzy_vpl::gi::scene_gpu::check_fits(&s, u64::MAX) {
+        Ok(()) => println!(
+            "GPU data:            {} of at most {} triangles",
+            s.triangles.len(),
+            fuzzy_vpl::gi::scene_gpu::MAX_TRIANGLES
+        ),
+        Err(e) => println!("GPU data:            does not fit: {e}"),
+    }
     println!(
         "extensions used:     {}",
         s.report.extensions_used.join(", ")

@@ -910,6 +910,15 @@ fn a_gltf_room_at_any_finite_scale_renders_the_same_image() {
         assert!((lk / l1 - 1.0).abs() < 5e-3, "scale {k}: {lk} vs {l1}");
         assert!(rel <= 1e-3, "scale {k}: rel_mse {rel}");
     }
+    // info names the unit frame and prints the bounds in the scene's own units.
+    let p = scaled_room(&d, "info", 1e-15);
+    let (code, out, err) = run(&["info", p.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("scaled by 2^48"), "{out}");
+    assert!(
+        out.contains("(-1.000e-15, -1.000e-15, -1.000e-15)"),
+        "{out}"
+    );
     // 1e-46 rounds every vertex to 0 (f32's smallest subnormal is 1.4e-45); 1e39 overflows f32.
     for k in [1e-46, 1e39] {
         let (code, err, _) = render(k);
