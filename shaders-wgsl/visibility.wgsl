@@ -3,7 +3,6 @@
 // themselves when VPLs are not clustered). Each invocation fills one 32-bit word of a row.
 #import common/bvh.wgsl
 #import common/chunk.wgsl
-#import common/gbuffer.wgsl
 #import common/vpl.wgsl
 
 struct VisParams {
@@ -15,9 +14,9 @@ struct VisParams {
 }
 
 @group(1) @binding(1) var<uniform> params: VisParams;
-@group(1) @binding(2) var<storage, read> gbuffer: array<ShadingPoint>;
-// SP-cluster representatives: reps[2k + 1] is the member pixel (INVALID for an unused cluster).
-@group(1) @binding(3) var<storage, read> sp_reps: array<u32>;
+// SP-cluster representatives as points (kmeans.wgsl `rep_points`): position with w > 0 when the
+// cluster has one, then normal.
+@group(1) @binding(2) var<storage, read> rep_points: array<vec4<f32>>;
 // Lights as 3 texels each (pos, nrm, flux), 4096 texels a row (texel fetches are vector code on
 // lavapipe, per-lane storage reads scalar loops; see shade.wgsl).
 @group(1) @binding(4) var lights_tex: texture_2d<f32>;
@@ -35,12 +34,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     }
     let k = i / params.words;
     let w = i % params.words;
-    let rep = sp_reps[2u * k + 1u];
+    let rep = rep_points[2u * k];
     var word = 0u;
-    if rep != INVALID {
-        let sp = gbuffer[rep];
-        let p = sp.pos.xyz;
-        let n = sp.nrm.xyz;
+    if rep.w > 0.0 {
+        let p = rep.xyz;
+        let n = rep_points[2u * k + 1u].xyz;
         let c0 = w * 32u;
         let c1 = min(c0 + 32u, params.num_lights);
         for (var c = c0; c < c1; c++) {

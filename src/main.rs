@@ -95,6 +95,14 @@ struct BenchArgs {
     /// e.g. off,20 (see render --plane-gate).
     #[arg(long, value_name = "LIST")]
     plane_gate: Option<String>,
+    /// Instead of the sweep's results.csv: render every configuration along a camera path,
+    /// orbit:N:DEG (N frames, DEG degrees in all about the point the start camera looks at), each
+    /// frame against its own reference; writes path.csv and path.png (docs/temporal.md).
+    #[arg(long, value_name = "orbit:N:DEG", value_parser = fuzzy_vpl::bench::path::parse_camera_path)]
+    camera_path: Option<fuzzy_vpl::bench::path::CameraPath>,
+    /// Temporal reuse along --camera-path: on, off or both (off,on).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = "off", value_parser = fuzzy_vpl::gi::pipeline::parse_on_off, action = clap::ArgAction::Set, requires = "camera_path")]
+    temporal: Vec<bool>,
     /// Image width (default 640; quick 96).
     #[arg(long)]
     width: Option<u32>,
@@ -196,6 +204,11 @@ struct RenderArgs {
     /// Render N times; timings are the mean of the 3 best (the paper's method).
     #[arg(long, default_value_t = 1)]
     repeat: u32,
+    /// Temporal reuse (on|off): each render's SP clustering starts from the previous one's
+    /// centroids where the view still sees them (docs/temporal.md). A single frame has no past, so
+    /// only --repeat's later renders reuse.
+    #[arg(long, default_value = "off", value_name = "on|off", value_parser = fuzzy_vpl::gi::pipeline::parse_on_off, action = clap::ArgAction::Set)]
+    temporal: bool,
     /// Number of VPLs (traced once, resident).
     #[arg(long, default_value_t = 8192)]
     vpls: u32,
@@ -328,21 +341,31 @@ struct ViewArgs {
     sp_clusters: u32,
     #[command(flatten)]
     cluster: ClusterArgs,
+    /// Temporal reuse (on|off): reprojection of the last frame while the camera moves, clusterings
+    /// warm-started from the previous frame, direct light accumulated at rest (docs/temporal.md).
+    #[arg(long, default_value = "on", value_name = "on|off", value_parser = fuzzy_vpl::gi::pipeline::parse_on_off, action = clap::ArgAction::Set)]
+    temporal: bool,
     /// Render scale of the GI image relative to the image area, 0.1..1.
     #[arg(long, default_value_t = 0.5)]
     render_scale: f32,
-    /// Scripted run: draw N window frames once the first full GI frame is shown, save the window to
-    /// --screenshot, exit.
-    #[arg(long, requires = "screenshot")]
+    /// Scripted run: draw N window frames once the first full GI frame is shown (with --animate: N
+    /// frames of orbiting, then one frame at rest), save the window to --screenshot and the
+    /// measurements to --stats, exit.
+    #[arg(long)]
     frames: Option<u32>,
     /// Where a scripted run saves the window (PNG, UI included).
     #[arg(long, requires = "frames")]
     screenshot: Option<PathBuf>,
+    /// Where a scripted run writes its JSON: settings, `motion` (camera change to image latency,
+    /// GPU ms of the GI frames while moving) and `rest` (GPU ms of the frame at rest).
+    #[arg(long, requires = "frames")]
+    stats: Option<PathBuf>,
     /// The view to start in (a scripted run in reference or error computes the reference first).
     #[arg(long, value_enum, default_value = "final")]
     view: fuzzy_vpl::app::views::View,
-    /// Keep orbiting the camera (to measure frame rates while moving; with --frames).
-    #[arg(long, hide = true)]
+    /// Keep orbiting the camera (0.6 rad/s about the point looked at) to measure the viewer while
+    /// moving; with --frames.
+    #[arg(long)]
     animate: bool,
     /// Directory for the panel's screenshots.
     #[arg(long, default_value = ".")]
@@ -622,6 +645,7 @@ fn render(a: RenderArgs) -> Result<()> {
         vpl_clusters: a.vpl_clusters,
         sp_clusters: a.sp_clusters,
         weights_to_reps: a.weights_to_reps,
+        temporal: a.temporal,
         progress: true,
         control: None,
         ..Default::default()
@@ -726,6 +750,7 @@ fn render(a: RenderArgs) -> Result<()> {
                 plane_gate_deg: settings
                     .plane_gate_deg
                     .filter(|_| frame.gamma_used.is_some() && settings.f() > 1),
+                temporal: settings.temporal,
             },
             counts: stats::Counts {
                 triangles: scene.triangles.len() as u64,
@@ -736,6 +761,8 @@ fn render(a: RenderArgs) -> Result<()> {
                 shadow_rays: frame.shadow_rays,
                 emissive_triangles: renderer.gpu.emitters.len() as u64,
                 punctual_lights: scene.lights.len() as u64,
+                sp_iterations: frame.sp_iterations,
+                sp_warm_kept: frame.sp_warm_kept,
             },
             passes: frame.passes.iter().map(|s| s.to_string()).collect(),
             timings_ms,
@@ -797,7 +824,10 @@ fn view(a: ViewArgs) -> Result<()> {
             p.display()
         )));
     }
-    if let Some(p) = &a.screenshot {
+    if a.frames.is_some() && a.screenshot.is_none() && a.stats.is_none() {
+        return Err(bad("--frames needs --screenshot or --stats"));
+    }
+    for p in a.screenshot.iter().chain(&a.stats) {
         export::check_writable(p).map_err(bad)?;
     }
     // The panel's screenshots go there: found out at start, not at the first F11.
@@ -827,6 +857,7 @@ fn view(a: ViewArgs) -> Result<()> {
         vpls: a.vpls,
         vpl_clusters: a.vpl_clusters,
         sp_clusters: a.sp_clusters,
+        temporal: a.temporal,
         ..Default::default()
     });
     let fixed = match a.exposure {
@@ -854,6 +885,7 @@ fn view(a: ViewArgs) -> Result<()> {
         screenshot: a.screenshot,
         view: a.view,
         animate: a.animate,
+        stats: a.stats,
         shot_dir: a.shot_dir,
     })
 }
@@ -1085,6 +1117,42 @@ fn bench(a: BenchArgs) -> Result<()> {
         let s = c.settings(&plan.base);
         let p = fuzzy_vpl::gi::pipeline::Plan::new(&scene, &s);
         fuzzy_vpl::gi::pipeline::check_visibility_size(&ctx, &p, &s).map_err(bad)?;
+    }
+    if let Some(path) = &a.camera_path {
+        eprintln!(
+            "bench {}: {} configuration(s) x temporal {:?} along orbit:{}:{}, {width}x{height}, {vpls} VPLs on {}",
+            a.scene.scene,
+            plan.sweep.configs().len(),
+            a.temporal,
+            path.frames,
+            path.degrees,
+            ctx.adapter_name
+        );
+        let rows = bench::path::run(&ctx, &scene, &plan, path, &a.temporal)?;
+        println!(
+            "{:<32} {:>8} {:>10} {:>12} {:>11} {:>12}",
+            "configuration", "temporal", "frame ms", "SP clust. ms", "MSE", "instability"
+        );
+        let mut seen = Vec::new();
+        for r in &rows {
+            if seen.contains(&(&r.label, r.temporal)) {
+                continue;
+            }
+            seen.push((&r.label, r.temporal));
+            if let Some([f, sp, mse, inst]) = bench::path::means(&rows, &r.label, r.temporal) {
+                println!(
+                    "{:<32} {:>8} {f:>10.2} {sp:>12.2} {mse:>11.3e} {inst:>12.3e}",
+                    r.label,
+                    if r.temporal { "on" } else { "off" }
+                );
+            }
+        }
+        println!(
+            "(means over frames 1..{}) wrote path.csv and path.png to {}",
+            path.frames.saturating_sub(1),
+            a.out_dir.display()
+        );
+        return Ok(());
     }
     let configs = plan.sweep.configs().len();
     eprintln!(

@@ -46,6 +46,8 @@ pub struct Settings {
     /// when off or when it had nothing to gate (no SP clustering, or F = 1).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub plane_gate_deg: Option<f32>,
+    /// Temporal reuse (`--temporal`).
+    pub temporal: bool,
 }
 
 #[derive(Clone, Debug, Default, Serialize)]
@@ -58,6 +60,11 @@ pub struct Counts {
     pub shadow_rays: u64,
     pub emissive_triangles: u64,
     pub punctual_lights: u64,
+    /// Alg. 1 iterations the SP clustering ran (0: none ran).
+    pub sp_iterations: u32,
+    /// SP centroids a temporal warm start kept from the previous render (absent: a cold start).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sp_warm_kept: Option<u32>,
 }
 
 #[derive(Clone, Debug, Serialize)]

@@ -48,7 +48,9 @@ fn run_gpu_with(
     let buf = ctx.storage_init("data", data);
     let m = data.len() as u32 / stride;
     let c = km
-        .run(ctx, &gpu, &mut prof, "test", &buf, m, stride, s, frame)
+        .run(
+            ctx, &gpu, &mut prof, "test", &buf, m, stride, s, frame, None,
+        )
         .unwrap();
     let p = c.params;
     let raw: Vec<[f32; 4]> = ctx.read_buffer(&c.centroids, p.k as usize * 2).unwrap();

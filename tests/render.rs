@@ -501,3 +501,59 @@ fn a_mesh_past_one_storage_binding_renders() {
     );
     assert!(mean_luminance(&f.radiance) > 0.0);
 }
+
+/// Lights set on a renderer (the viewer's moving lights, `Renderer::set_lights`) are in the caller's
+/// units like cameras: the conference room at 1e12 (rendered in a unit frame scaled by 2^-43) lit by
+/// a point light given at 1e12 units with intensity × 1e24 renders the image of the unscaled room
+/// with the unscaled light, and `Frame::positions` come back in the caller's units. Tolerance as in
+/// `any_finite_scale_renders_the_unscaled_image`.
+#[test]
+fn lights_set_at_any_scale_are_in_the_callers_units() {
+    use fuzzy_vpl::scene::{LightKind, PunctualLight};
+    let ctx = common::gpu();
+    let base = scene::load("builtin:conference").unwrap();
+    let (lo, hi) = base.bounds();
+    let light = |k: f32| PunctualLight {
+        kind: LightKind::Point,
+        position: 0.5 * (lo + hi) * k,
+        direction: Vec3::NEG_Y,
+        color: Vec3::ONE,
+        intensity: 2.0 * (hi - lo).length_squared() * k * k,
+    };
+    let fs = FrameSettings {
+        vpls: 512,
+        vpl_clusters: 64,
+        sp_clusters: 96,
+        ..settings(64, 48, 4)
+    };
+    let render = |k: f32| {
+        let s = scaled(base.clone(), k);
+        let mut r = Renderer::new(&ctx, &s).unwrap();
+        r.set_lights(&[light(k)], 0.0);
+        let f = r.render(&s.default_camera(), &fs).unwrap();
+        assert!(common::all_finite(&f.radiance), "scale {k}");
+        (r.geometry_scale, f)
+    };
+    let (g1, one) = render(1.0);
+    let (gk, big) = render(1e12);
+    assert_eq!(g1, 1.0);
+    assert!(gk < 1e-12 && gk.log2().fract() == 0.0, "{gk}");
+    let (l1, lk) = (mean_luminance(&one.radiance), mean_luminance(&big.radiance));
+    let rel = fuzzy_vpl::metrics::rel_mse(&big.radiance, &one.radiance);
+    println!("point light set at 1e12: mean luminance {lk:.5} (1: {l1:.5}), rel_mse {rel:.2e}");
+    assert!(l1 > 0.01, "the room is dark: {l1}");
+    assert!((lk / l1 - 1.0).abs() < 5e-3, "{lk} vs {l1}");
+    assert!(rel <= 1e-3, "rel_mse {rel}");
+    // G-buffer positions in the caller's units: 1e12 × those of the unscaled room (f32 rounding of
+    // the scaled input: 1e-5 relative to the room's size).
+    let size = (hi - lo).length();
+    let mut compared = 0;
+    for (a, b) in one.positions.iter().zip(&big.positions) {
+        if a[3] > 0.0 && b[3] > 0.0 {
+            let d = (Vec3::new(b[0], b[1], b[2]) / 1e12 - Vec3::new(a[0], a[1], a[2])).length();
+            assert!(d <= 1e-5 * size, "{a:?} vs {b:?}");
+            compared += 1;
+        }
+    }
+    assert!(compared > 1000, "{compared}");
+}

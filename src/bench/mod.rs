@@ -4,6 +4,7 @@
 //! compared with the reference. Writes `results.csv`, images, plots and `summary.md`.
 
 pub mod csv;
+pub mod path;
 pub mod plot;
 pub mod summary;
 pub mod sweep;

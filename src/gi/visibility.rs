@@ -25,7 +25,6 @@ impl Visibility {
         let entries = [
             uniform_layout(1),
             storage_layout(2, true),
-            storage_layout(3, true),
             data_texture_layout(4, wgpu::TextureSampleType::Float { filterable: false }),
             storage_layout(5, false),
         ];
@@ -41,8 +40,7 @@ impl Visibility {
         ctx: &GpuContext,
         scene: &SceneGpu,
         profiler: &mut Profiler,
-        gbuffer: &wgpu::Buffer,
-        sp_reps: &wgpu::Buffer,
+        rep_points: &wgpu::Buffer,
         lights: &wgpu::Buffer,
         num_lights: u32,
         k_sp: u32,
@@ -72,7 +70,7 @@ impl Visibility {
         let view = tex.create_view(&Default::default());
         let bg = self.kernel.bind_group_with_textures(
             ctx,
-            &[(1, &params), (2, gbuffer), (3, sp_reps), (5, &bits)],
+            &[(1, &params), (2, rep_points), (5, &bits)],
             &[(4, &view)],
         );
         // About 2^20 rays per submission (32 per item).

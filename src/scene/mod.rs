@@ -276,14 +276,22 @@ impl Scene {
                 *p = s(*p);
             }
         }
+        self.scale_lights(f);
+        for c in &mut self.cameras {
+            c.transform.w_axis = s(c.transform.w_axis.truncate()).extend(1.0);
+        }
+    }
+
+    /// The punctual-light part of `scale_geometry`: positions × `f`, point and spot intensities × f².
+    pub fn scale_lights(&mut self, f: f64) {
+        if f == 1.0 {
+            return;
+        }
         for l in &mut self.lights {
-            l.position = s(l.position);
+            l.position = (l.position.as_dvec3() * f).as_vec3();
             if !matches!(l.kind, LightKind::Directional) {
                 scale_intensity(l, f * f);
             }
-        }
-        for c in &mut self.cameras {
-            c.transform.w_axis = s(c.transform.w_axis.truncate()).extend(1.0);
         }
     }
 
