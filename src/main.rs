@@ -1,4 +1,4 @@
-//! `fuzzy-vpl`: command-line front end (DESIGN.md §4).
+//! `fuzzy-vpl`: command-line front end (docs/design.md, "CLI").
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -179,7 +179,7 @@ struct RenderArgs {
     /// Repeat -o to write several files of the same frame (e.g. -o a.exr -o a.png).
     #[arg(short, long, required = true)]
     output: Vec<PathBuf>,
-    /// Write the stats JSON (DESIGN.md §4) here.
+    /// Write the stats JSON (docs/design.md, "Stats JSON") here.
     #[arg(long)]
     stats: Option<PathBuf>,
     /// Fill the stats' error block against this reference EXR.
@@ -432,7 +432,8 @@ fn main() -> ExitCode {
         }
     }
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
-    // Bad arguments get one line and exit code 2 (DESIGN.md §4); help and version print in full.
+    // Bad arguments get one line and exit code 2 (docs/design.md, "Exit codes"); help and version
+    // print in full.
     let cli = match command()
         .try_get_matches()
         .and_then(|m| <Cli as clap::FromArgMatches>::from_arg_matches(&m))

@@ -1,4 +1,4 @@
-//! Error metrics of DESIGN.md §4.
+//! Error metrics of docs/design.md, "Error metrics".
 
 /// The paper's MSE: mean over pixels and RGB channels of (x − ref)², both clamped to [0, 1].
 pub fn mse(x: &[[f32; 3]], reference: &[[f32; 3]]) -> f64 {

@@ -1,4 +1,4 @@
-//! The stats JSON of DESIGN.md §4 (a contract: extend it, never break it).
+//! The stats JSON of docs/design.md, "Stats JSON" (a contract: extend it, never break it).
 
 use std::collections::BTreeMap;
 

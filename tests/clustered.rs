@@ -1,5 +1,5 @@
 //! The clustered frame (steps 2, 4, 5, 6) against its CPU twins, the paper's MSE ordering, and the
-//! numerical extremes of DESIGN.md §5.
+//! numerical extremes of docs/design.md, "Numerical stability".
 
 mod common;
 
@@ -205,7 +205,7 @@ fn scaled(mut s: Scene, k: f32) -> Scene {
     s
 }
 
-/// DESIGN.md §5 on the whole clustered frame: every output finite and the image sane.
+/// docs/design.md, "Numerical stability" on the whole clustered frame: every output finite and the image sane.
 #[test]
 fn clustered_extremes_stay_finite() {
     let ctx = common::gpu();

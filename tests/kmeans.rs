@@ -1,5 +1,5 @@
 //! GPU k-means (Alg. 1 + 2) against its CPU twin, on random surface data and on shading points from a
-//! real render; the numerical extremes of DESIGN.md §5.
+//! real render; the numerical extremes of docs/design.md, "Numerical stability".
 
 mod common;
 
@@ -322,7 +322,7 @@ fn gpu_kmeans_matches_cpu_on_shading_points() {
     assert!(differ * 20 <= valid, "{differ} of {valid}");
 }
 
-/// DESIGN.md §5: K = 1, K above the point count, F > K, γ above the point count, n_t = ±1, zero and
+/// docs/design.md, "Numerical stability": K = 1, K above the point count, F > K, γ above the point count, n_t = ±1, zero and
 /// 200 iterations, a single point: every valid point assigned, weights finite and normalised.
 #[test]
 fn kmeans_extremes_stay_sane() {

@@ -71,12 +71,14 @@ pub fn sun_direction(azimuth: f32, elevation: f32) -> Vec3 {
 impl Viewer {
     pub(super) fn lights_section(&mut self, ui: &mut Ui) {
         let Some(info) = &self.info else { return };
+        let has_light = info.has_light;
         let bounds = info.bounds;
         let emissive = info.emissive_triangles;
         let extent = (bounds.1 - bounds.0).length().max(1e-12);
         let mut set = self.lights.clone();
+        // Open from the start in a scene without light, where it is the first thing to use.
         egui::CollapsingHeader::new("Lights")
-            .default_open(false)
+            .default_open(!has_light)
             .show(ui, |ui| {
                 if emissive > 0 {
                     ui.add(
@@ -130,7 +132,9 @@ impl Viewer {
                                     ("y", &mut l.position.y),
                                     ("z", &mut l.position.z),
                                 ] {
-                                    ui.add(DragValue::new(v).speed(speed).prefix(name));
+                                    ui.add(
+                                        DragValue::new(v).speed(speed).prefix(format!("{name} ")),
+                                    );
                                 }
                             });
                         }
@@ -149,7 +153,7 @@ impl Viewer {
                 });
                 if let Some((trace, cluster)) = self.last_relight {
                     ui.label(format!(
-                        "last light change: VPL trace {trace:.0} ms + VPL clustering {cluster:.0} ms GPU"
+                        "VPLs last traced in {trace:.0} ms + clustered in {cluster:.0} ms (GPU)"
                     ));
                 }
             });

@@ -396,7 +396,7 @@ pub struct Viewer {
     pub shown_camera: Option<crate::scene::Camera>,
     /// The lights as the panel edits them (the scene's until changed).
     pub lights: lights::LightSet,
-    /// GPU ms of the last light change: (VPL trace, VPL clustering).
+    /// GPU ms of the last VPL trace (a light change) and clustering.
     pub last_relight: Option<(f64, f64)>,
     pub script_started: Option<Instant>,
     /// Set when the viewer should close (scripted run done, or failed).
@@ -1318,6 +1318,8 @@ mod tests {
         poll_until(&mut v, |v| v.latest.is_some());
         let lum = |v: &Viewer| metrics::mean_luminance(&v.latest.as_ref().unwrap().frame.radiance);
         let before = lum(&v);
+        assert!(v.last_relight.is_some(), "the first frame traced the VPLs");
+        v.last_relight = None;
         // The ceiling light off, a point light in the middle of the box.
         let bounds = v.info.as_ref().unwrap().bounds;
         let mut set = v.lights.clone();

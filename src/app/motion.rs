@@ -21,7 +21,7 @@ pub struct Motion {
     pub rest: Option<(f64, u32, u32)>,
 }
 
-/// `motion` and `rest` of the viewer's stats JSON (the DESIGN.md contract).
+/// `motion` and `rest` of the viewer's stats JSON (docs/design.md, "Contracts added later").
 #[derive(Debug, Serialize, PartialEq)]
 pub struct MotionStats {
     pub image_latency_ms_p95: f64,
@@ -29,7 +29,8 @@ pub struct MotionStats {
     pub image_latency_ms_max: f64,
     /// Camera changes measured.
     pub changes: usize,
-    pub gi_frame_ms_mean: f64,
+    /// `None` when no GI frame finished while moving.
+    pub gi_frame_ms_mean: Option<f64>,
     pub gi_frames: usize,
 }
 
@@ -74,7 +75,7 @@ impl Motion {
             image_latency_ms_mean: mean(&self.latencies_ms),
             image_latency_ms_max: quantile(&self.latencies_ms, 1.0)?,
             changes: self.latencies_ms.len(),
-            gi_frame_ms_mean: mean(&self.moving_gi_ms),
+            gi_frame_ms_mean: (!self.moving_gi_ms.is_empty()).then(|| mean(&self.moving_gi_ms)),
             gi_frames: self.moving_gi_ms.len(),
         })
     }
@@ -126,7 +127,7 @@ mod tests {
         m.moving_gi_ms = vec![10.0, 30.0];
         let s = m.stats().unwrap();
         assert_eq!((s.changes, s.gi_frames), (2, 2));
-        assert!((s.gi_frame_ms_mean - 20.0).abs() < 1e-9);
+        assert_eq!(s.gi_frame_ms_mean, Some(20.0));
         assert!((s.image_latency_ms_p95 - 50.0).abs() < 1e-6);
         assert!(Motion::default().stats().is_none());
     }

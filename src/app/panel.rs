@@ -55,8 +55,8 @@ impl Viewer {
         }
         self.scene_section(ui);
         self.camera_section(ui);
-        self.settings_section(ui);
         self.lights_section(ui);
+        self.settings_section(ui);
         self.stats_section(ui);
         self.reference_section(ui);
         self.screenshot_section(ui);

@@ -73,7 +73,8 @@ pub struct Rendered {
     pub wall_ms: f64,
     /// The direct light accumulated at rest: (estimates, samples a pixel, GPU ms of the last one).
     pub refined: Option<(u32, u64, f64)>,
-    /// GPU ms of (VPL trace, VPL clustering) when this frame traced new VPLs (a light change).
+    /// GPU ms of (VPL trace, VPL clustering) when this frame traced new VPLs (the first frame, a
+    /// light change, a new VPL count or seed).
     pub relit: Option<(f64, f64)>,
 }
 
@@ -373,7 +374,7 @@ fn render(
     };
     let wall_ms = t.elapsed().as_secs_f64() * 1e3;
     let relit = match &renderer.vpl_set {
-        Some((_, key, _)) if cache.vpl_key.is_some_and(|k| k != *key) => {
+        Some((_, key, _)) if cache.vpl_key != Some(*key) => {
             let ms = |k: &str| frame.timings_ms.get(k).copied().unwrap_or(0.0);
             Some((ms("vpl_trace"), ms("vpl_cluster")))
         }
