@@ -7,6 +7,7 @@ use anyhow::Result;
 use clap::{Args, Parser, Subcommand};
 
 use fuzzy_vpl::bench::{self, sweep};
+use fuzzy_vpl::exposure::Exposure;
 use fuzzy_vpl::gi::pipeline::{FrameSettings, Renderer, Weighting};
 use fuzzy_vpl::gpu::GpuContext;
 use fuzzy_vpl::scene::{self, Scene, extra_lights};
@@ -134,9 +135,10 @@ struct BenchArgs {
     /// G-term clamp as a fraction of the scene diagonal.
     #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_CLAMP)]
     clamp: f32,
-    /// Exposure of the PNG images.
-    #[arg(long, default_value_t = 1.0)]
-    exposure: f32,
+    /// Exposure of the PNG images: `auto` (the default: the reference's log-average luminance shown
+    /// as middle grey 0.18, Reinhard et al. 2002, for every image of a camera) or a factor >= 0.
+    #[arg(long, default_value = "auto", value_parser = Exposure::parse)]
+    exposure: Exposure,
 }
 
 #[derive(Args)]
@@ -195,9 +197,10 @@ struct RenderArgs {
     /// Area-light samples (shadow rays) per pixel for direct light, 1..=65536.
     #[arg(long, default_value_t = 16)]
     direct_samples: u32,
-    /// Exposure multiplier for PNG output (EXR stays unscaled radiance).
-    #[arg(long, default_value_t = 1.0)]
-    exposure: f32,
+    /// PNG exposure: `auto` (the default: the image's log-average luminance is shown as middle grey
+    /// 0.18, Reinhard et al. 2002) or a factor >= 0. EXR stays linear, unscaled radiance.
+    #[arg(long, default_value = "auto", value_parser = Exposure::parse)]
+    exposure: Exposure,
     /// Render N times; timings are the mean of the 3 best (the paper's method).
     #[arg(long, default_value_t = 1)]
     repeat: u32,
@@ -325,8 +328,10 @@ struct ViewArgs {
     /// Area-light samples (shadow rays) per pixel for direct light, 1..=65536.
     #[arg(long, default_value_t = 16)]
     direct_samples: u32,
-    #[arg(long, default_value_t = 1.0)]
-    exposure: f32,
+    /// Display exposure: `auto` (the default: each frame's log-average luminance shown as middle grey
+    /// 0.18) or a factor > 0.
+    #[arg(long, default_value = "auto", value_parser = Exposure::parse)]
+    exposure: Exposure,
     /// VPLs (the viewer starts lighter than `render` so a software driver stays interactive).
     #[arg(long, default_value_t = 4096)]
     vpls: u32,
@@ -373,6 +378,29 @@ struct InfoArgs {
     scene: SceneArgs,
 }
 
+/// The command line with every option that takes a value accepting a negative number as that value
+/// (`--light-scale -1` is then refused by the option's own check, with its range, rather than read
+/// as an unknown flag `-1`).
+fn command() -> clap::Command {
+    fn negatives(c: clap::Command) -> clap::Command {
+        let ids: Vec<clap::Id> = c
+            .get_arguments()
+            .filter(|a| !a.is_positional() && a.get_action().takes_values())
+            .map(|a| a.get_id().clone())
+            .collect();
+        let c = ids
+            .iter()
+            .fold(c, |c, id| c.mut_arg(id, |a| a.allow_negative_numbers(true)));
+        let subs: Vec<String> = c
+            .get_subcommands()
+            .map(|s| s.get_name().to_string())
+            .collect();
+        subs.iter()
+            .fold(c, |c, name| c.mut_subcommand(name, negatives))
+    }
+    negatives(<Cli as clap::CommandFactory>::command())
+}
+
 /// An error that is the user's input: exit code 2.
 #[derive(Debug)]
 struct BadInput(String);
@@ -406,7 +434,10 @@ fn main() -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     // Bad arguments get one line and exit code 2 (docs/design.md, "Exit codes"); help and version
     // print in full.
-    let cli = match Cli::try_parse() {
+    let cli = match command()
+        .try_get_matches()
+        .and_then(|m| <Cli as clap::FromArgMatches>::from_arg_matches(&m))
+    {
         Ok(c) => c,
         Err(e) => {
             use clap::error::ErrorKind;
@@ -445,6 +476,8 @@ fn main() -> ExitCode {
         Err(e) => {
             let is_input = e.downcast_ref::<BadInput>().is_some()
                 || e.downcast_ref::<scene::SceneError>().is_some()
+                || e.downcast_ref::<fuzzy_vpl::gi::scene_gpu::TooBig>()
+                    .is_some()
                 || e.downcast_ref::<fuzzy_vpl::app::Unavailable>().is_some();
             eprintln!("error: {e}");
             if is_input {
@@ -545,9 +578,6 @@ fn render(a: RenderArgs) -> Result<()> {
     if a.path_trace == Some(0) {
         return Err(bad("--path-trace 0: must be at least 1 sample a pixel"));
     }
-    if !(a.exposure.is_finite() && a.exposure >= 0.0) {
-        return Err(bad("--exposure must be a finite number >= 0"));
-    }
     a.cluster.check()?;
     check_direct_samples(a.direct_samples)?;
     if !(1..=64).contains(&a.bounces) {
@@ -645,8 +675,17 @@ fn render(a: RenderArgs) -> Result<()> {
     if non_finite > 0 {
         eprintln!("warning: {non_finite} non-finite pixel channels in the output");
     }
+    // Never a silent black image: a lit scene rendering all black says so (no light at all was
+    // warned about when loading).
+    if scene.has_light() && frame.radiance.iter().flatten().all(|&c| c == 0.0) {
+        eprintln!(
+            "warning: {}: the image is black although the scene has light (the camera sees no lit surface)",
+            a.scene.scene
+        );
+    }
+    let exposure = a.exposure.resolve(&frame.radiance);
     for out in &a.output {
-        export::write_image(out, frame.width, frame.height, &frame.radiance, a.exposure)?;
+        export::write_image(out, frame.width, frame.height, &frame.radiance, exposure)?;
     }
     if let (Some(p), Some(r)) = (&a.error_map, &reference) {
         export::write_png_rgb8(
@@ -700,7 +739,8 @@ fn render(a: RenderArgs) -> Result<()> {
                 seed: a.seed,
                 direct_samples: settings.direct_samples,
                 light_scale: a.scene.light_scale,
-                exposure: a.exposure,
+                exposure,
+                exposure_auto: a.exposure.is_auto(),
                 clamp: settings.clamp,
                 gamma_used: frame.gamma_used,
                 normal_threshold_used: fuzzy_vpl::gi::kmeans::effective_normal_threshold(
@@ -764,8 +804,10 @@ fn view(a: ViewArgs) -> Result<()> {
     }
     a.cluster.check()?;
     check_direct_samples(a.direct_samples)?;
-    if !(a.exposure.is_finite() && a.exposure > 0.0) {
-        return Err(bad("--exposure must be a finite number > 0"));
+    if a.exposure == Exposure::Fixed(0.0) {
+        return Err(bad(
+            "--exposure 0: the viewer needs an exposure > 0 (or auto)",
+        ));
     }
     if !(0.1..=1.0).contains(&a.render_scale) {
         return Err(bad(format!(
@@ -820,7 +862,12 @@ fn view(a: ViewArgs) -> Result<()> {
         temporal: a.temporal,
         ..Default::default()
     });
-    let mut settings = fuzzy_vpl::app::UiSettings::from_frame_settings(&fs, a.exposure);
+    let fixed = match a.exposure {
+        Exposure::Fixed(e) => e,
+        Exposure::Auto => 1.0,
+    };
+    let mut settings = fuzzy_vpl::app::UiSettings::from_frame_settings(&fs, fixed);
+    settings.exposure_auto = a.exposure.is_auto();
     settings.render_scale = a.render_scale;
     let args = a.scene.clone();
     let loader: fuzzy_vpl::app::worker::Loader = std::sync::Arc::new(move |spec: &str| {
@@ -867,21 +914,49 @@ fn info(a: InfoArgs) -> Result<()> {
         kinds(|k| matches!(k, scene::LightKind::Directional)),
     );
     println!("cameras:             {}", s.cameras.len());
+    // Fixed decimals for everyday units, exponents for scenes in other units (1e-15 or 1e12).
+    let num = |x: f32, d: usize| {
+        if x == 0.0 || (1e-3..1e6).contains(&x.abs()) {
+            format!("{x:.d$}")
+        } else {
+            format!("{x:.3e}")
+        }
+    };
     for (i, c) in s.cameras.iter().enumerate() {
         let e = c.eye();
         println!(
-            "  [{i}] {:<16} eye ({:.3}, {:.3}, {:.3}) yfov {:.1} deg",
+            "  [{i}] {:<16} eye ({}, {}, {}) yfov {:.1} deg",
             c.name,
-            e.x,
-            e.y,
-            e.z,
+            num(e.x, 3),
+            num(e.y, 3),
+            num(e.z, 3),
             c.yfov.to_degrees()
         );
     }
     println!(
-        "bounds:              ({:.4}, {:.4}, {:.4}) .. ({:.4}, {:.4}, {:.4})",
-        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+        "bounds:              ({}, {}, {}) .. ({}, {}, {})",
+        num(lo.x, 4),
+        num(lo.y, 4),
+        num(lo.z, 4),
+        num(hi.x, 4),
+        num(hi.y, 4),
+        num(hi.z, 4)
     );
+    let g = s.geometry_scale();
+    if g != 1.0 {
+        println!(
+            "unit frame:          rendered with the geometry scaled by 2^{} (Scene::geometry_scale)",
+            g.log2().round() as i32
+        );
+    }
+    match fuzzy_vpl::gi::scene_gpu::check_fits(&s, u64::MAX) {
+        Ok(()) => println!(
+            "GPU data:            {} of at most {} triangles",
+            s.triangles.len(),
+            fuzzy_vpl::gi::scene_gpu::MAX_TRIANGLES
+        ),
+        Err(e) => println!("GPU data:            does not fit: {e}"),
+    }
     println!(
         "extensions used:     {}",
         s.report.extensions_used.join(", ")
@@ -975,9 +1050,6 @@ fn bench(a: BenchArgs) -> Result<()> {
     check_iterations(a.iterations)?;
     check_clamp(a.clamp)?;
     check_direct_samples(a.direct_samples)?;
-    if !(a.exposure.is_finite() && a.exposure >= 0.0) {
-        return Err(bad("--exposure must be a finite number >= 0"));
-    }
     let cam_list: Option<Vec<usize>> = a
         .camera
         .as_deref()

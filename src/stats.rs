@@ -23,7 +23,11 @@ pub struct Settings {
     pub seed: u32,
     pub direct_samples: u32,
     pub light_scale: f32,
+    /// The PNG exposure used: with `exposure_auto` the one `exposure::auto_exposure` chose for this
+    /// image (its log-average luminance shown as 0.18); EXR is never scaled.
     pub exposure: f32,
+    /// `--exposure auto` (the default).
+    pub exposure_auto: bool,
     /// G-term clamp as a fraction of the scene diagonal.
     pub clamp: f32,
     /// γ and n_t as the SP k-means used them (`kmeans::effective_gamma`,

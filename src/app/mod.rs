@@ -89,6 +89,8 @@ pub struct UiSettings {
     pub nt_degrees: f32,
     pub iterations: u32,
     pub exposure: f32,
+    /// Exposure by `exposure::auto_exposure` of the latest frame (the panel keeps `exposure` at it).
+    pub exposure_auto: bool,
     pub render_scale: f32,
     pub mode: Mode,
     /// p of the weighted mode's w'_f = dist^-p (Eq. 10: 1).
@@ -122,6 +124,7 @@ impl UiSettings {
             nt_degrees: f.normal_threshold.clamp(-1.0, 1.0).acos().to_degrees(),
             iterations: f.iterations,
             exposure,
+            exposure_auto: false,
             render_scale: 1.0,
             mode: match f.weighting {
                 Weighting::Hard => Mode::Hard,

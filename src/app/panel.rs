@@ -213,6 +213,8 @@ impl Viewer {
                 ui.separator();
                 // The γ the last frame sampled with: the slider starts there when auto is unticked.
                 let gamma_used = self.latest.as_ref().and_then(|l| l.frame.gamma_used);
+                let auto_e = self.latest.as_ref().filter(|_| self.s.exposure_auto);
+                let auto_e = auto_e.map(|l| crate::exposure::auto_exposure(&l.frame.radiance));
                 let s = &mut self.s;
                 let r = &self.ranges;
                 ui.horizontal(|ui| {
@@ -292,11 +294,19 @@ impl Viewer {
                 );
                 ui.add(Slider::new(&mut s.iterations, 0..=r.iterations).text("k-means iterations"));
                 ui.separator();
-                ui.add(
-                    Slider::new(&mut s.exposure, r.exposure.0..=r.exposure.1)
-                        .logarithmic(true)
-                        .text("exposure"),
-                );
+                ui.horizontal(|ui| {
+                    ui.checkbox(&mut s.exposure_auto, "auto").on_hover_text(
+                        "the frame's log-average luminance shown as middle grey 0.18 \
+                         (Reinhard et al. 2002)",
+                    );
+                    s.exposure = auto_e.unwrap_or(s.exposure);
+                    ui.add_enabled(
+                        !s.exposure_auto,
+                        Slider::new(&mut s.exposure, r.exposure.0..=r.exposure.1)
+                            .logarithmic(true)
+                            .text("exposure"),
+                    );
+                });
                 ui.add(Slider::new(&mut s.render_scale, 0.1..=1.0).text("render scale"));
                 if let ((w, h), Some(lower)) = self.gi_size() {
                     let most = self.info.as_ref().map_or(0, |i| i.max_pixels);

@@ -380,7 +380,9 @@ fn render(
         }
         _ => None,
     };
-    let pos = |p: &[f32; 4]| Vec3::new(p[0], p[1], p[2]);
+    // In the caller's units (the renderer's are scaled by `geometry_scale`).
+    let k = 1.0 / renderer.geometry_scale;
+    let pos = |p: &[f32; 4]| (Vec3::new(p[0], p[1], p[2]).as_dvec3() * k).as_vec3();
     match &renderer.vpl_set {
         Some((set, key, _)) if cache.vpl_key != Some(*key) => {
             cache.vpl_key = Some(*key);

@@ -373,12 +373,16 @@ pub type VplKey = (u32, u32, u32, u32);
 /// Everything resident for one scene on one device.
 pub struct Renderer<'a> {
     pub ctx: &'a GpuContext,
-    /// The scene as rendered: borrowed, or a copy with its emitters scaled into range
-    /// (`Scene::normalize_emission`), in which case `output_scale` scales the images back.
+    /// The scene as rendered: borrowed, or a copy with its geometry scaled by a power of two into a
+    /// unit frame (`Scene::normalize_geometry`, `geometry_scale`) and/or its emitters scaled into
+    /// range (`Scene::normalize_emission`, `output_scale` scales the images back).
     pub scene: std::borrow::Cow<'a, Scene>,
     /// The scene as given (`set_lights` scales its emitters from these).
     source: &'a Scene,
     pub output_scale: f32,
+    /// The factor from the caller's units to the rendered scene's (a power of two; 1 for scenes of
+    /// 2^-10..2^10 across): cameras given to `render` and `path_trace` are scaled by it.
+    pub geometry_scale: f64,
     pub bvh: SceneBvh,
     pub gpu: SceneGpu,
     pub profiler: Profiler,
@@ -404,7 +408,12 @@ pub struct Renderer<'a> {
 
 impl<'a> Renderer<'a> {
     pub fn new(ctx: &'a GpuContext, source: &'a Scene) -> Result<Self> {
+        super::scene_gpu::check_fits(source, ctx.max_binding())?;
         let mut scene = std::borrow::Cow::Borrowed(source);
+        let geometry_scale = scene.geometry_scale();
+        if geometry_scale != 1.0 {
+            scene.to_mut().scale_geometry(geometry_scale);
+        }
         let output_scale = if scene.emission_out_of_range() {
             scene.to_mut().normalize_emission()
         } else {
@@ -417,6 +426,7 @@ impl<'a> Renderer<'a> {
             scene,
             source,
             output_scale,
+            geometry_scale,
             primary: Primary::new(ctx, &gpu),
             direct: Direct::new(ctx, &gpu),
             vpl_trace: VplTrace::new(ctx, &gpu),
@@ -436,15 +446,29 @@ impl<'a> Renderer<'a> {
         })
     }
 
-    /// Lights that move: replaces the scene's punctual lights with `lights` and scales its emissive
-    /// materials by `emitter_scale` (from the scene as given). The geometry and its BVH stay; the
-    /// scene's GPU buffers are uploaded again, and the passes rebuilt only when the shader paths a
-    /// scene needs change (punctual lights or emitters appear or go). The next frame traces the VPLs
-    /// again and clusters them (from the last clustering, with temporal reuse on).
+    /// `camera` (in the caller's units) in the rendered scene's units: its eye scaled by
+    /// `geometry_scale`.
+    pub fn to_render_units(&self, camera: &Camera) -> Camera {
+        let mut c = camera.clone();
+        if self.geometry_scale != 1.0 {
+            let eye = c.transform.w_axis.truncate().as_dvec3() * self.geometry_scale;
+            c.transform.w_axis = eye.as_vec3().extend(1.0);
+        }
+        c
+    }
+
+    /// Lights that move: replaces the scene's punctual lights with `lights` (in the caller's units,
+    /// like cameras) and scales its emissive materials by `emitter_scale` (from the scene as given).
+    /// The geometry and its BVH stay; the scene's GPU buffers are uploaded again, and the passes
+    /// rebuilt only when the shader paths a scene needs change (punctual lights or emitters appear or
+    /// go). The next frame traces the VPLs again and clusters them (from the last clustering, with
+    /// temporal reuse on).
     pub fn set_lights(&mut self, lights: &[PunctualLight], emitter_scale: f32) {
         let ctx = self.ctx;
         let scene = self.scene.to_mut();
         scene.lights = lights.to_vec();
+        // Lights come in the caller's units: into the unit frame the geometry was scaled to.
+        scene.scale_lights(self.geometry_scale);
         for (m, base) in scene.materials.iter_mut().zip(&self.source.materials) {
             m.emissive = base.emissive * emitter_scale;
         }
@@ -611,7 +635,7 @@ impl<'a> Renderer<'a> {
         let ctx = self.ctx;
         check_frame_size(ctx, s.width, s.height, PATH_TRACE_PIXEL_BYTES)?;
         let pt = super::pathtrace::PathTrace::new(ctx, &self.gpu);
-        let cam = CameraParams::new(camera, s.width, s.height);
+        let cam = CameraParams::new(&self.to_render_units(camera), s.width, s.height);
         let _ = self.profiler.collect(ctx)?;
         // Samples an invocation traces per pass. lavapipe ends all loops of a SIMD batch after
         // 65,535 trips (docs/architecture.md): 16 samples of up to 9 vertices lost up to 2 of them on
@@ -675,7 +699,7 @@ impl<'a> Renderer<'a> {
         let gbuffer = ctx.storage("gbuffer", n as u64 * SP_BYTES);
         let radiance = ctx.storage("radiance", n as u64 * 16);
         let indirect = ctx.storage("indirect", n as u64 * 16);
-        let cam = CameraParams::new(camera, s.width, s.height);
+        let cam = CameraParams::new(&self.to_render_units(camera), s.width, s.height);
         self.primary
             .record(ctx, &self.gpu, &mut self.profiler, &cam, &gbuffer);
         // With no light at all the direct pass still runs to write emission (zero) and clear the image.
@@ -885,7 +909,16 @@ impl<'a> Renderer<'a> {
             sp_clusters_used: sp_used,
             vpl_clusters_used: if plan.vpl_clustering { num_lights } else { 0 },
             gamma_used,
-            positions: sps.chunks(4).map(|sp| sp[0]).collect(),
+            // In the caller's units (the G-buffer holds the unit frame's, `geometry_scale`).
+            positions: sps
+                .chunks(4)
+                .map(|sp| {
+                    let p = sp[0];
+                    let k = 1.0 / self.geometry_scale;
+                    let q = glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) * k;
+                    [q.x as f32, q.y as f32, q.z as f32, p[3]]
+                })
+                .collect(),
             sp_iterations,
             sp_warm_kept,
             visibility_rows_reused: rows_reused,
