@@ -278,19 +278,14 @@ pub fn plot(path: &Path, title: &str, rows: &[PathRow]) -> Result<()> {
                 .filter_map(value)
                 .filter(|v| v.is_finite() && *v > 0.0)
                 .collect();
-            let (lo, hi) = vals
-                .iter()
-                .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
-            let (lo, hi) = if vals.is_empty() {
-                (1e-6, 1e-3)
-            } else {
-                (lo / 1.5, hi * 1.5)
-            };
+            // A linear axis from 0: the frames' values lie within a factor of a few of each other.
+            let hi = vals.iter().fold(0f64, |a, &v| a.max(v));
+            let hi = if hi > 0.0 { hi * 1.25 } else { 1e-3 };
             let mut chart = ChartBuilder::on(area)
                 .margin(12)
                 .x_label_area_size(36)
                 .y_label_area_size(70)
-                .build_cartesian_2d(0u32..frames, (lo..hi).log_scale())
+                .build_cartesian_2d(0u32..frames, 0f64..hi)
                 .map_err(|e| anyhow!("{e}"))?;
             chart
                 .configure_mesh()
