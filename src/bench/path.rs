@@ -101,9 +101,12 @@ pub struct PathRow {
     pub sp_clusters_used: u32,
     /// GPU ms of this frame's reference.
     pub reference_ms: f64,
+    /// GPU ms of the visibility pass, and its rows copied from the previous frame.
+    pub visibility_ms: f64,
+    pub visibility_rows_reused: u32,
 }
 
-pub const HEADER: &str = "label,temporal,frame,frame_ms,sp_cluster_ms,mse,rel_mse,instability,sp_iterations,sp_warm_kept,sp_clusters_used,reference_ms";
+pub const HEADER: &str = "label,temporal,frame,frame_ms,sp_cluster_ms,mse,rel_mse,instability,sp_iterations,sp_warm_kept,sp_clusters_used,reference_ms,visibility_ms,visibility_rows_reused";
 
 pub fn to_csv(rows: &[PathRow]) -> String {
     let mut s = String::from(HEADER);
@@ -111,7 +114,7 @@ pub fn to_csv(rows: &[PathRow]) -> String {
     let opt = |v: Option<String>| v.unwrap_or_default();
     for r in rows {
         s.push_str(&format!(
-            "\"{}\",{},{},{},{},{:e},{:e},{},{},{},{},{}\n",
+            "\"{}\",{},{},{},{},{:e},{:e},{},{},{},{},{},{},{}\n",
             r.label.replace('"', "\"\""),
             if r.temporal { "on" } else { "off" },
             r.frame,
@@ -124,6 +127,8 @@ pub fn to_csv(rows: &[PathRow]) -> String {
             opt(r.sp_warm_kept.map(|v| v.to_string())),
             r.sp_clusters_used,
             r.reference_ms,
+            r.visibility_ms,
+            r.visibility_rows_reused,
         ));
     }
     s
@@ -213,6 +218,8 @@ pub fn run(
                     sp_warm_kept: f.sp_warm_kept,
                     sp_clusters_used: f.sp_clusters_used,
                     reference_ms: *reference_ms,
+                    visibility_ms: f.timings_ms.get("visibility").copied().unwrap_or(0.0),
+                    visibility_rows_reused: f.visibility_rows_reused,
                 };
                 eprintln!(
                     "path: {} temporal {} frame {i}: {:.1} ms (SP clustering {:.1} ms, {} iteration(s), kept {}), MSE {:.3e}, instability {}",
@@ -399,6 +406,8 @@ mod tests {
             sp_warm_kept: on.then_some(180),
             sp_clusters_used: 192,
             reference_ms: 100.0,
+            visibility_ms: 5.0,
+            visibility_rows_reused: 0,
         };
         let rows = vec![
             row(0, false, 100.0, 9.0, None),
