@@ -6,7 +6,7 @@
 //! indexes the triangle arrays directly, on the CPU and the GPU alike. `slot_to_triangle` maps back to
 //! `Scene::triangles`. Why BVH2 rather than CWBVH is measured and argued in `docs/bvh.md`.
 
-use glam::Vec3A;
+use glam::{Vec2, Vec3A};
 use obvhs::{
     BvhBuildParams,
     bvh2::{Bvh2, builder::build_bvh2_from_tris},
@@ -31,7 +31,8 @@ pub struct GpuNode {
     pub index: u32,
 }
 
-/// A triangle's vertices as the shader reads them (w unused).
+/// A triangle's vertices as the shader reads them; `v0[3]` is 1 for an alpha-tested triangle, else 0
+/// (the per-triangle flag of the alpha test, read where a ray finds a candidate hit).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuTriangle {
@@ -47,6 +48,119 @@ pub struct SceneBvh {
     pub slot_to_triangle: Vec<u32>,
     pub depth: usize,
     pub build_ms: f64,
+    /// The alpha test of the CPU traversal; `None` when no triangle is alpha-tested.
+    pub alpha: Option<AlphaMask>,
+}
+
+/// What the CPU traversal needs to alpha-test (twin of `alpha_passes` in
+/// `shaders-wgsl/common/alpha.wgsl`): a hit on a flagged triangle whose alpha (base colour factor ×
+/// interpolated vertex alpha × bilinear texture alpha) is below its material's cutoff is no hit.
+pub struct AlphaMask {
+    /// Per slot: index into `tris`, or `u32::MAX` for a triangle that is not tested.
+    slot: Vec<u32>,
+    tris: Vec<MaskTri>,
+    /// The alpha channels of the textures that tested triangles read.
+    textures: Vec<AlphaTexture>,
+}
+
+struct MaskTri {
+    uv: [Vec2; 3],
+    vertex_alpha: [f32; 3],
+    factor: f32,
+    texture: Option<u32>,
+    cutoff: f32,
+}
+
+struct AlphaTexture {
+    width: u32,
+    height: u32,
+    alpha: Vec<u8>,
+}
+
+impl AlphaTexture {
+    /// Twin of `sample_alpha` (bilinear, repeat, alpha stored linear).
+    fn sample(&self, uv: Vec2) -> f32 {
+        let (w, h) = (self.width as i32, self.height as i32);
+        let f = (uv - uv.floor()) * Vec2::new(w as f32, h as f32) - 0.5;
+        let i = f.floor();
+        let t = f - i;
+        let (x, y) = (i.x as i32, i.y as i32);
+        let at = |x: i32, y: i32| {
+            self.alpha[(y.rem_euclid(h) * w + x.rem_euclid(w)) as usize] as f32 / 255.0
+        };
+        let lerp = |a: f32, b: f32, s: f32| a + (b - a) * s;
+        lerp(
+            lerp(at(x, y), at(x + 1, y), t.x),
+            lerp(at(x, y + 1), at(x + 1, y + 1), t.x),
+            t.y,
+        )
+    }
+}
+
+impl AlphaMask {
+    fn build(scene: &Scene, slot_to_triangle: &[u32]) -> Option<AlphaMask> {
+        let flags = scene.alpha_test_flags();
+        if !flags.iter().any(|&f| f) {
+            return None;
+        }
+        let mut texture_index = std::collections::HashMap::new();
+        let mut textures = Vec::new();
+        let mut tris = Vec::new();
+        let slot = slot_to_triangle
+            .iter()
+            .map(|&ti| {
+                if !flags[ti as usize] {
+                    return u32::MAX;
+                }
+                let t = &scene.triangles[ti as usize];
+                let m = &scene.materials[t.material as usize];
+                let texture = m.base_color_texture.map(|k| {
+                    *texture_index.entry(k).or_insert_with(|| {
+                        let tex = &scene.textures[k as usize];
+                        textures.push(AlphaTexture {
+                            width: tex.width,
+                            height: tex.height,
+                            alpha: tex.rgba8.iter().map(|c| c[3]).collect(),
+                        });
+                        textures.len() as u32 - 1
+                    })
+                });
+                tris.push(MaskTri {
+                    uv: t.uv,
+                    vertex_alpha: t.color.map(|c| c.w),
+                    factor: m.base_color.w,
+                    texture,
+                    cutoff: m.alpha_cutoff.unwrap_or(0.0),
+                });
+                tris.len() as u32 - 1
+            })
+            .collect();
+        Some(AlphaMask {
+            slot,
+            tris,
+            textures,
+        })
+    }
+
+    /// Whether `slot` is alpha-tested.
+    pub fn tested(&self, slot: usize) -> bool {
+        self.slot[slot] != u32::MAX
+    }
+
+    /// Whether a hit on `slot` at barycentrics (b1, b2) counts (always for untested triangles).
+    pub fn passes(&self, slot: usize, b1: f32, b2: f32) -> bool {
+        let Some(m) = self.tris.get(self.slot[slot] as usize) else {
+            return true;
+        };
+        let b0 = 1.0 - b1 - b2;
+        let va = b0 * m.vertex_alpha[0] + b1 * m.vertex_alpha[1] + b2 * m.vertex_alpha[2];
+        let mut a = m.factor * va;
+        if let Some(k) = m.texture {
+            let uv = b0 * m.uv[0] + b1 * m.uv[1] + b2 * m.uv[2];
+            a *= self.textures[k as usize].sample(uv);
+        }
+        a >= m.cutoff
+    }
 }
 
 /// A closest hit: distance and the *scene* triangle index.
@@ -83,9 +197,11 @@ impl SceneBvh {
         if depth >= MAX_GPU_DEPTH {
             anyhow::bail!("BVH depth {depth} exceeds {MAX_GPU_DEPTH}");
         }
+        let alpha = AlphaMask::build(scene, &slot_to_triangle);
         Ok(SceneBvh {
             bvh,
             tris,
+            alpha,
             slot_to_triangle,
             depth,
             build_ms: t0.elapsed().as_secs_f64() * 1e3,
@@ -123,21 +239,52 @@ impl SceneBvh {
     pub fn gpu_triangles(&self) -> Vec<GpuTriangle> {
         self.tris
             .iter()
-            .map(|t| GpuTriangle {
-                v0: t.v0.extend(0.0).into(),
-                v1: t.v1.extend(0.0).into(),
-                v2: t.v2.extend(0.0).into(),
+            .enumerate()
+            .map(|(slot, t)| {
+                let tested = self.alpha.as_ref().is_some_and(|a| a.tested(slot));
+                GpuTriangle {
+                    v0: t.v0.extend(if tested { 1.0 } else { 0.0 }).into(),
+                    v1: t.v1.extend(0.0).into(),
+                    v2: t.v2.extend(0.0).into(),
+                }
             })
             .collect()
     }
 
-    /// obvhs' own CPU closest-hit traversal (the reference the shader is tested against).
+    /// Whether any triangle is alpha-tested.
+    pub fn has_alpha_test(&self) -> bool {
+        self.alpha.is_some()
+    }
+
+    /// The ray-triangle test of the CPU traversals: obvhs' test, then the alpha test on flagged
+    /// triangles with the shader's barycentrics (`cpu::shading::barycentrics`).
+    fn hit_distance(&self, r: &Ray, slot: usize) -> f32 {
+        let t = self.tris[slot].intersect(r);
+        match &self.alpha {
+            Some(a) if t < f32::INFINITY && a.tested(slot) => {
+                let (b1, b2) = crate::cpu::shading::barycentrics(
+                    &self.tris[slot],
+                    r.origin.into(),
+                    r.direction.into(),
+                );
+                if a.passes(slot, b1, b2) {
+                    t
+                } else {
+                    f32::INFINITY
+                }
+            }
+            _ => t,
+        }
+    }
+
+    /// obvhs' own CPU closest-hit traversal (the reference the shader is tested against), with the
+    /// alpha test.
     pub fn closest(&self, origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> Option<Hit> {
         let ray = Ray::new(origin, dir, tmin, tmax);
         let mut hit = RayHit::none();
         if self
             .bvh
-            .ray_traverse(ray, &mut hit, |r, i| self.tris[i].intersect(r))
+            .ray_traverse(ray, &mut hit, |r, i| self.hit_distance(r, i))
         {
             Some(Hit {
                 t: hit.t,
@@ -148,12 +295,12 @@ impl SceneBvh {
         }
     }
 
-    /// obvhs' own CPU any-hit query: is anything hit in `[tmin, tmax]`?
+    /// obvhs' own CPU any-hit query: is anything hit in `[tmin, tmax]`? With the alpha test.
     pub fn occluded(&self, origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> bool {
         let ray = Ray::new(origin, dir, tmin, tmax);
         !self
             .bvh
-            .ray_traverse_miss(ray, |r, i| self.tris[i].intersect(r))
+            .ray_traverse_miss(ray, |r, i| self.hit_distance(r, i))
     }
 }
 

@@ -6,6 +6,7 @@
 // branch per lane and per component, while a texel fetch is one vector gather. That alone made the
 // traversal 3x faster (docs/bvh.md).
 #import common/scene.wgsl
+#import common/alpha.wgsl
 
 struct Ray {
     origin: vec3<f32>,
@@ -110,7 +111,7 @@ fn trace_closest(ray_in: Ray) -> Hit {
     while walk_to_leaf(&i, &node, ray.origin, inv_dir, ray.tmax) {
         for (var k = node.index; k < node.index + node.prim_count; k++) {
             let r = intersect_tri(k, ray);
-            if r.x < ray.tmax {
+            if r.x < ray.tmax && alpha_passes(k, r.y, r.z) {
                 ray.tmax = r.x;
                 hit = Hit(r.x, k, r.y, r.z);
             }
@@ -129,7 +130,8 @@ fn trace_any(ray_in: Ray) -> bool {
     var node: BvhNode;
     while walk_to_leaf(&i, &node, ray.origin, inv_dir, ray.tmax) {
         for (var k = node.index; k < node.index + node.prim_count; k++) {
-            if intersect_tri(k, ray).x < ray.tmax {
+            let r = intersect_tri(k, ray);
+            if r.x < ray.tmax && alpha_passes(k, r.y, r.z) {
                 return true;
             }
         }

@@ -24,6 +24,7 @@ struct BvhNode {
     index: u32,
 }
 
+// v0.w is the alpha test's per-triangle flag (1: alpha-tested, 0: opaque); see alpha.wgsl.
 struct Tri {
     v0: vec4<f32>,
     v1: vec4<f32>,
@@ -40,6 +41,7 @@ struct TriShade {
 
 struct Material {
     base_color: vec4<f32>,
+    // xyz: emitted radiance; w: the alpha test's cutoff (0 for opaque materials).
     emissive: vec4<f32>,
     // x: base colour texture, y: emissive texture (-1 = none).
     tex: vec4<i32>,
@@ -78,11 +80,16 @@ struct Light {
 @group(0) @binding(8) var<storage, read> lights: array<Light>;
 // The triangles again for the traversal, 3 texels (v0, v1, v2) each.
 @group(0) @binding(9) var tri_texels: texture_2d<f32>;
+// Linear vertex colours (COLOR_0), 3 per triangle slot; one unused entry without HAS_VERTEX_COLORS.
+@group(0) @binding(10) var<storage, read> tri_colors: array<vec4<f32>>;
 
 // Pipeline-overridable switches: a scene without textures or punctual lights compiles those paths out.
 override HAS_TEXTURES: bool = true;
 override HAS_EMITTERS: bool = true;
 override HAS_PUNCTUAL: bool = true;
+// Without alpha-tested triangles the traversal is compiled without the alpha test (alpha.wgsl).
+override HAS_ALPHA_TEST: bool = true;
+override HAS_VERTEX_COLORS: bool = true;
 
 const PI: f32 = 3.14159265358979;
 const INF: f32 = 3.4028235e38;
