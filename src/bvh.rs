@@ -24,12 +24,16 @@ pub const MAX_GPU_DEPTH: usize = 256;
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuNode {
     pub min: [f32; 3],
-    /// 0 for inner nodes; for leaves the number of triangles.
+    /// 0 for inner nodes; for leaves the number of triangles, with `ALPHA_LEAF` set when one of them
+    /// is alpha-tested (the shader then tests that leaf in a loop of its own).
     pub prim_count: u32,
     pub max: [f32; 3],
     /// Inner: the skip link (node after this subtree; = node count past the end). Leaf: first slot.
     pub index: u32,
 }
+
+/// The bit of `GpuNode::prim_count` that marks a leaf holding an alpha-tested triangle.
+pub const ALPHA_LEAF: u32 = 0x8000_0000;
 
 /// A triangle's vertices as the shader reads them; `v0[3]` is 1 for an alpha-tested triangle, else 0
 /// (the per-triangle flag of the alpha test, read where a ray finds a candidate hit).
@@ -214,24 +218,32 @@ impl SceneBvh {
     /// drivers (lavapipe) a per-lane stack array turns every push and pop into a gather or scatter.
     /// Nodes per-octant ordered (8 preorders) measured no faster on lavapipe (docs/bvh.md).
     pub fn gpu_nodes(&self) -> Vec<GpuNode> {
-        fn emit(nodes: &[obvhs::bvh2::node::Bvh2Node], i: usize, out: &mut Vec<GpuNode>) {
+        fn emit(
+            nodes: &[obvhs::bvh2::node::Bvh2Node],
+            alpha: Option<&AlphaMask>,
+            i: usize,
+            out: &mut Vec<GpuNode>,
+        ) {
             let n = &nodes[i];
             let me = out.len();
+            let slots = n.first_index as usize..(n.first_index + n.prim_count) as usize;
+            let tested =
+                n.prim_count > 0 && alpha.is_some_and(|a| slots.into_iter().any(|s| a.tested(s)));
             out.push(GpuNode {
                 min: n.aabb.min.into(),
-                prim_count: n.prim_count,
+                prim_count: n.prim_count | if tested { ALPHA_LEAF } else { 0 },
                 max: n.aabb.max.into(),
                 index: n.first_index,
             });
             if n.prim_count == 0 {
-                emit(nodes, n.first_index as usize, out);
-                emit(nodes, n.first_index as usize + 1, out);
+                emit(nodes, alpha, n.first_index as usize, out);
+                emit(nodes, alpha, n.first_index as usize + 1, out);
                 out[me].index = out.len() as u32;
             }
         }
         let mut out = Vec::with_capacity(self.bvh.nodes.len());
         if !self.bvh.nodes.is_empty() {
-            emit(&self.bvh.nodes, 0, &mut out);
+            emit(&self.bvh.nodes, self.alpha.as_ref(), 0, &mut out);
         }
         out
     }

@@ -394,6 +394,25 @@ fn cpu_traversal_alpha_test_by_hand() {
         let s = checker_scene(alpha);
         let bvh = fuzzy_vpl::bvh::SceneBvh::build(&s).unwrap();
         assert_eq!(bvh.has_alpha_test(), alpha);
+        // The GPU layout marks exactly the leaves holding a tested triangle (slots 2 and 3 in
+        // scene order: the quad), so the shader tests no other leaf.
+        let quad_slots: Vec<usize> = (0..4).filter(|&k| bvh.slot_to_triangle[k] >= 2).collect();
+        let tris = bvh.gpu_triangles();
+        for n in bvh.gpu_nodes() {
+            let count = n.prim_count & !fuzzy_vpl::bvh::ALPHA_LEAF;
+            if count == 0 {
+                assert_eq!(n.prim_count, 0, "an inner node is never marked");
+                continue;
+            }
+            let slots = n.index as usize..(n.index + count) as usize;
+            let holds_quad = slots.clone().any(|k| quad_slots.contains(&k));
+            let marked = n.prim_count & fuzzy_vpl::bvh::ALPHA_LEAF != 0;
+            assert_eq!(marked, alpha && holds_quad, "leaf {slots:?}");
+            for k in slots {
+                let flagged = tris[k].v0[3] == 1.0;
+                assert_eq!(flagged, alpha && quad_slots.contains(&k), "slot {k}");
+            }
+        }
         let down = glam::Vec3A::NEG_Y;
         // Cell (0, 0) spans x, z in [-1, -0.5]: opaque (parity 0); cell (1, 0) is clear. The points
         // are off the quad's diagonal, the edge its two triangles share.

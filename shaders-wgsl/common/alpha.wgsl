@@ -1,8 +1,11 @@
 // The alpha test (glTF alphaMode MASK; BLEND is treated as MASK at 0.5): a ray's hit on an
 // alpha-tested triangle whose alpha (base colour factor x vertex alpha x base colour texture alpha)
 // is below its material's cutoff is no hit. The traversal (bvh.wgsl) asks at each candidate hit,
-// so every ray kind sees the same cut-out surfaces. Only triangles flagged in v0.w pay for it, and
-// a scene without any compiles it out (HAS_ALPHA_TEST). CPU twin: `AlphaMask` in src/bvh.rs.
+// so every ray kind sees the same cut-out surfaces. Only leaves marked ALPHA_LEAF run the test, in
+// a loop of their own: on lavapipe the mere presence of the test in the one leaf loop slowed every
+// ray by ~40% (docs/scenes.md). Inside such a leaf, triangles not flagged in v0.w are plain hits,
+// and a scene without any compiles the test out (HAS_ALPHA_TEST). CPU twin: `AlphaMask` in
+// src/bvh.rs.
 #import common/surface.wgsl
 
 // Alpha of one texel, repeat-wrapped.

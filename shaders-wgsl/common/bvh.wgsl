@@ -109,11 +109,22 @@ fn trace_closest(ray_in: Ray) -> Hit {
     var i = 0u;
     var node: BvhNode;
     while walk_to_leaf(&i, &node, ray.origin, inv_dir, ray.tmax) {
-        for (var k = node.index; k < node.index + node.prim_count; k++) {
-            let r = intersect_tri(k, ray);
-            if r.x < ray.tmax && alpha_passes(k, r.y, r.z) {
-                ray.tmax = r.x;
-                hit = Hit(r.x, k, r.y, r.z);
+        let count = node.prim_count & ~ALPHA_LEAF;
+        if HAS_ALPHA_TEST && (node.prim_count & ALPHA_LEAF) != 0u {
+            for (var k = node.index; k < node.index + count; k++) {
+                let r = intersect_tri(k, ray);
+                if r.x < ray.tmax && alpha_passes(k, r.y, r.z) {
+                    ray.tmax = r.x;
+                    hit = Hit(r.x, k, r.y, r.z);
+                }
+            }
+        } else {
+            for (var k = node.index; k < node.index + count; k++) {
+                let r = intersect_tri(k, ray);
+                if r.x < ray.tmax {
+                    ray.tmax = r.x;
+                    hit = Hit(r.x, k, r.y, r.z);
+                }
             }
         }
         i += 1u;
@@ -129,10 +140,19 @@ fn trace_any(ray_in: Ray) -> bool {
     var i = 0u;
     var node: BvhNode;
     while walk_to_leaf(&i, &node, ray.origin, inv_dir, ray.tmax) {
-        for (var k = node.index; k < node.index + node.prim_count; k++) {
-            let r = intersect_tri(k, ray);
-            if r.x < ray.tmax && alpha_passes(k, r.y, r.z) {
-                return true;
+        let count = node.prim_count & ~ALPHA_LEAF;
+        if HAS_ALPHA_TEST && (node.prim_count & ALPHA_LEAF) != 0u {
+            for (var k = node.index; k < node.index + count; k++) {
+                let r = intersect_tri(k, ray);
+                if r.x < ray.tmax && alpha_passes(k, r.y, r.z) {
+                    return true;
+                }
+            }
+        } else {
+            for (var k = node.index; k < node.index + count; k++) {
+                if intersect_tri(k, ray).x < ray.tmax {
+                    return true;
+                }
             }
         }
         i += 1u;

@@ -17,6 +17,7 @@ struct SceneInfo {
 // BVH2 in depth-first preorder with skip links (src/bvh.rs): an inner node's first child follows it;
 // `index` is the inner node's skip link (next node after its subtree) or the leaf's first triangle slot.
 // Stored as two texels of `bvh_texels` (min | prim_count, max | index); see bvh.wgsl for why textures.
+// A leaf holding an alpha-tested triangle has ALPHA_LEAF set in prim_count (alpha.wgsl).
 struct BvhNode {
     min: vec3<f32>,
     prim_count: u32,
@@ -94,6 +95,7 @@ override HAS_VERTEX_COLORS: bool = true;
 const PI: f32 = 3.14159265358979;
 const INF: f32 = 3.4028235e38;
 const INVALID: u32 = 0xffffffffu;
+const ALPHA_LEAF: u32 = 0x80000000u;
 
 fn max_abs3(p: vec3<f32>) -> f32 {
     let a = abs(p);
