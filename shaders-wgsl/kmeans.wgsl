@@ -46,6 +46,15 @@ struct KmParams {
     plane_gate: f32,
     _p1: u32,
     _p2: u32,
+    // The temporal warm start (warm_centroids): the new frame's camera as primary.wgsl's
+    // CameraParams (eye; image-plane axes scaled by tan(fov/2); forward), with eye.w the same-surface
+    // tolerance as a fraction of the eye distance; warm_size = (width, height, previous K, 0), width 0
+    // when the points are not pixels of that view (VPLs: every previous centroid is kept).
+    warm_eye: vec4<f32>,
+    warm_right: vec4<f32>,
+    warm_up: vec4<f32>,
+    warm_forward: vec4<f32>,
+    warm_size: vec4<u32>,
 }
 
 // The grid over the centroids (written by grid_setup).
@@ -69,8 +78,9 @@ struct Centroid {
 @group(1) @binding(4) var<storage, read_write> sums: array<atomic<u32>>;
 // Centroid bounds as order-preserving float bits: min xyz, max xyz; then per iteration whether the
 // centroids changed (6), the iteration's number (7), whether it found an orphan (8), and the empty
-// cluster an update left (9 + the iteration's parity; k + 1, 0 for none: `last_empty`).
-@group(1) @binding(5) var<storage, read_write> bounds: array<atomic<u32>, 11>;
+// cluster an update left (9 + the iteration's parity; k + 1, 0 for none: `last_empty`), and the
+// centroids warm_centroids kept (11).
+@group(1) @binding(5) var<storage, read_write> bounds: array<atomic<u32>, 12>;
 @group(1) @binding(6) var<storage, read_write> grid: Grid;
 // Cell counts (0 outside a grid build), then from MAX_CELLS on each cell's offset within its scan
 // block, then from BLOCK_SUMS the blocks' totals. Fixed places: the next grid may have more cells, and
@@ -96,6 +106,11 @@ struct Centroid {
 @group(1) @binding(14) var<storage, read_write> ranges: array<vec4<u32>>;
 @group(1) @binding(15) var sorted_tex: texture_2d<u32>;
 @group(1) @binding(16) var ranges_tex: texture_2d<u32>;
+// Per cluster its representative as a point (2 vec4s: position with w = 1 when the cluster has one,
+// normal with w = 1 when it is the previous frame's, kept by the warm start): what the visibility
+// pass traces from. rep_store writes it after rep_pick; warm_centroids marks the previous ones (which
+// the host copied in) that may be kept.
+@group(1) @binding(17) var<storage, read_write> rep_points: array<vec4<f32>>;
 
 // Texel i of a data texture: 4096 texels a row (DATA_ROW in src/gi/dispatch.rs).
 fn texel_xy(i: u32) -> vec2<u32> {
@@ -148,12 +163,7 @@ fn cell_index(c: vec3<i32>) -> u32 {
 
 // --- Alg. 1 line 2: initial centroids, stratified over the (sampled) data: centroid k takes the
 // first valid sampled point of stratum k of the sampled sequence.
-@compute @workgroup_size(64)
-fn init_centroids(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let k = chunk_item(gid, nwg);
-    if k == INVALID || k >= params.k {
-        return;
-    }
+fn stratum_centroid(k: u32) -> Centroid {
     let s0 = u32(u64_mul_div(k, params.num_sampled, params.k));
     let s1 = max(u32(u64_mul_div(k + 1u, params.num_sampled, params.k)), s0 + 1u);
     var c: Centroid;
@@ -168,11 +178,90 @@ fn init_centroids(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
             break;
         }
     }
+    return c;
+}
+
+fn set_initial(k: u32, c: Centroid) {
     if c.pos.w == 0.0 {
         name_empty(k, 0u);
     }
     centroids[k] = c;
     add_to_bounds(c);
+}
+
+@compute @workgroup_size(64)
+fn init_centroids(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let k = chunk_item(gid, nwg);
+    if k == INVALID || k >= params.k {
+        return;
+    }
+    set_initial(k, stratum_centroid(k));
+}
+
+// Temporal warm start (not in the paper; its §5 names temporal coherence as future work): Alg. 1
+// starts from the previous frame's clusters, whose centroids and representative points the host
+// copied into `centroids` and `rep_points` [0, previous K). A previous cluster is kept where the new
+// view still sees its representative (a real surface point, unlike the centroid, which may float
+// between parallel surfaces of one cluster): warm_keeps. Its representative becomes a candidate for
+// reuse (rep_store). Every other cluster starts from its stratum as in init_centroids. Counts the
+// kept ones in bounds[11].
+@compute @workgroup_size(64)
+fn warm_centroids(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let k = chunk_item(gid, nwg);
+    if k == INVALID || k >= params.k {
+        return;
+    }
+    if k < params.warm_size.z {
+        let c = centroids[k];
+        let r = rep_points[2u * k];
+        let rn = rep_points[2u * k + 1u];
+        let seen = params.warm_size.x == 0u || (r.w > 0.0 && warm_keeps(r.xyz, rn.xyz));
+        if c.pos.w > 0.0 && seen {
+            atomicAdd(&bounds[11], 1u);
+            rep_points[2u * k + 1u] = vec4<f32>(rn.xyz, 1.0);
+            set_initial(k, c);
+            return;
+        }
+    }
+    rep_points[2u * k + 1u].w = 0.0;
+    set_initial(k, stratum_centroid(k));
+}
+
+// A surface point of the previous frame (position q, normal nq) is still seen by the new view when it
+// projects into the image, the pixel there has a shading point whose normal agrees with nq by Eq. (7),
+// and q lies on that point's tangent plane within eye.w times the point's eye distance (a point now
+// hidden behind nearer geometry lies farther off).
+fn warm_keeps(q: vec3<f32>, nq: vec3<f32>) -> bool {
+    let w = params.warm_size.x;
+    let h = params.warm_size.y;
+    let v = q - params.warm_eye.xyz;
+    let z = dot(v, params.warm_forward.xyz);
+    if !(z > 0.0) {
+        return false;
+    }
+    let r = params.warm_right.xyz;
+    let u = params.warm_up.xyz;
+    let sx = dot(v, r) / (z * dot(r, r));
+    let sy = dot(v, u) / (z * dot(u, u));
+    let x = (sx + 1.0) * 0.5 * f32(w);
+    let y = (1.0 - sy) * 0.5 * f32(h);
+    if !(x >= 0.0 && y >= 0.0 && x < f32(w) && y < f32(h)) {
+        return false;
+    }
+    let m = min(u32(y), h - 1u) * w + min(u32(x), w - 1u);
+    if m >= params.num_points {
+        return false;
+    }
+    let p = point_pos(m);
+    if p.w <= 0.0 {
+        return false;
+    }
+    let n = point_nrm(m);
+    if !eq7_normals_agree(n, nq) {
+        return false;
+    }
+    let tol = params.warm_eye.w * length(p.xyz - params.warm_eye.xyz);
+    return abs(dot(n, q - p.xyz)) <= tol;
 }
 
 // floor(a * b / c) without 32-bit overflow for a, b < 2^32 (a < c).
@@ -984,7 +1073,37 @@ fn rep_pick(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     }
 }
 
-// Optional step 4, Eq. (10) as the paper's text states it: w'_f = 1 / dist(p, p_f) with p_f the
+// Step 4: the representative as a point for the visibility pass. A cluster the warm start kept keeps
+// its previous representative while that point is still one of it: its normal agrees with the
+// centroid's by Eq. (7) and it lies within twice this frame's nearest member distance of the centroid
+// (so it cannot drift away as the centroid moves); then its visibility stays the same from frame to
+// frame. Otherwise the member rep_pick chose.
+@compute @workgroup_size(64)
+fn rep_store(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let k = chunk_item(gid, nwg);
+    if k == INVALID || k >= params.k {
+        return;
+    }
+    let m = atomicLoad(&reps[2u * k + 1u]);
+    if m == INVALID {
+        rep_points[2u * k] = vec4<f32>(0.0);
+        rep_points[2u * k + 1u] = vec4<f32>(0.0, 0.0, 1.0, 0.0);
+        return;
+    }
+    let c = centroids[k];
+    let r = rep_points[2u * k];
+    let rn = rep_points[2u * k + 1u];
+    if rn.w == 1.0 && r.w > 0.0 {
+        let nearest = bitcast<f32>(atomicLoad(&reps[2u * k]));
+        if eq7_normals_agree(rn.xyz, c.nrm.xyz) && length(r.xyz - c.pos.xyz) <= 2.0 * nearest {
+            return;
+        }
+    }
+    rep_points[2u * k] = vec4<f32>(point_pos(m).xyz, 1.0);
+    rep_points[2u * k + 1u] = vec4<f32>(point_nrm(m), 0.0);
+}
+
+// Optional step 5, Eq. (10) as the paper's text states it: w'_f = 1 / dist(p, p_f) with p_f the
 // representative of cluster f (a real shading point) instead of its centroid (Alg. 2's W). Replaces the
 // weights of final_assign; the same exact case (distance 0 takes the whole weight).
 @compute @workgroup_size(64)

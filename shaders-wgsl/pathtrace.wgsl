@@ -114,6 +114,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
                 throughput /= q;
             }
             dir = cosine_hemisphere(surf.n, rng_next(&rng), rng_next(&rng));
+            // Shading normals: a direction sampled about the shading normal that goes below the
+            // geometric surface carries nothing (the VPL particles end there too).
+            if dot(dir, surf.ng) <= 0.0 {
+                break;
+            }
             o = offset_origin(p, surf.ng);
         }
     }

@@ -3,7 +3,6 @@
 // themselves when VPLs are not clustered). Each invocation fills one 32-bit word of a row.
 #import common/bvh.wgsl
 #import common/chunk.wgsl
-#import common/gbuffer.wgsl
 #import common/vpl.wgsl
 
 struct VisParams {
@@ -11,13 +10,15 @@ struct VisParams {
     num_lights: u32,
     // Words per row: ceil(num_lights / 32).
     words: u32,
-    _a: u32,
+    // Rows of the previous frame's matrix (same lights) whose kept representatives may be copied
+    // instead of traced: 0 for none (temporal reuse off, or the lights changed).
+    reuse_rows: u32,
 }
 
 @group(1) @binding(1) var<uniform> params: VisParams;
-@group(1) @binding(2) var<storage, read> gbuffer: array<ShadingPoint>;
-// SP-cluster representatives: reps[2k + 1] is the member pixel (INVALID for an unused cluster).
-@group(1) @binding(3) var<storage, read> sp_reps: array<u32>;
+// SP-cluster representatives as points (kmeans.wgsl `rep_points`): position with w > 0 when the
+// cluster has one, then normal.
+@group(1) @binding(2) var<storage, read> rep_points: array<vec4<f32>>;
 // Lights as 3 texels each (pos, nrm, flux), 4096 texels a row (texel fetches are vector code on
 // lavapipe, per-lane storage reads scalar loops; see shade.wgsl).
 @group(1) @binding(4) var lights_tex: texture_2d<f32>;
@@ -26,6 +27,8 @@ fn light_texel(i: u32) -> vec4<f32> {
     return textureLoad(lights_tex, vec2<u32>(i & 4095u, i >> 12u), 0);
 }
 @group(1) @binding(5) var<storage, read_write> bits: array<u32>;
+// The previous frame's matrix (one word when not reused).
+@group(1) @binding(6) var<storage, read> prev_bits: array<u32>;
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
@@ -35,12 +38,16 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     }
     let k = i / params.words;
     let w = i % params.words;
-    let rep = sp_reps[2u * k + 1u];
+    let rep = rep_points[2u * k];
+    // A representative the warm start kept (normal w = 1) with the same lights sees what it saw.
+    if k < params.reuse_rows && rep.w > 0.0 && rep_points[2u * k + 1u].w == 1.0 {
+        bits[i] = prev_bits[i];
+        return;
+    }
     var word = 0u;
-    if rep != INVALID {
-        let sp = gbuffer[rep];
-        let p = sp.pos.xyz;
-        let n = sp.nrm.xyz;
+    if rep.w > 0.0 {
+        let p = rep.xyz;
+        let n = rep_points[2u * k + 1u].xyz;
         let c0 = w * 32u;
         let c1 = min(c0 + 32u, params.num_lights);
         for (var c = c0; c < c1; c++) {

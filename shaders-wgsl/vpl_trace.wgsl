@@ -99,12 +99,20 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         }
         let s = surface_at(hit.slot, hit.u, hit.v, dir);
         let p = o + hit.t * dir;
+        // Shading normals (Veach 1997, section 5.3): the camera side weighs incident light by the
+        // shading cosine, a particle arrives with power per geometric area, so the irradiance it
+        // stands for is its flux times cos_s / cos_g of its incoming direction (s.n and s.ng both
+        // face the side it came from; light behind the shading hemisphere counts for nothing, as in
+        // the direct pass and the path tracer).
+        let cos_g_in = dot(-dir, s.ng);
+        let cos_s_in = max(dot(-dir, s.n), 0.0);
         // Reflected flux: the particle's flux times the albedo.
-        flux *= s.albedo;
+        flux *= s.albedo * (cos_s_in / max(cos_g_in, 1e-6));
         if all(flux <= vec3<f32>(0.0)) {
             break;
         }
-        vpls_out[path * params.max_depth + count] = Vpl(vec4<f32>(p, 1.0), vec4<f32>(s.n, 0.0), vec4<f32>(flux, 0.0));
+        // A VPL is a patch of the surface: it radiates about its geometric normal (projected area).
+        vpls_out[path * params.max_depth + count] = Vpl(vec4<f32>(p, 1.0), vec4<f32>(s.ng, 0.0), vec4<f32>(flux, 0.0));
         count += 1u;
         // Russian roulette after the first bounce, by the largest albedo channel.
         if depth >= 1u {
@@ -114,7 +122,15 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
             }
             flux /= q;
         }
+        // Bounce: cosine about the shading normal; the VPL's radiance leaves along it weighted by the
+        // geometric cosine (its intensity above), so the flux takes cos_g / cos_s. Below the
+        // geometric surface nothing leaves (the path tracer ends there too).
         dir = cosine_hemisphere(s.n, rng_next(&rng), rng_next(&rng));
+        let cos_g_out = dot(dir, s.ng);
+        if cos_g_out <= 0.0 {
+            break;
+        }
+        flux *= cos_g_out / max(dot(dir, s.n), 1e-6);
         o = offset_origin(p, s.ng);
     }
     path_len[path] = count;

@@ -167,15 +167,30 @@ impl AlphaMask {
     }
 }
 
-/// A closest hit: distance and the *scene* triangle index.
+/// A closest hit: distance, the *scene* triangle index, its BVH slot and the barycentrics
+/// `p = (1 − u − v) v0 + u v1 + v v2` (NaN from `closest_obvhs`, which does not report them).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     pub t: f32,
     pub triangle: u32,
+    pub slot: u32,
+    pub u: f32,
+    pub v: f32,
 }
 
 impl SceneBvh {
     pub fn build(scene: &Scene) -> anyhow::Result<SceneBvh> {
+        // Checked before the build (a minute for millions of triangles): the traversal's data textures
+        // hold 4 texels a triangle (nodes: 2 texels each, fewer than 2 a triangle).
+        let max = crate::gi::scene_gpu::MAX_TRIANGLES;
+        if scene.triangles.len() > max {
+            return Err(crate::gi::scene_gpu::TooBig(format!(
+                "{}: {} triangles, more than the {max} the GPU data textures hold",
+                scene.name,
+                scene.triangles.len()
+            ))
+            .into());
+        }
         let t0 = std::time::Instant::now();
         let tris: Vec<OTri> = scene
             .triangles
@@ -190,13 +205,6 @@ impl SceneBvh {
         let bvh = build_bvh2_from_tris(&tris, BvhBuildParams::medium_build(), &mut core);
         let slot_to_triangle = bvh.primitive_indices.clone();
         let tris: Vec<OTri> = slot_to_triangle.iter().map(|&i| tris[i as usize]).collect();
-        // In the traversal's data textures a triangle takes 3 texels and each of the < 2n nodes 2.
-        if 4 * tris.len() > crate::gi::scene_gpu::MAX_TEXELS {
-            anyhow::bail!(
-                "{} triangles exceed the GPU traversal's texture capacity",
-                tris.len()
-            );
-        }
         let depth = depth_of(&bvh);
         if depth >= MAX_GPU_DEPTH {
             anyhow::bail!("BVH depth {depth} exceeds {MAX_GPU_DEPTH}");
@@ -268,52 +276,218 @@ impl SceneBvh {
         self.alpha.is_some()
     }
 
-    /// The ray-triangle test of the CPU traversals: obvhs' test, then the alpha test on flagged
-    /// triangles with the shader's barycentrics (`cpu::shading::barycentrics`).
-    fn hit_distance(&self, r: &Ray, slot: usize) -> f32 {
-        let t = self.tris[slot].intersect(r);
-        match &self.alpha {
-            Some(a) if t < f32::INFINITY && a.tested(slot) => {
-                let (b1, b2) = crate::cpu::shading::barycentrics(
-                    &self.tris[slot],
-                    r.origin.into(),
-                    r.direction.into(),
-                );
-                if a.passes(slot, b1, b2) {
-                    t
-                } else {
-                    f32::INFINITY
+    /// Closest hit in `[tmin, tmax]`: the CPU twin of `trace_closest` in `shaders-wgsl/common/bvh.wgsl`
+    /// (the same conservative box test, watertight triangle test and alpha test, on obvhs' tree with
+    /// a stack).
+    pub fn closest(&self, origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> Option<Hit> {
+        // The shader clamps tmax to its INF, f32::MAX.
+        let mut best = None;
+        let mut tmax = tmax.min(f32::MAX);
+        self.walk(origin, dir, tmin, &mut tmax, |slot, t, (u, v)| {
+            best = Some(Hit {
+                t,
+                triangle: self.slot_to_triangle[slot as usize],
+                slot,
+                u,
+                v,
+            });
+            false
+        });
+        best
+    }
+
+    /// Is anything hit in `[tmin, tmax]`? The CPU twin of `trace_any`.
+    pub fn occluded(&self, origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> bool {
+        let mut blocked = false;
+        let mut tmax = tmax.min(f32::MAX);
+        self.walk(origin, dir, tmin, &mut tmax, |_, _, _| {
+            blocked = true;
+            true
+        });
+        blocked
+    }
+
+    /// Visits the leaves the ray enters before `tmax` and reports each triangle hit closer than
+    /// `tmax` (which then shrinks to it); `on_hit(slot, t, (u, v))` returns true to stop.
+    fn walk(
+        &self,
+        origin: Vec3A,
+        dir: Vec3A,
+        tmin: f32,
+        tmax: &mut f32,
+        mut on_hit: impl FnMut(u32, f32, (f32, f32)) -> bool,
+    ) {
+        if self.bvh.nodes.is_empty() {
+            return;
+        }
+        let inv_dir = Vec3A::new(
+            safe_inverse(dir.x),
+            safe_inverse(dir.y),
+            safe_inverse(dir.z),
+        );
+        let sh = RayShear::new(dir);
+        let mut stack = vec![0usize];
+        while let Some(i) = stack.pop() {
+            let n = &self.bvh.nodes[i];
+            if aabb_entry(n.aabb.min, n.aabb.max, origin, inv_dir) >= *tmax {
+                continue;
+            }
+            if n.prim_count == 0 {
+                stack.push(n.first_index as usize + 1);
+                stack.push(n.first_index as usize);
+                continue;
+            }
+            for k in n.first_index..n.first_index + n.prim_count {
+                if let Some((t, u, v)) =
+                    intersect_watertight(&self.tris[k as usize], origin, &sh, tmin, *tmax)
+                    && t < *tmax
+                    && self
+                        .alpha
+                        .as_ref()
+                        .is_none_or(|a| a.passes(k as usize, u, v))
+                {
+                    *tmax = t;
+                    if on_hit(k, t, (u, v)) {
+                        return;
+                    }
                 }
             }
-            _ => t,
         }
     }
 
-    /// obvhs' own CPU closest-hit traversal (the reference the shader is tested against), with the
-    /// alpha test.
-    pub fn closest(&self, origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> Option<Hit> {
+    /// obvhs' own CPU closest-hit traversal with its Möller–Trumbore test (no alpha test): an independent oracle
+    /// for the tests, not watertight (a ray through a shared edge can miss both triangles).
+    pub fn closest_obvhs(&self, origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> Option<Hit> {
         let ray = Ray::new(origin, dir, tmin, tmax);
         let mut hit = RayHit::none();
         if self
             .bvh
-            .ray_traverse(ray, &mut hit, |r, i| self.hit_distance(r, i))
+            .ray_traverse(ray, &mut hit, |r, i| self.tris[i].intersect(r))
         {
             Some(Hit {
                 t: hit.t,
                 triangle: self.slot_to_triangle[hit.primitive_id as usize],
+                slot: hit.primitive_id,
+                u: f32::NAN,
+                v: f32::NAN,
             })
         } else {
             None
         }
     }
 
-    /// obvhs' own CPU any-hit query: is anything hit in `[tmin, tmax]`? With the alpha test.
-    pub fn occluded(&self, origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> bool {
+    /// obvhs' own CPU any-hit query (the oracle counterpart of `occluded`).
+    pub fn occluded_obvhs(&self, origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> bool {
         let ray = Ray::new(origin, dir, tmin, tmax);
         !self
             .bvh
-            .ray_traverse_miss(ray, |r, i| self.hit_distance(r, i))
+            .ray_traverse_miss(ray, |r, i| self.tris[i].intersect(r))
     }
+}
+
+/// `1 + 2 gamma(3)` with `gamma(n) = n u / (1 - n u)`, `u = 2^-24`: the factor on a box's exit distance
+/// that makes the slab test conservative under rounding (Ize 2013, "Robust BVH ray traversal").
+/// `BOX_EXIT_SCALE` in `bvh.wgsl`.
+pub const BOX_EXIT_SCALE: f32 = 1.000_000_4;
+
+/// `safe_inverse` of `bvh.wgsl` (−0.0 counts as positive there, as here).
+pub fn safe_inverse(x: f32) -> f32 {
+    let eps = f32::EPSILON;
+    if x.abs() <= eps {
+        (if x >= 0.0 { 1.0 } else { -1.0 }) / eps
+    } else {
+        1.0 / x
+    }
+}
+
+/// `aabb_entry` of `bvh.wgsl`: the entry distance, or infinity when the ray misses the box.
+pub fn aabb_entry(bmin: Vec3A, bmax: Vec3A, origin: Vec3A, inv_dir: Vec3A) -> f32 {
+    let t1 = (bmin - origin) * inv_dir;
+    let t2 = (bmax - origin) * inv_dir;
+    let lo = t1.min(t2);
+    let hi = t1.max(t2);
+    // The same order of min/max as the shader (NaN-free inputs: both give the same value).
+    let tn = lo.x.max(lo.y.max(lo.z));
+    let tf = hi.x.min(hi.y.min(hi.z)) * BOX_EXIT_SCALE;
+    if tf >= tn && tf >= 0.0 {
+        tn
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// Per-ray constants of the watertight triangle test (`RayShear` in `bvh.wgsl`).
+#[derive(Clone, Copy, Debug)]
+pub struct RayShear {
+    pub k: [usize; 3],
+    pub s: [f32; 3],
+}
+
+impl RayShear {
+    pub fn new(dir: Vec3A) -> RayShear {
+        let a = dir.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        if dir[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        let dz = dir[kz];
+        RayShear {
+            k: [kx, ky, kz],
+            s: [dir[kx] / dz, dir[ky] / dz, 1.0 / dz],
+        }
+    }
+
+    fn vertex(&self, p: Vec3A, origin: Vec3A) -> [f32; 3] {
+        let a = p - origin;
+        let z = a[self.k[2]];
+        [
+            a[self.k[0]] - self.s[0] * z,
+            a[self.k[1]] - self.s[1] * z,
+            z,
+        ]
+    }
+}
+
+/// `edge_fn` of `bvh.wgsl`: `p.x q.y − p.y q.x` with the end points in a fixed order, so that the
+/// two triangles sharing an edge get exactly opposite values.
+fn edge_fn(p: [f32; 3], q: [f32; 3]) -> f32 {
+    let swap = q[0] < p[0] || (q[0] == p[0] && q[1] < p[1]);
+    let (a, b) = if swap { (q, p) } else { (p, q) };
+    let e = a[0] * b[1] - a[1] * b[0];
+    if swap { -e } else { e }
+}
+
+/// The watertight ray–triangle test (Woop, Benthin and Wald 2013), `intersect_tri` of `bvh.wgsl`:
+/// `(t, u, v)` with `p = (1 − u − v) v0 + u v1 + v v2` when the ray hits in `[tmin, tmax]`. A ray
+/// through an edge or a vertex hits (an edge function of 0 or −0.0 counts as inside).
+pub fn intersect_watertight(
+    tri: &OTri,
+    origin: Vec3A,
+    sh: &RayShear,
+    tmin: f32,
+    tmax: f32,
+) -> Option<(f32, f32, f32)> {
+    let a = sh.vertex(tri.v0, origin);
+    let b = sh.vertex(tri.v1, origin);
+    let c = sh.vertex(tri.v2, origin);
+    let u = edge_fn(c, b);
+    let v = edge_fn(a, c);
+    let w = edge_fn(b, a);
+    let outside = (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0);
+    let det = u + v + w;
+    if outside || det == 0.0 {
+        return None;
+    }
+    let t = (u * a[2] + v * b[2] + w * c[2]) * sh.s[2] / det;
+    (t >= tmin && t <= tmax).then_some((t, v / det, w / det))
 }
 
 fn depth_of(bvh: &Bvh2) -> usize {

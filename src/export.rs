@@ -112,11 +112,17 @@ pub fn linear_to_srgb(c: f32) -> f32 {
     }
 }
 
-/// 8-bit sRGB display of linear radiance × exposure (clamped).
+/// 8-bit sRGB display of linear radiance × exposure (clamped; the product in f64, so a bright pixel
+/// times a large exposure is white, not an overflow to black).
 pub fn to_srgb8(radiance: &[[f32; 3]], exposure: f32) -> Vec<u8> {
     radiance
         .iter()
-        .flat_map(|p| p.map(|c| (linear_to_srgb(c * exposure) * 255.0 + 0.5) as u8))
+        .flat_map(|p| {
+            p.map(|c| {
+                let v = (c as f64 * exposure as f64).min(1.0) as f32;
+                (linear_to_srgb(if c.is_nan() { 0.0 } else { v }) * 255.0 + 0.5) as u8
+            })
+        })
         .collect()
 }
 

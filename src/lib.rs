@@ -8,6 +8,7 @@ pub mod bench;
 pub mod bvh;
 pub mod cpu;
 pub mod export;
+pub mod exposure;
 pub mod gi;
 pub mod gpu;
 pub mod metrics;

@@ -1,4 +1,4 @@
-//! `fuzzy-vpl`: command-line front end (DESIGN.md §4).
+//! `fuzzy-vpl`: command-line front end (docs/design.md, "CLI").
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -7,6 +7,7 @@ use anyhow::Result;
 use clap::{Args, Parser, Subcommand};
 
 use fuzzy_vpl::bench::{self, sweep};
+use fuzzy_vpl::exposure::Exposure;
 use fuzzy_vpl::gi::pipeline::{FrameSettings, Renderer, Weighting};
 use fuzzy_vpl::gpu::GpuContext;
 use fuzzy_vpl::scene::{self, Scene, extra_lights};
@@ -94,6 +95,14 @@ struct BenchArgs {
     /// e.g. off,20 (see render --plane-gate).
     #[arg(long, value_name = "LIST")]
     plane_gate: Option<String>,
+    /// Instead of the sweep's results.csv: render every configuration along a camera path,
+    /// orbit:N:DEG (N frames, DEG degrees in all about the point the start camera looks at), each
+    /// frame against its own reference; writes path.csv and path.png (docs/temporal.md).
+    #[arg(long, value_name = "orbit:N:DEG", value_parser = fuzzy_vpl::bench::path::parse_camera_path)]
+    camera_path: Option<fuzzy_vpl::bench::path::CameraPath>,
+    /// Temporal reuse along --camera-path: on, off or both (off,on).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = "off", value_parser = fuzzy_vpl::gi::pipeline::parse_on_off, action = clap::ArgAction::Set, requires = "camera_path")]
+    temporal: Vec<bool>,
     /// Image width (default 640; quick 96).
     #[arg(long)]
     width: Option<u32>,
@@ -126,9 +135,10 @@ struct BenchArgs {
     /// G-term clamp as a fraction of the scene diagonal.
     #[arg(long, default_value_t = fuzzy_vpl::gi::pipeline::DEFAULT_CLAMP)]
     clamp: f32,
-    /// Exposure of the PNG images.
-    #[arg(long, default_value_t = 1.0)]
-    exposure: f32,
+    /// Exposure of the PNG images: `auto` (the default: the reference's log-average luminance shown
+    /// as middle grey 0.18, Reinhard et al. 2002, for every image of a camera) or a factor >= 0.
+    #[arg(long, default_value = "auto", value_parser = Exposure::parse)]
+    exposure: Exposure,
 }
 
 #[derive(Args)]
@@ -173,7 +183,7 @@ struct RenderArgs {
     /// Repeat -o to write several files of the same frame (e.g. -o a.exr -o a.png).
     #[arg(short, long, required = true)]
     output: Vec<PathBuf>,
-    /// Write the stats JSON (DESIGN.md §4) here.
+    /// Write the stats JSON (docs/design.md, "Stats JSON") here.
     #[arg(long)]
     stats: Option<PathBuf>,
     /// Fill the stats' error block against this reference EXR.
@@ -191,12 +201,18 @@ struct RenderArgs {
     /// Area-light samples (shadow rays) per pixel for direct light, 1..=65536.
     #[arg(long, default_value_t = 16)]
     direct_samples: u32,
-    /// Exposure multiplier for PNG output (EXR stays unscaled radiance).
-    #[arg(long, default_value_t = 1.0)]
-    exposure: f32,
+    /// PNG exposure: `auto` (the default: the image's log-average luminance is shown as middle grey
+    /// 0.18, Reinhard et al. 2002) or a factor >= 0. EXR stays linear, unscaled radiance.
+    #[arg(long, default_value = "auto", value_parser = Exposure::parse)]
+    exposure: Exposure,
     /// Render N times; timings are the mean of the 3 best (the paper's method).
     #[arg(long, default_value_t = 1)]
     repeat: u32,
+    /// Temporal reuse (on|off): each render's SP clustering starts from the previous one's
+    /// centroids where the view still sees them (docs/temporal.md). A single frame has no past, so
+    /// only --repeat's later renders reuse.
+    #[arg(long, default_value = "off", value_name = "on|off", value_parser = fuzzy_vpl::gi::pipeline::parse_on_off, action = clap::ArgAction::Set)]
+    temporal: bool,
     /// Number of VPLs (traced once, resident).
     #[arg(long, default_value_t = 8192)]
     vpls: u32,
@@ -316,8 +332,10 @@ struct ViewArgs {
     /// Area-light samples (shadow rays) per pixel for direct light, 1..=65536.
     #[arg(long, default_value_t = 16)]
     direct_samples: u32,
-    #[arg(long, default_value_t = 1.0)]
-    exposure: f32,
+    /// Display exposure: `auto` (the default: each frame's log-average luminance shown as middle grey
+    /// 0.18) or a factor > 0.
+    #[arg(long, default_value = "auto", value_parser = Exposure::parse)]
+    exposure: Exposure,
     /// VPLs (the viewer starts lighter than `render` so a software driver stays interactive).
     #[arg(long, default_value_t = 4096)]
     vpls: u32,
@@ -327,21 +345,31 @@ struct ViewArgs {
     sp_clusters: u32,
     #[command(flatten)]
     cluster: ClusterArgs,
+    /// Temporal reuse (on|off): reprojection of the last frame while the camera moves, clusterings
+    /// warm-started from the previous frame, direct light accumulated at rest (docs/temporal.md).
+    #[arg(long, default_value = "on", value_name = "on|off", value_parser = fuzzy_vpl::gi::pipeline::parse_on_off, action = clap::ArgAction::Set)]
+    temporal: bool,
     /// Render scale of the GI image relative to the image area, 0.1..1.
     #[arg(long, default_value_t = 0.5)]
     render_scale: f32,
-    /// Scripted run: draw N window frames once the first full GI frame is shown, save the window to
-    /// --screenshot, exit.
-    #[arg(long, requires = "screenshot")]
+    /// Scripted run: draw N window frames once the first full GI frame is shown (with --animate: N
+    /// frames of orbiting, then one frame at rest), save the window to --screenshot and the
+    /// measurements to --stats, exit.
+    #[arg(long)]
     frames: Option<u32>,
     /// Where a scripted run saves the window (PNG, UI included).
     #[arg(long, requires = "frames")]
     screenshot: Option<PathBuf>,
+    /// Where a scripted run writes its JSON: settings, `motion` (camera change to image latency,
+    /// GPU ms of the GI frames while moving) and `rest` (GPU ms of the frame at rest).
+    #[arg(long, requires = "frames")]
+    stats: Option<PathBuf>,
     /// The view to start in (a scripted run in reference or error computes the reference first).
     #[arg(long, value_enum, default_value = "final")]
     view: fuzzy_vpl::app::views::View,
-    /// Keep orbiting the camera (to measure frame rates while moving; with --frames).
-    #[arg(long, hide = true)]
+    /// Keep orbiting the camera (0.6 rad/s about the point looked at) to measure the viewer while
+    /// moving; with --frames.
+    #[arg(long)]
     animate: bool,
     /// Directory for the panel's screenshots.
     #[arg(long, default_value = ".")]
@@ -352,6 +380,29 @@ struct ViewArgs {
 struct InfoArgs {
     #[command(flatten)]
     scene: SceneArgs,
+}
+
+/// The command line with every option that takes a value accepting a negative number as that value
+/// (`--light-scale -1` is then refused by the option's own check, with its range, rather than read
+/// as an unknown flag `-1`).
+fn command() -> clap::Command {
+    fn negatives(c: clap::Command) -> clap::Command {
+        let ids: Vec<clap::Id> = c
+            .get_arguments()
+            .filter(|a| !a.is_positional() && a.get_action().takes_values())
+            .map(|a| a.get_id().clone())
+            .collect();
+        let c = ids
+            .iter()
+            .fold(c, |c, id| c.mut_arg(id, |a| a.allow_negative_numbers(true)));
+        let subs: Vec<String> = c
+            .get_subcommands()
+            .map(|s| s.get_name().to_string())
+            .collect();
+        subs.iter()
+            .fold(c, |c, name| c.mut_subcommand(name, negatives))
+    }
+    negatives(<Cli as clap::CommandFactory>::command())
 }
 
 /// An error that is the user's input: exit code 2.
@@ -385,8 +436,12 @@ fn main() -> ExitCode {
         }
     }
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
-    // Bad arguments get one line and exit code 2 (DESIGN.md §4); help and version print in full.
-    let cli = match Cli::try_parse() {
+    // Bad arguments get one line and exit code 2 (docs/design.md, "Exit codes"); help and version
+    // print in full.
+    let cli = match command()
+        .try_get_matches()
+        .and_then(|m| <Cli as clap::FromArgMatches>::from_arg_matches(&m))
+    {
         Ok(c) => c,
         Err(e) => {
             use clap::error::ErrorKind;
@@ -425,6 +480,8 @@ fn main() -> ExitCode {
         Err(e) => {
             let is_input = e.downcast_ref::<BadInput>().is_some()
                 || e.downcast_ref::<scene::SceneError>().is_some()
+                || e.downcast_ref::<fuzzy_vpl::gi::scene_gpu::TooBig>()
+                    .is_some()
                 || e.downcast_ref::<fuzzy_vpl::app::Unavailable>().is_some();
             eprintln!("error: {e}");
             if is_input {
@@ -528,9 +585,6 @@ fn render(a: RenderArgs) -> Result<()> {
     if a.path_trace == Some(0) {
         return Err(bad("--path-trace 0: must be at least 1 sample a pixel"));
     }
-    if !(a.exposure.is_finite() && a.exposure >= 0.0) {
-        return Err(bad("--exposure must be a finite number >= 0"));
-    }
     a.cluster.check()?;
     check_direct_samples(a.direct_samples)?;
     if !(1..=64).contains(&a.bounces) {
@@ -599,6 +653,7 @@ fn render(a: RenderArgs) -> Result<()> {
         vpl_clusters: a.vpl_clusters,
         sp_clusters: a.sp_clusters,
         weights_to_reps: a.weights_to_reps,
+        temporal: a.temporal,
         progress: true,
         control: None,
         ..Default::default()
@@ -627,8 +682,17 @@ fn render(a: RenderArgs) -> Result<()> {
     if non_finite > 0 {
         eprintln!("warning: {non_finite} non-finite pixel channels in the output");
     }
+    // Never a silent black image: a lit scene rendering all black says so (no light at all was
+    // warned about when loading).
+    if scene.has_light() && frame.radiance.iter().flatten().all(|&c| c == 0.0) {
+        eprintln!(
+            "warning: {}: the image is black although the scene has light (the camera sees no lit surface)",
+            a.scene.scene
+        );
+    }
+    let exposure = a.exposure.resolve(&frame.radiance);
     for out in &a.output {
-        export::write_image(out, frame.width, frame.height, &frame.radiance, a.exposure)?;
+        export::write_image(out, frame.width, frame.height, &frame.radiance, exposure)?;
     }
     if let (Some(p), Some(r)) = (&a.error_map, &reference) {
         export::write_png_rgb8(
@@ -682,7 +746,8 @@ fn render(a: RenderArgs) -> Result<()> {
                 seed: a.seed,
                 direct_samples: settings.direct_samples,
                 light_scale: a.scene.light_scale,
-                exposure: a.exposure,
+                exposure,
+                exposure_auto: a.exposure.is_auto(),
                 clamp: settings.clamp,
                 gamma_used: frame.gamma_used,
                 normal_threshold_used: fuzzy_vpl::gi::kmeans::effective_normal_threshold(
@@ -693,6 +758,7 @@ fn render(a: RenderArgs) -> Result<()> {
                 plane_gate_deg: settings
                     .plane_gate_deg
                     .filter(|_| frame.gamma_used.is_some() && settings.f() > 1),
+                temporal: settings.temporal,
             },
             counts: stats::Counts {
                 triangles: scene.triangles.len() as u64,
@@ -703,6 +769,9 @@ fn render(a: RenderArgs) -> Result<()> {
                 shadow_rays: frame.shadow_rays,
                 emissive_triangles: renderer.gpu.emitters.len() as u64,
                 punctual_lights: scene.lights.len() as u64,
+                sp_iterations: frame.sp_iterations,
+                sp_warm_kept: frame.sp_warm_kept,
+                visibility_rows_reused: frame.visibility_rows_reused,
             },
             passes: frame.passes.iter().map(|s| s.to_string()).collect(),
             timings_ms,
@@ -742,8 +811,10 @@ fn view(a: ViewArgs) -> Result<()> {
     }
     a.cluster.check()?;
     check_direct_samples(a.direct_samples)?;
-    if !(a.exposure.is_finite() && a.exposure > 0.0) {
-        return Err(bad("--exposure must be a finite number > 0"));
+    if a.exposure == Exposure::Fixed(0.0) {
+        return Err(bad(
+            "--exposure 0: the viewer needs an exposure > 0 (or auto)",
+        ));
     }
     if !(0.1..=1.0).contains(&a.render_scale) {
         return Err(bad(format!(
@@ -762,7 +833,10 @@ fn view(a: ViewArgs) -> Result<()> {
             p.display()
         )));
     }
-    if let Some(p) = &a.screenshot {
+    if a.frames.is_some() && a.screenshot.is_none() && a.stats.is_none() {
+        return Err(bad("--frames needs --screenshot or --stats"));
+    }
+    for p in a.screenshot.iter().chain(&a.stats) {
         export::check_writable(p).map_err(bad)?;
     }
     // The panel's screenshots go there: found out at start, not at the first F11.
@@ -792,9 +866,15 @@ fn view(a: ViewArgs) -> Result<()> {
         vpls: a.vpls,
         vpl_clusters: a.vpl_clusters,
         sp_clusters: a.sp_clusters,
+        temporal: a.temporal,
         ..Default::default()
     });
-    let mut settings = fuzzy_vpl::app::UiSettings::from_frame_settings(&fs, a.exposure);
+    let fixed = match a.exposure {
+        Exposure::Fixed(e) => e,
+        Exposure::Auto => 1.0,
+    };
+    let mut settings = fuzzy_vpl::app::UiSettings::from_frame_settings(&fs, fixed);
+    settings.exposure_auto = a.exposure.is_auto();
     settings.render_scale = a.render_scale;
     let args = a.scene.clone();
     let loader: fuzzy_vpl::app::worker::Loader = std::sync::Arc::new(move |spec: &str| {
@@ -814,6 +894,7 @@ fn view(a: ViewArgs) -> Result<()> {
         screenshot: a.screenshot,
         view: a.view,
         animate: a.animate,
+        stats: a.stats,
         shot_dir: a.shot_dir,
     })
 }
@@ -840,21 +921,49 @@ fn info(a: InfoArgs) -> Result<()> {
         kinds(|k| matches!(k, scene::LightKind::Directional)),
     );
     println!("cameras:             {}", s.cameras.len());
+    // Fixed decimals for everyday units, exponents for scenes in other units (1e-15 or 1e12).
+    let num = |x: f32, d: usize| {
+        if x == 0.0 || (1e-3..1e6).contains(&x.abs()) {
+            format!("{x:.d$}")
+        } else {
+            format!("{x:.3e}")
+        }
+    };
     for (i, c) in s.cameras.iter().enumerate() {
         let e = c.eye();
         println!(
-            "  [{i}] {:<16} eye ({:.3}, {:.3}, {:.3}) yfov {:.1} deg",
+            "  [{i}] {:<16} eye ({}, {}, {}) yfov {:.1} deg",
             c.name,
-            e.x,
-            e.y,
-            e.z,
+            num(e.x, 3),
+            num(e.y, 3),
+            num(e.z, 3),
             c.yfov.to_degrees()
         );
     }
     println!(
-        "bounds:              ({:.4}, {:.4}, {:.4}) .. ({:.4}, {:.4}, {:.4})",
-        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+        "bounds:              ({}, {}, {}) .. ({}, {}, {})",
+        num(lo.x, 4),
+        num(lo.y, 4),
+        num(lo.z, 4),
+        num(hi.x, 4),
+        num(hi.y, 4),
+        num(hi.z, 4)
     );
+    let g = s.geometry_scale();
+    if g != 1.0 {
+        println!(
+            "unit frame:          rendered with the geometry scaled by 2^{} (Scene::geometry_scale)",
+            g.log2().round() as i32
+        );
+    }
+    match fuzzy_vpl::gi::scene_gpu::check_fits(&s, u64::MAX) {
+        Ok(()) => println!(
+            "GPU data:            {} of at most {} triangles",
+            s.triangles.len(),
+            fuzzy_vpl::gi::scene_gpu::MAX_TRIANGLES
+        ),
+        Err(e) => println!("GPU data:            does not fit: {e}"),
+    }
     println!(
         "extensions used:     {}",
         s.report.extensions_used.join(", ")
@@ -961,9 +1070,6 @@ fn bench(a: BenchArgs) -> Result<()> {
     check_iterations(a.iterations)?;
     check_clamp(a.clamp)?;
     check_direct_samples(a.direct_samples)?;
-    if !(a.exposure.is_finite() && a.exposure >= 0.0) {
-        return Err(bad("--exposure must be a finite number >= 0"));
-    }
     let cam_list: Option<Vec<usize>> = a
         .camera
         .as_deref()
@@ -1033,6 +1139,42 @@ fn bench(a: BenchArgs) -> Result<()> {
         let s = c.settings(&plan.base);
         let p = fuzzy_vpl::gi::pipeline::Plan::new(&scene, &s);
         fuzzy_vpl::gi::pipeline::check_visibility_size(&ctx, &p, &s).map_err(bad)?;
+    }
+    if let Some(path) = &a.camera_path {
+        eprintln!(
+            "bench {}: {} configuration(s) x temporal {:?} along orbit:{}:{}, {width}x{height}, {vpls} VPLs on {}",
+            a.scene.scene,
+            plan.sweep.configs().len(),
+            a.temporal,
+            path.frames,
+            path.degrees,
+            ctx.adapter_name
+        );
+        let rows = bench::path::run(&ctx, &scene, &plan, path, &a.temporal)?;
+        println!(
+            "{:<32} {:>8} {:>10} {:>12} {:>11} {:>12}",
+            "configuration", "temporal", "frame ms", "SP clust. ms", "MSE", "instability"
+        );
+        let mut seen = Vec::new();
+        for r in &rows {
+            if seen.contains(&(&r.label, r.temporal)) {
+                continue;
+            }
+            seen.push((&r.label, r.temporal));
+            if let Some([f, sp, mse, inst]) = bench::path::means(&rows, &r.label, r.temporal) {
+                println!(
+                    "{:<32} {:>8} {f:>10.2} {sp:>12.2} {mse:>11.3e} {inst:>12.3e}",
+                    r.label,
+                    if r.temporal { "on" } else { "off" }
+                );
+            }
+        }
+        println!(
+            "(means over frames 1..{}) wrote path.csv and path.png to {}",
+            path.frames.saturating_sub(1),
+            a.out_dir.display()
+        );
+        return Ok(());
     }
     let configs = plan.sweep.configs().len();
     eprintln!(

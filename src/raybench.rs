@@ -154,9 +154,9 @@ pub fn run(
                 .map(|r| {
                     let ray = to_ray(r);
                     if any {
-                        bvh.occluded(ray.origin, ray.direction, ray.tmin, ray.tmax) as usize
+                        bvh.occluded_obvhs(ray.origin, ray.direction, ray.tmin, ray.tmax) as usize
                     } else {
-                        bvh.closest(ray.origin, ray.direction, ray.tmin, ray.tmax)
+                        bvh.closest_obvhs(ray.origin, ray.direction, ray.tmin, ray.tmax)
                             .is_some() as usize
                     }
                 })

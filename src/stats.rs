@@ -1,4 +1,4 @@
-//! The stats JSON of DESIGN.md §4 (a contract: extend it, never break it).
+//! The stats JSON of docs/design.md, "Stats JSON" (a contract: extend it, never break it).
 
 use std::collections::BTreeMap;
 
@@ -23,7 +23,11 @@ pub struct Settings {
     pub seed: u32,
     pub direct_samples: u32,
     pub light_scale: f32,
+    /// The PNG exposure used: with `exposure_auto` the one `exposure::auto_exposure` chose for this
+    /// image (its log-average luminance shown as 0.18); EXR is never scaled.
     pub exposure: f32,
+    /// `--exposure auto` (the default).
+    pub exposure_auto: bool,
     /// G-term clamp as a fraction of the scene diagonal.
     pub clamp: f32,
     /// γ and n_t as the SP k-means used them (`kmeans::effective_gamma`,
@@ -42,6 +46,8 @@ pub struct Settings {
     /// when off or when it had nothing to gate (no SP clustering, or F = 1).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub plane_gate_deg: Option<f32>,
+    /// Temporal reuse (`--temporal`).
+    pub temporal: bool,
 }
 
 #[derive(Clone, Debug, Default, Serialize)]
@@ -54,6 +60,13 @@ pub struct Counts {
     pub shadow_rays: u64,
     pub emissive_triangles: u64,
     pub punctual_lights: u64,
+    /// Alg. 1 iterations the SP clustering ran (0: none ran).
+    pub sp_iterations: u32,
+    /// SP centroids a temporal warm start kept from the previous render (absent: a cold start).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sp_warm_kept: Option<u32>,
+    /// Rows of the visibility matrix copied from the previous render (kept representatives).
+    pub visibility_rows_reused: u32,
 }
 
 #[derive(Clone, Debug, Serialize)]

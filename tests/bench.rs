@@ -167,3 +167,108 @@ fn bad_sweep_options_exit_2_with_one_line() {
     assert!(!d.join("results.csv").exists());
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `bench --camera-path orbit:N:DEG --temporal off,on`: one row per frame and setting, frame 0
+/// without instability, the warm start visible in the rows, and the plot.
+#[test]
+fn camera_path_writes_path_csv_and_plot() {
+    let d = common::scratch("bench-path");
+    let (code, out, err) = run(&[
+        "bench",
+        "builtin:conference",
+        "--out-dir",
+        d.to_str().unwrap(),
+        "--camera-path",
+        "orbit:3:2",
+        "--temporal",
+        "off,on",
+        "--modes",
+        "weighted",
+        "--sp-clusters",
+        "48",
+        "--vpl-clusters",
+        "64",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--vpls",
+        "512",
+        "--direct-samples",
+        "1",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("instability"), "{out}");
+    let text = std::fs::read_to_string(d.join("path.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    for c in [
+        "label",
+        "temporal",
+        "frame",
+        "frame_ms",
+        "sp_cluster_ms",
+        "mse",
+        "rel_mse",
+        "instability",
+    ] {
+        assert!(header.contains(&c), "no column {c} in {header:?}");
+    }
+    let col =
+        |row: &[String], name: &str| row[header.iter().position(|h| *h == name).unwrap()].clone();
+    let rows: Vec<Vec<String>> = lines.map(csv::split_line).collect();
+    assert_eq!(rows.len(), 6, "{text}");
+    for (i, r) in rows.iter().enumerate() {
+        let (on, frame) = (i >= 3, i % 3);
+        assert_eq!(col(r, "temporal"), if on { "on" } else { "off" });
+        assert_eq!(col(r, "frame"), frame.to_string());
+        let inst = col(r, "instability");
+        if frame == 0 {
+            assert!(inst.is_empty(), "{r:?}");
+        } else {
+            let v: f64 = inst.parse().unwrap();
+            assert!(v.is_finite() && v >= 0.0, "{r:?}");
+        }
+        let mse: f64 = col(r, "mse").parse().unwrap();
+        assert!(mse.is_finite() && mse > 0.0, "{r:?}");
+        assert!(
+            col(r, "sp_cluster_ms").parse::<f64>().unwrap() > 0.0,
+            "{r:?}"
+        );
+        // Warm starts keep clusters from frame 1 on, and only with temporal reuse.
+        assert_eq!(
+            col(r, "sp_warm_kept").is_empty(),
+            !on || frame == 0,
+            "{r:?}"
+        );
+    }
+    let img = image::open(d.join("path.png")).unwrap().into_rgb8();
+    assert_eq!(img.dimensions(), (960, 540));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn camera_path_refuses_a_bad_path() {
+    let d = common::scratch("bench-path-bad");
+    for bad in ["orbit:0:3", "circle:3:3", "orbit:3"] {
+        let (code, _, err) = run(&[
+            "bench",
+            "builtin:cornell",
+            "--out-dir",
+            d.to_str().unwrap(),
+            "--camera-path",
+            bad,
+        ]);
+        assert_eq!(code, 2, "{bad}: {err}");
+        assert!(err.contains("orbit:N:DEG"), "{bad}: {err}");
+    }
+    let (code, _, err) = run(&[
+        "bench",
+        "builtin:cornell",
+        "--out-dir",
+        d.to_str().unwrap(),
+        "--temporal",
+        "on",
+    ]);
+    assert_eq!(code, 2, "{err}");
+}

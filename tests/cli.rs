@@ -403,6 +403,67 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
     assert!(!out.exists());
 }
 
+/// A negative number given to an option is read as that option's value and refused with the
+/// option's own message (clap used to read `-1` as an unknown flag: "unexpected argument '-1'");
+/// an output named as a directory (`-o dir/`) is refused before rendering. Exit 2, one line.
+#[test]
+fn negative_values_and_directory_outputs_get_clear_messages() {
+    let d = common::scratch("cli-negative");
+    let o = d.join("o.png").display().to_string();
+    let dir_slash = format!("{}/", d.display());
+    let dir_png = d.join("sub.png");
+    std::fs::create_dir_all(&dir_png).unwrap();
+    let dir_png = dir_png.display().to_string();
+    let bench_dir = d.join("bench").display().to_string();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["render", "-o", &o, "--light-scale", "-1"],
+            "--light-scale -1: must be a finite number >= 0",
+        ),
+        (vec!["render", "-o", &o, "--exposure", "-2"], "--exposure"),
+        (vec!["render", "-o", &o, "--clamp", "-0.5"], "--clamp -0.5"),
+        (
+            vec!["render", "-o", &o, "--width", "-5"],
+            "'--width <WIDTH>'",
+        ),
+        (
+            vec!["render", "-o", &o, "--vpls", "-1e3"],
+            "'--vpls <VPLS>'",
+        ),
+        (
+            vec![
+                "view",
+                "--render-scale",
+                "-1",
+                "--frames",
+                "1",
+                "--screenshot",
+                &o,
+            ],
+            "--render-scale",
+        ),
+        (
+            vec!["bench", "--out-dir", &bench_dir, "--light-scale", "-3"],
+            "--light-scale -3",
+        ),
+        (vec!["info", "--light-scale", "-1"], "--light-scale -1"),
+        (
+            vec!["render", "-o", &dir_slash],
+            "output must end in .exr or .png",
+        ),
+        (vec!["render", "-o", &dir_png], "it is a directory"),
+    ];
+    for (a, needle) in cases {
+        let (code, _, err) = run(&a);
+        assert_eq!(code, 2, "{a:?}: {err}");
+        let lines = common::error_lines(&err);
+        assert_eq!(lines.len(), 1, "{a:?}: {err}");
+        assert!(lines[0].contains(needle), "{a:?}: {err}");
+        assert!(!err.contains("unexpected argument"), "{a:?}: {err}");
+    }
+    assert!(!d.join("o.png").exists());
+}
+
 /// A valid scene without any light renders black with a warning, exit 0.
 #[test]
 fn scene_without_light_renders_black() {
@@ -762,4 +823,225 @@ fn required_extensions_on_the_command_line() {
         "{err}"
     );
     assert!(!err.contains("panicked"), "{err}");
+}
+
+/// A 1 TiB sparse file as the scene is refused with exit 2 and one line at once (it used to abort
+/// with exit 134 reserving 1 TiB). Asserted under 1 s for the whole process (measured: ~3 ms).
+#[test]
+fn a_terabyte_scene_file_is_refused_at_once() {
+    let d = common::scratch("cli-sparse");
+    for name in ["huge.glb", "huge.gltf"] {
+        let p = d.join(name);
+        std::fs::File::create(&p).unwrap().set_len(1 << 40).unwrap();
+        let t = std::time::Instant::now();
+        let (code, _, err) = run(&["info", p.to_str().unwrap()]);
+        let secs = t.elapsed().as_secs_f64();
+        assert_eq!(code, 2, "{err}");
+        let lines = common::error_lines(&err);
+        assert_eq!(lines.len(), 1, "{err}");
+        assert!(
+            lines[0].contains(name) && lines[0].contains("larger than"),
+            "{err}"
+        );
+        assert!(secs < 1.0, "{name}: {secs} s");
+        std::fs::remove_file(&p).unwrap();
+    }
+}
+
+/// PNG exposure is automatic by default: the stats' `settings.exposure` is the exposure the PNG was
+/// written with, `exposure::auto_exposure` of the frame (checked against the EXR of the same frame),
+/// and the PNG is exactly that exposure's tone mapping. The EXR stays unscaled: the same with
+/// `--exposure 2`, which is written as fixed. A scene lit 1000× dimmer gives the same PNG (within one
+/// 8-bit step on average: the image is linear in the emitters).
+#[test]
+fn png_exposure_is_automatic_and_written_in_the_stats() {
+    let d = common::scratch("cli-exposure");
+    let render = |tag: &str, extra: &[&str]| -> (serde_json::Value, Vec<[f32; 3]>, Vec<u8>) {
+        let exr = d.join(format!("{tag}.exr"));
+        let png = d.join(format!("{tag}.png"));
+        let stats = d.join(format!("{tag}.json"));
+        let mut args = vec![
+            "render",
+            "builtin:cornell",
+            "-o",
+            exr.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--vpls",
+            "256",
+            "--vpl-clusters",
+            "32",
+            "--sp-clusters",
+            "64",
+            "--direct-samples",
+            "2",
+        ];
+        args.extend_from_slice(extra);
+        let (code, _, err) = run(&args);
+        assert_eq!(code, 0, "{extra:?}: {err}");
+        let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+        let (_, _, px) = fuzzy_vpl::export::read_exr(&exr).unwrap();
+        assert!(common::all_finite(&px));
+        let rgb = image::open(&png).unwrap().into_rgb8().into_raw();
+        (j, px, rgb)
+    };
+    let (j, px, rgb) = render("auto", &[]);
+    assert_eq!(j["settings"]["exposure_auto"], true);
+    let used = j["settings"]["exposure"].as_f64().unwrap() as f32;
+    let want = fuzzy_vpl::exposure::auto_exposure(&px);
+    assert_eq!(used, want, "stats exposure {used}, auto of the EXR {want}");
+    assert_eq!(rgb, fuzzy_vpl::export::to_srgb8(&px, used));
+    // The key: the log-average luminance × exposure is 0.18 (f64 sums: 1e-6 relative).
+    let la = fuzzy_vpl::exposure::log_average_luminance(&px).unwrap();
+    assert!((la * used as f64 / 0.18 - 1.0).abs() < 1e-6);
+
+    let (j2, px2, rgb2) = render("fixed", &["--exposure", "2"]);
+    assert_eq!(j2["settings"]["exposure_auto"], false);
+    assert_eq!(j2["settings"]["exposure"], 2.0);
+    assert_eq!(px2, px, "the EXR depends on the exposure");
+    assert_eq!(rgb2, fuzzy_vpl::export::to_srgb8(&px, 2.0));
+
+    let (_, px3, rgb3) = render("dim", &["--light-scale", "0.001"]);
+    let mean = |p: &[[f32; 3]]| fuzzy_vpl::metrics::mean_luminance(p);
+    assert!(mean(&px3) < 0.002 * mean(&px), "the dim scene is not dim");
+    let diff: f64 = rgb3
+        .iter()
+        .zip(&rgb)
+        .map(|(a, b)| (*a as f64 - *b as f64).abs())
+        .sum::<f64>()
+        / rgb.len() as f64;
+    assert!(diff <= 1.0, "mean |PNG dim - PNG| = {diff} 8-bit steps");
+}
+
+/// A closed box room (walls 2 across, an emissive panel under the ceiling) as a glTF whose root node
+/// scales it by `k`, with a camera inside as the node's child.
+fn scaled_room(dir: &std::path::Path, name: &str, k: f64) -> std::path::PathBuf {
+    let quad = |a: [f32; 3], b: [f32; 3], c: [f32; 3], d: [f32; 3]| [a, b, c, a, c, d];
+    // Walls facing inwards, then the light panel under the ceiling, facing down.
+    let mut pos: Vec<[f32; 3]> = [
+        quad(
+            [-1., -1., -1.],
+            [1., -1., -1.],
+            [1., 1., -1.],
+            [-1., 1., -1.],
+        ),
+        quad([-1., -1., 1.], [-1., 1., 1.], [1., 1., 1.], [1., -1., 1.]),
+        quad(
+            [-1., -1., -1.],
+            [-1., 1., -1.],
+            [-1., 1., 1.],
+            [-1., -1., 1.],
+        ),
+        quad([1., -1., -1.], [1., -1., 1.], [1., 1., 1.], [1., 1., -1.]),
+        quad(
+            [-1., -1., -1.],
+            [-1., -1., 1.],
+            [1., -1., 1.],
+            [1., -1., -1.],
+        ),
+        quad([-1., 1., -1.], [1., 1., -1.], [1., 1., 1.], [-1., 1., 1.]),
+    ]
+    .concat();
+    let walls = pos.len();
+    pos.extend(quad(
+        [-0.3, 0.95, -0.3],
+        [0.3, 0.95, -0.3],
+        [0.3, 0.95, 0.3],
+        [-0.3, 0.95, 0.3],
+    ));
+    let bytes: Vec<u8> = pos.iter().flatten().flat_map(|f| f.to_le_bytes()).collect();
+    std::fs::write(dir.join(format!("{name}.bin")), &bytes).unwrap();
+    let acc = |first: usize, count: usize| {
+        serde_json::json!({"bufferView": 0, "byteOffset": first * 12, "componentType": 5126,
+            "count": count, "type": "VEC3", "min": [-1, -1, -1], "max": [1, 1, 1]})
+    };
+    let j = serde_json::json!({
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"scale": [k, k, k], "mesh": 0, "children": [1]},
+                  {"camera": 0, "translation": [0.2, 0.1, 0.9]}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 1.2, "znear": 0.01}}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.6, 0.5, 1]}},
+                      {"emissiveFactor": [1, 1, 1], "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 10}}}],
+        "extensionsUsed": ["KHR_materials_emissive_strength"],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "material": 0},
+                                   {"attributes": {"POSITION": 1}, "material": 1}]}],
+        "accessors": [acc(0, walls), acc(walls, pos.len() - walls)],
+        "bufferViews": [{"buffer": 0, "byteLength": bytes.len()}],
+        "buffers": [{"uri": format!("{name}.bin"), "byteLength": bytes.len()}]
+    });
+    let p = dir.join(format!("{name}.gltf"));
+    std::fs::write(&p, serde_json::to_vec(&j).unwrap()).unwrap();
+    p
+}
+
+/// A glTF room scaled by 1e-40 … 1e38 renders the image of the unscaled room (EXR, 48x36: mean
+/// luminance within 0.5%, rel_mse ≤ 1e-3); it used to come out black with exit 0 at 1e±12. Scales
+/// whose vertices do not fit f32 are refused with exit 2 and one line, never rendered black.
+#[test]
+fn a_gltf_room_at_any_finite_scale_renders_the_same_image() {
+    let d = common::scratch("cli-scale");
+    let render = |k: f64| -> (i32, String, Vec<[f32; 3]>) {
+        let p = scaled_room(&d, &format!("room{k:e}"), k);
+        let exr = d.join(format!("room{k:e}.exr"));
+        let (code, _, err) = run(&[
+            "render",
+            p.to_str().unwrap(),
+            "-o",
+            exr.to_str().unwrap(),
+            "--width",
+            "48",
+            "--height",
+            "36",
+            "--vpls",
+            "256",
+            "--vpl-clusters",
+            "32",
+            "--sp-clusters",
+            "48",
+            "--direct-samples",
+            "4",
+        ]);
+        let px = if code == 0 {
+            fuzzy_vpl::export::read_exr(&exr).unwrap().2
+        } else {
+            Vec::new()
+        };
+        (code, err, px)
+    };
+    let (code, err, one) = render(1.0);
+    assert_eq!(code, 0, "{err}");
+    let l1 = fuzzy_vpl::metrics::mean_luminance(&one);
+    assert!(l1 > 0.05, "the unscaled room is dark: {l1}");
+    for k in [1e-40, 1e-15, 1e-12, 1e12, 1e15, 1e38] {
+        let (code, err, px) = render(k);
+        assert_eq!(code, 0, "scale {k}: {err}");
+        assert!(common::all_finite(&px));
+        let lk = fuzzy_vpl::metrics::mean_luminance(&px);
+        let rel = fuzzy_vpl::metrics::rel_mse(&px, &one);
+        println!("room at {k:e}: mean luminance {lk:.5} (1: {l1:.5}), rel_mse {rel:.2e}");
+        assert!((lk / l1 - 1.0).abs() < 5e-3, "scale {k}: {lk} vs {l1}");
+        assert!(rel <= 1e-3, "scale {k}: rel_mse {rel}");
+    }
+    // info names the unit frame and prints the bounds in the scene's own units.
+    let p = scaled_room(&d, "info", 1e-15);
+    let (code, out, err) = run(&["info", p.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("scaled by 2^48"), "{out}");
+    assert!(
+        out.contains("(-1.000e-15, -1.000e-15, -1.000e-15)"),
+        "{out}"
+    );
+    // 1e-46 rounds every vertex to 0 (f32's smallest subnormal is 1.4e-45); 1e39 overflows f32.
+    for k in [1e-46, 1e39] {
+        let (code, err, _) = render(k);
+        println!("room at {k:e}: exit {code}: {err}");
+        assert_eq!(code, 2, "{err}");
+        assert_eq!(common::error_lines(&err).len(), 1, "{err}");
+    }
 }

@@ -1,8 +1,9 @@
 //! The clustered frame (steps 2, 4, 5, 6) against its CPU twins, the paper's MSE ordering, and the
-//! numerical extremes of DESIGN.md §5.
+//! numerical extremes of docs/design.md, "Numerical stability".
 
 mod common;
 
+use fuzzy_vpl::cpu::kmeans::RepPoint;
 use fuzzy_vpl::cpu::shade;
 use fuzzy_vpl::cpu::shading::ShadingPoint;
 use fuzzy_vpl::gi::pipeline::{Frame, FrameSettings, Renderer, Weighting};
@@ -41,10 +42,24 @@ fn shading_pairs(
     let assign: Vec<u32> = ctx.read_buffer(&c.assign, sps.len() * nf).unwrap();
     let weights: Vec<f32> = ctx.read_buffer(&c.weights, sps.len() * nf).unwrap();
     let reps: Vec<u32> = ctx.read_buffer(&c.reps, k * 2).unwrap();
-    let reps: Vec<u32> = reps.chunks(2).map(|x| x[1]).collect();
+    // A cold start: each representative point is its member pixel's shading point.
+    let reps: Vec<RepPoint> = reps
+        .chunks(2)
+        .map(|x| match x[1] {
+            u32::MAX => RepPoint::NONE,
+            m => RepPoint {
+                pos: sps[m as usize].pos,
+                valid: true,
+                nrm: sps[m as usize].normal,
+                previous: false,
+            },
+        })
+        .collect();
+    let on_gpu = RepPoint::from_vec4s(&ctx.read_buffer(&c.rep_points, k * 2).unwrap());
+    assert_eq!(on_gpu, reps, "representative points");
     let lights = &r.lights.as_ref().unwrap().0.lights;
     let cpu = common::cpu_scene(r, s);
-    let (bits, words) = shade::visibility_bits(&cpu, &sps, &reps, lights);
+    let (bits, words) = shade::visibility_bits(&cpu, &reps, lights);
     let d_min = fs.clamp * s.extent();
     sps.iter()
         .enumerate()
@@ -190,7 +205,7 @@ fn scaled(mut s: Scene, k: f32) -> Scene {
     s
 }
 
-/// DESIGN.md §5 on the whole clustered frame: every output finite and the image sane.
+/// docs/design.md, "Numerical stability" on the whole clustered frame: every output finite and the image sane.
 #[test]
 fn clustered_extremes_stay_finite() {
     let ctx = common::gpu();

@@ -1,5 +1,5 @@
 //! GPU k-means (Alg. 1 + 2) against its CPU twin, on random surface data and on shading points from a
-//! real render; the numerical extremes of DESIGN.md §5.
+//! real render; the numerical extremes of docs/design.md, "Numerical stability".
 
 mod common;
 
@@ -48,7 +48,9 @@ fn run_gpu_with(
     let buf = ctx.storage_init("data", data);
     let m = data.len() as u32 / stride;
     let c = km
-        .run(ctx, &gpu, &mut prof, "test", &buf, m, stride, s, frame)
+        .run(
+            ctx, &gpu, &mut prof, "test", &buf, m, stride, s, frame, None,
+        )
         .unwrap();
     let p = c.params;
     let raw: Vec<[f32; 4]> = ctx.read_buffer(&c.centroids, p.k as usize * 2).unwrap();
@@ -320,7 +322,7 @@ fn gpu_kmeans_matches_cpu_on_shading_points() {
     assert!(differ * 20 <= valid, "{differ} of {valid}");
 }
 
-/// DESIGN.md §5: K = 1, K above the point count, F > K, γ above the point count, n_t = ±1, zero and
+/// docs/design.md, "Numerical stability": K = 1, K above the point count, F > K, γ above the point count, n_t = ±1, zero and
 /// 200 iterations, a single point: every valid point assigned, weights finite and normalised.
 #[test]
 fn kmeans_extremes_stay_sane() {

@@ -252,3 +252,310 @@ fn direct_light_sub_ranges_with_many_lights_match_cpu_twin() {
         assert!(lit * 2 > w * h, "only {lit} pixels lit");
     }
 }
+
+/// A closed room (the cube −1..1, two triangles a wall) lit by a point light, and in front of the
+/// back wall a quad (a square turned 45°) split along its vertical diagonal x = 0. At an odd width the
+/// centre pixel column's rays have x exactly 0 (the camera sits on x = 0 looking down −z): they run
+/// exactly through the quad's shared edge. A non-watertight triangle test (Möller–Trumbore as before,
+/// which also rejected −0.0 barycentrics) left a dotted black crack there; every primary ray must hit
+/// and every pixel be lit.
+#[test]
+fn quad_diagonal_on_the_centre_line_has_no_crack() {
+    use fuzzy_vpl::scene::{LightKind, Material, PunctualLight, Triangle};
+    let ctx = common::gpu();
+    let mut triangles = Vec::new();
+    let mut quad = |a: Vec3, b: Vec3, c: Vec3, d: Vec3| {
+        for p in [[a, b, c], [a, c, d]] {
+            let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
+            triangles.push(Triangle {
+                p,
+                n: [n; 3],
+                uv: [glam::Vec2::ZERO; 3],
+                color: [glam::Vec4::ONE; 3],
+                material: 0,
+            });
+        }
+    };
+    let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    // The room's six walls, facing inwards.
+    quad(
+        v(-1., -1., -1.),
+        v(1., -1., -1.),
+        v(1., 1., -1.),
+        v(-1., 1., -1.),
+    );
+    quad(
+        v(-1., -1., 1.),
+        v(-1., 1., 1.),
+        v(1., 1., 1.),
+        v(1., -1., 1.),
+    );
+    quad(
+        v(-1., -1., -1.),
+        v(-1., 1., -1.),
+        v(-1., 1., 1.),
+        v(-1., -1., 1.),
+    );
+    quad(
+        v(1., -1., -1.),
+        v(1., -1., 1.),
+        v(1., 1., 1.),
+        v(1., 1., -1.),
+    );
+    quad(
+        v(-1., -1., -1.),
+        v(-1., -1., 1.),
+        v(1., -1., 1.),
+        v(1., -1., -1.),
+    );
+    quad(
+        v(-1., 1., -1.),
+        v(1., 1., -1.),
+        v(1., 1., 1.),
+        v(-1., 1., 1.),
+    );
+    // The quad: its first two triangles share the edge from (0, −0.5) to (0, 0.5).
+    quad(
+        v(0., -0.5, -0.5),
+        v(0.5, 0., -0.5),
+        v(0., 0.5, -0.5),
+        v(-0.5, 0., -0.5),
+    );
+    let s = Scene {
+        name: "crack-room".into(),
+        triangles,
+        materials: vec![Material::default()],
+        lights: vec![PunctualLight {
+            kind: LightKind::Point,
+            position: v(0.3, 0.6, 0.5),
+            direction: Vec3::NEG_Z,
+            color: Vec3::ONE,
+            intensity: 1.0,
+        }],
+        ..Default::default()
+    };
+    let cam = fuzzy_vpl::scene::Camera::look_at("c", v(0., 0., 0.9), v(0., 0., -1.), Vec3::Y, 1.2);
+    let (w, h) = (161u32, 121u32);
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let fs = FrameSettings {
+        vpls: 1024,
+        ..settings(w, h, 4)
+    };
+    let f = r.render(&cam, &fs).unwrap();
+    assert!(common::all_finite(&f.radiance));
+    let gbuf = r.last_gbuffer().unwrap();
+    let misses: Vec<u32> = (0..w * h)
+        .filter(|&px| !ShadingPoint::from_gpu(&gbuf[px as usize * 4..px as usize * 4 + 4]).valid)
+        .collect();
+    assert!(
+        misses.is_empty(),
+        "{} primary rays miss (cracks), e.g. pixels {:?}",
+        misses.len(),
+        &misses[..misses.len().min(8)]
+    );
+    let black = f
+        .radiance
+        .iter()
+        .filter(|c| c[0] + c[1] + c[2] <= 0.0)
+        .count();
+    assert_eq!(black, 0, "{black} black pixels");
+}
+
+/// Any finite scale renders the image of the unscaled room: conference and Cornell scaled by 1e-30,
+/// 1e-15, 1e-12, 1e12, 1e15 and 1e30 (used to: black at 1e±12, walls lost at 1e10) against scale 1
+/// (the renderer scales the geometry by a power of two into a unit frame, `Scene::geometry_scale`),
+/// clustered
+/// frame with indirect light. Tolerance: rel_mse ≤ 1e-3 and mean luminance within 0.5% (the scaled
+/// coordinates are rounded to f32, which moves VPLs and samples by an ulp; measured below).
+#[test]
+fn any_finite_scale_renders_the_unscaled_image() {
+    let ctx = common::gpu();
+    for name in ["cornell", "conference"] {
+        let base = scene::load(&format!("builtin:{name}")).unwrap();
+        let fs = FrameSettings {
+            vpls: 512,
+            vpl_clusters: 64,
+            sp_clusters: 96,
+            ..settings(64, 48, 4)
+        };
+        let render = |k: f32| {
+            let s = scaled(base.clone(), k);
+            let mut r = Renderer::new(&ctx, &s).unwrap();
+            let f = r.render(&s.default_camera(), &fs).unwrap();
+            assert!(common::all_finite(&f.radiance), "{name} at {k}");
+            f.radiance
+        };
+        let one = render(1.0);
+        let l1 = mean_luminance(&one);
+        for k in [1e-30f32, 1e-15, 1e-12, 1e12, 1e15, 1e30] {
+            let img = render(k);
+            let lk = mean_luminance(&img);
+            let rel = fuzzy_vpl::metrics::rel_mse(&img, &one);
+            println!("{name} at {k:e}: mean luminance {lk:.5} (1: {l1:.5}), rel_mse {rel:.2e}");
+            assert!((lk / l1 - 1.0).abs() < 5e-3, "{name} at {k}: {lk} vs {l1}");
+            assert!(rel <= 1e-3, "{name} at {k}: rel_mse {rel}");
+        }
+    }
+}
+
+/// A mesh whose per-triangle data exceed one storage binding (lavapipe: 128 MiB, 2.1 M triangles of
+/// 64 bytes of shading data; it used to panic with a wgpu validation error) renders: a flat grid of
+/// 2,205,000 triangles on y = 0 seen from above. Closed-form oracle: a pixel's G-buffer point is valid
+/// exactly when its ray meets the plane inside the grid's square (pixels within 1e-3 of the edge
+/// skipped), and then lies on the plane where the ray meets it (within 1e-5).
+#[test]
+fn a_mesh_past_one_storage_binding_renders() {
+    use fuzzy_vpl::scene::{LightKind, Material, PunctualLight, Triangle};
+    let ctx = common::gpu();
+    let n = 1050usize;
+    let v = |i: usize, j: usize| {
+        Vec3::new(
+            i as f32 / n as f32 * 2.0 - 1.0,
+            0.0,
+            j as f32 / n as f32 * 2.0 - 1.0,
+        )
+    };
+    let mut triangles = Vec::with_capacity(2 * n * n);
+    for j in 0..n {
+        for i in 0..n {
+            for p in [
+                [v(i, j), v(i, j + 1), v(i + 1, j)],
+                [v(i + 1, j), v(i, j + 1), v(i + 1, j + 1)],
+            ] {
+                triangles.push(Triangle {
+                    p,
+                    n: [Vec3::Y; 3],
+                    uv: [glam::Vec2::ZERO; 3],
+                    color: [glam::Vec4::ONE; 3],
+                    material: 0,
+                });
+            }
+        }
+    }
+    if ctx.max_binding() <= 128 << 20 {
+        assert!(
+            triangles.len() as u64 * 64 > ctx.max_binding(),
+            "the mesh fits one binding"
+        );
+    }
+    let s = Scene {
+        name: "grid".into(),
+        triangles,
+        materials: vec![Material::default()],
+        lights: vec![PunctualLight {
+            kind: LightKind::Directional,
+            position: Vec3::ZERO,
+            direction: Vec3::new(-0.3, -1.0, -0.2).normalize(),
+            color: Vec3::ONE,
+            intensity: 1.0,
+        }],
+        ..Default::default()
+    };
+    let cam =
+        fuzzy_vpl::scene::Camera::look_at("c", Vec3::new(0.1, 2.0, 0.2), Vec3::ZERO, Vec3::Z, 1.0);
+    let (w, h) = (40u32, 30u32);
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let f = r
+        .render(
+            &cam,
+            &FrameSettings {
+                vpls: 0,
+                ..settings(w, h, 1)
+            },
+        )
+        .unwrap();
+    assert!(common::all_finite(&f.radiance));
+    let gbuf = r.last_gbuffer().unwrap();
+    let p = CameraParams::new(&cam, w, h);
+    let (mut hits, mut checked) = (0, 0);
+    for px in 0..(w * h) as usize {
+        let x = (px as u32 % w) as f64 + 0.5;
+        let y = (px as u32 / w) as f64 + 0.5;
+        let sx = 2.0 * x / w as f64 - 1.0;
+        let sy = 1.0 - 2.0 * y / h as f64;
+        let v3 = |a: [f32; 4]| glam::DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64);
+        let d = v3(p.forward) + sx * v3(p.right) + sy * v3(p.up);
+        let eye = v3(p.eye);
+        let t = -eye.y / d.y;
+        let q = eye + t * d;
+        let inside = t > 0.0 && q.x.abs().max(q.z.abs()) < 1.0 - 1e-3;
+        let outside = t <= 0.0 || q.x.abs().max(q.z.abs()) > 1.0 + 1e-3;
+        let sp = ShadingPoint::from_gpu(&gbuf[px * 4..px * 4 + 4]);
+        if inside {
+            assert!(
+                sp.valid,
+                "pixel {px}: the ray meets the grid at {q} but misses"
+            );
+            assert!(
+                (sp.pos.as_dvec3() - q).length() < 1e-5,
+                "pixel {px}: {} vs {q}",
+                sp.pos
+            );
+            hits += 1;
+        } else if outside {
+            assert!(!sp.valid, "pixel {px}: hit {} outside the grid", sp.pos);
+        }
+        checked += 1;
+    }
+    assert!(
+        hits > (w * h) as usize / 4,
+        "only {hits} of {checked} pixels see the grid"
+    );
+    assert!(mean_luminance(&f.radiance) > 0.0);
+}
+
+/// Lights set on a renderer (the viewer's moving lights, `Renderer::set_lights`) are in the caller's
+/// units like cameras: the conference room at 1e12 (rendered in a unit frame scaled by 2^-43) lit by
+/// a point light given at 1e12 units with intensity × 1e24 renders the image of the unscaled room
+/// with the unscaled light, and `Frame::positions` come back in the caller's units. Tolerance as in
+/// `any_finite_scale_renders_the_unscaled_image`.
+#[test]
+fn lights_set_at_any_scale_are_in_the_callers_units() {
+    use fuzzy_vpl::scene::{LightKind, PunctualLight};
+    let ctx = common::gpu();
+    let base = scene::load("builtin:conference").unwrap();
+    let (lo, hi) = base.bounds();
+    let light = |k: f32| PunctualLight {
+        kind: LightKind::Point,
+        position: 0.5 * (lo + hi) * k,
+        direction: Vec3::NEG_Y,
+        color: Vec3::ONE,
+        intensity: 2.0 * (hi - lo).length_squared() * k * k,
+    };
+    let fs = FrameSettings {
+        vpls: 512,
+        vpl_clusters: 64,
+        sp_clusters: 96,
+        ..settings(64, 48, 4)
+    };
+    let render = |k: f32| {
+        let s = scaled(base.clone(), k);
+        let mut r = Renderer::new(&ctx, &s).unwrap();
+        r.set_lights(&[light(k)], 0.0);
+        let f = r.render(&s.default_camera(), &fs).unwrap();
+        assert!(common::all_finite(&f.radiance), "scale {k}");
+        (r.geometry_scale, f)
+    };
+    let (g1, one) = render(1.0);
+    let (gk, big) = render(1e12);
+    assert_eq!(g1, 1.0);
+    assert!(gk < 1e-12 && gk.log2().fract() == 0.0, "{gk}");
+    let (l1, lk) = (mean_luminance(&one.radiance), mean_luminance(&big.radiance));
+    let rel = fuzzy_vpl::metrics::rel_mse(&big.radiance, &one.radiance);
+    println!("point light set at 1e12: mean luminance {lk:.5} (1: {l1:.5}), rel_mse {rel:.2e}");
+    assert!(l1 > 0.01, "the room is dark: {l1}");
+    assert!((lk / l1 - 1.0).abs() < 5e-3, "{lk} vs {l1}");
+    assert!(rel <= 1e-3, "rel_mse {rel}");
+    // G-buffer positions in the caller's units: 1e12 × those of the unscaled room (f32 rounding of
+    // the scaled input: 1e-5 relative to the room's size).
+    let size = (hi - lo).length();
+    let mut compared = 0;
+    for (a, b) in one.positions.iter().zip(&big.positions) {
+        if a[3] > 0.0 && b[3] > 0.0 {
+            let d = (Vec3::new(b[0], b[1], b[2]) / 1e12 - Vec3::new(a[0], a[1], a[2])).length();
+            assert!(d <= 1e-5 * size, "{a:?} vs {b:?}");
+            compared += 1;
+        }
+    }
+    assert!(compared > 1000, "{compared}");
+}

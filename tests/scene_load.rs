@@ -1611,3 +1611,200 @@ fn real_scenes() {
         }
     }
 }
+
+/// A file of `len` bytes, all a hole (sparse: nothing is written to disk).
+fn sparse_file(path: &Path, len: u64) {
+    std::fs::File::create(path).unwrap().set_len(len).unwrap();
+}
+
+/// Files are read without trusting their size: a 1 TiB sparse file as the scene (.glb, .gltf) or as
+/// a buffer is refused at once (it used to abort, reserving 1 TiB), naming the size and the cap; a
+/// buffer file or a GLB longer than declared is read only as far as declared; a 1 TiB texture
+/// image is skipped with a warning. Each in well under a second (measured: a few ms; asserted < 1 s).
+#[test]
+fn huge_sparse_files_are_refused_or_read_only_as_declared() {
+    let dir = temp_dir("sparse");
+    let tib = 1u64 << 40;
+    let quick = |what: &str, t: std::time::Instant| {
+        let s = t.elapsed().as_secs_f64();
+        assert!(s < 1.0, "{what}: {s} s");
+    };
+    for name in ["huge.glb", "huge.gltf"] {
+        let p = dir.join(name);
+        sparse_file(&p, tib);
+        let t = std::time::Instant::now();
+        let e = assert_err(gltf_load::load_path(&p), name, "larger than");
+        quick(name, t);
+        assert!(e.contains("1.0 TiB") && e.contains("4.0 GiB"), "{e}");
+        std::fs::remove_file(&p).unwrap();
+    }
+
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(false);
+    d.node(json!({"mesh": m}), true);
+    // The buffer's file is 1 TiB and the buffer declares all of it.
+    let p = d.write_gltf(&dir, "tbbuf");
+    sparse_file(&dir.join("tbbuf.bin"), tib);
+    let mut j: Value = serde_json::from_slice(&std::fs::read(&p).unwrap()).unwrap();
+    j["buffers"][0]["byteLength"] = json!(tib);
+    std::fs::write(&p, serde_json::to_vec(&j).unwrap()).unwrap();
+    let t = std::time::Instant::now();
+    assert_err(gltf_load::load_path(&p), "tbbuf.gltf", "larger than");
+    quick("1 TiB buffer", t);
+    // The buffer declares its real length but its file goes on for 6 GiB: only the declared bytes
+    // are read.
+    let p = d.write_gltf(&dir, "longbin");
+    let f = std::fs::OpenOptions::new()
+        .write(true)
+        .open(dir.join("longbin.bin"))
+        .unwrap();
+    f.set_len(6 << 30).unwrap();
+    let t = std::time::Instant::now();
+    assert_eq!(load_ok(&p).triangles.len(), 1);
+    quick("6 GiB buffer file", t);
+    // A GLB followed by 3 GiB of zeros: read as far as its header declares.
+    let glb = dir.join("tail.glb");
+    std::fs::write(&glb, d.glb()).unwrap();
+    let f = std::fs::OpenOptions::new().write(true).open(&glb).unwrap();
+    f.set_len(3 << 30).unwrap();
+    let t = std::time::Instant::now();
+    assert_eq!(load_ok(&glb).triangles.len(), 1);
+    quick("GLB with a 3 GiB tail", t);
+
+    // A 1 TiB texture and a 256 MiB one of zeros (under the cap, not an image: refused from its
+    // first bytes): skipped with warnings.
+    sparse_file(&dir.join("tb.png"), tib);
+    sparse_file(&dir.join("zeros.png"), 256 << 20);
+    let mut d = Doc::new();
+    let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    let uv = d.floats(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], "VEC2", false);
+    d.json["images"] = json!([{"uri": "tb.png"}, {"uri": "zeros.png"}]);
+    d.json["textures"] = json!([{"source": 0}, {"source": 1}]);
+    d.json["materials"] = json!([
+        {"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},
+        {"pbrMetallicRoughness": {"baseColorTexture": {"index": 1}}}
+    ]);
+    for mat in 0..2 {
+        let m = d.mesh(json!({"attributes": {"POSITION": p, "TEXCOORD_0": uv}, "material": mat}));
+        d.node(json!({"mesh": m}), true);
+    }
+    let t = std::time::Instant::now();
+    let s = load_ok(&d.write_gltf(&dir, "tbimage"));
+    quick("1 TiB image", t);
+    assert!(s.textures.is_empty());
+    let w = &s.report.warnings;
+    assert!(
+        w.iter()
+            .any(|w| w.contains("tb.png") && w.contains("larger than")),
+        "{w:?}"
+    );
+    assert!(
+        w.iter()
+            .any(|w| w.contains("zeros.png") && w.contains("unrecognised image format")),
+        "{w:?}"
+    );
+}
+
+/// A file of another format named .gltf or .glb says what it is instead of "bad JSON at line 1".
+#[test]
+fn other_formats_named_gltf_say_what_they_are() {
+    let dir = temp_dir("foreign");
+    let p = dir.join("picture.gltf");
+    std::fs::write(&p, png_bytes(2, 2, [1, 2, 3, 255])).unwrap();
+    let e = assert_err(gltf_load::load_path(&p), "picture.gltf", "PNG image");
+    assert!(!e.contains("JSON"), "{e}");
+    let p = dir.join("archive.gltf");
+    std::fs::write(&p, b"PK\x03\x04 some zip").unwrap();
+    assert_err(gltf_load::load_path(&p), "archive.gltf", "ZIP archive");
+    let p = dir.join("picture.glb");
+    std::fs::write(&p, png_bytes(2, 2, [1, 2, 3, 255])).unwrap();
+    assert_err(gltf_load::load_path(&p), "picture.glb", "PNG image");
+}
+
+/// A mesh translated to 1e38 collapses in f32 (1e38 + 1 == 1e38): the error names the node and its
+/// distance instead of only "no triangles … degenerate"; one far node among others is a warning.
+#[test]
+fn a_node_too_far_for_f32_is_named() {
+    let dir = temp_dir("far");
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m, "translation": [1e38, 0, 0]}), true);
+    let p = d.write_gltf(&dir, "far");
+    let e = assert_err(
+        gltf_load::load_path(&p),
+        "far.gltf",
+        "node 0 lies 1.000e38 from the origin",
+    );
+    assert!(e.contains("no triangles"), "{e}");
+    // The same mesh also at the origin: the scene is then 1e38 across and the near triangle is
+    // degenerate relative to it too; the error still names the far node.
+    d.node(json!({"mesh": m}), true);
+    let p = d.write_gltf(&dir, "farandnear");
+    assert_err(
+        gltf_load::load_path(&p),
+        "farandnear.gltf",
+        "node 0 lies 1.000e38",
+    );
+    // 1e5 away and 1 across: the mesh spans 1.41 / (1e5 x 1.19e-7) = 119 f32 spacings: no warning;
+    // at 3e6: 4 spacings, a warning naming it (the triangle, exact at spacing 0.25, is kept).
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m, "translation": [1e5, 0, 0]}), true);
+    let s = load_ok(&d.write_gltf(&dir, "near"));
+    assert!(s.report.warnings.is_empty(), "{:?}", s.report.warnings);
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m, "translation": [3e6, 0, 0]}), true);
+    let s = load_ok(&d.write_gltf(&dir, "quantised"));
+    assert_eq!(s.triangles.len(), 1);
+    assert!(
+        s.report
+            .warnings
+            .iter()
+            .any(|w| w.contains("node 0 lies 3.000e6") && w.contains("quantised")),
+        "{:?}",
+        s.report.warnings
+    );
+}
+
+/// A zero quaternion on a camera's or a light's node is no rotation: the identity is used and a
+/// warning names the node and what it carries.
+#[test]
+fn zero_quaternions_on_cameras_and_lights_warn() {
+    let dir = temp_dir("zeroquat");
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m}), true);
+    d.json["cameras"] = json!([
+        {"type": "perspective", "name": "cam", "perspective": {"yfov": 0.8, "znear": 0.1}}
+    ]);
+    d.json["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+    d.json["extensions"] = json!({"KHR_lights_punctual": {"lights": [
+        {"type": "spot", "name": "spot", "intensity": 10.0, "spot": {"outerConeAngle": 0.6}}
+    ]}});
+    d.node(
+        json!({"camera": 0, "translation": [0, 0, 5], "rotation": [0, 0, 0, 0]}),
+        true,
+    );
+    d.node(
+        json!({"rotation": [0, 0, 0, 0], "extensions": {"KHR_lights_punctual": {"light": 0}}}),
+        true,
+    );
+    let s = load_ok(&d.write_gltf(&dir, "zeroquat"));
+    let w = &s.report.warnings;
+    assert!(
+        w.iter()
+            .any(|w| w.contains("node 1 (camera 'cam')") && w.contains("zero")),
+        "{w:?}"
+    );
+    assert!(
+        w.iter()
+            .any(|w| w.contains("node 2 (light 'spot')") && w.contains("zero")),
+        "{w:?}"
+    );
+    // The identity: the camera looks down -Z, the spot points down -Z.
+    assert_eq!(s.cameras.len(), 1);
+    assert!((s.cameras[0].forward() - Vec3::NEG_Z).length() < 1e-6);
+    assert_eq!(s.lights.len(), 1);
+    assert!((s.lights[0].direction - Vec3::NEG_Z).length() < 1e-6);
+}

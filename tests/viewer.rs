@@ -238,10 +238,68 @@ fn worker_replies_with_an_error_for_a_frame_too_large_for_the_device() {
             ..Default::default()
         },
         want_sp_ids: false,
+        preview: false,
     }));
     match w.rx.recv_timeout(t) {
         Ok(Reply::Failed(msg)) => assert!(msg.contains(&format!("{width}x{height}")), "{msg}"),
         Ok(_) => panic!("expected Failed"),
         Err(e) => panic!("no reply from the worker: {e}"),
     }
+}
+
+/// `view --animate --frames N --stats`: the viewer measures itself while orbiting (camera change to
+/// image, GI frames while moving) and at rest, and writes it as JSON.
+#[test]
+fn animated_view_reports_motion() {
+    let x = display();
+    let dir = std::env::temp_dir().join(format!("fuzzy-vpl-motion-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let json = dir.join("motion.json");
+    let out = Command::new(env!("CARGO_BIN_EXE_fuzzy-vpl"))
+        .env("DISPLAY", &x.1)
+        .env_remove("WAYLAND_DISPLAY")
+        .env("XDG_CONFIG_HOME", &dir)
+        .args([
+            "view",
+            "builtin:cornell",
+            "--animate",
+            "--frames",
+            "30",
+            "--stats",
+            json.to_str().unwrap(),
+            "--width",
+            "160",
+            "--height",
+            "120",
+            "--vpls",
+            "512",
+            "--sp-clusters",
+            "64",
+            "--vpl-clusters",
+            "64",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let num = |path: &[&str]| {
+        let mut x = &v;
+        for p in path {
+            x = &x[p];
+        }
+        x.as_f64()
+            .unwrap_or_else(|| panic!("{path:?} missing in {v}"))
+    };
+    // Every one of the 30 animated window frames moved the camera; each change was shown.
+    assert!(num(&["motion", "changes"]) >= 30.0, "{v}");
+    let p95 = num(&["motion", "image_latency_ms_p95"]);
+    assert!(p95 > 0.0 && p95.is_finite(), "{v}");
+    assert!(num(&["motion", "gi_frame_ms_mean"]) > 0.0, "{v}");
+    assert!(num(&["rest", "gi_frame_ms"]) > 0.0, "{v}");
+    // The frame at rest is the full render scale (0.5 of 160x120); the previews are half of it.
+    assert_eq!(num(&["rest", "width"]), 80.0, "{v}");
+    assert_eq!(v["settings"]["temporal"], true, "{v}");
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -1,5 +1,6 @@
-// Software BVH2 traversal (stackless, skip links) with the same ray-box and Moller-Trumbore tests as
-// obvhs' CPU code; tests/traversal.rs checks both agree.
+// Software BVH2 traversal (stackless, skip links) with a conservative ray-box test (Ize 2013) and the
+// watertight ray-triangle test (Woop, Benthin, Wald 2013); src/bvh.rs has the CPU twin of both and
+// tests/traversal.rs checks GPU, twin and obvhs' own CPU traversal agree.
 //
 // Nodes and triangles are read with textureLoad from 16-byte texels, not from storage buffers: on
 // lavapipe a storage-buffer load with a per-lane address is a scalar loop over the SIMD lanes with a
@@ -31,23 +32,20 @@ fn safe_inverse(x: f32) -> f32 {
     return 1.0 / x;
 }
 
-// Entry distance of the ray into the box, or INF when it misses.
+// Entry distance of the ray into the box, or INF when it misses. The exit distance is scaled by
+// 1 + 2 gamma(3) (Ize 2013, "Robust BVH ray traversal"): the rounding of the slab distances can no
+// longer make a ray that touches a box (a triangle's edge lies on its box) miss it.
 fn aabb_entry(bmin: vec3<f32>, bmax: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>) -> f32 {
     let t1 = (bmin - origin) * inv_dir;
     let t2 = (bmax - origin) * inv_dir;
     let lo = min(t1, t2);
     let hi = max(t1, t2);
     let tn = max(lo.x, max(lo.y, lo.z));
-    let tf = min(hi.x, min(hi.y, hi.z));
+    let tf = min(hi.x, min(hi.y, hi.z)) * BOX_EXIT_SCALE;
     if tf >= tn && tf >= 0.0 {
         return tn;
     }
     return INF;
-}
-
-// Texel i of a data texture: TEXEL_ROW (4096) texels a row (src/gi/scene_gpu.rs).
-fn texel_xy(i: u32) -> vec2<u32> {
-    return vec2<u32>(i & 4095u, i >> 12u);
 }
 
 fn load_node(i: u32) -> BvhNode {
@@ -56,23 +54,72 @@ fn load_node(i: u32) -> BvhNode {
     return BvhNode(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w);
 }
 
-// Returns (t, u, v); t = INF on a miss or outside [tmin, tmax].
-fn intersect_tri(slot: u32, ray: Ray) -> vec3<f32> {
-    let v0 = textureLoad(tri_texels, texel_xy(3u * slot), 0).xyz;
-    let e1 = v0 - textureLoad(tri_texels, texel_xy(3u * slot + 1u), 0).xyz;
-    let e2 = textureLoad(tri_texels, texel_xy(3u * slot + 2u), 0).xyz - v0;
-    let n = cross(e1, e2);
-    let c = v0 - ray.origin;
-    let r = cross(ray.dir, c);
-    let inv_det = 1.0 / dot(n, ray.dir);
-    let u = dot(r, e2) * inv_det;
-    let v = dot(r, e1) * inv_det;
-    let w = 1.0 - u - v;
-    let signs = (bitcast<u32>(u) | bitcast<u32>(v) | bitcast<u32>(w)) & 0x80000000u;
-    if inv_det != 0.0 && signs == 0u && abs(inv_det) < INF {
-        let t = dot(n, c) * inv_det;
+// 1 + 2 gamma(3), gamma(n) = n u / (1 - n u), u = 2^-24 (Ize 2013; src/bvh.rs has the same constant).
+const BOX_EXIT_SCALE: f32 = 1.0000004;
+
+// Per-ray constants of the watertight ray-triangle test (Woop, Benthin and Wald 2013): the axis `k.z`
+// where the direction is largest becomes z, `k.x` and `k.y` the other two (swapped when the ray runs
+// towards -z, which keeps the triangles' winding), and the shear `s` that maps the ray onto +z.
+struct RayShear {
+    k: vec3<u32>,
+    s: vec3<f32>,
+}
+
+fn ray_shear(dir: vec3<f32>) -> RayShear {
+    let a = abs(dir);
+    var kz = 2u;
+    if a.x >= a.y && a.x >= a.z {
+        kz = 0u;
+    } else if a.y >= a.z {
+        kz = 1u;
+    }
+    var kx = (kz + 1u) % 3u;
+    var ky = (kx + 1u) % 3u;
+    if dir[kz] < 0.0 {
+        let t = kx;
+        kx = ky;
+        ky = t;
+    }
+    let dz = dir[kz];
+    return RayShear(vec3<u32>(kx, ky, kz), vec3<f32>(dir[kx] / dz, dir[ky] / dz, 1.0 / dz));
+}
+
+// A vertex relative to the ray origin in the ray's sheared frame: (x, y) on the ray's image plane,
+// z still to be scaled by s.z.
+fn shear_vertex(p: vec3<f32>, ray: Ray, sh: RayShear) -> vec3<f32> {
+    let a = p - ray.origin;
+    let z = a[sh.k.z];
+    return vec3<f32>(a[sh.k.x] - sh.s.x * z, a[sh.k.y] - sh.s.y * z, z);
+}
+
+// The 2D edge function p.x q.y - p.y q.x of the edge (p, q), evaluated with the two end points in a
+// fixed order (the lexicographically smaller first) and negated when swapped. The triangles that
+// share an edge thus get bit-exact opposite values even where the compiler fuses the multiply-add
+// (FMA), so a ray through the edge is inside at least one of them.
+fn edge_fn(p: vec2<f32>, q: vec2<f32>) -> f32 {
+    let swap = q.x < p.x || (q.x == p.x && q.y < p.y);
+    let a = select(p, q, swap);
+    let b = select(q, p, swap);
+    let e = a.x * b.y - a.y * b.x;
+    return select(e, -e, swap);
+}
+
+// Watertight ray-triangle test (Woop, Benthin and Wald 2013). Returns (t, u, v) with barycentrics
+// p = (1 - u - v) v0 + u v1 + v v2; t = INF on a miss or outside [tmin, tmax]. A ray through an edge
+// or a vertex (edge function 0, also -0.0) hits; a ray in the triangle's plane (det 0) misses.
+fn intersect_tri(slot: u32, ray: Ray, sh: RayShear) -> vec3<f32> {
+    let a = shear_vertex(textureLoad(tri_texels, texel_xy(3u * slot), 0).xyz, ray, sh);
+    let b = shear_vertex(textureLoad(tri_texels, texel_xy(3u * slot + 1u), 0).xyz, ray, sh);
+    let c = shear_vertex(textureLoad(tri_texels, texel_xy(3u * slot + 2u), 0).xyz, ray, sh);
+    let u = edge_fn(c.xy, b.xy);
+    let v = edge_fn(a.xy, c.xy);
+    let w = edge_fn(b.xy, a.xy);
+    let outside = (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0);
+    let det = u + v + w;
+    if !outside && det != 0.0 {
+        let t = (u * a.z + v * b.z + w * c.z) * sh.s.z / det;
         if t >= ray.tmin && t <= ray.tmax {
-            return vec3<f32>(t, u, v);
+            return vec3<f32>(t, v / det, w / det);
         }
     }
     return vec3<f32>(INF, 0.0, 0.0);
@@ -106,13 +153,14 @@ fn trace_closest(ray_in: Ray) -> Hit {
     ray.tmax = min(ray.tmax, INF);
     var hit = Hit(INF, INVALID, 0.0, 0.0);
     let inv_dir = vec3<f32>(safe_inverse(ray.dir.x), safe_inverse(ray.dir.y), safe_inverse(ray.dir.z));
+    let sh = ray_shear(ray.dir);
     var i = 0u;
     var node: BvhNode;
     while walk_to_leaf(&i, &node, ray.origin, inv_dir, ray.tmax) {
         let count = node.prim_count & ~ALPHA_LEAF;
         if HAS_ALPHA_TEST && (node.prim_count & ALPHA_LEAF) != 0u {
             for (var k = node.index; k < node.index + count; k++) {
-                let r = intersect_tri(k, ray);
+                let r = intersect_tri(k, ray, sh);
                 if r.x < ray.tmax && alpha_passes(k, r.y, r.z) {
                     ray.tmax = r.x;
                     hit = Hit(r.x, k, r.y, r.z);
@@ -120,7 +168,7 @@ fn trace_closest(ray_in: Ray) -> Hit {
             }
         } else {
             for (var k = node.index; k < node.index + count; k++) {
-                let r = intersect_tri(k, ray);
+                let r = intersect_tri(k, ray, sh);
                 if r.x < ray.tmax {
                     ray.tmax = r.x;
                     hit = Hit(r.x, k, r.y, r.z);
@@ -137,20 +185,21 @@ fn trace_any(ray_in: Ray) -> bool {
     var ray = ray_in;
     ray.tmax = min(ray.tmax, INF);
     let inv_dir = vec3<f32>(safe_inverse(ray.dir.x), safe_inverse(ray.dir.y), safe_inverse(ray.dir.z));
+    let sh = ray_shear(ray.dir);
     var i = 0u;
     var node: BvhNode;
     while walk_to_leaf(&i, &node, ray.origin, inv_dir, ray.tmax) {
         let count = node.prim_count & ~ALPHA_LEAF;
         if HAS_ALPHA_TEST && (node.prim_count & ALPHA_LEAF) != 0u {
             for (var k = node.index; k < node.index + count; k++) {
-                let r = intersect_tri(k, ray);
+                let r = intersect_tri(k, ray, sh);
                 if r.x < ray.tmax && alpha_passes(k, r.y, r.z) {
                     return true;
                 }
             }
         } else {
             for (var k = node.index; k < node.index + count; k++) {
-                if intersect_tri(k, ray).x < ray.tmax {
+                if intersect_tri(k, ray, sh).x < ray.tmax {
                     return true;
                 }
             }

@@ -72,17 +72,41 @@ struct Light {
 
 @group(0) @binding(0) var<uniform> scene: SceneInfo;
 @group(0) @binding(1) var bvh_texels: texture_2d<u32>;
-@group(0) @binding(2) var<storage, read> tris: array<Tri>;
-@group(0) @binding(3) var<storage, read> tri_shade: array<TriShade>;
+// Shading normals and uvs, 4 texels (n0, n1, n2, extra of TriShade) a triangle: a texture rather than a
+// storage buffer so that a scene is not limited by one storage binding (128 MiB on lavapipe: 2.1 M
+// triangles at 64 bytes); data textures hold 33.5 M texels (src/gi/scene_gpu.rs, MAX_TEXELS).
+@group(0) @binding(3) var shade_texels: texture_2d<f32>;
 @group(0) @binding(4) var<storage, read> materials: array<Material>;
 @group(0) @binding(5) var<storage, read> tex_info: array<TexInfo>;
 @group(0) @binding(6) var<storage, read> texels: array<u32>;
 @group(0) @binding(7) var<storage, read> emitters: array<Emitter>;
 @group(0) @binding(8) var<storage, read> lights: array<Light>;
-// The triangles again for the traversal, 3 texels (v0, v1, v2) each.
+// The triangles' vertices, 3 texels (v0, v1, v2) each, for the traversal and the shading.
 @group(0) @binding(9) var tri_texels: texture_2d<f32>;
 // Linear vertex colours (COLOR_0), 3 per triangle slot; one unused entry without HAS_VERTEX_COLORS.
 @group(0) @binding(10) var<storage, read> tri_colors: array<vec4<f32>>;
+
+// Texel i of a data texture: TEXEL_ROW (4096) texels a row (src/gi/scene_gpu.rs).
+fn texel_xy(i: u32) -> vec2<u32> {
+    return vec2<u32>(i & 4095u, i >> 12u);
+}
+
+fn load_tri(slot: u32) -> Tri {
+    return Tri(
+        textureLoad(tri_texels, texel_xy(3u * slot), 0),
+        textureLoad(tri_texels, texel_xy(3u * slot + 1u), 0),
+        textureLoad(tri_texels, texel_xy(3u * slot + 2u), 0),
+    );
+}
+
+fn load_tri_shade(slot: u32) -> TriShade {
+    return TriShade(
+        textureLoad(shade_texels, texel_xy(4u * slot), 0),
+        textureLoad(shade_texels, texel_xy(4u * slot + 1u), 0),
+        textureLoad(shade_texels, texel_xy(4u * slot + 2u), 0),
+        textureLoad(shade_texels, texel_xy(4u * slot + 3u), 0),
+    );
+}
 
 // Pipeline-overridable switches: a scene without textures or punctual lights compiles those paths out.
 override HAS_TEXTURES: bool = true;

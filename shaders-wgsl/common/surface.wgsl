@@ -46,11 +46,11 @@ fn sample_texture(index: i32, uv: vec2<f32>) -> vec4<f32> {
 }
 
 fn tri_material(slot: u32) -> u32 {
-    return bitcast<u32>(tri_shade[slot].extra.w);
+    return bitcast<u32>(textureLoad(shade_texels, texel_xy(4u * slot + 3u), 0).w);
 }
 
 fn tri_uv(slot: u32, b1: f32, b2: f32) -> vec2<f32> {
-    let s = tri_shade[slot];
+    let s = load_tri_shade(slot);
     let uv0 = vec2<f32>(s.n0.w, s.n1.w);
     let uv1 = vec2<f32>(s.n2.w, s.extra.x);
     let uv2 = vec2<f32>(s.extra.y, s.extra.z);
@@ -58,12 +58,12 @@ fn tri_uv(slot: u32, b1: f32, b2: f32) -> vec2<f32> {
 }
 
 fn tri_geometric_normal(slot: u32) -> vec3<f32> {
-    let t = tris[slot];
+    let t = load_tri(slot);
     return normalize(cross(t.v1.xyz - t.v0.xyz, t.v2.xyz - t.v0.xyz));
 }
 
 fn tri_shading_normal(slot: u32, b1: f32, b2: f32) -> vec3<f32> {
-    let s = tri_shade[slot];
+    let s = load_tri_shade(slot);
     let n = (1.0 - b1 - b2) * s.n0.xyz + b1 * s.n1.xyz + b2 * s.n2.xyz;
     let l = length(n);
     if !(l > 1e-12) {
@@ -73,7 +73,7 @@ fn tri_shading_normal(slot: u32, b1: f32, b2: f32) -> vec3<f32> {
 }
 
 fn tri_point(slot: u32, b1: f32, b2: f32) -> vec3<f32> {
-    let t = tris[slot];
+    let t = load_tri(slot);
     return (1.0 - b1 - b2) * t.v0.xyz + b1 * t.v1.xyz + b2 * t.v2.xyz;
 }
 

@@ -8,7 +8,10 @@
 //! - `camera.rs`: fly / orbit camera. `settings.rs`: the bookmarks file. `screenshot.rs`: file output.
 
 pub mod camera;
+pub mod lights;
+pub mod motion;
 pub mod panel;
+pub mod reproject;
 pub mod screenshot;
 pub mod settings;
 pub mod views;
@@ -53,6 +56,8 @@ pub struct ViewOptions {
     pub view: View,
     /// Keep orbiting the camera (for measuring frame rates while moving).
     pub animate: bool,
+    /// Scripted run: write the motion stats JSON here once done.
+    pub stats: Option<PathBuf>,
     /// Where panel screenshots go.
     pub shot_dir: PathBuf,
 }
@@ -84,6 +89,8 @@ pub struct UiSettings {
     pub nt_degrees: f32,
     pub iterations: u32,
     pub exposure: f32,
+    /// Exposure by `exposure::auto_exposure` of the latest frame (the panel keeps `exposure` at it).
+    pub exposure_auto: bool,
     pub render_scale: f32,
     pub mode: Mode,
     /// p of the weighted mode's w'_f = dist^-p (Eq. 10: 1).
@@ -97,6 +104,8 @@ pub struct UiSettings {
     pub seed: u32,
     pub direct_samples: u32,
     pub clamp: f32,
+    /// Temporal reuse (`FrameSettings::temporal`).
+    pub temporal: bool,
 }
 
 impl UiSettings {
@@ -115,6 +124,7 @@ impl UiSettings {
             nt_degrees: f.normal_threshold.clamp(-1.0, 1.0).acos().to_degrees(),
             iterations: f.iterations,
             exposure,
+            exposure_auto: false,
             render_scale: 1.0,
             mode: match f.weighting {
                 Weighting::Hard => Mode::Hard,
@@ -130,6 +140,7 @@ impl UiSettings {
             seed: f.seed,
             direct_samples: f.direct_samples,
             clamp: f.clamp,
+            temporal: f.temporal,
         }
     }
 
@@ -179,6 +190,7 @@ impl UiSettings {
                 Mode::Weighted => Weighting::InverseDistance,
             },
             clamp: self.clamp,
+            temporal: self.temporal,
             progress: false,
             control: None,
         }
@@ -304,6 +316,17 @@ pub struct RefState {
     pub secs: f64,
 }
 
+/// A scripted run (`view --frames N`).
+#[derive(Clone, Debug)]
+pub struct Script {
+    /// Window frames left to draw.
+    pub left: u32,
+    pub screenshot: Option<PathBuf>,
+    pub stats: Option<PathBuf>,
+    /// The animation has stopped; waiting for the frame at rest.
+    pub settling: bool,
+}
+
 /// One (time, error) point of the scatter plot.
 pub struct PlotPoint {
     pub series: String,
@@ -362,7 +385,19 @@ pub struct Viewer {
     /// Window frames since the scripted run's first full GI frame.
     pub script_frames: u64,
     pub animate: bool,
-    pub script: Option<(u32, PathBuf)>,
+    /// Scripted run: window frames left, where to save the window (PNG) and the stats (JSON).
+    pub script: Option<Script>,
+    /// Latency and GI frame times while moving (`motion.rs`).
+    pub motion: motion::Motion,
+    /// The composed view of the latest frame (frame id, display key, RGBA, note): reprojected to
+    /// every new camera while the next frame renders.
+    composed: Option<(u64, String, Vec<u8>, Option<&'static str>)>,
+    /// The camera the image area shows.
+    pub shown_camera: Option<crate::scene::Camera>,
+    /// The lights as the panel edits them (the scene's until changed).
+    pub lights: lights::LightSet,
+    /// GPU ms of the last VPL trace (a light change) and clustering.
+    pub last_relight: Option<(f64, f64)>,
     pub script_started: Option<Instant>,
     /// Set when the viewer should close (scripted run done, or failed).
     pub exit: Option<Result<(), String>>,
@@ -430,14 +465,20 @@ impl Viewer {
             ui_frames: 0,
             script_frames: 0,
             animate: opts.animate,
-            script: opts.frames.map(|n| {
-                (
-                    n.max(1),
-                    opts.screenshot
-                        .clone()
-                        .unwrap_or_else(|| PathBuf::from("screenshot.png")),
-                )
+            script: opts.frames.map(|n| Script {
+                left: n.max(1),
+                screenshot: opts.screenshot.clone(),
+                stats: opts.stats.clone(),
+                settling: false,
             }),
+            motion: motion::Motion::default(),
+            composed: None,
+            shown_camera: None,
+            lights: lights::LightSet {
+                lights: Vec::new(),
+                emitter_scale: 1.0,
+            },
+            last_relight: None,
             script_started: None,
             exit: None,
             worker_gone: false,
@@ -481,7 +522,7 @@ impl Viewer {
                 self.live_error = None;
                 self.start_camera = None;
                 self.status.clear();
-                self.loaded(info);
+                self.loaded(*info);
                 return true;
             }
             Ok(Reply::LoadFailed(msg)) => msg,
@@ -519,8 +560,13 @@ impl Viewer {
         if self.status.starts_with("loading") {
             self.status.clear();
         }
+        self.lights = lights::LightSet {
+            lights: info.lights.clone(),
+            emitter_scale: 1.0,
+        };
+        self.last_relight = None;
         if !info.has_light {
-            let dark = "the scene has no light; add one with --sun or --point";
+            let dark = "the scene has no light; add one in the Lights section (or --sun, --point)";
             self.status = if self.status.is_empty() {
                 dark.into()
             } else {
@@ -564,6 +610,10 @@ impl Viewer {
     pub fn set_camera(&mut self, c: ViewCamera) {
         if c != self.cam {
             self.cam = c;
+            // Measured from the first image on (before it there is nothing to move).
+            if self.latest.is_some() {
+                self.motion.camera_changed(Instant::now());
+            }
             self.camera_moved();
         }
     }
@@ -597,22 +647,25 @@ impl Viewer {
         gi_size(self.area_px, self.s.render_scale, most)
     }
 
-    /// Sends a frame job when the camera, settings or size changed (progressive: half scale while
-    /// moving, full scale once the camera rests).
+    /// Sends a frame job when the camera, settings or size changed (progressive: a preview while
+    /// moving, `preview_settings`, the full frame once the camera rests).
     pub fn schedule(&mut self) {
         if self.info.is_none() {
             return;
         }
-        let (mut w, mut h) = self.full_size();
-        if self.moving() {
-            w = (w / 2).max(8);
-            h = (h / 2).max(8);
-        }
+        let (w, h) = self.full_size();
+        let preview = self.moving();
+        let settings = if preview {
+            preview_settings(self.s.frame_settings(w, h))
+        } else {
+            self.s.frame_settings(w, h)
+        };
         let job = FrameJob {
             id: self.next_id,
             camera: self.cam.to_camera(),
-            settings: self.s.frame_settings(w, h),
+            settings,
             want_sp_ids: self.view == View::SpClusters,
+            preview,
         };
         let key = format!("{:?} {:?} {}", job.camera, job.settings, job.want_sp_ids);
         if self.last_sent.as_deref() != Some(key.as_str()) {
@@ -638,6 +691,7 @@ impl Viewer {
             camera: self.cam.to_camera(),
             settings,
             want_sp_ids: false,
+            preview: false,
         };
         self.next_id += 1;
         self.worker.send(Job::Reference(job.clone()));
@@ -730,7 +784,7 @@ impl Viewer {
             };
             changed = true;
             match reply {
-                Reply::Loaded(info) => self.loaded(info),
+                Reply::Loaded(info) => self.loaded(*info),
                 Reply::LoadFailed(msg) => {
                     self.worker_gone = true;
                     self.status = msg.clone();
@@ -739,8 +793,17 @@ impl Viewer {
                     }
                 }
                 Reply::Frame(r) => {
+                    if r.relit.is_some() {
+                        self.last_relight = r.relit;
+                    }
                     self.gi_frames += 1;
                     self.gi_ms_sum += r.wall_ms;
+                    let gpu_ms = r.frame.timings_ms.get("frame").copied().unwrap_or(0.0);
+                    if r.job.preview {
+                        self.motion.moving_gi_ms.push(gpu_ms);
+                    } else {
+                        self.motion.rest = Some((gpu_ms, r.frame.width, r.frame.height));
+                    }
                     self.latest = Some(r);
                     self.image_dirty = true;
                     self.record_error();
@@ -753,6 +816,24 @@ impl Viewer {
                         rs.secs = rs.started.elapsed().as_secs_f64();
                         self.image_dirty = true;
                         self.record_error();
+                    }
+                }
+                Reply::Refined {
+                    id,
+                    direct,
+                    estimates,
+                    samples,
+                    gpu_ms,
+                } => {
+                    if let Some(r) = self.latest.as_mut().filter(|r| r.job.id == id) {
+                        r.frame.radiance = direct
+                            .iter()
+                            .zip(&r.frame.indirect)
+                            .map(|(a, b)| [0, 1, 2].map(|c| a[c] + b[c]))
+                            .collect();
+                        r.frame.direct = direct;
+                        r.refined = Some((estimates, samples, gpu_ms));
+                        self.image_dirty = true;
                     }
                 }
                 Reply::ReferenceCancelled => {}
@@ -868,18 +949,96 @@ impl Viewer {
         ));
     }
 
+    /// The animation's step (`--animate`), at the start of a window frame so the frame shows it.
+    pub fn animate_step(&mut self) {
+        if self.animate && self.info.is_some() {
+            let dt = self.last_tick.elapsed().as_secs_f32();
+            let mut c = self.cam;
+            c.orbit(0.6 * dt.min(0.2), 0.0);
+            self.set_camera(c);
+        }
+    }
+
+    /// The image the area shows now, as an egui image: the latest frame's view, reprojected to the
+    /// current camera while a newer frame renders (temporal reuse on); `None` when there is none.
+    /// Sets `shown_camera` and the view's note.
+    pub fn current_image(&mut self) -> Option<egui::ColorImage> {
+        let r = self.latest.as_ref()?;
+        let key = (r.job.id, self.display_key.clone());
+        if self.image_dirty
+            || self
+                .composed
+                .as_ref()
+                .is_none_or(|c| (c.0, &c.1) != (key.0, &key.1))
+        {
+            let (_, _, rgba, note) = self.compose()?;
+            self.composed = Some((key.0, key.1, rgba, note));
+        }
+        self.image_dirty = false;
+        let r = self.latest.as_ref()?;
+        let (w, h) = (r.frame.width, r.frame.height);
+        let (_, _, rgba, note) = self.composed.as_ref()?;
+        self.note = *note;
+        let now = self.cam.to_camera();
+        let from = &r.job.camera;
+        let reprojected;
+        let img: &[u8] =
+            if self.s.temporal && *from != now && r.frame.positions.len() == (w * h) as usize {
+                reprojected = reproject::reproject(
+                    rgba,
+                    &r.frame.positions,
+                    &crate::gi::primary::CameraParams::new(from, w, h),
+                    &crate::gi::primary::CameraParams::new(&now, w, h),
+                );
+                self.shown_camera = Some(now);
+                &reprojected
+            } else {
+                self.shown_camera = Some(from.clone());
+                rgba
+            };
+        Some(egui::ColorImage::from_rgba_unmultiplied(
+            [w as usize, h as usize],
+            img,
+        ))
+    }
+
+    /// Whether the image area must be redrawn: a new frame or view, or (reprojecting) a camera the
+    /// shown image was not made for.
+    pub fn image_stale(&self) -> bool {
+        self.image_dirty
+            || (self.s.temporal
+                && self.latest.is_some()
+                && self.shown_camera.as_ref() != Some(&self.cam.to_camera()))
+    }
+
+    /// The shortest time between window frames: while the worker renders on the same CPU cores
+    /// (a software adapter), window frames are paced to 25 a second so that they leave it most of
+    /// the cores; otherwise 60.
+    pub fn min_frame(&self) -> Duration {
+        let busy = self
+            .latest
+            .as_ref()
+            .is_none_or(|r| r.job.id != self.pending);
+        if busy && self.info.as_ref().is_some_and(|i| i.software) {
+            Duration::from_millis(40)
+        } else {
+            Duration::from_millis(16)
+        }
+    }
+
+    /// A window frame was presented at `now`: the camera change it shows is measured.
+    pub fn presented(&mut self, now: Instant) {
+        if self.shown_camera.as_ref() == Some(&self.cam.to_camera()) {
+            self.motion.shown(now);
+        }
+    }
+
     /// Per window frame: camera input has been applied; schedules work and drives a scripted run.
     pub fn tick(&mut self) {
         let now = Instant::now();
         self.ui_dt = now.duration_since(self.last_tick).as_secs_f32();
         self.last_tick = now;
         self.ui_frames += 1;
-        if self.animate && self.info.is_some() {
-            let c = self.cam;
-            let mut c2 = c;
-            c2.orbit(0.6 * self.ui_dt.min(0.2), 0.0);
-            self.set_camera(c2);
-        }
         self.schedule();
         let dk = format!(
             "{:?} {} {} {} {}",
@@ -894,10 +1053,14 @@ impl Viewer {
             self.image_dirty = true;
         }
         let full = self.full_size();
+        let pending = self.pending;
+        let at_rest = move |r: &Rendered| {
+            !r.job.preview && (r.frame.width, r.frame.height) == full && r.job.id == pending
+        };
         let mut shown = self
             .latest
             .as_ref()
-            .is_some_and(|r| self.animate || (r.frame.width, r.frame.height) == full)
+            .is_some_and(|r| self.animate || at_rest(r))
             && !self.image_dirty;
         if self.script.is_some() && self.view.needs_reference() && shown {
             if self.reference.is_none() {
@@ -905,18 +1068,84 @@ impl Viewer {
             }
             shown = self.live_error.is_some();
         }
-        if let Some((left, path)) = &mut self.script
-            && shown
-        {
-            self.script_started.get_or_insert(now);
-            if *left == 0 {
-                if self.png_request.is_none() {
-                    self.png_request = Some(path.clone());
-                }
-            } else {
-                *left -= 1;
-            }
+        let rest_ready = self.latest.as_ref().is_some_and(|r| at_rest(r)) && !self.moving();
+        let Some(sc) = &mut self.script else { return };
+        if !shown && !sc.settling {
+            return;
         }
+        self.script_started.get_or_insert(now);
+        if sc.left > 0 {
+            sc.left -= 1;
+            return;
+        }
+        if self.animate && sc.stats.is_some() {
+            // Stop moving, then measure the frame at rest.
+            self.animate = false;
+            sc.settling = true;
+            return;
+        }
+        if sc.settling && !rest_ready {
+            return;
+        }
+        sc.settling = false;
+        let (shot, stats) = (sc.screenshot.clone(), sc.stats.take());
+        if let Some(p) = stats
+            && let Err(e) = self.write_stats(&p)
+        {
+            self.exit = Some(Err(format!("{e:#}")));
+            return;
+        }
+        match shot {
+            Some(p) => {
+                if self.png_request.is_none() {
+                    self.png_request = Some(p);
+                }
+            }
+            None => self.exit = Some(Ok(())),
+        }
+    }
+
+    /// The scripted run's stats JSON: the scene, the settings, and what `motion` measured.
+    fn write_stats(&self, path: &std::path::Path) -> Result<()> {
+        let (w, h) = self.full_size();
+        let json = serde_json::json!({
+            "scene": self.spec,
+            "width": w,
+            "height": h,
+            "adapter": self.info.as_ref().map(|i| i.adapter.clone()),
+            "settings": {
+                "vpls": self.s.vpls,
+                "vpl_clusters": if self.s.vpl_on { self.s.vpl_clusters } else { 0 },
+                "sp_clusters": if self.s.sp_on { self.s.sp_clusters } else { 0 },
+                "fuzziness": self.s.fuzziness,
+                "iterations": self.s.iterations,
+                "weighting": self.s.frame_settings(w, h).weighting.name(),
+                "direct_samples": self.s.direct_samples,
+                "render_scale": self.s.render_scale,
+                "temporal": self.s.temporal,
+                "exposure": self.s.exposure,
+            },
+            "ui_frames": self.ui_frames,
+            "motion": self.motion.stats(),
+            "rest": self.motion.rest_stats(),
+        });
+        let text = serde_json::to_string_pretty(&json)?;
+        crate::export::write_atomic(path, |w| {
+            use std::io::Write;
+            w.write_all(text.as_bytes())?;
+            Ok(())
+        })
+    }
+}
+
+/// The preview a moving camera renders: a quarter of the pixels (half scale), one direct-light
+/// sample a pixel (docs/temporal.md measures what it saves).
+pub fn preview_settings(s: FrameSettings) -> FrameSettings {
+    FrameSettings {
+        width: (s.width / 2).max(8),
+        height: (s.height / 2).max(8),
+        direct_samples: 1,
+        ..s
     }
 }
 
@@ -939,6 +1168,7 @@ mod tests {
             screenshot: None,
             view: View::Final,
             animate: false,
+            stats: None,
             shot_dir: std::env::temp_dir(),
         };
         Viewer::new(opts, Arc::new(|| {}))
@@ -1076,6 +1306,84 @@ mod tests {
         v.save_exr();
         assert!(v.last_shot.contains("_final_"), "{}", v.last_shot);
         std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn the_direct_light_accumulates_at_rest() {
+        let mut s = UiSettings::from_frame_settings(&FrameSettings::default(), 1.0);
+        (s.vpls, s.vpl_clusters, s.sp_clusters, s.temporal) = (256, 32, 64, true);
+        s.direct_samples = 2;
+        let mut v = viewer(s);
+        poll_until(&mut v, |v| v.info.is_some());
+        v.schedule();
+        poll_until(&mut v, |v| {
+            v.latest
+                .as_ref()
+                .and_then(|r| r.refined)
+                .is_some_and(|(n, ..)| n >= 3)
+        });
+        let r = v.latest.as_ref().unwrap();
+        let (n, spp, ms) = r.refined.unwrap();
+        assert_eq!(spp, n as u64 * 2);
+        assert!(ms > 0.0);
+        // The image shown is the running mean plus the frame's indirect light.
+        for ((p, d), i) in r
+            .frame
+            .radiance
+            .iter()
+            .zip(&r.frame.direct)
+            .zip(&r.frame.indirect)
+        {
+            assert_eq!(*p, [d[0] + i[0], d[1] + i[1], d[2] + i[2]]);
+        }
+        // A change starts a new frame, which accumulates from its own first estimate.
+        v.s.seed += 1;
+        v.schedule();
+        let id = v.pending;
+        poll_until(&mut v, |v| {
+            v.latest
+                .as_ref()
+                .is_some_and(|r| r.job.id == id && r.refined.is_some())
+        });
+    }
+
+    #[test]
+    fn lights_move_without_a_restart() {
+        let mut s = UiSettings::from_frame_settings(&FrameSettings::default(), 1.0);
+        (s.vpls, s.vpl_clusters, s.sp_clusters, s.temporal) = (256, 32, 64, true);
+        let mut v = viewer(s);
+        poll_until(&mut v, |v| v.info.is_some());
+        v.schedule();
+        poll_until(&mut v, |v| v.latest.is_some());
+        let lum = |v: &Viewer| metrics::mean_luminance(&v.latest.as_ref().unwrap().frame.radiance);
+        let before = lum(&v);
+        assert!(v.last_relight.is_some(), "the first frame traced the VPLs");
+        v.last_relight = None;
+        // The ceiling light off, a point light in the middle of the box.
+        let bounds = v.info.as_ref().unwrap().bounds;
+        let mut set = v.lights.clone();
+        set.emitter_scale = 0.0;
+        set.lights.push(lights::new_point(bounds));
+        v.set_lights(set);
+        assert!(v.status.is_empty(), "{}", v.status);
+        v.schedule();
+        poll_until(&mut v, |v| v.last_relight.is_some());
+        let r = v.latest.as_ref().unwrap();
+        assert!(r.frame.radiance.iter().flatten().all(|c| c.is_finite()));
+        assert!(r.frame.vpls > 0);
+        let (trace, cluster) = v.last_relight.unwrap();
+        assert!(trace > 0.0 && cluster > 0.0, "{trace} {cluster}");
+        assert!(
+            (lum(&v) - before).abs() > 1e-3 * before,
+            "{} vs {before}",
+            lum(&v)
+        );
+        // Nothing left that emits: the panel says so.
+        v.set_lights(lights::LightSet {
+            lights: vec![],
+            emitter_scale: 0.0,
+        });
+        assert!(v.status.contains("no light"), "{}", v.status);
     }
 
     #[test]

@@ -55,6 +55,7 @@ impl Viewer {
         }
         self.scene_section(ui);
         self.camera_section(ui);
+        self.lights_section(ui);
         self.settings_section(ui);
         self.stats_section(ui);
         self.reference_section(ui);
@@ -212,6 +213,8 @@ impl Viewer {
                 ui.separator();
                 // The γ the last frame sampled with: the slider starts there when auto is unticked.
                 let gamma_used = self.latest.as_ref().and_then(|l| l.frame.gamma_used);
+                let auto_e = self.latest.as_ref().filter(|_| self.s.exposure_auto);
+                let auto_e = auto_e.map(|l| crate::exposure::auto_exposure(&l.frame.radiance));
                 let s = &mut self.s;
                 let r = &self.ranges;
                 ui.horizontal(|ui| {
@@ -224,6 +227,10 @@ impl Viewer {
                     ui.checkbox(&mut s.vpl_on, "VPL clustering");
                     ui.checkbox(&mut s.direct_on, "direct");
                 });
+                ui.checkbox(&mut s.temporal, "temporal reuse").on_hover_text(
+                    "Reproject the last frame while moving, start the clusterings from the last \
+                     frame's, accumulate the direct light at rest (docs/temporal.md)",
+                );
                 ui.add_enabled(
                     s.sp_on,
                     Slider::new(&mut s.sp_clusters, 1..=r.sp_clusters)
@@ -287,11 +294,19 @@ impl Viewer {
                 );
                 ui.add(Slider::new(&mut s.iterations, 0..=r.iterations).text("k-means iterations"));
                 ui.separator();
-                ui.add(
-                    Slider::new(&mut s.exposure, r.exposure.0..=r.exposure.1)
-                        .logarithmic(true)
-                        .text("exposure"),
-                );
+                ui.horizontal(|ui| {
+                    ui.checkbox(&mut s.exposure_auto, "auto").on_hover_text(
+                        "the frame's log-average luminance shown as middle grey 0.18 \
+                         (Reinhard et al. 2002)",
+                    );
+                    s.exposure = auto_e.unwrap_or(s.exposure);
+                    ui.add_enabled(
+                        !s.exposure_auto,
+                        Slider::new(&mut s.exposure, r.exposure.0..=r.exposure.1)
+                            .logarithmic(true)
+                            .text("exposure"),
+                    );
+                });
                 ui.add(Slider::new(&mut s.render_scale, 0.1..=1.0).text("render scale"));
                 if let ((w, h), Some(lower)) = self.gi_size() {
                     let most = self.info.as_ref().map_or(0, |i| i.max_pixels);
@@ -354,6 +369,17 @@ impl Viewer {
                 ));
                 if let Some(g) = f.gamma_used {
                     ui.label(format!("γ used {g}"));
+                }
+                if let Some(kept) = f.sp_warm_kept {
+                    ui.label(format!(
+                        "warm start: kept {kept} of {} SP clusters, {} iteration(s)",
+                        f.sp_clusters_used, f.sp_iterations
+                    ));
+                }
+                if let Some((n, spp, ms)) = r.refined {
+                    ui.label(format!(
+                        "direct light: {spp} samples a pixel ({n} frames at rest, {ms:.0} ms each)"
+                    ));
                 }
                 ui.label(format!("shadow rays {}", f.shadow_rays));
             });
@@ -467,24 +493,23 @@ impl Viewer {
         if px != self.area_px {
             self.area_px = px;
         }
-        if self.image_dirty {
-            self.image_dirty = false;
-            if let Some((w, h, rgba, note)) = self.compose() {
-                self.note = note;
-                let img = egui::ColorImage::from_rgba_unmultiplied([w as usize, h as usize], &rgba);
-                match &mut self.texture {
-                    Some(t) => t.set(img, egui::TextureOptions::LINEAR),
-                    None => {
-                        self.texture = Some(ui.ctx().load_texture(
-                            "gi",
-                            img,
-                            egui::TextureOptions::LINEAR,
-                        ))
-                    }
+        let (rect, response) = ui.allocate_exact_size(size, Sense::click_and_drag());
+        // Camera input first, so that this frame's image is already the new camera's.
+        self.camera_input(ui, &response);
+        if self.image_stale()
+            && let Some(img) = self.current_image()
+        {
+            match &mut self.texture {
+                Some(t) => t.set(img, egui::TextureOptions::LINEAR),
+                None => {
+                    self.texture = Some(ui.ctx().load_texture(
+                        "gi",
+                        img,
+                        egui::TextureOptions::LINEAR,
+                    ))
                 }
             }
         }
-        let (rect, response) = ui.allocate_exact_size(size, Sense::click_and_drag());
         if let Some(t) = &self.texture {
             ui.painter().image(
                 t.id(),
@@ -502,7 +527,6 @@ impl Viewer {
                 Color32::YELLOW,
             );
         }
-        self.camera_input(ui, &response);
     }
 
     fn camera_input(&mut self, ui: &mut Ui, response: &egui::Response) {

@@ -44,9 +44,6 @@ pub fn surface_size(size: winit::dpi::PhysicalSize<u32>, max_side: u32) -> (u32,
 #[derive(Debug, Clone, Copy)]
 pub struct Wake;
 
-/// Frames are paced to at most this rate, leaving the CPU to the GI worker on software drivers.
-const MIN_FRAME: Duration = Duration::from_millis(16);
-
 struct Gfx {
     window: Arc<Window>,
     surface: wgpu::Surface<'static>,
@@ -231,6 +228,7 @@ impl App {
         self.last_frame = Instant::now();
         self.redraw_at = None;
         v.poll();
+        v.animate_step();
         let input = g.state.take_egui_input(&g.window);
         let out = g.egui.run_ui(input, |ui| v.ui(ui));
         v.tick();
@@ -317,6 +315,8 @@ impl App {
             .submit(cmds.into_iter().chain(std::iter::once(enc.finish())));
         g.window.pre_present_notify();
         g.queue.present(frame);
+        v.presented(Instant::now());
+        v.motion.input_at = None;
         for id in &out.textures_delta.free {
             g.renderer.free_texture(id);
         }
@@ -326,7 +326,7 @@ impl App {
             let scripted = v
                 .script
                 .as_ref()
-                .is_some_and(|(left, p)| *left == 0 && *p == path);
+                .is_some_and(|sc| sc.left == 0 && sc.screenshot.as_ref() == Some(&path));
             match saved {
                 Ok(()) => {
                     v.last_shot = format!("saved {}", path.display());
@@ -349,8 +349,9 @@ impl App {
             el.exit();
             return Ok(());
         }
-        // Scripted runs and moving cameras draw continuously; otherwise egui says when.
-        let delay = if v.animate || v.moving() || v.script_started.is_some() {
+        // Scripted runs, moving cameras and reprojected images draw continuously; otherwise egui
+        // says when.
+        let delay = if v.animate || v.moving() || v.script_started.is_some() || v.image_stale() {
             Duration::ZERO
         } else if v.script.is_some() {
             repaint.min(Duration::from_millis(100))
@@ -382,6 +383,17 @@ impl ApplicationHandler<Wake> for App {
 
     fn window_event(&mut self, el: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
         let Some(g) = &mut self.gfx else { return };
+        if let Some(v) = &mut self.viewer
+            && matches!(
+                event,
+                WindowEvent::KeyboardInput { .. }
+                    | WindowEvent::CursorMoved { .. }
+                    | WindowEvent::MouseInput { .. }
+                    | WindowEvent::MouseWheel { .. }
+            )
+        {
+            v.motion.input_at.get_or_insert_with(Instant::now);
+        }
         let resp = g.state.on_window_event(&g.window, &event);
         match event {
             WindowEvent::CloseRequested => el.exit(),
@@ -421,7 +433,11 @@ impl ApplicationHandler<Wake> for App {
     fn about_to_wait(&mut self, el: &ActiveEventLoop) {
         match self.redraw_at {
             Some(t) => {
-                let t = t.max(self.last_frame + MIN_FRAME);
+                let min = self
+                    .viewer
+                    .as_ref()
+                    .map_or(Duration::from_millis(16), |v| v.min_frame());
+                let t = t.max(self.last_frame + min);
                 if Instant::now() >= t {
                     self.redraw_at = None;
                     if let Some(g) = &self.gfx {

@@ -28,7 +28,12 @@ pub struct SceneInfo {
     pub bounds: (Vec3, Vec3),
     pub triangles: usize,
     pub has_light: bool,
+    /// The scene's punctual lights and emissive triangles (the panel edits the lights).
+    pub lights: Vec<crate::scene::PunctualLight>,
+    pub emissive_triangles: usize,
     pub adapter: String,
+    /// The worker's adapter runs on the CPU (lavapipe): window frames share its cores.
+    pub software: bool,
     /// The most pixels a GI frame may have on the worker's device (`pipeline::max_pixels`).
     pub max_pixels: u64,
 }
@@ -40,10 +45,15 @@ pub struct FrameJob {
     pub settings: FrameSettings,
     /// Read back the SP clustering's nearest cluster per pixel.
     pub want_sp_ids: bool,
+    /// A preview rendered while the camera moves (`preview_settings`).
+    pub preview: bool,
 }
 
 pub enum Job {
     Frame(FrameJob),
+    /// Lights that move: the scene's punctual lights and the factor on its emissive materials
+    /// (`Renderer::set_lights`), applied before the next frame.
+    Lights(Vec<crate::scene::PunctualLight>, f32),
     /// The unclustered reference of this view; `settings.control` must be set.
     Reference(FrameJob),
 }
@@ -61,12 +71,26 @@ pub struct Rendered {
     pub lights_clustered: bool,
     /// Wall-clock time of the render call, readbacks included.
     pub wall_ms: f64,
+    /// The direct light accumulated at rest: (estimates, samples a pixel, GPU ms of the last one).
+    pub refined: Option<(u32, u64, f64)>,
+    /// GPU ms of (VPL trace, VPL clustering) when this frame traced new VPLs (the first frame, a
+    /// light change, a new VPL count or seed).
+    pub relit: Option<(f64, f64)>,
 }
 
 pub enum Reply {
-    Loaded(SceneInfo),
+    Loaded(Box<SceneInfo>),
     LoadFailed(String),
     Frame(Box<Rendered>),
+    /// The direct light (emission + direct) of frame `id` averaged over `estimates` renders of it
+    /// with different seeds (`samples` area samples a pixel in all), while the camera rests.
+    Refined {
+        id: u64,
+        direct: Vec<[f32; 3]>,
+        estimates: u32,
+        samples: u64,
+        gpu_ms: f64,
+    },
     Reference(Box<Rendered>),
     ReferenceCancelled,
     Failed(String),
@@ -148,33 +172,68 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
     lower_priority();
     let ctx = GpuContext::new_headless()?;
     let mut renderer = Renderer::new(&ctx, scene)?;
-    send(Reply::Loaded(SceneInfo {
+    send(Reply::Loaded(Box::new(SceneInfo {
         spec: spec.to_string(),
         cameras: scene.cameras.clone(),
         default_camera: scene.default_camera(),
         bounds: scene.bounds(),
         triangles: scene.triangles.len(),
         has_light: scene.has_light(),
+        lights: scene.lights.clone(),
+        emissive_triangles: scene.emissive_triangle_count(),
         adapter: ctx.adapter_name.clone(),
+        software: ctx.software,
         max_pixels: crate::gi::pipeline::max_pixels(&ctx, crate::gi::pipeline::PIXEL_BYTES),
-    }));
+    })));
     let mut cache = PointCache::default();
     let mut reference: Option<FrameJob> = None;
     let mut frame: Option<FrameJob> = None;
+    let mut accumulation: Option<Accumulation> = None;
+    let mut lights: Option<(Vec<crate::scene::PunctualLight>, f32)> = None;
     loop {
         if reference.is_none() && frame.is_none() {
-            match jobs.recv() {
-                Ok(j) => take(j, &mut reference, &mut frame),
-                Err(_) => return Ok(()),
+            // Idle: refine the direct light of the frame at rest, or wait for a job.
+            match accumulation
+                .as_mut()
+                .filter(|a| a.estimates < MAX_ESTIMATES)
+            {
+                Some(a) => match jobs.try_recv() {
+                    Ok(j) => take(j, &mut reference, &mut frame, &mut lights),
+                    Err(mpsc::TryRecvError::Empty) => {
+                        match crate::panic_guard::quietly(|| a.refine(&mut renderer)) {
+                            Ok(Ok(reply)) => send(reply),
+                            Ok(Err(e)) => {
+                                accumulation = None;
+                                send(Reply::Failed(format!("refining the direct light: {e:#}")));
+                            }
+                            Err(msg) => {
+                                accumulation = None;
+                                send(Reply::Failed(format!("refining the direct light: {msg}")));
+                            }
+                        }
+                        continue;
+                    }
+                    Err(mpsc::TryRecvError::Disconnected) => return Ok(()),
+                },
+                None => match jobs.recv() {
+                    Ok(j) => take(j, &mut reference, &mut frame, &mut lights),
+                    Err(_) => return Ok(()),
+                },
             }
         }
+        accumulation = None;
         // Drop stale jobs: only the newest of each kind matters.
         loop {
             match jobs.try_recv() {
-                Ok(j) => take(j, &mut reference, &mut frame),
+                Ok(j) => take(j, &mut reference, &mut frame, &mut lights),
                 Err(mpsc::TryRecvError::Empty) => break,
                 Err(mpsc::TryRecvError::Disconnected) => return Ok(()),
             }
+        }
+        if let Some((l, scale)) = lights.take()
+            && let Err(msg) = crate::panic_guard::quietly(|| renderer.set_lights(&l, scale))
+        {
+            send(Reply::Failed(format!("changing the lights: {msg}")));
         }
         if let Some(job) = reference.take() {
             if job
@@ -195,16 +254,27 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
         }
         if let Some(job) = frame.take() {
             match render_guarded(&ctx, &mut renderer, &mut cache, job) {
-                Ok(r) => send(Reply::Frame(Box::new(r))),
+                Ok(r) => {
+                    if r.job.settings.temporal && !r.job.preview {
+                        accumulation = Some(Accumulation::new(&r));
+                    }
+                    send(Reply::Frame(Box::new(r)))
+                }
                 Err(e) => send(Reply::Failed(format!("{e:#}"))),
             }
         }
     }
 }
 
-fn take(j: Job, reference: &mut Option<FrameJob>, frame: &mut Option<FrameJob>) {
+fn take(
+    j: Job,
+    reference: &mut Option<FrameJob>,
+    frame: &mut Option<FrameJob>,
+    lights: &mut Option<(Vec<crate::scene::PunctualLight>, f32)>,
+) {
     match j {
         Job::Frame(f) => *frame = Some(f),
+        Job::Lights(l, scale) => *lights = Some((l, scale)),
         Job::Reference(f) => {
             if let Some(old) = reference.replace(f)
                 && let Some(c) = &old.settings.control
@@ -215,12 +285,59 @@ fn take(j: Job, reference: &mut Option<FrameJob>, frame: &mut Option<FrameJob>) 
     }
 }
 
+/// How many direct-light estimates a frame at rest accumulates (64 × 16 samples a pixel by default).
+pub const MAX_ESTIMATES: u32 = 64;
+
+/// The running mean of the direct light of the frame at rest (temporal reuse on): each idle turn of
+/// the worker renders it again with another seed (`Renderer::direct_again`) and sends the mean. Any
+/// job (a camera move, a settings change) ends it.
+struct Accumulation {
+    id: u64,
+    settings: FrameSettings,
+    sum: Vec<[f64; 3]>,
+    estimates: u32,
+}
+
+impl Accumulation {
+    fn new(r: &Rendered) -> Self {
+        Accumulation {
+            id: r.job.id,
+            settings: r.job.settings.clone(),
+            sum: r.frame.direct.iter().map(|p| p.map(|c| c as f64)).collect(),
+            estimates: 1,
+        }
+    }
+
+    fn refine(&mut self, renderer: &mut Renderer) -> Result<Reply> {
+        let seed = self
+            .settings
+            .seed
+            .wrapping_add(self.estimates.wrapping_mul(0x9e37_79b9));
+        let (direct, gpu_ms) = renderer.direct_again(&self.settings, seed)?;
+        anyhow::ensure!(direct.len() == self.sum.len(), "the frame changed size");
+        for (s, d) in self.sum.iter_mut().zip(&direct) {
+            for c in 0..3 {
+                s[c] += d[c] as f64;
+            }
+        }
+        self.estimates += 1;
+        let n = self.estimates as f64;
+        Ok(Reply::Refined {
+            id: self.id,
+            direct: self.sum.iter().map(|s| s.map(|c| (c / n) as f32)).collect(),
+            estimates: self.estimates,
+            samples: self.estimates as u64 * self.settings.direct_samples as u64,
+            gpu_ms,
+        })
+    }
+}
+
 /// VPL and light positions, recomputed only when the resident sets change.
 #[derive(Default)]
 struct PointCache {
-    vpl_key: Option<(u32, u32, u32)>,
+    vpl_key: Option<crate::gi::pipeline::VplKey>,
     vpls: Arc<Vec<Vec3>>,
-    light_key: Option<(u32, u32, u32, u32, u32)>,
+    light_key: Option<crate::gi::pipeline::LightKey>,
     lights: Arc<Vec<Vec3>>,
 }
 
@@ -256,7 +373,16 @@ fn render(
         _ => None,
     };
     let wall_ms = t.elapsed().as_secs_f64() * 1e3;
-    let pos = |p: &[f32; 4]| Vec3::new(p[0], p[1], p[2]);
+    let relit = match &renderer.vpl_set {
+        Some((_, key, _)) if cache.vpl_key != Some(*key) => {
+            let ms = |k: &str| frame.timings_ms.get(k).copied().unwrap_or(0.0);
+            Some((ms("vpl_trace"), ms("vpl_cluster")))
+        }
+        _ => None,
+    };
+    // In the caller's units (the renderer's are scaled by `geometry_scale`).
+    let k = 1.0 / renderer.geometry_scale;
+    let pos = |p: &[f32; 4]| (Vec3::new(p[0], p[1], p[2]).as_dvec3() * k).as_vec3();
     match &renderer.vpl_set {
         Some((set, key, _)) if cache.vpl_key != Some(*key) => {
             cache.vpl_key = Some(*key);
@@ -288,6 +414,8 @@ fn render(
         lights: cache.lights.clone(),
         lights_clustered,
         wall_ms,
+        refined: None,
+        relit,
     })
 }
 

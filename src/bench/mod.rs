@@ -4,6 +4,7 @@
 //! compared with the reference. Writes `results.csv`, images, plots and `summary.md`.
 
 pub mod csv;
+pub mod path;
 pub mod plot;
 pub mod summary;
 pub mod sweep;
@@ -15,6 +16,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use crate::exposure::Exposure;
 use crate::gi::pipeline::{Frame, FrameSettings, Renderer};
 use crate::gpu::GpuContext;
 use crate::scene::{Camera, Scene};
@@ -35,8 +37,9 @@ pub struct BenchPlan {
     pub cameras: Vec<(String, Camera)>,
     pub repeat: u32,
     pub reference_repeat: u32,
-    /// PNG exposure.
-    pub exposure: f32,
+    /// PNG exposure; `Auto` is resolved once a camera from its reference, so that every image of a
+    /// camera is shown at the same exposure.
+    pub exposure: Exposure,
     /// Draw the progress bar (it hides itself when stderr is not a terminal).
     pub progress: bool,
 }
@@ -181,6 +184,7 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
             &pb,
         )?;
         let reference_ms = ref_t["frame"];
+        let exposure = plan.exposure.resolve(&reference.radiance);
         let ref_exr = format!("reference{suffix}.exr");
         export::write_exr(
             &out.join(&ref_exr),
@@ -194,7 +198,7 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
             reference.width,
             reference.height,
             &reference.radiance,
-            plan.exposure,
+            exposure,
         )?;
         files.extend([out.join(&ref_exr), ref_png]);
         say(format!(
@@ -257,7 +261,7 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
                 frame.width,
                 frame.height,
                 &frame.radiance,
-                plan.exposure,
+                exposure,
             )?;
             export::write_png_rgb8(
                 &out.join(&err),

@@ -16,7 +16,7 @@ use crate::export;
 pub const WIDTH: u32 = 960;
 pub const HEIGHT: u32 = 540;
 
-fn register_fonts() {
+pub fn register_fonts() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         let bytes = epaint_default_fonts::UBUNTU_LIGHT;

@@ -44,6 +44,8 @@ pub struct CpuClustering {
     pub weights: Vec<f32>,
     /// Per cluster: representative member index (u32::MAX when unused).
     pub reps: Vec<u32>,
+    /// Per cluster: the representative as a point (`rep_points`).
+    pub rep_points: Vec<RepPoint>,
     /// Iterations run (fewer than asked when one changed no assignment).
     pub iterations_run: u32,
 }
@@ -226,34 +228,158 @@ fn nearest(
     best
 }
 
+/// Alg. 1 line 2 for cluster `kk`: the first valid sampled point of stratum `kk` (twin of
+/// `stratum_centroid` in kmeans.wgsl); an invalid centroid when the stratum has none.
+pub fn stratum_centroid(points: &[Point], p: &KmParams, kk: u32) -> Centroid {
+    let s_n = p.num_sampled;
+    let s0 = (kk as f32 * (s_n as f32 / p.k as f32)).floor() as u32;
+    let s1 = (((kk + 1) as f32 * (s_n as f32 / p.k as f32)).floor() as u32).max(s0 + 1);
+    (s0..s1.min(s_n))
+        .map(|s| points[sample_index(p, s) as usize])
+        .find(|pt| pt.valid)
+        .map_or(
+            Centroid {
+                pos: Vec3::ZERO,
+                valid: false,
+                nrm: Vec3::Z,
+            },
+            |pt| Centroid {
+                pos: pt.pos,
+                valid: true,
+                nrm: pt.nrm,
+            },
+        )
+}
+
+/// A cluster's representative as a point (kmeans.wgsl `rep_points`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RepPoint {
+    pub pos: Vec3,
+    /// The cluster has a representative.
+    pub valid: bool,
+    pub nrm: Vec3,
+    /// It is the previous frame's, kept by a warm start.
+    pub previous: bool,
+}
+
+impl RepPoint {
+    pub const NONE: RepPoint = RepPoint {
+        pos: Vec3::ZERO,
+        valid: false,
+        nrm: Vec3::Z,
+        previous: false,
+    };
+
+    /// Reads K of them from the GPU layout (2 vec4s each).
+    pub fn from_vec4s(raw: &[[f32; 4]]) -> Vec<RepPoint> {
+        raw.chunks(2)
+            .map(|r| RepPoint {
+                pos: Vec3::new(r[0][0], r[0][1], r[0][2]),
+                valid: r[0][3] > 0.0,
+                nrm: Vec3::new(r[1][0], r[1][1], r[1][2]),
+                previous: r[1][3] == 1.0,
+            })
+            .collect()
+    }
+}
+
+/// Twin of `warm_keeps` in kmeans.wgsl: whether surface point `q` (normal `nq`) of the previous
+/// frame is still seen by the view in `p.warm`.
+pub fn warm_keeps(points: &[Point], p: &KmParams, q: Vec3, nq: Vec3) -> bool {
+    let v = &p.warm;
+    let (w, h) = (v.size[0], v.size[1]);
+    let eye = Vec3::from_slice(&v.eye[..3]);
+    let (r, u, f) = (
+        Vec3::from_slice(&v.right[..3]),
+        Vec3::from_slice(&v.up[..3]),
+        Vec3::from_slice(&v.forward[..3]),
+    );
+    let d = q - eye;
+    let z = d.dot(f);
+    if z.is_nan() || z <= 0.0 {
+        return false;
+    }
+    let sx = d.dot(r) / (z * r.dot(r));
+    let sy = d.dot(u) / (z * u.dot(u));
+    let x = (sx + 1.0) * 0.5 * w as f32;
+    let y = (1.0 - sy) * 0.5 * h as f32;
+    if !(x >= 0.0 && y >= 0.0 && x < w as f32 && y < h as f32) {
+        return false;
+    }
+    let m = (y as u32).min(h - 1) * w + (x as u32).min(w - 1);
+    let Some(pt) = points.get(m as usize).filter(|_| m < p.num_points) else {
+        return false;
+    };
+    if !pt.valid || pt.nrm.dot(nq) <= p.normal_threshold {
+        return false;
+    }
+    let tol = v.eye[3] * (pt.pos - eye).length();
+    pt.nrm.dot(q - pt.pos).abs() <= tol
+}
+
+/// Twin of `warm_centroids`: a previous cluster is kept where the view still sees its representative
+/// (every valid one without a view), the others start from their strata. Returns the initial
+/// centroids, the representatives that may be kept (`rep_store`), and how many clusters were kept.
+pub fn warm_centroids(
+    points: &[Point],
+    p: &KmParams,
+    previous: &[Centroid],
+    previous_reps: &[RepPoint],
+) -> (Vec<Centroid>, Vec<Option<RepPoint>>, u32) {
+    let mut kept = 0;
+    let mut candidates = vec![None; p.k as usize];
+    let cs = (0..p.k)
+        .map(|kk| {
+            let i = kk as usize;
+            if kk < p.warm.size[2] {
+                let (c, r) = (previous[i], previous_reps[i]);
+                let seen = p.warm.size[0] == 0 || (r.valid && warm_keeps(points, p, r.pos, r.nrm));
+                if c.valid && seen {
+                    kept += 1;
+                    candidates[i] = Some(r);
+                    return c;
+                }
+            }
+            stratum_centroid(points, p, kk)
+        })
+        .collect();
+    (cs, candidates, kept)
+}
+
 /// Alg. 1 + Alg. 2 on the CPU, mirroring the shader step by step.
 pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering {
+    let cs = (0..p.k).map(|kk| stratum_centroid(points, p, kk)).collect();
+    kmeans_from(points, p, iterations, cs, vec![None; p.k as usize])
+}
+
+/// `kmeans` warm-started from the previous clustering's centroids and representative points (`p`
+/// made by `KmParams::with_warm`), with the iterations `gi::kmeans::warm_iterations` gives, as
+/// `KMeans::run` does with a `Warm`. Also returns how many clusters were kept.
+pub fn kmeans_warm(
+    points: &[Point],
+    p: &KmParams,
+    iterations: u32,
+    previous: &[Centroid],
+    previous_reps: &[RepPoint],
+) -> (CpuClustering, u32) {
+    let (cs, candidates, kept) = warm_centroids(points, p, previous, previous_reps);
+    let n = crate::gi::kmeans::warm_iterations(iterations, kept, p.k);
+    (kmeans_from(points, p, n, cs, candidates), kept)
+}
+
+/// Alg. 1 from the initial centroids `cs`, then Alg. 2; `candidates`: the representatives a warm
+/// start may keep (twin of `rep_store`).
+fn kmeans_from(
+    points: &[Point],
+    p: &KmParams,
+    iterations: u32,
+    mut cs: Vec<Centroid>,
+    candidates: Vec<Option<RepPoint>>,
+) -> CpuClustering {
     let k = p.k as usize;
     let f = p.f as usize;
     let s_n = p.num_sampled;
     let n_t = p.normal_threshold;
-    // Initial centroids: the first valid sampled point of each stratum.
-    let mut cs: Vec<Centroid> = (0..p.k)
-        .map(|kk| {
-            let s0 = (kk as f32 * (s_n as f32 / p.k as f32)).floor() as u32;
-            let s1 = (((kk + 1) as f32 * (s_n as f32 / p.k as f32)).floor() as u32).max(s0 + 1);
-            (s0..s1.min(s_n))
-                .map(|s| points[sample_index(p, s) as usize])
-                .find(|pt| pt.valid)
-                .map_or(
-                    Centroid {
-                        pos: Vec3::ZERO,
-                        valid: false,
-                        nrm: Vec3::Z,
-                    },
-                    |pt| Centroid {
-                        pos: pt.pos,
-                        valid: true,
-                        nrm: pt.nrm,
-                    },
-                )
-        })
-        .collect();
     let lo = Vec3::from_slice(&p.lo[..3]);
     let ext = Vec3::from_slice(&p.ext[..3]);
     let mut sample_assign = vec![u32::MAX; s_n as usize];
@@ -406,8 +532,35 @@ pub fn kmeans(points: &[Point], p: &KmParams, iterations: u32) -> CpuClustering 
             }
         }
     }
+    // Representatives as points: a kept one while it is still one of its cluster (its normal agrees
+    // with the centroid's, within twice the nearest member distance of it), else the member.
+    let rep_points = (0..k)
+        .map(|kk| {
+            if reps[kk] == u32::MAX {
+                return RepPoint::NONE;
+            }
+            let c = &cs[kk];
+            if let Some(r) = candidates[kk].filter(|r| r.valid) {
+                let nearest = f32::from_bits(rep_d[kk]);
+                if r.nrm.dot(c.nrm) > n_t && (r.pos - c.pos).length() <= 2.0 * nearest {
+                    return RepPoint {
+                        previous: true,
+                        ..r
+                    };
+                }
+            }
+            let pt = points[reps[kk] as usize];
+            RepPoint {
+                pos: pt.pos,
+                valid: true,
+                nrm: pt.nrm,
+                previous: false,
+            }
+        })
+        .collect();
     CpuClustering {
         iterations_run,
+        rep_points,
         centroids: cs,
         sample_assign,
         assign,

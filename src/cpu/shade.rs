@@ -2,32 +2,27 @@
 
 use glam::Vec3;
 
+use super::kmeans::RepPoint;
 use super::shading::{CpuScene, ShadingPoint};
 use super::vpl::vpl_term;
 use crate::gi::vpl_trace::Vpl;
 
-/// The visibility bit matrix: row k (SP cluster with representative pixel `reps[k]`, or none), bit c
+/// The visibility bit matrix: row k (SP cluster with representative point `reps[k]`, or none), bit c
 /// set when light c's representative is visible from it. Returns (bits, words per row).
-pub fn visibility_bits(
-    cpu: &CpuScene,
-    sps: &[ShadingPoint],
-    reps: &[u32],
-    lights: &[Vpl],
-) -> (Vec<u32>, usize) {
+pub fn visibility_bits(cpu: &CpuScene, reps: &[RepPoint], lights: &[Vpl]) -> (Vec<u32>, usize) {
     let words = lights.len().div_ceil(32).max(1);
     let mut bits = vec![0u32; reps.len() * words];
-    for (k, &rep) in reps.iter().enumerate() {
-        if rep == u32::MAX {
+    for (k, rep) in reps.iter().enumerate() {
+        if !rep.valid {
             continue;
         }
-        let sp = &sps[rep as usize];
         for (c, l) in lights.iter().enumerate() {
-            let d = Vec3::new(l.pos[0], l.pos[1], l.pos[2]) - sp.pos;
+            let d = Vec3::new(l.pos[0], l.pos[1], l.pos[2]) - rep.pos;
             let ln = Vec3::new(l.nrm[0], l.nrm[1], l.nrm[2]);
-            if sp.normal.dot(d) <= 0.0 || ln.dot(d) >= 0.0 {
+            if rep.nrm.dot(d) <= 0.0 || ln.dot(d) >= 0.0 {
                 continue;
             }
-            if cpu.vpl_visible(sp.pos, sp.normal, l) {
+            if cpu.vpl_visible(rep.pos, rep.nrm, l) {
                 bits[k * words + c / 32] |= 1 << (c % 32);
             }
         }

@@ -1,7 +1,7 @@
 //! CPU twins of `primary.wgsl` and `direct.wgsl` (with `common/surface.wgsl`, `common/lights.wgsl`,
 //! `common/sampling.wgsl`): the same formulas, the same random numbers, obvhs for the rays.
 
-use glam::{Vec2, Vec3, Vec3A};
+use glam::{Vec2, Vec3};
 
 use super::rng::{rng_next, rng_seed};
 use crate::bvh::SceneBvh;
@@ -159,13 +159,7 @@ impl<'a> CpuScene<'a> {
         let Some(hit) = self.bvh.closest(eye.into(), dir.into(), 0.0, f32::INFINITY) else {
             return none;
         };
-        let slot = self
-            .bvh
-            .slot_to_triangle
-            .iter()
-            .position(|&t| t == hit.triangle)
-            .unwrap() as u32;
-        let (b1, b2) = barycentrics(&self.bvh.tris[slot as usize], eye, dir);
+        let (slot, b1, b2) = (hit.slot, hit.u, hit.v);
         let material = self.tri(slot).material;
         let uv = self.uv(slot, b1, b2);
         let mut ng = self.geometric_normal(slot);
@@ -305,16 +299,4 @@ impl<'a> CpuScene<'a> {
             dist * (1.0 - 1e-4) - self.info.eps,
         )
     }
-}
-
-/// Barycentrics (u, v) of the ray's hit on `t` with the shader's Möller–Trumbore formula.
-pub fn barycentrics(t: &obvhs::triangle::Triangle, o: Vec3, d: Vec3) -> (f32, f32) {
-    let (o, d) = (Vec3A::from(o), Vec3A::from(d));
-    let e1 = t.v0 - t.v1;
-    let e2 = t.v2 - t.v0;
-    let n = e1.cross(e2);
-    let c = t.v0 - o;
-    let r = d.cross(c);
-    let inv_det = 1.0 / n.dot(d);
-    (r.dot(e2) * inv_det, r.dot(e1) * inv_det)
 }

@@ -14,6 +14,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use super::dispatch::{Kernel, RecordCopies, WORKGROUP, copy_to_texture, data_texture};
+use super::primary::CameraParams;
 use super::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::{GpuContext, profiler::Profiler};
 
@@ -169,6 +170,10 @@ pub struct KmParams {
     /// `plane_gate_sine` of the settings.
     pub plane_gate: f32,
     pub _pad: [u32; 2],
+    /// The temporal warm start's view (kmeans.wgsl `warm_keeps`): the new frame's camera, with
+    /// `warm.eye[3]` the same-surface tolerance; `warm.size` = (width, height, previous K, 0), width 0
+    /// when the points are no view's pixels. All zero for a cold start.
+    pub warm: CameraParams,
 }
 
 impl KmParams {
@@ -191,15 +196,64 @@ impl KmParams {
             weight_exponent: s.weight_exponent,
             plane_gate: plane_gate_sine(s.plane_gate_deg),
             _pad: [0; 2],
+            warm: CameraParams::zeroed(),
         }
     }
+
+    /// These parameters warm-started from `previous_k` centroids, tested against `view` (the new
+    /// frame's camera when the points are its pixels).
+    pub fn with_warm(mut self, previous_k: u32, view: Option<&CameraParams>) -> Self {
+        self.warm = match view {
+            Some(v) => {
+                let mut w = *v;
+                w.eye[3] = WARM_SURFACE_TOLERANCE;
+                w
+            }
+            None => CameraParams::zeroed(),
+        };
+        self.warm.size[2] = previous_k.min(self.k);
+        self
+    }
+}
+
+/// How far a previous centroid may lie off the tangent plane of the shading point it projects to,
+/// as a fraction of that point's distance from the eye, and still count as the same surface
+/// (`warm_keeps`). 2%: a centroid is a mean over a curved patch, so it lies a little inside a curved
+/// surface; geometry that hides it lies farther off.
+pub const WARM_SURFACE_TOLERANCE: f32 = 0.02;
+
+/// Alg. 1 iterations after a warm start that kept `kept` of `k` centroids: the share of re-seeded
+/// centroids of the cold start's `iterations`, rounded up, at least 1 (a still camera keeps every
+/// centroid and runs one iteration; a view with half its clusters new runs half of them).
+pub fn warm_iterations(iterations: u32, kept: u32, k: u32) -> u32 {
+    if iterations == 0 {
+        return 0;
+    }
+    let new = k.saturating_sub(kept) as u64;
+    let n = (iterations as u64 * new).div_ceil(k.max(1) as u64) as u32;
+    n.clamp(1, iterations)
+}
+
+/// A warm start: the previous clustering of the same kind of points.
+pub struct Warm<'a> {
+    /// Its centroids and representative points (`Clustering::centroids`, `rep_points`).
+    pub centroids: &'a wgpu::Buffer,
+    pub rep_points: &'a wgpu::Buffer,
+    /// Its K.
+    pub k: u32,
+    /// The new frame's camera when the points are that frame's pixels (SP clustering); `None` for
+    /// VPLs (every valid previous centroid is kept).
+    pub view: Option<CameraParams>,
 }
 
 /// The result of one clustering, resident on the GPU.
 pub struct Clustering {
     pub params: KmParams,
-    /// Iterations of Alg. 1 run: the requested count, or fewer when one changed no assignment.
+    /// Iterations of Alg. 1 run: the requested count, or fewer when one changed no assignment or
+    /// after a warm start (`warm_iterations`).
     pub iterations_run: u32,
+    /// Centroids a warm start kept from the previous clustering (`None`: a cold start).
+    pub warm_kept: Option<u32>,
     /// K centroids (pos xyz + valid w, normal).
     pub centroids: wgpu::Buffer,
     /// M × F cluster indices (u32::MAX where fewer than F were found).
@@ -208,6 +262,9 @@ pub struct Clustering {
     pub weights: wgpu::Buffer,
     /// Per cluster: (smallest member distance bits, member index); index u32::MAX when unused.
     pub reps: wgpu::Buffer,
+    /// Per cluster its representative as a point, 2 vec4s: position (w = 1: the cluster has one),
+    /// normal (w = 1: the previous frame's, kept by a warm start). The visibility pass traces from it.
+    pub rep_points: wgpu::Buffer,
     /// The sampled points' assignment of the last iteration (for tests).
     pub sample_assign: wgpu::Buffer,
 }
@@ -223,6 +280,7 @@ impl Clustering {
 
 const ENTRIES: &[&str] = &[
     "init_centroids",
+    "warm_centroids",
     "grid_setup",
     "grid_count",
     "grid_scan_blocks",
@@ -234,6 +292,7 @@ const ENTRIES: &[&str] = &[
     "final_assign",
     "rep_clear",
     "rep_pick",
+    "rep_store",
     "rep_weights",
 ];
 
@@ -279,6 +338,7 @@ impl KMeans {
             entries.extend((3..=14).map(|b| storage_layout(b, false)));
             entries.push(data_texture_layout(15, wgpu::TextureSampleType::Uint));
             entries.push(data_texture_layout(16, wgpu::TextureSampleType::Uint));
+            entries.push(storage_layout(17, false));
             let texture = self.texture_search(ctx) as u32 as f64;
             Kernel::with_entries(
                 ctx,
@@ -296,7 +356,8 @@ impl KMeans {
     }
 
     /// Clusters `num_points` points of `data` (`stride` vec4s each: position with w > 0 when valid,
-    /// then normal), timing every step under `label`.
+    /// then normal), timing every step under `label`; from `warm`'s centroids where given
+    /// (`warm_centroids`), else from strata (Alg. 1 line 2).
     #[allow(clippy::too_many_arguments)]
     pub fn run(
         &self,
@@ -309,8 +370,12 @@ impl KMeans {
         stride: u32,
         settings: &KMeansSettings,
         frame: (Vec3, Vec3),
+        warm: Option<&Warm>,
     ) -> Result<Clustering> {
-        let p = KmParams::new(num_points, stride, settings, frame);
+        let mut p = KmParams::new(num_points, stride, settings, frame);
+        if let Some(w) = warm {
+            p = p.with_warm(w.k, w.view.as_ref());
+        }
         let k = p.k as u64;
         let m = num_points as u64;
         let f = p.f as u64;
@@ -319,7 +384,7 @@ impl KMeans {
         let sums = ctx.storage("centroid sums", k * WORDS * 4);
         let bounds = ctx.storage_init(
             "centroid bounds",
-            &[u32::MAX, u32::MAX, u32::MAX, 0, 0, 0, 0, 0, 0, 0, 0],
+            &[u32::MAX, u32::MAX, u32::MAX, 0, 0, 0, 0, 0, 0, 0, 0, 0],
         );
         let grid_buf = ctx.storage("grid", 32);
         let cells = ctx.storage("grid cells", (2 * MAX_CELLS + SCAN_BLOCKS) * 4);
@@ -327,6 +392,7 @@ impl KMeans {
         let assign = ctx.storage("assign", m * f * 4);
         let weights = ctx.storage("weights", m * f * 4);
         let reps = ctx.storage("representatives", k * 8);
+        let rep_points = ctx.storage("representative points", k * 32);
         let member_dists = ctx.storage("member distances", m * f * 4);
         // The grid for the nearest-centroid search: centroids sorted by cell (2 texels each) and per
         // cell the sorted offsets of it and its row neighbours (one texel gives a row run of three
@@ -369,6 +435,7 @@ impl KMeans {
                 (12, &reps),
                 (13, &sorted),
                 (14, &ranges),
+                (17, &rep_points),
             ],
             &[(15, &sorted_view), (16, &ranges_view)],
         );
@@ -399,9 +466,25 @@ impl KMeans {
         let mut run = |steps: &[(&str, u32)]| {
             kernel.run_entries(ctx, profiler, label, scene, &bg, steps, seed, after)
         };
-        run(&[("init_centroids", kk), ("init_sampled", p.num_sampled)]);
+        let (mut iterations, mut warm_kept) = (settings.iterations, None);
+        match warm {
+            Some(w) => {
+                let n = p.warm.size[2] as u64 * 32;
+                if n > 0 {
+                    let mut enc = ctx.device.create_command_encoder(&Default::default());
+                    enc.copy_buffer_to_buffer(w.centroids, 0, &centroids, 0, n);
+                    enc.copy_buffer_to_buffer(w.rep_points, 0, &rep_points, 0, n);
+                    ctx.queue.submit([enc.finish()]);
+                }
+                run(&[("warm_centroids", kk), ("init_sampled", p.num_sampled)]);
+                let kept = ctx.read_buffer::<u32>(&bounds, 12)?[11];
+                iterations = warm_iterations(iterations, kept, kk);
+                warm_kept = Some(kept);
+            }
+            None => run(&[("init_centroids", kk), ("init_sampled", p.num_sampled)]),
+        }
         let mut iterations_run = 0;
-        for i in 0..settings.iterations {
+        for i in 0..iterations {
             let mut steps = grid.to_vec();
             steps.extend([("assign_sampled", p.num_sampled), ("update", kk)]);
             run(&steps);
@@ -419,7 +502,7 @@ impl KMeans {
         let mut steps = grid.to_vec();
         steps.extend([("rep_clear", kk), ("final_assign", num_points)]);
         run(&steps);
-        run(&[("rep_pick", num_points)]);
+        run(&[("rep_pick", num_points), ("rep_store", kk)]);
         if settings.weights_to_reps && p.f > 1 {
             run(&[("rep_weights", num_points)]);
         }
@@ -440,11 +523,13 @@ impl KMeans {
         }
         Ok(Clustering {
             iterations_run,
+            warm_kept,
             params: p,
             centroids,
             assign,
             weights,
             reps,
+            rep_points,
             sample_assign,
         })
     }

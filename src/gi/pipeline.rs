@@ -26,7 +26,7 @@ use super::vpl_cluster::{self, LightList};
 use super::vpl_trace::{VplSet, VplTrace};
 use crate::bvh::SceneBvh;
 use crate::gpu::{GpuContext, profiler::Profiler};
-use crate::scene::{Camera, Scene};
+use crate::scene::{Camera, PunctualLight, Scene};
 
 /// How a pixel's F SP clusters combine their visibility.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
@@ -47,6 +47,15 @@ impl Weighting {
             Weighting::Uniform => "uniform",
             Weighting::InverseDistance => "inverse-distance",
         }
+    }
+}
+
+/// `on` / `off` (`--temporal`), as a bool.
+pub fn parse_on_off(v: &str) -> Result<bool, String> {
+    match v.trim() {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        t => Err(format!("'{t}': expected `on` or `off`")),
     }
 }
 
@@ -86,6 +95,10 @@ pub struct FrameSettings {
     pub plane_gate_deg: Option<f32>,
     /// G-term clamp: 1/d² uses d ≥ clamp × scene diagonal (scale-free; see docs/reference.md).
     pub clamp: f32,
+    /// Temporal reuse: the SP clustering starts from the previous frame's centroids where the view
+    /// still sees their surface, and the VPL clustering from its last centroids when the lights
+    /// change (`kmeans::Warm`; docs/temporal.md). Off: every frame starts from the strata.
+    pub temporal: bool,
     /// Print progress of long passes on stderr.
     pub progress: bool,
     /// Shared with another thread (the viewer): progress of the long gather passes and a cancel flag
@@ -147,6 +160,7 @@ impl Default for FrameSettings {
             weight_exponent: DEFAULT_WEIGHT_EXPONENT,
             plane_gate_deg: None,
             clamp: DEFAULT_CLAMP,
+            temporal: false,
             progress: false,
             control: None,
         }
@@ -338,17 +352,37 @@ pub struct Frame {
     pub vpl_clusters_used: u32,
     /// γ Alg. 1 sampled with (`kmeans::effective_gamma`); `None` when no SP clustering ran.
     pub gamma_used: Option<u32>,
+    /// The shading point of each pixel: world position, w = 1 where the primary ray hit (0: sky).
+    /// What the viewer reprojects a frame with.
+    pub positions: Vec<[f32; 4]>,
+    /// Alg. 1 iterations the SP clustering ran (0 when none ran).
+    pub sp_iterations: u32,
+    /// SP centroids a temporal warm start kept from the previous frame (`None`: a cold start).
+    pub sp_warm_kept: Option<u32>,
+    /// Rows of the visibility matrix copied from the previous frame instead of traced (kept
+    /// representatives, same lights).
+    pub visibility_rows_reused: u32,
 }
 
-type LightKey = (u32, u32, u32, u32, u32);
+/// What a light list was built for: (K, n_t bits, iterations, seed, VPLs, the VPL set's trace).
+pub type LightKey = (u32, u32, u32, u32, u32, u32);
+/// What a VPL set was traced for: (count, seed, bounces) and which trace it is (`Renderer`'s count of
+/// traces: a light change re-traces the same count, seed and bounces).
+pub type VplKey = (u32, u32, u32, u32);
 
 /// Everything resident for one scene on one device.
 pub struct Renderer<'a> {
     pub ctx: &'a GpuContext,
-    /// The scene as rendered: borrowed, or a copy with its emitters scaled into range
-    /// (`Scene::normalize_emission`), in which case `output_scale` scales the images back.
+    /// The scene as rendered: borrowed, or a copy with its geometry scaled by a power of two into a
+    /// unit frame (`Scene::normalize_geometry`, `geometry_scale`) and/or its emitters scaled into
+    /// range (`Scene::normalize_emission`, `output_scale` scales the images back).
     pub scene: std::borrow::Cow<'a, Scene>,
+    /// The scene as given (`set_lights` scales its emitters from these).
+    source: &'a Scene,
     pub output_scale: f32,
+    /// The factor from the caller's units to the rendered scene's (a power of two; 1 for scenes of
+    /// 2^-10..2^10 across): cameras given to `render` and `path_trace` are scaled by it.
+    pub geometry_scale: f64,
     pub bvh: SceneBvh,
     pub gpu: SceneGpu,
     pub profiler: Profiler,
@@ -360,17 +394,26 @@ pub struct Renderer<'a> {
     visibility: Visibility,
     shade: Shade,
     gbuffer: Option<(wgpu::Buffer, u32)>,
-    /// Resident VPLs with the (count, seed, bounces) they were traced for and the GPU ms it took.
-    pub vpl_set: Option<(VplSet, (u32, u32, u32), f64)>,
+    /// Resident VPLs with what they were traced for and the GPU ms it took.
+    pub vpl_set: Option<(VplSet, VplKey, f64)>,
+    /// VPL traces so far (the last element of `VplKey`).
+    vpl_traces: u32,
     /// Resident light list (VPL clusters or the VPLs), its key and the clustering's GPU ms.
     pub lights: Option<(LightList, LightKey, f64)>,
     /// The last frame's SP clustering (for views and tests).
     pub sp_clustering: Option<super::kmeans::Clustering>,
+    /// The last frame's visibility matrix and the light list it was traced against.
+    last_visibility: Option<(super::visibility::Previous, LightKey)>,
 }
 
 impl<'a> Renderer<'a> {
-    pub fn new(ctx: &'a GpuContext, scene: &'a Scene) -> Result<Self> {
-        let mut scene = std::borrow::Cow::Borrowed(scene);
+    pub fn new(ctx: &'a GpuContext, source: &'a Scene) -> Result<Self> {
+        super::scene_gpu::check_fits(source, ctx.max_binding())?;
+        let mut scene = std::borrow::Cow::Borrowed(source);
+        let geometry_scale = scene.geometry_scale();
+        if geometry_scale != 1.0 {
+            scene.to_mut().scale_geometry(geometry_scale);
+        }
         let output_scale = if scene.emission_out_of_range() {
             scene.to_mut().normalize_emission()
         } else {
@@ -381,7 +424,9 @@ impl<'a> Renderer<'a> {
         Ok(Renderer {
             ctx,
             scene,
+            source,
             output_scale,
+            geometry_scale,
             primary: Primary::new(ctx, &gpu),
             direct: Direct::new(ctx, &gpu),
             vpl_trace: VplTrace::new(ctx, &gpu),
@@ -392,11 +437,56 @@ impl<'a> Renderer<'a> {
             profiler: Profiler::new(ctx),
             gbuffer: None,
             vpl_set: None,
+            vpl_traces: 0,
             lights: None,
             sp_clustering: None,
+            last_visibility: None,
             bvh,
             gpu,
         })
+    }
+
+    /// `camera` (in the caller's units) in the rendered scene's units: its eye scaled by
+    /// `geometry_scale`.
+    pub fn to_render_units(&self, camera: &Camera) -> Camera {
+        let mut c = camera.clone();
+        if self.geometry_scale != 1.0 {
+            let eye = c.transform.w_axis.truncate().as_dvec3() * self.geometry_scale;
+            c.transform.w_axis = eye.as_vec3().extend(1.0);
+        }
+        c
+    }
+
+    /// Lights that move: replaces the scene's punctual lights with `lights` (in the caller's units,
+    /// like cameras) and scales its emissive materials by `emitter_scale` (from the scene as given).
+    /// The geometry and its BVH stay; the scene's GPU buffers are uploaded again, and the passes
+    /// rebuilt only when the shader paths a scene needs change (punctual lights or emitters appear or
+    /// go). The next frame traces the VPLs again and clusters them (from the last clustering, with
+    /// temporal reuse on).
+    pub fn set_lights(&mut self, lights: &[PunctualLight], emitter_scale: f32) {
+        let ctx = self.ctx;
+        let scene = self.scene.to_mut();
+        scene.lights = lights.to_vec();
+        // Lights come in the caller's units: into the unit frame the geometry was scaled to.
+        scene.scale_lights(self.geometry_scale);
+        for (m, base) in scene.materials.iter_mut().zip(&self.source.materials) {
+            m.emissive = base.emissive * emitter_scale;
+        }
+        self.output_scale = if scene.emission_out_of_range() {
+            scene.normalize_emission()
+        } else {
+            1.0
+        };
+        let gpu = SceneGpu::upload(ctx, scene, &self.bvh);
+        if gpu.overrides() != self.gpu.overrides() {
+            self.primary = Primary::new(ctx, &gpu);
+            self.direct = Direct::new(ctx, &gpu);
+            self.vpl_trace = VplTrace::new(ctx, &gpu);
+            self.reference = Reference::new(ctx, &gpu);
+            self.visibility = Visibility::new(ctx, &gpu);
+        }
+        self.gpu = gpu;
+        self.vpl_set = None;
     }
 
     /// The passes a frame with these settings runs, in order (also what `info` prints).
@@ -406,8 +496,10 @@ impl<'a> Renderer<'a> {
 
     /// Traces the VPLs unless the resident ones match (count, seed, bounces).
     pub fn ensure_vpls(&mut self, n: u32, seed: u32, bounces: u32) -> Result<&VplSet> {
-        let key = (n, seed, bounces);
-        if self.vpl_set.as_ref().map(|v| v.1) != Some(key) {
+        let traced = self.vpl_set.as_ref().map(|v| (v.1.0, v.1.1, v.1.2));
+        if traced != Some((n, seed, bounces)) {
+            self.vpl_traces += 1;
+            let key = (n, seed, bounces, self.vpl_traces);
             let _ = self.profiler.collect(self.ctx)?;
             let set = self.vpl_trace.trace(
                 self.ctx,
@@ -420,7 +512,6 @@ impl<'a> Renderer<'a> {
             )?;
             let ms: f64 = self.profiler.collect(self.ctx)?.values().sum();
             self.vpl_set = Some((set, key, ms));
-            self.lights = None;
         }
         Ok(&self.vpl_set.as_ref().unwrap().0)
     }
@@ -439,6 +530,7 @@ impl<'a> Renderer<'a> {
             s.iterations,
             s.seed,
             s.vpls,
+            self.vpl_set.as_ref().unwrap().1.3,
         );
         if self.lights.as_ref().map(|l| l.1) == Some(key) {
             return Ok(());
@@ -457,6 +549,16 @@ impl<'a> Renderer<'a> {
                 weight_exponent: 1.0,
                 plane_gate_deg: None,
             };
+            let previous = self.lights.take().filter(|_| s.temporal);
+            let warm = previous
+                .as_ref()
+                .and_then(|(l, ..)| l.clustering.as_ref())
+                .map(|c| super::kmeans::Warm {
+                    centroids: &c.centroids,
+                    rep_points: &c.rep_points,
+                    k: c.k(),
+                    view: None,
+                });
             vpl_cluster::cluster(
                 self.ctx,
                 &self.gpu,
@@ -465,6 +567,7 @@ impl<'a> Renderer<'a> {
                 vpls,
                 &ks,
                 self.scene.bounds(),
+                warm.as_ref(),
             )?
         } else {
             vpl_cluster::unclustered(self.ctx, vpls)
@@ -472,6 +575,49 @@ impl<'a> Renderer<'a> {
         let ms: f64 = self.profiler.collect(self.ctx)?.values().sum();
         self.lights = Some((list, key, ms));
         Ok(())
+    }
+
+    /// The direct light (emission + direct, as `Frame::direct`) of the last frame's shading points
+    /// again, with another seed: an independent estimate to average with it (the viewer accumulates
+    /// these while the camera rests). Returns it with its GPU ms.
+    pub fn direct_again(&mut self, s: &FrameSettings, seed: u32) -> Result<(Vec<[f32; 3]>, f64)> {
+        let ctx = self.ctx;
+        let Some((gbuffer, n)) = &self.gbuffer else {
+            anyhow::bail!("no frame rendered yet");
+        };
+        let radiance = ctx.storage("radiance", *n as u64 * 16);
+        let spp = if self.gpu.has_emitters {
+            s.direct_samples.max(1)
+        } else {
+            0
+        };
+        let _ = self.profiler.collect(ctx)?;
+        self.direct.record(
+            ctx,
+            &self.gpu,
+            &mut self.profiler,
+            gbuffer,
+            &radiance,
+            *n,
+            spp,
+            seed,
+        );
+        let ms: f64 = self.profiler.collect(ctx)?.values().sum();
+        let px: Vec<[f32; 4]> = ctx.read_buffer(&radiance, *n as usize)?;
+        let k = self.output_scale;
+        Ok((
+            px.iter()
+                .map(|p| [0, 1, 2].map(|c| (p[c] * k).min(f32::MAX)))
+                .collect(),
+            ms,
+        ))
+    }
+
+    /// The last clustered frame's visibility bit matrix and its words per row (for tests).
+    pub fn last_visibility(&self) -> Option<(&wgpu::Buffer, u32)> {
+        self.last_visibility
+            .as_ref()
+            .map(|(p, _)| (&p.bits, p.words))
     }
 
     /// The last frame's shading points, 4 × vec4 each (`common/gbuffer.wgsl`), for tests and views.
@@ -489,7 +635,7 @@ impl<'a> Renderer<'a> {
         let ctx = self.ctx;
         check_frame_size(ctx, s.width, s.height, PATH_TRACE_PIXEL_BYTES)?;
         let pt = super::pathtrace::PathTrace::new(ctx, &self.gpu);
-        let cam = CameraParams::new(camera, s.width, s.height);
+        let cam = CameraParams::new(&self.to_render_units(camera), s.width, s.height);
         let _ = self.profiler.collect(ctx)?;
         // Samples an invocation traces per pass. lavapipe ends all loops of a SIMD batch after
         // 65,535 trips (docs/architecture.md): 16 samples of up to 9 vertices lost up to 2 of them on
@@ -533,6 +679,10 @@ impl<'a> Renderer<'a> {
             sp_clusters_used: 0,
             vpl_clusters_used: 0,
             gamma_used: None,
+            positions: Vec::new(),
+            sp_iterations: 0,
+            sp_warm_kept: None,
+            visibility_rows_reused: 0,
         })
     }
 
@@ -549,7 +699,7 @@ impl<'a> Renderer<'a> {
         let gbuffer = ctx.storage("gbuffer", n as u64 * SP_BYTES);
         let radiance = ctx.storage("radiance", n as u64 * 16);
         let indirect = ctx.storage("indirect", n as u64 * 16);
-        let cam = CameraParams::new(camera, s.width, s.height);
+        let cam = CameraParams::new(&self.to_render_units(camera), s.width, s.height);
         self.primary
             .record(ctx, &self.gpu, &mut self.profiler, &cam, &gbuffer);
         // With no light at all the direct pass still runs to write emission (zero) and clear the image.
@@ -573,7 +723,8 @@ impl<'a> Renderer<'a> {
         let mut sp_used = 0;
         let mut gamma_used = None;
         let mut num_lights = 0;
-        self.sp_clustering = None;
+        let (mut sp_iterations, mut sp_warm_kept, mut rows_reused) = (0, None, 0);
+        let previous = self.sp_clustering.take().filter(|_| s.temporal);
         if plan.indirect {
             let lights = &self.lights.as_ref().unwrap().0;
             num_lights = lights.lights.len() as u32;
@@ -589,6 +740,12 @@ impl<'a> Renderer<'a> {
                     weight_exponent: s.weight_exponent,
                     plane_gate_deg: s.plane_gate_deg,
                 };
+                let warm = previous.as_ref().map(|c| super::kmeans::Warm {
+                    centroids: &c.centroids,
+                    rep_points: &c.rep_points,
+                    k: c.k(),
+                    view: Some(cam),
+                });
                 let c = self.kmeans.run(
                     ctx,
                     &self.gpu,
@@ -599,16 +756,24 @@ impl<'a> Renderer<'a> {
                     4,
                     &ks,
                     self.scene.bounds(),
+                    warm.as_ref(),
                 )?;
+                sp_iterations = c.iterations_run;
+                sp_warm_kept = c.warm_kept;
+                let light_key = self.lights.as_ref().unwrap().1;
+                let previous = self
+                    .last_visibility
+                    .take()
+                    .filter(|(_, key)| s.temporal && c.warm_kept.is_some() && *key == light_key);
                 let (bits, words) = self.visibility.record(
                     ctx,
                     &self.gpu,
                     &mut self.profiler,
-                    &gbuffer,
-                    &c.reps,
+                    &c.rep_points,
                     &lights.buffer,
                     num_lights,
                     c.k(),
+                    previous.as_ref().map(|p| &p.0),
                 );
                 self.shade.record(
                     ctx,
@@ -634,7 +799,27 @@ impl<'a> Renderer<'a> {
                 );
                 let reps: Vec<u32> = ctx.read_buffer(&c.reps, c.k() as usize * 2)?;
                 sp_used = reps.chunks(2).filter(|r| r[1] != u32::MAX).count() as u32;
-                indirect_rays = sp_used as u64 * num_lights as u64;
+                if let Some((p, _)) = &previous
+                    && p.words == words
+                {
+                    // Rows copied, not traced: kept representatives below the previous row count.
+                    let points: Vec<[f32; 4]> =
+                        ctx.read_buffer(&c.rep_points, c.k() as usize * 2)?;
+                    rows_reused = points
+                        .chunks(2)
+                        .take(p.rows as usize)
+                        .filter(|r| r[0][3] > 0.0 && r[1][3] == 1.0)
+                        .count() as u32;
+                }
+                indirect_rays = (sp_used - rows_reused) as u64 * num_lights as u64;
+                self.last_visibility = Some((
+                    super::visibility::Previous {
+                        bits,
+                        rows: c.k(),
+                        words,
+                    },
+                    light_key,
+                ));
                 gamma_used = Some(c.params.gamma);
                 self.sp_clustering = Some(c);
             } else {
@@ -724,6 +909,19 @@ impl<'a> Renderer<'a> {
             sp_clusters_used: sp_used,
             vpl_clusters_used: if plan.vpl_clustering { num_lights } else { 0 },
             gamma_used,
+            // In the caller's units (the G-buffer holds the unit frame's, `geometry_scale`).
+            positions: sps
+                .chunks(4)
+                .map(|sp| {
+                    let p = sp[0];
+                    let k = 1.0 / self.geometry_scale;
+                    let q = glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) * k;
+                    [q.x as f32, q.y as f32, q.z as f32, p[3]]
+                })
+                .collect(),
+            sp_iterations,
+            sp_warm_kept,
+            visibility_rows_reused: rows_reused,
         })
     }
 }

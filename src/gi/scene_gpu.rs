@@ -163,6 +163,64 @@ pub const TEXEL_ROW: u32 = 4096;
 /// The most texels one data texture holds under WebGPU's default 8192-row limit.
 pub const MAX_TEXELS: usize = TEXEL_ROW as usize * 8192;
 
+/// The most triangles the data textures hold: 4 texels a triangle in the shading texture and in the
+/// node texture (2 texels a node, fewer than 2 nodes a triangle).
+pub const MAX_TRIANGLES: usize = MAX_TEXELS / 4;
+
+/// A scene whose GPU data do not fit the device: one line naming the limit (exit 2 in the CLI).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct TooBig(pub String);
+
+fn mib(bytes: u64) -> String {
+    format!("{:.1} MiB", bytes as f64 / (1u64 << 20) as f64)
+}
+
+/// Checks from the scene alone, before the BVH build, that its GPU data fit: triangles and nodes in
+/// the data textures (`MAX_TRIANGLES`), and the storage buffers bound whole (texture texels,
+/// emissive triangles, materials, lights) within `max_binding` bytes (the adapter's
+/// `max_storage_buffer_binding_size`: 128 MiB on lavapipe).
+pub fn check_fits(scene: &Scene, max_binding: u64) -> Result<(), TooBig> {
+    let n = scene.triangles.len();
+    if n > MAX_TRIANGLES {
+        return Err(TooBig(format!(
+            "{}: {n} triangles, more than the {MAX_TRIANGLES} the GPU data textures hold ({MAX_TEXELS} texels of 16 bytes each, 4 a triangle)",
+            scene.name
+        )));
+    }
+    let texels: u64 = scene
+        .textures
+        .iter()
+        .map(|t| t.width as u64 * t.height as u64 * 4)
+        .sum();
+    let buffers = [
+        ("texture texels", texels),
+        (
+            "emissive triangles",
+            scene.emissive_triangle_count() as u64 * std::mem::size_of::<GpuEmitter>() as u64,
+        ),
+        (
+            "materials",
+            scene.materials.len() as u64 * std::mem::size_of::<GpuMaterial>() as u64,
+        ),
+        (
+            "lights",
+            scene.lights.len() as u64 * std::mem::size_of::<GpuLight>() as u64,
+        ),
+    ];
+    for (what, bytes) in buffers {
+        if bytes > max_binding {
+            return Err(TooBig(format!(
+                "{}: its {what} take {}, more than one storage binding of {} on this adapter",
+                scene.name,
+                mib(bytes),
+                mib(max_binding)
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// A layout entry for a 2D data texture (`textureLoad` only) visible to compute.
 pub fn data_texture_layout(
     binding: u32,
@@ -327,10 +385,11 @@ impl SceneGpu {
         let entries: Vec<wgpu::BindGroupLayoutEntry> = [
             uniform_layout(0),
             data_texture_layout(1, wgpu::TextureSampleType::Uint),
+            data_texture_layout(3, wgpu::TextureSampleType::Float { filterable: false }),
             data_texture_layout(9, wgpu::TextureSampleType::Float { filterable: false }),
         ]
         .into_iter()
-        .chain((2..=8).chain([10]).map(storage_entry))
+        .chain((4..=8).chain([10]).map(storage_entry))
         .collect();
         let layout = ctx
             .device
@@ -340,8 +399,6 @@ impl SceneGpu {
             });
         let buffers = [
             (0, ctx.uniform("scene info", &info)),
-            (2, ctx.storage_init("triangles", &tris)),
-            (3, ctx.storage_init("triangle shading", &shade)),
             (4, ctx.storage_init("materials", &materials)),
             (5, ctx.storage_init("texture info", &tex_info)),
             (6, ctx.storage_init("texels", &texels)),
@@ -349,7 +406,8 @@ impl SceneGpu {
             (8, ctx.storage_init("lights", &lights)),
             (10, ctx.storage_init("vertex colours", &colors)),
         ];
-        // The traversal reads nodes and triangles as texels (see shaders-wgsl/common/bvh.wgsl).
+        // Nodes, triangles and their shading data are texels (see shaders-wgsl/common/bvh.wgsl and
+        // scene.wgsl): not limited by one storage binding.
         let texel_views = [
             (
                 1,
@@ -360,6 +418,11 @@ impl SceneGpu {
                 9,
                 wgpu::TextureFormat::Rgba32Float,
                 bytemuck::cast_slice(&tris),
+            ),
+            (
+                3,
+                wgpu::TextureFormat::Rgba32Float,
+                bytemuck::cast_slice(&shade),
             ),
         ]
         .map(|(binding, format, bytes)| {
@@ -404,5 +467,49 @@ impl SceneGpu {
             ("HAS_ALPHA_TEST", self.has_alpha_test as u32 as f64),
             ("HAS_VERTEX_COLORS", self.has_vertex_colors as u32 as f64),
         ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Material, Texture};
+
+    /// Storage buffers bound whole are refused past the binding size, naming the scene and the
+    /// buffer: one 64×64 texture is 16 KiB of texels (64 · 64 · 4 bytes).
+    #[test]
+    fn storage_buffers_past_one_binding_are_refused() {
+        let s = Scene {
+            name: "big.glb".into(),
+            materials: vec![Material::default()],
+            textures: vec![Texture {
+                name: "t".into(),
+                width: 64,
+                height: 64,
+                rgba8: vec![[0; 4]; 64 * 64],
+            }],
+            ..Default::default()
+        };
+        assert!(check_fits(&s, 16 * 1024).is_ok());
+        let e = check_fits(&s, 16 * 1024 - 1).unwrap_err().to_string();
+        assert!(
+            e.starts_with("big.glb: its texture texels take 0.0 MiB")
+                && e.contains("storage binding"),
+            "{e}"
+        );
+        // 48 bytes a material.
+        let many = Scene {
+            materials: vec![Material::default(); 100],
+            textures: Vec::new(),
+            ..s.clone()
+        };
+        assert!(check_fits(&many, 4800).is_ok());
+        assert!(
+            check_fits(&many, 4799)
+                .unwrap_err()
+                .to_string()
+                .contains("materials")
+        );
+        assert_eq!(MAX_TRIANGLES, 8_388_608);
     }
 }

@@ -13,7 +13,15 @@ struct VisParams {
     num_sp_clusters: u32,
     num_lights: u32,
     words: u32,
-    _pad: u32,
+    reuse_rows: u32,
+}
+
+/// The previous frame's visibility matrix, for rows a warm start may copy (the light list must be
+/// the same one).
+pub struct Previous {
+    pub bits: wgpu::Buffer,
+    pub rows: u32,
+    pub words: u32,
 }
 
 pub struct Visibility {
@@ -25,9 +33,9 @@ impl Visibility {
         let entries = [
             uniform_layout(1),
             storage_layout(2, true),
-            storage_layout(3, true),
             data_texture_layout(4, wgpu::TextureSampleType::Float { filterable: false }),
             storage_layout(5, false),
+            storage_layout(6, true),
         ];
         Visibility {
             kernel: Kernel::new(ctx, scene, "visibility", &entries, &[]),
@@ -41,11 +49,11 @@ impl Visibility {
         ctx: &GpuContext,
         scene: &SceneGpu,
         profiler: &mut Profiler,
-        gbuffer: &wgpu::Buffer,
-        sp_reps: &wgpu::Buffer,
+        rep_points: &wgpu::Buffer,
         lights: &wgpu::Buffer,
         num_lights: u32,
         k_sp: u32,
+        previous: Option<&Previous>,
     ) -> (wgpu::Buffer, u32) {
         let words = num_lights.div_ceil(32).max(1);
         let params = ctx.uniform(
@@ -54,9 +62,13 @@ impl Visibility {
                 num_sp_clusters: k_sp,
                 num_lights,
                 words,
-                _pad: 0,
+                reuse_rows: previous
+                    .filter(|p| p.words == words)
+                    .map_or(0, |p| p.rows.min(k_sp)),
             },
         );
+        let none = ctx.storage("no previous bits", 4);
+        let prev_bits = previous.map_or(&none, |p| &p.bits);
         let bits = ctx.storage("visibility bits", k_sp as u64 * words as u64 * 4);
         // The lights as a texture (3 texels each; see visibility.wgsl).
         let n = num_lights as u64;
@@ -72,7 +84,7 @@ impl Visibility {
         let view = tex.create_view(&Default::default());
         let bg = self.kernel.bind_group_with_textures(
             ctx,
-            &[(1, &params), (2, gbuffer), (3, sp_reps), (5, &bits)],
+            &[(1, &params), (2, rep_points), (5, &bits), (6, prev_bits)],
             &[(4, &view)],
         );
         // About 2^20 rays per submission (32 per item).

@@ -5,7 +5,7 @@
 use anyhow::Result;
 use glam::Vec3;
 
-use super::kmeans::{KMeans, KMeansSettings};
+use super::kmeans::{Clustering, KMeans, KMeansSettings, Warm};
 use super::scene_gpu::SceneGpu;
 use super::vpl_trace::{Vpl, VplSet};
 use crate::gpu::{GpuContext, profiler::Profiler};
@@ -13,6 +13,9 @@ use crate::gpu::{GpuContext, profiler::Profiler};
 pub struct LightList {
     pub buffer: wgpu::Buffer,
     pub lights: Vec<Vpl>,
+    /// The VPL clustering (`None` when unclustered): where the next one starts from with temporal
+    /// reuse on.
+    pub clustering: Option<Clustering>,
 }
 
 /// The raw VPLs as the light list (VPL clustering off).
@@ -20,12 +23,14 @@ pub fn unclustered(ctx: &GpuContext, vpls: &VplSet) -> LightList {
     LightList {
         buffer: ctx.storage_init("lights", &vpls.vpls),
         lights: vpls.vpls.clone(),
+        clustering: None,
     }
 }
 
 /// Clusters the VPLs on the GPU and builds the light list. The flux sums are done on the CPU in f64
 /// from the GPU's assignment (N values, once per scene): exact and independent of the order of
-/// additions, so the same seed gives the same image.
+/// additions, so the same seed gives the same image. With `warm`, Alg. 1 starts from the last
+/// clustering's centroids (`kmeans::Warm`).
 #[allow(clippy::too_many_arguments)]
 pub fn cluster(
     ctx: &GpuContext,
@@ -35,6 +40,7 @@ pub fn cluster(
     vpls: &VplSet,
     settings: &KMeansSettings,
     frame: (Vec3, Vec3),
+    warm: Option<&Warm>,
 ) -> Result<LightList> {
     let n = vpls.vpls.len() as u32;
     let s = KMeansSettings { f: 1, ..*settings };
@@ -48,6 +54,7 @@ pub fn cluster(
         3,
         &s,
         frame,
+        warm,
     )?;
     let assign: Vec<u32> = ctx.read_buffer(&c.assign, n as usize)?;
     let reps: Vec<u32> = ctx.read_buffer(&c.reps, c.k() as usize * 2)?;
@@ -75,5 +82,6 @@ pub fn cluster(
     Ok(LightList {
         buffer: ctx.storage_init("vpl cluster lights", &lights),
         lights,
+        clustering: Some(c),
     })
 }

@@ -83,9 +83,9 @@ impl GpuContext {
         let info = adapter.get_info();
         let adapter_name = format!("{} ({:?}, {})", info.name, info.backend, info.driver_info);
         let adapter_limits = adapter.limits();
-        if adapter_limits.max_storage_buffers_per_shader_stage < 13 {
+        if adapter_limits.max_storage_buffers_per_shader_stage < 14 {
             return Err(anyhow!(
-                "adapter {adapter_name} allows only {} storage buffers per shader stage; fuzzy-vpl needs 13 (the k-means pass)",
+                "adapter {adapter_name} allows only {} storage buffers per shader stage; fuzzy-vpl needs 14 (the k-means pass)",
                 adapter_limits.max_storage_buffers_per_shader_stage
             ));
         }

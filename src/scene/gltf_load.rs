@@ -12,6 +12,7 @@
 
 mod accessor;
 mod images;
+pub mod read;
 mod uri;
 
 use super::{
@@ -104,50 +105,6 @@ const DEGENERATE_AREA_REL: f64 = 1e-12;
 /// collinear vertices: its height is below f32 precision relative to its length).
 const DEGENERATE_SLIVER_REL: f64 = 1e-7;
 
-/// Reads a file a scene is made of (the scene, its external buffers and images). Anything but a
-/// regular file is refused: a FIFO would block forever, `/dev/zero` never ends, a directory is no
-/// file. Opened non-blocking so that a FIFO without a writer does not block before the check.
-pub(crate) fn read_regular(path: &Path) -> Result<Vec<u8>, String> {
-    use std::io::Read;
-    let mut opts = std::fs::OpenOptions::new();
-    opts.read(true);
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::OpenOptionsExt;
-        opts.custom_flags(libc::O_NONBLOCK);
-    }
-    let mut f = opts.open(path).map_err(|e| e.to_string())?;
-    let meta = f.metadata().map_err(|e| e.to_string())?;
-    if !meta.is_file() {
-        let t = meta.file_type();
-        #[cfg(unix)]
-        let kind = {
-            use std::os::unix::fs::FileTypeExt;
-            if t.is_dir() {
-                "a directory"
-            } else if t.is_fifo() {
-                "a FIFO"
-            } else if t.is_socket() {
-                "a socket"
-            } else if t.is_char_device() || t.is_block_device() {
-                "a device"
-            } else {
-                "not a file"
-            }
-        };
-        #[cfg(not(unix))]
-        let kind = if t.is_dir() {
-            "a directory"
-        } else {
-            "not a file"
-        };
-        return Err(format!("not a regular file ({kind})"));
-    }
-    let mut out = Vec::with_capacity(meta.len() as usize);
-    f.read_to_end(&mut out).map_err(|e| e.to_string())?;
-    Ok(out)
-}
-
 /// Loads a `.gltf` (external files resolved relative to it, or `data:` URIs) or `.glb` file.
 pub fn load_path(path: &Path) -> Result<Scene, SceneError> {
     load_path_with(path, &LoadOptions::default())
@@ -157,7 +114,7 @@ pub fn load_path(path: &Path) -> Result<Scene, SceneError> {
 pub fn load_path_with(path: &Path, opts: &LoadOptions) -> Result<Scene, SceneError> {
     let file = path.display().to_string();
     guarded(&file, || {
-        let bytes = read_regular(path).map_err(|e| format!("cannot read file: {e}"))?;
+        let bytes = read::read_scene_file(path).map_err(|e| format!("cannot read file: {e}"))?;
         let base = match path.parent() {
             Some(p) if !p.as_os_str().is_empty() => p,
             _ => Path::new("."),
@@ -420,7 +377,7 @@ fn load_buffers(
                 };
                 let data = match uri::resolve(u, base).map_err(|e| format!("buffer {i}: {e}"))? {
                     uri::Resolved::Data(d) => d,
-                    uri::Resolved::File(p) => read_regular(&p)
+                    uri::Resolved::File(p) => read::read_buffer_file(&p, buffer.length() as u64)
                         .map_err(|e| format!("buffer {i}: cannot read '{}': {e}", p.display()))?,
                 };
                 (data, label)
@@ -1081,6 +1038,77 @@ fn emit(
     Ok(())
 }
 
+/// A mesh instance placed so far from the origin, for its size, that f32 positions cannot resolve it.
+struct FarNode {
+    node: usize,
+    /// The largest coordinate magnitude of its vertices (world units, computed in f64).
+    far: f64,
+    /// Its bounding-box diagonal (world units, f64).
+    size: f64,
+}
+
+impl FarNode {
+    fn describe(&self) -> String {
+        format!(
+            "node {} lies {:.3e} from the origin, where f32 positions are {:.1e} apart, and its mesh is only {:.3e} across",
+            self.node,
+            self.far,
+            self.far * f32::EPSILON as f64,
+            self.size
+        )
+    }
+}
+
+/// `Some` when an instance of `prim` under `world` spans fewer than 10 f32 spacings at its distance
+/// from the origin (its shape is then quantised to a few positions or collapses to nothing).
+fn too_far_for_f32(prim: &Primitive, world: &Mat4, node: usize) -> Option<FarNode> {
+    let Primitive::Triangles { positions, .. } = prim else {
+        return None;
+    };
+    let w = world.as_dmat4();
+    let mut lo = glam::DVec3::splat(f64::INFINITY);
+    let mut hi = glam::DVec3::splat(f64::NEG_INFINITY);
+    for p in positions {
+        let q = w.transform_point3(p.as_dvec3());
+        lo = lo.min(q);
+        hi = hi.max(q);
+    }
+    let far = lo.abs().max(hi.abs()).max_element();
+    let size = (hi - lo).length();
+    (size > 0.0 && far * (f32::EPSILON as f64) > 0.1 * size).then_some(FarNode { node, far, size })
+}
+
+/// A warning for a node whose TRS rotation is no rotation (a zero or non-finite quaternion; the
+/// identity is used, `local_matrix`), naming what the node carries.
+fn zero_rotation_warning(node: &gltf::Node) -> Option<String> {
+    let gltf::scene::Transform::Decomposed { rotation, .. } = node.transform() else {
+        return None;
+    };
+    let q = Quat::from_array(rotation);
+    if q.is_finite() && q.length_squared() > 0.0 {
+        return None;
+    }
+    let mut what = Vec::new();
+    if let Some(c) = node.camera() {
+        what.push(format!("camera '{}'", c.name().unwrap_or("")));
+    }
+    if let Some(l) = node.light() {
+        what.push(format!("light '{}'", l.name().unwrap_or("")));
+    }
+    if node.mesh().is_some() {
+        what.push("a mesh".to_string());
+    }
+    let what = if what.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", what.join(", "))
+    };
+    Some(format!(
+        "node {}{what}: rotation {rotation:?} is a zero or non-finite quaternion, not a rotation; the identity is used for it",
+        node.index()
+    ))
+}
+
 /// Whether a triangle has (numerically) no area, relative to the scene and to its own size.
 fn is_degenerate(t: &Triangle, extent_sq: f64) -> bool {
     let p = t.p.map(|v| v.as_dvec3());
@@ -1114,7 +1142,10 @@ fn light_from_node(
         return None;
     }
     let position = world.w_axis.truncate();
-    let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    let direction = (world.as_dmat4())
+        .transform_vector3(glam::DVec3::NEG_Z)
+        .normalize_or_zero()
+        .as_vec3();
     if !position.is_finite() || direction == Vec3::ZERO || !direction.is_finite() {
         report.warnings.push(format!(
             "light '{name}': its node transform is degenerate, light skipped"
@@ -1202,8 +1233,12 @@ fn camera_from_node(
             .push(format!("camera '{name}': invalid yfov {yfov}; skipped"));
         return None;
     }
-    let (_, rotation, translation) = world.to_scale_rotation_translation();
-    let transform = Mat4::from_rotation_translation(rotation.normalize(), translation);
+    // In f64: under a node scale of 1e-40 (or 1e30) the f32 decomposition is no longer finite.
+    let (_, rotation, translation) = world.as_dmat4().to_scale_rotation_translation();
+    let transform = Mat4::from_rotation_translation(
+        rotation.normalize().as_quat().normalize(),
+        translation.as_vec3(),
+    );
     if !transform.is_finite() {
         report.warnings.push(format!(
             "camera '{name}': its node transform is degenerate; skipped"
@@ -1270,9 +1305,13 @@ fn load_bytes(
     let mut lights = Vec::new();
     let mut cameras = Vec::new();
     let mut warned_skin = false;
+    let mut far_nodes: Vec<FarNode> = Vec::new();
     let nodes: Vec<gltf::Node> = doc.nodes().collect();
     for (i, world) in flatten_nodes(&doc)? {
         let node = &nodes[i];
+        if let Some(w) = zero_rotation_warning(node) {
+            report.warnings.push(w);
+        }
         if let Some(mesh) = node.mesh() {
             if !warned_skin && (node.skin().is_some() || mesh.weights().is_some()) {
                 warned_skin = true;
@@ -1293,6 +1332,9 @@ fn load_bytes(
                     )?),
                 };
                 emit(decoded, &world, i, &table.uv_transform, &mut triangles)?;
+                if let Some(far) = too_far_for_f32(decoded, &world, i) {
+                    far_nodes.push(far);
+                }
             }
         }
         if let Some(light) = node.light()
@@ -1324,7 +1366,12 @@ fn load_bytes(
     report.dropped_degenerate = before - triangles.len();
     for t in &mut triangles {
         if t.n.contains(&Vec3::ZERO) {
-            let face = t.geometric_normal();
+            // In f64: at 1e-20 units the f32 cross product of the edges underflows to zero.
+            let p = t.p.map(|v| v.as_dvec3());
+            let face = (p[1] - p[0])
+                .cross(p[2] - p[0])
+                .normalize_or_zero()
+                .as_vec3();
             for n in &mut t.n {
                 if *n == Vec3::ZERO {
                     *n = face;
@@ -1334,10 +1381,25 @@ fn load_bytes(
         }
     }
 
+    if triangles.is_empty()
+        && let Some(f) = far_nodes.first()
+    {
+        return Err(format!(
+            "the scene has no triangles to render: {} (and {} degenerate triangles dropped)",
+            f.describe(),
+            report.dropped_degenerate
+        ));
+    }
     if triangles.is_empty() {
         return Err(format!(
             "the scene has no triangles to render ({} non-triangle primitives skipped, {} degenerate triangles dropped)",
             report.skipped_primitives, report.dropped_degenerate
+        ));
+    }
+    for f in &far_nodes {
+        report.warnings.push(format!(
+            "{}: its shape is quantised to that spacing",
+            f.describe()
         ));
     }
 

@@ -298,21 +298,7 @@ impl Scene {
             m.emissive = (m.emissive.as_dvec3() * factor).as_vec3();
         }
         for l in &mut self.lights {
-            let i = l.intensity as f64 * factor;
-            if (i as f32).is_finite() && (i == 0.0 || (i as f32).is_normal()) {
-                l.intensity = i as f32;
-            } else {
-                // The intensity alone leaves f32's normal range (a tiny colour scaled up, a huge
-                // one down): keep the product, with the colour's largest component at 1.
-                let e = l.color.as_dvec3() * i;
-                let peak = e.max_element();
-                if peak > 0.0 {
-                    l.color = (e / peak).as_vec3();
-                    l.intensity = peak as f32;
-                } else {
-                    l.intensity = 0.0;
-                }
-            }
+            scale_intensity(l, factor);
         }
     }
 
@@ -328,6 +314,50 @@ impl Scene {
             .iter()
             .map(|l| (l.color.as_dvec3() * l.intensity as f64).max_element())
             .fold(m, f64::max)
+    }
+
+    /// The power of two the renderer scales the geometry by (`scale_geometry`): 1 when the
+    /// bounds' diagonal lies in 2^-10..2^10, else 2^-round(log2 diagonal), which brings it into
+    /// [0.7, 1.42]. A power of two scales every f32 coordinate exactly. In f64: a room 1e-40 across
+    /// needs 2^133, beyond f32.
+    pub fn geometry_scale(&self) -> f64 {
+        // In f64: the f32 diagonal overflows beyond ~1.8e19 (its square does).
+        let (lo, hi) = self.bounds();
+        let e = (hi.as_dvec3() - lo.as_dvec3()).length();
+        if !e.is_finite() || e <= 0.0 || (2f64.powi(-10)..=2f64.powi(10)).contains(&e) {
+            return 1.0;
+        }
+        2f64.powi(-(e.log2().round() as i32))
+    }
+
+    /// Scales the scene by `f` (positions of triangles, lights and cameras) keeping its image: a point
+    /// or spot light's irradiance I / d² stays the same with I × f² (in f64, folded into the colour
+    /// when I alone leaves f32's normal range, as in `scale_light_power`); emitted radiance and
+    /// directional irradiance do not depend on the unit. Normals and angles are unchanged.
+    pub fn scale_geometry(&mut self, f: f64) {
+        let s = |p: Vec3| (p.as_dvec3() * f).as_vec3();
+        for t in &mut self.triangles {
+            for p in &mut t.p {
+                *p = s(*p);
+            }
+        }
+        self.scale_lights(f);
+        for c in &mut self.cameras {
+            c.transform.w_axis = s(c.transform.w_axis.truncate()).extend(1.0);
+        }
+    }
+
+    /// The punctual-light part of `scale_geometry`: positions × `f`, point and spot intensities × f².
+    pub fn scale_lights(&mut self, f: f64) {
+        if f == 1.0 {
+            return;
+        }
+        for l in &mut self.lights {
+            l.position = (l.position.as_dvec3() * f).as_vec3();
+            if !matches!(l.kind, LightKind::Directional) {
+                scale_intensity(l, f * f);
+            }
+        }
     }
 
     /// Whether the emitters need `normalize_emission`: their largest is outside 1e-6..1e6.
@@ -380,6 +410,25 @@ impl Scene {
             f.push("generated-normals");
         }
         f
+    }
+}
+
+/// Multiplies a light's emitted quantity (colour × intensity) by `factor`, in f64.
+fn scale_intensity(l: &mut PunctualLight, factor: f64) {
+    let i = l.intensity as f64 * factor;
+    if (i as f32).is_finite() && (i == 0.0 || (i as f32).is_normal()) {
+        l.intensity = i as f32;
+    } else {
+        // The intensity alone leaves f32's normal range (a tiny colour scaled up, a huge one down):
+        // keep the product, with the colour's largest component at 1.
+        let e = l.color.as_dvec3() * i;
+        let peak = e.max_element();
+        if peak > 0.0 {
+            l.color = (e / peak).as_vec3();
+            l.intensity = peak as f32;
+        } else {
+            l.intensity = 0.0;
+        }
     }
 }
 

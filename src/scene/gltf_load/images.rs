@@ -30,7 +30,7 @@ pub(super) fn encoded_bytes(
         }
         gltf::image::Source::Uri { uri, .. } => match uri::resolve(uri, base)? {
             Resolved::Data(bytes) => Ok(bytes),
-            Resolved::File(path) => super::read_regular(&path)
+            Resolved::File(path) => super::read::read_image_file(&path)
                 .map_err(|e| format!("cannot read '{}': {e}", uri::short(uri))),
         },
     }

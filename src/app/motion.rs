@@ -1,0 +1,134 @@
+//! What the viewer measures of itself while the camera moves (`view --animate --frames N --stats`):
+//! the time from a camera change (its input event, or the animation's step) to the first presented
+//! window frame that shows the new camera, and the GPU time of the GI frames rendered while moving
+//! against one at rest.
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+#[derive(Debug, Default)]
+pub struct Motion {
+    /// The earliest input event the next window frame handles.
+    pub input_at: Option<Instant>,
+    /// When the camera first changed since the last presented frame that showed it.
+    pub change_at: Option<Instant>,
+    /// Camera change → presented image, ms, one per shown change.
+    pub latencies_ms: Vec<f64>,
+    /// GPU ms (timestamps) of the GI frames that finished while the camera moved.
+    pub moving_gi_ms: Vec<f64>,
+    /// (GPU ms, width, height) of the last GI frame at rest.
+    pub rest: Option<(f64, u32, u32)>,
+}
+
+/// `motion` and `rest` of the viewer's stats JSON (docs/design.md, "Contracts added later").
+#[derive(Debug, Serialize, PartialEq)]
+pub struct MotionStats {
+    pub image_latency_ms_p95: f64,
+    pub image_latency_ms_mean: f64,
+    pub image_latency_ms_max: f64,
+    /// Camera changes measured.
+    pub changes: usize,
+    /// `None` when no GI frame finished while moving.
+    pub gi_frame_ms_mean: Option<f64>,
+    pub gi_frames: usize,
+}
+
+#[derive(Debug, Serialize, PartialEq)]
+pub struct RestStats {
+    pub gi_frame_ms: f64,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// The q-quantile (0..1) of `v` by the nearest-rank method; `None` when empty.
+pub fn quantile(v: &[f64], q: f64) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let rank = ((q * s.len() as f64).ceil() as usize).clamp(1, s.len());
+    Some(s[rank - 1])
+}
+
+impl Motion {
+    /// The camera changed now (after the input at `input_at`, if any).
+    pub fn camera_changed(&mut self, now: Instant) {
+        if self.change_at.is_none() {
+            self.change_at = Some(self.input_at.unwrap_or(now).min(now));
+        }
+    }
+
+    /// A window frame showing the current camera was presented at `now`.
+    pub fn shown(&mut self, now: Instant) {
+        if let Some(t) = self.change_at.take() {
+            self.latencies_ms
+                .push(now.duration_since(t).as_secs_f64() * 1e3);
+        }
+    }
+
+    pub fn stats(&self) -> Option<MotionStats> {
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+        Some(MotionStats {
+            image_latency_ms_p95: quantile(&self.latencies_ms, 0.95)?,
+            image_latency_ms_mean: mean(&self.latencies_ms),
+            image_latency_ms_max: quantile(&self.latencies_ms, 1.0)?,
+            changes: self.latencies_ms.len(),
+            gi_frame_ms_mean: (!self.moving_gi_ms.is_empty()).then(|| mean(&self.moving_gi_ms)),
+            gi_frames: self.moving_gi_ms.len(),
+        })
+    }
+
+    pub fn rest_stats(&self) -> Option<RestStats> {
+        self.rest.map(|(gi_frame_ms, width, height)| RestStats {
+            gi_frame_ms,
+            width,
+            height,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Duration;
+
+    #[test]
+    fn quantile_by_nearest_rank() {
+        let v: Vec<f64> = (1..=20).map(f64::from).collect();
+        assert_eq!(quantile(&v, 0.95), Some(19.0));
+        assert_eq!(quantile(&v, 1.0), Some(20.0));
+        assert_eq!(quantile(&v, 0.0), Some(1.0));
+        assert_eq!(quantile(&[3.0], 0.95), Some(3.0));
+        assert_eq!(quantile(&[], 0.95), None);
+    }
+
+    #[test]
+    fn latency_runs_from_the_first_input_to_the_frame_that_shows_it() {
+        let t0 = Instant::now();
+        let mut m = Motion {
+            input_at: Some(t0),
+            ..Default::default()
+        };
+        m.camera_changed(t0 + Duration::from_millis(10));
+        // A second change before the frame is shown does not restart the clock.
+        m.camera_changed(t0 + Duration::from_millis(20));
+        m.shown(t0 + Duration::from_millis(50));
+        // Shown again with no change: nothing recorded.
+        m.shown(t0 + Duration::from_millis(60));
+        assert_eq!(m.latencies_ms.len(), 1);
+        assert!((m.latencies_ms[0] - 50.0).abs() < 1e-6);
+        // Without an input event (the animation) the clock starts at the change.
+        m.input_at = None;
+        m.camera_changed(t0 + Duration::from_millis(100));
+        m.shown(t0 + Duration::from_millis(130));
+        assert!((m.latencies_ms[1] - 30.0).abs() < 1e-6);
+        m.moving_gi_ms = vec![10.0, 30.0];
+        let s = m.stats().unwrap();
+        assert_eq!((s.changes, s.gi_frames), (2, 2));
+        assert_eq!(s.gi_frame_ms_mean, Some(20.0));
+        assert!((s.image_latency_ms_p95 - 50.0).abs() < 1e-6);
+        assert!(Motion::default().stats().is_none());
+    }
+}

@@ -1,0 +1,273 @@
+//! The last finished GI frame shown from the current camera while the next one renders (the Render
+//! Cache of Walter et al. 1999, reduced to one frame): every pixel of the frame is splatted forward
+//! to where its shading point lands in the new view, nearest first (a depth test), over a footprint
+//! as large as the pixel's projected size; pixels that saw nothing are carried as directions. The
+//! holes that remain (newly seen surfaces) are filled from their neighbours by push-pull.
+
+use glam::{Vec3, Vec4};
+
+use crate::gi::primary::CameraParams;
+
+/// A view's projection: pixel centres ↔ rays, as `primary.wgsl` makes them.
+struct View {
+    eye: Vec3,
+    right: Vec3,
+    up: Vec3,
+    forward: Vec3,
+    w: f32,
+    h: f32,
+}
+
+impl View {
+    fn new(c: &CameraParams) -> View {
+        let v = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
+        View {
+            eye: v(c.eye),
+            right: v(c.right),
+            up: v(c.up),
+            forward: v(c.forward),
+            w: c.size[0] as f32,
+            h: c.size[1] as f32,
+        }
+    }
+
+    /// The direction of pixel (x, y)'s ray (pixel units, centres at + 0.5).
+    fn ray(&self, x: f32, y: f32) -> Vec3 {
+        let sx = 2.0 * x / self.w - 1.0;
+        let sy = 1.0 - 2.0 * y / self.h;
+        self.forward + sx * self.right + sy * self.up
+    }
+
+    /// Where direction `d` from the eye lands in the image (pixel units) and its depth along the
+    /// view axis; `None` behind the eye.
+    fn project_dir(&self, d: Vec3) -> Option<(f32, f32, f32)> {
+        let z = d.dot(self.forward);
+        if z.is_nan() || z <= 1e-12 * d.length() {
+            return None;
+        }
+        let sx = d.dot(self.right) / (z * self.right.length_squared());
+        let sy = d.dot(self.up) / (z * self.up.length_squared());
+        Some(((sx + 1.0) * 0.5 * self.w, (1.0 - sy) * 0.5 * self.h, z))
+    }
+}
+
+/// `rgba` (sRGB8, `from`'s size) as seen from `to` (the same size): each pixel with a shading point
+/// at `positions[i]` (w > 0) moves with it; the others (sky) move as directions behind everything.
+pub fn reproject(
+    rgba: &[u8],
+    positions: &[[f32; 4]],
+    from: &CameraParams,
+    to: &CameraParams,
+) -> Vec<u8> {
+    let (w, h) = (from.size[0] as usize, from.size[1] as usize);
+    assert_eq!(rgba.len(), w * h * 4);
+    assert_eq!(positions.len(), w * h);
+    assert_eq!((to.size[0] as usize, to.size[1] as usize), (w, h));
+    let (src, dst) = (View::new(from), View::new(to));
+    let mut depth = vec![f32::INFINITY; w * h];
+    let mut out = vec![0u8; w * h * 4];
+    let mut filled = vec![false; w * h];
+    // Where each pixel lands: (target x, y, depth, footprint in target pixels); None off screen.
+    let landed: Vec<Option<(f32, f32, f32, i64)>> = positions
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let (x, y) = ((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+            if p[3].is_nan() || p[3] <= 0.0 {
+                // Sky: a direction, behind everything.
+                let (tx, ty, _) = dst.project_dir(src.ray(x, y))?;
+                return Some((tx, ty, f32::INFINITY, 1));
+            }
+            let q = Vec4::from(*p).truncate();
+            let (tx, ty, z) = dst.project_dir(q - dst.eye)?;
+            // The pixel's size here: where its neighbour's point at the same distance lands.
+            let dist = (q - src.eye).length();
+            let step = src.ray(x + 1.0, y).normalize() - src.ray(x, y).normalize();
+            let size = dst
+                .project_dir(q + step * dist - dst.eye)
+                .map_or(1.0, |n| (n.0 - tx).abs());
+            Some((tx, ty, z, ((size - 0.25).ceil() as i64).clamp(1, 3)))
+        })
+        .collect();
+    let inside = |x: i64, y: i64| x >= 0 && y >= 0 && x < w as i64 && y < h as i64;
+    // The pixel each lands in, nearest first; then, magnified, the rest of its footprint where no
+    // pixel landed.
+    for (i, l) in landed.iter().enumerate() {
+        let Some((tx, ty, z, _)) = *l else { continue };
+        let (xx, yy) = (tx.floor() as i64, ty.floor() as i64);
+        if !inside(xx, yy) {
+            continue;
+        }
+        let j = yy as usize * w + xx as usize;
+        if !filled[j] || z < depth[j] {
+            depth[j] = z;
+            filled[j] = true;
+            out[j * 4..j * 4 + 4].copy_from_slice(&rgba[i * 4..i * 4 + 4]);
+        }
+    }
+    let landed_in = filled.clone();
+    for (i, l) in landed.iter().enumerate() {
+        let Some((tx, ty, z, size)) = *l else {
+            continue;
+        };
+        if size == 1 {
+            continue;
+        }
+        let x0 = (tx - 0.5 * (size - 1) as f32).floor() as i64;
+        let y0 = (ty - 0.5 * (size - 1) as f32).floor() as i64;
+        for yy in y0..y0 + size {
+            for xx in x0..x0 + size {
+                if !inside(xx, yy) {
+                    continue;
+                }
+                let j = yy as usize * w + xx as usize;
+                if !landed_in[j] && (!filled[j] || z < depth[j]) {
+                    depth[j] = z;
+                    filled[j] = true;
+                    out[j * 4..j * 4 + 4].copy_from_slice(&rgba[i * 4..i * 4 + 4]);
+                }
+            }
+        }
+    }
+    fill_holes(&mut out, &filled, w, h);
+    out
+}
+
+/// Push-pull: each hole takes the mean of the filled pixels around it at the finest scale that has
+/// any (a pyramid of 2×2 means, then back down).
+fn fill_holes(img: &mut [u8], filled: &[bool], w: usize, h: usize) {
+    if filled.iter().all(|&f| f) || !filled.iter().any(|&f| f) {
+        return;
+    }
+    // Level 0: premultiplied colour sums and weights.
+    let mut levels: Vec<(usize, usize, Vec<[f32; 5]>)> = Vec::new();
+    let base: Vec<[f32; 5]> = (0..w * h)
+        .map(|i| {
+            if filled[i] {
+                let c = &img[i * 4..i * 4 + 4];
+                [c[0] as f32, c[1] as f32, c[2] as f32, c[3] as f32, 1.0]
+            } else {
+                [0.0; 5]
+            }
+        })
+        .collect();
+    levels.push((w, h, base));
+    while {
+        let (lw, lh, _) = levels.last().unwrap();
+        *lw > 1 || *lh > 1
+    } {
+        let (lw, lh, prev) = levels.last().unwrap();
+        let (nw, nh) = (lw.div_ceil(2), lh.div_ceil(2));
+        let mut next = vec![[0.0f32; 5]; nw * nh];
+        for y in 0..*lh {
+            for x in 0..*lw {
+                let s = prev[y * lw + x];
+                let t = &mut next[(y / 2) * nw + x / 2];
+                for c in 0..5 {
+                    t[c] += s[c];
+                }
+            }
+        }
+        levels.push((nw, nh, next));
+    }
+    // Pull: a pixel without weight takes its parent's mean.
+    for l in (0..levels.len() - 1).rev() {
+        let (upper, lower) = levels.split_at_mut(l + 1);
+        let (lw, lh, cur) = &mut upper[l];
+        let (pw, _, parent) = &lower[0];
+        for y in 0..*lh {
+            for x in 0..*lw {
+                let i = y * *lw + x;
+                if cur[i][4] <= 0.0 {
+                    let p = parent[(y / 2) * pw + x / 2];
+                    if p[4] > 0.0 {
+                        cur[i] = [p[0] / p[4], p[1] / p[4], p[2] / p[4], p[3] / p[4], 1.0];
+                    }
+                }
+            }
+        }
+    }
+    let (_, _, l0) = &levels[0];
+    for i in 0..w * h {
+        if !filled[i] && l0[i][4] > 0.0 {
+            for c in 0..4 {
+                img[i * 4 + c] = (l0[i][c] / l0[i][4]).round().clamp(0.0, 255.0) as u8;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Camera;
+
+    /// A w×h view of the plane z = −5 from `eye` looking down −Z; its pixels' positions and an image
+    /// whose red channel is the pixel's column and green its row.
+    fn plane(eye: Vec3, w: u32, h: u32) -> (CameraParams, Vec<[f32; 4]>, Vec<u8>) {
+        let cam = Camera::look_at("c", eye, eye - Vec3::Z, Vec3::Y, 1.0);
+        let p = CameraParams::new(&cam, w, h);
+        let v = View::new(&p);
+        let mut pos = Vec::new();
+        let mut rgba = Vec::new();
+        for i in 0..(w * h) as usize {
+            let (x, y) = ((i % w as usize) as f32 + 0.5, (i / w as usize) as f32 + 0.5);
+            let d = v.ray(x, y);
+            let t = (eye.z + 5.0) / -d.z;
+            let q = eye + d * t;
+            pos.push([q.x, q.y, q.z, 1.0]);
+            rgba.extend([(i % w as usize) as u8, (i / w as usize) as u8, 0, 255]);
+        }
+        (p, pos, rgba)
+    }
+
+    #[test]
+    fn the_same_camera_gives_the_same_image() {
+        let (p, pos, rgba) = plane(Vec3::ZERO, 32, 24);
+        assert_eq!(reproject(&rgba, &pos, &p, &p), rgba);
+    }
+
+    #[test]
+    fn a_sideways_step_shifts_the_image_by_the_parallax() {
+        // The plane is 5 away; a 90°-ish view 32 px wide spans 2·5·tan(0.5)·(32/24) ≈ 7.28 units, so a
+        // step of 7.28/32 to the right moves every point one pixel to the left.
+        let (p0, pos, rgba) = plane(Vec3::ZERO, 32, 24);
+        let span = 2.0 * 5.0 * 0.5f32.tan() * 32.0 / 24.0;
+        let (p1, ..) = plane(Vec3::new(span / 32.0, 0.0, 0.0), 32, 24);
+        let out = reproject(&rgba, &pos, &p0, &p1);
+        for y in 0..24usize {
+            for x in 0..31usize {
+                let j = (y * 32 + x) * 4;
+                assert_eq!((out[j], out[j + 1]), ((x + 1) as u8, y as u8), "({x}, {y})");
+            }
+            // The last column was not seen before: filled from its neighbours (the column 31).
+            let j = (y * 32 + 31) * 4;
+            assert_eq!(out[j], 31, "row {y}");
+        }
+    }
+
+    #[test]
+    fn moving_closer_leaves_no_holes_and_keeps_the_centre() {
+        let (p0, pos, rgba) = plane(Vec3::ZERO, 32, 24);
+        let (p1, ..) = plane(Vec3::new(0.0, 0.0, -2.0), 32, 24);
+        let out = reproject(&rgba, &pos, &p0, &p1);
+        // Magnified 5/3: still every pixel opaque, the centre pixel's colour near the centre.
+        assert!(out.chunks(4).all(|c| c[3] == 255));
+        let j = (12 * 32 + 16) * 4;
+        assert!((out[j] as i32 - 16).abs() <= 1 && (out[j + 1] as i32 - 12).abs() <= 1);
+        // The image grew: the left edge now shows a column nearer the centre than 0.
+        assert!(out[(12 * 32) * 4] >= 5, "{}", out[(12 * 32) * 4]);
+    }
+
+    #[test]
+    fn holes_take_their_neighbours_colour() {
+        let mut img = vec![0u8; 4 * 4 * 4];
+        let mut filled = vec![false; 16];
+        for i in [0usize, 1, 4, 5] {
+            img[i * 4..i * 4 + 4].copy_from_slice(&[200, 100, 50, 255]);
+            filled[i] = true;
+        }
+        fill_holes(&mut img, &filled, 4, 4);
+        assert!(img.chunks(4).all(|c| c == [200, 100, 50, 255]));
+    }
+}

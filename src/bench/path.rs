@@ -1,0 +1,438 @@
+//! `bench --camera-path orbit:N:DEG [--temporal off,on]`: the clustered frame along a camera path,
+//! each frame against its own unclustered reference (same VPLs, direct-light samples and seed), so
+//! that what temporal reuse buys (SP clustering time) and costs (error) is measured frame by frame,
+//! with `instability` (`metrics::instability`): how much the clustering error changes between
+//! consecutive frames. Writes `path.csv` and `path.png`.
+
+use std::path::Path;
+
+use anyhow::{Result, anyhow};
+use glam::{Mat4, Vec3, Vec3A};
+use plotters::prelude::*;
+
+use super::BenchPlan;
+use super::sweep::Config;
+use crate::bvh::SceneBvh;
+use crate::gi::pipeline::{Frame, FrameSettings, Renderer};
+use crate::gpu::GpuContext;
+use crate::scene::{Camera, Scene};
+use crate::{export, metrics};
+
+/// An orbit of `degrees` in all, in `frames` frames, about the vertical axis through the point the
+/// start camera looks at.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraPath {
+    pub frames: u32,
+    pub degrees: f32,
+}
+
+/// `orbit:N:DEG` (N ≥ 1 frames, a finite angle in degrees).
+pub fn parse_camera_path(v: &str) -> Result<CameraPath, String> {
+    let bad =
+        || format!("'{v}': expected orbit:N:DEG (N frames, DEG degrees in all), e.g. orbit:6:3");
+    let parts: Vec<&str> = v.trim().split(':').collect();
+    match parts.as_slice() {
+        ["orbit", n, deg] => {
+            let frames: u32 = n.parse().map_err(|_| bad())?;
+            let degrees: f32 = deg.parse().map_err(|_| bad())?;
+            if frames == 0 || frames > 100_000 || !degrees.is_finite() {
+                return Err(bad());
+            }
+            Ok(CameraPath { frames, degrees })
+        }
+        _ => Err(bad()),
+    }
+}
+
+impl CameraPath {
+    /// The cameras of the path: `start` turned by DEG · i / (N − 1) about the vertical (+Y, glTF's
+    /// up) axis through `target`; the first is `start` itself.
+    pub fn cameras(&self, start: &Camera, target: Vec3) -> Vec<Camera> {
+        (0..self.frames)
+            .map(|i| {
+                let t = if self.frames > 1 {
+                    i as f32 / (self.frames - 1) as f32
+                } else {
+                    0.0
+                };
+                let turn = Mat4::from_translation(target)
+                    * Mat4::from_rotation_y((self.degrees * t).to_radians())
+                    * Mat4::from_translation(-target);
+                Camera {
+                    name: format!("{} orbit {i}", start.name),
+                    transform: turn * start.transform,
+                    yfov: start.yfov,
+                }
+            })
+            .collect()
+    }
+}
+
+/// The point `cam` looks at: where its central ray first hits the scene, or (looking at nothing) the
+/// point along that ray nearest the centre of the scene's bounds.
+pub fn orbit_target(scene: &Scene, bvh: &SceneBvh, cam: &Camera) -> Vec3 {
+    let (eye, dir) = (cam.eye(), cam.forward());
+    match bvh.closest(Vec3A::from(eye), Vec3A::from(dir), 0.0, f32::INFINITY) {
+        Some(hit) if hit.t.is_finite() => eye + dir * hit.t,
+        _ => {
+            let (lo, hi) = scene.bounds();
+            let c = 0.5 * (lo + hi);
+            eye + dir * (c - eye).dot(dir).max(0.0)
+        }
+    }
+}
+
+/// One frame of a path.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PathRow {
+    pub label: String,
+    pub temporal: bool,
+    pub frame: u32,
+    /// GPU ms of the frame (resident VPL work excluded) and of its SP clustering.
+    pub frame_ms: f64,
+    pub sp_cluster_ms: f64,
+    pub mse: f64,
+    pub rel_mse: f64,
+    /// `None` for the first frame (no previous one).
+    pub instability: Option<f64>,
+    /// Alg. 1 iterations the SP clustering ran, and the centroids a warm start kept.
+    pub sp_iterations: u32,
+    pub sp_warm_kept: Option<u32>,
+    pub sp_clusters_used: u32,
+    /// GPU ms of this frame's reference.
+    pub reference_ms: f64,
+}
+
+pub const HEADER: &str = "label,temporal,frame,frame_ms,sp_cluster_ms,mse,rel_mse,instability,sp_iterations,sp_warm_kept,sp_clusters_used,reference_ms";
+
+pub fn to_csv(rows: &[PathRow]) -> String {
+    let mut s = String::from(HEADER);
+    s.push('\n');
+    let opt = |v: Option<String>| v.unwrap_or_default();
+    for r in rows {
+        s.push_str(&format!(
+            "\"{}\",{},{},{},{},{:e},{:e},{},{},{},{},{}\n",
+            r.label.replace('"', "\"\""),
+            if r.temporal { "on" } else { "off" },
+            r.frame,
+            r.frame_ms,
+            r.sp_cluster_ms,
+            r.mse,
+            r.rel_mse,
+            opt(r.instability.map(|v| format!("{v:e}"))),
+            r.sp_iterations,
+            opt(r.sp_warm_kept.map(|v| v.to_string())),
+            r.sp_clusters_used,
+            r.reference_ms,
+        ));
+    }
+    s
+}
+
+/// Means over frames 1.. (the frames that can reuse) of one label and temporal setting: (frame ms,
+/// SP clustering ms, MSE, instability).
+pub fn means(rows: &[PathRow], label: &str, temporal: bool) -> Option<[f64; 4]> {
+    let sel: Vec<&PathRow> = rows
+        .iter()
+        .filter(|r| r.label == label && r.temporal == temporal && r.frame >= 1)
+        .collect();
+    if sel.is_empty() {
+        return None;
+    }
+    let n = sel.len() as f64;
+    let mean = |f: &dyn Fn(&PathRow) -> f64| sel.iter().map(|r| f(r)).sum::<f64>() / n;
+    Some([
+        mean(&|r| r.frame_ms),
+        mean(&|r| r.sp_cluster_ms),
+        mean(&|r| r.mse),
+        mean(&|r| r.instability.unwrap_or(0.0)),
+    ])
+}
+
+/// Renders every configuration of `plan` along `path` with each of `temporal`, against one reference
+/// per frame (rendered once, shared by all). Writes `path.csv` and `path.png` into the plan's folder.
+pub fn run(
+    ctx: &GpuContext,
+    scene: &Scene,
+    plan: &BenchPlan,
+    path: &CameraPath,
+    temporal: &[bool],
+) -> Result<Vec<PathRow>> {
+    let mut renderer = Renderer::new(ctx, scene)?;
+    let start = &plan.cameras.first().ok_or_else(|| anyhow!("no camera"))?.1;
+    let target = orbit_target(&renderer.scene, &renderer.bvh, start);
+    let cameras = path.cameras(start, target);
+    let configs: Vec<Config> = plan.sweep.configs();
+    let reference_settings = FrameSettings {
+        reference: true,
+        progress: false,
+        ..plan.base.clone()
+    };
+    let mut references: Vec<(Vec<[f32; 3]>, f64)> = Vec::new();
+    for (i, cam) in cameras.iter().enumerate() {
+        let f = renderer.render(cam, &reference_settings)?;
+        eprintln!(
+            "path: reference {}/{} in {:.0} ms GPU",
+            i + 1,
+            cameras.len(),
+            f.timings_ms["frame"]
+        );
+        references.push((f.radiance, f.timings_ms["frame"]));
+    }
+    let mut rows = Vec::new();
+    for c in &configs {
+        for &on in temporal {
+            let s = FrameSettings {
+                temporal: on,
+                ..c.settings(&plan.base)
+            };
+            // Each run starts with no past.
+            renderer.sp_clustering = None;
+            let mut prev: Option<Frame> = None;
+            for (i, cam) in cameras.iter().enumerate() {
+                let f = renderer.render(cam, &s)?;
+                let label = c.label_ran(
+                    f.gamma_used.is_some(),
+                    f.vpl_clusters_used > 0,
+                    f.gamma_used,
+                );
+                let (reference, reference_ms) = &references[i];
+                let instability = prev.as_ref().map(|p| {
+                    metrics::instability(&f.radiance, reference, &p.radiance, &references[i - 1].0)
+                });
+                let row = PathRow {
+                    label,
+                    temporal: on,
+                    frame: i as u32,
+                    frame_ms: f.timings_ms["frame"],
+                    sp_cluster_ms: f.timings_ms.get("sp_cluster").copied().unwrap_or(0.0),
+                    mse: metrics::mse(&f.radiance, reference),
+                    rel_mse: metrics::rel_mse(&f.radiance, reference),
+                    instability,
+                    sp_iterations: f.sp_iterations,
+                    sp_warm_kept: f.sp_warm_kept,
+                    sp_clusters_used: f.sp_clusters_used,
+                    reference_ms: *reference_ms,
+                };
+                eprintln!(
+                    "path: {} temporal {} frame {i}: {:.1} ms (SP clustering {:.1} ms, {} iteration(s), kept {}), MSE {:.3e}, instability {}",
+                    row.label,
+                    if on { "on" } else { "off" },
+                    row.frame_ms,
+                    row.sp_cluster_ms,
+                    row.sp_iterations,
+                    row.sp_warm_kept.map_or("-".into(), |k| k.to_string()),
+                    row.mse,
+                    row.instability.map_or("-".into(), |v| format!("{v:.3e}"))
+                );
+                rows.push(row);
+                prev = Some(f);
+            }
+        }
+    }
+    let text = to_csv(&rows);
+    export::write_atomic(&plan.out_dir.join("path.csv"), |w| {
+        use std::io::Write;
+        w.write_all(text.as_bytes())?;
+        Ok(())
+    })?;
+    plot(
+        &plan.out_dir.join("path.png"),
+        &format!(
+            "{} along orbit:{}:{} ({}x{})",
+            plan.scene_name, path.frames, path.degrees, plan.base.width, plan.base.height
+        ),
+        &rows,
+    )?;
+    Ok(rows)
+}
+
+/// A measure of a row (`None`: not measured for it).
+type Metric = fn(&PathRow) -> Option<f64>;
+
+/// MSE (left) and instability (right) per frame, a line per configuration and temporal setting
+/// (solid: on, dashed look: off drawn thinner).
+pub fn plot(path: &Path, title: &str, rows: &[PathRow]) -> Result<()> {
+    super::plot::register_fonts();
+    let (w, h) = (super::plot::WIDTH, super::plot::HEIGHT);
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+        let root = root
+            .titled(title, ("sans-serif", 18))
+            .map_err(|e| anyhow!("{e}"))?;
+        let panels = root.split_evenly((1, 2));
+        let mut series: Vec<(String, bool)> = Vec::new();
+        for r in rows {
+            if !series.contains(&(r.label.clone(), r.temporal)) {
+                series.push((r.label.clone(), r.temporal));
+            }
+        }
+        let frames = rows.iter().map(|r| r.frame).max().unwrap_or(0).max(1);
+        let panel_defs: [(&str, Metric); 2] =
+            [("MSE", |r| Some(r.mse)), ("instability", |r| r.instability)];
+        for (area, (name, value)) in panels.iter().zip(panel_defs) {
+            let vals: Vec<f64> = rows
+                .iter()
+                .filter_map(value)
+                .filter(|v| v.is_finite() && *v > 0.0)
+                .collect();
+            let (lo, hi) = vals
+                .iter()
+                .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+            let (lo, hi) = if vals.is_empty() {
+                (1e-6, 1e-3)
+            } else {
+                (lo / 1.5, hi * 1.5)
+            };
+            let mut chart = ChartBuilder::on(area)
+                .margin(12)
+                .x_label_area_size(36)
+                .y_label_area_size(70)
+                .build_cartesian_2d(0u32..frames, (lo..hi).log_scale())
+                .map_err(|e| anyhow!("{e}"))?;
+            chart
+                .configure_mesh()
+                .x_desc("frame")
+                .y_desc(name)
+                .y_label_formatter(&|v| format!("{v:.1e}"))
+                .label_style(("sans-serif", 13))
+                .draw()
+                .map_err(|e| anyhow!("{e}"))?;
+            for (i, (label, on)) in series.iter().enumerate() {
+                let colour = Palette99::pick(i).to_rgba();
+                let pts: Vec<(u32, f64)> = rows
+                    .iter()
+                    .filter(|r| &r.label == label && r.temporal == *on)
+                    .filter_map(|r| value(r).filter(|v| *v > 0.0).map(|v| (r.frame, v)))
+                    .collect();
+                let width = if *on { 3 } else { 1 };
+                chart
+                    .draw_series(LineSeries::new(
+                        pts.iter().copied(),
+                        colour.stroke_width(width),
+                    ))
+                    .map_err(|e| anyhow!("{e}"))?
+                    .label(format!(
+                        "{label}, temporal {}",
+                        if *on { "on" } else { "off" }
+                    ))
+                    .legend(move |(x, y)| {
+                        PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(width))
+                    });
+                chart
+                    .draw_series(pts.iter().map(|&p| Circle::new(p, 3, colour.filled())))
+                    .map_err(|e| anyhow!("{e}"))?;
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 12))
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()
+                .map_err(|e| anyhow!("{e}"))?;
+        }
+        root.present().map_err(|e| anyhow!("{e}"))?;
+    }
+    export::write_png_rgb8(path, w, h, buf)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn camera_path_parses_orbit_and_refuses_the_rest() {
+        assert_eq!(
+            parse_camera_path("orbit:6:3"),
+            Ok(CameraPath {
+                frames: 6,
+                degrees: 3.0
+            })
+        );
+        assert_eq!(parse_camera_path("orbit:1:-90").unwrap().degrees, -90.0);
+        for bad in [
+            "orbit:0:3",
+            "orbit:6",
+            "orbit:x:3",
+            "orbit:6:nan",
+            "line:6:3",
+            "",
+        ] {
+            assert!(parse_camera_path(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn orbit_turns_about_the_target_and_keeps_it_in_view() {
+        // A camera at (0, 1, 5) looking at the origin; a quarter turn in two frames.
+        let start = Camera::look_at("c", Vec3::new(0.0, 1.0, 5.0), Vec3::ZERO, Vec3::Y, 0.8);
+        let cams = CameraPath {
+            frames: 3,
+            degrees: 90.0,
+        }
+        .cameras(&start, Vec3::ZERO);
+        assert_eq!(cams.len(), 3);
+        assert_eq!(cams[0].transform, start.transform);
+        // +90° about +Y takes +Z to +X: the eye goes to (5, 1, 0), 45° half way.
+        assert!((cams[2].eye() - Vec3::new(5.0, 1.0, 0.0)).length() < 1e-5);
+        let h = 5.0 / 2f32.sqrt();
+        assert!((cams[1].eye() - Vec3::new(h, 1.0, h)).length() < 1e-5);
+        for c in &cams {
+            // Still looking at the target, same distance, same field of view.
+            let to = (Vec3::ZERO - c.eye()).normalize();
+            assert!(c.forward().dot(to) > 1.0 - 1e-6);
+            assert!((c.eye().length() - 26f32.sqrt()).abs() < 1e-5);
+            assert_eq!(c.yfov, 0.8);
+        }
+    }
+
+    #[test]
+    fn csv_and_means_of_frames_after_the_first() {
+        let row = |frame: u32, on: bool, sp: f64, mse: f64, inst: Option<f64>| PathRow {
+            label: "weighted 192/512".into(),
+            temporal: on,
+            frame,
+            frame_ms: 10.0,
+            sp_cluster_ms: sp,
+            mse,
+            rel_mse: 0.5,
+            instability: inst,
+            sp_iterations: 1,
+            sp_warm_kept: on.then_some(180),
+            sp_clusters_used: 192,
+            reference_ms: 100.0,
+        };
+        let rows = vec![
+            row(0, false, 100.0, 9.0, None),
+            row(1, false, 4.0, 1.0, Some(2.0)),
+            row(2, false, 6.0, 3.0, Some(4.0)),
+            row(0, true, 100.0, 9.0, None),
+            row(1, true, 1.0, 2.0, Some(1.0)),
+        ];
+        // Frame 0 is left out of the means.
+        assert_eq!(
+            means(&rows, "weighted 192/512", false),
+            Some([10.0, 5.0, 2.0, 3.0])
+        );
+        assert_eq!(
+            means(&rows, "weighted 192/512", true),
+            Some([10.0, 1.0, 2.0, 1.0])
+        );
+        assert_eq!(means(&rows, "other", true), None);
+        let csv = to_csv(&rows);
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(lines.len(), 6);
+        assert!(
+            lines[0]
+                .starts_with("label,temporal,frame,frame_ms,sp_cluster_ms,mse,rel_mse,instability")
+        );
+        // Frame 0 has an empty instability; temporal is written on/off.
+        let f0: Vec<&str> = lines[1].split(',').collect();
+        assert_eq!((f0[1], f0[2], f0[7]), ("off", "0", ""));
+        let f4: Vec<&str> = lines[5].split(',').collect();
+        assert_eq!((f4[1], f4[7], f4[9]), ("on", "1e0", "180"));
+    }
+}
