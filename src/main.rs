@@ -169,6 +169,10 @@ struct SceneArgs {
     /// Multiply every emitter's power by this factor.
     #[arg(long, default_value_t = 1.0)]
     light_scale: f32,
+    /// Load a file that requires glTF extension NAME, which fuzzy-vpl does not know, ignoring it
+    /// (repeatable). Only for extensions that change neither geometry nor diffuse colour.
+    #[arg(long, value_name = "NAME")]
+    allow_extension: Vec<String>,
 }
 
 #[derive(Args)]
@@ -516,7 +520,10 @@ fn check_size(ctx: &GpuContext, width: u32, height: u32, bytes_per_pixel: u64) -
 }
 
 fn load_scene(a: &SceneArgs) -> Result<Scene> {
-    let mut s = scene::load(&a.scene)?;
+    let opts = scene::LoadOptions {
+        allow_extensions: a.allow_extension.clone(),
+    };
+    let mut s = scene::load_with(&a.scene, &opts)?;
     for w in &s.report.warnings {
         eprintln!("warning: {}: {w}", a.scene);
     }
@@ -966,6 +973,19 @@ fn info(a: InfoArgs) -> Result<()> {
         "passes (render):     {}",
         Renderer::passes_for(&s, &FrameSettings::default()).join(" -> ")
     );
+    let tested = s.alpha_test_flags().into_iter().filter(|&f| f).count();
+    if tested > 0 {
+        let materials = s
+            .materials
+            .iter()
+            .filter(|m| m.alpha_cutoff.is_some())
+            .count();
+        println!(
+            "alpha test:          {tested} triangles ({materials} alpha-masked materials); in every pass that traces rays"
+        );
+    } else {
+        println!("alpha test:          none (the passes are compiled without it)");
+    }
     Ok(())
 }
 

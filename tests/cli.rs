@@ -707,6 +707,124 @@ fn auto_gamma_is_written_as_chosen() {
     assert!(err.contains("--gamma"), "{err}");
 }
 
+/// A one-quad glTF (two triangles, data: URI) whose material is `material` (JSON) and which
+/// requires `required`.
+fn quad_gltf(path: &std::path::Path, material: &str, required: &[&str]) {
+    let pos: [[f32; 3]; 4] = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+    let mut bin: Vec<u8> = pos.iter().flatten().flat_map(|f| f.to_le_bytes()).collect();
+    bin.extend([0u16, 1, 2, 0, 2, 3].iter().flat_map(|i| i.to_le_bytes()));
+    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut b64 = String::new();
+    for c in bin.chunks(3) {
+        let n = (c[0] as u32) << 16
+            | (*c.get(1).unwrap_or(&0) as u32) << 8
+            | *c.get(2).unwrap_or(&0) as u32;
+        for k in 0..4 {
+            b64.push(if k <= c.len() {
+                A[(n >> (18 - 6 * k) & 63) as usize] as char
+            } else {
+                '='
+            });
+        }
+    }
+    let req = serde_json::to_string(required).unwrap();
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "extensionsUsed": {req}, "extensionsRequired": {req},
+        "buffers": [{{"byteLength": {len}, "uri": "data:application/octet-stream;base64,{b64}"}}],
+        "bufferViews": [{{"buffer": 0, "byteLength": 48}}, {{"buffer": 0, "byteOffset": 48, "byteLength": 12}}],
+        "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                        "min": [0, 0, 0], "max": [1, 1, 0]}},
+                      {{"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"}}],
+        "materials": [{material}],
+        "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1, "material": 0}}]}}],
+        "nodes": [{{"mesh": 0}}], "scenes": [{{"nodes": [0]}}], "scene": 0}}"#,
+        len = bin.len()
+    );
+    std::fs::write(path, json).unwrap();
+}
+
+/// `info` names the alpha test where a material needs it, and says it is compiled out elsewhere.
+#[test]
+fn info_lists_the_alpha_test_where_it_runs() {
+    let d = common::scratch("cli-alpha");
+    let masked = d.join("masked.gltf");
+    quad_gltf(
+        &masked,
+        r#"{"alphaMode": "MASK", "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 0.25]}}"#,
+        &[],
+    );
+    let (code, out, err) = run(&["info", masked.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("alpha-test"), "{out}");
+    assert!(
+        out.contains("alpha test:          2 triangles (1 alpha-masked materials)"),
+        "{out}"
+    );
+    let (code, out, err) = run(&["info", "builtin:cornell"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!out.contains("alpha-test"), "{out}");
+    assert!(out.contains("alpha test:          none"), "{out}");
+}
+
+/// Required extensions: one that only a specular renderer needs loads with one warning; an unknown
+/// one exits 2 with one line naming the file and the extension unless `--allow-extension` names
+/// it; one that changes geometry exits 2 even then.
+#[test]
+fn required_extensions_on_the_command_line() {
+    let d = common::scratch("cli-ext");
+    let spec = d.join("specular.gltf");
+    quad_gltf(&spec, r#"{"name": "m"}"#, &["KHR_materials_specular"]);
+    let (code, _, err) = run(&["info", spec.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    // (The other warning says the quad has no light.)
+    let warnings: Vec<&str> = err
+        .lines()
+        .filter(|l| l.starts_with("warning: ") && l.contains("extension"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{err}");
+    assert!(warnings[0].contains("KHR_materials_specular"), "{err}");
+
+    let vendor = d.join("vendor.gltf");
+    quad_gltf(&vendor, r#"{"name": "m"}"#, &["VENDOR_paint"]);
+    let (code, _, err) = run(&["info", vendor.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    let lines = common::error_lines(&err);
+    assert_eq!(lines.len(), 1, "{err}");
+    assert!(
+        lines[0].contains("vendor.gltf") && lines[0].contains("VENDOR_paint"),
+        "{err}"
+    );
+    let (code, _, err) = run(&[
+        "info",
+        vendor.to_str().unwrap(),
+        "--allow-extension",
+        "VENDOR_paint",
+    ]);
+    assert_eq!(code, 0, "{err}");
+
+    let draco = d.join("draco.gltf");
+    quad_gltf(&draco, r#"{"name": "m"}"#, &["KHR_draco_mesh_compression"]);
+    let (code, _, err) = run(&[
+        "info",
+        draco.to_str().unwrap(),
+        "--allow-extension",
+        "KHR_draco_mesh_compression",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    let lines = common::error_lines(&err);
+    assert_eq!(lines.len(), 1, "{err}");
+    assert!(
+        lines[0].contains("draco.gltf") && lines[0].contains("Draco"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+}
+
 /// A 1 TiB sparse file as the scene is refused with exit 2 and one line at once (it used to abort
 /// with exit 134 reserving 1 TiB). Asserted under 1 s for the whole process (measured: ~3 ms).
 #[test]

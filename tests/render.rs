@@ -271,6 +271,7 @@ fn quad_diagonal_on_the_centre_line_has_no_crack() {
                 p,
                 n: [n; 3],
                 uv: [glam::Vec2::ZERO; 3],
+                color: [glam::Vec4::ONE; 3],
                 material: 0,
             });
         }
@@ -425,6 +426,7 @@ fn a_mesh_past_one_storage_binding_renders() {
                     p,
                     n: [Vec3::Y; 3],
                     uv: [glam::Vec2::ZERO; 3],
+                    color: [glam::Vec4::ONE; 3],
                     material: 0,
                 });
             }

@@ -1,7 +1,7 @@
 //! glTF loading: crafted valid and malformed files, the assimp glTF test corpus, and the real scenes.
 
 use fuzzy_vpl::scene::{self, LightKind, Scene, SceneError, builtin, gltf_load};
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
@@ -1154,6 +1154,287 @@ fn load_dispatches_builtin_and_paths() {
     let s = scene::load(p.to_str().unwrap()).unwrap();
     assert_eq!(s.name, p.display().to_string());
     assert_eq!(s.path.as_deref(), Some(p.as_path()));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Alpha modes, vertex colours, extensions a diffuse renderer can ignore
+
+/// A one-triangle mesh with TEXCOORD_0 and material `mat`, instanced by a root node.
+fn textured_triangle(d: &mut Doc, mat: usize) {
+    let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    let uv = d.floats(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], "VEC2", false);
+    let m = d.mesh(json!({"attributes": {"POSITION": p, "TEXCOORD_0": uv}, "material": mat}));
+    d.node(json!({"mesh": m}), true);
+}
+
+#[test]
+fn alpha_modes_and_cutoffs() {
+    let dir = temp_dir("alpha_modes");
+    // Texture alpha: 0 in one texel, 255 in the others; and one fully opaque texture.
+    let mut holes = image::RgbaImage::from_pixel(2, 2, image::Rgba([255, 255, 255, 255]));
+    holes.put_pixel(1, 1, image::Rgba([255, 255, 255, 0]));
+    let mut png = Vec::new();
+    holes
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    std::fs::write(dir.join("holes.png"), png).unwrap();
+    std::fs::write(dir.join("solid.png"), png_bytes(2, 2, [9, 9, 9, 255])).unwrap();
+    let mut d = Doc::new();
+    d.json["images"] = json!([{"uri": "holes.png"}, {"uri": "solid.png"}]);
+    d.json["textures"] = json!([{"source": 0}, {"source": 1}]);
+    d.json["materials"] = json!([
+        {"name": "opaque", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},
+        {"name": "mask", "alphaMode": "MASK", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},
+        {"name": "mask 0.3", "alphaMode": "MASK", "alphaCutoff": 0.3,
+            "pbrMetallicRoughness": {"baseColorTexture": {"index": 1}}},
+        {"name": "mask by factor", "alphaMode": "MASK", "alphaCutoff": 0.3,
+            "pbrMetallicRoughness": {"baseColorTexture": {"index": 1}, "baseColorFactor": [1, 1, 1, 0.25]}},
+        {"name": "blend", "alphaMode": "BLEND", "alphaCutoff": 0.9},
+        {"name": "blend too", "alphaMode": "BLEND"}
+    ]);
+    for mat in 0..6 {
+        textured_triangle(&mut d, mat);
+    }
+    let s = load_ok(&d.write_gltf(&dir, "alpha"));
+    let cutoffs: Vec<Option<f32>> = s.materials.iter().map(|m| m.alpha_cutoff).collect();
+    // BLEND is MASK at 0.5 whatever alphaCutoff says (the spec ignores it outside MASK).
+    assert_eq!(
+        cutoffs,
+        [None, Some(0.5), Some(0.3), Some(0.3), Some(0.5), Some(0.5)]
+    );
+    // Tested: MASK over a texture with a clear texel, MASK with factor alpha 0.25 < 0.3, and the
+    // BLEND materials whose alpha is 1 everywhere are not (nothing can fall below 0.5), nor is
+    // the opaque texture under MASK 0.3, nor the OPAQUE material.
+    assert_eq!(
+        s.alpha_test_flags(),
+        [false, true, false, true, false, false]
+    );
+    assert!(s.features().contains(&"alpha-test"));
+    let blend: Vec<&String> = s
+        .report
+        .warnings
+        .iter()
+        .filter(|w| w.contains("BLEND"))
+        .collect();
+    assert_eq!(blend.len(), 1, "{:?}", s.report.warnings);
+    assert!(blend[0].contains("2 materials") && blend[0].contains("cutoff 0.5"));
+
+    // A file without alpha modes tests nothing.
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m}), true);
+    let s = load_ok(&d.write_gltf(&dir, "plain"));
+    assert!(!s.uses_alpha_test() && !s.features().contains(&"alpha-test"));
+}
+
+#[test]
+fn vertex_colours_in_every_format() {
+    let dir = temp_dir("colors");
+    let mut d = Doc::new();
+    let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    // RGB float.
+    let rgb = d.floats(
+        &[[1.0, 0.5, 0.0], [0.0, 1.0, 0.25], [0.2, 0.2, 0.2]],
+        "VEC3",
+        false,
+    );
+    // RGBA normalised unsigned byte.
+    let v = d.view(&[255, 0, 0, 255, 0, 51, 0, 128, 0, 0, 255, 0], None);
+    let u8s = d.push(
+        "accessors",
+        json!({"bufferView": v, "componentType": 5121,
+        "normalized": true, "count": 3, "type": "VEC4"}),
+    );
+    // RGB normalised unsigned short.
+    let shorts: Vec<u8> = [65535u16, 0, 0, 0, 65535, 0, 13107, 13107, 65535]
+        .iter()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let v = d.view(&shorts, None);
+    let u16s = d.push(
+        "accessors",
+        json!({"bufferView": v, "componentType": 5123,
+        "normalized": true, "count": 3, "type": "VEC3"}),
+    );
+    // Not normalised: not a colour glTF allows; ignored with a warning.
+    let v = d.view(&[1, 2, 3, 4, 5, 6, 7, 8, 9, 0, 0, 0], None);
+    let raw = d.push(
+        "accessors",
+        json!({"bufferView": v, "componentType": 5121,
+        "count": 3, "type": "VEC4"}),
+    );
+    // Out of [0, 1]: clamped with a warning.
+    let hot = d.floats(&[[2.0, 0.5, -1.0]; 3], "VEC3", false);
+    for (i, c) in [rgb, u8s, u16s, raw, hot].into_iter().enumerate() {
+        let m = d.mesh(json!({"attributes": {"POSITION": p, "COLOR_0": c}}));
+        d.node(json!({"mesh": m, "translation": [0, 0, i]}), true);
+    }
+    let s = load_ok(&d.write_gltf(&dir, "colors"));
+    assert_eq!(s.triangles.len(), 5);
+    let by_z = |z: f32| s.triangles.iter().find(|t| t.p[0].z == z).unwrap().color;
+    let close4 = |a: Vec4, b: Vec4| (a - b).abs().max_element() < 1e-6;
+    let c = by_z(0.0);
+    assert!(
+        close4(c[0], Vec4::new(1.0, 0.5, 0.0, 1.0)) && close4(c[1], Vec4::new(0.0, 1.0, 0.25, 1.0))
+    );
+    let c = by_z(1.0);
+    assert!(close4(c[0], Vec4::new(1.0, 0.0, 0.0, 1.0)), "{c:?}");
+    assert!(
+        close4(c[1], Vec4::new(0.0, 0.2, 0.0, 128.0 / 255.0)),
+        "{c:?}"
+    );
+    assert!(close4(c[2], Vec4::new(0.0, 0.0, 1.0, 0.0)), "{c:?}");
+    let c = by_z(2.0);
+    assert!(close4(c[2], Vec4::new(0.2, 0.2, 1.0, 1.0)), "{c:?}");
+    assert_eq!(by_z(3.0), [Vec4::ONE; 3]);
+    assert_eq!(by_z(4.0), [Vec4::new(1.0, 0.5, 0.0, 1.0); 3]);
+    let w = &s.report.warnings;
+    assert!(
+        w.iter()
+            .any(|w| w.contains("COLOR_0") && w.contains("normalised")),
+        "{w:?}"
+    );
+    assert!(
+        w.iter()
+            .any(|w| w.contains("COLOR_0") && w.contains("clamped")),
+        "{w:?}"
+    );
+    assert!(s.uses_vertex_colors() && s.features().contains(&"vertex-colors"));
+    // Without COLOR_0 the vertices are white and the feature is off.
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(true);
+    d.node(json!({"mesh": m}), true);
+    let s = load_ok(&d.write_gltf(&dir, "white"));
+    assert_eq!(s.triangles[0].color, [Vec4::ONE; 3]);
+    assert!(!s.uses_vertex_colors());
+}
+
+#[test]
+fn required_extensions_a_diffuse_renderer_can_ignore() {
+    let dir = temp_dir("ignorable");
+    let doc = |required: &[&str]| {
+        let mut d = Doc::new();
+        let m = d.triangle_mesh(true);
+        d.node(json!({"mesh": m}), true);
+        d.json["extensionsUsed"] = json!(required);
+        d.json["extensionsRequired"] = json!(required);
+        d
+    };
+    // Specular, clearcoat, sheen, roughness packing: one warning naming them all.
+    let ignorable = [
+        "AMD_split_roughnessMetallic",
+        "KHR_materials_specular",
+        "KHR_materials_clearcoat",
+        "KHR_materials_sheen",
+    ];
+    let mut d = doc(&ignorable);
+    d.json["materials"] = json!([{"name": "shiny", "extensions": {
+        "KHR_materials_clearcoat": {"clearcoatFactor": 1.0},
+        "AMD_split_roughnessMetallic": {"roughnessTexture": {"index": 0}}}}]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let s = load_ok(&d.write_gltf(&dir, "shiny"));
+    let named: Vec<&String> = s
+        .report
+        .warnings
+        .iter()
+        .filter(|w| w.contains("AMD_split_roughnessMetallic"))
+        .collect();
+    assert_eq!(named.len(), 1, "{:?}", s.report.warnings);
+    for e in ignorable {
+        assert!(named[0].contains(e), "{}", named[0]);
+    }
+    assert_eq!(s.report.warnings.len(), 1, "{:?}", s.report.warnings);
+
+    // An extension the loader does not know is refused, naming it and the way to allow it…
+    let path = doc(&["VENDOR_fancy_paint"]).write_gltf(&dir, "vendor");
+    let e = assert_err(
+        gltf_load::load_path(&path),
+        "vendor.gltf",
+        "VENDOR_fancy_paint",
+    );
+    assert!(e.contains("--allow-extension VENDOR_fancy_paint"), "{e}");
+    // …and loads with --allow-extension, with one warning.
+    let opts = scene::LoadOptions {
+        allow_extensions: vec!["VENDOR_fancy_paint".into()],
+    };
+    let s = gltf_load::load_path_with(&path, &opts).unwrap();
+    assert_eq!(s.report.warnings.len(), 1, "{:?}", s.report.warnings);
+    assert!(s.report.warnings[0].contains("VENDOR_fancy_paint"));
+    assert!(scene::load_with(path.to_str().unwrap(), &opts).is_ok());
+
+    // What changes geometry or diffuse colour stays refused, allowed or not.
+    for ext in [
+        "KHR_draco_mesh_compression",
+        "EXT_meshopt_compression",
+        "EXT_mesh_gpu_instancing",
+        "KHR_materials_pbrSpecularGlossiness",
+    ] {
+        let path = doc(&[ext]).write_gltf(&dir, ext);
+        let opts = scene::LoadOptions {
+            allow_extensions: vec![ext.into()],
+        };
+        let e = assert_err(
+            gltf_load::load_path_with(&path, &opts),
+            &format!("{ext}.gltf"),
+            ext,
+        );
+        assert!(e.contains("does not support"), "{e}");
+    }
+}
+
+#[test]
+fn textures_only_in_formats_the_loader_cannot_read() {
+    let dir = temp_dir("dds_only");
+    std::fs::write(dir.join("white.png"), png_bytes(2, 2, [255, 255, 255, 255])).unwrap();
+    let doc = |base_dds: bool, emissive_dds: bool| {
+        let mut d = Doc::new();
+        d.json["extensionsUsed"] = json!(["MSFT_texture_dds"]);
+        d.json["extensionsRequired"] = json!(["MSFT_texture_dds"]);
+        d.json["images"] = json!([{"uri": "white.png"}, {"uri": "rough.dds"}]);
+        // Texture 0: PNG with a DDS alternative; 1 and 2: DDS only.
+        d.json["textures"] = json!([
+            {"source": 0, "extensions": {"MSFT_texture_dds": {"source": 1}}},
+            {"extensions": {"MSFT_texture_dds": {"source": 1}}},
+            {"extensions": {"MSFT_texture_dds": {"source": 1}}}
+        ]);
+        let mut m = json!({"name": "wall",
+            "pbrMetallicRoughness": {"baseColorTexture": {"index": if base_dds { 1 } else { 0 }}},
+            "normalTexture": {"index": 2}});
+        if emissive_dds {
+            m["emissiveFactor"] = json!([1, 1, 1]);
+            m["emissiveTexture"] = json!({"index": 1});
+        }
+        d.json["materials"] = json!([m]);
+        textured_triangle(&mut d, 0);
+        d
+    };
+    // DDS-only textures used as normal maps only: skipped with one warning naming the extension.
+    let s = load_ok(&doc(false, false).write_gltf(&dir, "normals"));
+    assert_eq!(s.materials[0].base_color_texture, Some(0));
+    assert_eq!(s.textures.len(), 1);
+    let w: Vec<&String> = s
+        .report
+        .warnings
+        .iter()
+        .filter(|w| w.contains("MSFT_texture_dds"))
+        .collect();
+    assert_eq!(w.len(), 1, "{:?}", s.report.warnings);
+    assert!(
+        w[0].contains("2 textures") && w[0].contains("skipped"),
+        "{}",
+        w[0]
+    );
+    // As the only base colour (or emissive) source: refused, naming the file and the extension.
+    let p = doc(true, false).write_gltf(&dir, "base");
+    let e = assert_err(gltf_load::load_path(&p), "base.gltf", "MSFT_texture_dds");
+    assert!(e.contains("base colour"), "{e}");
+    let p = doc(false, true).write_gltf(&dir, "emissive");
+    let e = assert_err(
+        gltf_load::load_path(&p),
+        "emissive.gltf",
+        "MSFT_texture_dds",
+    );
+    assert!(e.contains("emissive"), "{e}");
 }
 
 // ---------------------------------------------------------------------------------------------

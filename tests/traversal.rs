@@ -168,6 +168,7 @@ fn grid_scene(axis: usize) -> Scene {
             p,
             n: [n; 3],
             uv: [Vec2::ZERO; 3],
+            color: [glam::Vec4::ONE; 3],
             material: 0,
         });
     };

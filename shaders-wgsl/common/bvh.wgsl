@@ -7,6 +7,7 @@
 // branch per lane and per component, while a texel fetch is one vector gather. That alone made the
 // traversal 3x faster (docs/bvh.md).
 #import common/scene.wgsl
+#import common/alpha.wgsl
 
 struct Ray {
     origin: vec3<f32>,
@@ -156,11 +157,22 @@ fn trace_closest(ray_in: Ray) -> Hit {
     var i = 0u;
     var node: BvhNode;
     while walk_to_leaf(&i, &node, ray.origin, inv_dir, ray.tmax) {
-        for (var k = node.index; k < node.index + node.prim_count; k++) {
-            let r = intersect_tri(k, ray, sh);
-            if r.x < ray.tmax {
-                ray.tmax = r.x;
-                hit = Hit(r.x, k, r.y, r.z);
+        let count = node.prim_count & ~ALPHA_LEAF;
+        if HAS_ALPHA_TEST && (node.prim_count & ALPHA_LEAF) != 0u {
+            for (var k = node.index; k < node.index + count; k++) {
+                let r = intersect_tri(k, ray, sh);
+                if r.x < ray.tmax && alpha_passes(k, r.y, r.z) {
+                    ray.tmax = r.x;
+                    hit = Hit(r.x, k, r.y, r.z);
+                }
+            }
+        } else {
+            for (var k = node.index; k < node.index + count; k++) {
+                let r = intersect_tri(k, ray, sh);
+                if r.x < ray.tmax {
+                    ray.tmax = r.x;
+                    hit = Hit(r.x, k, r.y, r.z);
+                }
             }
         }
         i += 1u;
@@ -177,9 +189,19 @@ fn trace_any(ray_in: Ray) -> bool {
     var i = 0u;
     var node: BvhNode;
     while walk_to_leaf(&i, &node, ray.origin, inv_dir, ray.tmax) {
-        for (var k = node.index; k < node.index + node.prim_count; k++) {
-            if intersect_tri(k, ray, sh).x < ray.tmax {
-                return true;
+        let count = node.prim_count & ~ALPHA_LEAF;
+        if HAS_ALPHA_TEST && (node.prim_count & ALPHA_LEAF) != 0u {
+            for (var k = node.index; k < node.index + count; k++) {
+                let r = intersect_tri(k, ray, sh);
+                if r.x < ray.tmax && alpha_passes(k, r.y, r.z) {
+                    return true;
+                }
+            }
+        } else {
+            for (var k = node.index; k < node.index + count; k++) {
+                if intersect_tri(k, ray, sh).x < ray.tmax {
+                    return true;
+                }
             }
         }
         i += 1u;

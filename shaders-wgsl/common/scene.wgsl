@@ -17,6 +17,7 @@ struct SceneInfo {
 // BVH2 in depth-first preorder with skip links (src/bvh.rs): an inner node's first child follows it;
 // `index` is the inner node's skip link (next node after its subtree) or the leaf's first triangle slot.
 // Stored as two texels of `bvh_texels` (min | prim_count, max | index); see bvh.wgsl for why textures.
+// A leaf holding an alpha-tested triangle has ALPHA_LEAF set in prim_count (alpha.wgsl).
 struct BvhNode {
     min: vec3<f32>,
     prim_count: u32,
@@ -24,6 +25,7 @@ struct BvhNode {
     index: u32,
 }
 
+// v0.w is the alpha test's per-triangle flag (1: alpha-tested, 0: opaque); see alpha.wgsl.
 struct Tri {
     v0: vec4<f32>,
     v1: vec4<f32>,
@@ -40,6 +42,7 @@ struct TriShade {
 
 struct Material {
     base_color: vec4<f32>,
+    // xyz: emitted radiance; w: the alpha test's cutoff (0 for opaque materials).
     emissive: vec4<f32>,
     // x: base colour texture, y: emissive texture (-1 = none).
     tex: vec4<i32>,
@@ -80,6 +83,8 @@ struct Light {
 @group(0) @binding(8) var<storage, read> lights: array<Light>;
 // The triangles' vertices, 3 texels (v0, v1, v2) each, for the traversal and the shading.
 @group(0) @binding(9) var tri_texels: texture_2d<f32>;
+// Linear vertex colours (COLOR_0), 3 per triangle slot; one unused entry without HAS_VERTEX_COLORS.
+@group(0) @binding(10) var<storage, read> tri_colors: array<vec4<f32>>;
 
 // Texel i of a data texture: TEXEL_ROW (4096) texels a row (src/gi/scene_gpu.rs).
 fn texel_xy(i: u32) -> vec2<u32> {
@@ -107,10 +112,14 @@ fn load_tri_shade(slot: u32) -> TriShade {
 override HAS_TEXTURES: bool = true;
 override HAS_EMITTERS: bool = true;
 override HAS_PUNCTUAL: bool = true;
+// Without alpha-tested triangles the traversal is compiled without the alpha test (alpha.wgsl).
+override HAS_ALPHA_TEST: bool = true;
+override HAS_VERTEX_COLORS: bool = true;
 
 const PI: f32 = 3.14159265358979;
 const INF: f32 = 3.4028235e38;
 const INVALID: u32 = 0xffffffffu;
+const ALPHA_LEAF: u32 = 0x80000000u;
 
 fn max_abs3(p: vec3<f32>) -> f32 {
     let a = abs(p);

@@ -86,10 +86,22 @@ fn material_emission(m: Material, uv: vec2<f32>) -> vec3<f32> {
     return e;
 }
 
-fn material_albedo(m: Material, uv: vec2<f32>) -> vec3<f32> {
+// Interpolated vertex colour (COLOR_0), white without vertex colours.
+fn tri_vertex_color(slot: u32, b1: f32, b2: f32) -> vec4<f32> {
+    if !HAS_VERTEX_COLORS {
+        return vec4<f32>(1.0);
+    }
+    return (1.0 - b1 - b2) * tri_colors[3u * slot] + b1 * tri_colors[3u * slot + 1u] + b2 * tri_colors[3u * slot + 2u];
+}
+
+// Base colour factor x texture x vertex colour (`color`: white without vertex colours).
+fn material_albedo(m: Material, uv: vec2<f32>, color: vec3<f32>) -> vec3<f32> {
     var a = m.base_color.xyz;
     if HAS_TEXTURES && m.tex.x >= 0 {
         a *= sample_texture(m.tex.x, uv).xyz;
+    }
+    if HAS_VERTEX_COLORS {
+        a *= color;
     }
     return clamp(a, vec3<f32>(0.0), vec3<f32>(1.0));
 }
@@ -115,6 +127,6 @@ fn surface_at(slot: u32, b1: f32, b2: f32, dir: vec3<f32>) -> Surface {
     }
     s.n = n;
     s.ng = ng;
-    s.albedo = material_albedo(m, uv);
+    s.albedo = material_albedo(m, uv, tri_vertex_color(slot, b1, b2).xyz);
     return s;
 }

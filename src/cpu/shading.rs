@@ -96,13 +96,20 @@ impl<'a> CpuScene<'a> {
         e
     }
 
-    fn albedo(&self, material: u32, uv: Vec2) -> Vec3 {
+    /// Twin of `material_albedo`: factor × texture × vertex colour.
+    fn albedo(&self, material: u32, uv: Vec2, color: Vec3) -> Vec3 {
         let m = &self.scene.materials[material as usize];
         let mut a = m.base_color.truncate();
         if let Some(t) = m.base_color_texture {
             a *= sample_texture(&self.scene.textures[t as usize], uv);
         }
-        a.clamp(Vec3::ZERO, Vec3::ONE)
+        (a * color).clamp(Vec3::ZERO, Vec3::ONE)
+    }
+
+    /// Twin of `tri_vertex_color`.
+    fn vertex_color(&self, slot: u32, b1: f32, b2: f32) -> Vec3 {
+        let c = self.tri(slot).color;
+        ((1.0 - b1 - b2) * c[0] + b1 * c[1] + b2 * c[2]).truncate()
     }
 
     fn shading_normal(&self, slot: u32, b1: f32, b2: f32) -> Vec3 {
@@ -174,7 +181,7 @@ impl<'a> CpuScene<'a> {
             pos: eye + hit.t * dir,
             normal: n,
             material,
-            albedo: self.albedo(material, uv),
+            albedo: self.albedo(material, uv, self.vertex_color(slot, b1, b2)),
             emission,
         }
     }

@@ -128,6 +128,9 @@ pub struct SceneGpu {
     pub has_textures: bool,
     pub has_emitters: bool,
     pub has_punctual: bool,
+    /// Some triangle is alpha-tested (`Scene::alpha_test_flags`).
+    pub has_alpha_test: bool,
+    pub has_vertex_colors: bool,
     pub emitters: Vec<GpuEmitter>,
 }
 
@@ -318,7 +321,7 @@ impl SceneGpu {
             .iter()
             .map(|m| GpuMaterial {
                 base_color: m.base_color.into(),
-                emissive: m.emissive.extend(0.0).into(),
+                emissive: m.emissive.extend(m.alpha_cutoff.unwrap_or(0.0)).into(),
                 tex: [
                     m.base_color_texture.map_or(-1, |t| t as i32),
                     m.emissive_texture.map_or(-1, |t| t as i32),
@@ -338,6 +341,15 @@ impl SceneGpu {
             });
             texels.extend(t.rgba8.iter().map(|c| u32::from_le_bytes(*c)));
         }
+        let has_vertex_colors = scene.uses_vertex_colors();
+        let colors: Vec<[f32; 4]> = if has_vertex_colors {
+            bvh.slot_to_triangle
+                .iter()
+                .flat_map(|&i| scene.triangles[i as usize].color.map(Into::into))
+                .collect()
+        } else {
+            vec![[1.0; 4]]
+        };
         let (emitters, emit_power) = emitter_table(scene, bvh);
         let lights: Vec<GpuLight> = scene
             .lights
@@ -377,7 +389,7 @@ impl SceneGpu {
             data_texture_layout(9, wgpu::TextureSampleType::Float { filterable: false }),
         ]
         .into_iter()
-        .chain((4..=8).map(storage_entry))
+        .chain((4..=8).chain([10]).map(storage_entry))
         .collect();
         let layout = ctx
             .device
@@ -392,6 +404,7 @@ impl SceneGpu {
             (6, ctx.storage_init("texels", &texels)),
             (7, ctx.storage_init("emitters", &emitters)),
             (8, ctx.storage_init("lights", &lights)),
+            (10, ctx.storage_init("vertex colours", &colors)),
         ];
         // Nodes, triangles and their shading data are texels (see shaders-wgsl/common/bvh.wgsl and
         // scene.wgsl): not limited by one storage binding.
@@ -439,6 +452,8 @@ impl SceneGpu {
             has_textures: !scene.textures.is_empty() && scene.uses_textures(),
             has_emitters: !emitters.is_empty(),
             has_punctual: !lights.is_empty(),
+            has_alpha_test: bvh.has_alpha_test(),
+            has_vertex_colors,
             emitters,
         }
     }
@@ -449,6 +464,8 @@ impl SceneGpu {
             ("HAS_TEXTURES", self.has_textures as u32 as f64),
             ("HAS_EMITTERS", self.has_emitters as u32 as f64),
             ("HAS_PUNCTUAL", self.has_punctual as u32 as f64),
+            ("HAS_ALPHA_TEST", self.has_alpha_test as u32 as f64),
+            ("HAS_VERTEX_COLORS", self.has_vertex_colors as u32 as f64),
         ]
     }
 }

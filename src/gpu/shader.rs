@@ -21,6 +21,7 @@ pub const FILES: &[(&str, &str)] = wgsl![
     "common/chunk.wgsl",
     "common/gbuffer.wgsl",
     "common/vpl.wgsl",
+    "common/alpha.wgsl",
     "raycast.wgsl",
     "primary.wgsl",
     "direct.wgsl",

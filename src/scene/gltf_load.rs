@@ -16,7 +16,8 @@ pub mod read;
 mod uri;
 
 use super::{
-    Camera, LightKind, LoadReport, Material, PunctualLight, Scene, SceneError, Texture, Triangle,
+    Camera, LightKind, LoadOptions, LoadReport, Material, PunctualLight, Scene, SceneError,
+    Texture, Triangle,
 };
 use crate::panic_guard::one_line;
 use glam::{Affine2, DMat3, Mat4, Quat, Vec2, Vec3, Vec4};
@@ -35,6 +36,68 @@ pub const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &[
     "KHR_mesh_quantization",
 ];
 
+/// Required extensions that change only what a diffuse renderer does not model (specular lobes,
+/// clearcoat, sheen, transmission, refraction, how roughness and metallic are packed…) or that
+/// only add data it does not read: a file requiring them loads, with one warning naming them.
+/// Each keeps the core material's base colour as the diffuse colour (their specifications say a
+/// viewer without them falls back to the core material).
+pub const IGNORABLE_REQUIRED_EXTENSIONS: &[&str] = &[
+    "AMD_split_roughnessMetallic",
+    "KHR_materials_anisotropy",
+    "KHR_materials_clearcoat",
+    "KHR_materials_diffuse_transmission",
+    "KHR_materials_dispersion",
+    "KHR_materials_ior",
+    "KHR_materials_iridescence",
+    "KHR_materials_sheen",
+    "KHR_materials_specular",
+    "KHR_materials_transmission",
+    "KHR_materials_unlit",
+    "KHR_materials_variants",
+    "KHR_materials_volume",
+    "KHR_animation_pointer",
+    "KHR_xmp_json_ld",
+    "EXT_lights_image_based",
+    "MSFT_lod",
+    "MSFT_packing_normalRoughnessMetallic",
+    "MSFT_packing_occlusionRoughnessMetallic",
+];
+
+/// Required extensions that give a texture a source in a format the loader cannot decode. A file
+/// requiring them loads; each texture is judged where it is used: a base colour or emissive
+/// texture with no readable source refuses the file, any other one is skipped with a warning.
+pub const TEXTURE_FORMAT_EXTENSIONS: &[&str] = &[
+    "MSFT_texture_dds",
+    "KHR_texture_basisu",
+    "EXT_texture_webp",
+    "EXT_texture_avif",
+];
+
+/// Required extensions that change geometry or the diffuse colour and that the loader does not
+/// decode: always refused, with the reason.
+pub const REFUSED_REQUIRED_EXTENSIONS: &[(&str, &str)] = &[
+    (
+        "KHR_draco_mesh_compression",
+        "its geometry is Draco-compressed",
+    ),
+    (
+        "EXT_meshopt_compression",
+        "its geometry is meshopt-compressed",
+    ),
+    (
+        "KHR_meshopt_compression",
+        "its geometry is meshopt-compressed",
+    ),
+    (
+        "EXT_mesh_gpu_instancing",
+        "it places meshes by GPU instancing",
+    ),
+    (
+        "KHR_materials_pbrSpecularGlossiness",
+        "it replaces the base colour with a diffuse colour",
+    ),
+];
+
 /// A triangle is degenerate when its area is at most this fraction of the squared scene extent
 /// (bounding-box diagonal), which keeps the test scale-free.
 const DEGENERATE_AREA_REL: f64 = 1e-12;
@@ -44,6 +107,11 @@ const DEGENERATE_SLIVER_REL: f64 = 1e-7;
 
 /// Loads a `.gltf` (external files resolved relative to it, or `data:` URIs) or `.glb` file.
 pub fn load_path(path: &Path) -> Result<Scene, SceneError> {
+    load_path_with(path, &LoadOptions::default())
+}
+
+/// `load_path` with options (extensions the user allows).
+pub fn load_path_with(path: &Path, opts: &LoadOptions) -> Result<Scene, SceneError> {
     let file = path.display().to_string();
     guarded(&file, || {
         let bytes = read::read_scene_file(path).map_err(|e| format!("cannot read file: {e}"))?;
@@ -54,7 +122,7 @@ pub fn load_path(path: &Path) -> Result<Scene, SceneError> {
         let glb_name = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
-        let mut scene = load_bytes(&bytes, Some(base), glb_name)?;
+        let mut scene = load_bytes(&bytes, Some(base), glb_name, opts)?;
         scene.name = file.clone();
         scene.path = Some(path.to_path_buf());
         Ok(scene)
@@ -63,9 +131,14 @@ pub fn load_path(path: &Path) -> Result<Scene, SceneError> {
 
 /// Loads a GLB or self-contained glTF held in memory; `name` labels errors and becomes `Scene::name`.
 pub fn load_slice(bytes: &[u8], name: &str) -> Result<Scene, SceneError> {
+    load_slice_with(bytes, name, &LoadOptions::default())
+}
+
+/// `load_slice` with options (extensions the user allows).
+pub fn load_slice_with(bytes: &[u8], name: &str, opts: &LoadOptions) -> Result<Scene, SceneError> {
     guarded(name, || {
         let glb_name = name.to_ascii_lowercase().ends_with(".glb");
-        let mut scene = load_bytes(bytes, None, glb_name)?;
+        let mut scene = load_bytes(bytes, None, glb_name, opts)?;
         scene.name = name.to_string();
         Ok(scene)
     })
@@ -154,7 +227,7 @@ fn parse_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
 
 /// Why a JSON document that failed to deserialize was refused: a glTF 1.0 file, an unsupported
 /// required extension, or the deserialization error itself.
-fn explain_bad_json(json: &[u8], err: &serde_json::Error) -> String {
+fn explain_bad_json(json: &[u8], err: &serde_json::Error, opts: &LoadOptions) -> String {
     if let Ok(v) = serde_json::from_slice::<serde_json::Value>(json) {
         if let Some(ver) = v.pointer("/asset/version") {
             let ver = ver
@@ -170,7 +243,7 @@ fn explain_bad_json(json: &[u8], err: &serde_json::Error) -> String {
                 .iter()
                 .filter_map(|x| x.as_str().map(str::to_string))
                 .collect();
-            if let Err(e) = check_required(&names) {
+            if let Err(e) = check_required(&names, opts) {
                 return e;
             }
         }
@@ -193,25 +266,55 @@ fn check_version(version: &str) -> Result<(), String> {
     }
 }
 
-fn check_required(required: &[String]) -> Result<(), String> {
-    match required
-        .iter()
-        .find(|e| !SUPPORTED_REQUIRED_EXTENSIONS.contains(&e.as_str()))
-    {
-        Some(e) => Err(format!(
-            "requires extension {}, which fuzzy-vpl does not support",
-            uri::short(e)
-        )),
-        None => Ok(()),
+/// Checks `extensionsRequired`: supported ones pass, refused ones fail with their reason, unknown
+/// ones fail unless allowed (`--allow-extension`). Returns the ignored ones: (known to be
+/// ignorable, allowed by the user), for a warning each.
+fn check_required(
+    required: &[String],
+    opts: &LoadOptions,
+) -> Result<(Vec<String>, Vec<String>), String> {
+    let mut ignored = Vec::new();
+    let mut allowed = Vec::new();
+    for e in required {
+        let name = e.as_str();
+        if SUPPORTED_REQUIRED_EXTENSIONS.contains(&name)
+            || TEXTURE_FORMAT_EXTENSIONS.contains(&name)
+        {
+            continue;
+        }
+        if let Some((_, why)) = REFUSED_REQUIRED_EXTENSIONS.iter().find(|(n, _)| *n == name) {
+            return Err(format!(
+                "requires extension {name}, which fuzzy-vpl does not support ({why})"
+            ));
+        }
+        let list = if IGNORABLE_REQUIRED_EXTENSIONS.contains(&name) {
+            &mut ignored
+        } else if opts.allow_extensions.iter().any(|a| a == name) {
+            &mut allowed
+        } else {
+            let e = uri::short(e);
+            return Err(format!(
+                "requires extension {e}, which fuzzy-vpl does not know; if it changes neither geometry nor diffuse colour, load the file with --allow-extension {e}"
+            ));
+        };
+        if !list.contains(e) {
+            list.push(e.clone());
+        }
     }
+    Ok((ignored, allowed))
 }
 
-/// Parses, version-checks and validates the JSON document.
-fn parse_document(json: &[u8]) -> Result<gltf::Document, String> {
+/// Required extensions a loaded file declares and the loader ignores: (known to be ignorable,
+/// allowed with `--allow-extension`).
+type Ignored = (Vec<String>, Vec<String>);
+
+/// Parses, version-checks and validates the JSON document; also returns the required extensions
+/// it ignores.
+fn parse_document(json: &[u8], opts: &LoadOptions) -> Result<(gltf::Document, Ignored), String> {
     let json = json.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(json);
-    let root = gltf::json::Root::from_slice(json).map_err(|e| explain_bad_json(json, &e))?;
+    let root = gltf::json::Root::from_slice(json).map_err(|e| explain_bad_json(json, &e, opts))?;
     check_version(&root.asset.version)?;
-    check_required(&root.extensions_required)?;
+    let ignored = check_required(&root.extensions_required, opts)?;
 
     // gltf-json's primitive hook indexes `accessors` with the POSITION index unchecked.
     for (m, mesh) in root.meshes.iter().enumerate() {
@@ -247,7 +350,7 @@ fn parse_document(json: &[u8]) -> Result<gltf::Document, String> {
             errors[..errors.len().min(2)].join("; ")
         ));
     }
-    Ok(gltf::Document::from_json_without_validation(root))
+    Ok((gltf::Document::from_json_without_validation(root), ignored))
 }
 
 /// Loads every buffer: the GLB BIN chunk, `data:` URIs or files next to the glTF.
@@ -349,14 +452,16 @@ struct TextureCache<'a> {
 
 impl TextureCache<'_> {
     /// The scene texture and uv transform for a material's texture slot, or `None` (with a warning
-    /// when the slot is set but unusable) so the material falls back to its factor.
+    /// when the slot is set but unusable) so the material falls back to its factor. A texture
+    /// whose only source is in a format extension the loader cannot decode (DDS, KTX2, WebP…)
+    /// refuses the file: the slots resolved here are the colours fuzzy-vpl renders.
     fn resolve(
         &mut self,
         info: Option<gltf::texture::Info>,
         what: &str,
         report: &mut LoadReport,
-    ) -> Option<(u32, Option<Affine2>)> {
-        let info = info?;
+    ) -> Result<Option<(u32, Option<Affine2>)>, String> {
+        let Some(info) = info else { return Ok(None) };
         let set = info
             .texture_transform()
             .and_then(|t| t.tex_coord())
@@ -365,9 +470,16 @@ impl TextureCache<'_> {
             report.warnings.push(format!(
                 "{what} uses TEXCOORD_{set}; only TEXCOORD_0 is supported, texture ignored"
             ));
-            return None;
+            return Ok(None);
         }
-        let image = info.texture().source();
+        let texture = info.texture();
+        let Some(image) = texture.source() else {
+            return Err(format!(
+                "{what} (texture {}) has no source fuzzy-vpl can read, only {}",
+                texture.index(),
+                source_extensions(&texture)
+            ));
+        };
         let index = *self.decoded.entry(image.index()).or_insert_with(|| {
             let label = images::image_name(&image);
             // A decoder crash on a hostile image costs the texture, not the scene.
@@ -389,8 +501,65 @@ impl TextureCache<'_> {
                 }
             }
         });
-        Some((index?, texture_transform(&info)))
+        Ok(index.map(|i| (i, texture_transform(&info))))
     }
+}
+
+/// The extensions that give a texture without a core `source` its image (e.g. `MSFT_texture_dds`).
+fn source_extensions(texture: &gltf::Texture) -> String {
+    let names: Vec<String> = texture
+        .extensions()
+        .map(|m| m.keys().map(|k| uri::short(k)).collect())
+        .unwrap_or_default();
+    if names.is_empty() {
+        "no source at all".into()
+    } else {
+        names.join(", ")
+    }
+}
+
+/// One warning for the textures without a readable source that no base colour or emissive slot
+/// uses (normal, roughness… maps in DDS or KTX2 only): they are skipped.
+fn warn_unreadable_textures(doc: &gltf::Document, report: &mut LoadReport) {
+    let used: std::collections::HashSet<usize> = doc
+        .materials()
+        .flat_map(|m| {
+            [
+                m.pbr_metallic_roughness().base_color_texture(),
+                m.emissive_texture(),
+            ]
+        })
+        .flatten()
+        .map(|i| i.texture().index())
+        .collect();
+    let skipped: Vec<gltf::Texture> = doc
+        .textures()
+        .filter(|t| t.source().is_none() && !used.contains(&t.index()))
+        .collect();
+    let Some(first) = skipped.first() else {
+        return;
+    };
+    let list = if skipped.len() <= 4 {
+        skipped
+            .iter()
+            .map(|t| t.index().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    } else {
+        format!(
+            "{}, {} … {}",
+            skipped[0].index(),
+            skipped[1].index(),
+            skipped[skipped.len() - 1].index()
+        )
+    };
+    report.warnings.push(format!(
+        "{} texture{} ({list}) {} no source fuzzy-vpl can read (only {}); not a base colour or emissive texture, skipped",
+        skipped.len(),
+        if skipped.len() > 1 { "s" } else { "" },
+        if skipped.len() > 1 { "have" } else { "has" },
+        source_extensions(first),
+    ));
 }
 
 /// Builds the material table; textures are decoded once per glTF image actually used.
@@ -399,7 +568,8 @@ fn load_materials(
     buffers: &[Vec<u8>],
     base: Option<&Path>,
     report: &mut LoadReport,
-) -> (MaterialTable, Vec<Texture>) {
+) -> Result<(MaterialTable, Vec<Texture>), String> {
+    warn_unreadable_textures(doc, report);
     let mut cache = TextureCache {
         buffers,
         base,
@@ -411,6 +581,7 @@ fn load_materials(
         uv_transform: Vec::new(),
         default: None,
     };
+    let mut blend = Vec::new();
 
     for m in doc.materials() {
         let i = m.index().unwrap_or(0);
@@ -444,12 +615,31 @@ fn load_materials(
             pbr.base_color_texture(),
             &format!("material '{name}': the base colour texture"),
             report,
-        );
+        )?;
         let emissive_tex = cache.resolve(
             m.emissive_texture(),
             &format!("material '{name}': the emissive texture"),
             report,
-        );
+        )?;
+
+        use gltf::material::AlphaMode;
+        let alpha_cutoff = match m.alpha_mode() {
+            AlphaMode::Opaque => None,
+            AlphaMode::Mask => Some(match m.alpha_cutoff() {
+                None => 0.5,
+                Some(c) if c.is_finite() && c >= 0.0 => c,
+                Some(c) => {
+                    report.warnings.push(format!(
+                        "material '{name}': invalid alphaCutoff {c}, 0.5 used"
+                    ));
+                    0.5
+                }
+            }),
+            AlphaMode::Blend => {
+                blend.push(name.clone());
+                Some(0.5)
+            }
+        };
         // Triangles carry one uv set, so one KHR_texture_transform per material: the base colour
         // texture's when there is one.
         let uv_transform = match (base_tex, emissive_tex) {
@@ -473,12 +663,21 @@ fn load_materials(
             name,
             base_color: clamped,
             base_color_texture: base_tex.map(|t| t.0),
+            alpha_cutoff,
             emissive,
             emissive_texture: emissive_tex.map(|t| t.0),
         });
         table.uv_transform.push(uv_transform);
     }
-    (table, cache.textures)
+    if let Some(first) = blend.first() {
+        report.warnings.push(format!(
+            "{} material{} ('{first}'{}) with alphaMode BLEND rendered as MASK with cutoff 0.5",
+            blend.len(),
+            if blend.len() > 1 { "s" } else { "" },
+            if blend.len() > 1 { ", …" } else { "" },
+        ));
+    }
+    Ok((table, cache.textures))
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -490,6 +689,8 @@ enum Primitive {
         positions: Vec<Vec3>,
         normals: Option<Vec<Vec3>>,
         uvs: Option<Vec<Vec2>>,
+        /// COLOR_0 as linear RGBA (alpha 1 for RGB).
+        colors: Option<Vec<Vec4>>,
         /// Vertex index triples, in glTF winding order.
         tris: Vec<[u32; 3]>,
         material: u32,
@@ -579,6 +780,37 @@ fn decode_primitive(
         }
     };
 
+    let colors = match prim.get(&gltf::Semantic::Colors(0)) {
+        None => None,
+        Some(acc) => match read_colors(&acc, buffers, &format!("{label} COLOR_0")) {
+            Ok(v) if v.len() == n => {
+                if v.iter().any(|c| {
+                    !c.is_finite() || c.cmplt(Vec4::ZERO).any() || c.cmpgt(Vec4::ONE).any()
+                }) {
+                    report.warnings.push(format!(
+                        "{label}: COLOR_0 has values outside [0, 1], clamped"
+                    ));
+                }
+                Some(
+                    v.into_iter()
+                        .map(|c| finite_or(c, Vec4::ONE).clamp(Vec4::ZERO, Vec4::ONE))
+                        .collect(),
+                )
+            }
+            Ok(v) => {
+                report.warnings.push(format!(
+                    "{label}: COLOR_0 has {} entries for {n} vertices, ignored",
+                    v.len()
+                ));
+                None
+            }
+            Err(e) => {
+                report.warnings.push(format!("{e}; vertex colours ignored"));
+                None
+            }
+        },
+    };
+
     let indices: Vec<u32> = match prim.indices() {
         Some(acc) => {
             let idx = accessor::read_indices(&acc, buffers, &format!("{label} indices"))?;
@@ -623,9 +855,36 @@ fn decode_primitive(
         positions,
         normals,
         uvs,
+        colors,
         tris,
         material: table.index_for(prim.material().index()),
     })
+}
+
+/// COLOR_0: VEC3 or VEC4 of float or normalised unsigned byte / short, as linear RGBA.
+fn read_colors(acc: &gltf::Accessor, buffers: &[Vec<u8>], what: &str) -> Result<Vec<Vec4>, String> {
+    use gltf::accessor::{DataType, Dimensions};
+    let ok_type = match acc.data_type() {
+        DataType::F32 => true,
+        DataType::U8 | DataType::U16 => acc.normalized(),
+        _ => false,
+    };
+    if !ok_type {
+        return Err(format!(
+            "{what} (accessor {}) must be float or normalised unsigned byte or short",
+            acc.index()
+        ));
+    }
+    match acc.dimensions() {
+        Dimensions::Vec3 => Ok(accessor::read_floats::<3>(acc, buffers, what)?
+            .into_iter()
+            .map(|c| Vec3::from(c).extend(1.0))
+            .collect()),
+        _ => Ok(accessor::read_floats::<4>(acc, buffers, what)?
+            .into_iter()
+            .map(Vec4::from)
+            .collect()),
+    }
 }
 
 /// A node's local matrix. TRS rotations are normalised (glTF requires unit quaternions; a
@@ -715,6 +974,7 @@ fn emit(
         positions,
         normals,
         uvs,
+        colors,
         tris,
         material,
     } = prim
@@ -767,6 +1027,10 @@ fn emit(
             uv: match &world_uv {
                 Some(uv) => [uv[a], uv[b], uv[c]],
                 None => [Vec2::ZERO; 3],
+            },
+            color: match colors {
+                Some(col) => [col[a], col[b], col[c]],
+                None => [Vec4::ONE; 3],
             },
             material: *material,
         });
@@ -991,7 +1255,12 @@ fn camera_from_node(
 // ---------------------------------------------------------------------------------------------
 // The whole load
 
-fn load_bytes(bytes: &[u8], base: Option<&Path>, glb_name: bool) -> Result<Scene, String> {
+fn load_bytes(
+    bytes: &[u8],
+    base: Option<&Path>,
+    glb_name: bool,
+    opts: &LoadOptions,
+) -> Result<Scene, String> {
     let (json, blob) = if bytes.starts_with(b"glTF") {
         parse_glb(bytes)?
     } else if glb_name {
@@ -1006,14 +1275,30 @@ fn load_bytes(bytes: &[u8], base: Option<&Path>, glb_name: bool) -> Result<Scene
     } else {
         (bytes, None)
     };
-    let doc = parse_document(json)?;
+    let (doc, (ignored, allowed)) = parse_document(json, opts)?;
     let buffers = load_buffers(&doc, base, blob)?;
 
     let mut report = LoadReport {
         extensions_used: doc.extensions_used().map(str::to_string).collect(),
         ..LoadReport::default()
     };
-    let (mut table, textures) = load_materials(&doc, &buffers, base, &mut report);
+    if !ignored.is_empty() {
+        report.warnings.push(format!(
+            "required extension{} {} ignored: {} only what fuzzy-vpl does not model (it renders the base colour as a diffuse surface)",
+            if ignored.len() > 1 { "s" } else { "" },
+            ignored.join(", "),
+            if ignored.len() > 1 { "they change" } else { "it changes" },
+        ));
+    }
+    if !allowed.is_empty() {
+        report.warnings.push(format!(
+            "required extension{} {} ignored as --allow-extension asks (fuzzy-vpl does not know {})",
+            if allowed.len() > 1 { "s" } else { "" },
+            allowed.join(", "),
+            if allowed.len() > 1 { "them" } else { "it" },
+        ));
+    }
+    let (mut table, textures) = load_materials(&doc, &buffers, base, &mut report)?;
 
     let mut primitives: HashMap<(usize, usize), Primitive> = HashMap::new();
     let mut triangles = Vec::new();

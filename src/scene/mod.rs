@@ -20,6 +20,9 @@ pub struct Triangle {
     pub n: [Vec3; 3],
     /// Texture coordinates (TEXCOORD_0), zero when absent.
     pub uv: [Vec2; 3],
+    /// Linear vertex colours (COLOR_0, RGBA in [0, 1]), multiplying the base colour and its alpha;
+    /// white when absent.
+    pub color: [Vec4; 3],
     /// Index into `Scene::materials`.
     pub material: u32,
 }
@@ -41,9 +44,13 @@ impl Triangle {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
-    /// Linear base colour factor (RGBA); alpha is ignored by the renderer.
+    /// Linear base colour factor (RGBA). Its alpha matters only with an alpha test.
     pub base_color: Vec4,
     pub base_color_texture: Option<u32>,
+    /// The alpha test's cutoff (glTF `alphaMode` MASK, `alphaCutoff`, default 0.5; BLEND is treated
+    /// as MASK at 0.5): a ray hit whose alpha (factor × texture × vertex colour) is below it is no
+    /// hit. `None`: opaque.
+    pub alpha_cutoff: Option<f32>,
     /// Emitted radiance factor: glTF `emissiveFactor` × `KHR_materials_emissive_strength`.
     pub emissive: Vec3,
     pub emissive_texture: Option<u32>,
@@ -55,6 +62,7 @@ impl Default for Material {
             name: "default".into(),
             base_color: Vec4::ONE,
             base_color_texture: None,
+            alpha_cutoff: None,
             emissive: Vec3::ZERO,
             emissive_texture: None,
         }
@@ -71,6 +79,17 @@ pub struct Texture {
     /// `width * height` texels, row-major, RGBA8.
     pub rgba8: Vec<[u8; 4]>,
 }
+
+impl Texture {
+    /// The smallest texel alpha, in [0, 1]: no bilinear sample of the texture is below it.
+    pub fn min_alpha(&self) -> f32 {
+        self.rgba8.iter().map(|c| c[3]).min().unwrap_or(255) as f32 / 255.0
+    }
+}
+
+/// Set (to anything) to render every material opaque: the alpha test's cost is measured against it
+/// (docs/scenes.md). Not for ordinary use.
+pub const NO_ALPHA_TEST_ENV: &str = "FVPL_NO_ALPHA_TEST";
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum LightKind {
@@ -205,6 +224,52 @@ impl Scene {
             || self.emissive_triangle_count() > 0
     }
 
+    /// Per triangle: whether rays alpha-test it. A triangle is tested when its material has an alpha
+    /// cutoff and its alpha can fall below it: the lowest alpha it can show (factor × the texture's
+    /// smallest texel alpha × its smallest vertex alpha; bilinear filtering and barycentric
+    /// interpolation never go below their inputs) is under the cutoff. Every other triangle keeps
+    /// the opaque fast path. All false with `FVPL_NO_ALPHA_TEST` set.
+    pub fn alpha_test_flags(&self) -> Vec<bool> {
+        if std::env::var_os(NO_ALPHA_TEST_ENV).is_some() {
+            return vec![false; self.triangles.len()];
+        }
+        // Per material: the lowest alpha its factor and texture allow, and its cutoff.
+        let bound: Vec<Option<(f32, f32)>> = self
+            .materials
+            .iter()
+            .map(|m| {
+                let cutoff = m.alpha_cutoff?;
+                let tex = m
+                    .base_color_texture
+                    .and_then(|t| self.textures.get(t as usize))
+                    .map_or(1.0, Texture::min_alpha);
+                Some((m.base_color.w * tex, cutoff))
+            })
+            .collect();
+        self.triangles
+            .iter()
+            .map(|t| match bound[t.material as usize] {
+                Some((lo, cutoff)) => {
+                    let v = t.color.iter().map(|c| c.w).fold(1.0f32, f32::min);
+                    lo * v < cutoff
+                }
+                None => false,
+            })
+            .collect()
+    }
+
+    /// Whether any triangle is alpha-tested (`alpha_test_flags`).
+    pub fn uses_alpha_test(&self) -> bool {
+        self.alpha_test_flags().into_iter().any(|f| f)
+    }
+
+    /// Whether any triangle has a vertex colour other than white.
+    pub fn uses_vertex_colors(&self) -> bool {
+        self.triangles
+            .iter()
+            .any(|t| t.color.iter().any(|&c| c != Vec4::ONE))
+    }
+
     pub fn uses_textures(&self) -> bool {
         self.materials
             .iter()
@@ -332,6 +397,12 @@ impl Scene {
         {
             f.push("emissive-textures");
         }
+        if self.uses_alpha_test() {
+            f.push("alpha-test");
+        }
+        if self.uses_vertex_colors() {
+            f.push("vertex-colors");
+        }
         if !self.cameras.is_empty() {
             f.push("cameras");
         }
@@ -383,11 +454,24 @@ impl SceneError {
     }
 }
 
+/// How to load a scene file.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoadOptions {
+    /// Required glTF extensions the loader does not know that the user declares safe to ignore
+    /// (`--allow-extension NAME`): they must change neither geometry nor diffuse colour.
+    pub allow_extensions: Vec<String>,
+}
+
 /// Loads `builtin:NAME` or a `.gltf`/`.glb` path.
 pub fn load(spec: &str) -> Result<Scene, SceneError> {
+    load_with(spec, &LoadOptions::default())
+}
+
+/// `load` with options.
+pub fn load_with(spec: &str, opts: &LoadOptions) -> Result<Scene, SceneError> {
     if let Some(name) = spec.strip_prefix("builtin:") {
         builtin::load(name)
     } else {
-        gltf_load::load_path(std::path::Path::new(spec))
+        gltf_load::load_path_with(std::path::Path::new(spec), opts)
     }
 }
