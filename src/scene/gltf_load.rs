@@ -480,6 +480,9 @@ impl TextureCache<'_> {
                 source_extensions(&texture)
             ));
         };
+        if let Some(why) = images::refused_file(&image, self.base) {
+            return Err(format!("{what}: {why}"));
+        }
         let index = *self.decoded.entry(image.index()).or_insert_with(|| {
             let label = images::image_name(&image);
             // A decoder crash on a hostile image costs the texture, not the scene.

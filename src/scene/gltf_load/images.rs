@@ -36,6 +36,30 @@ pub(super) fn encoded_bytes(
     }
 }
 
+/// Why an external image file is refused outright (it is larger than any texture fuzzy-vpl reads:
+/// a 1 TB sparse file, say), or `None`. Unlike an image that does not decode, which costs only its
+/// texture, such a file is an error in the scene, found from its size without reading it.
+pub(super) fn refused_file(image: &gltf::Image, base: Option<&Path>) -> Option<String> {
+    let gltf::image::Source::Uri { uri, .. } = image.source() else {
+        return None;
+    };
+    if uri.starts_with("data:") {
+        return None;
+    }
+    let Ok(Resolved::File(path)) = uri::resolve(uri, base) else {
+        return None;
+    };
+    let size = std::fs::metadata(&path).ok()?.len();
+    (size > super::read::MAX_IMAGE_BYTES).then(|| {
+        format!(
+            "texture image '{}' is {}, more than the {} a texture image may have",
+            uri::short(uri),
+            super::read::human_bytes(size),
+            super::read::human_bytes(super::read::MAX_IMAGE_BYTES)
+        )
+    })
+}
+
 /// A short name for an image: its name, else its URI's file name, else `image N`.
 pub(super) fn image_name(image: &gltf::Image) -> String {
     if let Some(n) = image.name().filter(|n| !n.is_empty()) {
