@@ -43,18 +43,7 @@ fn shading_pairs(
     let weights: Vec<f32> = ctx.read_buffer(&c.weights, sps.len() * nf).unwrap();
     let reps: Vec<u32> = ctx.read_buffer(&c.reps, k * 2).unwrap();
     // A cold start: each representative point is its member pixel's shading point.
-    let reps: Vec<RepPoint> = reps
-        .chunks(2)
-        .map(|x| match x[1] {
-            u32::MAX => RepPoint::NONE,
-            m => RepPoint {
-                pos: sps[m as usize].pos,
-                valid: true,
-                nrm: sps[m as usize].normal,
-                previous: false,
-            },
-        })
-        .collect();
+    let reps = common::cold_rep_points(&sps, &reps);
     let on_gpu = RepPoint::from_vec4s(&ctx.read_buffer(&c.rep_points, k * 2).unwrap());
     assert_eq!(on_gpu, reps, "representative points");
     let lights = &r.lights.as_ref().unwrap().0.lights;

@@ -8,7 +8,6 @@
 
 mod common;
 
-use fuzzy_vpl::cpu::kmeans::RepPoint;
 use fuzzy_vpl::cpu::shade;
 use fuzzy_vpl::cpu::shading::ShadingPoint;
 use fuzzy_vpl::gi::pipeline::{DEFAULT_CLAMP, Frame, FrameSettings, Renderer, Weighting};
@@ -365,18 +364,7 @@ fn cpu_twins_agree_on_the_alpha_tested_scene() {
     let weights: Vec<f32> = ctx.read_buffer(&c.weights, sps.len() * nf).unwrap();
     let reps: Vec<u32> = ctx.read_buffer(&c.reps, k * 2).unwrap();
     // A cold start: each representative point is its member pixel's shading point.
-    let reps: Vec<RepPoint> = reps
-        .chunks(2)
-        .map(|x| match x[1] {
-            u32::MAX => RepPoint::NONE,
-            m => RepPoint {
-                pos: sps[m as usize].pos,
-                valid: true,
-                nrm: sps[m as usize].normal,
-                previous: false,
-            },
-        })
-        .collect();
+    let reps = common::cold_rep_points(&sps, &reps);
     let lights = &r.lights.as_ref().unwrap().0.lights;
     let cpu = common::cpu_scene(&r, &s);
     let (bits, words) = shade::visibility_bits(&cpu, &reps, lights);

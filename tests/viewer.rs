@@ -255,12 +255,10 @@ fn animated_view_reports_motion() {
     let dir = std::env::temp_dir().join(format!("fuzzy-vpl-motion-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let json = dir.join("motion.json");
-    let out = Command::new(env!("CARGO_BIN_EXE_fuzzy-vpl"))
-        .env("DISPLAY", &x.1)
-        .env_remove("WAYLAND_DISPLAY")
-        .env("XDG_CONFIG_HOME", &dir)
-        .args([
-            "view",
+    let out = view(
+        &x,
+        &dir,
+        &[
             "builtin:cornell",
             "--animate",
             "--frames",
@@ -277,9 +275,8 @@ fn animated_view_reports_motion() {
             "64",
             "--vpl-clusters",
             "64",
-        ])
-        .output()
-        .unwrap();
+        ],
+    );
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(0), "{err}");
     let v: serde_json::Value =

@@ -1,7 +1,8 @@
 //! Shared helpers for GPU tests (they run on lavapipe in CI: `apt-get install mesa-vulkan-drivers`).
 #![allow(dead_code)]
 
-use fuzzy_vpl::cpu::shading::CpuScene;
+use fuzzy_vpl::cpu::kmeans::RepPoint;
+use fuzzy_vpl::cpu::shading::{CpuScene, ShadingPoint};
 use fuzzy_vpl::gi::pipeline::Renderer;
 use fuzzy_vpl::gpu::GpuContext;
 use fuzzy_vpl::scene::Scene;
@@ -54,5 +55,21 @@ pub fn error_lines(stderr: &str) -> Vec<&str> {
     stderr
         .lines()
         .filter(|l| l.starts_with("error: "))
+        .collect()
+}
+
+/// A cold start's representative points: each cluster's member pixel's shading point (`reps`: the
+/// GPU's (distance bits, member) pairs, the member `u32::MAX` for an unused cluster).
+pub fn cold_rep_points(sps: &[ShadingPoint], reps: &[u32]) -> Vec<RepPoint> {
+    reps.chunks(2)
+        .map(|x| match x[1] {
+            u32::MAX => RepPoint::NONE,
+            m => RepPoint {
+                pos: sps[m as usize].pos,
+                valid: true,
+                nrm: sps[m as usize].normal,
+                previous: false,
+            },
+        })
         .collect()
 }
