@@ -2,21 +2,8 @@
 
 mod common;
 
-use std::process::Command;
-
+use common::run_cli as run;
 use fuzzy_vpl::bench::csv;
-
-fn run(args: &[&str]) -> (i32, String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_fuzzy-vpl"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stdout).into_owned(),
-        String::from_utf8_lossy(&o.stderr).into_owned(),
-    )
-}
 
 #[test]
 fn quick_bench_writes_csv_plots_and_summary() {

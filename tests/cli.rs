@@ -4,17 +4,10 @@ mod common;
 
 use std::process::Command;
 
+use common::run_cli as run;
+
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fuzzy-vpl"))
-}
-
-fn run(args: &[&str]) -> (i32, String, String) {
-    let o = bin().args(args).output().unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stdout).into_owned(),
-        String::from_utf8_lossy(&o.stderr).into_owned(),
-    )
 }
 
 #[test]

@@ -123,22 +123,19 @@ fn a_light_far_outside_the_scene_traces_without_a_panic() {
     assert!(common::all_finite(&f.radiance));
 }
 
-/// The VPL reference against a converged path tracer with the same bounce budget. The remaining
-/// difference is VPL noise (splotches) plus the clamp's energy loss in corners: docs/reference.md
-/// measures it. Measured here: rel_mse 0.0012 and mean luminance within 0.7%; the bounds are about
-/// four times that.
-#[test]
-fn reference_is_close_to_path_tracing() {
-    let ctx = common::gpu();
-    let s = scene::load("builtin:cornell").unwrap();
-    let mut r = Renderer::new(&ctx, &s).unwrap();
+/// The 32×32 VPL reference (4096 VPLs, seed 1) of `s` from its default camera, and the path tracer's
+/// image of the same view with 1024 samples a pixel and the same bounce budget.
+fn reference_and_path_trace(
+    ctx: &fuzzy_vpl::gpu::GpuContext,
+    s: &scene::Scene,
+) -> (fuzzy_vpl::gi::pipeline::Frame, Vec<[f32; 3]>) {
+    let mut r = Renderer::new(ctx, s).unwrap();
     let cam = s.default_camera();
     let (w, h) = (32, 32);
     let f = r.render(&cam, &reference(w, h, 4096, 1)).unwrap();
-    let pt = PathTrace::new(&ctx, &r.gpu);
-    let img = pt
+    let img = PathTrace::new(ctx, &r.gpu)
         .render(
-            &ctx,
+            ctx,
             &r.gpu,
             &mut r.profiler,
             &CameraParams::new(&cam, w, h),
@@ -148,6 +145,18 @@ fn reference_is_close_to_path_tracing() {
             fuzzy_vpl::gi::vpl_trace::MAX_DEPTH,
         )
         .unwrap();
+    (f, img)
+}
+
+/// The VPL reference against a converged path tracer with the same bounce budget. The remaining
+/// difference is VPL noise (splotches) plus the clamp's energy loss in corners: docs/reference.md
+/// measures it. Measured here: rel_mse 0.0012 and mean luminance within 0.7%; the bounds are about
+/// four times that.
+#[test]
+fn reference_is_close_to_path_tracing() {
+    let ctx = common::gpu();
+    let s = scene::load("builtin:cornell").unwrap();
+    let (f, img) = reference_and_path_trace(&ctx, &s);
     assert!(common::all_finite(&img));
     let e = rel_mse(&f.radiance, &img);
     let (lv, lp) = (mean_luminance(&f.radiance), mean_luminance(&img));
@@ -265,23 +274,7 @@ fn smooth_normal_box_reference_matches_path_tracing() {
         })
         .fold(0.0f32, f32::max);
     assert!(max_off > 50.0, "normals only {max_off}° off the faces");
-    let mut r = Renderer::new(&ctx, &s).unwrap();
-    let cam = s.default_camera();
-    let (w, h) = (32, 32);
-    let f = r.render(&cam, &reference(w, h, 4096, 1)).unwrap();
-    let pt = PathTrace::new(&ctx, &r.gpu);
-    let img = pt
-        .render(
-            &ctx,
-            &r.gpu,
-            &mut r.profiler,
-            &CameraParams::new(&cam, w, h),
-            1024,
-            64,
-            1,
-            fuzzy_vpl::gi::vpl_trace::MAX_DEPTH,
-        )
-        .unwrap();
+    let (f, img) = reference_and_path_trace(&ctx, &s);
     assert!(common::all_finite(&img) && common::all_finite(&f.radiance));
     let e = rel_mse(&f.radiance, &img);
     let (lv, lp) = (mean_luminance(&f.radiance), mean_luminance(&img));

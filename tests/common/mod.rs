@@ -73,3 +73,16 @@ pub fn cold_rep_points(sps: &[ShadingPoint], reps: &[u32]) -> Vec<RepPoint> {
         })
         .collect()
 }
+
+/// Runs the fuzzy-vpl binary with `args`: (exit code, stdout, stderr).
+pub fn run_cli(args: &[&str]) -> (i32, String, String) {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_fuzzy-vpl"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
