@@ -1141,6 +1141,12 @@ fn bench(a: BenchArgs) -> Result<()> {
         fuzzy_vpl::gi::pipeline::check_visibility_size(&ctx, &p, &s).map_err(bad)?;
     }
     if let Some(path) = &a.camera_path {
+        if plan.cameras.len() > 1 {
+            return Err(bad(format!(
+                "--camera-path starts from one camera; --camera lists {}",
+                plan.cameras.len()
+            )));
+        }
         eprintln!(
             "bench {}: {} configuration(s) x temporal {:?} along orbit:{}:{}, {width}x{height}, {vpls} VPLs on {}",
             a.scene.scene,
