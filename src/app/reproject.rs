@@ -4,52 +4,9 @@
 //! as large as the pixel's projected size; pixels that saw nothing are carried as directions. The
 //! holes that remain (newly seen surfaces) are filled from their neighbours by push-pull.
 
-use glam::{Vec3, Vec4};
+use glam::Vec4;
 
 use crate::gi::primary::CameraParams;
-
-/// A view's projection: pixel centres ↔ rays, as `primary.wgsl` makes them.
-struct View {
-    eye: Vec3,
-    right: Vec3,
-    up: Vec3,
-    forward: Vec3,
-    w: f32,
-    h: f32,
-}
-
-impl View {
-    fn new(c: &CameraParams) -> View {
-        let v = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
-        View {
-            eye: v(c.eye),
-            right: v(c.right),
-            up: v(c.up),
-            forward: v(c.forward),
-            w: c.size[0] as f32,
-            h: c.size[1] as f32,
-        }
-    }
-
-    /// The direction of pixel (x, y)'s ray (pixel units, centres at + 0.5).
-    fn ray(&self, x: f32, y: f32) -> Vec3 {
-        let sx = 2.0 * x / self.w - 1.0;
-        let sy = 1.0 - 2.0 * y / self.h;
-        self.forward + sx * self.right + sy * self.up
-    }
-
-    /// Where direction `d` from the eye lands in the image (pixel units) and its depth along the
-    /// view axis; `None` behind the eye.
-    fn project_dir(&self, d: Vec3) -> Option<(f32, f32, f32)> {
-        let z = d.dot(self.forward);
-        if z.is_nan() || z <= 1e-12 * d.length() {
-            return None;
-        }
-        let sx = d.dot(self.right) / (z * self.right.length_squared());
-        let sy = d.dot(self.up) / (z * self.up.length_squared());
-        Some(((sx + 1.0) * 0.5 * self.w, (1.0 - sy) * 0.5 * self.h, z))
-    }
-}
 
 /// `rgba` (sRGB8, `from`'s size) as seen from `to` (the same size): each pixel with a shading point
 /// at `positions[i]` (w > 0) moves with it; the others (sky) move as directions behind everything.
@@ -63,7 +20,9 @@ pub fn reproject(
     assert_eq!(rgba.len(), w * h * 4);
     assert_eq!(positions.len(), w * h);
     assert_eq!((to.size[0] as usize, to.size[1] as usize), (w, h));
-    let (src, dst) = (View::new(from), View::new(to));
+    // Nearer than this fraction of a direction's length counts as behind the eye.
+    const NEAR: f32 = 1e-12;
+    let (from_eye, to_eye) = (from.eye_point(), to.eye_point());
     let mut depth = vec![f32::INFINITY; w * h];
     let mut out = vec![0u8; w * h * 4];
     let mut filled = vec![false; w * h];
@@ -75,16 +34,16 @@ pub fn reproject(
             let (x, y) = ((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
             if p[3].is_nan() || p[3] <= 0.0 {
                 // Sky: a direction, behind everything.
-                let (tx, ty, _) = dst.project_dir(src.ray(x, y))?;
+                let (tx, ty, _) = to.project(from.ray(x, y), NEAR)?;
                 return Some((tx, ty, f32::INFINITY, 1));
             }
             let q = Vec4::from(*p).truncate();
-            let (tx, ty, z) = dst.project_dir(q - dst.eye)?;
+            let (tx, ty, z) = to.project(q - to_eye, NEAR)?;
             // The pixel's size here: where its neighbour's point at the same distance lands.
-            let dist = (q - src.eye).length();
-            let step = src.ray(x + 1.0, y).normalize() - src.ray(x, y).normalize();
-            let size = dst
-                .project_dir(q + step * dist - dst.eye)
+            let dist = (q - from_eye).length();
+            let step = from.ray(x + 1.0, y).normalize() - from.ray(x, y).normalize();
+            let size = to
+                .project(q + step * dist - to_eye, NEAR)
                 .map_or(1.0, |n| (n.0 - tx).abs());
             Some((tx, ty, z, ((size - 0.25).ceil() as i64).clamp(1, 3)))
         })
@@ -201,18 +160,18 @@ fn fill_holes(img: &mut [u8], filled: &[bool], w: usize, h: usize) {
 mod tests {
     use super::*;
     use crate::scene::Camera;
+    use glam::Vec3;
 
     /// A w×h view of the plane z = −5 from `eye` looking down −Z; its pixels' positions and an image
     /// whose red channel is the pixel's column and green its row.
     fn plane(eye: Vec3, w: u32, h: u32) -> (CameraParams, Vec<[f32; 4]>, Vec<u8>) {
         let cam = Camera::look_at("c", eye, eye - Vec3::Z, Vec3::Y, 1.0);
         let p = CameraParams::new(&cam, w, h);
-        let v = View::new(&p);
         let mut pos = Vec::new();
         let mut rgba = Vec::new();
         for i in 0..(w * h) as usize {
             let (x, y) = ((i % w as usize) as f32 + 0.5, (i / w as usize) as f32 + 0.5);
-            let d = v.ray(x, y);
+            let d = p.ray(x, y);
             let t = (eye.z + 5.0) / -d.z;
             let q = eye + d * t;
             pos.push([q.x, q.y, q.z, 1.0]);

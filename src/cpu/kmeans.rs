@@ -288,21 +288,10 @@ impl RepPoint {
 pub fn warm_keeps(points: &[Point], p: &KmParams, q: Vec3, nq: Vec3) -> bool {
     let v = &p.warm;
     let (w, h) = (v.size[0], v.size[1]);
-    let eye = Vec3::from_slice(&v.eye[..3]);
-    let (r, u, f) = (
-        Vec3::from_slice(&v.right[..3]),
-        Vec3::from_slice(&v.up[..3]),
-        Vec3::from_slice(&v.forward[..3]),
-    );
-    let d = q - eye;
-    let z = d.dot(f);
-    if z.is_nan() || z <= 0.0 {
+    let eye = v.eye_point();
+    let Some((x, y, _)) = v.project(q - eye, 0.0) else {
         return false;
-    }
-    let sx = d.dot(r) / (z * r.dot(r));
-    let sy = d.dot(u) / (z * u.dot(u));
-    let x = (sx + 1.0) * 0.5 * w as f32;
-    let y = (1.0 - sy) * 0.5 * h as f32;
+    };
     if !(x >= 0.0 && y >= 0.0 && x < w as f32 && y < h as f32) {
         return false;
     }

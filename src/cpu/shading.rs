@@ -140,14 +140,11 @@ impl<'a> CpuScene<'a> {
 
     /// Twin of `primary.wgsl` for one pixel.
     pub fn primary(&self, cam: &CameraParams, pixel: u32) -> ShadingPoint {
-        let (w, h) = (cam.size[0], cam.size[1]);
+        let w = cam.size[0];
         let x = (pixel % w) as f32 + 0.5;
         let y = (pixel / w) as f32 + 0.5;
-        let sx = 2.0 * x / w as f32 - 1.0;
-        let sy = 1.0 - 2.0 * y / h as f32;
-        let v = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
-        let dir = (v(cam.forward) + sx * v(cam.right) + sy * v(cam.up)).normalize();
-        let eye = v(cam.eye);
+        let dir = cam.ray(x, y).normalize();
+        let eye = cam.eye_point();
         let none = ShadingPoint {
             valid: false,
             pos: Vec3::ZERO,

@@ -1,6 +1,7 @@
 //! Step 3: primary rays through pixel centres → shading points (`shaders-wgsl/primary.wgsl`).
 
 use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
 
 use super::dispatch::Kernel;
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
@@ -35,6 +36,39 @@ impl CameraParams {
             forward: f.extend(0.0).into(),
             size: [width, height, 0, 0],
         }
+    }
+
+    fn axis(a: [f32; 4]) -> Vec3 {
+        Vec3::new(a[0], a[1], a[2])
+    }
+
+    pub fn eye_point(&self) -> Vec3 {
+        Self::axis(self.eye)
+    }
+
+    /// The (unnormalised) direction of the ray through image point (x, y), in pixels with pixel
+    /// centres at + 0.5, as `primary.wgsl` makes it.
+    pub fn ray(&self, x: f32, y: f32) -> Vec3 {
+        let sx = 2.0 * x / self.size[0] as f32 - 1.0;
+        let sy = 1.0 - 2.0 * y / self.size[1] as f32;
+        Self::axis(self.forward) + sx * Self::axis(self.right) + sy * Self::axis(self.up)
+    }
+
+    /// `ray`'s inverse: where direction `d` from the eye lands in the image (pixels) and its depth
+    /// along the view axis; `None` unless that depth is above `near` × |d| (behind the eye).
+    pub fn project(&self, d: Vec3, near: f32) -> Option<(f32, f32, f32)> {
+        let (r, u) = (Self::axis(self.right), Self::axis(self.up));
+        let z = d.dot(Self::axis(self.forward));
+        if z.is_nan() || z <= near * d.length() {
+            return None;
+        }
+        let sx = d.dot(r) / (z * r.dot(r));
+        let sy = d.dot(u) / (z * u.dot(u));
+        Some((
+            (sx + 1.0) * 0.5 * self.size[0] as f32,
+            (1.0 - sy) * 0.5 * self.size[1] as f32,
+            z,
+        ))
     }
 }
 
