@@ -40,6 +40,14 @@ fn plane_view() -> (CameraParams, Vec<[f32; 4]>) {
     (p, data)
 }
 
+/// `frames` cameras orbiting `degrees` in all from the scene's default view, as `bench
+/// --camera-path` makes them.
+fn orbit(sc: &scene::Scene, r: &Renderer, frames: u32, degrees: f32) -> Vec<scene::Camera> {
+    let start = sc.default_camera();
+    let target = fuzzy_vpl::bench::path::orbit_target(sc, &r.bvh, &start);
+    CameraPath { frames, degrees }.cameras(&start, target)
+}
+
 fn c(pos: [f32; 3], nrm: [f32; 3], valid: bool) -> Centroid {
     Centroid {
         pos: Vec3::from(pos),
@@ -222,13 +230,7 @@ fn warm_sp_clustering_matches_its_twin_on_a_moving_view() {
         temporal: true,
         ..Default::default()
     };
-    let start = sc.default_camera();
-    let target = fuzzy_vpl::bench::path::orbit_target(&sc, &r.bvh, &start);
-    let cams = CameraPath {
-        frames: 2,
-        degrees: 1.0,
-    }
-    .cameras(&start, target);
+    let cams = orbit(&sc, &r, 2, 1.0);
     let a = r.render(&cams[0], &s).unwrap();
     assert_eq!(a.sp_warm_kept, None, "the first frame has no past");
     let prev_k = r.sp_clustering.as_ref().unwrap().k();
@@ -306,13 +308,7 @@ fn temporal_reuse_steadies_the_error_along_an_orbit() {
         weighting: Weighting::InverseDistance,
         ..Default::default()
     };
-    let start = sc.default_camera();
-    let target = fuzzy_vpl::bench::path::orbit_target(&sc, &r.bvh, &start);
-    let cams = CameraPath {
-        frames: 4,
-        degrees: 1.5,
-    }
-    .cameras(&start, target);
+    let cams = orbit(&sc, &r, 4, 1.5);
     let reference = FrameSettings {
         reference: true,
         ..base.clone()

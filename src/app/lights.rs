@@ -11,6 +11,10 @@ use super::Viewer;
 use super::worker::Job;
 use crate::scene::{LightKind, PunctualLight};
 
+/// The status line of a scene with nothing that emits.
+pub const NO_LIGHT: &str =
+    "the scene has no light; add one in the Lights section (or --sun, --point)";
+
 /// The lights as the panel edits them.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightSet {
@@ -22,9 +26,7 @@ pub struct LightSet {
 impl LightSet {
     /// Whether anything emits: a punctual light with power, or emissive triangles scaled above 0.
     pub fn has_light(&self, emissive_triangles: usize) -> bool {
-        self.lights
-            .iter()
-            .any(|l| (l.color * l.intensity).max_element() > 0.0)
+        self.lights.iter().any(PunctualLight::emits)
             || (emissive_triangles > 0 && self.emitter_scale > 0.0)
     }
 }
@@ -171,10 +173,9 @@ impl Viewer {
         self.camera_moved();
         self.last_sent = None;
         let emissive = self.info.as_ref().map_or(0, |i| i.emissive_triangles);
-        let dark = "the scene has no light; add one in the Lights section";
         if !self.lights.has_light(emissive) {
-            self.status = dark.into();
-        } else if self.status.contains("has no light") {
+            self.status = NO_LIGHT.into();
+        } else if self.status.contains(NO_LIGHT) {
             self.status.clear();
         }
     }

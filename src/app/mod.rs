@@ -566,7 +566,7 @@ impl Viewer {
         };
         self.last_relight = None;
         if !info.has_light {
-            let dark = "the scene has no light; add one in the Lights section (or --sun, --point)";
+            let dark = lights::NO_LIGHT;
             self.status = if self.status.is_empty() {
                 dark.into()
             } else {

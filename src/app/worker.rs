@@ -206,15 +206,13 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
                 Some(a) => match jobs.try_recv() {
                     Ok(j) => take(j, &mut reference, &mut frame, &mut lights),
                     Err(mpsc::TryRecvError::Empty) => {
-                        match crate::panic_guard::quietly(|| a.refine(&mut renderer)) {
-                            Ok(Ok(reply)) => send(reply),
-                            Ok(Err(e)) => {
+                        let refined = crate::panic_guard::quietly(|| a.refine(&mut renderer))
+                            .unwrap_or_else(|msg| Err(anyhow::anyhow!(msg)));
+                        match refined {
+                            Ok(reply) => send(reply),
+                            Err(e) => {
                                 accumulation = None;
                                 send(Reply::Failed(format!("refining the direct light: {e:#}")));
-                            }
-                            Err(msg) => {
-                                accumulation = None;
-                                send(Reply::Failed(format!("refining the direct light: {msg}")));
                             }
                         }
                         continue;

@@ -113,6 +113,13 @@ pub struct PunctualLight {
     pub intensity: f32,
 }
 
+impl PunctualLight {
+    /// Whether it emits anything (colour × intensity above zero somewhere).
+    pub fn emits(&self) -> bool {
+        (self.color * self.intensity).max_element() > 0.0
+    }
+}
+
 /// A perspective camera in world space.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Camera {
@@ -218,10 +225,7 @@ impl Scene {
     /// Whether anything emits: an emissive triangle or a punctual light of non-zero power (a light
     /// scaled to 0 with `--light-scale 0`, or given intensity 0, is none).
     pub fn has_light(&self) -> bool {
-        self.lights
-            .iter()
-            .any(|l| (l.color * l.intensity).max_element() > 0.0)
-            || self.emissive_triangle_count() > 0
+        self.lights.iter().any(PunctualLight::emits) || self.emissive_triangle_count() > 0
     }
 
     /// Per triangle: whether rays alpha-test it. A triangle is tested when its material has an alpha
