@@ -99,7 +99,10 @@ fn bench_rows_say_what_ran_and_reruns_leave_no_stale_images() {
     let rows = csv::from_csv(&std::fs::read_to_string(d.join("results.csv")).unwrap()).unwrap();
     assert_eq!(rows.len(), 2, "{rows:?}");
     let (clustered, off) = (&rows[0], &rows[1]);
-    assert_eq!((clustered.sp_clusters, clustered.gamma), (8, 64));
+    assert_eq!(
+        (clustered.sp_clusters, clustered.gamma),
+        (8, fuzzy_vpl::settings::Gamma::Fixed(64))
+    );
     assert_eq!(clustered.gamma_used, Some(24), "{clustered:?}");
     assert_eq!(clustered.label, "hard 8/16 g24");
     assert_eq!(off.sp_clusters, 400);

@@ -7,10 +7,12 @@ use common::Rand;
 use fuzzy_vpl::bvh::SceneBvh;
 use fuzzy_vpl::cpu::kmeans::{self, Centroid, Point};
 use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KMeansTuning, KmParams, scan_groups};
-use fuzzy_vpl::gi::pipeline::{FrameSettings, Renderer};
+use fuzzy_vpl::gi::pipeline::{RenderSettings, Renderer};
 use fuzzy_vpl::gi::scene_gpu::SceneGpu;
 use fuzzy_vpl::gpu::{GpuContext, profiler::Profiler};
 use fuzzy_vpl::scene;
+#[allow(unused_imports)]
+use fuzzy_vpl::settings::{ClusterSettings, FrameSettings, Gamma};
 use glam::Vec3;
 
 struct GpuResult {
@@ -261,7 +263,7 @@ fn settings(k: u32, f: u32, gamma: u32, n_t: f32, iterations: u32) -> KMeansSett
     KMeansSettings {
         k,
         f,
-        gamma,
+        gamma: fuzzy_vpl::settings::Gamma::Fixed(gamma),
         normal_threshold: n_t,
         iterations,
         seed: 3,
@@ -285,9 +287,12 @@ fn gpu_kmeans_matches_cpu_on_random_surfaces() {
 fn conference_sps(ctx: &GpuContext) -> (scene::Scene, Vec<[f32; 4]>) {
     let sc = scene::load("builtin:conference").unwrap();
     let mut r = Renderer::new(ctx, &sc).unwrap();
-    let fs = FrameSettings {
-        width: 96,
-        height: 72,
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            width: 96,
+            height: 72,
+            ..Default::default()
+        },
         ..Default::default()
     };
     r.render(&sc.default_camera(), &fs).unwrap();

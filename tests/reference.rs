@@ -5,21 +5,26 @@ mod common;
 
 use fuzzy_vpl::cpu::shading::ShadingPoint;
 use fuzzy_vpl::gi::pathtrace::PathTrace;
-use fuzzy_vpl::gi::pipeline::{DEFAULT_CLAMP, Frame, FrameSettings, Renderer};
+use fuzzy_vpl::gi::pipeline::{Frame, RenderSettings, Renderer};
 use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::metrics::{mean_luminance, rel_mse};
 use fuzzy_vpl::scene;
+#[allow(unused_imports)]
+use fuzzy_vpl::settings::{ClusterSettings, DEFAULT_CLAMP, FrameSettings, Gamma};
 use glam::Vec3;
 
-fn reference(w: u32, h: u32, vpls: u32, seed: u32) -> FrameSettings {
-    FrameSettings {
-        width: w,
-        height: h,
-        seed,
-        direct_samples: 16,
-        vpls,
+fn reference(w: u32, h: u32, vpls: u32, seed: u32) -> RenderSettings {
+    RenderSettings {
+        frame: FrameSettings {
+            width: w,
+            height: h,
+            seed,
+            direct_samples: 16,
+            vpls,
+            clamp: DEFAULT_CLAMP,
+            ..Default::default()
+        },
         reference: true,
-        clamp: DEFAULT_CLAMP,
         ..Default::default()
     }
 }
@@ -27,7 +32,7 @@ fn reference(w: u32, h: u32, vpls: u32, seed: u32) -> FrameSettings {
 /// (CPU twin, GPU) indirect light of every pixel of the last reference frame `f` of `r`.
 fn reference_pairs(r: &Renderer, s: &fuzzy_vpl::scene::Scene, f: &Frame) -> Vec<(Vec3, Vec3)> {
     let gbuf = r.last_gbuffer().unwrap();
-    let vpls = &r.vpl_set.as_ref().unwrap().0.vpls;
+    let vpls = &r.vpl_set.as_ref().unwrap().set.vpls;
     let cpu = common::cpu_scene(r, s);
     let d_min = DEFAULT_CLAMP * s.extent();
     (0..f.indirect.len())
@@ -92,7 +97,7 @@ fn reference_of_a_tiny_image_with_many_vpls_matches_cpu_twin() {
     let cam = s.default_camera();
     let (w, h) = (6, 4);
     let f = r.render(&cam, &reference(w, h, 4096, 5)).unwrap();
-    assert_eq!(r.vpl_set.as_ref().unwrap().0.vpls.len(), 4096);
+    assert_eq!(r.vpl_set.as_ref().unwrap().set.vpls.len(), 4096);
     let mut lit = 0;
     for (px, (c, g)) in reference_pairs(&r, &s, &f).into_iter().enumerate() {
         lit += (c.max_element() > 0.0) as u32;
@@ -175,11 +180,14 @@ fn light_sampling_matches_bsdf_sampling() {
     let mut r = Renderer::new(&ctx, &s).unwrap();
     let cam = s.default_camera();
     let (w, h) = (24, 18);
-    let fs = FrameSettings {
-        width: w,
-        height: h,
-        vpls: 0,
-        direct_samples: 256,
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            width: w,
+            height: h,
+            vpls: 0,
+            direct_samples: 256,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let f = r.render(&cam, &fs).unwrap();
@@ -210,7 +218,7 @@ fn path_trace_alone_in_scene_units() {
     let fs = reference(16, 12, 256, 3);
     let mut r = Renderer::new(&ctx, &s).unwrap();
     let f = r.path_trace(&s.default_camera(), &fs, 8).unwrap();
-    assert_eq!(f.passes, vec!["pathtrace"]);
+    assert_eq!(f.passes, vec![fuzzy_vpl::gi::pipeline::Pass::PathTrace]);
     assert!(r.vpl_set.is_none(), "the VPL frame ran as well");
     assert!(common::all_finite(&f.radiance));
     let mut bright = s.clone();

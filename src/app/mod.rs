@@ -24,10 +24,13 @@ use std::time::{Duration, Instant};
 
 use anyhow::Result;
 
-use crate::gi::kmeans::{AUTO_GAMMA, AUTO_GAMMA_MIN, DEFAULT_PLANE_GATE_DEG};
-use crate::gi::pipeline::{Control, FrameSettings, Weighting};
+use crate::exposure::Exposure;
+use crate::gi::pipeline::{Control, RenderSettings};
 use crate::metrics;
 use crate::scene::Scene;
+use crate::settings::{
+    AUTO_GAMMA_MIN, ClusterSettings, DEFAULT_PLANE_GATE_DEG, FrameSettings, Gamma, Weighting,
+};
 use camera::ViewCamera;
 use settings::SceneSettings;
 use views::View;
@@ -66,147 +69,114 @@ pub fn run(opts: ViewOptions) -> Result<()> {
     window::run(opts)
 }
 
-/// How a pixel's clusters combine, as the panel offers it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Mode {
-    Hard,
-    Uniform,
-    Weighted,
-}
-
-/// The panel's settings.
+/// The panel's state: the settings types as the renderer takes them, and what only a panel has
+/// (clusterings switched off keep their K, γ's slider keeps its value while `auto` is ticked, the
+/// plane gate keeps its angle while off, n_t is shown in degrees).
 #[derive(Clone, Debug, PartialEq)]
 pub struct UiSettings {
-    pub sp_clusters: u32,
-    pub vpl_clusters: u32,
-    pub vpls: u32,
-    pub fuzziness: u32,
+    /// The frame (its size is the viewer's GI size, set per frame).
+    pub frame: FrameSettings,
+    pub cluster: ClusterSettings,
     /// γ of the slider, used when `gamma_auto` is off.
     pub gamma: u32,
-    /// γ by `kmeans::auto_gamma` (the default).
+    /// γ by `Gamma::auto` (the default).
     pub gamma_auto: bool,
     /// n_t as the largest normal angle within a cluster, degrees.
     pub nt_degrees: f32,
-    pub iterations: u32,
+    /// The display exposure; with `exposure_auto` the panel keeps it at `exposure::auto_exposure` of
+    /// the latest frame.
     pub exposure: f32,
-    /// Exposure by `exposure::auto_exposure` of the latest frame (the panel keeps `exposure` at it).
     pub exposure_auto: bool,
     pub render_scale: f32,
-    pub mode: Mode,
-    /// p of the weighted mode's w'_f = dist^-p (Eq. 10: 1).
-    pub weight_exponent: f32,
     /// The plane gate of the fuzzy F lists (off: the paper) and its angle, degrees.
     pub plane_gate_on: bool,
     pub plane_gate_deg: f32,
     pub sp_on: bool,
     pub vpl_on: bool,
     pub direct_on: bool,
-    pub seed: u32,
-    pub direct_samples: u32,
-    pub clamp: f32,
-    /// Temporal reuse (`FrameSettings::temporal`).
-    pub temporal: bool,
 }
 
 impl UiSettings {
-    pub fn from_frame_settings(f: &FrameSettings, exposure: f32) -> Self {
+    /// The panel's state for `s` (its K's at least 1 so that switching a clustering on has one).
+    pub fn new(s: &RenderSettings) -> Self {
+        let c = &s.cluster;
         UiSettings {
-            sp_clusters: f.sp_clusters.max(1),
-            vpl_clusters: f.vpl_clusters.max(1),
-            vpls: f.vpls,
-            fuzziness: f.fuzziness,
-            gamma: if f.gamma == AUTO_GAMMA {
-                AUTO_GAMMA_MIN
-            } else {
-                f.gamma
+            frame: s.frame,
+            cluster: ClusterSettings {
+                sp_clusters: c.sp_clusters.max(1),
+                vpl_clusters: c.vpl_clusters.max(1),
+                ..c.clone()
             },
-            gamma_auto: f.gamma == AUTO_GAMMA,
-            nt_degrees: f.normal_threshold.clamp(-1.0, 1.0).acos().to_degrees(),
-            iterations: f.iterations,
-            exposure,
-            exposure_auto: false,
+            gamma: match c.gamma {
+                Gamma::Auto => AUTO_GAMMA_MIN,
+                Gamma::Fixed(g) => g,
+            },
+            gamma_auto: c.gamma.is_auto(),
+            nt_degrees: c.normal_threshold.clamp(-1.0, 1.0).acos().to_degrees(),
+            exposure: match s.frame.exposure {
+                Exposure::Fixed(e) => e,
+                Exposure::Auto => 1.0,
+            },
+            exposure_auto: s.frame.exposure.is_auto(),
             render_scale: 1.0,
-            mode: match f.weighting {
-                Weighting::Hard => Mode::Hard,
-                Weighting::Uniform => Mode::Uniform,
-                Weighting::InverseDistance => Mode::Weighted,
-            },
-            weight_exponent: f.weight_exponent,
-            plane_gate_on: f.plane_gate_deg.is_some(),
-            plane_gate_deg: f.plane_gate_deg.unwrap_or(DEFAULT_PLANE_GATE_DEG),
-            sp_on: f.sp_clusters > 0,
-            vpl_on: f.vpl_clusters > 0,
+            plane_gate_on: c.plane_gate.is_some(),
+            plane_gate_deg: c.plane_gate.unwrap_or(DEFAULT_PLANE_GATE_DEG),
+            sp_on: c.sp_clusters > 0,
+            vpl_on: c.vpl_clusters > 0,
             direct_on: true,
-            seed: f.seed,
-            direct_samples: f.direct_samples,
-            clamp: f.clamp,
-            temporal: f.temporal,
         }
     }
 
     /// The gate's angle when it is on and applies (fuzzy modes).
     pub fn plane_gate(&self) -> Option<f32> {
-        (self.plane_gate_on && self.mode != Mode::Hard).then_some(self.plane_gate_deg)
+        (self.plane_gate_on && self.cluster.weighting != Weighting::Hard)
+            .then_some(self.plane_gate_deg)
     }
 
-    /// γ as the frame settings take it: `AUTO_GAMMA` when auto is ticked, else the slider's.
-    pub fn gamma_setting(&self) -> u32 {
+    /// γ as the frame settings take it: `Auto` when auto is ticked, else the slider's.
+    pub fn gamma_setting(&self) -> Gamma {
         if self.gamma_auto {
-            AUTO_GAMMA
+            Gamma::Auto
         } else {
-            self.gamma
+            Gamma::Fixed(self.gamma)
         }
     }
 
-    pub fn normal_threshold(&self) -> f32 {
-        self.nt_degrees.to_radians().cos()
-    }
-
-    pub fn frame_settings(&self, width: u32, height: u32) -> FrameSettings {
-        FrameSettings {
-            width,
-            height,
-            seed: self.seed,
-            direct_samples: self.direct_samples,
-            vpls: self.vpls,
-            bounces: crate::gi::vpl_trace::MAX_DEPTH,
-            weights_to_reps: false,
-            weight_exponent: self.weight_exponent,
-            plane_gate_deg: self.plane_gate(),
-            reference: false,
-            vpl_clusters: if self.vpl_on { self.vpl_clusters } else { 0 },
-            sp_clusters: if self.sp_on { self.sp_clusters } else { 0 },
-            fuzziness: if self.mode == Mode::Hard {
-                1
-            } else {
-                self.fuzziness
+    /// The settings a frame of `width` × `height` is rendered with.
+    pub fn frame_settings(&self, width: u32, height: u32) -> RenderSettings {
+        let c = &self.cluster;
+        RenderSettings {
+            frame: FrameSettings {
+                width,
+                height,
+                ..self.frame
             },
-            gamma: self.gamma_setting(),
-            normal_threshold: self.normal_threshold(),
-            iterations: self.iterations,
-            weighting: match self.mode {
-                Mode::Hard => Weighting::Hard,
-                Mode::Uniform => Weighting::Uniform,
-                Mode::Weighted => Weighting::InverseDistance,
+            cluster: ClusterSettings {
+                vpl_clusters: if self.vpl_on { c.vpl_clusters } else { 0 },
+                sp_clusters: if self.sp_on { c.sp_clusters } else { 0 },
+                fuzziness: c.f(),
+                gamma: self.gamma_setting(),
+                normal_threshold: self.nt_degrees.to_radians().cos(),
+                plane_gate: self.plane_gate(),
+                weights_to_reps: false,
+                ..c.clone()
             },
-            clamp: self.clamp,
-            temporal: self.temporal,
-            progress: false,
-            control: None,
+            ..Default::default()
         }
     }
 
     /// The scatter plot's series: how the indirect light is computed.
     pub fn mode_label(&self) -> String {
+        let p = self.cluster.weight_exponent;
         match (self.sp_on, self.vpl_on) {
             (false, false) => "no clustering".into(),
             (false, true) => "VPL clusters only".into(),
             (true, _) => {
-                let m = match self.mode {
-                    Mode::Hard => "hard".to_string(),
-                    Mode::Uniform => "fuzzy uniform".to_string(),
-                    Mode::Weighted if self.weight_exponent == 1.0 => "fuzzy weighted".to_string(),
-                    Mode::Weighted => format!("fuzzy weighted p{}", self.weight_exponent),
+                let m = match self.cluster.weighting {
+                    Weighting::Hard => "hard".to_string(),
+                    Weighting::Uniform => "fuzzy uniform".to_string(),
+                    Weighting::InverseDistance if p == 1.0 => "fuzzy weighted".to_string(),
+                    Weighting::InverseDistance => format!("fuzzy weighted p{p}"),
                 };
                 let m = match self.plane_gate() {
                     Some(g) => format!("{m}, gate {g:.0}°"),
@@ -223,29 +193,33 @@ impl UiSettings {
 
     /// The settings in short, for file names and plot tooltips.
     pub fn short(&self) -> String {
-        let mode = match self.mode {
-            Mode::Weighted if self.weight_exponent == 1.0 => "weighted".to_string(),
-            Mode::Weighted => format!("weighted-p{}", self.weight_exponent),
-            Mode::Hard => "hard".to_string(),
-            Mode::Uniform => "uniform".to_string(),
+        let c = &self.cluster;
+        let mode = match c.weighting {
+            Weighting::InverseDistance if c.weight_exponent == 1.0 => "weighted".to_string(),
+            Weighting::InverseDistance => format!("weighted-p{}", c.weight_exponent),
+            Weighting::Hard => "hard".to_string(),
+            Weighting::Uniform => "uniform".to_string(),
         };
         let sp = if self.sp_on {
-            format!("K{}", self.sp_clusters)
+            format!("K{}", c.sp_clusters)
         } else {
             "K0".into()
         };
         let vpl = if self.vpl_on {
-            format!("Kv{}", self.vpl_clusters)
+            format!("Kv{}", c.vpl_clusters)
         } else {
             "Kv0".into()
         };
         let gate = self
             .plane_gate()
             .map_or(String::new(), |g| format!("_gate{g:.0}"));
-        let gamma = crate::gi::kmeans::gamma_name(self.gamma_setting());
         format!(
-            "{mode}_{sp}_{vpl}_N{}_F{}_g{gamma}_nt{:.0}_it{}{gate}",
-            self.vpls, self.fuzziness, self.nt_degrees, self.iterations
+            "{mode}_{sp}_{vpl}_N{}_F{}_g{}_nt{:.0}_it{}{gate}",
+            self.frame.vpls,
+            c.fuzziness,
+            self.gamma_setting(),
+            self.nt_degrees,
+            c.iterations
         )
     }
 }
@@ -294,12 +268,12 @@ pub struct SliderRanges {
 impl SliderRanges {
     pub fn new(s: &UiSettings) -> Self {
         SliderRanges {
-            sp_clusters: s.sp_clusters.max(16384),
-            vpl_clusters: s.vpl_clusters.max(16384),
-            vpls: s.vpls.max(65536),
+            sp_clusters: s.cluster.sp_clusters.max(16384),
+            vpl_clusters: s.cluster.vpl_clusters.max(16384),
+            vpls: s.frame.vpls.max(65536),
             gamma: s.gamma.max(16),
-            iterations: s.iterations.max(50),
-            weight_exponent: s.weight_exponent.max(8.0),
+            iterations: s.cluster.iterations.max(50),
+            weight_exponent: s.cluster.weight_exponent.max(8.0),
             exposure: (s.exposure.min(0.01), s.exposure.max(64.0)),
             plane_gate_min: s.plane_gate_deg.min(1.0),
         }
@@ -719,19 +693,19 @@ impl Viewer {
         let (a, b) = (&rs.job.settings, &r.job.settings);
         (rs.job.camera == r.job.camera
             && (
-                a.width,
-                a.height,
-                a.vpls,
-                a.seed,
-                a.clamp.to_bits(),
-                a.direct_samples,
+                a.frame.width,
+                a.frame.height,
+                a.frame.vpls,
+                a.frame.seed,
+                a.frame.clamp.to_bits(),
+                a.frame.direct_samples,
             ) == (
-                b.width,
-                b.height,
-                b.vpls,
-                b.seed,
-                b.clamp.to_bits(),
-                b.direct_samples,
+                b.frame.width,
+                b.frame.height,
+                b.frame.vpls,
+                b.frame.seed,
+                b.frame.clamp.to_bits(),
+                b.frame.direct_samples,
             ))
             .then_some(img.as_slice())
     }
@@ -982,20 +956,22 @@ impl Viewer {
         let now = self.cam.to_camera();
         let from = &r.job.camera;
         let reprojected;
-        let img: &[u8] =
-            if self.s.temporal && *from != now && r.frame.positions.len() == (w * h) as usize {
-                reprojected = reproject::reproject(
-                    rgba,
-                    &r.frame.positions,
-                    &crate::gi::primary::CameraParams::new(from, w, h),
-                    &crate::gi::primary::CameraParams::new(&now, w, h),
-                );
-                self.shown_camera = Some(now);
-                &reprojected
-            } else {
-                self.shown_camera = Some(from.clone());
-                rgba
-            };
+        let img: &[u8] = if self.s.cluster.temporal
+            && *from != now
+            && r.frame.positions.len() == (w * h) as usize
+        {
+            reprojected = reproject::reproject(
+                rgba,
+                &r.frame.positions,
+                &crate::gi::primary::CameraParams::new(from, w, h),
+                &crate::gi::primary::CameraParams::new(&now, w, h),
+            );
+            self.shown_camera = Some(now);
+            &reprojected
+        } else {
+            self.shown_camera = Some(from.clone());
+            rgba
+        };
         Some(egui::ColorImage::from_rgba_unmultiplied(
             [w as usize, h as usize],
             img,
@@ -1006,7 +982,7 @@ impl Viewer {
     /// shown image was not made for.
     pub fn image_stale(&self) -> bool {
         self.image_dirty
-            || (self.s.temporal
+            || (self.s.cluster.temporal
                 && self.latest.is_some()
                 && self.shown_camera.as_ref() != Some(&self.cam.to_camera()))
     }
@@ -1108,43 +1084,39 @@ impl Viewer {
     /// The scripted run's stats JSON: the scene, the settings, and what `motion` measured.
     fn write_stats(&self, path: &std::path::Path) -> Result<()> {
         let (w, h) = self.full_size();
+        // The settings types as they are, with the display exposure (a number) and the render scale.
+        let rs = self.s.frame_settings(w, h);
+        let mut settings = serde_json::to_value(rs.cluster)?;
+        let frame = serde_json::to_value(rs.frame)?;
+        if let (Some(m), serde_json::Value::Object(f)) = (settings.as_object_mut(), frame) {
+            m.extend(f);
+            m.insert("exposure".into(), self.s.exposure.into());
+            m.insert("render_scale".into(), self.s.render_scale.into());
+        }
         let json = serde_json::json!({
             "scene": self.spec,
             "width": w,
             "height": h,
             "adapter": self.info.as_ref().map(|i| i.adapter.clone()),
-            "settings": {
-                "vpls": self.s.vpls,
-                "vpl_clusters": if self.s.vpl_on { self.s.vpl_clusters } else { 0 },
-                "sp_clusters": if self.s.sp_on { self.s.sp_clusters } else { 0 },
-                "fuzziness": self.s.fuzziness,
-                "iterations": self.s.iterations,
-                "weighting": self.s.frame_settings(w, h).weighting.name(),
-                "direct_samples": self.s.direct_samples,
-                "render_scale": self.s.render_scale,
-                "temporal": self.s.temporal,
-                "exposure": self.s.exposure,
-            },
+            "settings": settings,
             "ui_frames": self.ui_frames,
             "motion": self.motion.stats(),
             "rest": self.motion.rest_stats(),
         });
-        let text = serde_json::to_string_pretty(&json)?;
-        crate::export::write_atomic(path, |w| {
-            use std::io::Write;
-            w.write_all(text.as_bytes())?;
-            Ok(())
-        })
+        crate::export::write_json(path, &json)
     }
 }
 
 /// The preview a moving camera renders: a quarter of the pixels (half scale), one direct-light
 /// sample a pixel (docs/temporal.md measures what it saves).
-pub fn preview_settings(s: FrameSettings) -> FrameSettings {
-    FrameSettings {
-        width: (s.width / 2).max(8),
-        height: (s.height / 2).max(8),
-        direct_samples: 1,
+pub fn preview_settings(s: RenderSettings) -> RenderSettings {
+    RenderSettings {
+        frame: FrameSettings {
+            width: (s.frame.width / 2).max(8),
+            height: (s.frame.height / 2).max(8),
+            direct_samples: 1,
+            ..s.frame
+        },
         ..s
     }
 }
@@ -1213,8 +1185,7 @@ mod tests {
         bytes.extend(1000u32.to_le_bytes());
         bytes.extend(b"{\"asset\"");
         std::fs::write(&glb, &bytes).unwrap();
-        let fs = FrameSettings::default();
-        let mut v = viewer(UiSettings::from_frame_settings(&fs, 1.0));
+        let mut v = viewer(UiSettings::new(&RenderSettings::default()));
         poll_until(&mut v, |v| v.info.is_some());
         let cam = v.cam;
         v.open(glb.display().to_string());
@@ -1255,10 +1226,7 @@ mod tests {
         std::fs::write(&scene, gltf).unwrap();
         let settings = d.join("t.gltf.fuzzy-vpl.json");
         std::fs::write(&settings, "{ \"bookmarks\": [ truncated").unwrap();
-        let mut v = viewer(UiSettings::from_frame_settings(
-            &FrameSettings::default(),
-            1.0,
-        ));
+        let mut v = viewer(UiSettings::new(&RenderSettings::default()));
         poll_until(&mut v, |v| v.info.is_some());
         v.open(scene.display().to_string());
         poll_until(&mut v, |v| v.loading.is_none());
@@ -1288,10 +1256,10 @@ mod tests {
     #[test]
     fn exr_of_the_reference_view_without_a_reference_is_refused() {
         let d = scratch("refshot");
-        let mut s = UiSettings::from_frame_settings(&FrameSettings::default(), 1.0);
-        s.vpls = 256;
-        s.vpl_clusters = 32;
-        s.sp_clusters = 64;
+        let mut s = UiSettings::new(&RenderSettings::default());
+        s.frame.vpls = 256;
+        s.cluster.vpl_clusters = 32;
+        s.cluster.sp_clusters = 64;
         let mut v = viewer(s);
         v.shot_dir = d.clone();
         v.view = View::Reference;
@@ -1310,9 +1278,14 @@ mod tests {
 
     #[test]
     fn the_direct_light_accumulates_at_rest() {
-        let mut s = UiSettings::from_frame_settings(&FrameSettings::default(), 1.0);
-        (s.vpls, s.vpl_clusters, s.sp_clusters, s.temporal) = (256, 32, 64, true);
-        s.direct_samples = 2;
+        let mut s = UiSettings::new(&RenderSettings::default());
+        (
+            s.frame.vpls,
+            s.cluster.vpl_clusters,
+            s.cluster.sp_clusters,
+            s.cluster.temporal,
+        ) = (256, 32, 64, true);
+        s.frame.direct_samples = 2;
         let mut v = viewer(s);
         poll_until(&mut v, |v| v.info.is_some());
         v.schedule();
@@ -1337,7 +1310,7 @@ mod tests {
             assert_eq!(*p, [d[0] + i[0], d[1] + i[1], d[2] + i[2]]);
         }
         // A change starts a new frame, which accumulates from its own first estimate.
-        v.s.seed += 1;
+        v.s.frame.seed += 1;
         v.schedule();
         let id = v.pending;
         poll_until(&mut v, |v| {
@@ -1349,8 +1322,13 @@ mod tests {
 
     #[test]
     fn lights_move_without_a_restart() {
-        let mut s = UiSettings::from_frame_settings(&FrameSettings::default(), 1.0);
-        (s.vpls, s.vpl_clusters, s.sp_clusters, s.temporal) = (256, 32, 64, true);
+        let mut s = UiSettings::new(&RenderSettings::default());
+        (
+            s.frame.vpls,
+            s.cluster.vpl_clusters,
+            s.cluster.sp_clusters,
+            s.cluster.temporal,
+        ) = (256, 32, 64, true);
         let mut v = viewer(s);
         poll_until(&mut v, |v| v.info.is_some());
         v.schedule();
@@ -1388,37 +1366,42 @@ mod tests {
 
     #[test]
     fn auto_gamma_reaches_the_frame_and_the_file_names() {
-        let s = UiSettings::from_frame_settings(&FrameSettings::default(), 1.0);
+        let s = UiSettings::new(&RenderSettings::default());
         assert!(s.gamma_auto);
-        assert_eq!(s.frame_settings(64, 48).gamma, AUTO_GAMMA);
+        assert_eq!(s.frame_settings(64, 48).cluster.gamma, Gamma::Auto);
         assert!(s.short().contains("_gauto_"), "{}", s.short());
         // Unticked, the slider's γ is used (a γ from the command line arrives unticked).
-        let fixed = FrameSettings {
-            gamma: 8,
-            ..Default::default()
-        };
-        let mut s = UiSettings::from_frame_settings(&fixed, 1.0);
+        let mut fixed = RenderSettings::default();
+        fixed.cluster.gamma = Gamma::Fixed(8);
+        let mut s = UiSettings::new(&fixed);
         assert!(!s.gamma_auto);
-        assert_eq!(s.frame_settings(64, 48).gamma, 8);
+        assert_eq!(s.frame_settings(64, 48).cluster.gamma, Gamma::Fixed(8));
         assert!(s.short().contains("_g8_"), "{}", s.short());
         s.gamma_auto = true;
-        assert_eq!(s.frame_settings(64, 48).gamma, AUTO_GAMMA);
+        assert_eq!(s.frame_settings(64, 48).cluster.gamma, Gamma::Auto);
     }
 
     #[test]
     fn command_line_values_beyond_the_sliders_survive_the_panel() {
-        let fs = FrameSettings {
-            vpls: 100_000,
-            sp_clusters: 20_000,
-            vpl_clusters: 20_000,
-            gamma: 100,
-            iterations: 1000,
-            weight_exponent: 20.0,
-            plane_gate_deg: Some(0.5),
+        let fs = RenderSettings {
+            frame: FrameSettings {
+                vpls: 100_000,
+                exposure: Exposure::Fixed(100.0),
+                ..Default::default()
+            },
+            cluster: ClusterSettings {
+                sp_clusters: 20_000,
+                vpl_clusters: 20_000,
+                gamma: Gamma::Fixed(100),
+                iterations: 1000,
+                weight_exponent: 20.0,
+                plane_gate: Some(0.5),
+                weighting: Weighting::InverseDistance,
+                ..Default::default()
+            },
             ..Default::default()
         };
-        let mut s = UiSettings::from_frame_settings(&fs, 100.0);
-        s.mode = Mode::Weighted;
+        let s = UiSettings::new(&fs);
         let mut v = viewer(s.clone());
         draw(&mut v);
         draw(&mut v);

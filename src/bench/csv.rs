@@ -1,9 +1,9 @@
 //! `results.csv`: one row per configuration. A fixed header (the contract a reader indexes by name);
-//! fields are quoted only when they hold a comma, quote or newline (RFC 4180).
+//! fields are quoted only when they hold a comma, quote or newline (RFC 4180, by the `csv` crate).
 
 use std::collections::BTreeMap;
 
-use crate::gi::kmeans::{gamma_name, parse_gamma};
+use crate::settings::Gamma;
 use anyhow::{Context, Result, bail};
 
 /// The stage timings of a row, in the order of the CSV columns (`frame` last).
@@ -32,8 +32,8 @@ pub struct Row {
     pub vpl_clusters: u32,
     pub sp_clusters: u32,
     pub fuzziness: u32,
-    /// γ asked (`kmeans::AUTO_GAMMA` for `auto`, written so in the file).
-    pub gamma: u32,
+    /// γ asked (`auto` or the factor, written so in the file).
+    pub gamma: Gamma,
     pub normal_threshold: f32,
     pub iterations: u32,
     /// GPU ms per stage (mean of the 3 best of `repeat`), keyed by `STAGES`.
@@ -120,7 +120,7 @@ fn record(r: &Row) -> Vec<String> {
         r.vpl_clusters.to_string(),
         r.sp_clusters.to_string(),
         r.fuzziness.to_string(),
-        gamma_name(r.gamma),
+        r.gamma.to_string(),
         r.normal_threshold.to_string(),
         r.iterations.to_string(),
     ];
@@ -142,50 +142,46 @@ fn record(r: &Row) -> Vec<String> {
     v
 }
 
-fn quote(field: &str) -> String {
-    if field.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", field.replace('"', "\"\""))
-    } else {
-        field.to_string()
-    }
-}
-
 /// The whole file: header and rows, `\n` line ends.
 pub fn to_csv(rows: &[Row]) -> String {
-    let line = |f: Vec<String>| f.iter().map(|s| quote(s)).collect::<Vec<_>>().join(",") + "\n";
-    let mut s = line(header());
-    for r in rows {
-        s += &line(record(r));
-    }
-    s
+    write_records(std::iter::once(header()).chain(rows.iter().map(record)))
 }
 
-/// Splits one CSV line (no embedded newlines) into fields.
+/// One CSV line's fields (for tests and tools reading `path.csv`).
 pub fn split_line(line: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut cur = String::new();
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(c) = chars.next() {
-        match (quoted, c) {
-            (true, '"') if chars.peek() == Some(&'"') => {
-                cur.push('"');
-                chars.next();
-            }
-            (true, '"') => quoted = false,
-            (false, '"') if cur.is_empty() => quoted = true,
-            (false, ',') => out.push(std::mem::take(&mut cur)),
-            _ => cur.push(c),
-        }
+    ::csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(line.as_bytes())
+        .records()
+        .next()
+        .and_then(|r| r.ok())
+        .map_or_else(Vec::new, |r| r.iter().map(String::from).collect())
+}
+
+/// Writes `records` (the header first) as CSV text, `\n` line ends.
+pub fn write_records(records: impl IntoIterator<Item = Vec<String>>) -> String {
+    let mut w = ::csv::WriterBuilder::new()
+        .terminator(::csv::Terminator::Any(b'\n'))
+        .from_writer(Vec::new());
+    for r in records {
+        w.write_record(&r).expect("writing to memory");
     }
-    out.push(cur);
-    out
+    String::from_utf8(w.into_inner().expect("writing to memory")).expect("UTF-8 fields")
 }
 
 /// Reads a file written by `to_csv` back (for tests and tools).
 pub fn from_csv(text: &str) -> Result<Vec<Row>> {
-    let mut lines = text.lines();
-    let head = split_line(lines.next().context("empty CSV")?);
+    let mut reader = ::csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .from_reader(text.as_bytes());
+    let mut records = reader.records();
+    let head: Vec<String> = records
+        .next()
+        .context("empty CSV")??
+        .iter()
+        .map(String::from)
+        .collect();
     // The columns through `label` are required; a file from an older version may stop after any of
     // the later ones (they were added at the end).
     let full = header();
@@ -195,11 +191,8 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
     }
     let col = |name: &str| head.iter().position(|h| h == name).unwrap();
     let mut rows = Vec::new();
-    for (i, l) in lines.enumerate() {
-        if l.is_empty() {
-            continue;
-        }
-        let f = split_line(l);
+    for (i, record) in records.enumerate() {
+        let f: Vec<String> = record?.iter().map(String::from).collect();
         if f.len() != head.len() {
             bail!(
                 "line {}: {} fields, expected {}",
@@ -224,7 +217,9 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
             vpl_clusters: num("vpl_clusters")? as u32,
             sp_clusters: num("sp_clusters")? as u32,
             fuzziness: num("fuzziness")? as u32,
-            gamma: parse_gamma(get("gamma")).or_else(|_| num("gamma").map(|g| g as u32))?,
+            gamma: get("gamma")
+                .parse()
+                .or_else(|_| num("gamma").map(|g| Gamma::Fixed(g as u32)))?,
             normal_threshold: num("normal_threshold")? as f32,
             iterations: num("iterations")? as u32,
             stages_ms: STAGES
@@ -296,7 +291,7 @@ pub(crate) mod tests {
             vpl_clusters: vpl,
             sp_clusters: sp,
             fuzziness: 6,
-            gamma: 4,
+            gamma: Gamma::Fixed(4),
             normal_threshold: 0.866,
             iterations: 10,
             stages_ms,
@@ -364,7 +359,7 @@ pub(crate) mod tests {
         let back = from_csv(&csv).unwrap();
         assert_eq!(back, vec![r.clone()]);
         // γ auto is written as the word and read back.
-        r.gamma = crate::gi::kmeans::AUTO_GAMMA;
+        r.gamma = Gamma::Auto;
         let csv = to_csv(std::slice::from_ref(&r));
         assert!(csv.contains(",auto,"), "{csv}");
         assert_eq!(from_csv(&csv).unwrap(), vec![r]);
@@ -377,15 +372,13 @@ pub(crate) mod tests {
         let csv = to_csv(std::slice::from_ref(&r));
         assert_eq!(from_csv(&csv).unwrap(), vec![r.clone()]);
         // Drop the three columns added last (weight_exponent, gamma_used, plane_gate_deg).
-        let cut = |l: &str| {
-            let f = split_line(l);
-            f[..f.len() - 3]
-                .iter()
-                .map(|x| quote(x))
-                .collect::<Vec<_>>()
-                .join(",")
+        let cut = |text: &str| {
+            write_records(text.lines().map(|l| {
+                let f = split_line(l);
+                f[..f.len() - 3].to_vec()
+            }))
         };
-        let old: String = csv.lines().map(|l| cut(l) + "\n").collect();
+        let old = cut(&csv);
         let back = from_csv(&old).unwrap();
         assert_eq!(back[0].weight_exponent, 1.0);
         assert_eq!(back[0].gamma_used, None);
@@ -393,7 +386,7 @@ pub(crate) mod tests {
         assert_eq!(back[0].label, r.label);
         // Not a prefix of the header, or short of `label`: refused.
         assert!(from_csv(&old.replacen("scene,camera", "camera,scene", 1)).is_err());
-        let short: String = old.lines().map(|l| cut(l) + "\n").collect();
+        let short = cut(&old);
         assert!(from_csv(&short).is_err());
     }
 

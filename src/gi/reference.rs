@@ -24,6 +24,23 @@ pub struct Reference {
     kernel: Kernel,
 }
 
+/// What a gather reads and writes.
+#[derive(Clone, Copy)]
+pub struct GatherInputs<'a> {
+    /// The shading points (`common/gbuffer.wgsl`).
+    pub gbuffer: &'a wgpu::Buffer,
+    /// The lights: VPLs (`reference`) or VPL-cluster representatives (`gather`).
+    pub lights: &'a wgpu::Buffer,
+    pub num_lights: u32,
+    /// vec4 per pixel, added to.
+    pub indirect: &'a wgpu::Buffer,
+    pub pixels: u32,
+    /// The G-term clamp distance in the rendered scene's units.
+    pub d_min: f32,
+    /// The profiler label: the pass's name.
+    pub label: &'a str,
+}
+
 impl Reference {
     pub fn new(ctx: &GpuContext, scene: &SceneGpu) -> Self {
         let entries = [
@@ -37,22 +54,24 @@ impl Reference {
         }
     }
 
-    /// Adds the VPLs' light to `indirect` (vec4 per pixel, zeroed by the caller).
-    #[allow(clippy::too_many_arguments)]
+    /// Adds the lights' light to `indirect` (vec4 per pixel, zeroed by the caller).
     pub fn record(
         &self,
         ctx: &GpuContext,
         scene: &SceneGpu,
         profiler: &mut Profiler,
-        gbuffer: &wgpu::Buffer,
-        vpls: &wgpu::Buffer,
-        num_vpls: u32,
-        indirect: &wgpu::Buffer,
-        pixels: u32,
-        d_min: f32,
-        label: &str,
+        inputs: &GatherInputs,
         progress: &mut dyn FnMut(u64, u64) -> bool,
     ) {
+        let GatherInputs {
+            gbuffer,
+            lights: vpls,
+            num_lights: num_vpls,
+            indirect,
+            pixels,
+            d_min,
+            label,
+        } = *inputs;
         if num_vpls == 0 || pixels == 0 {
             return;
         }
