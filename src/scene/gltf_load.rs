@@ -174,10 +174,10 @@ fn load_bytes(
             "not a binary glTF file: magic is \"{magic}\", expected \"glTF\""
         ));
     } else {
-        (bytes, None)
+        (std::borrow::Cow::Borrowed(bytes), None)
     };
-    let (doc, (ignored, allowed)) = container::parse_document(json, opts)?;
-    let buffers = container::load_buffers(&doc, base, blob)?;
+    let (doc, (ignored, allowed)) = container::parse_document(&json, opts)?;
+    let buffers = container::load_buffers(&doc, base, blob.as_deref())?;
 
     let mut report = LoadReport {
         extensions_used: doc.extensions_used().map(str::to_string).collect(),

@@ -7,18 +7,25 @@ use super::{
 };
 use crate::scene::LoadOptions;
 use gltf::json::validation::Validate;
+use std::borrow::Cow;
 use std::path::Path;
 
-/// Splits a GLB into its JSON chunk and optional BIN chunk, with precise errors.
-pub(super) fn parse_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
-    let u32_at =
-        |i: usize| u32::from_le_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]);
+/// A GLB's JSON chunk and optional BIN chunk.
+pub(super) type GlbChunks<'a> = (Cow<'a, [u8]>, Option<Cow<'a, [u8]>>);
+
+/// Splits a GLB into its JSON chunk and optional BIN chunk with `gltf::binary::Glb::from_slice`,
+/// after the header checks it lacks (it subtracts the header's 12 bytes from the declared length
+/// unchecked, and reads past the declared length), its errors given as messages. Chunks after the
+/// BIN chunk are ignored; a chunk of an unknown type right after the JSON chunk is refused.
+pub(super) fn parse_glb(bytes: &[u8]) -> Result<GlbChunks<'_>, String> {
     if bytes.len() < 12 {
         return Err(format!(
             "truncated GLB: {} bytes, less than the 12-byte header",
             bytes.len()
         ));
     }
+    let u32_at =
+        |i: usize| u32::from_le_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]);
     match u32_at(4) {
         2 => {}
         1 => {
@@ -36,40 +43,54 @@ pub(super) fn parse_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> 
             bytes.len()
         ));
     }
-    let bytes = &bytes[..declared];
-    let mut at = 12;
-    let mut json = None;
-    let mut bin = None;
-    while at < bytes.len() {
-        if at + 8 > bytes.len() {
-            return Err(format!("corrupt GLB: truncated chunk header at byte {at}"));
-        }
-        let len = u32_at(at) as usize;
-        let ty = &bytes[at + 4..at + 8];
-        let start = at + 8;
-        let end = start
-            .checked_add(len)
-            .filter(|&e| e <= bytes.len())
-            .ok_or_else(|| {
-                format!(
-                    "truncated GLB: chunk at byte {at} declares {len} bytes but only {} remain",
-                    bytes.len() - start
-                )
-            })?;
-        let data = &bytes[start..end];
-        match ty {
-            b"JSON" if json.is_none() && at == 12 => json = Some(data),
-            b"BIN\0" if json.is_some() && bin.is_none() => bin = Some(data),
-            b"JSON" | b"BIN\0" => {
-                return Err(format!("corrupt GLB: unexpected chunk at byte {at}"));
-            }
-            _ if json.is_none() => return Err("corrupt GLB: the first chunk is not JSON".into()),
-            _ => {} // unknown chunk types are skipped, per the spec
-        }
-        at = end.next_multiple_of(4);
+    if declared < 20 {
+        return Err(format!(
+            "corrupt GLB: header declares {declared} bytes, too few for a JSON chunk"
+        ));
     }
-    let json = json.ok_or("corrupt GLB: no JSON chunk")?;
-    Ok((json, bin))
+    let glb = gltf::binary::Glb::from_slice(&bytes[..declared]).map_err(|e| match e {
+        gltf::Error::Binary(e) => glb_error(e),
+        e => format!("corrupt GLB: {e}"),
+    })?;
+    Ok((glb.json, glb.bin))
+}
+
+/// A GLB container error as a message.
+fn glb_error(e: gltf::binary::Error) -> String {
+    use gltf::binary::{ChunkType, Error};
+    let name = |ty: ChunkType| match ty {
+        ChunkType::Json => "JSON",
+        ChunkType::Bin => "BIN",
+    };
+    match e {
+        Error::Io(_) => "corrupt GLB: truncated chunk header".into(),
+        Error::Version(v) => format!("unsupported GLB container version {v}"),
+        Error::Magic(_) => "not a binary glTF file: wrong magic".into(),
+        Error::Length {
+            length,
+            length_read,
+        } => format!(
+            "truncated GLB: header declares {} bytes but the file has {}",
+            length as usize + 12,
+            length_read + 12
+        ),
+        Error::ChunkLength {
+            ty,
+            length,
+            length_read,
+        } => format!(
+            "truncated GLB: the {} chunk declares {length} bytes but only {length_read} remain",
+            name(ty)
+        ),
+        Error::ChunkType(ChunkType::Bin) => "corrupt GLB: the first chunk is not JSON".into(),
+        Error::ChunkType(ty) => format!("corrupt GLB: unexpected {} chunk", name(ty)),
+        Error::UnknownChunkType(ty) => format!(
+            "corrupt GLB: a chunk of unknown type \"{}\" where a JSON or BIN chunk belongs",
+            ty.map(|b| if b.is_ascii_graphic() { b as char } else { '?' })
+                .iter()
+                .collect::<String>()
+        ),
+    }
 }
 
 /// Why a JSON document that failed to deserialize was refused: a glTF 1.0 file, an unsupported
