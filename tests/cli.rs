@@ -429,7 +429,7 @@ fn negative_values_and_directory_outputs_get_clear_messages() {
         (vec!["render", "-o", &o, "--clamp", "-0.5"], "--clamp -0.5"),
         (
             vec!["render", "-o", &o, "--width", "-5"],
-            "'--width <WIDTH>'",
+            "--width -5: must be 1..16384",
         ),
         (
             vec!["render", "-o", &o, "--vpls", "-1e3"],
