@@ -21,7 +21,7 @@ use crate::gpu::GpuContext;
 use crate::scene::{Camera, Scene};
 use crate::settings::{ClusterSettings, FrameSettings};
 use crate::{export, metrics, stats};
-use csv::{Row, STAGES};
+use csv::Row;
 use summary::{CameraSummary, SummaryInfo};
 use sweep::Sweep;
 
@@ -231,9 +231,8 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
                 frame.ran(Pass::VplCluster),
                 frame.gamma_used,
             );
-            let stages_ms: BTreeMap<String, f64> = STAGES
-                .iter()
-                .map(|k| (k.to_string(), t.get(*k).copied().unwrap_or(0.0)))
+            let stages_ms: BTreeMap<String, f64> = csv::stages()
+                .map(|k| (k.to_string(), t.get(k).copied().unwrap_or(0.0)))
                 .collect();
             let frame_ms = stages_ms[FRAME_KEY];
             let row = Row {

@@ -6,10 +6,10 @@ use anyhow::Result;
 use clap::Args;
 
 use super::bad;
-use super::scene::{SceneArgs, check_size, check_vpls};
+use super::scene::{SceneArgs, ShotArgs, check_size, check_vpls};
 use crate::gi::pipeline::{self, RenderSettings, Renderer};
 use crate::gpu::GpuContext;
-use crate::settings::{ClusterSettings, FrameSettings};
+use crate::settings::FrameSettings;
 use crate::{export, metrics, stats};
 
 #[derive(Args)]
@@ -29,13 +29,8 @@ pub struct RenderArgs {
     /// Write a false-colour per-pixel error image against --compare (log10 rel. error, -4..0).
     #[arg(long, requires = "compare")]
     error_map: Option<PathBuf>,
-    /// Use the Nth glTF camera (0-based); default: the scene's first camera, else a view of its bounds.
-    #[arg(long)]
-    camera: Option<usize>,
     #[command(flatten)]
-    frame: FrameSettings,
-    #[command(flatten)]
-    cluster: ClusterSettings,
+    shot: ShotArgs,
     /// Render N times; timings are the mean of the 3 best (the paper's method).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     repeat: u32,
@@ -100,21 +95,21 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let reference = a
         .compare
         .as_deref()
-        .map(|p| read_reference(p, &a.frame))
+        .map(|p| read_reference(p, &a.shot.frame))
         .transpose()?;
     let scene = a.scene.load()?;
-    let camera = a.scene.camera(&scene, a.camera)?;
+    let camera = a.scene.camera(&scene, a.shot.camera)?;
     let ctx = GpuContext::new_headless()?;
-    check_vpls(&ctx, a.frame.vpls)?;
+    check_vpls(&ctx, a.shot.frame.vpls)?;
     let bytes = match a.path_trace {
         Some(_) => pipeline::PATH_TRACE_PIXEL_BYTES,
         None => pipeline::PIXEL_BYTES,
     };
-    check_size(&ctx, a.frame.width, a.frame.height, bytes)?;
+    check_size(&ctx, a.shot.frame.width, a.shot.frame.height, bytes)?;
     let mut renderer = Renderer::new(&ctx, &scene)?;
     let settings = RenderSettings {
-        frame: a.frame,
-        cluster: a.cluster.clone(),
+        frame: a.shot.frame,
+        cluster: a.shot.cluster.clone(),
         reference: a.reference,
         progress: true,
         control: None,
@@ -151,7 +146,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
             a.scene.scene
         );
     }
-    let exposure = a.frame.exposure.resolve(&frame.radiance);
+    let exposure = a.shot.frame.exposure.resolve(&frame.radiance);
     for out in &a.output {
         export::write_image(out, frame.width, frame.height, &frame.radiance, exposure)?;
     }
