@@ -23,6 +23,10 @@ pub struct RenderArgs {
     /// Write the stats JSON (docs/design.md, "Stats JSON") here.
     #[arg(long)]
     stats: Option<PathBuf>,
+    /// Write the GPU timer queries of the render (every dispatch of every pass) as a Chrome trace
+    /// (chrome://tracing, Perfetto) here.
+    #[arg(long, value_name = "TRACE.json")]
+    trace: Option<PathBuf>,
     /// Fill the stats' error block against this reference EXR.
     #[arg(long)]
     compare: Option<PathBuf>,
@@ -89,7 +93,13 @@ pub fn run(a: RenderArgs) -> Result<()> {
         )));
     }
     // Every output can be written: checked before the (possibly long) render.
-    for p in a.output.iter().chain(&a.stats).chain(&a.error_map) {
+    for p in a
+        .output
+        .iter()
+        .chain(&a.stats)
+        .chain(&a.error_map)
+        .chain(&a.trace)
+    {
         export::check_writable(p).map_err(bad)?;
     }
     let reference = a
@@ -107,6 +117,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     };
     check_size(&ctx, a.shot.frame.width, a.shot.frame.height, bytes)?;
     let mut renderer = Renderer::new(&ctx, &scene)?;
+    renderer.profiler.keep_trace = a.trace.is_some();
     let settings = RenderSettings {
         frame: a.shot.frame,
         cluster: a.shot.cluster.clone(),
@@ -129,6 +140,9 @@ pub fn run(a: RenderArgs) -> Result<()> {
         frame = Some(f);
     }
     let frame = frame.expect("repeat >= 1");
+    if let Some(p) = &a.trace {
+        renderer.profiler.write_trace(p)?;
+    }
     let non_finite = frame
         .radiance
         .iter()

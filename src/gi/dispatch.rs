@@ -306,13 +306,12 @@ impl Kernel {
             } else {
                 label.to_string()
             };
-            {
-                let mut pass = self.begin_pass(&mut enc, profiler, &name, scene, group);
+            self.in_pass(&mut enc, profiler, &name, scene, group, |pass| {
                 for &(entry, total) in &steps[first..=last] {
                     pass.set_pipeline(&self.pipelines[self.entry_index(entry)].1);
-                    dispatch_items(&mut pass, total);
+                    dispatch_items(pass, total);
                 }
-            }
+            });
             if let Some((entry, record)) = after
                 && entry == steps[last].0
             {
@@ -320,7 +319,7 @@ impl Kernel {
             }
             first = last + 1;
         }
-        ctx.queue.submit([enc.finish()]);
+        profiler.submit(ctx, enc);
         let _ = ctx.wait();
     }
 
@@ -402,7 +401,7 @@ impl Kernel {
         self.write_chunk(ctx, offset, count, sub, seed);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         self.record_pass(&mut enc, profiler, label, scene, group, index, count);
-        ctx.queue.submit([enc.finish()]);
+        profiler.submit(ctx, enc);
         // Waiting keeps each submission short and bounded on software drivers.
         let _ = ctx.wait();
     }
@@ -430,24 +429,24 @@ impl Kernel {
             .unwrap_or_else(|| panic!("{}: no entry point {entry}", self.name))
     }
 
-    /// A compute pass timed under `label` with the scene's and the pass's bind groups set.
-    fn begin_pass<'e>(
+    /// Records `f` in a compute pass timed under `label` with the scene's and the pass's bind
+    /// groups set.
+    fn in_pass(
         &self,
-        enc: &'e mut wgpu::CommandEncoder,
+        enc: &mut wgpu::CommandEncoder,
         profiler: &mut Profiler,
         label: &str,
         scene: &SceneGpu,
         group: &wgpu::BindGroup,
-    ) -> wgpu::ComputePass<'e> {
-        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(label),
-            timestamp_writes: profiler.pass(label),
-        });
-        if self.uses_scene {
-            pass.set_bind_group(0, &scene.bind_group, &[]);
-        }
-        pass.set_bind_group(1, group, &[]);
-        pass
+        f: impl FnOnce(&mut wgpu::ComputePass<'_>),
+    ) {
+        profiler.compute_pass(enc, label, |pass| {
+            if self.uses_scene {
+                pass.set_bind_group(0, &scene.bind_group, &[]);
+            }
+            pass.set_bind_group(1, group, &[]);
+            f(pass)
+        })
     }
 
     /// One timed compute pass of pipeline `index` over `count` invocations.
@@ -462,9 +461,10 @@ impl Kernel {
         index: usize,
         count: u32,
     ) {
-        let mut pass = self.begin_pass(enc, profiler, label, scene, group);
-        pass.set_pipeline(&self.pipelines[index].1);
-        dispatch_items(&mut pass, count);
+        self.in_pass(enc, profiler, label, scene, group, |pass| {
+            pass.set_pipeline(&self.pipelines[index].1);
+            dispatch_items(pass, count);
+        });
     }
 }
 
