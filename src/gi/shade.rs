@@ -8,6 +8,7 @@ use bytemuck::{Pod, Zeroable};
 use super::dispatch::{Kernel, copy_to_texture, data_texture};
 use super::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::{GpuContext, profiler::Profiler};
+use crate::settings::MAX_F;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -31,9 +32,6 @@ pub struct ShadeInputs<'a> {
     pub pixels: u32,
     pub params: ShadeParams,
 }
-
-/// The largest F (`MAX_F` in shade.wgsl).
-pub const MAX_F: u32 = 16;
 
 /// The most bit words (32 lights each) one invocation walks per dispatch: 16,384 lights, so the
 /// paper's settings (at most 8,192 lights) shade in one dispatch per pixel range as before.
