@@ -6,7 +6,8 @@ mod common;
 use common::Rand;
 use fuzzy_vpl::bvh::SceneBvh;
 use fuzzy_vpl::cpu::kmeans::{self, Centroid, Point};
-use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KMeansTuning, KmParams, scan_groups};
+use fuzzy_vpl::gi::dispatch::Gpu;
+use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KMeansTuning, KmParams, Points, scan_groups};
 use fuzzy_vpl::gi::pipeline::{RenderSettings, Renderer};
 use fuzzy_vpl::gi::scene_gpu::SceneGpu;
 use fuzzy_vpl::gpu::{GpuContext, profiler::Profiler};
@@ -49,11 +50,17 @@ fn run_gpu_with(
     let mut prof = Profiler::new(ctx);
     let buf = ctx.storage_init("data", data);
     let m = data.len() as u32 / stride;
-    let c = km
-        .run(
-            ctx, &gpu, &mut prof, "test", &buf, m, stride, s, frame, None,
-        )
-        .unwrap();
+    let mut g = Gpu {
+        ctx,
+        scene: &gpu,
+        profiler: &mut prof,
+    };
+    let points = Points {
+        data: &buf,
+        count: m,
+        stride,
+    };
+    let c = km.run(&mut g, "test", &points, s, frame, None).unwrap();
     let p = c.params;
     let raw: Vec<[f32; 4]> = ctx.read_buffer(&c.centroids, p.k as usize * 2).unwrap();
     let centroids = raw
