@@ -61,14 +61,15 @@ fn shading_pairs(
     sps.iter()
         .enumerate()
         .map(|(m, sp)| {
-            let c = shade::shade(
+            let c = shade::eq6_indirect(
                 sp,
                 lights,
-                &bits,
-                words,
-                &assign[m * nf..m * nf + nf],
-                &weights[m * nf..m * nf + nf],
-                fs.cluster.weighting == Weighting::InverseDistance,
+                &shade::Bits { bits: &bits, words },
+                &shade::Slots {
+                    assign: &assign[m * nf..m * nf + nf],
+                    weights: &weights[m * nf..m * nf + nf],
+                    weighted: fs.cluster.weighting == Weighting::InverseDistance,
+                },
                 d_min * d_min,
             );
             (c, Vec3::from(f.indirect[m]))

@@ -384,14 +384,15 @@ fn cpu_twins_agree_on_the_alpha_tested_scene() {
     let (bits, words) = shade::visibility_bits(&cpu, &reps, lights);
     let mut bad = 0;
     for (m, sp) in sps.iter().enumerate() {
-        let c = shade::shade(
+        let c = shade::eq6_indirect(
             sp,
             lights,
-            &bits,
-            words,
-            &assign[m * nf..m * nf + nf],
-            &weights[m * nf..m * nf + nf],
-            true,
+            &shade::Bits { bits: &bits, words },
+            &shade::Slots {
+                assign: &assign[m * nf..m * nf + nf],
+                weights: &weights[m * nf..m * nf + nf],
+                weighted: true,
+            },
             d_min * d_min,
         );
         bad += !close(c, Vec3::from(f.indirect[m])) as u32;

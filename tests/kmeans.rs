@@ -155,8 +155,8 @@ fn assign_mismatches(
                     || a == u32::MAX
                     || b == u32::MAX
                     || !near(
-                        kmeans::dist7(&pts[i / f], &cs[a as usize], n_t),
-                        kmeans::dist7(&pts[i / f], &cs[b as usize], n_t),
+                        kmeans::eq7_dist(&pts[i / f], &cs[a as usize], n_t),
+                        kmeans::eq7_dist(&pts[i / f], &cs[b as usize], n_t),
                     ))
         })
         .count()

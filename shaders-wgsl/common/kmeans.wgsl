@@ -132,8 +132,17 @@ fn sample_index(s: u32) -> u32 {
     return min(s * g + (h >> 8u) % g, params.num_points - 1u);
 }
 
-// Eq. (7): dist(d1, d2) = |p1 - p2| when n1 · n2 > n_t, else ∞. The search (scan_slots) takes the
-// distance first and this test only for a candidate that would enter the list.
+// Eq. (7): dist(d1, d2) = |p1 - p2| when n1 · n2 > n_t, else ∞ (BIG). CPU twin: cpu::kmeans::eq7_dist.
+fn eq7_dist(p: vec3<f32>, n: vec3<f32>, c: vec3<f32>, nc: vec3<f32>) -> f32 {
+    if !eq7_normals_agree(n, nc) {
+        return BIG;
+    }
+    return length(p - c);
+}
+
+// Eq. (7)'s orientation test alone: the nearest-centroid search (scan_slots) takes the distance
+// first and this test only for a candidate that would enter the list (the same result as
+// `eq7_dist`, half the texel fetches).
 fn eq7_normals_agree(n: vec3<f32>, nc: vec3<f32>) -> bool {
     return dot(n, nc) > params.normal_threshold;
 }

@@ -6,7 +6,7 @@
 // parameter; p = 1 is Eq. 10, p = 0 Eq. 8's mean, large p tends to hard clustering). Computed as
 // (d_min / d_f)^p / Σ (d_min / d_f)^p, ratios in (0, 1]: no overflow for any distance or p. Slots at
 // or past `count` (and negative distances) get 0; a distance of 0 (`zero`) takes the whole weight.
-// CPU twin: cpu::kmeans::inverse_distance_weights.
+// CPU twin: cpu::kmeans::eq10_weights.
 // A distance at or below this counts as 0 (the point sits on the centroid): below it a GPU may flush
 // the quotient d_min / d to 0 / 0.
 const ZERO_DIST: f32 = 1e-30;
@@ -26,7 +26,7 @@ fn ratio_pow(x: f32, p: f32) -> f32 {
 // guard, so the arrays stay in registers: a loop to the run-time count indexes them at run time,
 // which put them in memory (on lavapipe a per-lane scatter; final_assign spent more time here than in
 // its search).
-fn inverse_distance_weights(d: array<f32, MAX_F>, count: u32, zero: u32) -> array<f32, MAX_F> {
+fn eq10_weights(d: array<f32, MAX_F>, count: u32, zero: u32) -> array<f32, MAX_F> {
     var w: array<f32, MAX_F>;
     var d_min = 3.4e38;
     for (var j = 0u; j < F; j++) {
@@ -80,7 +80,7 @@ fn final_assign(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         b = nearest(p.xyz, n, f);
     }
     var zero = INVALID;
-    // A slot the plane gate drops gets distance -1: weight 0 (inverse_distance_weights) and no
+    // A slot the plane gate drops gets distance -1: weight 0 (eq10_weights) and no
     // cluster below. (Off, the pipeline is built without the test: see PLANE_GATE.)
     var dists: array<f32, MAX_F>;
     for (var j = 0u; j < F; j++) {
@@ -92,7 +92,7 @@ fn final_assign(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
             zero = j;
         }
     }
-    let w = inverse_distance_weights(dists, b.count, zero);
+    let w = eq10_weights(dists, b.count, zero);
     for (var j = 0u; j < f; j++) {
         var k = INVALID;
         if j < b.count && dists[j] >= 0.0 {

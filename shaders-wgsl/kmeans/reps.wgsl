@@ -53,7 +53,7 @@ fn rep_store(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     let rn = rep_points[2u * k + 1u];
     if rn.w == 1.0 && r.w > 0.0 {
         let nearest = bitcast<f32>(atomicLoad(&reps[2u * k]));
-        if eq7_normals_agree(rn.xyz, c.nrm.xyz) && length(r.xyz - c.pos.xyz) <= 2.0 * nearest {
+        if eq7_dist(r.xyz, rn.xyz, c.pos.xyz, c.nrm.xyz) <= 2.0 * nearest {
             return;
         }
     }
@@ -88,7 +88,7 @@ fn rep_weights(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
             }
         }
     }
-    let w = inverse_distance_weights(d, f, zero);
+    let w = eq10_weights(d, f, zero);
     for (var j = 0u; j < f; j++) {
         weights[m * f + j] = w[j];
     }
