@@ -62,6 +62,15 @@ pub fn check_writable(path: &Path) -> std::result::Result<(), String> {
     ))
 }
 
+/// Writes `value` as pretty JSON to `path` atomically.
+pub fn write_json(path: &Path, value: &impl serde::Serialize) -> Result<()> {
+    let json = serde_json::to_string_pretty(value)?;
+    write_atomic(path, |w| {
+        w.write_all(json.as_bytes())?;
+        Ok(())
+    })
+}
+
 /// Writes `bytes_fn`'s output to `path` atomically (temp file + rename).
 pub fn write_atomic(
     path: &Path,

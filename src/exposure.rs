@@ -39,6 +39,32 @@ impl Exposure {
     }
 }
 
+/// Serialised as the command line writes it: `"auto"` or the factor.
+impl serde::Serialize for Exposure {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Exposure::Auto => s.serialize_str("auto"),
+            Exposure::Fixed(e) => s.serialize_f32(*e),
+        }
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for Exposure {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Exposure, D::Error> {
+        #[derive(serde::Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            N(f32),
+            S(String),
+        }
+        match Raw::deserialize(d)? {
+            Raw::N(e) => Exposure::parse(&e.to_string()),
+            Raw::S(s) => Exposure::parse(&s),
+        }
+        .map_err(serde::de::Error::custom)
+    }
+}
+
 /// The log-average luminance exp(mean ln L) over the pixels with a finite luminance L > 0 (in f64),
 /// or `None` when there is none. Reinhard et al. add a small δ inside the log to allow black pixels;
 /// here black pixels (misses, unlit surfaces) are left out instead, which keeps the rule scale-free:

@@ -6,6 +6,7 @@
 pub mod app;
 pub mod bench;
 pub mod bvh;
+pub mod cli;
 pub mod cpu;
 pub mod export;
 pub mod exposure;
@@ -15,4 +16,5 @@ pub mod metrics;
 pub mod panic_guard;
 pub mod raybench;
 pub mod scene;
+pub mod settings;
 pub mod stats;

@@ -4,50 +4,75 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
+use crate::exposure::Exposure;
+use crate::gi::pipeline::{Frame, Pass, RenderSettings};
+use crate::scene::Scene;
+use crate::settings::{ClusterSettings, FrameSettings, Gamma, LightSettings};
+
+/// The settings block: the settings types as they are (`crate::settings`), with the values the
+/// frame resolved (γ and exposure as used, F in effect, the VPLs traced) and what only a frame knows.
 #[derive(Clone, Debug, Serialize)]
 pub struct Settings {
-    pub vpls: u32,
-    pub vpl_clusters: u32,
-    pub sp_clusters: u32,
-    pub fuzziness: u32,
-    /// γ asked; with `gamma_auto` the auto rule's choice for this size and K (`kmeans::resolve_gamma`).
-    pub gamma: u32,
+    /// F is the F in effect (1 for hard), γ the γ asked or, with `gamma_auto`, the one the rule chose
+    /// for this size and K (`Gamma::resolve`); the plane gate only when it gated a fuzzy frame.
+    #[serde(flatten)]
+    pub cluster: ClusterSettings,
+    /// `vpls` as traced; `exposure` the PNG exposure used (with `exposure_auto` the one
+    /// `exposure::auto_exposure` chose for this image); EXR is never scaled.
+    #[serde(flatten)]
+    pub frame: FrameSettings,
+    #[serde(flatten)]
+    pub lights: LightSettings,
     /// γ was `auto` (the default): `gamma` is what the rule chose.
     pub gamma_auto: bool,
-    pub normal_threshold: f32,
-    pub iterations: u32,
-    pub weighting: String,
-    /// p of the inverse-distance weights (w'_f = dist^-p; Eq. 10: 1).
-    pub weight_exponent: f32,
-    pub reference: bool,
-    pub seed: u32,
-    pub direct_samples: u32,
-    pub light_scale: f32,
-    /// The PNG exposure used: with `exposure_auto` the one `exposure::auto_exposure` chose for this
-    /// image (its log-average luminance shown as 0.18); EXR is never scaled.
-    pub exposure: f32,
     /// `--exposure auto` (the default).
     pub exposure_auto: bool,
-    /// G-term clamp as a fraction of the scene diagonal.
-    pub clamp: f32,
-    /// γ and n_t as the SP k-means used them (`kmeans::effective_gamma`,
-    /// `effective_normal_threshold`): γ is at most pixels / K (absent when no SP clustering ran),
-    /// n_t at most 1 − 2⁻²⁰.
+    pub reference: bool,
+    /// γ and n_t as the SP k-means used them (`Gamma::effective`, at most 1 − 2⁻²⁰): γ is at most
+    /// pixels / K (absent when no SP clustering ran).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gamma_used: Option<u32>,
     pub normal_threshold_used: f32,
-    /// The indirect bounce budget.
-    pub bounces: u32,
     /// Samples per pixel of `--path-trace` (the frame is the path tracer's alone; the VPL and
     /// clustering settings above were not used).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub path_trace_spp: Option<u32>,
-    /// The plane gate of the fuzzy F lists in degrees (`--plane-gate`; not in the paper): absent
-    /// when off or when it had nothing to gate (no SP clustering, or F = 1).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub plane_gate_deg: Option<f32>,
-    /// Temporal reuse (`--temporal`).
-    pub temporal: bool,
+}
+
+impl Settings {
+    /// The block of a frame rendered with `s` and `lights`, written with `exposure`.
+    pub fn new(
+        s: &RenderSettings,
+        lights: &LightSettings,
+        frame: &Frame,
+        exposure: f32,
+        path_trace_spp: Option<u32>,
+    ) -> Settings {
+        let c = &s.cluster;
+        let pixels = frame.width * frame.height;
+        Settings {
+            cluster: ClusterSettings {
+                fuzziness: c.f(),
+                gamma: Gamma::Fixed(c.gamma.resolve(pixels, c.sp_clusters)),
+                plane_gate: c
+                    .plane_gate
+                    .filter(|_| frame.gamma_used.is_some() && c.f() > 1),
+                ..c.clone()
+            },
+            frame: FrameSettings {
+                vpls: frame.vpls,
+                exposure: Exposure::Fixed(exposure),
+                ..s.frame
+            },
+            lights: lights.clone(),
+            gamma_auto: c.gamma.is_auto(),
+            exposure_auto: s.frame.exposure.is_auto(),
+            reference: s.reference,
+            gamma_used: frame.gamma_used,
+            normal_threshold_used: c.normal_threshold_used(),
+            path_trace_spp,
+        }
+    }
 }
 
 #[derive(Clone, Debug, Default, Serialize)]
@@ -67,6 +92,25 @@ pub struct Counts {
     pub sp_warm_kept: Option<u32>,
     /// Rows of the visibility matrix copied from the previous render (kept representatives).
     pub visibility_rows_reused: u32,
+}
+
+impl Counts {
+    /// What `frame` of `scene` counted; `emissive_triangles` as uploaded.
+    pub fn new(scene: &Scene, frame: &Frame, emissive_triangles: u64) -> Counts {
+        Counts {
+            triangles: scene.triangles.len() as u64,
+            vpls: frame.vpls as u64,
+            sp_clusters_used: frame.sp_clusters_used as u64,
+            vpl_clusters_used: frame.vpl_clusters_used as u64,
+            shading_points: frame.shading_points as u64,
+            shadow_rays: frame.shadow_rays,
+            emissive_triangles,
+            punctual_lights: scene.lights.len() as u64,
+            sp_iterations: frame.sp_iterations,
+            sp_warm_kept: frame.sp_warm_kept,
+            visibility_rows_reused: frame.visibility_rows_reused,
+        }
+    }
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -93,19 +137,14 @@ pub struct Stats {
     pub error: Option<ErrorStats>,
 }
 
-/// Every timing key of the contract, so readers can index them; passes that did not run read 0.
-pub const TIMING_KEYS: &[&str] = &[
-    "vpl_trace",
-    "vpl_cluster",
-    "primary",
-    "sp_cluster",
-    "visibility",
-    "shade",
-    "direct",
-    "reference",
-    "gather",
-    "frame",
-];
+/// Every timing key of the contract (`Pass::TIMED` and `frame`), so readers can index them; passes
+/// that did not run read 0.
+pub fn timing_keys() -> impl Iterator<Item = &'static str> {
+    Pass::TIMED
+        .iter()
+        .map(|p| p.name())
+        .chain([crate::gi::pipeline::FRAME_KEY])
+}
 
 /// Mean of the `k` smallest values (all of them if fewer): the paper's "3-best" timing.
 pub fn mean_of_best(values: &[f64], k: usize) -> f64 {
@@ -120,7 +159,7 @@ pub fn mean_of_best(values: &[f64], k: usize) -> f64 {
 
 /// Per-key mean of the 3 best over several runs' timings, with every contract key present.
 pub fn best_of_runs(runs: &[BTreeMap<String, f64>]) -> BTreeMap<String, f64> {
-    let mut keys: Vec<String> = TIMING_KEYS.iter().map(|s| s.to_string()).collect();
+    let mut keys: Vec<String> = timing_keys().map(String::from).collect();
     for r in runs {
         for k in r.keys() {
             if !keys.contains(k) {
@@ -156,9 +195,10 @@ mod tests {
         let mut r = BTreeMap::new();
         r.insert("primary".to_string(), 2.0);
         let b = best_of_runs(&[r]);
-        for k in TIMING_KEYS {
-            assert!(b.contains_key(*k), "{k}");
+        for k in timing_keys() {
+            assert!(b.contains_key(k), "{k}");
         }
+        assert_eq!(timing_keys().count(), 10);
         assert_eq!(b["primary"], 2.0);
         assert_eq!(b["vpl_trace"], 0.0);
     }

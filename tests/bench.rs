@@ -99,7 +99,10 @@ fn bench_rows_say_what_ran_and_reruns_leave_no_stale_images() {
     let rows = csv::from_csv(&std::fs::read_to_string(d.join("results.csv")).unwrap()).unwrap();
     assert_eq!(rows.len(), 2, "{rows:?}");
     let (clustered, off) = (&rows[0], &rows[1]);
-    assert_eq!((clustered.sp_clusters, clustered.gamma), (8, 64));
+    assert_eq!(
+        (clustered.sp_clusters, clustered.gamma),
+        (8, fuzzy_vpl::settings::Gamma::Fixed(64))
+    );
     assert_eq!(clustered.gamma_used, Some(24), "{clustered:?}");
     assert_eq!(clustered.label, "hard 8/16 g24");
     assert_eq!(off.sp_clusters, 400);
@@ -258,4 +261,44 @@ fn camera_path_refuses_a_bad_path() {
         "on",
     ]);
     assert_eq!(code, 2, "{err}");
+}
+
+/// The contract's columns (docs/design.md, "Bench outputs"), written out rather than taken from the code.
+#[test]
+fn header_has_the_contract_columns_in_order() {
+    let h = csv::header();
+    let want = [
+        "scene",
+        "camera",
+        "width",
+        "height",
+        "vpls",
+        "mode",
+        "vpl_clusters",
+        "sp_clusters",
+        "fuzziness",
+        "gamma",
+        "normal_threshold",
+        "iterations",
+        "vpl_trace_ms",
+        "vpl_cluster_ms",
+        "primary_ms",
+        "sp_cluster_ms",
+        "visibility_ms",
+        "shade_ms",
+        "gather_ms",
+        "direct_ms",
+        "frame_ms",
+        "reference_ms",
+        "speedup",
+        "mse",
+        "rel_mse",
+        "sp_clusters_used",
+        "vpl_clusters_used",
+        "shadow_rays",
+    ];
+    assert_eq!(&h[..want.len()], &want.map(String::from));
+    let csv = csv::to_csv(&[]);
+    assert_eq!(csv.lines().count(), 1);
+    assert_eq!(csv::split_line(csv.trim_end()), h);
 }

@@ -6,22 +6,30 @@ mod common;
 use fuzzy_vpl::cpu::kmeans::RepPoint;
 use fuzzy_vpl::cpu::shade;
 use fuzzy_vpl::cpu::shading::ShadingPoint;
-use fuzzy_vpl::gi::pipeline::{Frame, FrameSettings, Renderer, Weighting};
+use fuzzy_vpl::gi::pipeline::{Frame, RenderSettings, Renderer};
 use fuzzy_vpl::metrics::{mean_luminance, mse};
 use fuzzy_vpl::scene::{self, Scene};
+#[allow(unused_imports)]
+use fuzzy_vpl::settings::{ClusterSettings, FrameSettings, Gamma, Weighting};
 use glam::{Mat4, Vec3};
 
-fn clustered(w: u32, h: u32) -> FrameSettings {
-    FrameSettings {
-        width: w,
-        height: h,
-        vpls: 1024,
-        vpl_clusters: 128,
-        sp_clusters: 48,
-        fuzziness: 6,
-        gamma: 4,
-        iterations: 8,
-        direct_samples: 4,
+fn clustered(w: u32, h: u32) -> RenderSettings {
+    RenderSettings {
+        frame: FrameSettings {
+            width: w,
+            height: h,
+            vpls: 1024,
+            direct_samples: 4,
+            ..Default::default()
+        },
+        cluster: ClusterSettings {
+            vpl_clusters: 128,
+            sp_clusters: 48,
+            fuzziness: 6,
+            gamma: Gamma::Fixed(4),
+            iterations: 8,
+            ..Default::default()
+        },
         ..Default::default()
     }
 }
@@ -33,7 +41,7 @@ fn shading_pairs(
     r: &Renderer,
     s: &Scene,
     f: &Frame,
-    fs: &FrameSettings,
+    fs: &RenderSettings,
 ) -> Vec<(Vec3, Vec3)> {
     let gbuf = r.last_gbuffer().unwrap();
     let sps: Vec<ShadingPoint> = gbuf.chunks(4).map(ShadingPoint::from_gpu).collect();
@@ -46,10 +54,10 @@ fn shading_pairs(
     let reps = common::cold_rep_points(&sps, &reps);
     let on_gpu = RepPoint::from_vec4s(&ctx.read_buffer(&c.rep_points, k * 2).unwrap());
     assert_eq!(on_gpu, reps, "representative points");
-    let lights = &r.lights.as_ref().unwrap().0.lights;
+    let lights = &r.lights.as_ref().unwrap().list.lights;
     let cpu = common::cpu_scene(r, s);
     let (bits, words) = shade::visibility_bits(&cpu, &reps, lights);
-    let d_min = fs.clamp * s.extent();
+    let d_min = fs.frame.clamp * s.extent();
     sps.iter()
         .enumerate()
         .map(|(m, sp)| {
@@ -60,7 +68,7 @@ fn shading_pairs(
                 words,
                 &assign[m * nf..m * nf + nf],
                 &weights[m * nf..m * nf + nf],
-                fs.weighting == Weighting::InverseDistance,
+                fs.cluster.weighting == Weighting::InverseDistance,
                 d_min * d_min,
             );
             (c, Vec3::from(f.indirect[m]))
@@ -80,8 +88,11 @@ fn clustered_shading_matches_cpu_twin() {
         Weighting::Uniform,
         Weighting::InverseDistance,
     ] {
-        let fs = FrameSettings {
-            weighting,
+        let fs = RenderSettings {
+            cluster: ClusterSettings {
+                weighting,
+                ..clustered(w, h).cluster.clone()
+            },
             ..clustered(w, h)
         };
         let f = r.render(&s.default_camera(), &fs).unwrap();
@@ -107,14 +118,20 @@ fn shading_131072_lights_matches_cpu_twin() {
     let ctx = common::gpu();
     let s = scene::load("builtin:conference").unwrap();
     let mut r = Renderer::new(&ctx, &s).unwrap();
-    let fs = FrameSettings {
-        vpls: 131_072,
-        vpl_clusters: 0,
-        sp_clusters: 4,
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            vpls: 131_072,
+            ..clustered(8, 6).frame
+        },
+        cluster: ClusterSettings {
+            vpl_clusters: 0,
+            sp_clusters: 4,
+            ..clustered(8, 6).cluster.clone()
+        },
         ..clustered(8, 6)
     };
     let f = r.render(&s.default_camera(), &fs).unwrap();
-    assert_eq!(r.lights.as_ref().unwrap().0.lights.len(), 131_072);
+    assert_eq!(r.lights.as_ref().unwrap().list.lights.len(), 131_072);
     for (m, (c, g)) in shading_pairs(&ctx, &r, &s, &f, &fs).into_iter().enumerate() {
         assert!(
             (c - g).abs().max_element() <= 1e-3 * (1.0 + c.max_element()),
@@ -132,16 +149,22 @@ fn mse_order_and_speedup_on_the_conference_room() {
     let mut r = Renderer::new(&ctx, &s).unwrap();
     let cam = s.default_camera();
     let (w, h) = (80, 60);
-    let base = FrameSettings {
-        vpls: 2048,
-        vpl_clusters: 256,
-        sp_clusters: 96,
+    let base = RenderSettings {
+        frame: FrameSettings {
+            vpls: 2048,
+            ..clustered(w, h).frame
+        },
+        cluster: ClusterSettings {
+            vpl_clusters: 256,
+            sp_clusters: 96,
+            ..clustered(w, h).cluster.clone()
+        },
         ..clustered(w, h)
     };
     let reference = r
         .render(
             &cam,
-            &FrameSettings {
+            &RenderSettings {
                 reference: true,
                 ..base.clone()
             },
@@ -156,8 +179,11 @@ fn mse_order_and_speedup_on_the_conference_room() {
         let f = r
             .render(
                 &cam,
-                &FrameSettings {
-                    weighting,
+                &RenderSettings {
+                    cluster: ClusterSettings {
+                        weighting,
+                        ..base.clone().cluster.clone()
+                    },
                     ..base.clone()
                 },
             )
@@ -201,121 +227,172 @@ fn clustered_extremes_stay_finite() {
     let base = scene::load("builtin:cornell").unwrap();
     let (w, h) = (32, 24);
     let b = clustered(w, h);
-    let cases: Vec<(&str, FrameSettings)> = vec![
+    let cases: Vec<(&str, RenderSettings)> = vec![
         (
             "K_sp=1",
-            FrameSettings {
-                sp_clusters: 1,
+            RenderSettings {
+                cluster: ClusterSettings {
+                    sp_clusters: 1,
+                    ..b.clone().cluster.clone()
+                },
                 ..b.clone()
             },
         ),
         (
             "K_vpl=1",
-            FrameSettings {
-                vpl_clusters: 1,
+            RenderSettings {
+                cluster: ClusterSettings {
+                    vpl_clusters: 1,
+                    ..b.clone().cluster.clone()
+                },
                 ..b.clone()
             },
         ),
         (
             "K far above the points",
-            FrameSettings {
-                sp_clusters: w * h - 1,
-                vpl_clusters: 1023,
+            RenderSettings {
+                cluster: ClusterSettings {
+                    sp_clusters: w * h - 1,
+                    vpl_clusters: 1023,
+                    ..b.clone().cluster.clone()
+                },
                 ..b.clone()
             },
         ),
         (
             "F > K",
-            FrameSettings {
-                sp_clusters: 3,
-                fuzziness: 8,
+            RenderSettings {
+                cluster: ClusterSettings {
+                    sp_clusters: 3,
+                    fuzziness: 8,
+                    ..b.clone().cluster.clone()
+                },
                 ..b.clone()
             },
         ),
         (
             "F = 16",
-            FrameSettings {
-                fuzziness: 16,
+            RenderSettings {
+                cluster: ClusterSettings {
+                    fuzziness: 16,
+                    ..b.clone().cluster.clone()
+                },
                 ..b.clone()
             },
         ),
         (
             "huge gamma",
-            FrameSettings {
-                gamma: 1_000_000,
+            RenderSettings {
+                cluster: ClusterSettings {
+                    gamma: Gamma::Fixed(1_000_000),
+                    ..b.clone().cluster.clone()
+                },
                 ..b.clone()
             },
         ),
         (
             "n_t = 1",
-            FrameSettings {
-                normal_threshold: 1.0,
+            RenderSettings {
+                cluster: ClusterSettings {
+                    normal_threshold: 1.0,
+                    ..b.clone().cluster.clone()
+                },
                 ..b.clone()
             },
         ),
         (
             "n_t = 1, one SP cluster",
-            FrameSettings {
-                sp_clusters: 1,
-                normal_threshold: 1.0,
+            RenderSettings {
+                cluster: ClusterSettings {
+                    sp_clusters: 1,
+                    normal_threshold: 1.0,
+                    ..b.clone().cluster.clone()
+                },
                 ..b.clone()
             },
         ),
         (
             "n_t = 1, one VPL cluster",
-            FrameSettings {
-                vpl_clusters: 1,
-                normal_threshold: 1.0,
+            RenderSettings {
+                cluster: ClusterSettings {
+                    vpl_clusters: 1,
+                    normal_threshold: 1.0,
+                    ..b.clone().cluster.clone()
+                },
                 ..b.clone()
             },
         ),
         (
             "n_t = -1",
-            FrameSettings {
-                normal_threshold: -1.0,
+            RenderSettings {
+                cluster: ClusterSettings {
+                    normal_threshold: -1.0,
+                    ..b.clone().cluster.clone()
+                },
                 ..b.clone()
             },
         ),
         (
             "one VPL",
-            FrameSettings {
-                vpls: 1,
-                vpl_clusters: 1,
+            RenderSettings {
+                frame: FrameSettings {
+                    vpls: 1,
+                    ..b.clone().frame
+                },
+                cluster: ClusterSettings {
+                    vpl_clusters: 1,
+                    ..b.clone().cluster.clone()
+                },
                 ..b.clone()
             },
         ),
         (
             "zero iterations",
-            FrameSettings {
-                iterations: 0,
+            RenderSettings {
+                cluster: ClusterSettings {
+                    iterations: 0,
+                    ..b.clone().cluster.clone()
+                },
                 ..b.clone()
             },
         ),
         (
             "200 iterations",
-            FrameSettings {
-                iterations: 200,
+            RenderSettings {
+                cluster: ClusterSettings {
+                    iterations: 200,
+                    ..b.clone().cluster.clone()
+                },
                 ..b.clone()
             },
         ),
         (
             "SPs only",
-            FrameSettings {
-                vpl_clusters: 0,
+            RenderSettings {
+                cluster: ClusterSettings {
+                    vpl_clusters: 0,
+                    ..b.clone().cluster.clone()
+                },
                 ..b.clone()
             },
         ),
         (
             "VPLs only",
-            FrameSettings {
-                sp_clusters: 0,
+            RenderSettings {
+                cluster: ClusterSettings {
+                    sp_clusters: 0,
+                    ..b.clone().cluster.clone()
+                },
                 ..b.clone()
             },
         ),
         (
             "no clamp",
-            FrameSettings {
-                clamp: 0.0,
+            RenderSettings {
+                frame: FrameSettings {
+                    clamp: 0.0,
+                    ..b.clone().frame
+                },
                 ..b.clone()
             },
         ),
@@ -393,11 +470,14 @@ fn no_valid_shading_points() {
 fn work_per_submission_does_not_change_the_image() {
     let s = scene::load("builtin:conference").unwrap();
     let cam = s.default_camera();
-    let base = FrameSettings {
-        vpls: 256,
+    let base = RenderSettings {
+        frame: FrameSettings {
+            vpls: 256,
+            ..clustered(200, 180).frame
+        },
         ..clustered(200, 180)
     };
-    let reference = FrameSettings {
+    let reference = RenderSettings {
         reference: true,
         ..base.clone()
     };

@@ -10,9 +10,11 @@ mod common;
 
 use fuzzy_vpl::cpu::shade;
 use fuzzy_vpl::cpu::shading::ShadingPoint;
-use fuzzy_vpl::gi::pipeline::{DEFAULT_CLAMP, Frame, FrameSettings, Renderer, Weighting};
+use fuzzy_vpl::gi::pipeline::{Frame, Pass, RenderSettings, Renderer};
 use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::scene::{Camera, LightKind, Material, PunctualLight, Scene, Texture, Triangle};
+#[allow(unused_imports)]
+use fuzzy_vpl::settings::{ClusterSettings, DEFAULT_CLAMP, FrameSettings, Gamma, Weighting};
 use glam::{Vec2, Vec3, Vec4};
 
 /// Texels a side of the checkerboard texture; a cell is 2×2 texels, so 4×4 cells.
@@ -199,19 +201,25 @@ fn agreement(img: &[[f32; 3]]) -> (usize, usize) {
     (n, ok)
 }
 
-fn settings(reference: bool) -> FrameSettings {
-    FrameSettings {
-        width: W,
-        height: H,
-        vpls: 512,
+fn settings(reference: bool) -> RenderSettings {
+    RenderSettings {
+        frame: FrameSettings {
+            width: W,
+            height: H,
+            vpls: 512,
+            direct_samples: 1,
+            clamp: DEFAULT_CLAMP,
+            ..Default::default()
+        },
+        cluster: ClusterSettings {
+            vpl_clusters: if reference { 0 } else { 128 },
+            sp_clusters: if reference { 0 } else { 96 },
+            fuzziness: 4,
+            gamma: Gamma::Fixed(4),
+            iterations: 6,
+            ..Default::default()
+        },
         reference,
-        vpl_clusters: if reference { 0 } else { 128 },
-        sp_clusters: if reference { 0 } else { 96 },
-        fuzziness: 4,
-        gamma: 4,
-        iterations: 6,
-        direct_samples: 1,
-        clamp: DEFAULT_CLAMP,
         ..Default::default()
     }
 }
@@ -255,15 +263,18 @@ fn checkerboard_shadow_in_clustered_reference_and_path_traced_frames() {
     assert!(lit > 300 && dark > 300, "lit {lit}, dark {dark}");
 
     let clustered = r.render(&cam, &settings(false)).unwrap();
-    assert!(clustered.passes.contains(&"sp_cluster"));
+    assert!(clustered.ran(Pass::SpCluster));
     assert_checkerboard("clustered", &clustered.radiance, 0.99);
     let reference = r.render(&cam, &settings(true)).unwrap();
     assert_checkerboard("reference", &reference.radiance, 0.99);
     let path = r
         .path_trace(
             &cam,
-            &FrameSettings {
-                bounces: 2,
+            &RenderSettings {
+                frame: FrameSettings {
+                    bounces: 2,
+                    ..settings(true).frame
+                },
                 ..settings(true)
             },
             64,
@@ -273,7 +284,7 @@ fn checkerboard_shadow_in_clustered_reference_and_path_traced_frames() {
 
     // VPL tracing: the sun's particles pass the clear cells, so the VPLs on the quad's plane lie on
     // opaque cells only, and the floor under the quad holds VPLs under clear cells only.
-    let vpls = &r.vpl_set.as_ref().unwrap().0.vpls;
+    let vpls = &r.vpl_set.as_ref().unwrap().set.vpls;
     let (mut on_quad, mut under) = (0, 0);
     for v in vpls {
         let (x, y, z) = (v.pos[0], v.pos[1], v.pos[2]);
@@ -324,8 +335,8 @@ fn cpu_twins_agree_on_the_alpha_tested_scene() {
     let sps: Vec<ShadingPoint> = gbuf.chunks(4).map(ShadingPoint::from_gpu).collect();
     let cpu = common::cpu_scene(&r, &s);
     let params = CameraParams::new(&cam, W, H);
-    let vpls = &r.vpl_set.as_ref().unwrap().0.vpls;
-    let d_min = fs.clamp * s.extent();
+    let vpls = &r.vpl_set.as_ref().unwrap().set.vpls;
+    let d_min = fs.frame.clamp * s.extent();
     // Tolerance 1e-3 relative, as tests/reference.rs: the GPU sums in another order. Pixels whose
     // alpha sits at the cutoff within rounding (cell edges) may differ; measured: none.
     let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() <= 1e-3 * (1.0 + a.max_element());
@@ -337,7 +348,7 @@ fn cpu_twins_agree_on_the_alpha_tested_scene() {
             primary_bad += 1;
             continue;
         }
-        let d = cpu.direct(g, px, fs.seed, fs.direct_samples);
+        let d = cpu.direct(g, px, fs.frame.seed, fs.frame.direct_samples);
         direct_bad += !close(d, Vec3::from(f.direct[px as usize])) as u32;
         let i = cpu.reference_indirect(g, vpls, d_min * d_min);
         indirect_bad += !close(i, Vec3::from(f.indirect[px as usize])) as u32;
@@ -351,8 +362,11 @@ fn cpu_twins_agree_on_the_alpha_tested_scene() {
     assert!(indirect_bad * 100 <= n, "indirect: {indirect_bad} of {n}");
 
     // The clustered frame: the visibility matrix and shading from the GPU's own clustering.
-    let fs = FrameSettings {
-        weighting: Weighting::InverseDistance,
+    let fs = RenderSettings {
+        cluster: ClusterSettings {
+            weighting: Weighting::InverseDistance,
+            ..settings(false).cluster.clone()
+        },
         ..settings(false)
     };
     let f: Frame = r.render(&cam, &fs).unwrap();
@@ -365,7 +379,7 @@ fn cpu_twins_agree_on_the_alpha_tested_scene() {
     let reps: Vec<u32> = ctx.read_buffer(&c.reps, k * 2).unwrap();
     // A cold start: each representative point is its member pixel's shading point.
     let reps = common::cold_rep_points(&sps, &reps);
-    let lights = &r.lights.as_ref().unwrap().0.lights;
+    let lights = &r.lights.as_ref().unwrap().list.lights;
     let cpu = common::cpu_scene(&r, &s);
     let (bits, words) = shade::visibility_bits(&cpu, &reps, lights);
     let mut bad = 0;
@@ -516,11 +530,14 @@ fn vertex_colours_multiply_the_base_colour_and_their_alpha_is_tested() {
         40f32.to_radians(),
     );
     let (w, h) = (40u32, 40u32);
-    let fs = FrameSettings {
-        width: w,
-        height: h,
-        vpls: 0,
-        direct_samples: 1,
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            width: w,
+            height: h,
+            vpls: 0,
+            direct_samples: 1,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let f = r.render(&cam, &fs).unwrap();
@@ -627,25 +644,31 @@ fn sponza_from_its_four_cameras_with_cut_out_leaves_and_chains() {
     let mut r = Renderer::new(&ctx, &s).unwrap();
     let mut ro = Renderer::new(&ctx, &opaque).unwrap();
     assert!(r.gpu.has_alpha_test && !ro.gpu.has_alpha_test);
-    let fs = FrameSettings {
-        width: 96,
-        height: 72,
-        vpls: 256,
-        vpl_clusters: 64,
-        sp_clusters: 256,
-        direct_samples: 1,
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            width: 96,
+            height: 72,
+            vpls: 256,
+            direct_samples: 1,
+            ..Default::default()
+        },
+        cluster: ClusterSettings {
+            vpl_clusters: 64,
+            sp_clusters: 256,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let (mut see_through, mut light_through) = (0, 0);
     for (i, cam) in s.cameras.iter().enumerate() {
         let f = r.render(cam, &fs).unwrap();
         assert!(common::all_finite(&f.radiance), "camera {i}");
-        assert!(f.passes.contains(&"sp_cluster"), "camera {i}");
+        assert!(f.ran(Pass::SpCluster), "camera {i}");
         let g = r.last_gbuffer().unwrap();
         let fo = ro.render(cam, &fs).unwrap();
         let go = ro.last_gbuffer().unwrap();
         let (mut see, mut light) = (0, 0);
-        for px in 0..(fs.width * fs.height) as usize {
+        for px in 0..(fs.frame.width * fs.frame.height) as usize {
             let a = ShadingPoint::from_gpu(&g[px * 4..px * 4 + 4]);
             let b = ShadingPoint::from_gpu(&go[px * 4..px * 4 + 4]);
             // The card stops the ray in the opaque copy; with the alpha test it hits farther on.

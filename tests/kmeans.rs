@@ -6,11 +6,14 @@ mod common;
 use common::Rand;
 use fuzzy_vpl::bvh::SceneBvh;
 use fuzzy_vpl::cpu::kmeans::{self, Centroid, Point};
-use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KMeansTuning, KmParams, scan_groups};
-use fuzzy_vpl::gi::pipeline::{FrameSettings, Renderer};
+use fuzzy_vpl::gi::dispatch::Gpu;
+use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KMeansTuning, KmParams, Points, scan_groups};
+use fuzzy_vpl::gi::pipeline::{RenderSettings, Renderer};
 use fuzzy_vpl::gi::scene_gpu::SceneGpu;
 use fuzzy_vpl::gpu::{GpuContext, profiler::Profiler};
 use fuzzy_vpl::scene;
+#[allow(unused_imports)]
+use fuzzy_vpl::settings::{ClusterSettings, FrameSettings, Gamma};
 use glam::Vec3;
 
 struct GpuResult {
@@ -47,11 +50,17 @@ fn run_gpu_with(
     let mut prof = Profiler::new(ctx);
     let buf = ctx.storage_init("data", data);
     let m = data.len() as u32 / stride;
-    let c = km
-        .run(
-            ctx, &gpu, &mut prof, "test", &buf, m, stride, s, frame, None,
-        )
-        .unwrap();
+    let mut g = Gpu {
+        ctx,
+        scene: &gpu,
+        profiler: &mut prof,
+    };
+    let points = Points {
+        data: &buf,
+        count: m,
+        stride,
+    };
+    let c = km.run(&mut g, "test", &points, s, frame, None).unwrap();
     let p = c.params;
     let raw: Vec<[f32; 4]> = ctx.read_buffer(&c.centroids, p.k as usize * 2).unwrap();
     let centroids = raw
@@ -261,7 +270,7 @@ fn settings(k: u32, f: u32, gamma: u32, n_t: f32, iterations: u32) -> KMeansSett
     KMeansSettings {
         k,
         f,
-        gamma,
+        gamma: fuzzy_vpl::settings::Gamma::Fixed(gamma),
         normal_threshold: n_t,
         iterations,
         seed: 3,
@@ -285,9 +294,12 @@ fn gpu_kmeans_matches_cpu_on_random_surfaces() {
 fn conference_sps(ctx: &GpuContext) -> (scene::Scene, Vec<[f32; 4]>) {
     let sc = scene::load("builtin:conference").unwrap();
     let mut r = Renderer::new(ctx, &sc).unwrap();
-    let fs = FrameSettings {
-        width: 96,
-        height: 72,
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            width: 96,
+            height: 72,
+            ..Default::default()
+        },
         ..Default::default()
     };
     r.render(&sc.default_camera(), &fs).unwrap();

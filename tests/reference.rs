@@ -4,22 +4,28 @@
 mod common;
 
 use fuzzy_vpl::cpu::shading::ShadingPoint;
-use fuzzy_vpl::gi::pathtrace::PathTrace;
-use fuzzy_vpl::gi::pipeline::{DEFAULT_CLAMP, Frame, FrameSettings, Renderer};
+use fuzzy_vpl::gi::dispatch::Gpu;
+use fuzzy_vpl::gi::pathtrace::{PathTrace, PtSamples};
+use fuzzy_vpl::gi::pipeline::{Frame, RenderSettings, Renderer};
 use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::metrics::{mean_luminance, rel_mse};
 use fuzzy_vpl::scene;
+#[allow(unused_imports)]
+use fuzzy_vpl::settings::{ClusterSettings, DEFAULT_CLAMP, FrameSettings, Gamma};
 use glam::Vec3;
 
-fn reference(w: u32, h: u32, vpls: u32, seed: u32) -> FrameSettings {
-    FrameSettings {
-        width: w,
-        height: h,
-        seed,
-        direct_samples: 16,
-        vpls,
+fn reference(w: u32, h: u32, vpls: u32, seed: u32) -> RenderSettings {
+    RenderSettings {
+        frame: FrameSettings {
+            width: w,
+            height: h,
+            seed,
+            direct_samples: 16,
+            vpls,
+            clamp: DEFAULT_CLAMP,
+            ..Default::default()
+        },
         reference: true,
-        clamp: DEFAULT_CLAMP,
         ..Default::default()
     }
 }
@@ -27,7 +33,7 @@ fn reference(w: u32, h: u32, vpls: u32, seed: u32) -> FrameSettings {
 /// (CPU twin, GPU) indirect light of every pixel of the last reference frame `f` of `r`.
 fn reference_pairs(r: &Renderer, s: &fuzzy_vpl::scene::Scene, f: &Frame) -> Vec<(Vec3, Vec3)> {
     let gbuf = r.last_gbuffer().unwrap();
-    let vpls = &r.vpl_set.as_ref().unwrap().0.vpls;
+    let vpls = &r.vpl_set.as_ref().unwrap().set.vpls;
     let cpu = common::cpu_scene(r, s);
     let d_min = DEFAULT_CLAMP * s.extent();
     (0..f.indirect.len())
@@ -92,7 +98,7 @@ fn reference_of_a_tiny_image_with_many_vpls_matches_cpu_twin() {
     let cam = s.default_camera();
     let (w, h) = (6, 4);
     let f = r.render(&cam, &reference(w, h, 4096, 5)).unwrap();
-    assert_eq!(r.vpl_set.as_ref().unwrap().0.vpls.len(), 4096);
+    assert_eq!(r.vpl_set.as_ref().unwrap().set.vpls.len(), 4096);
     let mut lit = 0;
     for (px, (c, g)) in reference_pairs(&r, &s, &f).into_iter().enumerate() {
         lit += (c.max_element() > 0.0) as u32;
@@ -133,14 +139,20 @@ fn reference_and_path_trace(
     let cam = s.default_camera();
     let (w, h) = (32, 32);
     let f = r.render(&cam, &reference(w, h, 4096, 1)).unwrap();
+    let mut g = Gpu {
+        ctx,
+        scene: &r.gpu,
+        profiler: &mut r.profiler,
+    };
+    let samples = PtSamples {
+        spp: 1024,
+        per_pass: 64,
+    };
     let img = PathTrace::new(ctx, &r.gpu)
         .render(
-            ctx,
-            &r.gpu,
-            &mut r.profiler,
+            &mut g,
             &CameraParams::new(&cam, w, h),
-            1024,
-            64,
+            samples,
             1,
             fuzzy_vpl::gi::vpl_trace::MAX_DEPTH,
         )
@@ -175,26 +187,29 @@ fn light_sampling_matches_bsdf_sampling() {
     let mut r = Renderer::new(&ctx, &s).unwrap();
     let cam = s.default_camera();
     let (w, h) = (24, 18);
-    let fs = FrameSettings {
-        width: w,
-        height: h,
-        vpls: 0,
-        direct_samples: 256,
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            width: w,
+            height: h,
+            vpls: 0,
+            direct_samples: 256,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let f = r.render(&cam, &fs).unwrap();
     let pt = PathTrace::with_nee(&ctx, &r.gpu, false);
+    let mut g = Gpu {
+        ctx: &ctx,
+        scene: &r.gpu,
+        profiler: &mut r.profiler,
+    };
+    let samples = PtSamples {
+        spp: 4096,
+        per_pass: 256,
+    };
     let img = pt
-        .render(
-            &ctx,
-            &r.gpu,
-            &mut r.profiler,
-            &CameraParams::new(&cam, w, h),
-            4096,
-            256,
-            3,
-            1,
-        )
+        .render(&mut g, &CameraParams::new(&cam, w, h), samples, 3, 1)
         .unwrap();
     let (a, b) = (mean_luminance(&f.direct), mean_luminance(&img));
     println!("direct pass {a:.5}, BSDF-sampled {b:.5}");
@@ -210,7 +225,7 @@ fn path_trace_alone_in_scene_units() {
     let fs = reference(16, 12, 256, 3);
     let mut r = Renderer::new(&ctx, &s).unwrap();
     let f = r.path_trace(&s.default_camera(), &fs, 8).unwrap();
-    assert_eq!(f.passes, vec!["pathtrace"]);
+    assert_eq!(f.passes, vec![fuzzy_vpl::gi::pipeline::Pass::PathTrace]);
     assert!(r.vpl_set.is_none(), "the VPL frame ran as well");
     assert!(common::all_finite(&f.radiance));
     let mut bright = s.clone();

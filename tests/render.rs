@@ -3,18 +3,23 @@
 mod common;
 
 use fuzzy_vpl::cpu::shading::ShadingPoint;
-use fuzzy_vpl::gi::pipeline::{Frame, FrameSettings, Renderer};
+use fuzzy_vpl::gi::pipeline::{Frame, RenderSettings, Renderer};
 use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::metrics::mean_luminance;
 use fuzzy_vpl::scene::{self, Scene};
+#[allow(unused_imports)]
+use fuzzy_vpl::settings::{ClusterSettings, FrameSettings, Gamma};
 use glam::{Mat4, Vec3};
 
-fn settings(w: u32, h: u32, spp: u32) -> FrameSettings {
-    FrameSettings {
-        width: w,
-        height: h,
-        seed: 7,
-        direct_samples: spp,
+fn settings(w: u32, h: u32, spp: u32) -> RenderSettings {
+    RenderSettings {
+        frame: FrameSettings {
+            width: w,
+            height: h,
+            seed: 7,
+            direct_samples: spp,
+            ..Default::default()
+        },
         ..Default::default()
     }
 }
@@ -158,10 +163,16 @@ fn rendering_is_scale_free() {
 #[test]
 fn extreme_light_power_scales_the_image_linearly() {
     let ctx = common::gpu();
-    let s = FrameSettings {
-        vpls: 256,
-        vpl_clusters: 64,
-        sp_clusters: 48,
+    let s = RenderSettings {
+        frame: FrameSettings {
+            vpls: 256,
+            ..settings(24, 18, 4).frame
+        },
+        cluster: ClusterSettings {
+            vpl_clusters: 64,
+            sp_clusters: 48,
+            ..settings(24, 18, 4).cluster.clone()
+        },
         ..settings(24, 18, 4)
     };
     let lum = |scene: &Scene| {
@@ -234,8 +245,11 @@ fn direct_light_sub_ranges_with_many_lights_match_cpu_twin() {
         let mut r = Renderer::new(&ctx, &s).unwrap();
         let (w, h) = (8u32, 6u32);
         let cam = s.default_camera();
-        let fs = FrameSettings {
-            vpls: 0,
+        let fs = RenderSettings {
+            frame: FrameSettings {
+                vpls: 0,
+                ..settings(w, h, spp).frame
+            },
             ..settings(w, h, spp)
         };
         let f = r.render(&cam, &fs).unwrap();
@@ -337,8 +351,11 @@ fn quad_diagonal_on_the_centre_line_has_no_crack() {
     let cam = fuzzy_vpl::scene::Camera::look_at("c", v(0., 0., 0.9), v(0., 0., -1.), Vec3::Y, 1.2);
     let (w, h) = (161u32, 121u32);
     let mut r = Renderer::new(&ctx, &s).unwrap();
-    let fs = FrameSettings {
-        vpls: 1024,
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            vpls: 1024,
+            ..settings(w, h, 4).frame
+        },
         ..settings(w, h, 4)
     };
     let f = r.render(&cam, &fs).unwrap();
@@ -372,10 +389,16 @@ fn any_finite_scale_renders_the_unscaled_image() {
     let ctx = common::gpu();
     for name in ["cornell", "conference"] {
         let base = scene::load(&format!("builtin:{name}")).unwrap();
-        let fs = FrameSettings {
-            vpls: 512,
-            vpl_clusters: 64,
-            sp_clusters: 96,
+        let fs = RenderSettings {
+            frame: FrameSettings {
+                vpls: 512,
+                ..settings(64, 48, 4).frame
+            },
+            cluster: ClusterSettings {
+                vpl_clusters: 64,
+                sp_clusters: 96,
+                ..settings(64, 48, 4).cluster.clone()
+            },
             ..settings(64, 48, 4)
         };
         let render = |k: f32| {
@@ -458,8 +481,11 @@ fn a_mesh_past_one_storage_binding_renders() {
     let f = r
         .render(
             &cam,
-            &FrameSettings {
-                vpls: 0,
+            &RenderSettings {
+                frame: FrameSettings {
+                    vpls: 0,
+                    ..settings(w, h, 1).frame
+                },
                 ..settings(w, h, 1)
             },
         )
@@ -522,10 +548,16 @@ fn lights_set_at_any_scale_are_in_the_callers_units() {
         color: Vec3::ONE,
         intensity: 2.0 * (hi - lo).length_squared() * k * k,
     };
-    let fs = FrameSettings {
-        vpls: 512,
-        vpl_clusters: 64,
-        sp_clusters: 96,
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            vpls: 512,
+            ..settings(64, 48, 4).frame
+        },
+        cluster: ClusterSettings {
+            vpl_clusters: 64,
+            sp_clusters: 96,
+            ..settings(64, 48, 4).cluster.clone()
+        },
         ..settings(64, 48, 4)
     };
     let render = |k: f32| {

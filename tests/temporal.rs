@@ -6,11 +6,14 @@ mod common;
 use fuzzy_vpl::bench::path::CameraPath;
 use fuzzy_vpl::bvh::SceneBvh;
 use fuzzy_vpl::cpu::kmeans::{self, Centroid, Point, RepPoint};
-use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KmParams, Warm, warm_iterations};
-use fuzzy_vpl::gi::pipeline::{FrameSettings, Renderer, Weighting};
+use fuzzy_vpl::gi::dispatch::Gpu;
+use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KmParams, Points, Warm, warm_iterations};
+use fuzzy_vpl::gi::pipeline::{RenderSettings, Renderer};
 use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::gi::scene_gpu::SceneGpu;
 use fuzzy_vpl::gpu::{GpuContext, profiler::Profiler};
+#[allow(unused_imports)]
+use fuzzy_vpl::settings::{ClusterSettings, FrameSettings, Gamma, Weighting};
 use fuzzy_vpl::{metrics, scene};
 use glam::Vec3;
 
@@ -130,7 +133,7 @@ fn warm_start_keeps_what_the_view_still_sees() {
     let s = KMeansSettings {
         k: 12,
         f: 1,
-        gamma: 1,
+        gamma: Gamma::Fixed(1),
         normal_threshold: 30f32.to_radians().cos(),
         iterations: 0,
         seed: 1,
@@ -179,19 +182,18 @@ fn warm_start_keeps_what_the_view_still_sees() {
         k: previous.len() as u32,
         view: Some(cam),
     };
+    let on_gpu = Points {
+        data: &buf,
+        count: W * H,
+        stride: 4,
+    };
+    let mut on = Gpu {
+        ctx: &ctx,
+        scene: &gpu,
+        profiler: &mut prof,
+    };
     let g = KMeans::new()
-        .run(
-            &ctx,
-            &gpu,
-            &mut prof,
-            "t",
-            &buf,
-            W * H,
-            4,
-            &s,
-            frame,
-            Some(&warm),
-        )
+        .run(&mut on, "t", &on_gpu, &s, frame, Some(&warm))
         .unwrap();
     assert_eq!(g.warm_kept, Some(2));
     assert_eq!(g.iterations_run, 0);
@@ -220,14 +222,20 @@ fn warm_sp_clustering_matches_its_twin_on_a_moving_view() {
     let ctx = common::gpu();
     let sc = scene::load("builtin:conference").unwrap();
     let mut r = Renderer::new(&ctx, &sc).unwrap();
-    let s = FrameSettings {
-        width: 64,
-        height: 48,
-        vpls: 512,
-        vpl_clusters: 64,
-        sp_clusters: 48,
-        direct_samples: 1,
-        temporal: true,
+    let s = RenderSettings {
+        frame: FrameSettings {
+            width: 64,
+            height: 48,
+            vpls: 512,
+            direct_samples: 1,
+            ..Default::default()
+        },
+        cluster: ClusterSettings {
+            vpl_clusters: 64,
+            sp_clusters: 48,
+            temporal: true,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let cams = orbit(&sc, &r, 2, 1.0);
@@ -247,7 +255,10 @@ fn warm_sp_clustering_matches_its_twin_on_a_moving_view() {
     let kept = b.sp_warm_kept.expect("the second frame starts warm");
     // Measured 44 of 48 kept at one degree; a warm start that keeps fewer than 3/4 is broken.
     assert!(kept >= 36, "kept {kept} of 48");
-    assert_eq!(b.sp_iterations, warm_iterations(s.iterations, kept, 48));
+    assert_eq!(
+        b.sp_iterations,
+        warm_iterations(s.cluster.iterations, kept, 48)
+    );
     assert!(
         b.sp_iterations < a.sp_iterations,
         "{} vs {}",
@@ -257,8 +268,13 @@ fn warm_sp_clustering_matches_its_twin_on_a_moving_view() {
     let c = r.sp_clustering.as_ref().unwrap();
     let gb = r.last_gbuffer().unwrap();
     let points: Vec<Point> = (0..64 * 48).map(|m| Point::from_vec4s(&gb, m, 4)).collect();
-    let (twin, twin_kept) =
-        kmeans::kmeans_warm(&points, &c.params, s.iterations, &previous, &previous_reps);
+    let (twin, twin_kept) = kmeans::kmeans_warm(
+        &points,
+        &c.params,
+        s.cluster.iterations,
+        &previous,
+        &previous_reps,
+    );
     assert_eq!(twin_kept, kept);
     assert_eq!(twin.iterations_run, c.iterations_run);
     let gpu_centroids = read_centroids(&ctx, &c.centroids, c.k());
@@ -298,18 +314,24 @@ fn temporal_reuse_steadies_the_error_along_an_orbit() {
     let ctx = common::gpu();
     let sc = scene::load("builtin:conference").unwrap();
     let mut r = Renderer::new(&ctx, &sc).unwrap();
-    let base = FrameSettings {
-        width: 80,
-        height: 60,
-        vpls: 1024,
-        vpl_clusters: 128,
-        sp_clusters: 64,
-        direct_samples: 1,
-        weighting: Weighting::InverseDistance,
+    let base = RenderSettings {
+        frame: FrameSettings {
+            width: 80,
+            height: 60,
+            vpls: 1024,
+            direct_samples: 1,
+            ..Default::default()
+        },
+        cluster: ClusterSettings {
+            vpl_clusters: 128,
+            sp_clusters: 64,
+            weighting: Weighting::InverseDistance,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let cams = orbit(&sc, &r, 4, 1.5);
-    let reference = FrameSettings {
+    let reference = RenderSettings {
         reference: true,
         ..base.clone()
     };
@@ -319,8 +341,11 @@ fn temporal_reuse_steadies_the_error_along_an_orbit() {
         .collect();
     let mut result = Vec::new();
     for temporal in [false, true] {
-        let s = FrameSettings {
-            temporal,
+        let s = RenderSettings {
+            cluster: ClusterSettings {
+                temporal,
+                ..base.clone().cluster.clone()
+            },
             ..base.clone()
         };
         r.sp_clustering = None;
@@ -369,13 +394,19 @@ fn temporal_reuse_steadies_the_error_along_an_orbit() {
 fn relit_renderer_equals_a_fresh_one_of_the_relit_scene() {
     let ctx = common::gpu();
     let sc = scene::load("builtin:cornell").unwrap();
-    let s = FrameSettings {
-        width: 48,
-        height: 36,
-        vpls: 512,
-        vpl_clusters: 64,
-        sp_clusters: 32,
-        direct_samples: 2,
+    let s = RenderSettings {
+        frame: FrameSettings {
+            width: 48,
+            height: 36,
+            vpls: 512,
+            direct_samples: 2,
+            ..Default::default()
+        },
+        cluster: ClusterSettings {
+            vpl_clusters: 64,
+            sp_clusters: 32,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let cam = sc.default_camera();
@@ -410,15 +441,18 @@ fn relit_renderer_equals_a_fresh_one_of_the_relit_scene() {
     }
     // Temporal: the relit frame's VPL clustering is warm (kept its valid centroids).
     let mut r = Renderer::new(&ctx, &sc).unwrap();
-    let t = FrameSettings {
-        temporal: true,
+    let t = RenderSettings {
+        cluster: ClusterSettings {
+            temporal: true,
+            ..s.clone().cluster.clone()
+        },
         ..s.clone()
     };
     r.render(&cam, &t).unwrap();
     r.set_lights(&[point], 1.0);
     let f = r.render(&cam, &t).unwrap();
     assert!(common::all_finite(&f.radiance));
-    let c = r.lights.as_ref().unwrap().0.clustering.as_ref().unwrap();
+    let c = r.lights.as_ref().unwrap().list.clustering.as_ref().unwrap();
     assert_eq!(c.warm_kept, Some(64), "every previous VPL centroid is kept");
     assert!(c.iterations_run == 1, "{}", c.iterations_run);
 }
@@ -432,21 +466,27 @@ fn direct_light_estimates_average_towards_the_converged_image() {
     let sc = scene::load("builtin:cornell").unwrap();
     let mut r = Renderer::new(&ctx, &sc).unwrap();
     let cam = sc.default_camera();
-    let one = FrameSettings {
-        width: 48,
-        height: 36,
-        vpls: 0,
-        direct_samples: 1,
+    let one = RenderSettings {
+        frame: FrameSettings {
+            width: 48,
+            height: 36,
+            vpls: 0,
+            direct_samples: 1,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let f = r.render(&cam, &one).unwrap();
-    let (again, ms) = r.direct_again(&one, one.seed).unwrap();
+    let (again, ms) = r.direct_again(&one, one.frame.seed).unwrap();
     assert_eq!(again, f.direct, "the same seed gives the same estimate");
     assert!(ms > 0.0);
     let mut sum = vec![[0f64; 3]; f.direct.len()];
     for i in 0..16u32 {
         let (d, _) = r
-            .direct_again(&one, one.seed.wrapping_add(i.wrapping_mul(0x9e37_79b9)))
+            .direct_again(
+                &one,
+                one.frame.seed.wrapping_add(i.wrapping_mul(0x9e37_79b9)),
+            )
             .unwrap();
         assert!(common::all_finite(&d));
         for (s, p) in sum.iter_mut().zip(&d) {
@@ -459,9 +499,12 @@ fn direct_light_estimates_average_towards_the_converged_image() {
     let converged = r
         .render(
             &cam,
-            &FrameSettings {
-                direct_samples: 256,
-                seed: 7,
+            &RenderSettings {
+                frame: FrameSettings {
+                    direct_samples: 256,
+                    seed: 7,
+                    ..one.clone().frame
+                },
                 ..one.clone()
             },
         )

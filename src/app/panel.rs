@@ -6,10 +6,11 @@ use std::sync::atomic::Ordering;
 use egui::{Color32, Key, PointerButton, RichText, Sense, Slider, Ui};
 use egui_plot::{Legend, Plot, Points};
 
+use super::Viewer;
 use super::camera::Mode as CamMode;
 use super::settings::Bookmark;
 use super::views::View;
-use super::{Mode, Viewer};
+use crate::settings::Weighting;
 
 pub const PANEL_WIDTH: f32 = 310.0;
 
@@ -218,46 +219,46 @@ impl Viewer {
                 let s = &mut self.s;
                 let r = &self.ranges;
                 ui.horizontal(|ui| {
-                    ui.selectable_value(&mut s.mode, Mode::Hard, "hard");
-                    ui.selectable_value(&mut s.mode, Mode::Uniform, "fuzzy (uniform)");
-                    ui.selectable_value(&mut s.mode, Mode::Weighted, "weighted");
+                    ui.selectable_value(&mut s.cluster.weighting, Weighting::Hard, "hard");
+                    ui.selectable_value(&mut s.cluster.weighting, Weighting::Uniform, "fuzzy (uniform)");
+                    ui.selectable_value(&mut s.cluster.weighting, Weighting::InverseDistance, "weighted");
                 });
                 ui.horizontal(|ui| {
                     ui.checkbox(&mut s.sp_on, "SP clustering");
                     ui.checkbox(&mut s.vpl_on, "VPL clustering");
                     ui.checkbox(&mut s.direct_on, "direct");
                 });
-                ui.checkbox(&mut s.temporal, "temporal reuse").on_hover_text(
+                ui.checkbox(&mut s.cluster.temporal, "temporal reuse").on_hover_text(
                     "Reproject the last frame while moving, start the clusterings from the last \
                      frame's, accumulate the direct light at rest (docs/temporal.md)",
                 );
                 ui.add_enabled(
                     s.sp_on,
-                    Slider::new(&mut s.sp_clusters, 1..=r.sp_clusters)
+                    Slider::new(&mut s.cluster.sp_clusters, 1..=r.sp_clusters)
                         .logarithmic(true)
                         .text("K (SP clusters)"),
                 );
                 ui.add_enabled(
                     s.vpl_on,
-                    Slider::new(&mut s.vpl_clusters, 1..=r.vpl_clusters)
+                    Slider::new(&mut s.cluster.vpl_clusters, 1..=r.vpl_clusters)
                         .logarithmic(true)
                         .text("K_VPL"),
                 );
                 ui.add(
-                    Slider::new(&mut s.vpls, 0..=r.vpls)
+                    Slider::new(&mut s.frame.vpls, 0..=r.vpls)
                         .logarithmic(true)
                         .text("VPLs"),
                 );
                 ui.add_enabled(
-                    s.mode != Mode::Hard,
-                    Slider::new(&mut s.fuzziness, 1..=16).text("F (fuzziness)"),
+                    s.cluster.weighting != Weighting::Hard,
+                    Slider::new(&mut s.cluster.fuzziness, 1..=16).text("F (fuzziness)"),
                 );
                 ui.add_enabled(
-                    s.mode == Mode::Weighted,
-                    Slider::new(&mut s.weight_exponent, 0.0..=r.weight_exponent)
+                    s.cluster.weighting == Weighting::InverseDistance,
+                    Slider::new(&mut s.cluster.weight_exponent, 0.0..=r.weight_exponent)
                         .text("p (weights = dist^-p; Eq. 10: 1)"),
                 );
-                ui.add_enabled_ui(s.mode != Mode::Hard, |ui| {
+                ui.add_enabled_ui(s.cluster.weighting != Weighting::Hard, |ui| {
                     ui.horizontal(|ui| {
                         ui.checkbox(&mut s.plane_gate_on, "plane gate")
                             .on_hover_text(
@@ -286,13 +287,13 @@ impl Viewer {
                         Slider::new(&mut s.gamma, 1..=r.gamma).text("γ (downsampling)"),
                     );
                 });
-                let cos = s.normal_threshold();
+                let cos = s.nt_degrees.to_radians().cos();
                 ui.add(
                     Slider::new(&mut s.nt_degrees, 0.0..=180.0)
                         .suffix("°")
                         .text(format!("n_t (cos {cos:.3})")),
                 );
-                ui.add(Slider::new(&mut s.iterations, 0..=r.iterations).text("k-means iterations"));
+                ui.add(Slider::new(&mut s.cluster.iterations, 0..=r.iterations).text("k-means iterations"));
                 ui.separator();
                 ui.horizontal(|ui| {
                     ui.checkbox(&mut s.exposure_auto, "auto").on_hover_text(
@@ -354,8 +355,8 @@ impl Viewer {
                     for p in f
                         .passes
                         .iter()
-                        .copied()
-                        .chain(["frame"])
+                        .map(|p| p.name())
+                        .chain([crate::gi::pipeline::FRAME_KEY])
                         .filter(|p| f.timings_ms.contains_key(*p))
                     {
                         ui.label(p);
@@ -421,7 +422,7 @@ impl Viewer {
                         if let Some(r) = &self.reference {
                             ui.label(format!(
                                 "reference {}×{} in {:.1} s (moving the camera drops it)",
-                                r.job.settings.width, r.job.settings.height, r.secs
+                                r.job.settings.frame.width, r.job.settings.frame.height, r.secs
                             ));
                         }
                     }

@@ -12,7 +12,7 @@ use std::time::Instant;
 use anyhow::Result;
 use glam::Vec3;
 
-use crate::gi::pipeline::{Cancelled, Control, Frame, FrameSettings, Renderer};
+use crate::gi::pipeline::{Cancelled, Control, Frame, Pass, RenderSettings, Renderer};
 use crate::gpu::GpuContext;
 use crate::scene::{Camera, Scene};
 
@@ -42,7 +42,7 @@ pub struct SceneInfo {
 pub struct FrameJob {
     pub id: u64,
     pub camera: Camera,
-    pub settings: FrameSettings,
+    pub settings: RenderSettings,
     /// Read back the SP clustering's nearest cluster per pixel.
     pub want_sp_ids: bool,
     /// A preview rendered while the camera moves (`preview_settings`).
@@ -259,7 +259,7 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
         if let Some(job) = frame.take() {
             match render_guarded(&ctx, &mut renderer, &mut cache, job) {
                 Ok(r) => {
-                    if r.job.settings.temporal && !r.job.preview {
+                    if r.job.settings.cluster.temporal && !r.job.preview {
                         accumulation = Some(Accumulation::new(&r));
                     }
                     send(Reply::Frame(Box::new(r)))
@@ -297,7 +297,7 @@ pub const MAX_ESTIMATES: u32 = 64;
 /// job (a camera move, a settings change) ends it.
 struct Accumulation {
     id: u64,
-    settings: FrameSettings,
+    settings: RenderSettings,
     sum: Vec<[f64; 3]>,
     estimates: u32,
 }
@@ -315,6 +315,7 @@ impl Accumulation {
     fn refine(&mut self, renderer: &mut Renderer) -> Result<Reply> {
         let seed = self
             .settings
+            .frame
             .seed
             .wrapping_add(self.estimates.wrapping_mul(0x9e37_79b9));
         let (direct, gpu_ms) = renderer.direct_again(&self.settings, seed)?;
@@ -330,7 +331,7 @@ impl Accumulation {
             id: self.id,
             direct: self.sum.iter().map(|s| s.map(|c| (c / n) as f32)).collect(),
             estimates: self.estimates,
-            samples: self.estimates as u64 * self.settings.direct_samples as u64,
+            samples: self.estimates as u64 * self.settings.frame.direct_samples as u64,
             gpu_ms,
         })
     }
@@ -354,7 +355,7 @@ fn render_guarded(
     cache: &mut PointCache,
     job: FrameJob,
 ) -> Result<Rendered> {
-    let (w, h) = (job.settings.width, job.settings.height);
+    let (w, h) = (job.settings.frame.width, job.settings.frame.height);
     crate::panic_guard::quietly(|| render(ctx, renderer, cache, job))
         .unwrap_or_else(|msg| Err(anyhow::anyhow!("the {w}x{h} GI frame failed: {msg}")))
 }
@@ -378,9 +379,8 @@ fn render(
     };
     let wall_ms = t.elapsed().as_secs_f64() * 1e3;
     let relit = match &renderer.vpl_set {
-        Some((_, key, _)) if cache.vpl_key != Some(*key) => {
-            let ms = |k: &str| frame.timings_ms.get(k).copied().unwrap_or(0.0);
-            Some((ms("vpl_trace"), ms("vpl_cluster")))
+        Some(v) if cache.vpl_key != Some(v.key) => {
+            Some((frame.ms(Pass::VplTrace), frame.ms(Pass::VplCluster)))
         }
         _ => None,
     };
@@ -388,9 +388,9 @@ fn render(
     let k = 1.0 / renderer.geometry_scale;
     let pos = |p: &[f32; 4]| (Vec3::new(p[0], p[1], p[2]).as_dvec3() * k).as_vec3();
     match &renderer.vpl_set {
-        Some((set, key, _)) if cache.vpl_key != Some(*key) => {
-            cache.vpl_key = Some(*key);
-            cache.vpls = Arc::new(set.vpls.iter().map(|v| pos(&v.pos)).collect());
+        Some(v) if cache.vpl_key != Some(v.key) => {
+            cache.vpl_key = Some(v.key);
+            cache.vpls = Arc::new(v.set.vpls.iter().map(|v| pos(&v.pos)).collect());
         }
         None => {
             cache.vpl_key = None;
@@ -399,9 +399,9 @@ fn render(
         _ => {}
     }
     match &renderer.lights {
-        Some((list, key, _)) if cache.light_key != Some(*key) => {
-            cache.light_key = Some(*key);
-            cache.lights = Arc::new(list.lights.iter().map(|v| pos(&v.pos)).collect());
+        Some(l) if cache.light_key != Some(l.key) => {
+            cache.light_key = Some(l.key);
+            cache.lights = Arc::new(l.list.lights.iter().map(|v| pos(&v.pos)).collect());
         }
         None => {
             cache.light_key = None;

@@ -1,23 +1,22 @@
 //! `results.csv`: one row per configuration. A fixed header (the contract a reader indexes by name);
-//! fields are quoted only when they hold a comma, quote or newline (RFC 4180).
+//! fields are quoted only when they hold a comma, quote or newline (RFC 4180, by the `csv` crate).
 
 use std::collections::BTreeMap;
 
-use crate::gi::kmeans::{gamma_name, parse_gamma};
+use crate::gi::pipeline::{FRAME_KEY, Pass};
+use crate::settings::Gamma;
 use anyhow::{Context, Result, bail};
 
+/// The passes with a `<stage>_ms` column, in the order of the CSV columns (`frame` follows them):
+/// every timed pass but the unclustered reference, which has `reference_ms`.
+pub fn stage_passes() -> impl Iterator<Item = Pass> {
+    Pass::TIMED.into_iter().filter(|&p| p != Pass::Reference)
+}
+
 /// The stage timings of a row, in the order of the CSV columns (`frame` last).
-pub const STAGES: &[&str] = &[
-    "vpl_trace",
-    "vpl_cluster",
-    "primary",
-    "sp_cluster",
-    "visibility",
-    "shade",
-    "gather",
-    "direct",
-    "frame",
-];
+pub fn stages() -> impl Iterator<Item = &'static str> {
+    stage_passes().map(|p| p.name()).chain([FRAME_KEY])
+}
 
 /// One measured configuration.
 #[derive(Clone, Debug, PartialEq)]
@@ -32,11 +31,11 @@ pub struct Row {
     pub vpl_clusters: u32,
     pub sp_clusters: u32,
     pub fuzziness: u32,
-    /// γ asked (`kmeans::AUTO_GAMMA` for `auto`, written so in the file).
-    pub gamma: u32,
+    /// γ asked (`auto` or the factor, written so in the file).
+    pub gamma: Gamma,
     pub normal_threshold: f32,
     pub iterations: u32,
-    /// GPU ms per stage (mean of the 3 best of `repeat`), keyed by `STAGES`.
+    /// GPU ms per stage (mean of the 3 best of `repeat`), keyed by `stages()`.
     pub stages_ms: BTreeMap<String, f64>,
     /// The reference's frame time (same camera), ms.
     pub reference_ms: f64,
@@ -88,7 +87,7 @@ pub fn header() -> Vec<String> {
     ]
     .map(String::from)
     .to_vec();
-    h.extend(STAGES.iter().map(|s| format!("{s}_ms")));
+    h.extend(stages().map(|s| format!("{s}_ms")));
     h.extend(
         [
             "reference_ms",
@@ -120,11 +119,11 @@ fn record(r: &Row) -> Vec<String> {
         r.vpl_clusters.to_string(),
         r.sp_clusters.to_string(),
         r.fuzziness.to_string(),
-        gamma_name(r.gamma),
+        r.gamma.to_string(),
         r.normal_threshold.to_string(),
         r.iterations.to_string(),
     ];
-    v.extend(STAGES.iter().map(|s| format!("{}", r.stage(s))));
+    v.extend(stages().map(|s| format!("{}", r.stage(s))));
     v.extend([
         format!("{}", r.reference_ms),
         format!("{}", r.speedup),
@@ -142,50 +141,46 @@ fn record(r: &Row) -> Vec<String> {
     v
 }
 
-fn quote(field: &str) -> String {
-    if field.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", field.replace('"', "\"\""))
-    } else {
-        field.to_string()
-    }
-}
-
 /// The whole file: header and rows, `\n` line ends.
 pub fn to_csv(rows: &[Row]) -> String {
-    let line = |f: Vec<String>| f.iter().map(|s| quote(s)).collect::<Vec<_>>().join(",") + "\n";
-    let mut s = line(header());
-    for r in rows {
-        s += &line(record(r));
-    }
-    s
+    write_records(std::iter::once(header()).chain(rows.iter().map(record)))
 }
 
-/// Splits one CSV line (no embedded newlines) into fields.
+/// One CSV line's fields (for tests and tools reading `path.csv`).
 pub fn split_line(line: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut cur = String::new();
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(c) = chars.next() {
-        match (quoted, c) {
-            (true, '"') if chars.peek() == Some(&'"') => {
-                cur.push('"');
-                chars.next();
-            }
-            (true, '"') => quoted = false,
-            (false, '"') if cur.is_empty() => quoted = true,
-            (false, ',') => out.push(std::mem::take(&mut cur)),
-            _ => cur.push(c),
-        }
+    ::csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(line.as_bytes())
+        .records()
+        .next()
+        .and_then(|r| r.ok())
+        .map_or_else(Vec::new, |r| r.iter().map(String::from).collect())
+}
+
+/// Writes `records` (the header first) as CSV text, `\n` line ends.
+pub fn write_records(records: impl IntoIterator<Item = Vec<String>>) -> String {
+    let mut w = ::csv::WriterBuilder::new()
+        .terminator(::csv::Terminator::Any(b'\n'))
+        .from_writer(Vec::new());
+    for r in records {
+        w.write_record(&r).expect("writing to memory");
     }
-    out.push(cur);
-    out
+    String::from_utf8(w.into_inner().expect("writing to memory")).expect("UTF-8 fields")
 }
 
 /// Reads a file written by `to_csv` back (for tests and tools).
 pub fn from_csv(text: &str) -> Result<Vec<Row>> {
-    let mut lines = text.lines();
-    let head = split_line(lines.next().context("empty CSV")?);
+    let mut reader = ::csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .from_reader(text.as_bytes());
+    let mut records = reader.records();
+    let head: Vec<String> = records
+        .next()
+        .context("empty CSV")??
+        .iter()
+        .map(String::from)
+        .collect();
     // The columns through `label` are required; a file from an older version may stop after any of
     // the later ones (they were added at the end).
     let full = header();
@@ -195,11 +190,8 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
     }
     let col = |name: &str| head.iter().position(|h| h == name).unwrap();
     let mut rows = Vec::new();
-    for (i, l) in lines.enumerate() {
-        if l.is_empty() {
-            continue;
-        }
-        let f = split_line(l);
+    for (i, record) in records.enumerate() {
+        let f: Vec<String> = record?.iter().map(String::from).collect();
         if f.len() != head.len() {
             bail!(
                 "line {}: {} fields, expected {}",
@@ -224,11 +216,12 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
             vpl_clusters: num("vpl_clusters")? as u32,
             sp_clusters: num("sp_clusters")? as u32,
             fuzziness: num("fuzziness")? as u32,
-            gamma: parse_gamma(get("gamma")).or_else(|_| num("gamma").map(|g| g as u32))?,
+            gamma: get("gamma")
+                .parse()
+                .or_else(|_| num("gamma").map(|g| Gamma::Fixed(g as u32)))?,
             normal_threshold: num("normal_threshold")? as f32,
             iterations: num("iterations")? as u32,
-            stages_ms: STAGES
-                .iter()
+            stages_ms: stages()
                 .map(|s| Ok((s.to_string(), num(&format!("{s}_ms"))?)))
                 .collect::<Result<_>>()?,
             reference_ms: num("reference_ms")?,
@@ -266,21 +259,15 @@ pub(crate) mod tests {
     pub fn synthetic(mode: &str, sp: u32, vpl: u32) -> Row {
         let mut stages_ms = BTreeMap::new();
         let k = (sp + vpl) as f64;
-        for (i, s) in STAGES.iter().enumerate() {
+        for (i, s) in stages().enumerate() {
             stages_ms.insert(s.to_string(), 0.5 + i as f64 * 0.1 + k * 1e-3);
         }
-        let frame: f64 = [
-            "primary",
-            "sp_cluster",
-            "visibility",
-            "shade",
-            "gather",
-            "direct",
-        ]
-        .iter()
-        .map(|s| stages_ms[*s])
-        .sum();
-        stages_ms.insert("frame".into(), frame);
+        // The frame: every stage but the resident VPL work.
+        let frame: f64 = stage_passes()
+            .filter(|p| !p.resident())
+            .map(|p| stages_ms[p.name()])
+            .sum();
+        stages_ms.insert(FRAME_KEY.into(), frame);
         let bias = match mode {
             "hard" => 2.0,
             "uniform" => 1.3,
@@ -296,7 +283,7 @@ pub(crate) mod tests {
             vpl_clusters: vpl,
             sp_clusters: sp,
             fuzziness: 6,
-            gamma: 4,
+            gamma: Gamma::Fixed(4),
             normal_threshold: 0.866,
             iterations: 10,
             stages_ms,
@@ -316,45 +303,6 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn header_has_the_contract_columns_in_order() {
-        let h = header();
-        let want = [
-            "scene",
-            "camera",
-            "width",
-            "height",
-            "vpls",
-            "mode",
-            "vpl_clusters",
-            "sp_clusters",
-            "fuzziness",
-            "gamma",
-            "normal_threshold",
-            "iterations",
-            "vpl_trace_ms",
-            "vpl_cluster_ms",
-            "primary_ms",
-            "sp_cluster_ms",
-            "visibility_ms",
-            "shade_ms",
-            "gather_ms",
-            "direct_ms",
-            "frame_ms",
-            "reference_ms",
-            "speedup",
-            "mse",
-            "rel_mse",
-            "sp_clusters_used",
-            "vpl_clusters_used",
-            "shadow_rays",
-        ];
-        assert_eq!(&h[..want.len()], &want.map(String::from));
-        let csv = to_csv(&[]);
-        assert_eq!(csv.lines().count(), 1);
-        assert_eq!(split_line(csv.trim_end()), h);
-    }
-
-    #[test]
     fn a_row_round_trips() {
         let mut r = synthetic("weighted", 48, 128);
         r.scene = "dir, with \"comma\"/scene.glb".into();
@@ -364,7 +312,7 @@ pub(crate) mod tests {
         let back = from_csv(&csv).unwrap();
         assert_eq!(back, vec![r.clone()]);
         // γ auto is written as the word and read back.
-        r.gamma = crate::gi::kmeans::AUTO_GAMMA;
+        r.gamma = Gamma::Auto;
         let csv = to_csv(std::slice::from_ref(&r));
         assert!(csv.contains(",auto,"), "{csv}");
         assert_eq!(from_csv(&csv).unwrap(), vec![r]);
@@ -377,15 +325,13 @@ pub(crate) mod tests {
         let csv = to_csv(std::slice::from_ref(&r));
         assert_eq!(from_csv(&csv).unwrap(), vec![r.clone()]);
         // Drop the three columns added last (weight_exponent, gamma_used, plane_gate_deg).
-        let cut = |l: &str| {
-            let f = split_line(l);
-            f[..f.len() - 3]
-                .iter()
-                .map(|x| quote(x))
-                .collect::<Vec<_>>()
-                .join(",")
+        let cut = |text: &str| {
+            write_records(text.lines().map(|l| {
+                let f = split_line(l);
+                f[..f.len() - 3].to_vec()
+            }))
         };
-        let old: String = csv.lines().map(|l| cut(l) + "\n").collect();
+        let old = cut(&csv);
         let back = from_csv(&old).unwrap();
         assert_eq!(back[0].weight_exponent, 1.0);
         assert_eq!(back[0].gamma_used, None);
@@ -393,7 +339,7 @@ pub(crate) mod tests {
         assert_eq!(back[0].label, r.label);
         // Not a prefix of the header, or short of `label`: refused.
         assert!(from_csv(&old.replacen("scene,camera", "camera,scene", 1)).is_err());
-        let short: String = old.lines().map(|l| cut(l) + "\n").collect();
+        let short = cut(&old);
         assert!(from_csv(&short).is_err());
     }
 

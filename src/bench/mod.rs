@@ -16,32 +16,51 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::exposure::Exposure;
-use crate::gi::pipeline::{Frame, FrameSettings, Renderer};
+use crate::gi::pipeline::{FRAME_KEY, Frame, Pass, RenderSettings, Renderer};
 use crate::gpu::GpuContext;
 use crate::scene::{Camera, Scene};
+use crate::settings::{ClusterSettings, FrameSettings};
 use crate::{export, metrics, stats};
-use csv::{Row, STAGES};
+use csv::Row;
 use summary::{CameraSummary, SummaryInfo};
-use sweep::{Config, Sweep};
+use sweep::Sweep;
 
 /// Everything a bench run needs besides the scene and the device.
 pub struct BenchPlan {
     /// The scene as named on the command line (written in every row).
     pub scene_name: String,
     pub out_dir: PathBuf,
-    /// Size, VPLs, seed, n_t, iterations, clamp, direct samples; the sweep sets the rest.
-    pub base: FrameSettings,
+    /// Size, VPLs, seed, clamp, direct samples and exposure (PNG; `Auto` is resolved once a camera
+    /// from its reference, so that every image of a camera is shown at the same exposure).
+    pub frame: FrameSettings,
+    /// Resolved (`Sweep::resolve`): every list has its values.
     pub sweep: Sweep,
     /// (name written in the rows, camera).
     pub cameras: Vec<(String, Camera)>,
     pub repeat: u32,
     pub reference_repeat: u32,
-    /// PNG exposure; `Auto` is resolved once a camera from its reference, so that every image of a
-    /// camera is shown at the same exposure.
-    pub exposure: Exposure,
     /// Draw the progress bar (it hides itself when stderr is not a terminal).
     pub progress: bool,
+}
+
+impl BenchPlan {
+    /// The render settings of configuration `c`.
+    pub fn settings(&self, c: &ClusterSettings) -> RenderSettings {
+        RenderSettings {
+            frame: self.frame,
+            cluster: c.clone(),
+            ..Default::default()
+        }
+    }
+
+    /// The render settings of the unclustered reference.
+    pub fn reference_settings(&self) -> RenderSettings {
+        RenderSettings {
+            frame: self.frame,
+            reference: true,
+            ..Default::default()
+        }
+    }
 }
 
 /// What a run produced.
@@ -72,7 +91,7 @@ const GPU_WARMUP: Duration = Duration::from_millis(300);
 fn timed(
     renderer: &mut Renderer,
     camera: &Camera,
-    s: &FrameSettings,
+    s: &RenderSettings,
     n: u32,
     pb: &ProgressBar,
 ) -> Result<(Frame, BTreeMap<String, f64>)> {
@@ -138,7 +157,7 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
     std::fs::create_dir_all(&img_dir)
         .with_context(|| format!("{}: cannot create", img_dir.display()))?;
     remove_old_images(&img_dir)?;
-    let configs: Vec<Config> = plan.sweep.configs();
+    let configs: Vec<ClusterSettings> = plan.sweep.configs();
     let frames = plan.cameras.len() as u64
         * (plan.reference_repeat.max(1) as u64 + configs.len() as u64 * plan.repeat.max(1) as u64);
     let pb = if plan.progress {
@@ -155,10 +174,7 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
     );
     let say = |line: String| pb.suspend(|| eprintln!("{line}"));
     let mut renderer = Renderer::new(ctx, scene)?;
-    let base = FrameSettings {
-        progress: false,
-        ..plan.base.clone()
-    };
+    let base = plan.frame;
     let multi = plan.cameras.len() > 1;
     let mut rows: Vec<Row> = Vec::new();
     let mut files = Vec::new();
@@ -172,10 +188,7 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
         };
         // The reference: every pixel × every VPL.
         pb.set_message(format!("camera {cam_name}: reference"));
-        let ref_settings = FrameSettings {
-            reference: true,
-            ..base.clone()
-        };
+        let ref_settings = plan.reference_settings();
         let (reference, ref_t) = timed(
             &mut renderer,
             camera,
@@ -183,8 +196,8 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
             plan.reference_repeat,
             &pb,
         )?;
-        let reference_ms = ref_t["frame"];
-        let exposure = plan.exposure.resolve(&reference.radiance);
+        let reference_ms = ref_t[FRAME_KEY];
+        let exposure = plan.frame.exposure.resolve(&reference.radiance);
         let ref_exr = format!("reference{suffix}.exr");
         export::write_exr(
             &out.join(&ref_exr),
@@ -209,35 +222,35 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
         ));
         let mut cam_rows = Vec::new();
         for (i, c) in configs.iter().enumerate() {
-            pb.set_message(format!("camera {cam_name}: {}", c.label()));
-            let s = c.settings(&base);
+            pb.set_message(format!("camera {cam_name}: {}", sweep::label(c)));
+            let s = plan.settings(c);
             let (frame, t) = timed(&mut renderer, camera, &s, plan.repeat, &pb)?;
-            let label = c.label_ran(
-                frame.passes.contains(&"sp_cluster"),
-                frame.passes.contains(&"vpl_cluster"),
+            let label = sweep::label_ran(
+                c,
+                frame.ran(Pass::SpCluster),
+                frame.ran(Pass::VplCluster),
                 frame.gamma_used,
             );
-            let stages_ms: BTreeMap<String, f64> = STAGES
-                .iter()
-                .map(|k| (k.to_string(), t.get(*k).copied().unwrap_or(0.0)))
+            let stages_ms: BTreeMap<String, f64> = csv::stages()
+                .map(|k| (k.to_string(), t.get(k).copied().unwrap_or(0.0)))
                 .collect();
-            let frame_ms = stages_ms["frame"];
+            let frame_ms = stages_ms[FRAME_KEY];
             let row = Row {
                 scene: plan.scene_name.clone(),
                 camera: cam_name.clone(),
                 width: frame.width,
                 height: frame.height,
                 vpls: frame.vpls,
-                mode: c.mode.name().into(),
+                mode: sweep::mode(c).name().into(),
                 vpl_clusters: c.vpl_clusters,
                 sp_clusters: c.sp_clusters,
                 fuzziness: c.fuzziness,
                 gamma: c.gamma,
                 gamma_used: frame.gamma_used,
-                plane_gate_deg: c.plane_gate_deg,
+                plane_gate_deg: c.plane_gate,
                 weight_exponent: c.weight_exponent,
-                normal_threshold: s.normal_threshold,
-                iterations: s.iterations,
+                normal_threshold: c.normal_threshold,
+                iterations: c.iterations,
                 stages_ms,
                 reference_ms,
                 speedup: if frame_ms > 0.0 {

@@ -11,11 +11,12 @@ use glam::{Mat4, Vec3, Vec3A};
 use plotters::prelude::*;
 
 use super::BenchPlan;
-use super::sweep::Config;
+use super::sweep;
 use crate::bvh::SceneBvh;
-use crate::gi::pipeline::{Frame, FrameSettings, Renderer};
+use crate::gi::pipeline::{Frame, Pass, Renderer};
 use crate::gpu::GpuContext;
 use crate::scene::{Camera, Scene};
+use crate::settings::ClusterSettings;
 use crate::{export, metrics};
 
 /// An orbit of `degrees` in all, in `frames` frames, about the vertical axis through the point the
@@ -83,9 +84,10 @@ pub fn orbit_target(scene: &Scene, bvh: &SceneBvh, cam: &Camera) -> Vec3 {
 }
 
 /// One frame of a path.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PathRow {
     pub label: String,
+    #[serde(serialize_with = "on_off")]
     pub temporal: bool,
     pub frame: u32,
     /// GPU ms of the frame (resident VPL work excluded) and of its SP clustering.
@@ -106,32 +108,18 @@ pub struct PathRow {
     pub visibility_rows_reused: u32,
 }
 
-pub const HEADER: &str = "label,temporal,frame,frame_ms,sp_cluster_ms,mse,rel_mse,instability,sp_iterations,sp_warm_kept,sp_clusters_used,reference_ms,visibility_ms,visibility_rows_reused";
-
 pub fn to_csv(rows: &[PathRow]) -> String {
-    let mut s = String::from(HEADER);
-    s.push('\n');
-    let opt = |v: Option<String>| v.unwrap_or_default();
+    let mut w = ::csv::WriterBuilder::new()
+        .terminator(::csv::Terminator::Any(b'\n'))
+        .from_writer(Vec::new());
     for r in rows {
-        s.push_str(&format!(
-            "\"{}\",{},{},{},{},{:e},{:e},{},{},{},{},{},{},{}\n",
-            r.label.replace('"', "\"\""),
-            if r.temporal { "on" } else { "off" },
-            r.frame,
-            r.frame_ms,
-            r.sp_cluster_ms,
-            r.mse,
-            r.rel_mse,
-            opt(r.instability.map(|v| format!("{v:e}"))),
-            r.sp_iterations,
-            opt(r.sp_warm_kept.map(|v| v.to_string())),
-            r.sp_clusters_used,
-            r.reference_ms,
-            r.visibility_ms,
-            r.visibility_rows_reused,
-        ));
+        w.serialize(r).expect("writing to memory");
     }
-    s
+    String::from_utf8(w.into_inner().expect("writing to memory")).expect("UTF-8 fields")
+}
+
+fn on_off<S: serde::Serializer>(on: &bool, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(if *on { "on" } else { "off" })
 }
 
 /// Means over frames 1.. (the frames that can reuse) of one label and temporal setting: (frame ms,
@@ -167,12 +155,8 @@ pub fn run(
     let start = &plan.cameras.first().ok_or_else(|| anyhow!("no camera"))?.1;
     let target = orbit_target(&renderer.scene, &renderer.bvh, start);
     let cameras = path.cameras(start, target);
-    let configs: Vec<Config> = plan.sweep.configs();
-    let reference_settings = FrameSettings {
-        reference: true,
-        progress: false,
-        ..plan.base.clone()
-    };
+    let configs = plan.sweep.configs();
+    let reference_settings = plan.reference_settings();
     let mut references: Vec<(Vec<[f32; 3]>, f64)> = Vec::new();
     for (i, cam) in cameras.iter().enumerate() {
         let f = renderer.render(cam, &reference_settings)?;
@@ -180,23 +164,25 @@ pub fn run(
             "path: reference {}/{} in {:.0} ms GPU",
             i + 1,
             cameras.len(),
-            f.timings_ms["frame"]
+            f.frame_ms()
         );
-        references.push((f.radiance, f.timings_ms["frame"]));
+        let ms = f.frame_ms();
+        references.push((f.radiance, ms));
     }
     let mut rows = Vec::new();
     for c in &configs {
         for &on in temporal {
-            let s = FrameSettings {
+            let s = plan.settings(&ClusterSettings {
                 temporal: on,
-                ..c.settings(&plan.base)
-            };
+                ..c.clone()
+            });
             // Each run starts with no past.
             renderer.sp_clustering = None;
             let mut prev: Option<Frame> = None;
             for (i, cam) in cameras.iter().enumerate() {
                 let f = renderer.render(cam, &s)?;
-                let label = c.label_ran(
+                let label = sweep::label_ran(
+                    c,
                     f.gamma_used.is_some(),
                     f.vpl_clusters_used > 0,
                     f.gamma_used,
@@ -209,8 +195,8 @@ pub fn run(
                     label,
                     temporal: on,
                     frame: i as u32,
-                    frame_ms: f.timings_ms["frame"],
-                    sp_cluster_ms: f.timings_ms.get("sp_cluster").copied().unwrap_or(0.0),
+                    frame_ms: f.frame_ms(),
+                    sp_cluster_ms: f.ms(Pass::SpCluster),
                     mse: metrics::mse(&f.radiance, reference),
                     rel_mse: metrics::rel_mse(&f.radiance, reference),
                     instability,
@@ -218,7 +204,7 @@ pub fn run(
                     sp_warm_kept: f.sp_warm_kept,
                     sp_clusters_used: f.sp_clusters_used,
                     reference_ms: *reference_ms,
-                    visibility_ms: f.timings_ms.get("visibility").copied().unwrap_or(0.0),
+                    visibility_ms: f.ms(Pass::Visibility),
                     visibility_rows_reused: f.visibility_rows_reused,
                 };
                 eprintln!(
@@ -247,7 +233,7 @@ pub fn run(
         &plan.out_dir.join("path.png"),
         &format!(
             "{} along orbit:{}:{} ({}x{})",
-            plan.scene_name, path.frames, path.degrees, plan.base.width, plan.base.height
+            plan.scene_name, path.frames, path.degrees, plan.frame.width, plan.frame.height
         ),
         &rows,
     )?;
@@ -437,6 +423,7 @@ mod tests {
         let f0: Vec<&str> = lines[1].split(',').collect();
         assert_eq!((f0[1], f0[2], f0[7]), ("off", "0", ""));
         let f4: Vec<&str> = lines[5].split(',').collect();
-        assert_eq!((f4[1], f4[7], f4[9]), ("on", "1e0", "180"));
+        assert_eq!((f4[1], f4[9]), ("on", "180"));
+        assert_eq!(f4[7].parse::<f64>().unwrap(), 1.0);
     }
 }

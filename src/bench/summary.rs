@@ -4,7 +4,6 @@ use std::fmt::Write;
 
 use super::csv::Row;
 use super::plot::pareto_front;
-use crate::gi::kmeans::gamma_name;
 
 /// What the summary states besides the rows.
 pub struct SummaryInfo<'a> {
@@ -127,7 +126,7 @@ pub fn markdown(s: &SummaryInfo) -> String {
 fn gamma_cell(r: &Row) -> String {
     match r.gamma_used {
         None => "–".into(),
-        Some(g) if g != r.gamma => format!("{} → {g}", gamma_name(r.gamma)),
+        Some(g) if r.gamma != crate::settings::Gamma::Fixed(g) => format!("{} → {g}", r.gamma),
         Some(g) => g.to_string(),
     }
 }

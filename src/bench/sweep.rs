@@ -3,9 +3,9 @@
 use std::fmt;
 use std::str::FromStr;
 
-use crate::gi::kmeans::{AUTO_GAMMA, gamma_name, parse_gamma, valid_plane_gate};
-use crate::gi::pipeline::{
-    DEFAULT_WEIGHT_EXPONENT, FrameSettings, Weighting, valid_weight_exponent,
+use crate::settings::{
+    ClusterSettings, Gamma, Invalid, Weighting, parse_fuzziness, parse_gamma, parse_iterations,
+    parse_normal_threshold, parse_plane_gate, parse_weight_exponent,
 };
 
 /// What is clustered, and how a pixel combines its SP clusters.
@@ -99,227 +99,132 @@ impl FromStr for Mode {
     }
 }
 
-/// `--pairs 461/750,3072/2000`: K_SP/K_VPL pairs.
-pub fn parse_pairs(s: &str) -> Result<Vec<(u32, u32)>, String> {
-    s.split(',')
-        .map(|item| {
-            let item = item.trim();
-            let (a, b) = item
-                .split_once('/')
-                .ok_or_else(|| format!("--pairs {s:?}: {item:?} is not K_SP/K_VPL"))?;
-            let n = |v: &str| {
-                v.trim()
-                    .parse::<u32>()
-                    .map_err(|_| format!("--pairs {s:?}: {item:?} is not K_SP/K_VPL"))
-            };
-            Ok((n(a)?, n(b)?))
-        })
-        .collect()
+/// A `--pairs` item: K_SP/K_VPL.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Pair(pub u32, pub u32);
+
+pub fn parse_pair(item: &str) -> Result<Pair, Invalid> {
+    let bad = || Invalid("not K_SP/K_VPL".into());
+    let (a, b) = item.trim().split_once('/').ok_or_else(bad)?;
+    let n = |v: &str| v.trim().parse::<u32>().map_err(|_| bad());
+    Ok(Pair(n(a)?, n(b)?))
 }
 
-/// Parses a comma-separated list (`"192,768"`), naming `option` in errors. Duplicates are dropped,
-/// order is kept; an empty list is an error.
-pub fn parse_list<T>(option: &str, s: &str) -> Result<Vec<T>, String>
-where
-    T: FromStr + PartialEq,
-{
-    let mut out: Vec<T> = Vec::new();
-    for item in s.split(',') {
-        let item = item.trim();
-        if item.is_empty() {
-            return Err(format!("{option} {s:?}: empty item in the list"));
-        }
-        let v = item
-            .parse::<T>()
-            .map_err(|_| format!("{option} {s:?}: {item:?} is not a valid value"))?;
-        if !out.contains(&v) {
-            out.push(v);
-        }
+/// A `--plane-gate` item: `off` (the paper) or an angle in (0, 90] degrees.
+pub fn parse_gate(item: &str) -> Result<PlaneGate, Invalid> {
+    if item.trim().eq_ignore_ascii_case("off") {
+        return Ok(PlaneGate(None));
     }
-    Ok(out)
+    parse_plane_gate(item)
+        .map(|d| PlaneGate(Some(d)))
+        .map_err(|_| Invalid("must be off or an angle in (0, 90] degrees".into()))
 }
 
-/// One item of `--plane-gate`: `off` (the paper) or an angle in degrees.
+/// One item of `--plane-gate`: `None` is off.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlaneGate(pub Option<f32>);
 
-impl FromStr for PlaneGate {
-    type Err = ();
-    fn from_str(s: &str) -> Result<Self, ()> {
-        if s.eq_ignore_ascii_case("off") {
-            return Ok(PlaneGate(None));
-        }
-        s.parse::<f32>().map(|d| PlaneGate(Some(d))).map_err(|_| ())
-    }
+pub fn parse_mode(item: &str) -> Result<Mode, Invalid> {
+    item.parse().map_err(Invalid)
 }
 
-/// A `--gamma` item: `auto` or a factor of at least 1 (`kmeans::parse_gamma`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Gamma(pub u32);
-
-impl FromStr for Gamma {
-    type Err = ();
-    fn from_str(s: &str) -> Result<Self, ()> {
-        parse_gamma(s).map(Gamma).map_err(|_| ())
-    }
-}
-
-/// Parses `--modes`.
-pub fn parse_modes(s: &str) -> Result<Vec<Mode>, String> {
-    let mut out = Vec::new();
-    for item in s.split(',') {
-        if item.trim().is_empty() {
-            return Err(format!("--modes {s:?}: empty item in the list"));
-        }
-        let m: Mode = item.parse().map_err(|e| format!("--modes: {e}"))?;
-        if !out.contains(&m) {
-            out.push(m);
-        }
-    }
-    Ok(out)
-}
-
-/// The lists a sweep multiplies out.
-#[derive(Clone, Debug, PartialEq)]
+/// The lists a sweep multiplies out: every `ClusterSettings` knob as a comma-separated list (an
+/// empty list takes the default; `--quick` has its own defaults for the modes and the K's).
+#[derive(clap::Args, Clone, Debug, Default, PartialEq)]
 pub struct Sweep {
+    /// Modes to compare: hard,uniform,weighted,vpl-only,sp-only (default hard,uniform,weighted;
+    /// quick: all five).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_mode)]
     pub modes: Vec<Mode>,
+    /// SP cluster counts (default 768,1536,3072; quick 48,96).
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
     pub sp_clusters: Vec<u32>,
+    /// VPL cluster counts (default 1024; quick 128).
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
     pub vpl_clusters: Vec<u32>,
+    /// F values, 1..16 (default 6).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_fuzziness)]
     pub fuzziness: Vec<u32>,
-    pub gamma: Vec<u32>,
-    /// p of the fuzzy weights (weighted and sp-only modes).
+    /// γ values: `auto` (the default: the largest γ in 4..16 that keeps 40 sampled points a cluster
+    /// and 19,200 in all) or factors of at least 1, e.g. auto,4,16.
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_gamma)]
+    pub gamma: Vec<Gamma>,
+    /// n_t values of Eq. (7), cosines in [-1, 1] (default 0.866).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_normal_threshold, allow_hyphen_values = true)]
+    pub normal_threshold: Vec<f32>,
+    /// k-means iterations (default 10).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_iterations)]
+    pub iterations: Vec<u32>,
+    /// p values of the inverse-distance weights w'_f = dist^-p, for weighted and sp-only (default 1,
+    /// Eq. 10).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_weight_exponent)]
     pub weight_exponent: Vec<f32>,
-    /// Plane gates of the fuzzy modes' F lists (`None`: off, the paper).
-    pub plane_gate: Vec<Option<f32>>,
-    /// (K_SP, K_VPL) pairs measured instead of every SP K × VPL K (`--pairs`: e.g. the paper's
-    /// light / intermediate / high settings without the off-diagonal ones).
-    pub pairs: Option<Vec<(u32, u32)>>,
+    /// Plane gates of the fuzzy modes' F lists: `off` (the paper, default) or angles in degrees,
+    /// e.g. off,20 (see render --plane-gate).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_gate)]
+    pub plane_gate: Vec<PlaneGate>,
+    /// K_SP/K_VPL pairs to measure instead of every --sp-clusters × --vpl-clusters, e.g. the paper's
+    /// light, intermediate and high settings at 640x480: 461/750,3072/2000,12288/4000.
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_pair)]
+    pub pairs: Vec<Pair>,
 }
 
-/// The sweep options as typed (`None` = not given).
-#[derive(Clone, Debug, Default)]
-pub struct SweepArgs {
-    pub modes: Option<String>,
-    pub sp_clusters: Option<String>,
-    pub vpl_clusters: Option<String>,
-    pub fuzziness: Option<String>,
-    pub gamma: Option<String>,
-    pub weight_exponent: Option<String>,
-    pub plane_gate: Option<String>,
-    pub pairs: Option<String>,
+/// `v` without repeats, in order; `default` when empty.
+fn or_default<T: PartialEq + Clone>(v: &[T], default: &[T]) -> Vec<T> {
+    let src = if v.is_empty() { default } else { v };
+    let mut out: Vec<T> = Vec::new();
+    for x in src {
+        if !out.contains(x) {
+            out.push(x.clone());
+        }
+    }
+    out
 }
 
 impl Sweep {
-    /// The full default sweep: the three shading modes at the render defaults, three SP cluster counts.
-    pub fn full_default() -> Sweep {
-        Sweep {
-            modes: vec![Mode::Hard, Mode::Uniform, Mode::Weighted],
-            sp_clusters: vec![768, 1536, 3072],
-            vpl_clusters: vec![1024],
-            fuzziness: vec![6],
-            gamma: vec![AUTO_GAMMA],
-            weight_exponent: vec![DEFAULT_WEIGHT_EXPONENT],
-            plane_gate: vec![None],
-            pairs: None,
+    /// The lists with every empty one at its default (`quick`: the small sweep's), repeats dropped,
+    /// checked.
+    pub fn resolve(&self, quick: bool) -> Result<Sweep, String> {
+        if !self.pairs.is_empty() && (!self.sp_clusters.is_empty() || !self.vpl_clusters.is_empty())
+        {
+            return Err(
+                "--pairs replaces --sp-clusters and --vpl-clusters: give one or the other".into(),
+            );
         }
-    }
-
-    /// `--quick`: every mode at two SP cluster counts and 128 VPL clusters (9 configurations).
-    pub fn quick_default() -> Sweep {
-        Sweep {
-            modes: Mode::ALL.to_vec(),
-            sp_clusters: vec![48, 96],
-            vpl_clusters: vec![128],
-            fuzziness: vec![6],
-            gamma: vec![AUTO_GAMMA],
-            weight_exponent: vec![DEFAULT_WEIGHT_EXPONENT],
-            plane_gate: vec![None],
-            pairs: None,
-        }
-    }
-
-    /// Parses the given lists over `base` and checks every value.
-    pub fn parse(args: &SweepArgs, base: Sweep) -> Result<Sweep, String> {
-        let mut s = base;
-        if let Some(v) = &args.modes {
-            s.modes = parse_modes(v)?;
-        }
-        if let Some(v) = &args.sp_clusters {
-            s.sp_clusters = parse_list("--sp-clusters", v)?;
-        }
-        if let Some(v) = &args.vpl_clusters {
-            s.vpl_clusters = parse_list("--vpl-clusters", v)?;
-        }
-        if let Some(v) = &args.fuzziness {
-            s.fuzziness = parse_list("--fuzziness", v)?;
-        }
-        if let Some(v) = &args.gamma {
-            s.gamma = parse_list::<Gamma>("--gamma", v)?
-                .into_iter()
-                .map(|g| g.0)
-                .collect();
-        }
-        if let Some(v) = &args.weight_exponent {
-            s.weight_exponent = parse_list("--weight-exponent", v)?;
-        }
-        if let Some(v) = &args.plane_gate {
-            s.plane_gate = parse_list::<PlaneGate>("--plane-gate", v)?
-                .into_iter()
-                .map(|g| g.0)
-                .collect();
-        }
-        if let Some(v) = &args.pairs {
-            if args.sp_clusters.is_some() || args.vpl_clusters.is_some() {
-                return Err(
-                    "--pairs replaces --sp-clusters and --vpl-clusters: give one or the other"
-                        .into(),
-                );
-            }
-            s.pairs = Some(parse_pairs(v)?);
-        }
+        let c = ClusterSettings::default();
+        let s = Sweep {
+            modes: or_default(
+                &self.modes,
+                if quick {
+                    &Mode::ALL
+                } else {
+                    &[Mode::Hard, Mode::Uniform, Mode::Weighted]
+                },
+            ),
+            sp_clusters: or_default(
+                &self.sp_clusters,
+                if quick { &[48, 96] } else { &[768, 1536, 3072] },
+            ),
+            vpl_clusters: or_default(&self.vpl_clusters, if quick { &[128] } else { &[1024] }),
+            fuzziness: or_default(&self.fuzziness, &[c.fuzziness]),
+            gamma: or_default(&self.gamma, &[c.gamma]),
+            normal_threshold: or_default(&self.normal_threshold, &[c.normal_threshold]),
+            iterations: or_default(&self.iterations, &[c.iterations]),
+            weight_exponent: or_default(&self.weight_exponent, &[c.weight_exponent]),
+            plane_gate: or_default(&self.plane_gate, &[PlaneGate(None)]),
+            pairs: or_default(&self.pairs, &[]),
+        };
         s.validate()?;
         Ok(s)
     }
 
-    pub fn validate(&self) -> Result<(), String> {
-        if self.modes.is_empty()
-            || self.sp_clusters.is_empty()
-            || self.vpl_clusters.is_empty()
-            || self.fuzziness.is_empty()
-            || self.gamma.is_empty()
-            || self.weight_exponent.is_empty()
-            || self.plane_gate.is_empty()
-        {
-            return Err("every sweep list needs at least one value".into());
-        }
-        if let Some(f) = self.fuzziness.iter().find(|f| !(1..=16).contains(*f)) {
-            return Err(format!("--fuzziness {f}: must be 1..16"));
-        }
-        if let Some(p) = self
-            .weight_exponent
-            .iter()
-            .find(|p| !valid_weight_exponent(**p))
-        {
-            return Err(format!(
-                "--weight-exponent {p}: must be a number in [0, 64]"
-            ));
-        }
-        if let Some(g) = self
-            .plane_gate
-            .iter()
-            .flatten()
-            .find(|g| !valid_plane_gate(**g))
-        {
-            return Err(format!(
-                "--plane-gate {g}: must be off or an angle in (0, 90] degrees"
-            ));
-        }
-        let (sps, vpls): (Vec<u32>, Vec<u32>) = match &self.pairs {
-            Some(p) if p.is_empty() => return Err("--pairs needs at least one pair".into()),
-            Some(p) => p.iter().copied().unzip(),
-            None => (self.sp_clusters.clone(), self.vpl_clusters.clone()),
+    fn validate(&self) -> Result<(), String> {
+        let (sps, vpls): (Vec<u32>, Vec<u32>) = if self.pairs.is_empty() {
+            (self.sp_clusters.clone(), self.vpl_clusters.clone())
+        } else {
+            self.pairs.iter().map(|p| (p.0, p.1)).unzip()
         };
-        if self.pairs.is_some() && (sps.contains(&0) || vpls.contains(&0)) {
+        if !self.pairs.is_empty() && (sps.contains(&0) || vpls.contains(&0)) {
             return Err(
                 "--pairs: a K of 0; use --modes vpl-only or sp-only for no clustering".into(),
             );
@@ -335,35 +240,59 @@ impl Sweep {
         Ok(())
     }
 
-    /// Every distinct configuration: modes × SP K × VPL K × F × γ, with the values a mode ignores
-    /// dropped (hard has F = 1; vpl-only has no SP K, F, γ; sp-only has no VPL K).
-    pub fn configs(&self) -> Vec<Config> {
-        let ks: Vec<(u32, u32)> = match &self.pairs {
-            Some(p) => p.clone(),
-            None => self
-                .sp_clusters
+    /// Every configuration of a resolved sweep, without repeats: the values a mode ignores are
+    /// dropped (hard has F = 1, vpl-only no SP K, sp-only no VPL K).
+    pub fn configs(&self) -> Vec<ClusterSettings> {
+        let ks: Vec<(u32, u32)> = if self.pairs.is_empty() {
+            self.sp_clusters
                 .iter()
                 .flat_map(|&sp| self.vpl_clusters.iter().map(move |&vpl| (sp, vpl)))
-                .collect(),
+                .collect()
+        } else {
+            self.pairs.iter().map(|p| (p.0, p.1)).collect()
         };
-        let mut out: Vec<Config> = Vec::new();
+        let mut out: Vec<ClusterSettings> = Vec::new();
         for &mode in &self.modes {
             for &(sp, vpl) in &ks {
                 for &f in &self.fuzziness {
                     for &g in &self.gamma {
-                        for &p in &self.weight_exponent {
-                            for &gate in &self.plane_gate {
-                                let c = Config {
-                                    mode,
-                                    sp_clusters: if mode.clusters_sps() { sp } else { 0 },
-                                    vpl_clusters: if mode.clusters_vpls() { vpl } else { 0 },
-                                    fuzziness: if mode.uses_fuzziness() { f } else { 1 },
-                                    gamma: if mode.clusters_sps() { g } else { AUTO_GAMMA },
-                                    weight_exponent: if mode.uses_weights() { p } else { 1.0 },
-                                    plane_gate_deg: if mode.uses_fuzziness() { gate } else { None },
-                                };
-                                if !out.contains(&c) {
-                                    out.push(c);
+                        for &n_t in &self.normal_threshold {
+                            for &iterations in &self.iterations {
+                                for &p in &self.weight_exponent {
+                                    for &gate in &self.plane_gate {
+                                        let c = ClusterSettings {
+                                            sp_clusters: if mode.clusters_sps() { sp } else { 0 },
+                                            vpl_clusters: if mode.clusters_vpls() {
+                                                vpl
+                                            } else {
+                                                0
+                                            },
+                                            fuzziness: if mode.uses_fuzziness() { f } else { 1 },
+                                            gamma: if mode.clusters_sps() {
+                                                g
+                                            } else {
+                                                Gamma::Auto
+                                            },
+                                            normal_threshold: n_t,
+                                            iterations,
+                                            weighting: mode.weighting(),
+                                            weight_exponent: if mode.uses_weights() {
+                                                p
+                                            } else {
+                                                1.0
+                                            },
+                                            plane_gate: if mode.uses_fuzziness() {
+                                                gate.0
+                                            } else {
+                                                None
+                                            },
+                                            weights_to_reps: false,
+                                            temporal: false,
+                                        };
+                                        if !out.contains(&c) {
+                                            out.push(c);
+                                        }
+                                    }
                                 }
                             }
                         }
@@ -375,135 +304,134 @@ impl Sweep {
     }
 }
 
-/// One point of the sweep.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Config {
-    pub mode: Mode,
-    /// 0 = no SP clustering.
-    pub sp_clusters: u32,
-    /// 0 = no VPL clustering.
-    pub vpl_clusters: u32,
-    /// F in effect (1 for hard and vpl-only).
-    pub fuzziness: u32,
-    /// γ (`AUTO_GAMMA`: the auto rule; also where no SP clustering runs).
-    pub gamma: u32,
-    /// p of the fuzzy weights (1 where the mode has none).
-    pub weight_exponent: f32,
-    /// The plane gate of the F lists, degrees (`None`: off, and where the mode has no F).
-    pub plane_gate_deg: Option<f32>,
+/// The mode a configuration of the sweep is in.
+pub fn mode(c: &ClusterSettings) -> Mode {
+    match (c.sp_clusters, c.vpl_clusters, c.weighting) {
+        (0, _, _) => Mode::VplOnly,
+        (_, 0, _) => Mode::SpOnly,
+        (_, _, Weighting::Hard) => Mode::Hard,
+        (_, _, Weighting::Uniform) => Mode::Uniform,
+        (_, _, Weighting::InverseDistance) => Mode::Weighted,
+    }
 }
 
-impl Config {
-    /// `weighted 48/128 F6 γ4`: mode, K_sp/K_vpl ("-" = not clustered), F and γ where they apply.
-    pub fn label(&self) -> String {
-        let k = |v: u32| {
-            if v == 0 {
-                "-".to_string()
-            } else {
-                v.to_string()
-            }
-        };
-        let mut s = format!(
-            "{} {}/{}",
-            self.mode,
-            k(self.sp_clusters),
-            k(self.vpl_clusters)
-        );
-        if self.mode.uses_fuzziness() {
-            s += &format!(" F{}", self.fuzziness);
-        }
-        if self.mode.clusters_sps() && self.sp_clusters > 0 {
-            s += &format!(" g{}", gamma_name(self.gamma));
-        }
-        if self.mode.uses_weights() && self.weight_exponent != 1.0 {
-            s += &format!(" p{}", self.weight_exponent);
-        }
-        if let Some(g) = self.plane_gate_deg {
-            s += &format!(" gate{g}");
-        }
-        s
-    }
+/// Short name of a configuration for plots and the summary (`weighted 48/128 F6 gauto`).
+pub fn label(c: &ClusterSettings) -> String {
+    label_in(mode(c), c)
+}
 
-    /// The label of what ran (`label` is of what was asked): a K the renderer turned off (at or
-    /// above the pixel or VPL count) shows as "-" with a note, and γ as Alg. 1 used it
-    /// (`kmeans::effective_gamma`, at most pixels / K).
-    pub fn label_ran(&self, sp_ran: bool, vpl_ran: bool, gamma_used: Option<u32>) -> String {
-        let ran = Config {
-            sp_clusters: if sp_ran { self.sp_clusters } else { 0 },
-            vpl_clusters: if vpl_ran { self.vpl_clusters } else { 0 },
-            gamma: gamma_used.unwrap_or(self.gamma),
-            ..*self
-        };
-        let mut s = ran.label();
-        let off: Vec<&str> = [
-            (self.sp_clusters > 0 && !sp_ran, "K_sp"),
-            (self.vpl_clusters > 0 && !vpl_ran, "K_vpl"),
-        ]
-        .iter()
-        .filter(|x| x.0)
-        .map(|x| x.1)
-        .collect();
-        if !off.is_empty() {
-            s += &format!(" ({} off)", off.join(", "));
+fn label_in(mode: Mode, c: &ClusterSettings) -> String {
+    let k = |v: u32| {
+        if v == 0 {
+            "-".to_string()
+        } else {
+            v.to_string()
         }
-        s
+    };
+    let mut s = format!("{} {}/{}", mode, k(c.sp_clusters), k(c.vpl_clusters));
+    if mode.uses_fuzziness() {
+        s += &format!(" F{}", c.fuzziness);
     }
+    if mode.clusters_sps() && c.sp_clusters > 0 {
+        s += &format!(" g{}", c.gamma);
+    }
+    if c.normal_threshold != ClusterSettings::default().normal_threshold {
+        s += &format!(" nt{}", c.normal_threshold);
+    }
+    if c.iterations != ClusterSettings::default().iterations {
+        s += &format!(" i{}", c.iterations);
+    }
+    if mode.uses_weights() && c.weight_exponent != 1.0 {
+        s += &format!(" p{}", c.weight_exponent);
+    }
+    if let Some(g) = c.plane_gate {
+        s += &format!(" gate{g}");
+    }
+    s
+}
 
-    /// The frame settings of this configuration over `base` (size, VPLs, seed, n_t, iterations...).
-    pub fn settings(&self, base: &FrameSettings) -> FrameSettings {
-        FrameSettings {
-            reference: false,
-            sp_clusters: self.sp_clusters,
-            vpl_clusters: self.vpl_clusters,
-            fuzziness: self.fuzziness.max(1),
-            gamma: self.gamma,
-            weighting: self.mode.weighting(),
-            weight_exponent: self.weight_exponent,
-            plane_gate_deg: self.plane_gate_deg,
-            ..base.clone()
-        }
+/// The label of what ran: clusterings the frame skipped (K ≥ the points) shown as off, γ as used.
+pub fn label_ran(
+    c: &ClusterSettings,
+    sp_ran: bool,
+    vpl_ran: bool,
+    gamma_used: Option<u32>,
+) -> String {
+    let ran = ClusterSettings {
+        sp_clusters: if sp_ran { c.sp_clusters } else { 0 },
+        vpl_clusters: if vpl_ran { c.vpl_clusters } else { 0 },
+        gamma: gamma_used.map_or(c.gamma, Gamma::Fixed),
+        ..c.clone()
+    };
+    let mut s = label_in(mode(c), &ran);
+    let off: Vec<&str> = [
+        (c.sp_clusters > 0 && !sp_ran, "K_sp"),
+        (c.vpl_clusters > 0 && !vpl_ran, "K_vpl"),
+    ]
+    .iter()
+    .filter(|x| x.0)
+    .map(|x| x.1)
+    .collect();
+    if !off.is_empty() {
+        s += &format!(" ({} off)", off.join(", "));
     }
+    s
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Wrap {
+        #[command(flatten)]
+        s: Sweep,
+    }
+
+    /// The sweep of `bench ARGS` (`quick` defaults or the full ones).
+    fn parse(args: &[&str], quick: bool) -> Result<Sweep, String> {
+        let w = Wrap::try_parse_from(std::iter::once("bench").chain(args.iter().copied()))
+            .map_err(|e| e.to_string())?;
+        w.s.resolve(quick)
+    }
 
     #[test]
     fn lists_parse_trim_and_dedup() {
-        assert_eq!(
-            parse_list::<u32>("--sp-clusters", "192, 768,192").unwrap(),
-            vec![192, 768]
-        );
-        assert_eq!(parse_list::<u32>("--gamma", "4").unwrap(), vec![4]);
-        assert_eq!(
-            parse_list::<f32>("--x", "0.5,1").unwrap(),
-            vec![0.5f32, 1.0]
-        );
+        let s = parse(&["--sp-clusters", "192,768,192", "--gamma", "4"], true).unwrap();
+        assert_eq!(s.sp_clusters, vec![192, 768]);
+        assert_eq!(s.gamma, vec![Gamma::Fixed(4)]);
+        let s = parse(&["--weight-exponent", "0.5,1"], true).unwrap();
+        assert_eq!(s.weight_exponent, vec![0.5f32, 1.0]);
     }
 
     #[test]
     fn bad_lists_name_the_option_and_value() {
-        let e = parse_list::<u32>("--sp-clusters", "192,abc").unwrap_err();
+        let e = parse(&["--sp-clusters", "192,abc"], true).unwrap_err();
         assert!(e.contains("--sp-clusters") && e.contains("abc"), "{e}");
-        let e = parse_list::<u32>("--sp-clusters", "192,,768").unwrap_err();
-        assert!(e.contains("empty"), "{e}");
-        let e = parse_list::<u32>("--vpl-clusters", "-5").unwrap_err();
+        let e = parse(&["--sp-clusters", "192,,768"], true).unwrap_err();
+        assert!(e.contains("--sp-clusters"), "{e}");
+        let e = parse(&["--vpl-clusters", "-5"], true).unwrap_err();
         assert!(e.contains("-5"), "{e}");
-        assert!(parse_list::<u32>("--gamma", "").is_err());
+        assert!(parse(&["--gamma", ""], true).is_err());
     }
 
     #[test]
     fn plane_gates_expand_for_the_fuzzy_modes_only() {
-        let a = SweepArgs {
-            modes: Some("hard,uniform,weighted".into()),
-            sp_clusters: Some("48".into()),
-            plane_gate: Some("off, 20,OFF".into()),
-            ..Default::default()
-        };
-        let s = Sweep::parse(&a, Sweep::quick_default()).unwrap();
-        assert_eq!(s.plane_gate, vec![None, Some(20.0)]);
-        let labels: Vec<String> = s.configs().iter().map(Config::label).collect();
+        let s = parse(
+            &[
+                "--modes",
+                "hard,uniform,weighted",
+                "--sp-clusters",
+                "48",
+                "--plane-gate",
+                "off,20,OFF",
+            ],
+            true,
+        )
+        .unwrap();
+        assert_eq!(s.plane_gate, vec![PlaneGate(None), PlaneGate(Some(20.0))]);
+        let labels: Vec<String> = s.configs().iter().map(label).collect();
         assert_eq!(
             labels,
             [
@@ -514,81 +442,55 @@ mod tests {
                 "weighted 48/128 F6 gauto gate20",
             ]
         );
-        let c = s.configs()[2];
-        assert_eq!(
-            c.settings(&FrameSettings::default()).plane_gate_deg,
-            Some(20.0)
-        );
+        assert_eq!(s.configs()[2].plane_gate, Some(20.0));
         for bad in ["0", "90.5", "-3", "nan", "on", "20,"] {
-            let a = SweepArgs {
-                plane_gate: Some(bad.into()),
-                ..Default::default()
-            };
-            let e = Sweep::parse(&a, Sweep::quick_default()).unwrap_err();
+            let e = parse(&[&format!("--plane-gate={bad}")], true).unwrap_err();
             assert!(e.contains("--plane-gate"), "{bad}: {e}");
         }
     }
 
     #[test]
     fn modes_parse_with_aliases() {
-        assert_eq!(
-            parse_modes("hard,uniform,weighted,vpl-only,sp-only").unwrap(),
-            Mode::ALL.to_vec()
-        );
-        assert_eq!(
-            parse_modes("Weighted,inverse-distance").unwrap(),
-            vec![Mode::Weighted]
-        );
-        let e = parse_modes("hard,fuzzy").unwrap_err();
+        let s = parse(
+            &["--modes", "hard,uniform,weighted,vpl-only,sp-only"],
+            false,
+        )
+        .unwrap();
+        assert_eq!(s.modes, Mode::ALL.to_vec());
+        let s = parse(&["--modes", "Weighted,inverse-distance"], false).unwrap();
+        assert_eq!(s.modes, vec![Mode::Weighted]);
+        let e = parse(&["--modes", "hard,fuzzy"], false).unwrap_err();
         assert!(e.contains("fuzzy") && e.contains("vpl-only"), "{e}");
     }
 
     #[test]
     fn invalid_values_are_rejected() {
-        let args = |f: &str| SweepArgs {
-            fuzziness: Some(f.into()),
-            ..Default::default()
-        };
-        assert!(Sweep::parse(&args("6,17"), Sweep::quick_default()).is_err());
-        assert!(Sweep::parse(&args("0"), Sweep::quick_default()).is_err());
-        assert!(Sweep::parse(&args("1,16"), Sweep::quick_default()).is_ok());
-        let g = SweepArgs {
-            gamma: Some("0".into()),
-            ..Default::default()
-        };
-        assert!(Sweep::parse(&g, Sweep::quick_default()).is_err());
+        assert!(parse(&["--fuzziness", "6,17"], true).is_err());
+        assert!(parse(&["--fuzziness", "0"], true).is_err());
+        assert!(parse(&["--fuzziness", "1,16"], true).is_ok());
+        assert!(parse(&["--gamma", "0"], true).is_err());
         // γ: auto (the default) and factors, auto reaching the frame settings as it is.
-        let g = SweepArgs {
-            gamma: Some("auto,8".into()),
-            ..Default::default()
-        };
-        let sw = Sweep::parse(&g, Sweep::quick_default()).unwrap();
-        assert_eq!(sw.gamma, vec![AUTO_GAMMA, 8]);
-        assert_eq!(Sweep::quick_default().gamma, vec![AUTO_GAMMA]);
+        let sw = parse(&["--gamma", "auto,8"], true).unwrap();
+        assert_eq!(sw.gamma, vec![Gamma::Auto, Gamma::Fixed(8)]);
+        assert_eq!(parse(&[], true).unwrap().gamma, vec![Gamma::Auto]);
         let c = sw.configs();
-        let weighted: Vec<_> = c.iter().filter(|c| c.mode == Mode::Weighted).collect();
-        assert_eq!(weighted[0].label(), "weighted 48/128 F6 gauto");
+        let weighted: Vec<_> = c.iter().filter(|c| mode(c) == Mode::Weighted).collect();
+        assert_eq!(label(weighted[0]), "weighted 48/128 F6 gauto");
+        assert_eq!(weighted[0].gamma, Gamma::Auto);
         assert_eq!(
-            weighted[0].settings(&FrameSettings::default()).gamma,
-            AUTO_GAMMA
-        );
-        assert_eq!(
-            weighted[0].label_ran(true, true, Some(5)),
+            label_ran(weighted[0], true, true, Some(5)),
             "weighted 48/128 F6 g5"
         );
-        assert_eq!(weighted[1].settings(&FrameSettings::default()).gamma, 8);
-        let k = SweepArgs {
-            sp_clusters: Some("0".into()),
-            ..Default::default()
-        };
-        assert!(Sweep::parse(&k, Sweep::quick_default()).is_err());
+        assert_eq!(
+            label_ran(weighted[0], false, true, None),
+            "weighted -/128 F6 (K_sp off)"
+        );
+        assert_eq!(weighted[1].gamma, Gamma::Fixed(8));
+        assert!(parse(&["--sp-clusters", "0"], true).is_err());
         // ... but fine where no mode clusters SPs.
-        let k = SweepArgs {
-            sp_clusters: Some("0".into()),
-            modes: Some("vpl-only".into()),
-            ..Default::default()
-        };
-        assert!(Sweep::parse(&k, Sweep::quick_default()).is_ok());
+        assert!(parse(&["--sp-clusters", "0", "--modes", "vpl-only"], true).is_ok());
+        assert!(parse(&["--normal-threshold", "1.5"], true).is_err());
+        assert!(parse(&["--iterations", "1001"], true).is_err());
     }
 
     #[test]
@@ -598,31 +500,33 @@ mod tests {
             sp_clusters: vec![48, 96],
             vpl_clusters: vec![128, 256],
             fuzziness: vec![4, 6],
-            gamma: vec![4],
+            gamma: vec![Gamma::Fixed(4)],
             weight_exponent: vec![1.0, 2.0],
-            plane_gate: vec![None],
-            pairs: None,
-        };
+            ..Default::default()
+        }
+        .resolve(true)
+        .unwrap();
         let c = s.configs();
-        let count = |m: Mode| c.iter().filter(|c| c.mode == m).count();
+        let count = |m: Mode| c.iter().filter(|c| mode(c) == m).count();
         assert_eq!(count(Mode::Hard), 4); // F is 1, no p
         assert_eq!(count(Mode::Uniform), 8); // no p
         assert_eq!(count(Mode::Weighted), 16);
         assert_eq!(count(Mode::VplOnly), 2); // one per VPL K
         assert_eq!(count(Mode::SpOnly), 8); // SP K × F × p
-        assert!(c.iter().any(|c| c.label() == "weighted 48/128 F6 g4 p2"));
+        assert!(c.iter().any(|c| label(c) == "weighted 48/128 F6 g4 p2"));
         // --pairs: only the given (K_SP, K_VPL) pairs.
-        let paired = Sweep::parse(
-            &SweepArgs {
-                modes: Some("hard,weighted,vpl-only".into()),
-                pairs: Some("48/128, 96/256".into()),
-                ..Default::default()
-            },
-            Sweep::quick_default(),
+        let paired = parse(
+            &[
+                "--modes",
+                "hard,weighted,vpl-only",
+                "--pairs",
+                "48/128, 96/256",
+            ],
+            true,
         )
         .unwrap()
         .configs();
-        let labels: Vec<String> = paired.iter().map(|c| c.label()).collect();
+        let labels: Vec<String> = paired.iter().map(label).collect();
         assert_eq!(
             labels,
             [
@@ -635,39 +539,44 @@ mod tests {
             ]
         );
         for bad in ["48", "48/x", "48/128,", "-1/2"] {
-            let a = SweepArgs {
-                pairs: Some(bad.into()),
-                ..Default::default()
-            };
-            assert!(Sweep::parse(&a, Sweep::quick_default()).is_err(), "{bad}");
+            assert!(parse(&["--pairs", bad], true).is_err(), "{bad}");
         }
-        let both = SweepArgs {
-            pairs: Some("48/128".into()),
-            sp_clusters: Some("48".into()),
-            ..Default::default()
-        };
-        assert!(Sweep::parse(&both, Sweep::quick_default()).is_err());
+        assert!(parse(&["--pairs", "48/128", "--sp-clusters", "48"], true).is_err());
         assert!(
             c.iter()
-                .filter(|c| c.mode == Mode::VplOnly)
+                .filter(|c| mode(c) == Mode::VplOnly)
                 .all(|c| c.sp_clusters == 0)
         );
         assert!(
             c.iter()
-                .filter(|c| c.mode == Mode::SpOnly)
+                .filter(|c| mode(c) == Mode::SpOnly)
                 .all(|c| c.vpl_clusters == 0)
         );
-        assert_eq!(Sweep::quick_default().configs().len(), 9);
-        let w = c.iter().find(|c| c.mode == Mode::Weighted).unwrap();
-        assert_eq!(w.label(), "weighted 48/128 F4 g4");
-        let v = c.iter().find(|c| c.mode == Mode::VplOnly).unwrap();
-        assert_eq!(v.label(), "vpl-only -/128");
-        let st = w.settings(&FrameSettings::default());
-        assert_eq!(st.weighting, Weighting::InverseDistance);
-        assert_eq!(
-            (st.sp_clusters, st.vpl_clusters, st.fuzziness),
-            (48, 128, 4)
+        assert_eq!(parse(&[], true).unwrap().configs().len(), 9);
+        let w = c.iter().find(|c| mode(c) == Mode::Weighted).unwrap();
+        assert_eq!(label(w), "weighted 48/128 F4 g4");
+        let v = c.iter().find(|c| mode(c) == Mode::VplOnly).unwrap();
+        assert_eq!(label(v), "vpl-only -/128");
+        assert_eq!(w.weighting, Weighting::InverseDistance);
+        assert_eq!((w.sp_clusters, w.vpl_clusters, w.fuzziness), (48, 128, 4));
+        // Lists of n_t and iterations multiply out too, and show in the labels.
+        let s = parse(
+            &[
+                "--modes",
+                "hard",
+                "--normal-threshold",
+                "0.9,0.5",
+                "--iterations",
+                "5",
+            ],
+            true,
+        )
+        .unwrap();
+        let labels: Vec<String> = s.configs().iter().map(label).collect();
+        assert!(
+            labels.contains(&"hard 96/128 gauto nt0.5 i5".to_string()),
+            "{labels:?}"
         );
-        assert!(!st.reference);
+        assert_eq!(labels.len(), 4);
     }
 }

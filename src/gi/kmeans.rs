@@ -13,12 +13,13 @@ use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
+use super::dispatch::{Gpu, Run};
 use super::dispatch::{Kernel, RecordCopies, WORKGROUP, copy_to_texture, data_texture};
 use super::primary::CameraParams;
-use super::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
-use crate::gpu::{GpuContext, profiler::Profiler};
+use super::scene_gpu::{data_texture_layout, storage_layout, uniform_layout};
+use crate::gpu::GpuContext;
+use crate::settings::{ClusterSettings, Gamma, MAX_F, MAX_NORMAL_THRESHOLD, plane_gate_sine};
 
-pub const MAX_F: u32 = 16;
 pub const MAX_DIM: u32 = 64;
 const WORDS: u64 = 13;
 const MAX_CELLS: u64 = (MAX_DIM as u64).pow(3);
@@ -38,6 +39,15 @@ pub fn scan_groups(k: u32) -> u32 {
     ((cells / 1024.0).ceil() as u64).clamp(1, SCAN_BLOCKS) as u32
 }
 
+/// The points a clustering reads: `count` points of `stride` vec4s each in `data` (position with
+/// w > 0 when valid, then normal).
+#[derive(Clone, Copy)]
+pub struct Points<'a> {
+    pub data: &'a wgpu::Buffer,
+    pub count: u32,
+    pub stride: u32,
+}
+
 /// Alg. 1 parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct KMeansSettings {
@@ -45,8 +55,8 @@ pub struct KMeansSettings {
     pub k: u32,
     /// F: clusters per point in the final assignment (1 = hard).
     pub f: u32,
-    /// γ: downsampling factor (one sampled point per γ data points); `AUTO_GAMMA` for the auto rule.
-    pub gamma: u32,
+    /// γ: downsampling factor (one sampled point per γ data points).
+    pub gamma: Gamma,
     /// n_t of Eq. (7), a cosine.
     pub normal_threshold: f32,
     pub iterations: u32,
@@ -58,99 +68,42 @@ pub struct KMeansSettings {
     pub weight_exponent: f32,
     /// The plane gate of the final assignment, in degrees (`None`: off, the paper): slots 2..F keep
     /// only clusters whose centroid lies within this angle of the point's tangent plane, seen from
-    /// the point (`plane_gate_sine`).
+    /// the point (`settings::plane_gate_sine`).
     pub plane_gate_deg: Option<f32>,
 }
 
-/// The gate as the shader tests it: slot j ≥ 2 is kept when |n · (c − p)| ≤ s |c − p|, s = sin θ;
-/// 2 (above any ratio) when off. Eq. (7) gates on normals alone, so a pixel's F nearest clusters
-/// include parallel surfaces above or below it (a chair seat over the floor) whose visibility
-/// differs; this drops them (docs/clustering.md, "The plane gate").
-pub fn plane_gate_sine(deg: Option<f32>) -> f32 {
-    deg.map_or(2.0, |d| d.clamp(0.0, 90.0).to_radians().sin())
-}
-
-/// The gate's angle the viewer starts from when it is switched on (the held-out study in
-/// docs/clustering.md measured 10°, 20° and 30°; 20° was best on average).
-pub const DEFAULT_PLANE_GATE_DEG: f32 = 20.0;
-
-/// Angles the gate takes: (0, 90] degrees (0 would drop every slot but the first off a curved
-/// surface; 90 keeps every slot).
-pub fn valid_plane_gate(deg: f32) -> bool {
-    deg > 0.0 && deg <= 90.0
-}
-
-/// γ = `AUTO_GAMMA` (the default, `--gamma auto`): Alg. 1 samples as few points as keep the error,
-/// chosen from M and K by `auto_gamma`.
-pub const AUTO_GAMMA: u32 = 0;
-/// The auto rule's bounds on γ: 4 is the fixed default it replaced (kept wherever the rule has no
-/// room), 16 the largest factor measured at equal error (docs/clustering.md, "γ by rule").
-pub const AUTO_GAMMA_MIN: u32 = 4;
-pub const AUTO_GAMMA_MAX: u32 = 16;
-/// The auto rule keeps at least this many sampled points a cluster (Alg. 1's means need members)...
-pub const AUTO_SAMPLES_PER_CLUSTER: u32 = 40;
-/// ...and at least this many sampled points in all: a full 160×120 picture of the view, so that the
-/// sampled set never resolves the image more coarsely than that (γ 20 at 160×120 lost thin surfaces'
-/// clusters: docs/clustering.md).
-pub const AUTO_MIN_SAMPLED: u32 = 19_200;
-
-/// The auto rule: the largest γ in [4, 16] that keeps `AUTO_SAMPLES_PER_CLUSTER` sampled points a
-/// cluster and `AUTO_MIN_SAMPLED` in all. 640×480: K 461 → 16, K 1000 → 7, K ≥ 1920 → 4; 1024×720:
-/// K 1000 → 16, K 8000 → 4; 160×120 and 320×240: 4 at any K.
-pub fn auto_gamma(num_points: u32, k: u32) -> u32 {
-    let per_cluster = num_points / (AUTO_SAMPLES_PER_CLUSTER.saturating_mul(k.max(1)));
-    let in_all = num_points / AUTO_MIN_SAMPLED;
-    per_cluster
-        .min(in_all)
-        .clamp(AUTO_GAMMA_MIN, AUTO_GAMMA_MAX)
-}
-
-/// γ as asked: `gamma`, or the auto rule's choice for `AUTO_GAMMA`.
-pub fn resolve_gamma(gamma: u32, num_points: u32, k: u32) -> u32 {
-    if gamma == AUTO_GAMMA {
-        auto_gamma(num_points, k)
-    } else {
-        gamma
+impl KMeansSettings {
+    /// The shading-point clustering of a frame (step 4): the user's K_SP, F, γ, n_t, iterations, p
+    /// and plane gate.
+    pub fn shading_points(c: &ClusterSettings, seed: u32) -> Self {
+        KMeansSettings {
+            k: c.sp_clusters,
+            f: c.f(),
+            gamma: c.gamma,
+            normal_threshold: c.normal_threshold,
+            iterations: c.iterations,
+            seed,
+            weights_to_reps: c.weights_to_reps,
+            weight_exponent: c.weight_exponent,
+            plane_gate_deg: c.plane_gate,
+        }
     }
-}
 
-/// γ as the command line gives it: `auto` (`AUTO_GAMMA`) or a factor of at least 1.
-pub fn parse_gamma(v: &str) -> Result<u32, String> {
-    match v.trim() {
-        "auto" => Ok(AUTO_GAMMA),
-        t => match t.parse::<u32>() {
-            Ok(g) if g >= 1 => Ok(g),
-            _ => Err(format!(
-                "'{t}': γ is `auto` or a whole number of at least 1"
-            )),
-        },
+    /// The VPL clustering (step 2): K_VPL, hard, every VPL sampled (γ 1), the same n_t and
+    /// iterations.
+    pub fn vpls(c: &ClusterSettings, seed: u32) -> Self {
+        KMeansSettings {
+            k: c.vpl_clusters,
+            f: 1,
+            gamma: Gamma::Fixed(1),
+            normal_threshold: c.normal_threshold,
+            iterations: c.iterations,
+            seed,
+            weights_to_reps: false,
+            weight_exponent: 1.0,
+            plane_gate_deg: None,
+        }
     }
-}
-
-/// γ for labels and file names: the number, or `auto`.
-pub fn gamma_name(gamma: u32) -> String {
-    if gamma == AUTO_GAMMA {
-        "auto".into()
-    } else {
-        gamma.to_string()
-    }
-}
-
-/// γ as Alg. 1 uses it (`resolve_gamma`): at least 1, and at most M / K, so that the sampled set
-/// holds at least K points (a γ near the point count would leave a single sampled point, often in the
-/// sky, and no cluster).
-pub fn effective_gamma(gamma: u32, num_points: u32, k: u32) -> u32 {
-    resolve_gamma(gamma, num_points, k).clamp(1, (num_points / k.max(1)).max(1))
-}
-
-/// The largest n_t Eq. (7) can use: its test n1 · n2 > n_t is strict, so n_t = 1 would accept no pair
-/// at all (not even a point and a centroid with the same normal), every cluster would empty in the
-/// first iteration and no point would get one. n_t = 1 is read as the tightest threshold an f32
-/// cosine resolves (about 0.08°).
-pub const MAX_NORMAL_THRESHOLD: f32 = 1.0 - 1.0 / (1 << 20) as f32;
-
-pub fn effective_normal_threshold(n_t: f32) -> f32 {
-    n_t.min(MAX_NORMAL_THRESHOLD)
 }
 
 #[repr(C)]
@@ -180,7 +133,7 @@ impl KmParams {
     /// `frame`: bounds (lo, hi) containing every point (the scene's bounds).
     pub fn new(num_points: u32, stride: u32, s: &KMeansSettings, frame: (Vec3, Vec3)) -> Self {
         let k = s.k.max(1);
-        let gamma = effective_gamma(s.gamma, num_points, k);
+        let gamma = s.gamma.effective(num_points, k);
         let ext = (frame.1 - frame.0).max(Vec3::splat(1e-30));
         KmParams {
             num_points,
@@ -189,7 +142,7 @@ impl KmParams {
             num_sampled: num_points.div_ceil(gamma),
             k,
             f: s.f.clamp(1, MAX_F),
-            normal_threshold: effective_normal_threshold(s.normal_threshold),
+            normal_threshold: s.normal_threshold.min(MAX_NORMAL_THRESHOLD),
             seed: s.seed,
             lo: frame.0.extend(0.0).into(),
             ext: [ext.x, ext.y, ext.z, ext.length()],
@@ -355,23 +308,24 @@ impl KMeans {
         })
     }
 
-    /// Clusters `num_points` points of `data` (`stride` vec4s each: position with w > 0 when valid,
-    /// then normal), timing every step under `label`; from `warm`'s centroids where given
-    /// (`warm_centroids`), else from strata (Alg. 1 line 2).
-    #[allow(clippy::too_many_arguments)]
+    /// Clusters `points`, timing every step under `label`; from `warm`'s centroids where given
+    /// (`warm_centroids`), else from strata (Alg. 1 line 2). `frame`: bounds (lo, hi) containing every
+    /// point (the scene's bounds).
     pub fn run(
         &self,
-        ctx: &GpuContext,
-        scene: &SceneGpu,
-        profiler: &mut Profiler,
+        gpu: &mut Gpu,
         label: &str,
-        data: &wgpu::Buffer,
-        num_points: u32,
-        stride: u32,
+        points: &Points,
         settings: &KMeansSettings,
         frame: (Vec3, Vec3),
         warm: Option<&Warm>,
     ) -> Result<Clustering> {
+        let ctx = gpu.ctx;
+        let Points {
+            data,
+            count: num_points,
+            stride,
+        } = *points;
         let mut p = KmParams::new(num_points, stride, settings, frame);
         if let Some(w) = warm {
             p = p.with_warm(w.k, w.view.as_ref());
@@ -463,9 +417,12 @@ impl KMeans {
         ];
         // Small steps share a submission: one per iteration, then the final assignment and the
         // representatives (each bounded by the point count).
-        let mut run = |steps: &[(&str, u32)]| {
-            kernel.run_entries(ctx, profiler, label, scene, &bg, steps, seed, after)
+        let r = Run {
+            label,
+            group: &bg,
+            seed,
         };
+        let mut run = |steps: &[(&str, u32)]| kernel.run_entries(gpu, r, steps, after);
         let (mut iterations, mut warm_kept) = (settings.iterations, None);
         match warm {
             Some(w) => {
@@ -532,57 +489,5 @@ impl KMeans {
             rep_points,
             sample_assign,
         })
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn auto_gamma_keeps_samples_per_cluster_and_in_all() {
-        // (pixels, K, γ): the paper's settings at 640×480 and 1024×720, the held-out 160×120.
-        for (m, k, g) in [
-            (640 * 480, 461, 16),
-            (640 * 480, 1000, 7),
-            (640 * 480, 1920, 4),
-            (640 * 480, 3072, 4),
-            (640 * 480, 12288, 4),
-            (1024 * 720, 1000, 16),
-            (1024 * 720, 2000, 9),
-            (1024 * 720, 8000, 4),
-            (160 * 120, 29, 4),
-            (160 * 120, 192, 4),
-            (320 * 240, 115, 4),
-            (1280 * 960, 100, 16),
-            (0, 0, 4),
-        ] {
-            assert_eq!(auto_gamma(m, k), g, "{m} points, K {k}");
-            let ran = effective_gamma(AUTO_GAMMA, m, k);
-            let s = m.div_ceil(ran);
-            // Above the floor of 4, the rule's two bounds hold for the points it samples.
-            if ran > AUTO_GAMMA_MIN {
-                assert!(s >= AUTO_MIN_SAMPLED, "{m}, {k}: {s} sampled");
-                assert!(s >= AUTO_SAMPLES_PER_CLUSTER * k, "{m}, {k}: {s} sampled");
-            }
-        }
-        // The cap of every γ (at most M / K) still applies to the rule's choice.
-        assert_eq!(effective_gamma(AUTO_GAMMA, 1000, 500), 2);
-        // A γ asked is kept as it is.
-        assert_eq!(effective_gamma(4, 640 * 480, 461), 4);
-        assert_eq!(resolve_gamma(9, 640 * 480, 461), 9);
-        assert_eq!(resolve_gamma(AUTO_GAMMA, 640 * 480, 461), 16);
-    }
-
-    #[test]
-    fn gamma_parses_auto_or_a_factor() {
-        assert_eq!(parse_gamma("auto"), Ok(AUTO_GAMMA));
-        assert_eq!(parse_gamma("16"), Ok(16));
-        assert_eq!(parse_gamma(" 1 "), Ok(1));
-        for bad in ["0", "-1", "4.5", "", "Auto2"] {
-            assert!(parse_gamma(bad).is_err(), "{bad:?}");
-        }
-        assert_eq!(gamma_name(AUTO_GAMMA), "auto");
-        assert_eq!(gamma_name(8), "8");
     }
 }

@@ -3,12 +3,14 @@
 
 pub mod direct;
 pub mod dispatch;
+pub mod frame;
 pub mod kmeans;
 pub mod pathtrace;
 pub mod pipeline;
 pub mod primary;
 pub mod raycast;
 pub mod reference;
+pub mod resident;
 pub mod scene_gpu;
 pub mod shade;
 pub mod visibility;

@@ -5,8 +5,9 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::dispatch::Kernel;
+use super::dispatch::{Gpu, Run};
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
-use crate::gpu::{GpuContext, profiler::Profiler};
+use crate::gpu::GpuContext;
 
 /// Shadow rays per submission: about a second of lavapipe work.
 pub const RAYS_PER_SUBMISSION: u32 = 1 << 20;
@@ -24,6 +25,23 @@ pub struct Reference {
     kernel: Kernel,
 }
 
+/// What a gather reads and writes.
+#[derive(Clone, Copy)]
+pub struct GatherInputs<'a> {
+    /// The shading points (`common/gbuffer.wgsl`).
+    pub gbuffer: &'a wgpu::Buffer,
+    /// The lights: VPLs (`reference`) or VPL-cluster representatives (`gather`).
+    pub lights: &'a wgpu::Buffer,
+    pub num_lights: u32,
+    /// vec4 per pixel, added to.
+    pub indirect: &'a wgpu::Buffer,
+    pub pixels: u32,
+    /// The G-term clamp distance in the rendered scene's units.
+    pub d_min: f32,
+    /// The profiler label: the pass's name.
+    pub label: &'a str,
+}
+
 impl Reference {
     pub fn new(ctx: &GpuContext, scene: &SceneGpu) -> Self {
         let entries = [
@@ -37,25 +55,26 @@ impl Reference {
         }
     }
 
-    /// Adds the VPLs' light to `indirect` (vec4 per pixel, zeroed by the caller).
-    #[allow(clippy::too_many_arguments)]
+    /// Adds the lights' light to `indirect` (vec4 per pixel, zeroed by the caller).
     pub fn record(
         &self,
-        ctx: &GpuContext,
-        scene: &SceneGpu,
-        profiler: &mut Profiler,
-        gbuffer: &wgpu::Buffer,
-        vpls: &wgpu::Buffer,
-        num_vpls: u32,
-        indirect: &wgpu::Buffer,
-        pixels: u32,
-        d_min: f32,
-        label: &str,
+        g: &mut Gpu,
+        inputs: &GatherInputs,
         progress: &mut dyn FnMut(u64, u64) -> bool,
     ) {
+        let GatherInputs {
+            gbuffer,
+            lights: vpls,
+            num_lights: num_vpls,
+            indirect,
+            pixels,
+            d_min,
+            label,
+        } = *inputs;
         if num_vpls == 0 || pixels == 0 {
             return;
         }
+        let ctx = g.ctx;
         let params = ctx.uniform(
             "reference params",
             &RefParams {
@@ -71,16 +90,12 @@ impl Reference {
         // batch after 65,535 trips (docs/architecture.md), and a small image would otherwise give each pixel
         // thousands of VPLs per dispatch.
         let vpl_chunk = (RAYS_PER_SUBMISSION / px_chunk).clamp(1, num_vpls.min(VPLS_PER_DISPATCH));
-        self.kernel.run_2d(
-            ctx,
-            profiler,
+        let run = Run {
             label,
-            scene,
-            &bg,
-            (pixels, px_chunk),
-            (num_vpls, vpl_chunk),
-            0,
-            progress,
-        );
+            group: &bg,
+            seed: 0,
+        };
+        self.kernel
+            .run_2d(g, run, (pixels, px_chunk), (num_vpls, vpl_chunk), progress);
     }
 }

@@ -1,8 +1,14 @@
-//! Accessor decoding with full bounds checking: byte strides, sparse substitution, every component
-//! type (normalised or not, as `KHR_mesh_quantization` allows). Malformed data gives an `Err` with a
-//! short message, never a panic or an out-of-bounds read.
+//! Accessor decoding: the `gltf` crate's accessor iterator (`gltf::accessor::Iter`: byte strides,
+//! sparse substitution) behind bounds checks, for every component type (normalised or not, as
+//! `KHR_mesh_quantization` allows). Malformed data gives an `Err` with a short message, never a
+//! panic or an out-of-bounds read.
+//!
+//! Not `gltf::mesh::Reader`: its `read_positions` and `read_normals` take every accessor as f32
+//! (quantised positions would be read as garbage), its `read_tex_coords`, `read_colors` and
+//! `read_indices` end in `unreachable!()` on a component type they do not expect, and it ignores
+//! `normalized`.
 
-use gltf::accessor::{DataType, Dimensions};
+use gltf::accessor::{DataType, Dimensions, Item, Iter};
 
 /// Component count of an accessor type.
 fn components(d: Dimensions) -> usize {
@@ -79,21 +85,16 @@ fn check_fits(
 /// Most elements an accessor without a bufferView (all zeros plus sparse values) may declare.
 const MAX_VIEWLESS: usize = 1 << 24;
 
-/// Decodes every element of the accessor with `decode` (given `accessor.size()` bytes), applying
-/// sparse substitutes. All bounds are checked before anything is allocated.
-fn visit<T: Clone>(
-    acc: &gltf::Accessor,
-    buffers: &[Vec<u8>],
-    what: &str,
-    decode: impl Fn(&[u8]) -> T,
-) -> Result<Vec<T>, String> {
-    let n = components(acc.dimensions());
-    let elem = n * acc.data_type().size();
+/// Checks every bound `gltf::accessor::Iter` relies on before it is built: it slices buffers and
+/// computes `count - 1` unchecked (a count of 0, a view or element past its buffer's end, a stride
+/// smaller than an element would panic or read a wrong element), takes a sparse view's byteStride
+/// where glTF forbids one, and skips a sparse index that is out of range or out of order without a
+/// word. Returns whether the accessor has elements at all.
+fn check(acc: &gltf::Accessor, buffers: &[Vec<u8>], what: &str) -> Result<bool, String> {
+    let elem = components(acc.dimensions()) * acc.data_type().size();
     let count = acc.count();
     let ctx = |msg: String| format!("{what} (accessor {}) {msg}", acc.index());
-
-    // Dense part: (bytes, offset, stride), checked.
-    let dense = match acc.view() {
+    match acc.view() {
         Some(view) => {
             let bytes = view_bytes(&view, buffers, what)?;
             let stride = view.stride().unwrap_or(elem);
@@ -103,102 +104,143 @@ fn visit<T: Clone>(
                 )));
             }
             check_fits(acc.offset(), stride, elem, count, bytes.len()).map_err(ctx)?;
-            Some((bytes, acc.offset(), stride))
         }
         None if count > MAX_VIEWLESS => {
             return Err(ctx(format!(
                 "has no bufferView and an implausible count {count}"
             )));
         }
-        None => None,
-    };
-
-    // Sparse part: (count, index bytes, index offset, index size, value bytes, value offset).
-    let sparse = match acc.sparse() {
-        Some(sparse) => {
-            let scount = sparse.count();
-            let idx = sparse.indices();
-            let isize = match idx.index_type() {
-                gltf::accessor::sparse::IndexType::U8 => 1,
-                gltf::accessor::sparse::IndexType::U16 => 2,
-                gltf::accessor::sparse::IndexType::U32 => 4,
-            };
-            let ibytes = view_bytes(&idx.view(), buffers, what)?;
-            check_fits(idx.offset(), isize, isize, scount, ibytes.len())
-                .map_err(|m| ctx(format!("sparse indices {m}")))?;
-            let vals = sparse.values();
-            let vbytes = view_bytes(&vals.view(), buffers, what)?;
-            check_fits(vals.offset(), elem, elem, scount, vbytes.len())
-                .map_err(|m| ctx(format!("sparse values {m}")))?;
-            Some((scount, ibytes, idx.offset(), isize, vbytes, vals.offset()))
-        }
-        None => None,
-    };
-
-    let mut out = match dense {
-        Some((bytes, offset, stride)) => (0..count)
-            .map(|i| {
-                let at = offset + i * stride;
-                decode(&bytes[at..at + elem])
-            })
-            .collect(),
-        None => vec![decode(&vec![0u8; elem]); count],
-    };
-
-    if let Some((scount, ibytes, ioff, isize, vbytes, voff)) = sparse {
-        for k in 0..scount {
-            let at = ioff + k * isize;
-            let target = read_uint(&ibytes[at..at + isize]) as usize;
-            if target >= count {
-                return Err(ctx(format!(
-                    "has sparse index {target} out of range (count {count})"
-                )));
-            }
-            let v = voff + k * elem;
-            out[target] = decode(&vbytes[v..v + elem]);
-        }
+        None => {}
     }
-    Ok(out)
+    let Some(sparse) = acc.sparse() else {
+        return Ok(count > 0);
+    };
+    let scount = sparse.count();
+    if scount == 0 {
+        return Err(ctx(
+            "has a sparse count of 0 (at least 1 is required)".into()
+        ));
+    }
+    let idx = sparse.indices();
+    let vals = sparse.values();
+    if idx.view().stride().is_some() || vals.view().stride().is_some() {
+        return Err(ctx(
+            "has a sparse bufferView with a byteStride, which glTF forbids".into(),
+        ));
+    }
+    let isize = idx.index_type().size();
+    let ibytes = view_bytes(&idx.view(), buffers, what)?;
+    check_fits(idx.offset(), isize, isize, scount, ibytes.len())
+        .map_err(|m| ctx(format!("sparse indices {m}")))?;
+    let vbytes = view_bytes(&vals.view(), buffers, what)?;
+    check_fits(vals.offset(), elem, elem, scount, vbytes.len())
+        .map_err(|m| ctx(format!("sparse values {m}")))?;
+    let mut previous = None;
+    for k in 0..scount {
+        let at = idx.offset() + k * isize;
+        let b = &ibytes[at..at + isize];
+        let target = match isize {
+            1 => b[0] as usize,
+            2 => u16::from_le_bytes([b[0], b[1]]) as usize,
+            _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize,
+        };
+        if target >= count {
+            return Err(ctx(format!(
+                "has sparse index {target} out of range (count {count})"
+            )));
+        }
+        if previous.is_some_and(|p| target <= p) {
+            return Err(ctx(format!(
+                "has sparse index {target} after {}: the indices must strictly increase",
+                previous.unwrap_or(0)
+            )));
+        }
+        previous = Some(target);
+    }
+    Ok(count > 0)
 }
 
-/// A little-endian unsigned integer of 1, 2 or 4 bytes.
-fn read_uint(b: &[u8]) -> u32 {
-    match b.len() {
-        1 => b[0] as u32,
-        2 => u16::from_le_bytes([b[0], b[1]]) as u32,
-        _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+/// Every element of a checked accessor through the `gltf` crate's iterator (strides, sparse
+/// substitution, zeros for a sparse accessor without a bufferView).
+fn elements<T: Item>(
+    acc: &gltf::Accessor,
+    buffers: &[Vec<u8>],
+    what: &str,
+) -> Result<Vec<T>, String> {
+    if !check(acc, buffers, what)? {
+        return Ok(Vec::new());
+    }
+    let iter = Iter::<T>::new(acc.clone(), |b: gltf::Buffer| {
+        buffers.get(b.index()).map(Vec::as_slice)
+    })
+    .ok_or_else(|| format!("{what} (accessor {}) cannot be read", acc.index()))?;
+    Ok(iter.collect())
+}
+
+/// A component type and its conversion to f32, normalised per the glTF rules when asked.
+trait Component: Copy {
+    fn to_f32(self, normalized: bool) -> f32;
+}
+
+impl Component for f32 {
+    fn to_f32(self, _: bool) -> f32 {
+        self
     }
 }
 
-/// One component as f32, normalised per the glTF rules when `normalized` is set.
-fn component(b: &[u8], ty: DataType, normalized: bool) -> f32 {
-    match ty {
-        DataType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
-        DataType::I8 => {
-            let v = b[0] as i8 as f32;
-            if normalized { (v / 127.0).max(-1.0) } else { v }
-        }
-        DataType::U8 => {
-            let v = b[0] as f32;
-            if normalized { v / 255.0 } else { v }
-        }
-        DataType::I16 => {
-            let v = i16::from_le_bytes([b[0], b[1]]) as f32;
-            if normalized {
-                (v / 32767.0).max(-1.0)
-            } else {
-                v
-            }
-        }
-        DataType::U16 => {
-            let v = u16::from_le_bytes([b[0], b[1]]) as f32;
-            if normalized { v / 65535.0 } else { v }
-        }
-        DataType::U32 => {
-            let v = u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64;
-            (if normalized { v / u32::MAX as f64 } else { v }) as f32
+impl Component for i8 {
+    fn to_f32(self, normalized: bool) -> f32 {
+        let v = self as f32;
+        if normalized { (v / 127.0).max(-1.0) } else { v }
+    }
+}
+
+impl Component for u8 {
+    fn to_f32(self, normalized: bool) -> f32 {
+        let v = self as f32;
+        if normalized { v / 255.0 } else { v }
+    }
+}
+
+impl Component for i16 {
+    fn to_f32(self, normalized: bool) -> f32 {
+        let v = self as f32;
+        if normalized {
+            (v / 32767.0).max(-1.0)
+        } else {
+            v
         }
     }
+}
+
+impl Component for u16 {
+    fn to_f32(self, normalized: bool) -> f32 {
+        let v = self as f32;
+        if normalized { v / 65535.0 } else { v }
+    }
+}
+
+impl Component for u32 {
+    fn to_f32(self, normalized: bool) -> f32 {
+        let v = self as f64;
+        (if normalized { v / u32::MAX as f64 } else { v }) as f32
+    }
+}
+
+/// The elements of an accessor of component type `C`, as floats.
+fn floats_of<C: Component, const N: usize>(
+    acc: &gltf::Accessor,
+    buffers: &[Vec<u8>],
+    what: &str,
+) -> Result<Vec<[f32; N]>, String>
+where
+    [C; N]: Item,
+{
+    let normalized = acc.normalized();
+    Ok(elements::<[C; N]>(acc, buffers, what)?
+        .into_iter()
+        .map(|e| e.map(|c| c.to_f32(normalized)))
+        .collect())
 }
 
 /// Reads an accessor of `N` components per element as floats.
@@ -206,7 +248,15 @@ pub(super) fn read_floats<const N: usize>(
     acc: &gltf::Accessor,
     buffers: &[Vec<u8>],
     what: &str,
-) -> Result<Vec<[f32; N]>, String> {
+) -> Result<Vec<[f32; N]>, String>
+where
+    [f32; N]: Item,
+    [i8; N]: Item,
+    [u8; N]: Item,
+    [i16; N]: Item,
+    [u16; N]: Item,
+    [u32; N]: Item,
+{
     if components(acc.dimensions()) != N || matches!(acc.dimensions(), Dimensions::Mat2) {
         return Err(format!(
             "{what} (accessor {}) has type {}, expected {} components",
@@ -215,12 +265,14 @@ pub(super) fn read_floats<const N: usize>(
             N
         ));
     }
-    let ty = acc.data_type();
-    let csize = ty.size();
-    let normalized = acc.normalized();
-    visit(acc, buffers, what, |b| {
-        std::array::from_fn(|c| component(&b[c * csize..(c + 1) * csize], ty, normalized))
-    })
+    match acc.data_type() {
+        DataType::F32 => floats_of::<f32, N>(acc, buffers, what),
+        DataType::I8 => floats_of::<i8, N>(acc, buffers, what),
+        DataType::U8 => floats_of::<u8, N>(acc, buffers, what),
+        DataType::I16 => floats_of::<i16, N>(acc, buffers, what),
+        DataType::U16 => floats_of::<u16, N>(acc, buffers, what),
+        DataType::U32 => floats_of::<u32, N>(acc, buffers, what),
+    }
 }
 
 /// Reads an index accessor (SCALAR of U8, U16 or U32).
@@ -238,5 +290,15 @@ pub(super) fn read_indices(
             acc.index()
         ));
     }
-    visit(acc, buffers, what, read_uint)
+    Ok(match ty {
+        DataType::U8 => elements::<u8>(acc, buffers, what)?
+            .into_iter()
+            .map(u32::from)
+            .collect(),
+        DataType::U16 => elements::<u16>(acc, buffers, what)?
+            .into_iter()
+            .map(u32::from)
+            .collect(),
+        _ => elements::<u32>(acc, buffers, what)?,
+    })
 }

@@ -1,0 +1,303 @@
+//! The viewer without a window (its worker starts on lavapipe).
+
+use super::*;
+use crate::metrics;
+use std::time::Duration;
+
+/// A viewer on builtin:cornell with `s`, without a window (its worker starts on lavapipe).
+fn viewer(s: UiSettings) -> Viewer {
+    let loader: Loader = Arc::new(|spec: &str| Ok(crate::scene::load(spec)?));
+    let opts = ViewOptions {
+        spec: "builtin:cornell".into(),
+        scene: crate::scene::load("builtin:cornell").unwrap(),
+        loader,
+        width: 64,
+        height: 48,
+        camera: None,
+        settings: s,
+        frames: None,
+        screenshot: None,
+        view: View::Final,
+        animate: false,
+        stats: None,
+        shot_dir: std::env::temp_dir(),
+    };
+    Viewer::new(opts, Arc::new(|| {}))
+}
+
+/// One egui frame of the whole window's UI.
+fn draw(v: &mut Viewer) {
+    let ctx = egui::Context::default();
+    let input = egui::RawInput {
+        screen_rect: Some(egui::Rect::from_min_size(
+            egui::Pos2::ZERO,
+            egui::vec2(1200.0, 2000.0),
+        )),
+        ..Default::default()
+    };
+    let _ = ctx.run_ui(input, |ui| v.ui(ui));
+}
+
+/// Polls until `done` holds (the worker replies on lavapipe within seconds).
+fn poll_until(v: &mut Viewer, done: impl Fn(&Viewer) -> bool) {
+    let t = Instant::now();
+    while !done(v) {
+        assert!(t.elapsed() < Duration::from_secs(120), "timed out");
+        v.poll();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("fuzzy-vpl-app-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn a_scene_that_fails_to_load_keeps_the_open_one() {
+    let d = scratch("trunc");
+    // A GLB header that promises more bytes than the file has.
+    let glb = d.join("trunc.glb");
+    let mut bytes = b"glTF".to_vec();
+    bytes.extend(2u32.to_le_bytes());
+    bytes.extend(1000u32.to_le_bytes());
+    bytes.extend(b"{\"asset\"");
+    std::fs::write(&glb, &bytes).unwrap();
+    let mut v = viewer(UiSettings::new(&RenderSettings::default()));
+    poll_until(&mut v, |v| v.info.is_some());
+    let cam = v.cam;
+    v.open(glb.display().to_string());
+    assert!(v.loading.is_some());
+    poll_until(&mut v, |v| v.loading.is_none());
+    assert_eq!(v.spec, "builtin:cornell");
+    assert_eq!(
+        v.info.as_ref().map(|i| i.spec.as_str()),
+        Some("builtin:cornell")
+    );
+    assert_eq!(v.cam, cam);
+    assert!(!v.worker_gone);
+    assert!(v.status.contains("trunc.glb"), "{}", v.status);
+    // The open scene's worker still renders.
+    v.schedule();
+    poll_until(&mut v, |v| v.latest.is_some());
+    // A scene that loads replaces it.
+    v.open("builtin:conference".into());
+    poll_until(&mut v, |v| v.loading.is_none());
+    assert_eq!(v.spec, "builtin:conference");
+    assert!(v.info.is_some() && v.latest.is_none());
+    assert!(v.status.is_empty(), "{}", v.status);
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[test]
+fn a_bookmarks_file_that_fails_to_load_is_moved_aside_not_overwritten() {
+    let d = scratch("bookmarks");
+    // One triangle, lit by nothing: it only has to load.
+    let pos: [f32; 9] = [-1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 0.0];
+    let bytes: Vec<u8> = pos.iter().flat_map(|f| f.to_le_bytes()).collect();
+    std::fs::write(d.join("t.bin"), &bytes).unwrap();
+    let gltf = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+      "meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
+      "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[-1,-1,0],"max":[1,1,0]}],
+      "bufferViews":[{"buffer":0,"byteLength":36}],"buffers":[{"uri":"t.bin","byteLength":36}]}"#;
+    let scene = d.join("t.gltf");
+    std::fs::write(&scene, gltf).unwrap();
+    let settings = d.join("t.gltf.fuzzy-vpl.json");
+    std::fs::write(&settings, "{ \"bookmarks\": [ truncated").unwrap();
+    let mut v = viewer(UiSettings::new(&RenderSettings::default()));
+    poll_until(&mut v, |v| v.info.is_some());
+    v.open(scene.display().to_string());
+    poll_until(&mut v, |v| v.loading.is_none());
+    assert_eq!(v.spec, scene.display().to_string());
+    assert!(
+        v.status.contains("not a fuzzy-vpl settings file"),
+        "{}",
+        v.status
+    );
+    v.bookmarks
+        .bookmarks
+        .push(settings::Bookmark::new("door".into(), &v.cam));
+    v.save_bookmarks();
+    let aside = d.join("t.gltf.fuzzy-vpl.json.bad-1");
+    assert_eq!(
+        std::fs::read_to_string(&aside).unwrap(),
+        "{ \"bookmarks\": [ truncated"
+    );
+    assert!(v.status.contains("moved to"), "{}", v.status);
+    assert_eq!(SceneSettings::load(&settings).unwrap(), v.bookmarks);
+    // Later saves write the (now readable) file in place.
+    v.save_bookmarks();
+    assert!(!d.join("t.gltf.fuzzy-vpl.json.bad-2").exists());
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[test]
+fn exr_of_the_reference_view_without_a_reference_is_refused() {
+    let d = scratch("refshot");
+    let mut s = UiSettings::new(&RenderSettings::default());
+    s.frame.vpls = 256;
+    s.cluster.vpl_clusters = 32;
+    s.cluster.sp_clusters = 64;
+    let mut v = viewer(s);
+    v.shot_dir = d.clone();
+    v.view = View::Reference;
+    poll_until(&mut v, |v| v.info.is_some());
+    v.schedule();
+    poll_until(&mut v, |v| v.latest.is_some());
+    v.save_exr();
+    assert!(v.last_shot.contains("no reference"), "{}", v.last_shot);
+    assert_eq!(std::fs::read_dir(&d).unwrap().count(), 0);
+    // The final view saves under its own name.
+    v.view = View::Final;
+    v.save_exr();
+    assert!(v.last_shot.contains("_final_"), "{}", v.last_shot);
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Panel settings for a quick frame with temporal reuse: 256 VPLs in 32 clusters, 64 SP clusters.
+fn small_temporal() -> UiSettings {
+    let mut s = UiSettings::new(&RenderSettings::default());
+    s.frame.vpls = 256;
+    s.cluster.vpl_clusters = 32;
+    s.cluster.sp_clusters = 64;
+    s.cluster.temporal = true;
+    s
+}
+
+#[test]
+fn the_direct_light_accumulates_at_rest() {
+    let mut s = small_temporal();
+    s.frame.direct_samples = 2;
+    let mut v = viewer(s);
+    poll_until(&mut v, |v| v.info.is_some());
+    v.schedule();
+    poll_until(&mut v, |v| {
+        v.latest
+            .as_ref()
+            .and_then(|r| r.refined)
+            .is_some_and(|(n, ..)| n >= 3)
+    });
+    let r = v.latest.as_ref().unwrap();
+    let (n, spp, ms) = r.refined.unwrap();
+    assert_eq!(spp, n as u64 * 2);
+    assert!(ms > 0.0);
+    // The image shown is the running mean plus the frame's indirect light.
+    for ((p, d), i) in r
+        .frame
+        .radiance
+        .iter()
+        .zip(&r.frame.direct)
+        .zip(&r.frame.indirect)
+    {
+        assert_eq!(*p, [d[0] + i[0], d[1] + i[1], d[2] + i[2]]);
+    }
+    // A change starts a new frame, which accumulates from its own first estimate.
+    v.s.frame.seed += 1;
+    v.schedule();
+    let id = v.pending;
+    poll_until(&mut v, |v| {
+        v.latest
+            .as_ref()
+            .is_some_and(|r| r.job.id == id && r.refined.is_some())
+    });
+}
+
+#[test]
+fn lights_move_without_a_restart() {
+    let s = small_temporal();
+    let mut v = viewer(s);
+    poll_until(&mut v, |v| v.info.is_some());
+    v.schedule();
+    poll_until(&mut v, |v| v.latest.is_some());
+    let lum = |v: &Viewer| metrics::mean_luminance(&v.latest.as_ref().unwrap().frame.radiance);
+    let before = lum(&v);
+    assert!(v.last_relight.is_some(), "the first frame traced the VPLs");
+    v.last_relight = None;
+    // The ceiling light off, a point light in the middle of the box.
+    let bounds = v.info.as_ref().unwrap().bounds;
+    let mut set = v.lights.clone();
+    set.emitter_scale = 0.0;
+    set.lights.push(lights::new_point(bounds));
+    v.set_lights(set);
+    assert!(v.status.is_empty(), "{}", v.status);
+    v.schedule();
+    poll_until(&mut v, |v| v.last_relight.is_some());
+    let r = v.latest.as_ref().unwrap();
+    assert!(r.frame.radiance.iter().flatten().all(|c| c.is_finite()));
+    assert!(r.frame.vpls > 0);
+    let (trace, cluster) = v.last_relight.unwrap();
+    assert!(trace > 0.0 && cluster > 0.0, "{trace} {cluster}");
+    assert!(
+        (lum(&v) - before).abs() > 1e-3 * before,
+        "{} vs {before}",
+        lum(&v)
+    );
+    // Nothing left that emits: the panel says so.
+    v.set_lights(lights::LightSet {
+        lights: vec![],
+        emitter_scale: 0.0,
+    });
+    assert!(v.status.contains("no light"), "{}", v.status);
+}
+
+#[test]
+fn auto_gamma_reaches_the_frame_and_the_file_names() {
+    let s = UiSettings::new(&RenderSettings::default());
+    assert!(s.gamma_auto);
+    assert_eq!(s.frame_settings(64, 48).cluster.gamma, Gamma::Auto);
+    assert!(s.short().contains("_gauto_"), "{}", s.short());
+    // Unticked, the slider's γ is used (a γ from the command line arrives unticked).
+    let mut fixed = RenderSettings::default();
+    fixed.cluster.gamma = Gamma::Fixed(8);
+    let mut s = UiSettings::new(&fixed);
+    assert!(!s.gamma_auto);
+    assert_eq!(s.frame_settings(64, 48).cluster.gamma, Gamma::Fixed(8));
+    assert!(s.short().contains("_g8_"), "{}", s.short());
+    s.gamma_auto = true;
+    assert_eq!(s.frame_settings(64, 48).cluster.gamma, Gamma::Auto);
+}
+
+#[test]
+fn command_line_values_beyond_the_sliders_survive_the_panel() {
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            vpls: 100_000,
+            exposure: Exposure::Fixed(100.0),
+            ..Default::default()
+        },
+        cluster: ClusterSettings {
+            sp_clusters: 20_000,
+            vpl_clusters: 20_000,
+            gamma: Gamma::Fixed(100),
+            iterations: 1000,
+            weight_exponent: 20.0,
+            plane_gate: Some(0.5),
+            weighting: Weighting::InverseDistance,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let s = UiSettings::new(&fs);
+    let mut v = viewer(s.clone());
+    draw(&mut v);
+    draw(&mut v);
+    assert_eq!(v.s, s);
+}
+
+#[test]
+fn gi_size_lowers_the_render_scale_to_what_the_device_holds() {
+    assert_eq!(gi_size([640, 480], 0.5, 2_097_152), ((320, 240), None));
+    assert_eq!(gi_size([10, 10], 0.1, 2_097_152), ((8, 8), None));
+    // 2048x1100 at scale 1 is 2,252,800 pixels: more than lavapipe's binding holds.
+    let ((w, h), lower) = gi_size([2048, 1100], 1.0, 2_097_152);
+    let lower = lower.expect("lowered");
+    assert!(w as u64 * h as u64 <= 2_097_152, "{w}x{h}");
+    assert!(lower < 1.0 && lower > 0.95, "{lower}");
+    assert!(w > 1900 && h > 1000, "{w}x{h}");
+    let ((w, h), lower) = gi_size([16384, 16384], 1.0, 2_097_152);
+    assert!(
+        w as u64 * h as u64 <= 2_097_152 && lower.is_some(),
+        "{w}x{h}"
+    );
+}

@@ -1,0 +1,742 @@
+//! The viewer's state machine: camera and panel input, jobs to the GI worker, what each window
+//! frame shows, references, screenshots and the scripted run.
+
+use super::camera::ViewCamera;
+use super::settings::SceneSettings;
+use super::views::View;
+use super::worker::{FrameJob, Job, Rendered, Reply, SceneInfo, Source, Worker};
+use super::{
+    PlotPoint, RefState, Script, SliderRanges, ViewOptions, Viewer, gi_size, preview_settings,
+};
+use super::{camera, lights, motion, reproject, screenshot, settings, views, worker};
+use crate::metrics;
+use anyhow::Result;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+impl Viewer {
+    pub fn new(opts: ViewOptions, wake: Arc<dyn Fn() + Send + Sync>) -> Viewer {
+        let w = wake.clone();
+        let worker = Worker::spawn(
+            Source::Loaded(Box::new(opts.scene), opts.spec.clone()),
+            opts.loader.clone(),
+            Box::new(move || w()),
+        );
+        let placeholder = ViewCamera {
+            eye: glam::Vec3::ZERO,
+            yaw: 0.0,
+            pitch: 0.0,
+            yfov: 1.0,
+            distance: 1.0,
+        };
+        Viewer {
+            spec: opts.spec.clone(),
+            info: None,
+            loader: opts.loader,
+            worker,
+            wake,
+            status: String::new(),
+            cam: placeholder,
+            cam_mode: camera::Mode::Fly,
+            speed: 1.0,
+            home: placeholder,
+            start_camera: opts.camera,
+            ranges: SliderRanges::new(&opts.settings),
+            s: opts.settings,
+            view: opts.view,
+            latest: None,
+            texture: None,
+            image_dirty: false,
+            display_key: String::new(),
+            note: None,
+            last_sent: None,
+            next_id: 1,
+            pending: 0,
+            last_motion: Instant::now() - Duration::from_secs(10),
+            last_tick: Instant::now(),
+            area_px: [opts.width, opts.height],
+            reference: None,
+            points: Vec::new(),
+            live_error: None,
+            bookmarks: SceneSettings::default(),
+            bookmarks_unreadable: false,
+            bookmark_name: String::new(),
+            path_field: opts.spec,
+            dialog: None,
+            shot_dir: opts.shot_dir,
+            last_shot: String::new(),
+            png_request: None,
+            ui_dt: 0.0,
+            gi_frames: 0,
+            gi_ms_sum: 0.0,
+            ui_frames: 0,
+            script_frames: 0,
+            animate: opts.animate,
+            script: opts.frames.map(|n| Script {
+                left: n.max(1),
+                screenshot: opts.screenshot.clone(),
+                stats: opts.stats.clone(),
+                settling: false,
+            }),
+            motion: motion::Motion::default(),
+            composed: None,
+            shown_camera: None,
+            lights: lights::LightSet {
+                lights: Vec::new(),
+                emitter_scale: 1.0,
+            },
+            last_relight: None,
+            script_started: None,
+            exit: None,
+            worker_gone: false,
+            loading: None,
+        }
+    }
+
+    /// Opens another scene: a new worker loads it while the open scene stays on screen, and
+    /// replaces it once loaded (`poll`); when loading fails the open scene and its worker stay.
+    pub fn open(&mut self, spec: String) {
+        let w = self.wake.clone();
+        let worker = Worker::spawn(
+            Source::Spec(spec.clone()),
+            self.loader.clone(),
+            Box::new(move || w()),
+        );
+        // A load still running is dropped (its worker ends after loading).
+        self.loading = Some((spec.clone(), worker));
+        self.path_field = spec;
+    }
+
+    /// The loading worker's first reply: swap it in when its scene loaded, else keep the open one.
+    fn poll_loading(&mut self) -> bool {
+        let Some((spec, w)) = &self.loading else {
+            return false;
+        };
+        let failed = match w.rx.try_recv() {
+            Err(std::sync::mpsc::TryRecvError::Empty) => return false,
+            Ok(Reply::Loaded(info)) => {
+                let (spec, worker) = self.loading.take().expect("loading");
+                if let Some(r) = self.reference.take() {
+                    r.control.cancel();
+                }
+                // The old worker ends after its current job.
+                self.worker = worker;
+                self.worker_gone = false;
+                self.spec = spec;
+                self.latest = None;
+                self.texture = None;
+                self.points.clear();
+                self.live_error = None;
+                self.start_camera = None;
+                self.status.clear();
+                self.loaded(*info);
+                return true;
+            }
+            Ok(Reply::LoadFailed(msg)) => msg,
+            Ok(_) => format!("{spec}: the loading worker sent no scene"),
+            Err(std::sync::mpsc::TryRecvError::Disconnected) => {
+                format!("{spec}: loading stopped (see stderr)")
+            }
+        };
+        self.loading = None;
+        self.status = format!("{failed} (kept {})", self.spec);
+        true
+    }
+
+    /// The worker's scene is ready: start camera, bookmarks, status.
+    fn loaded(&mut self, info: SceneInfo) {
+        let radius = 0.5 * (info.bounds.1 - info.bounds.0).length();
+        let cam = self
+            .start_camera
+            .and_then(|i| info.cameras.get(i).cloned())
+            .unwrap_or_else(|| info.default_camera.clone());
+        let centre = 0.5 * (info.bounds.0 + info.bounds.1);
+        let dist = (centre - cam.eye()).dot(cam.forward()).max(radius * 0.5);
+        self.home = ViewCamera::from_camera(&cam, dist);
+        self.cam = self.home;
+        self.speed = (radius * 0.5).max(1e-6);
+        self.bookmarks_unreadable = false;
+        self.bookmarks = match self.settings_path() {
+            Some(p) => SceneSettings::load(&p).unwrap_or_else(|e| {
+                self.status = format!("{e:#} (kept; moved aside on the next save)");
+                self.bookmarks_unreadable = true;
+                SceneSettings::default()
+            }),
+            None => SceneSettings::default(),
+        };
+        if self.status.starts_with("loading") {
+            self.status.clear();
+        }
+        self.lights = lights::LightSet {
+            lights: info.lights.clone(),
+            emitter_scale: 1.0,
+        };
+        self.last_relight = None;
+        if !info.has_light {
+            let dark = lights::NO_LIGHT;
+            self.status = if self.status.is_empty() {
+                dark.into()
+            } else {
+                format!("{} · {dark}", self.status)
+            };
+        }
+        self.info = Some(info);
+        self.last_sent = None;
+    }
+
+    pub fn settings_path(&self) -> Option<PathBuf> {
+        settings::settings_path(&self.spec)
+    }
+
+    /// Saves the bookmarks; a settings file that failed to load is moved aside first, never
+    /// overwritten.
+    pub fn save_bookmarks(&mut self) {
+        if let Some(p) = self.settings_path() {
+            match self.bookmarks.save_keeping(&p, self.bookmarks_unreadable) {
+                Ok(moved) => {
+                    self.bookmarks_unreadable = false;
+                    self.status = match moved {
+                        Some(m) => format!(
+                            "{} could not be read: moved to {}; bookmarks saved to {}",
+                            p.display(),
+                            m.display(),
+                            p.display()
+                        ),
+                        None => format!("bookmarks saved to {}", p.display()),
+                    }
+                }
+                Err(e) => self.status = format!("{e:#}"),
+            }
+        }
+    }
+
+    pub fn reset_camera(&mut self) {
+        self.set_camera(self.home);
+    }
+
+    pub fn set_camera(&mut self, c: ViewCamera) {
+        if c != self.cam {
+            self.cam = c;
+            // Measured from the first image on (before it there is nothing to move).
+            if self.latest.is_some() {
+                self.motion.camera_changed(Instant::now());
+            }
+            self.camera_moved();
+        }
+    }
+
+    /// A moving camera renders at a reduced scale and invalidates the reference.
+    pub fn camera_moved(&mut self) {
+        self.last_motion = Instant::now();
+        if let Some(r) = self.reference.take() {
+            r.control.cancel();
+            if r.image.is_none() {
+                self.status = "reference cancelled: the camera moved".into();
+            }
+        }
+        self.points.clear();
+        self.live_error = None;
+    }
+
+    pub fn moving(&self) -> bool {
+        self.last_motion.elapsed() < Duration::from_millis(300)
+    }
+
+    /// The GI image size at full render scale (lowered to what the worker's device holds).
+    pub fn full_size(&self) -> (u32, u32) {
+        self.gi_size().0
+    }
+
+    /// The GI size at full render scale and, when the device cannot hold that many pixels, the
+    /// lower render scale used instead.
+    pub fn gi_size(&self) -> ((u32, u32), Option<f32>) {
+        let most = self.info.as_ref().map_or(u64::MAX, |i| i.max_pixels);
+        gi_size(self.area_px, self.s.render_scale, most)
+    }
+
+    /// Sends a frame job when the camera, settings or size changed (progressive: a preview while
+    /// moving, `preview_settings`, the full frame once the camera rests).
+    pub fn schedule(&mut self) {
+        if self.info.is_none() {
+            return;
+        }
+        let (w, h) = self.full_size();
+        let preview = self.moving();
+        let settings = if preview {
+            preview_settings(self.s.frame_settings(w, h))
+        } else {
+            self.s.frame_settings(w, h)
+        };
+        let job = FrameJob {
+            id: self.next_id,
+            camera: self.cam.to_camera(),
+            settings,
+            want_sp_ids: self.view == View::SpClusters,
+            preview,
+        };
+        let key = format!("{:?} {:?} {}", job.camera, job.settings, job.want_sp_ids);
+        if self.last_sent.as_deref() != Some(key.as_str()) {
+            self.last_sent = Some(key);
+            self.pending = job.id;
+            self.next_id += 1;
+            self.worker.send(Job::Frame(job));
+        }
+    }
+
+    /// Starts the reference of the current view at full scale.
+    pub fn start_reference(&mut self) {
+        if let Some(r) = self.reference.take() {
+            r.control.cancel();
+        }
+        let (w, h) = self.full_size();
+        let control = worker::control();
+        let mut settings = self.s.frame_settings(w, h);
+        settings.reference = true;
+        settings.control = Some(control.clone());
+        let job = FrameJob {
+            id: self.next_id,
+            camera: self.cam.to_camera(),
+            settings,
+            want_sp_ids: false,
+            preview: false,
+        };
+        self.next_id += 1;
+        self.worker.send(Job::Reference(job.clone()));
+        self.reference = Some(RefState {
+            job,
+            control,
+            started: Instant::now(),
+            image: None,
+            secs: 0.0,
+        });
+        self.points.clear();
+        self.status.clear();
+    }
+
+    pub fn cancel_reference(&mut self) {
+        if let Some(r) = self.reference.take() {
+            r.control.cancel();
+        }
+    }
+
+    /// Whether a frame is comparable with the finished reference (same view, size and VPLs).
+    fn reference_for(&self, r: &Rendered) -> Option<&[[f32; 3]]> {
+        let rs = self.reference.as_ref()?;
+        let img = rs.image.as_ref()?;
+        let (a, b) = (&rs.job.settings, &r.job.settings);
+        (rs.job.camera == r.job.camera
+            && (
+                a.frame.width,
+                a.frame.height,
+                a.frame.vpls,
+                a.frame.seed,
+                a.frame.clamp.to_bits(),
+                a.frame.direct_samples,
+            ) == (
+                b.frame.width,
+                b.frame.height,
+                b.frame.vpls,
+                b.frame.seed,
+                b.frame.clamp.to_bits(),
+                b.frame.direct_samples,
+            ))
+            .then_some(img.as_slice())
+    }
+
+    fn record_error(&mut self) {
+        let Some(r) = &self.latest else { return };
+        let Some(reference) = self.reference_for(r) else {
+            self.live_error = None;
+            return;
+        };
+        let img = r.frame.radiance.as_slice();
+        let (mse, rel) = (
+            metrics::mse(img, reference),
+            metrics::rel_mse(img, reference),
+        );
+        let ms = r.frame.timings_ms.get("frame").copied().unwrap_or(0.0);
+        self.live_error = Some((mse, rel));
+        let key = self.s.short();
+        let series = self.s.mode_label();
+        self.points.retain(|p| p.key != key);
+        self.points.push(PlotPoint {
+            series,
+            key,
+            ms,
+            mse,
+        });
+    }
+
+    /// Handles the worker's replies; returns whether anything changed.
+    pub fn poll(&mut self) -> bool {
+        let mut changed = self.poll_loading();
+        loop {
+            let reply = match self.worker.rx.try_recv() {
+                Ok(r) => r,
+                Err(std::sync::mpsc::TryRecvError::Empty) => break,
+                Err(std::sync::mpsc::TryRecvError::Disconnected) => {
+                    // Ended without saying why (it panicked outside a frame): no reply will come.
+                    if !self.worker_gone {
+                        self.worker_gone = true;
+                        changed = true;
+                        let msg =
+                            "the GI worker stopped (see stderr); load the scene again".to_string();
+                        self.status = msg.clone();
+                        if self.script.is_some() {
+                            self.exit = Some(Err(msg));
+                        }
+                    }
+                    break;
+                }
+            };
+            changed = true;
+            match reply {
+                Reply::Loaded(info) => self.loaded(*info),
+                Reply::LoadFailed(msg) => {
+                    self.worker_gone = true;
+                    self.status = msg.clone();
+                    if self.script.is_some() {
+                        self.exit = Some(Err(msg));
+                    }
+                }
+                Reply::Frame(r) => {
+                    if r.relit.is_some() {
+                        self.last_relight = r.relit;
+                    }
+                    self.gi_frames += 1;
+                    self.gi_ms_sum += r.wall_ms;
+                    let gpu_ms = r.frame.timings_ms.get("frame").copied().unwrap_or(0.0);
+                    if r.job.preview {
+                        self.motion.moving_gi_ms.push(gpu_ms);
+                    } else {
+                        self.motion.rest = Some((gpu_ms, r.frame.width, r.frame.height));
+                    }
+                    self.latest = Some(r);
+                    self.image_dirty = true;
+                    self.record_error();
+                }
+                Reply::Reference(r) => {
+                    if let Some(rs) = &mut self.reference
+                        && rs.job.id == r.job.id
+                    {
+                        rs.image = Some(r.frame.radiance.clone());
+                        rs.secs = rs.started.elapsed().as_secs_f64();
+                        self.image_dirty = true;
+                        self.record_error();
+                    }
+                }
+                Reply::Refined {
+                    id,
+                    direct,
+                    estimates,
+                    samples,
+                    gpu_ms,
+                } => {
+                    if let Some(r) = self.latest.as_mut().filter(|r| r.job.id == id) {
+                        r.frame.radiance = direct
+                            .iter()
+                            .zip(&r.frame.indirect)
+                            .map(|(a, b)| [0, 1, 2].map(|c| a[c] + b[c]))
+                            .collect();
+                        r.frame.direct = direct;
+                        r.refined = Some((estimates, samples, gpu_ms));
+                        self.image_dirty = true;
+                    }
+                }
+                Reply::ReferenceCancelled => {}
+                Reply::Failed(msg) => {
+                    self.status = msg.clone();
+                    if self.script.is_some() {
+                        self.exit = Some(Err(msg));
+                    }
+                }
+            }
+        }
+        if let Some(rx) = &self.dialog
+            && let Ok(picked) = rx.try_recv()
+        {
+            self.dialog = None;
+            if let Some(p) = picked {
+                self.open(p.to_string_lossy().into_owned());
+            }
+        }
+        changed
+    }
+
+    /// The RGBA8 image of the current view, its size, and a note when it cannot be shown.
+    pub fn compose(&self) -> Option<(u32, u32, Vec<u8>, Option<&'static str>)> {
+        let r = self.latest.as_ref()?;
+        let (w, h) = (r.frame.width, r.frame.height);
+        let e = self.s.exposure;
+        let fin = || views::final_image(&r.frame.direct, &r.frame.indirect, self.s.direct_on);
+        let reference = self.reference_for(r);
+        let (img, note) = match self.view {
+            View::Final => (views::tonemap(&fin(), e), None),
+            View::Direct => (views::tonemap(&r.frame.direct, e), None),
+            View::Indirect => (views::tonemap(&r.frame.indirect, e), None),
+            View::SpClusters => match &r.sp_ids {
+                Some(ids) => (views::sp_clusters(ids, &r.frame.radiance, e), None),
+                None => (
+                    views::tonemap(&fin(), e),
+                    Some("no SP clustering in this frame"),
+                ),
+            },
+            View::VplPoints => {
+                let base = views::tonemap(&fin(), e);
+                (
+                    views::vpl_points(
+                        &base,
+                        &r.job.camera,
+                        w,
+                        h,
+                        &r.vpls,
+                        &r.lights,
+                        r.lights_clustered,
+                    ),
+                    None,
+                )
+            }
+            View::Reference => match reference {
+                Some(img) => (views::tonemap(img, e), None),
+                None => (
+                    views::tonemap(&fin(), e),
+                    Some("no reference for this view yet: press \"compute reference\""),
+                ),
+            },
+            View::Error => match reference {
+                Some(img) => (views::error(&r.frame.radiance, img), None),
+                None => (
+                    views::tonemap(&fin(), e),
+                    Some("no reference for this view yet: press \"compute reference\""),
+                ),
+            },
+        };
+        Some((w, h, img, note))
+    }
+
+    /// Writes the current view's linear radiance (as displayed: direct toggle applied) as EXR.
+    pub fn save_exr(&mut self) {
+        let Some(r) = &self.latest else {
+            self.last_shot = "no frame yet".into();
+            return;
+        };
+        let img = match self.view {
+            View::Direct => r.frame.direct.clone(),
+            View::Indirect => r.frame.indirect.clone(),
+            // Without a reference these views show the clustered frame: saving that under a
+            // `_reference_` / `_error_` name would mislabel it.
+            View::Reference | View::Error if self.reference_for(r).is_none() => {
+                self.last_shot =
+                    "no reference for this view yet: nothing saved (press \"compute reference\")"
+                        .into();
+                return;
+            }
+            View::Reference => self.reference_for(r).expect("checked").to_vec(),
+            _ => views::final_image(&r.frame.direct, &r.frame.indirect, self.s.direct_on),
+        };
+        let path = screenshot::unique_path(
+            &self.shot_dir,
+            &screenshot::scene_stem(&self.spec),
+            &format!("{}_{}", self.s.short(), self.view.slug()),
+            "exr",
+        );
+        self.last_shot = match crate::export::write_exr(&path, r.frame.width, r.frame.height, &img)
+        {
+            Ok(()) => format!("saved {}", path.display()),
+            Err(e) => format!("{e:#}"),
+        };
+    }
+
+    pub fn request_png(&mut self) {
+        self.png_request = Some(screenshot::unique_path(
+            &self.shot_dir,
+            &screenshot::scene_stem(&self.spec),
+            &format!("{}_{}", self.s.short(), self.view.slug()),
+            "png",
+        ));
+    }
+
+    /// The animation's step (`--animate`), at the start of a window frame so the frame shows it.
+    pub fn animate_step(&mut self) {
+        if self.animate && self.info.is_some() {
+            let dt = self.last_tick.elapsed().as_secs_f32();
+            let mut c = self.cam;
+            c.orbit(0.6 * dt.min(0.2), 0.0);
+            self.set_camera(c);
+        }
+    }
+
+    /// The image the area shows now, as an egui image: the latest frame's view, reprojected to the
+    /// current camera while a newer frame renders (temporal reuse on); `None` when there is none.
+    /// Sets `shown_camera` and the view's note.
+    pub fn current_image(&mut self) -> Option<egui::ColorImage> {
+        let r = self.latest.as_ref()?;
+        let key = (r.job.id, self.display_key.clone());
+        if self.image_dirty
+            || self
+                .composed
+                .as_ref()
+                .is_none_or(|c| (c.0, &c.1) != (key.0, &key.1))
+        {
+            let (_, _, rgba, note) = self.compose()?;
+            self.composed = Some((key.0, key.1, rgba, note));
+        }
+        self.image_dirty = false;
+        let r = self.latest.as_ref()?;
+        let (w, h) = (r.frame.width, r.frame.height);
+        let (_, _, rgba, note) = self.composed.as_ref()?;
+        self.note = *note;
+        let now = self.cam.to_camera();
+        let from = &r.job.camera;
+        let reprojected;
+        let img: &[u8] = if self.s.cluster.temporal
+            && *from != now
+            && r.frame.positions.len() == (w * h) as usize
+        {
+            reprojected = reproject::reproject(
+                rgba,
+                &r.frame.positions,
+                &crate::gi::primary::CameraParams::new(from, w, h),
+                &crate::gi::primary::CameraParams::new(&now, w, h),
+            );
+            self.shown_camera = Some(now);
+            &reprojected
+        } else {
+            self.shown_camera = Some(from.clone());
+            rgba
+        };
+        Some(egui::ColorImage::from_rgba_unmultiplied(
+            [w as usize, h as usize],
+            img,
+        ))
+    }
+
+    /// Whether the image area must be redrawn: a new frame or view, or (reprojecting) a camera the
+    /// shown image was not made for.
+    pub fn image_stale(&self) -> bool {
+        self.image_dirty
+            || (self.s.cluster.temporal
+                && self.latest.is_some()
+                && self.shown_camera.as_ref() != Some(&self.cam.to_camera()))
+    }
+
+    /// The shortest time between window frames: while the worker renders on the same CPU cores
+    /// (a software adapter), window frames are paced to 25 a second so that they leave it most of
+    /// the cores; otherwise 60.
+    pub fn min_frame(&self) -> Duration {
+        let busy = self
+            .latest
+            .as_ref()
+            .is_none_or(|r| r.job.id != self.pending);
+        if busy && self.info.as_ref().is_some_and(|i| i.software) {
+            Duration::from_millis(40)
+        } else {
+            Duration::from_millis(16)
+        }
+    }
+
+    /// A window frame was presented at `now`: the camera change it shows is measured.
+    pub fn presented(&mut self, now: Instant) {
+        if self.shown_camera.as_ref() == Some(&self.cam.to_camera()) {
+            self.motion.shown(now);
+        }
+    }
+
+    /// Per window frame: camera input has been applied; schedules work and drives a scripted run.
+    pub fn tick(&mut self) {
+        let now = Instant::now();
+        self.ui_dt = now.duration_since(self.last_tick).as_secs_f32();
+        self.last_tick = now;
+        self.ui_frames += 1;
+        self.schedule();
+        let dk = format!(
+            "{:?} {} {} {} {}",
+            self.view,
+            self.s.exposure,
+            self.s.direct_on,
+            self.reference.as_ref().is_some_and(|r| r.image.is_some()),
+            self.live_error.is_some()
+        );
+        if dk != self.display_key {
+            self.display_key = dk;
+            self.image_dirty = true;
+        }
+        let full = self.full_size();
+        let pending = self.pending;
+        let at_rest = move |r: &Rendered| {
+            !r.job.preview && (r.frame.width, r.frame.height) == full && r.job.id == pending
+        };
+        let mut shown = self
+            .latest
+            .as_ref()
+            .is_some_and(|r| self.animate || at_rest(r))
+            && !self.image_dirty;
+        if self.script.is_some() && self.view.needs_reference() && shown {
+            if self.reference.is_none() {
+                self.start_reference();
+            }
+            shown = self.live_error.is_some();
+        }
+        let rest_ready = self.latest.as_ref().is_some_and(|r| at_rest(r)) && !self.moving();
+        let Some(sc) = &mut self.script else { return };
+        if !shown && !sc.settling {
+            return;
+        }
+        self.script_started.get_or_insert(now);
+        if sc.left > 0 {
+            sc.left -= 1;
+            return;
+        }
+        if self.animate && sc.stats.is_some() {
+            // Stop moving, then measure the frame at rest.
+            self.animate = false;
+            sc.settling = true;
+            return;
+        }
+        if sc.settling && !rest_ready {
+            return;
+        }
+        sc.settling = false;
+        let (shot, stats) = (sc.screenshot.clone(), sc.stats.take());
+        if let Some(p) = stats
+            && let Err(e) = self.write_stats(&p)
+        {
+            self.exit = Some(Err(format!("{e:#}")));
+            return;
+        }
+        match shot {
+            Some(p) => {
+                if self.png_request.is_none() {
+                    self.png_request = Some(p);
+                }
+            }
+            None => self.exit = Some(Ok(())),
+        }
+    }
+
+    /// The scripted run's stats JSON: the scene, the settings, and what `motion` measured.
+    fn write_stats(&self, path: &std::path::Path) -> Result<()> {
+        let (w, h) = self.full_size();
+        // The settings types as they are, with the display exposure (a number) and the render scale.
+        let rs = self.s.frame_settings(w, h);
+        let mut settings = serde_json::to_value(rs.cluster)?;
+        let frame = serde_json::to_value(rs.frame)?;
+        if let (Some(m), serde_json::Value::Object(f)) = (settings.as_object_mut(), frame) {
+            m.extend(f);
+            m.insert("exposure".into(), self.s.exposure.into());
+            m.insert("render_scale".into(), self.s.render_scale.into());
+        }
+        let json = serde_json::json!({
+            "scene": self.spec,
+            "width": w,
+            "height": h,
+            "adapter": self.info.as_ref().map(|i| i.adapter.clone()),
+            "settings": settings,
+            "ui_frames": self.ui_frames,
+            "motion": self.motion.stats(),
+            "rest": self.motion.rest_stats(),
+        });
+        crate::export::write_json(path, &json)
+    }
+}

@@ -1,0 +1,212 @@
+//! `fuzzy-vpl render`: one frame headless to EXR / PNG, with stats and an error against a reference.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args;
+
+use super::bad;
+use super::scene::{SceneArgs, ShotArgs, check_size, check_vpls};
+use crate::gi::pipeline::{self, RenderSettings, Renderer};
+use crate::gpu::GpuContext;
+use crate::settings::FrameSettings;
+use crate::{export, metrics, stats};
+
+#[derive(Args)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Output image: .exr (linear radiance) or .png (exposure, clamp, sRGB).
+    /// Repeat -o to write several files of the same frame (e.g. -o a.exr -o a.png).
+    #[arg(short, long, required = true)]
+    output: Vec<PathBuf>,
+    /// Write the stats JSON (docs/design.md, "Stats JSON") here.
+    #[arg(long)]
+    stats: Option<PathBuf>,
+    /// Write the GPU timer queries of the render (every dispatch of every pass) as a Chrome trace
+    /// (chrome://tracing, Perfetto) here.
+    #[arg(long, value_name = "TRACE.json")]
+    trace: Option<PathBuf>,
+    /// Fill the stats' error block against this reference EXR.
+    #[arg(long)]
+    compare: Option<PathBuf>,
+    /// Write a false-colour per-pixel error image against --compare (log10 rel. error, -4..0).
+    #[arg(long, requires = "compare")]
+    error_map: Option<PathBuf>,
+    #[command(flatten)]
+    shot: ShotArgs,
+    /// Render N times; timings are the mean of the 3 best (the paper's method).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    repeat: u32,
+    /// Indirect light without any clustering: every pixel gathers every VPL with its own shadow ray
+    /// (Eq. 5; the paper's reference).
+    #[arg(long)]
+    reference: bool,
+    /// Render with the diffuse path tracer instead (SPP samples per pixel, same bounce budget as the
+    /// VPLs): the check of the VPL reference's own bias.
+    #[arg(long, value_name = "SPP", conflicts_with = "reference", value_parser = clap::value_parser!(u32).range(1..))]
+    path_trace: Option<u32>,
+}
+
+/// The extension of `p`, lower case.
+fn extension(p: &std::path::Path) -> Option<String> {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+}
+
+/// The reference EXR of `--compare`: finite, of the render's size.
+fn read_reference(p: &std::path::Path, f: &FrameSettings) -> Result<Vec<[f32; 3]>> {
+    let (w, h, px) = export::read_exr(p).map_err(|e| bad(format!("{e:#}")))?;
+    if let Some(i) = px.iter().position(|c| c.iter().any(|x| !x.is_finite())) {
+        return Err(bad(format!(
+            "{}: reference has a non-finite pixel (NaN or infinity) at pixel {i}",
+            p.display()
+        )));
+    }
+    if (w, h) != (f.width, f.height) {
+        return Err(bad(format!(
+            "{}: reference is {w}x{h}, the render is {}x{}",
+            p.display(),
+            f.width,
+            f.height
+        )));
+    }
+    Ok(px)
+}
+
+pub fn run(a: RenderArgs) -> Result<()> {
+    for out in &a.output {
+        if !matches!(extension(out).as_deref(), Some("exr") | Some("png")) {
+            return Err(bad(format!(
+                "{}: output must end in .exr or .png",
+                out.display()
+            )));
+        }
+    }
+    if let Some(p) = &a.error_map
+        && extension(p).as_deref() != Some("png")
+    {
+        return Err(bad(format!(
+            "{}: --error-map must end in .png",
+            p.display()
+        )));
+    }
+    // Every output can be written: checked before the (possibly long) render.
+    for p in a
+        .output
+        .iter()
+        .chain(&a.stats)
+        .chain(&a.error_map)
+        .chain(&a.trace)
+    {
+        export::check_writable(p).map_err(bad)?;
+    }
+    let reference = a
+        .compare
+        .as_deref()
+        .map(|p| read_reference(p, &a.shot.frame))
+        .transpose()?;
+    let scene = a.scene.load()?;
+    let camera = a.scene.camera(&scene, a.shot.camera)?;
+    let ctx = GpuContext::new_headless()?;
+    check_vpls(&ctx, a.shot.frame.vpls)?;
+    let bytes = match a.path_trace {
+        Some(_) => pipeline::PATH_TRACE_PIXEL_BYTES,
+        None => pipeline::PIXEL_BYTES,
+    };
+    check_size(&ctx, a.shot.frame.width, a.shot.frame.height, bytes)?;
+    let mut renderer = Renderer::new(&ctx, &scene)?;
+    renderer.profiler.keep_trace = a.trace.is_some();
+    let settings = RenderSettings {
+        frame: a.shot.frame,
+        cluster: a.shot.cluster.clone(),
+        reference: a.reference,
+        progress: true,
+        control: None,
+    };
+    if a.path_trace.is_none() {
+        let plan = pipeline::Plan::new(&scene, &settings);
+        pipeline::check_visibility_size(&ctx, &plan, &settings).map_err(bad)?;
+    }
+    let mut runs = Vec::new();
+    let mut frame = None;
+    for _ in 0..a.repeat {
+        let f = match a.path_trace {
+            Some(spp) => renderer.path_trace(&camera, &settings, spp)?,
+            None => renderer.render(&camera, &settings)?,
+        };
+        runs.push(f.timings_ms.clone());
+        frame = Some(f);
+    }
+    let frame = frame.expect("repeat >= 1");
+    if let Some(p) = &a.trace {
+        renderer.profiler.write_trace(p)?;
+    }
+    let non_finite = frame
+        .radiance
+        .iter()
+        .flatten()
+        .filter(|c| !c.is_finite())
+        .count();
+    if non_finite > 0 {
+        eprintln!("warning: {non_finite} non-finite pixel channels in the output");
+    }
+    // Never a silent black image: a lit scene rendering all black says so (no light at all was
+    // warned about when loading).
+    if scene.has_light() && frame.radiance.iter().flatten().all(|&c| c == 0.0) {
+        eprintln!(
+            "warning: {}: the image is black although the scene has light (the camera sees no lit surface)",
+            a.scene.scene
+        );
+    }
+    let exposure = a.shot.frame.exposure.resolve(&frame.radiance);
+    for out in &a.output {
+        export::write_image(out, frame.width, frame.height, &frame.radiance, exposure)?;
+    }
+    if let (Some(p), Some(r)) = (&a.error_map, &reference) {
+        let map = metrics::error_map(&frame.radiance, r);
+        export::write_png_rgb8(p, frame.width, frame.height, map)?;
+    }
+    let error = reference.as_ref().map(|r| stats::ErrorStats {
+        mse: metrics::mse(&frame.radiance, r),
+        rel_mse: metrics::rel_mse(&frame.radiance, r),
+    });
+    let timings_ms = stats::best_of_runs(&runs);
+    let outputs: Vec<String> = a.output.iter().map(|p| p.display().to_string()).collect();
+    let passes: Vec<&str> = frame.passes.iter().map(|p| p.name()).collect();
+    eprintln!(
+        "{}: {}x{} in {:.1} ms GPU ({}), mean luminance {:.4} -> {}",
+        a.scene.scene,
+        frame.width,
+        frame.height,
+        timings_ms[pipeline::FRAME_KEY],
+        passes.join(" + "),
+        metrics::mean_luminance(&frame.radiance),
+        outputs.join(", ")
+    );
+    if let Some(p) = &a.stats {
+        let s = stats::Stats {
+            scene: a.scene.scene.clone(),
+            width: frame.width,
+            height: frame.height,
+            adapter: ctx.adapter_name.clone(),
+            settings: stats::Settings::new(
+                &settings,
+                &a.scene.lights,
+                &frame,
+                exposure,
+                a.path_trace,
+            ),
+            counts: stats::Counts::new(&scene, &frame, renderer.gpu.emitters.len() as u64),
+            passes: passes.iter().map(|s| s.to_string()).collect(),
+            timings_ms,
+            repeat: a.repeat,
+            mean_luminance: metrics::mean_luminance(&frame.radiance),
+            bvh_build_ms: renderer.bvh.build_ms,
+            error,
+        };
+        export::write_json(p, &s)?;
+    }
+    Ok(())
+}

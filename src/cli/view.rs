@@ -1,0 +1,124 @@
+//! `fuzzy-vpl view` (the default): the interactive viewer, or a scripted run of it.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args;
+
+use super::bad;
+use super::scene::{SceneArgs, ShotArgs, check_vpls};
+use crate::export;
+use crate::exposure::Exposure;
+use crate::gi::pipeline::RenderSettings;
+use crate::gpu::GpuContext;
+use crate::settings::Invalid;
+
+#[derive(Args)]
+pub struct ViewArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// The camera, the frame and the clustering (in `view`, the frame's size is the image area at
+    /// start, logical pixels; the window adds the side panel).
+    #[command(flatten)]
+    shot: ShotArgs,
+    /// Render scale of the GI image relative to the image area, 0.1..1.
+    #[arg(long, default_value_t = 0.5, value_parser = parse_render_scale)]
+    render_scale: f32,
+    /// Scripted run: draw N window frames once the first full GI frame is shown (with --animate: N
+    /// frames of orbiting, then one frame at rest), save the window to --screenshot and the
+    /// measurements to --stats, exit.
+    #[arg(long)]
+    frames: Option<u32>,
+    /// Where a scripted run saves the window (PNG, UI included).
+    #[arg(long, requires = "frames")]
+    screenshot: Option<PathBuf>,
+    /// Where a scripted run writes its JSON: settings, `motion` (camera change to image latency,
+    /// GPU ms of the GI frames while moving) and `rest` (GPU ms of the frame at rest).
+    #[arg(long, requires = "frames")]
+    stats: Option<PathBuf>,
+    /// The view to start in (a scripted run in reference or error computes the reference first).
+    #[arg(long, value_enum, default_value = "final")]
+    view: crate::app::views::View,
+    /// Keep orbiting the camera (0.6 rad/s about the point looked at) to measure the viewer while
+    /// moving; with --frames.
+    #[arg(long)]
+    animate: bool,
+    /// Directory for the panel's screenshots.
+    #[arg(long, default_value = ".")]
+    shot_dir: PathBuf,
+}
+
+fn parse_render_scale(v: &str) -> Result<f32, Invalid> {
+    match v.trim().parse::<f32>() {
+        Ok(s) if (0.1..=1.0).contains(&s) => Ok(s),
+        _ => Err(Invalid("must be in [0.1, 1]".into())),
+    }
+}
+
+pub fn run(a: ViewArgs) -> Result<()> {
+    if a.shot.frame.exposure == Exposure::Fixed(0.0) {
+        return Err(bad(
+            "--exposure 0: the viewer needs an exposure > 0 (or auto)",
+        ));
+    }
+    if let Some(p) = &a.screenshot
+        && !p
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("png"))
+    {
+        return Err(bad(format!(
+            "{}: --screenshot must end in .png",
+            p.display()
+        )));
+    }
+    if a.frames.is_some() && a.screenshot.is_none() && a.stats.is_none() {
+        return Err(bad("--frames needs --screenshot or --stats"));
+    }
+    for p in a.screenshot.iter().chain(&a.stats) {
+        export::check_writable(p).map_err(bad)?;
+    }
+    // The panel's screenshots go there: found out at start, not at the first F11.
+    if !a.shot_dir.is_dir() {
+        return Err(bad(format!(
+            "--shot-dir {}: not a directory",
+            a.shot_dir.display()
+        )));
+    }
+    export::check_writable(&a.shot_dir.join("screenshot.png"))
+        .map_err(|e| bad(format!("--shot-dir {e}")))?;
+    let scene = a.scene.load()?;
+    // render's device limits apply to the viewer's GI worker too (it makes its own device).
+    check_vpls(&GpuContext::new_headless()?, a.shot.frame.vpls)?;
+    if let Some(i) = a.shot.camera {
+        a.scene.camera(&scene, Some(i))?;
+    }
+    let rs = RenderSettings {
+        frame: a.shot.frame,
+        cluster: a.shot.cluster,
+        ..Default::default()
+    };
+    let mut settings = crate::app::UiSettings::new(&rs);
+    settings.render_scale = a.render_scale;
+    let args = a.scene.clone();
+    let loader: crate::app::worker::Loader = std::sync::Arc::new(move |spec: &str| {
+        let mut sa = args.clone();
+        sa.scene = spec.to_string();
+        sa.load()
+    });
+    crate::app::run(crate::app::ViewOptions {
+        spec: a.scene.scene.clone(),
+        scene,
+        loader,
+        width: a.shot.frame.width,
+        height: a.shot.frame.height,
+        camera: a.shot.camera,
+        settings,
+        frames: a.frames,
+        screenshot: a.screenshot,
+        view: a.view,
+        animate: a.animate,
+        stats: a.stats,
+        shot_dir: a.shot_dir,
+    })
+}

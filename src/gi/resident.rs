@@ -1,0 +1,303 @@
+//! What stays on the device for one scene between frames (the role of Bevy Solari's `prepare.rs`):
+//! the scene's buffers and BVH, the passes' pipelines, the VPLs (step 1) and their light list (step
+//! 2), rebuilt only when their inputs change, and the last frame's clustering and visibility that
+//! temporal reuse starts from. `pipeline.rs` records the frame passes on top of it.
+
+use anyhow::Result;
+
+use super::direct::Direct;
+use super::kmeans::{Clustering, KMeans, KMeansSettings};
+use super::pipeline::{Plan, RenderSettings, gpu};
+use super::primary::Primary;
+use super::reference::Reference;
+use super::scene_gpu::SceneGpu;
+use super::shade::Shade;
+use super::visibility::{self, Visibility};
+use super::vpl_cluster::{self, LightList};
+use super::vpl_trace::{VplSet, VplTrace};
+use crate::bvh::SceneBvh;
+use crate::gpu::{GpuContext, profiler::Profiler};
+use crate::scene::{Camera, PunctualLight, Scene};
+
+/// What a VPL set was traced for, and which trace it is (`Renderer`'s count of traces: a light
+/// change re-traces the same count, seed and bounces).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VplKey {
+    pub count: u32,
+    pub seed: u32,
+    pub bounces: u32,
+    pub trace: u32,
+}
+
+/// The resident VPLs (step 1) with what they were traced for and the GPU ms it took.
+pub struct ResidentVpls {
+    pub set: VplSet,
+    pub key: VplKey,
+    pub ms: f64,
+}
+
+/// What a light list was built for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LightKey {
+    /// K_VPL (0: the VPLs themselves).
+    pub k: u32,
+    pub normal_threshold_bits: u32,
+    pub iterations: u32,
+    pub seed: u32,
+    /// The VPL set it clusters.
+    pub vpls: VplKey,
+}
+
+/// The resident light list (VPL clusters, step 2, or the VPLs) with its key and the clustering's GPU
+/// ms.
+pub struct ResidentLights {
+    pub list: LightList,
+    pub key: LightKey,
+    pub ms: f64,
+}
+
+/// The last clustered frame's visibility matrix and the light list it was traced against.
+pub(super) struct LastVisibility {
+    pub matrix: visibility::Previous,
+    pub lights: LightKey,
+}
+
+/// Everything resident for one scene on one device.
+pub struct Renderer<'a> {
+    pub ctx: &'a GpuContext,
+    /// The scene as rendered: borrowed, or a copy with its geometry scaled by a power of two into a
+    /// unit frame (`Scene::normalize_geometry`, `geometry_scale`) and/or its emitters scaled into
+    /// range (`Scene::normalize_emission`, `output_scale` scales the images back).
+    pub scene: std::borrow::Cow<'a, Scene>,
+    /// The scene as given (`set_lights` scales its emitters from these).
+    source: &'a Scene,
+    pub output_scale: f32,
+    /// The factor from the caller's units to the rendered scene's (a power of two; 1 for scenes of
+    /// 2^-10..2^10 across): cameras given to `render` and `path_trace` are scaled by it.
+    pub geometry_scale: f64,
+    pub bvh: SceneBvh,
+    pub gpu: SceneGpu,
+    pub profiler: Profiler,
+    pub(super) primary: Primary,
+    pub(super) direct: Direct,
+    vpl_trace: VplTrace,
+    pub(super) reference: Reference,
+    pub(super) kmeans: KMeans,
+    pub(super) visibility: Visibility,
+    pub(super) shade: Shade,
+    /// The last frame's G-buffer and its pixel count (`direct_again`, `last_gbuffer`).
+    pub(super) gbuffer: Option<(wgpu::Buffer, u32)>,
+    pub vpl_set: Option<ResidentVpls>,
+    /// VPL traces so far (`VplKey::trace`).
+    vpl_traces: u32,
+    pub lights: Option<ResidentLights>,
+    /// The last frame's SP clustering (for views, tests and temporal reuse).
+    pub sp_clustering: Option<Clustering>,
+    pub(super) last_visibility: Option<LastVisibility>,
+}
+
+impl<'a> Renderer<'a> {
+    pub fn new(ctx: &'a GpuContext, source: &'a Scene) -> Result<Self> {
+        super::scene_gpu::check_fits(source, ctx.max_binding())?;
+        let mut scene = std::borrow::Cow::Borrowed(source);
+        let geometry_scale = scene.geometry_scale();
+        if geometry_scale != 1.0 {
+            scene.to_mut().scale_geometry(geometry_scale);
+        }
+        let output_scale = if scene.emission_out_of_range() {
+            scene.to_mut().normalize_emission()
+        } else {
+            1.0
+        };
+        let bvh = SceneBvh::build(&scene)?;
+        let gpu = SceneGpu::upload(ctx, &scene, &bvh);
+        Ok(Renderer {
+            ctx,
+            scene,
+            source,
+            output_scale,
+            geometry_scale,
+            primary: Primary::new(ctx, &gpu),
+            direct: Direct::new(ctx, &gpu),
+            vpl_trace: VplTrace::new(ctx, &gpu),
+            reference: Reference::new(ctx, &gpu),
+            kmeans: KMeans::new(),
+            visibility: Visibility::new(ctx, &gpu),
+            shade: Shade::new(),
+            profiler: Profiler::new(ctx),
+            gbuffer: None,
+            vpl_set: None,
+            vpl_traces: 0,
+            lights: None,
+            sp_clustering: None,
+            last_visibility: None,
+            bvh,
+            gpu,
+        })
+    }
+
+    /// `camera` (in the caller's units) in the rendered scene's units: its eye scaled by
+    /// `geometry_scale`.
+    pub fn to_render_units(&self, camera: &Camera) -> Camera {
+        let mut c = camera.clone();
+        if self.geometry_scale != 1.0 {
+            let eye = c.transform.w_axis.truncate().as_dvec3() * self.geometry_scale;
+            c.transform.w_axis = eye.as_vec3().extend(1.0);
+        }
+        c
+    }
+
+    /// Lights that move: replaces the scene's punctual lights with `lights` (in the caller's units,
+    /// like cameras) and scales its emissive materials by `emitter_scale` (from the scene as given).
+    /// The geometry and its BVH stay; the scene's GPU buffers are uploaded again, and the passes
+    /// rebuilt only when the shader paths a scene needs change (punctual lights or emitters appear or
+    /// go). The next frame traces the VPLs again and clusters them (from the last clustering, with
+    /// temporal reuse on).
+    pub fn set_lights(&mut self, lights: &[PunctualLight], emitter_scale: f32) {
+        let ctx = self.ctx;
+        let scene = self.scene.to_mut();
+        scene.lights = lights.to_vec();
+        // Lights come in the caller's units: into the unit frame the geometry was scaled to.
+        scene.scale_lights(self.geometry_scale);
+        for (m, base) in scene.materials.iter_mut().zip(&self.source.materials) {
+            m.emissive = base.emissive * emitter_scale;
+        }
+        self.output_scale = if scene.emission_out_of_range() {
+            scene.normalize_emission()
+        } else {
+            1.0
+        };
+        let gpu = SceneGpu::upload(ctx, scene, &self.bvh);
+        if gpu.overrides() != self.gpu.overrides() {
+            self.primary = Primary::new(ctx, &gpu);
+            self.direct = Direct::new(ctx, &gpu);
+            self.vpl_trace = VplTrace::new(ctx, &gpu);
+            self.reference = Reference::new(ctx, &gpu);
+            self.visibility = Visibility::new(ctx, &gpu);
+        }
+        self.gpu = gpu;
+        self.vpl_set = None;
+    }
+
+    /// Step 1: traces the VPLs unless the resident ones match (count, seed, bounces).
+    pub fn ensure_vpls(&mut self, n: u32, seed: u32, bounces: u32) -> Result<&VplSet> {
+        let traced = self
+            .vpl_set
+            .as_ref()
+            .map(|v| (v.key.count, v.key.seed, v.key.bounces));
+        if traced != Some((n, seed, bounces)) {
+            self.vpl_traces += 1;
+            let key = VplKey {
+                count: n,
+                seed,
+                bounces,
+                trace: self.vpl_traces,
+            };
+            let _ = self.profiler.collect(self.ctx)?;
+            let set = self
+                .vpl_trace
+                .trace(&mut gpu!(self), &self.scene, n, seed, bounces)?;
+            let ms: f64 = self.profiler.collect(self.ctx)?.values().sum();
+            self.vpl_set = Some(ResidentVpls { set, key, ms });
+        }
+        Ok(&self.vpl_set.as_ref().unwrap().set)
+    }
+
+    /// Step 2: builds the light list (VPL clusters, or the VPLs themselves) unless the resident one
+    /// matches.
+    pub(super) fn ensure_lights(&mut self, s: &RenderSettings, plan: &Plan) -> Result<()> {
+        let f = &s.frame;
+        let c = &s.cluster;
+        self.ensure_vpls(f.vpls, f.seed, f.bounces)?;
+        let key = LightKey {
+            k: if plan.vpl_clustering {
+                c.vpl_clusters
+            } else {
+                0
+            },
+            normal_threshold_bits: c.normal_threshold.to_bits(),
+            iterations: c.iterations,
+            seed: f.seed,
+            vpls: self.vpl_set.as_ref().unwrap().key,
+        };
+        if self.lights.as_ref().map(|l| l.key) == Some(key) {
+            return Ok(());
+        }
+        let vpls = &self.vpl_set.as_ref().unwrap().set;
+        let _ = self.profiler.collect(self.ctx)?;
+        let list = if plan.vpl_clustering {
+            let previous = self.lights.take().filter(|_| c.temporal);
+            let warm = previous
+                .as_ref()
+                .and_then(|l| l.list.clustering.as_ref())
+                .map(|c| super::kmeans::Warm {
+                    centroids: &c.centroids,
+                    rep_points: &c.rep_points,
+                    k: c.k(),
+                    view: None,
+                });
+            vpl_cluster::cluster(
+                &mut gpu!(self),
+                &self.kmeans,
+                vpls,
+                &KMeansSettings::vpls(c, f.seed),
+                self.scene.bounds(),
+                warm.as_ref(),
+            )?
+        } else {
+            vpl_cluster::unclustered(self.ctx, vpls)
+        };
+        let ms: f64 = self.profiler.collect(self.ctx)?.values().sum();
+        self.lights = Some(ResidentLights { list, key, ms });
+        Ok(())
+    }
+
+    /// The direct light (emission + direct, as `Frame::direct`) of the last frame's shading points
+    /// again, with another seed: an independent estimate to average with it (the viewer accumulates
+    /// these while the camera rests). Returns it with its GPU ms.
+    pub fn direct_again(&mut self, s: &RenderSettings, seed: u32) -> Result<(Vec<[f32; 3]>, f64)> {
+        let ctx = self.ctx;
+        let Some((gbuffer, n)) = &self.gbuffer else {
+            anyhow::bail!("no frame rendered yet");
+        };
+        let radiance = ctx.storage("radiance", *n as u64 * 16);
+        let spp = self.direct_samples(s);
+        let _ = self.profiler.collect(ctx)?;
+        self.direct
+            .record(&mut gpu!(self), gbuffer, &radiance, *n, spp, seed);
+        let ms: f64 = self.profiler.collect(ctx)?.values().sum();
+        let px: Vec<[f32; 4]> = ctx.read_buffer(&radiance, *n as usize)?;
+        Ok((px.iter().map(|p| self.to_scene_units(p)).collect(), ms))
+    }
+
+    /// Area-light samples a pixel: the settings', or 0 in a scene without emitters (the direct pass
+    /// then only writes emission, zero, and clears the image).
+    pub(super) fn direct_samples(&self, s: &RenderSettings) -> u32 {
+        if self.gpu.has_emitters {
+            s.frame.direct_samples.max(1)
+        } else {
+            0
+        }
+    }
+
+    /// A pixel of the rendered scene scaled back to the scene's own units, saturating at the largest
+    /// finite f32.
+    pub(super) fn to_scene_units(&self, p: &[f32; 4]) -> [f32; 3] {
+        [0, 1, 2].map(|c| (p[c] * self.output_scale).min(f32::MAX))
+    }
+
+    /// The last clustered frame's visibility bit matrix and its words per row (for tests).
+    pub fn last_visibility(&self) -> Option<(&wgpu::Buffer, u32)> {
+        self.last_visibility
+            .as_ref()
+            .map(|v| (&v.matrix.bits, v.matrix.words))
+    }
+
+    /// The last frame's shading points, 4 × vec4 each (`common/gbuffer.wgsl`), for tests and views.
+    pub fn last_gbuffer(&self) -> Result<Vec<[f32; 4]>> {
+        match &self.gbuffer {
+            Some((b, n)) => self.ctx.read_buffer(b, *n as usize * 4),
+            None => anyhow::bail!("no frame rendered yet"),
+        }
+    }
+}

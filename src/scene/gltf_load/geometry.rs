@@ -1,0 +1,345 @@
+//! Mesh primitives: their vertex attributes and indices, decoded once, and their world-space
+//! triangles per node instance.
+
+use super::materials::{MaterialTable, finite_or};
+use super::{accessor, uri};
+use crate::scene::{LoadReport, Triangle};
+use glam::{Affine2, DMat3, Mat4, Vec2, Vec3, Vec4};
+
+/// A mesh primitive decoded once, in its local space, shared by every node that instances it.
+pub(super) enum Primitive {
+    Triangles {
+        positions: Vec<Vec3>,
+        normals: Option<Vec<Vec3>>,
+        uvs: Option<Vec<Vec2>>,
+        /// COLOR_0 as linear RGBA (alpha 1 for RGB).
+        colors: Option<Vec<Vec4>>,
+        /// Vertex index triples, in glTF winding order.
+        tris: Vec<[u32; 3]>,
+        material: u32,
+    },
+    /// Points or lines: not rendered.
+    Skipped,
+}
+
+pub(super) fn decode_primitive(
+    prim: &gltf::Primitive,
+    mesh: &gltf::Mesh,
+    buffers: &[Vec<u8>],
+    table: &mut MaterialTable,
+    report: &mut LoadReport,
+) -> Result<Primitive, String> {
+    use gltf::mesh::Mode;
+    let label = match mesh.name() {
+        Some(n) => format!(
+            "mesh {} ('{}') primitive {}",
+            mesh.index(),
+            uri::short(n),
+            prim.index()
+        ),
+        None => format!("mesh {} primitive {}", mesh.index(), prim.index()),
+    };
+    let mode = prim.mode();
+    if !matches!(
+        mode,
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+    ) {
+        report.skipped_primitives += 1;
+        return Ok(Primitive::Skipped);
+    }
+
+    let pos_acc = prim
+        .get(&gltf::Semantic::Positions)
+        .ok_or_else(|| format!("{label} has no POSITION attribute"))?;
+    let positions: Vec<Vec3> =
+        accessor::read_floats::<3>(&pos_acc, buffers, &format!("{label} POSITION"))?
+            .into_iter()
+            .map(Vec3::from)
+            .collect();
+    if let Some(v) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(format!(
+            "{label} POSITION has a non-finite value ({}) at vertex {v}",
+            positions[v]
+        ));
+    }
+    let n = positions.len();
+
+    let normals = match prim.get(&gltf::Semantic::Normals) {
+        None => None,
+        Some(acc) => match accessor::read_floats::<3>(&acc, buffers, &format!("{label} NORMAL")) {
+            Ok(v) if v.len() == n => Some(v.into_iter().map(Vec3::from).collect()),
+            Ok(v) => {
+                report.warnings.push(format!(
+                    "{label}: NORMAL has {} entries for {n} vertices, normals generated",
+                    v.len()
+                ));
+                None
+            }
+            Err(e) => {
+                report.warnings.push(format!("{e}; normals generated"));
+                None
+            }
+        },
+    };
+    let uvs = match prim.get(&gltf::Semantic::TexCoords(0)) {
+        None => None,
+        Some(acc) => {
+            match accessor::read_floats::<2>(&acc, buffers, &format!("{label} TEXCOORD_0")) {
+                Ok(v) if v.len() == n => Some(v.into_iter().map(Vec2::from).collect()),
+                Ok(v) => {
+                    report.warnings.push(format!(
+                        "{label}: TEXCOORD_0 has {} entries for {n} vertices, ignored",
+                        v.len()
+                    ));
+                    None
+                }
+                Err(e) => {
+                    report
+                        .warnings
+                        .push(format!("{e}; texture coordinates ignored"));
+                    None
+                }
+            }
+        }
+    };
+
+    let colors = match prim.get(&gltf::Semantic::Colors(0)) {
+        None => None,
+        Some(acc) => match read_colors(&acc, buffers, &format!("{label} COLOR_0")) {
+            Ok(v) if v.len() == n => {
+                if v.iter().any(|c| {
+                    !c.is_finite() || c.cmplt(Vec4::ZERO).any() || c.cmpgt(Vec4::ONE).any()
+                }) {
+                    report.warnings.push(format!(
+                        "{label}: COLOR_0 has values outside [0, 1], clamped"
+                    ));
+                }
+                Some(
+                    v.into_iter()
+                        .map(|c| finite_or(c, Vec4::ONE).clamp(Vec4::ZERO, Vec4::ONE))
+                        .collect(),
+                )
+            }
+            Ok(v) => {
+                report.warnings.push(format!(
+                    "{label}: COLOR_0 has {} entries for {n} vertices, ignored",
+                    v.len()
+                ));
+                None
+            }
+            Err(e) => {
+                report.warnings.push(format!("{e}; vertex colours ignored"));
+                None
+            }
+        },
+    };
+
+    let indices: Vec<u32> = match prim.indices() {
+        Some(acc) => {
+            let idx = accessor::read_indices(&acc, buffers, &format!("{label} indices"))?;
+            if let Some(&bad) = idx.iter().find(|&&i| i as usize >= n) {
+                return Err(format!(
+                    "{label}: index {bad} out of range (the primitive has {n} vertices)"
+                ));
+            }
+            idx
+        }
+        None => (0..n as u32).collect(),
+    };
+
+    let tris: Vec<[u32; 3]> = match mode {
+        Mode::Triangles => {
+            if !indices.len().is_multiple_of(3) {
+                report.warnings.push(format!(
+                    "{label}: {} indices is not a multiple of 3, the last {} ignored",
+                    indices.len(),
+                    indices.len() % 3
+                ));
+            }
+            indices
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect()
+        }
+        // glTF: triangle i = (v[i], v[i + 1 + i % 2], v[i + 2 - i % 2]).
+        Mode::TriangleStrip => (0..indices.len().saturating_sub(2))
+            .map(|i| {
+                let odd = i % 2;
+                [indices[i], indices[i + 1 + odd], indices[i + 2 - odd]]
+            })
+            .collect(),
+        // glTF: triangle i = (v[i + 1], v[i + 2], v[0]).
+        _ => (0..indices.len().saturating_sub(2))
+            .map(|i| [indices[i + 1], indices[i + 2], indices[0]])
+            .collect(),
+    };
+
+    Ok(Primitive::Triangles {
+        positions,
+        normals,
+        uvs,
+        colors,
+        tris,
+        material: table.index_for(prim.material().index()),
+    })
+}
+
+/// COLOR_0: VEC3 or VEC4 of float or normalised unsigned byte / short, as linear RGBA.
+fn read_colors(acc: &gltf::Accessor, buffers: &[Vec<u8>], what: &str) -> Result<Vec<Vec4>, String> {
+    use gltf::accessor::{DataType, Dimensions};
+    let ok_type = match acc.data_type() {
+        DataType::F32 => true,
+        DataType::U8 | DataType::U16 => acc.normalized(),
+        _ => false,
+    };
+    if !ok_type {
+        return Err(format!(
+            "{what} (accessor {}) must be float or normalised unsigned byte or short",
+            acc.index()
+        ));
+    }
+    match acc.dimensions() {
+        Dimensions::Vec3 => Ok(accessor::read_floats::<3>(acc, buffers, what)?
+            .into_iter()
+            .map(|c| Vec3::from(c).extend(1.0))
+            .collect()),
+        _ => Ok(accessor::read_floats::<4>(acc, buffers, what)?
+            .into_iter()
+            .map(Vec4::from)
+            .collect()),
+    }
+}
+
+/// Appends the world-space triangles of one primitive instance. Invalid normals are left as
+/// `Vec3::ZERO` and filled in later with the face normal.
+pub(super) fn emit(
+    prim: &Primitive,
+    world: &Mat4,
+    node: usize,
+    uv_transform: &[Option<Affine2>],
+    out: &mut Vec<Triangle>,
+) -> Result<(), String> {
+    let Primitive::Triangles {
+        positions,
+        normals,
+        uvs,
+        colors,
+        tris,
+        material,
+    } = prim
+    else {
+        return Ok(());
+    };
+    let world_pos: Vec<Vec3> = positions
+        .iter()
+        .map(|&p| world.transform_point3(p))
+        .collect();
+    if let Some(p) = world_pos.iter().find(|p| !p.is_finite()) {
+        return Err(format!(
+            "node {node}: a vertex position is not finite after the node transform ({p})"
+        ));
+    }
+    // In f64 so that tiny (or huge) scales keep a usable determinant sign and inverse.
+    let m3 = DMat3::from_mat4(world.as_dmat4());
+    let det = m3.determinant();
+    let normal_matrix = (det != 0.0 && det.is_finite())
+        .then(|| m3.inverse().transpose().as_mat3())
+        .filter(|m| m.is_finite());
+    let world_n: Option<Vec<Vec3>> = match (normals, normal_matrix) {
+        (Some(ns), Some(nm)) => Some(
+            ns.iter()
+                .map(|&n| {
+                    let v = (nm * n).normalize_or_zero();
+                    if v.is_finite() { v } else { Vec3::ZERO }
+                })
+                .collect(),
+        ),
+        _ => None,
+    };
+    let xf = uv_transform[*material as usize];
+    let world_uv: Option<Vec<Vec2>> = uvs.as_ref().map(|uvs| match xf {
+        Some(a) => uvs.iter().map(|&uv| a.transform_point2(uv)).collect(),
+        None => uvs.clone(),
+    });
+
+    out.reserve(tris.len());
+    for &t in tris {
+        // A mirroring transform reverses the winding; swap to keep the front face.
+        let t = if det < 0.0 { [t[0], t[2], t[1]] } else { t };
+        let [a, b, c] = t.map(|i| i as usize);
+        out.push(Triangle {
+            p: [world_pos[a], world_pos[b], world_pos[c]],
+            n: match &world_n {
+                Some(n) => [n[a], n[b], n[c]],
+                None => [Vec3::ZERO; 3],
+            },
+            uv: match &world_uv {
+                Some(uv) => [uv[a], uv[b], uv[c]],
+                None => [Vec2::ZERO; 3],
+            },
+            color: match colors {
+                Some(col) => [col[a], col[b], col[c]],
+                None => [Vec4::ONE; 3],
+            },
+            material: *material,
+        });
+    }
+    Ok(())
+}
+
+/// A mesh instance placed so far from the origin, for its size, that f32 positions cannot resolve it.
+pub(super) struct FarNode {
+    node: usize,
+    /// The largest coordinate magnitude of its vertices (world units, computed in f64).
+    far: f64,
+    /// Its bounding-box diagonal (world units, f64).
+    size: f64,
+}
+
+impl FarNode {
+    pub(super) fn describe(&self) -> String {
+        format!(
+            "node {} lies {:.3e} from the origin, where f32 positions are {:.1e} apart, and its mesh is only {:.3e} across",
+            self.node,
+            self.far,
+            self.far * f32::EPSILON as f64,
+            self.size
+        )
+    }
+}
+
+/// `Some` when an instance of `prim` under `world` spans fewer than 10 f32 spacings at its distance
+/// from the origin (its shape is then quantised to a few positions or collapses to nothing).
+pub(super) fn too_far_for_f32(prim: &Primitive, world: &Mat4, node: usize) -> Option<FarNode> {
+    let Primitive::Triangles { positions, .. } = prim else {
+        return None;
+    };
+    let w = world.as_dmat4();
+    let mut lo = glam::DVec3::splat(f64::INFINITY);
+    let mut hi = glam::DVec3::splat(f64::NEG_INFINITY);
+    for p in positions {
+        let q = w.transform_point3(p.as_dvec3());
+        lo = lo.min(q);
+        hi = hi.max(q);
+    }
+    let far = lo.abs().max(hi.abs()).max_element();
+    let size = (hi - lo).length();
+    (size > 0.0 && far * (f32::EPSILON as f64) > 0.1 * size).then_some(FarNode { node, far, size })
+}
+
+/// Whether a triangle has (numerically) no area, relative to the scene and to its own size.
+pub(super) fn is_degenerate(t: &Triangle, extent_sq: f64) -> bool {
+    let p = t.p.map(|v| v.as_dvec3());
+    let e = [p[1] - p[0], p[2] - p[1], p[0] - p[2]];
+    let twice_area = e[0].cross(-e[2]).length();
+    let longest_sq = e.iter().map(|v| v.length_squared()).fold(0.0, f64::max);
+    twice_area <= 2.0 * DEGENERATE_AREA_REL * extent_sq
+        || twice_area <= DEGENERATE_SLIVER_REL * longest_sq
+}
+
+/// A triangle is degenerate when its area is at most this fraction of the squared scene extent
+/// (bounding-box diagonal), which keeps the test scale-free.
+const DEGENERATE_AREA_REL: f64 = 1e-12;
+/// …or when twice its area is at most this fraction of its longest edge squared (numerically
+/// collinear vertices: its height is below f32 precision relative to its length).
+const DEGENERATE_SLIVER_REL: f64 = 1e-7;

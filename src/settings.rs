@@ -1,0 +1,543 @@
+//! The settings model: one type per idea, each declared once with its command-line form (clap
+//! `Args`) and its serialised form (serde), flattened into `render`, `view` and `bench` and used as
+//! they are by the renderer (`gi::pipeline::Settings`), the viewer's state, the stats JSON and the
+//! bench CSV.
+//!
+//! - `ClusterSettings`: the paper's knobs (K_SP, K_VPL, F, γ, n_t, iterations, weighting, p, the
+//!   plane gate, temporal reuse);
+//! - `FrameSettings`: what a frame is (size, seed, VPLs, bounces, direct samples, exposure, clamp);
+//! - `LightSettings`: the lights added to or scaled in a scene.
+//!
+//! Ranges are checked by the value parsers below; a value out of range is refused by clap with one
+//! line naming the option and the value, exit 2 (`cli::parse`).
+
+use std::fmt;
+use std::str::FromStr;
+
+use clap::Args;
+use serde::{Deserialize, Serialize};
+
+use crate::exposure::Exposure;
+
+/// A value a parser refused: the message (`cli::parse` prints it as `--option VALUE: message`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Invalid(pub String);
+
+impl fmt::Display for Invalid {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Invalid {}
+
+fn invalid<T>(msg: impl Into<String>) -> Result<T, Invalid> {
+    Err(Invalid(msg.into()))
+}
+
+/// How a pixel's F SP clusters combine their visibility.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, Serialize, Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum Weighting {
+    /// F = 1: the nearest cluster only.
+    Hard,
+    /// Eq. (8): the mean over the F nearest clusters.
+    Uniform,
+    /// Eq. (9) with Eq. (10): inverse-distance weights.
+    #[default]
+    InverseDistance,
+}
+
+impl Weighting {
+    pub const ALL: [Weighting; 3] = [
+        Weighting::Hard,
+        Weighting::Uniform,
+        Weighting::InverseDistance,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Weighting::Hard => "hard",
+            Weighting::Uniform => "uniform",
+            Weighting::InverseDistance => "inverse-distance",
+        }
+    }
+}
+
+/// γ, the SP downsampling factor of Alg. 1's iterations: `auto` (the default) lets
+/// `Gamma::resolve` choose it from the pixels and K, or a fixed factor of at least 1.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Gamma {
+    #[default]
+    Auto,
+    Fixed(u32),
+}
+
+/// The auto rule's bounds on γ: 4 is the fixed default it replaced (kept wherever the rule has no
+/// room), 16 the largest factor measured at equal error (docs/clustering.md, "γ by rule").
+pub const AUTO_GAMMA_MIN: u32 = 4;
+pub const AUTO_GAMMA_MAX: u32 = 16;
+/// The auto rule keeps at least this many sampled points a cluster (Alg. 1's means need members)...
+pub const AUTO_SAMPLES_PER_CLUSTER: u32 = 40;
+/// ...and at least this many sampled points in all: a full 160×120 picture of the view, so that the
+/// sampled set never resolves the image more coarsely than that (γ 20 at 160×120 lost thin surfaces'
+/// clusters: docs/clustering.md).
+pub const AUTO_MIN_SAMPLED: u32 = 19_200;
+
+impl Gamma {
+    /// The auto rule: the largest γ in [4, 16] that keeps `AUTO_SAMPLES_PER_CLUSTER` sampled points
+    /// a cluster and `AUTO_MIN_SAMPLED` in all. 640×480: K 461 → 16, K 1000 → 7, K ≥ 1920 → 4;
+    /// 1024×720: K 1000 → 16, K 8000 → 4; 160×120 and 320×240: 4 at any K.
+    pub fn auto(num_points: u32, k: u32) -> u32 {
+        let per_cluster = num_points / (AUTO_SAMPLES_PER_CLUSTER.saturating_mul(k.max(1)));
+        let in_all = num_points / AUTO_MIN_SAMPLED;
+        per_cluster
+            .min(in_all)
+            .clamp(AUTO_GAMMA_MIN, AUTO_GAMMA_MAX)
+    }
+
+    /// γ as asked: the fixed factor, or the auto rule's choice for `num_points` and `k`.
+    pub fn resolve(self, num_points: u32, k: u32) -> u32 {
+        match self {
+            Gamma::Auto => Gamma::auto(num_points, k),
+            Gamma::Fixed(g) => g,
+        }
+    }
+
+    /// γ as Alg. 1 uses it (`resolve`): at least 1, and at most M / K, so that the sampled set holds
+    /// at least K points (a γ near the point count would leave a single sampled point, often in the
+    /// sky, and no cluster).
+    pub fn effective(self, num_points: u32, k: u32) -> u32 {
+        self.resolve(num_points, k)
+            .clamp(1, (num_points / k.max(1)).max(1))
+    }
+
+    pub fn is_auto(self) -> bool {
+        self == Gamma::Auto
+    }
+}
+
+impl FromStr for Gamma {
+    type Err = Invalid;
+    fn from_str(v: &str) -> Result<Gamma, Invalid> {
+        match v.trim() {
+            "auto" => Ok(Gamma::Auto),
+            t => match t.parse::<u32>() {
+                Ok(g) if g >= 1 => Ok(Gamma::Fixed(g)),
+                _ => invalid("γ is `auto` or a whole number of at least 1"),
+            },
+        }
+    }
+}
+
+/// `auto` or the number (labels, file names, CSV).
+impl fmt::Display for Gamma {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Gamma::Auto => f.write_str("auto"),
+            Gamma::Fixed(g) => write!(f, "{g}"),
+        }
+    }
+}
+
+/// Serialised as the command line writes it: `"auto"` or the number.
+impl Serialize for Gamma {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Gamma::Auto => s.serialize_str("auto"),
+            Gamma::Fixed(g) => s.serialize_u32(*g),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Gamma {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Gamma, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            N(u32),
+            S(String),
+        }
+        match Raw::deserialize(d)? {
+            Raw::N(0) => Ok(Gamma::Auto),
+            Raw::N(g) => Ok(Gamma::Fixed(g)),
+            Raw::S(s) => s.parse().map_err(serde::de::Error::custom),
+        }
+    }
+}
+
+/// The most SP clusters a pixel keeps (F); the slot loops are compiled for F as an override.
+pub const MAX_F: u32 = 16;
+
+/// The largest n_t Eq. (7) can use: its test n1 · n2 > n_t is strict, so n_t = 1 would accept no
+/// pair at all (not even a point and a centroid with the same normal), every cluster would empty in
+/// the first iteration and no point would get one. n_t = 1 is read as the tightest threshold an f32
+/// cosine resolves (about 0.08°).
+pub const MAX_NORMAL_THRESHOLD: f32 = 1.0 - 1.0 / (1 << 20) as f32;
+
+/// The plane gate's angle the viewer starts from when it is switched on (the held-out study in
+/// docs/clustering.md measured 10°, 20° and 30°; 20° was best on average).
+pub const DEFAULT_PLANE_GATE_DEG: f32 = 20.0;
+
+/// The default G-term clamp as a fraction of the scene diagonal.
+pub const DEFAULT_CLAMP: f32 = 0.02;
+
+/// The most area-light samples a pixel (the default is 16): far beyond any useful count, while
+/// without a bound --direct-samples 4294967295 blocked for hours.
+pub const MAX_DIRECT_SAMPLES: u32 = 65536;
+
+/// The most diffuse reflections a light path deposits VPLs at.
+pub const MAX_BOUNCES: u32 = 64;
+
+/// The largest image side.
+pub const MAX_SIDE: u32 = 16384;
+
+/// The clustering of shading points and VPLs: the paper's knobs.
+#[derive(Args, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ClusterSettings {
+    /// K of the shading-point clustering (0 = no SP clustering; off when ≥ the pixel count).
+    #[arg(long, default_value_t = 3072)]
+    pub sp_clusters: u32,
+    /// K of the VPL clustering (0 = no VPL clustering; off when ≥ --vpls).
+    #[arg(long, default_value_t = 1024)]
+    pub vpl_clusters: u32,
+    /// F: SP clusters per pixel (fuzziness), 1..16 (hard weighting uses 1).
+    #[arg(long, default_value_t = 6, value_parser = parse_fuzziness)]
+    pub fuzziness: u32,
+    /// γ: SP downsampling factor for the k-means iterations, or `auto`: the largest γ in 4..16 that
+    /// keeps 40 sampled points a cluster and 19,200 in all. Either way at most pixels / K, so that at
+    /// least K points are sampled.
+    #[arg(long, default_value = "auto", value_parser = parse_gamma)]
+    pub gamma: Gamma,
+    /// n_t of Eq. (7): cosine of the largest normal angle within a cluster, in [-1, 1] (Eq. 7's test
+    /// is strict, so 1 is read as 1 - 2^-20: the same normal only).
+    #[arg(long, default_value_t = 0.866, value_parser = parse_normal_threshold)]
+    pub normal_threshold: f32,
+    /// k-means iterations (Alg. 1), 0..=1000.
+    #[arg(long, default_value_t = 10, value_parser = parse_iterations)]
+    pub iterations: u32,
+    /// How a pixel's F clusters combine visibility: hard (F = 1), uniform (Eq. 8), inverse-distance
+    /// (Eq. 9).
+    #[arg(long, value_enum, default_value_t = Weighting::InverseDistance)]
+    pub weighting: Weighting,
+    /// p of the inverse-distance weights, w'_f = dist^-p: 1 is Eq. (10); larger p falls off faster
+    /// (the paper's §6 suggestion), 0 is Eq. (8)'s plain mean (but a point on a centroid still takes
+    /// it alone), 64 is nearly hard clustering. [0, 64].
+    #[arg(long, default_value_t = 1.0, value_parser = parse_weight_exponent)]
+    pub weight_exponent: f32,
+    /// Not in the paper (off by default): the fuzzy modes' slots 2..F keep only SP clusters whose
+    /// centroid lies within DEG degrees of the pixel's tangent plane, seen from the pixel. Eq. (7)
+    /// gates on normals alone, so without it a floor pixel's F clusters include a chair seat above
+    /// it (docs/clustering.md, "The plane gate"). (0, 90].
+    #[arg(long = "plane-gate", value_name = "DEG", value_parser = parse_plane_gate)]
+    #[serde(rename = "plane_gate_deg", skip_serializing_if = "Option::is_none")]
+    pub plane_gate: Option<f32>,
+    /// Eq. (10) weights from the distances to the SP clusters' representatives (the paper's text)
+    /// instead of their centroids (Alg. 2).
+    #[arg(long)]
+    pub weights_to_reps: bool,
+    /// Temporal reuse (on|off): each frame's SP clustering starts from the previous one's centroids
+    /// where the view still sees them, the VPL clustering from its last centroids when the lights
+    /// change (docs/temporal.md). A single `render` has no past: only --repeat's later renders reuse.
+    #[arg(long, default_value = "off", value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    pub temporal: bool,
+}
+
+impl Default for ClusterSettings {
+    fn default() -> Self {
+        ClusterSettings {
+            sp_clusters: 3072,
+            vpl_clusters: 1024,
+            fuzziness: 6,
+            gamma: Gamma::Auto,
+            normal_threshold: 0.866,
+            iterations: 10,
+            weighting: Weighting::InverseDistance,
+            weight_exponent: 1.0,
+            plane_gate: None,
+            weights_to_reps: false,
+            temporal: false,
+        }
+    }
+}
+
+impl ClusterSettings {
+    /// F in effect: 1 for hard clustering.
+    pub fn f(&self) -> u32 {
+        if self.weighting == Weighting::Hard {
+            1
+        } else {
+            self.fuzziness
+        }
+    }
+
+    /// n_t as Eq. (7) uses it: at most `MAX_NORMAL_THRESHOLD`.
+    pub fn normal_threshold_used(&self) -> f32 {
+        self.normal_threshold.min(MAX_NORMAL_THRESHOLD)
+    }
+}
+
+/// The plane gate as the shader tests it: slot j ≥ 2 is kept when |n · (c − p)| ≤ s |c − p|, s =
+/// sin θ; 2 (above any ratio) when off. Eq. (7) gates on normals alone, so a pixel's F nearest
+/// clusters include parallel surfaces above or below it (a chair seat over the floor) whose
+/// visibility differs; this drops them (docs/clustering.md, "The plane gate").
+pub fn plane_gate_sine(deg: Option<f32>) -> f32 {
+    deg.map_or(2.0, |d| d.clamp(0.0, 90.0).to_radians().sin())
+}
+
+/// What a frame is: its size, random seed, VPLs, bounce budget, direct-light samples, exposure and
+/// G-term clamp.
+#[derive(Args, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct FrameSettings {
+    /// Image width, 1..16384.
+    #[arg(long, default_value_t = 640, value_parser = parse_side)]
+    pub width: u32,
+    /// Image height, 1..16384.
+    #[arg(long, default_value_t = 480, value_parser = parse_side)]
+    pub height: u32,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u32,
+    /// Number of VPLs (traced once, resident).
+    #[arg(long, default_value_t = 8192)]
+    pub vpls: u32,
+    /// Indirect bounce budget: the most VPLs a light path deposits (the path tracer gets the same),
+    /// 1..64.
+    #[arg(long, default_value_t = crate::gi::vpl_trace::MAX_DEPTH, value_parser = parse_bounces)]
+    pub bounces: u32,
+    /// Area-light samples (shadow rays) per pixel for direct light, 1..=65536.
+    #[arg(long, default_value_t = 16, value_parser = parse_direct_samples)]
+    pub direct_samples: u32,
+    /// Exposure of PNG images and the viewer: `auto` (the default: the image's log-average
+    /// luminance is shown as middle grey 0.18, Reinhard et al. 2002) or a factor >= 0. EXR stays
+    /// linear, unscaled radiance.
+    #[arg(long, default_value = "auto", value_parser = parse_exposure)]
+    pub exposure: Exposure,
+    /// G-term clamp: the VPL distance in 1/d² is at least CLAMP × scene diagonal (scale-free),
+    /// [0, 1).
+    #[arg(long, default_value_t = DEFAULT_CLAMP, value_parser = parse_clamp)]
+    pub clamp: f32,
+}
+
+impl Default for FrameSettings {
+    fn default() -> Self {
+        FrameSettings {
+            width: 640,
+            height: 480,
+            seed: 1,
+            vpls: 8192,
+            bounces: crate::gi::vpl_trace::MAX_DEPTH,
+            direct_samples: 16,
+            exposure: Exposure::Auto,
+            clamp: DEFAULT_CLAMP,
+        }
+    }
+}
+
+impl FrameSettings {
+    pub fn pixels(&self) -> u32 {
+        self.width * self.height
+    }
+}
+
+/// Lights added to a scene (for scenes that ship without any) and the scale of its emitters.
+#[derive(Args, Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct LightSettings {
+    /// Add a directional light: DX,DY,DZ,E[,R,G,B] (direction towards the sun).
+    #[arg(long, value_name = "DX,DY,DZ,E[,R,G,B]", allow_hyphen_values = true)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sun: Vec<String>,
+    /// Add a point light: X,Y,Z,I[,R,G,B].
+    #[arg(long, value_name = "X,Y,Z,I[,R,G,B]", allow_hyphen_values = true)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub point: Vec<String>,
+    /// Multiply every emitter's power by this factor (>= 0).
+    #[arg(long, default_value_t = 1.0, value_parser = parse_light_scale)]
+    pub light_scale: f32,
+}
+
+// ---- value parsers: one line each, `cli::parse` prefixes the option and the value ----
+
+fn in_range<T: PartialOrd + Copy + FromStr>(
+    v: &str,
+    ok: impl Fn(T) -> bool,
+    what: &str,
+) -> Result<T, Invalid> {
+    match v.trim().parse::<T>() {
+        Ok(x) if ok(x) => Ok(x),
+        _ => invalid(what),
+    }
+}
+
+pub fn parse_fuzziness(v: &str) -> Result<u32, Invalid> {
+    in_range(v, |f: u32| (1..=MAX_F).contains(&f), "must be 1..16")
+}
+
+pub fn parse_gamma(v: &str) -> Result<Gamma, Invalid> {
+    v.parse()
+}
+
+pub fn parse_normal_threshold(v: &str) -> Result<f32, Invalid> {
+    in_range(
+        v,
+        |x: f32| (-1.0..=1.0).contains(&x),
+        "must be a cosine in [-1, 1]",
+    )
+}
+
+pub fn parse_iterations(v: &str) -> Result<u32, Invalid> {
+    in_range(v, |i: u32| i <= 1000, "must be 0..=1000")
+}
+
+pub fn parse_weight_exponent(v: &str) -> Result<f32, Invalid> {
+    in_range(
+        v,
+        |p: f32| (0.0..=64.0).contains(&p),
+        "must be a number in [0, 64]",
+    )
+}
+
+pub fn parse_plane_gate(v: &str) -> Result<f32, Invalid> {
+    in_range(
+        v,
+        |d: f32| d > 0.0 && d <= 90.0,
+        "must be an angle in (0, 90] degrees",
+    )
+}
+
+pub fn parse_on_off(v: &str) -> Result<bool, Invalid> {
+    match v.trim() {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => invalid("expected `on` or `off`"),
+    }
+}
+
+pub fn parse_side(v: &str) -> Result<u32, Invalid> {
+    in_range(v, |s: u32| (1..=MAX_SIDE).contains(&s), "must be 1..16384")
+}
+
+pub fn parse_bounces(v: &str) -> Result<u32, Invalid> {
+    in_range(v, |b: u32| (1..=MAX_BOUNCES).contains(&b), "must be 1..64")
+}
+
+pub fn parse_direct_samples(v: &str) -> Result<u32, Invalid> {
+    in_range(
+        v,
+        |n: u32| (1..=MAX_DIRECT_SAMPLES).contains(&n),
+        "must be 1..=65536",
+    )
+}
+
+pub fn parse_exposure(v: &str) -> Result<Exposure, Invalid> {
+    Exposure::parse(v).map_err(Invalid)
+}
+
+pub fn parse_clamp(v: &str) -> Result<f32, Invalid> {
+    in_range(v, |c: f32| (0.0..1.0).contains(&c), "must be in [0, 1)")
+}
+
+pub fn parse_light_scale(v: &str) -> Result<f32, Invalid> {
+    in_range(
+        v,
+        |x: f32| x.is_finite() && x >= 0.0,
+        "must be a finite number >= 0",
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gamma_reads_writes_and_resolves() {
+        assert_eq!("auto".parse::<Gamma>(), Ok(Gamma::Auto));
+        assert_eq!("8".parse::<Gamma>(), Ok(Gamma::Fixed(8)));
+        assert!("0".parse::<Gamma>().is_err());
+        assert!("x".parse::<Gamma>().is_err());
+        assert_eq!(Gamma::Auto.to_string(), "auto");
+        assert_eq!(Gamma::Fixed(3).to_string(), "3");
+        assert_eq!(serde_json::to_string(&Gamma::Auto).unwrap(), "\"auto\"");
+        assert_eq!(serde_json::to_string(&Gamma::Fixed(5)).unwrap(), "5");
+        let back: Gamma = serde_json::from_str("5").unwrap();
+        assert_eq!(back, Gamma::Fixed(5));
+        // The rule's worked cases (docs/clustering.md): 640×480 at K 461 → 16, K 1000 → 7, K ≥ 1920
+        // → 4; never above pixels / K.
+        assert_eq!(Gamma::Fixed(9).effective(100, 50), 2);
+        assert_eq!(Gamma::Fixed(9).resolve(640 * 480, 461), 9);
+        for bad in ["0", "-1", "4.5", "", "Auto2"] {
+            assert!(bad.parse::<Gamma>().is_err(), "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn auto_gamma_keeps_samples_per_cluster_and_in_all() {
+        // (pixels, K, γ): the paper's settings at 640×480 and 1024×720, the held-out 160×120.
+        for (m, k, g) in [
+            (640 * 480, 461, 16),
+            (640 * 480, 1000, 7),
+            (640 * 480, 1920, 4),
+            (640 * 480, 3072, 4),
+            (640 * 480, 12288, 4),
+            (1024 * 720, 1000, 16),
+            (1024 * 720, 2000, 9),
+            (1024 * 720, 8000, 4),
+            (160 * 120, 29, 4),
+            (160 * 120, 192, 4),
+            (320 * 240, 115, 4),
+            (1280 * 960, 100, 16),
+            (0, 0, 4),
+        ] {
+            assert_eq!(Gamma::auto(m, k), g, "{m} points, K {k}");
+            let ran = Gamma::Auto.effective(m, k);
+            let s = m.div_ceil(ran);
+            // Above the floor of 4, the rule's two bounds hold for the points it samples.
+            if ran > AUTO_GAMMA_MIN {
+                assert!(s >= AUTO_MIN_SAMPLED, "{m}, {k}: {s} sampled");
+                assert!(s >= AUTO_SAMPLES_PER_CLUSTER * k, "{m}, {k}: {s} sampled");
+            }
+        }
+        // The cap of every γ (at most M / K) still applies to the rule's choice.
+        assert_eq!(Gamma::Auto.effective(1000, 500), 2);
+        // A γ asked is kept as it is.
+        assert_eq!(Gamma::Fixed(4).effective(640 * 480, 461), 4);
+        assert_eq!(Gamma::Auto.resolve(640 * 480, 461), 16);
+    }
+
+    #[test]
+    fn parsers_refuse_out_of_range() {
+        assert!(parse_fuzziness("0").is_err() && parse_fuzziness("17").is_err());
+        assert_eq!(parse_fuzziness("16"), Ok(16));
+        assert!(parse_normal_threshold("NaN").is_err());
+        assert!(parse_normal_threshold("1.01").is_err());
+        assert_eq!(parse_normal_threshold("-1"), Ok(-1.0));
+        assert!(parse_clamp("1").is_err() && parse_clamp("-0.5").is_err());
+        assert!(parse_plane_gate("0").is_err() && parse_plane_gate("91").is_err());
+        assert!(parse_plane_gate("NaN").is_err());
+        assert!(parse_weight_exponent("65").is_err());
+        assert!(parse_direct_samples("0").is_err() && parse_direct_samples("65537").is_err());
+        assert!(parse_side("0").is_err() && parse_side("16385").is_err());
+        assert!(parse_light_scale("inf").is_err() && parse_light_scale("-1").is_err());
+        assert_eq!(parse_on_off("on"), Ok(true));
+        assert!(parse_on_off("yes").is_err());
+    }
+
+    #[test]
+    fn settings_round_trip_through_json() {
+        let c = ClusterSettings {
+            gamma: Gamma::Fixed(7),
+            plane_gate: Some(20.0),
+            weighting: Weighting::Uniform,
+            ..Default::default()
+        };
+        let j = serde_json::to_string(&c).unwrap();
+        assert!(j.contains("\"plane_gate_deg\":20.0"), "{j}");
+        assert_eq!(serde_json::from_str::<ClusterSettings>(&j).unwrap(), c);
+        let f = FrameSettings::default();
+        let j = serde_json::to_string(&f).unwrap();
+        assert_eq!(serde_json::from_str::<FrameSettings>(&j).unwrap(), f);
+    }
+}
