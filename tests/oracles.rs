@@ -17,16 +17,18 @@ use fuzzy_vpl::bvh::SceneBvh;
 use fuzzy_vpl::cpu::kmeans::{Centroid, Point, dist7, inverse_distance_weights};
 use fuzzy_vpl::cpu::vpl::vpl_term;
 use fuzzy_vpl::export;
-use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings};
-use fuzzy_vpl::gi::pipeline::{FrameSettings, Renderer};
+use fuzzy_vpl::gi::dispatch::Gpu;
+use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, Points};
+use fuzzy_vpl::gi::pipeline::{RenderSettings, Renderer};
 use fuzzy_vpl::gi::primary::CameraParams;
-use fuzzy_vpl::gi::reference::Reference;
+use fuzzy_vpl::gi::reference::{GatherInputs, Reference};
 use fuzzy_vpl::gi::scene_gpu::SceneGpu;
 use fuzzy_vpl::gi::shade::{Shade, ShadeInputs, ShadeParams};
 use fuzzy_vpl::gi::vpl_cluster;
 use fuzzy_vpl::gi::vpl_trace::{Vpl, VplSet};
 use fuzzy_vpl::gpu::{GpuContext, profiler::Profiler};
 use fuzzy_vpl::scene::{self, Camera};
+use fuzzy_vpl::settings::{FrameSettings, Gamma};
 use glam::Vec3;
 
 /// `a` within `rel` of `b` (relative, with an absolute floor of `rel` × 1e-3 for values near 0).
@@ -191,8 +193,18 @@ fn run_kmeans(ctx: &GpuContext, data: &[[f32; 4]], s: &KMeansSettings) -> Fuzzy 
     let buf = ctx.storage_init("data", data);
     let m = data.len() as u32 / 2;
     let frame = (Vec3::ZERO, Vec3::splat(16.0));
+    let mut g = Gpu {
+        ctx,
+        scene: &gpu,
+        profiler: &mut prof,
+    };
+    let points = Points {
+        data: &buf,
+        count: m,
+        stride: 2,
+    };
     let c = KMeans::new()
-        .run(ctx, &gpu, &mut prof, "oracle", &buf, m, 2, s, frame, None)
+        .run(&mut g, "oracle", &points, s, frame, None)
         .unwrap();
     let f = c.params.f as usize;
     let raw: Vec<[f32; 4]> = ctx
@@ -212,7 +224,7 @@ fn oracle_settings(f: u32, p: f32, to_reps: bool) -> KMeansSettings {
     KMeansSettings {
         k: 3,
         f,
-        gamma: 1,
+        gamma: Gamma::Fixed(1),
         normal_threshold: 0.866,
         iterations: 10,
         seed: 3,
@@ -392,6 +404,10 @@ fn vpl_term_by_hand() {
     assert_eq!(vpl_term(p, Vec3::Z, Vec3::ONE, &back, DMIN2), Vec3::ZERO);
     let below = light(-Vec3::Z, UP, [1.0; 3]);
     assert_eq!(vpl_term(p, Vec3::Z, Vec3::ONE, &below, DMIN2), Vec3::ZERO);
+    // Both cosines negative (a light under the surface facing away): their product is positive, the
+    // term still 0.
+    let away = light(-Vec3::Z, DOWN, [1.0; 3]);
+    assert_eq!(vpl_term(p, Vec3::Z, Vec3::ONE, &away, DMIN2), Vec3::ZERO);
     // Grazing: the light in the pixel's plane gives 0.
     let side = light(Vec3::X, [-1.0, 0.0, 0.0], [1.0; 3]);
     assert_eq!(vpl_term(p, Vec3::Z, Vec3::ONE, &side, DMIN2), Vec3::ZERO);
@@ -432,10 +448,13 @@ fn gpu_shading_is_eq6_by_hand() {
     for (weighted, v0) in [(1u32, [1.0, 0.75, 0.25]), (0, [1.0, 0.5, 0.5])] {
         let indirect = ctx.storage("indirect", 2 * 16);
         let mut prof = Profiler::new(&ctx);
+        let mut g = Gpu {
+            ctx: &ctx,
+            scene: &gpu,
+            profiler: &mut prof,
+        };
         shade.record(
-            &ctx,
-            &gpu,
-            &mut prof,
+            &mut g,
             &ShadeInputs {
                 gbuffer: &gbuffer,
                 lights: &lights_buf,
@@ -484,17 +503,22 @@ fn gpu_reference_is_eq5_in_closed_form() {
         let vpls = ctx.storage_init("vpls", lights);
         let indirect = ctx.storage("indirect", sps.len() as u64 * 16);
         let mut prof = Profiler::new(&ctx);
+        let mut g = Gpu {
+            ctx: &ctx,
+            scene: &gpu,
+            profiler: &mut prof,
+        };
         reference.record(
-            &ctx,
-            &gpu,
-            &mut prof,
-            &gbuffer,
-            &vpls,
-            lights.len() as u32,
-            &indirect,
-            sps.len() as u32,
-            DMIN2.sqrt(),
-            "reference",
+            &mut g,
+            &GatherInputs {
+                gbuffer: &gbuffer,
+                lights: &vpls,
+                num_lights: lights.len() as u32,
+                indirect: &indirect,
+                pixels: sps.len() as u32,
+                d_min: DMIN2.sqrt(),
+                label: "reference",
+            },
             &mut |_, _| true,
         );
         ctx.read_buffer(&indirect, sps.len()).unwrap()
@@ -512,7 +536,15 @@ fn gpu_reference_is_eq5_in_closed_form() {
             &[light(base + Vec3::new(0.0, h, 0.0), yd, [PI2; 3])],
         ));
     }
+    // A light under pixel 0's plane facing away from it: both cosines negative, nothing between
+    // them; Eq. (5) gives 0 (cos⁺ of both), not the positive product of the two negative cosines.
+    out.extend(run(&sps[..1], &[light(o - Vec3::Z, DOWN, [PI2; 3])]));
     let got = |i: usize| [out[i][0], out[i][1], out[i][2]];
+    assert_eq!(
+        got(4),
+        [0.0; 3],
+        "a light behind the pixel facing away lights it"
+    );
     for (px, terms) in t.iter().enumerate() {
         let mut want = [0f32; 3];
         for term in terms {
@@ -569,8 +601,12 @@ fn light_list_flux_sums_to_the_vpls_flux() {
     };
     let mut prof = Profiler::new(&ctx);
     let frame = (Vec3::ZERO, Vec3::splat(4.0));
-    let list =
-        vpl_cluster::cluster(&ctx, &gpu, &KMeans::new(), &mut prof, &set, &s, frame, None).unwrap();
+    let mut g = Gpu {
+        ctx: &ctx,
+        scene: &gpu,
+        profiler: &mut prof,
+    };
+    let list = vpl_cluster::cluster(&mut g, &KMeans::new(), &set, &s, frame, None).unwrap();
     assert!(
         list.lights.len() > 20 && list.lights.len() <= 40,
         "{}",
@@ -636,11 +672,14 @@ fn camera_rays_at_the_frustum_corners() {
     let look = sc.default_camera().forward();
     let cam = Camera::look_at("t", eye, eye + look, Vec3::Y, yfov);
     let mut r = Renderer::new(&ctx, &sc).unwrap();
-    let fs = FrameSettings {
-        width: w,
-        height: h,
-        vpls: 0,
-        direct_samples: 1,
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            width: w,
+            height: h,
+            vpls: 0,
+            direct_samples: 1,
+            ..Default::default()
+        },
         ..Default::default()
     };
     r.render(&cam, &fs).unwrap();
