@@ -34,7 +34,10 @@ MUTANTS = [
     ("eq5-albedo-not-over-pi", "common/vpl.wgsl", "(albedo / PI)", "albedo", "Eq. 5"),
     ("eq5-flux-not-over-pi", "common/vpl.wgsl", "(v.flux.xyz / PI)", "v.flux.xyz", "Eq. 5"),
     ("eq5-vpl-cosine-sign", "common/vpl.wgsl", "dot(v.nrm.xyz, -wi)", "abs(dot(v.nrm.xyz, -wi))", "Eq. 5"),
-    ("eq5-backface-test-dropped", "common/vpl.wgsl", "if cos_p <= 0.0 || cos_v <= 0.0 {", "if cos_v <= 0.0 {", "Eq. 5"),
+    # Not `if cos_v <= 0.0` alone: with cos_v > 0 a negative cos_p makes the term negative, which every
+    # caller drops (`any(t > 0)`): an equivalent mutant. Without both tests two negative cosines give
+    # a positive term.
+    ("eq5-cosine-tests-dropped", "common/vpl.wgsl", "if cos_p <= 0.0 || cos_v <= 0.0 {", "if false {", "Eq. 5"),
     ("eq5-direction-not-normalised", "common/vpl.wgsl", "let wi = d * inverseSqrt(d2);", "let wi = d / d2;", "Eq. 5"),
     ("eq5-visibility-inverted", "reference.wgsl", "&& vpl_visible(p, n, v.pos.xyz, v.nrm.xyz)", "&& !vpl_visible(p, n, v.pos.xyz, v.nrm.xyz)", "Eq. 5"),
     ("eq5-shadow-ray-overshoots", "reference.wgsl", "dist * (1.0 - 1e-4)", "dist * 1.5", "Eq. 5"),
