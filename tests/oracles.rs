@@ -14,8 +14,8 @@ mod common;
 use std::f32::consts::PI;
 
 use fuzzy_vpl::bvh::SceneBvh;
-use fuzzy_vpl::cpu::kmeans::{Centroid, Point, dist7, inverse_distance_weights};
-use fuzzy_vpl::cpu::vpl::vpl_term;
+use fuzzy_vpl::cpu::kmeans::{Centroid, Point, eq7_dist, eq10_weights};
+use fuzzy_vpl::cpu::vpl::eq5_vpl_radiance;
 use fuzzy_vpl::export;
 use fuzzy_vpl::gi::dispatch::Gpu;
 use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, Points};
@@ -69,30 +69,30 @@ fn eq7_distance_on_chosen_pairs() {
     let up = [0.0, 0.0, 1.0];
     let p = pt([1.0, 1.0, 0.0], up);
     // A 3-4-5 triangle: exactly 5.
-    assert_eq!(dist7(&p, &ctr([4.0, 5.0, 0.0], up), 0.866), 5.0);
-    assert_eq!(dist7(&p, &ctr([1.0, 1.0, 0.0], up), 0.866), 0.0);
+    assert_eq!(eq7_dist(&p, &ctr([4.0, 5.0, 0.0], up), 0.866), 5.0);
+    assert_eq!(eq7_dist(&p, &ctr([1.0, 1.0, 0.0], up), 0.866), 0.0);
     // Normals 29° apart agree at n_t = cos 30°, 31° apart do not.
     let tilt = |deg: f32| [deg.to_radians().sin(), 0.0, deg.to_radians().cos()];
-    assert_eq!(dist7(&p, &ctr([1.0, 4.0, 4.0], tilt(29.0)), 0.866), 5.0);
+    assert_eq!(eq7_dist(&p, &ctr([1.0, 4.0, 4.0], tilt(29.0)), 0.866), 5.0);
     assert_eq!(
-        dist7(&p, &ctr([1.0, 4.0, 4.0], tilt(31.0)), 0.866),
+        eq7_dist(&p, &ctr([1.0, 4.0, 4.0], tilt(31.0)), 0.866),
         f32::MAX
     );
     // Perpendicular and opposite normals never agree at n_t ≥ 0; the test is strict (n·n_c = n_t
     // does not agree).
     assert_eq!(
-        dist7(&p, &ctr([1.0, 1.0, 0.0], [1.0, 0.0, 0.0]), 0.0),
+        eq7_dist(&p, &ctr([1.0, 1.0, 0.0], [1.0, 0.0, 0.0]), 0.0),
         f32::MAX
     );
     assert_eq!(
-        dist7(&p, &ctr([1.0, 1.0, 0.0], [0.0, 0.0, -1.0]), 0.5),
+        eq7_dist(&p, &ctr([1.0, 1.0, 0.0], [0.0, 0.0, -1.0]), 0.5),
         f32::MAX
     );
-    assert_eq!(dist7(&p, &ctr([1.0, 1.0, 3.0], up), 1.0), f32::MAX);
-    assert_eq!(dist7(&p, &ctr([1.0, 1.0, 3.0], up), 0.999), 3.0);
+    assert_eq!(eq7_dist(&p, &ctr([1.0, 1.0, 3.0], up), 1.0), f32::MAX);
+    assert_eq!(eq7_dist(&p, &ctr([1.0, 1.0, 3.0], up), 0.999), 3.0);
     // n_t = -1 lets every normal but the exact opposite through.
     assert_eq!(
-        dist7(&p, &ctr([1.0, 3.0, 1.0], [1.0, 0.0, 0.0]), -1.0),
+        eq7_dist(&p, &ctr([1.0, 3.0, 1.0], [1.0, 0.0, 0.0]), -1.0),
         5f32.sqrt()
     );
 }
@@ -101,7 +101,7 @@ fn eq7_distance_on_chosen_pairs() {
 /// a negative distance is an unused slot.
 #[test]
 fn eq10_weights_closed_form() {
-    let w = |d: &[f32], p: f32| inverse_distance_weights(d, p);
+    let w = |d: &[f32], p: f32| eq10_weights(d, p);
     // Distances 1 and 2: weights 2/3 and 1/3 (f32 rounding of each: within 1 ulp).
     let x = w(&[1.0, 2.0], 1.0);
     assert!(
@@ -385,7 +385,7 @@ fn vpl_term_by_hand() {
     let (sps, lights, terms) = two_pixels_three_lights(Vec3::ZERO);
     for (i, s) in sps.iter().enumerate() {
         for (j, l) in lights.iter().enumerate() {
-            let t = vpl_term(
+            let t = eq5_vpl_radiance(
                 Vec3::new(s[0][0], s[0][1], s[0][2]),
                 Vec3::new(s[1][0], s[1][1], s[1][2]),
                 Vec3::new(s[2][0], s[2][1], s[2][2]),
@@ -401,16 +401,28 @@ fn vpl_term_by_hand() {
     // Facing away (either cosine ≤ 0) gives 0.
     let p = Vec3::ZERO;
     let back = light(Vec3::Z, UP, [1.0; 3]);
-    assert_eq!(vpl_term(p, Vec3::Z, Vec3::ONE, &back, DMIN2), Vec3::ZERO);
+    assert_eq!(
+        eq5_vpl_radiance(p, Vec3::Z, Vec3::ONE, &back, DMIN2),
+        Vec3::ZERO
+    );
     let below = light(-Vec3::Z, UP, [1.0; 3]);
-    assert_eq!(vpl_term(p, Vec3::Z, Vec3::ONE, &below, DMIN2), Vec3::ZERO);
+    assert_eq!(
+        eq5_vpl_radiance(p, Vec3::Z, Vec3::ONE, &below, DMIN2),
+        Vec3::ZERO
+    );
     // Both cosines negative (a light under the surface facing away): their product is positive, the
     // term still 0.
     let away = light(-Vec3::Z, DOWN, [1.0; 3]);
-    assert_eq!(vpl_term(p, Vec3::Z, Vec3::ONE, &away, DMIN2), Vec3::ZERO);
+    assert_eq!(
+        eq5_vpl_radiance(p, Vec3::Z, Vec3::ONE, &away, DMIN2),
+        Vec3::ZERO
+    );
     // Grazing: the light in the pixel's plane gives 0.
     let side = light(Vec3::X, [-1.0, 0.0, 0.0], [1.0; 3]);
-    assert_eq!(vpl_term(p, Vec3::Z, Vec3::ONE, &side, DMIN2), Vec3::ZERO);
+    assert_eq!(
+        eq5_vpl_radiance(p, Vec3::Z, Vec3::ONE, &side, DMIN2),
+        Vec3::ZERO
+    );
 }
 
 fn cornell_gpu(ctx: &GpuContext) -> (scene::Scene, SceneGpu) {
