@@ -44,11 +44,11 @@ MUTANTS = [
     # --- Eq. (6), (8), (9): shade.wgsl
     ("eq8-uniform-over-F-not-used-slots", "shade.wgsl", "1.0 / f32(nf)", "1.0 / f32(F)", "Eq. 8"),
     ("eq8-eq9-switch-inverted", "shade.wgsl", "if params.weighted == 0u {", "if params.weighted != 0u {", "Eq. 8/9"),
-    ("eq8-used-slot-count-off", "shade.wgsl", "nf += 1u;", "nf += 2u;", "Eq. 8"),
+    ("eq8-used-slot-count-off", "shade.wgsl", "nf += select(0u, 1u, rows[j] != INVALID);", "nf += select(0u, 2u, rows[j] != INVALID);", "Eq. 8"),
     ("eq9-visibility-bit-inverted", "shade.wgsl", "((rw[j] >> b) & 1u) != 0u", "((rw[j] >> b) & 1u) == 0u", "Eq. 9"),
-    ("eq9-slot-loop-skips-first", "shade.wgsl", "for (var j = 0u; j < F; j++) {\n                    v +=", "for (var j = 1u; j < F; j++) {\n                    v +=", "Eq. 9"),
+    ("eq9-slot-loop-skips-first", "shade.wgsl", "for (var j = 0u; j < F; j++) {\n        v +=", "for (var j = 1u; j < F; j++) {\n        v +=", "Eq. 9"),
     ("eq9-weight-ignored", "shade.wgsl", "v += select(0.0, w[j],", "v += select(0.0, 1.0,", "Eq. 9"),
-    ("eq6-visibility-ignored", "shade.wgsl", "sum += t * v;", "sum += t;", "Eq. 6"),
+    ("eq6-visibility-ignored", "shade.wgsl", "sum += t * eq9_weighted_visibility(w, rw, b);", "sum += t;", "Eq. 6"),
     ("eq6-light-index-off-by-one", "shade.wgsl", "load_light(wd * 32u + b)", "load_light(wd * 32u + b + 1u)", "Eq. 6"),
     # --- Eq. (7), Alg. 1: kmeans.wgsl
     ("eq7-normal-test-swapped", "common/kmeans.wgsl", "return dot(n, nc) > params.normal_threshold;", "return dot(n, nc) < params.normal_threshold;", "Eq. 7"),

@@ -154,6 +154,10 @@ fn push(data: &mut Vec<[f32; 4]>, p: [f32; 3], n: [f32; 3]) {
 /// - a + (0.25, 0, 0): distances 0.25 and 2.75: weights 11/12, 1/12.
 /// - g = (2, 2.5, 0) with normal +x (in C) is nearer to a and b than to c but its normal disagrees
 ///   with theirs (Eq. 7): its only slot is C, weight 1, the second slot unused.
+/// - t = (3.5, 2, 0) lies 1.5 from a and from b (exact): the tie goes to the lower index (A), then
+///   weights 1/2, 1/2; had it gone to B, both means would move.
+///
+/// Nine points a cluster (indices 0–8, 9–17, 18–26).
 fn known_optimum() -> Vec<[f32; 4]> {
     let mut d = Vec::new();
     let z = [0.0, 0.0, 1.0];
@@ -165,6 +169,13 @@ fn known_optimum() -> Vec<[f32; 4]> {
         }
         push(&mut d, [c[0] + 1.0, c[1], 0.0], z);
         push(&mut d, [c[0] - 1.0, c[1], 0.0], z);
+        // A: the tie (3.5, 2, 0), 1.5 from a and b, and its mirror; B: a pair at ±0.5 in y.
+        let pair = if c[0] == 2.0 { [1.5, 0.0] } else { [0.0, 0.5] };
+        // B's pair is tilted ±16° about x (normals (0, ±0.28, 0.96)): B's mean normal is +z only
+        // once normalised (length 0.991 before).
+        let tilt = |y: f32| if c[0] == 2.0 { z } else { [0.0, y, 0.96] };
+        push(&mut d, [c[0] + pair[0], c[1] + pair[1], 0.0], tilt(0.28));
+        push(&mut d, [c[0] - pair[0], c[1] - pair[1], 0.0], tilt(-0.28));
     }
     let c = [2.0, 6.0, 2.0];
     push(&mut d, c, x);
@@ -174,11 +185,14 @@ fn known_optimum() -> Vec<[f32; 4]> {
     // g and its mirror 2c − g.
     push(&mut d, [2.0, 2.5, 0.0], x);
     push(&mut d, [2.0, 9.5, 4.0], x);
+    push(&mut d, [c[0], c[1] + 0.5, c[2]], x);
+    push(&mut d, [c[0], c[1] - 0.5, c[2]], x);
     d
 }
 
 struct Fuzzy {
     centroids: Vec<[f32; 4]>,
+    normals: Vec<[f32; 4]>,
     assign: Vec<u32>,
     weights: Vec<f32>,
     reps: Vec<u32>,
@@ -213,6 +227,7 @@ fn run_kmeans(ctx: &GpuContext, data: &[[f32; 4]], s: &KMeansSettings) -> Fuzzy 
     let reps: Vec<u32> = ctx.read_buffer(&c.reps, c.params.k as usize * 2).unwrap();
     Fuzzy {
         centroids: raw.chunks(2).map(|c| c[0]).collect(),
+        normals: raw.chunks(2).map(|c| c[1]).collect(),
         assign: ctx.read_buffer(&c.assign, m as usize * f).unwrap(),
         weights: ctx.read_buffer(&c.weights, m as usize * f).unwrap(),
         reps: reps.chunks(2).map(|r| r[1]).collect(),
@@ -243,9 +258,10 @@ fn gpu_final_assignment_has_the_closed_form_weights() {
     let ctx = common::gpu();
     let data = known_optimum();
     const Q: usize = 5; // (3, 2, 0)
-    const QB: usize = 13; // (4, 2, 0)
+    const QB: usize = 15; // (4, 2, 0)
+    const TIE: usize = 7; // (3.5, 2, 0)
     const NEAR: usize = 1; // a + (0.25, 0, 0)
-    const G: usize = 19; // (2, 2.5, 0), normal +x
+    const G: usize = 23; // (2, 2.5, 0), normal +x
     const NONE: u32 = u32::MAX;
     for to_reps in [false, true] {
         let r = run_kmeans(&ctx, &data, &oracle_settings(2, 1.0, to_reps));
@@ -255,17 +271,24 @@ fn gpu_final_assignment_has_the_closed_form_weights() {
         for (k, w) in want.iter().enumerate() {
             assert_eq!(r.centroids[k][..3], w[..], "{tag}: centroid {k}");
             assert!(r.centroids[k][3] > 0.0, "{tag}: centroid {k} invalid");
+            // The mean normal, normalised: +z (A, B) and +x (C). Measured: within 1e-7.
+            let n = Vec3::new(r.normals[k][0], r.normals[k][1], r.normals[k][2]);
+            let want_n = if k == 2 { Vec3::X } else { Vec3::Z };
+            assert!(
+                (n - want_n).length() < 1e-6,
+                "{tag}: centroid {k} normal {n}"
+            );
         }
         assert_eq!(r.iterations_run, 2, "{tag}");
         // Representatives: the member nearest its centroid, the centre itself.
-        assert_eq!(r.reps, vec![0, 7, 14], "{tag}");
+        assert_eq!(r.reps, vec![0, 9, 18], "{tag}");
         let slot = |m: usize| (&r.assign[2 * m..2 * m + 2], &r.weights[2 * m..2 * m + 2]);
         // Every point's nearest cluster is its own (Eq. 7 on the data order).
-        for m in 0..21 {
-            assert_eq!(r.assign[2 * m], (m / 7) as u32, "{tag}: point {m}");
+        for m in 0..27 {
+            assert_eq!(r.assign[2 * m], (m / 9) as u32, "{tag}: point {m}");
         }
         // Distance 0: the whole weight, for every centre.
-        for (m, other) in [(0, 1), (7, 0)] {
+        for (m, other) in [(0, 1), (9, 0)] {
             let (a, w) = slot(m);
             assert_eq!(a[1], other, "{tag}: centre {m}");
             assert_eq!(w, [1.0, 0.0], "{tag}: centre {m} on its centroid");
@@ -290,12 +313,16 @@ fn gpu_final_assignment_has_the_closed_form_weights() {
             close(w[0], 11.0 / 12.0, 2e-7) && close(w[1], 1.0 / 12.0, 3e-7),
             "{tag}: {w:?}"
         );
+        // The tie: lower index first, equal weights.
+        let (a, w) = slot(TIE);
+        assert_eq!(a, [0, 1], "{tag}: the tie");
+        assert_eq!(w, [0.5, 0.5], "{tag}: the tie");
         // Eq. (7): the +x point near a and b has only C.
         let (a, w) = slot(G);
         assert_eq!(a, [2, NONE], "{tag}");
         assert_eq!(w, [1.0, 0.0], "{tag}");
         // Every point's weights sum to 1.
-        for m in 0..21 {
+        for m in 0..27 {
             let (_, w) = slot(m);
             assert!(
                 (w[0] + w[1] - 1.0).abs() <= 1.2e-7,
@@ -312,10 +339,10 @@ fn gpu_final_assignment_has_the_closed_form_weights() {
     );
     // F = 1 (hard): the nearest cluster, weight 1.
     let r = run_kmeans(&ctx, &data, &oracle_settings(1, 1.0, false));
-    for m in 0..21 {
+    for m in 0..27 {
         assert_eq!(
             (r.assign[m], r.weights[m]),
-            ((m / 7) as u32, 1.0),
+            ((m / 9) as u32, 1.0),
             "F = 1: point {m}"
         );
     }
