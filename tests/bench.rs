@@ -58,8 +58,16 @@ fn quick_bench_writes_csv_plots_and_summary() {
     assert!(md.contains("mean of the 3 best of 3"));
     assert_eq!(
         std::fs::read_dir(d.join("images")).unwrap().count(),
-        2 * rows.len()
+        3 * rows.len()
     );
+    // FLIP in every row; the border measure where SP clusters ran.
+    for r in &rows {
+        let f = r.flip.unwrap();
+        assert!(f.is_finite() && (0.0..=1.0).contains(&f), "{r:?}");
+        assert_eq!(r.border.is_some(), r.sp_clusters_used > 0, "{r:?}");
+        assert!(r.border.is_none_or(|b| b.is_finite() && b >= 0.0), "{r:?}");
+    }
+    assert!(md.contains("FLIP"));
     let _ = std::fs::remove_dir_all(&d);
 }
 
@@ -119,8 +127,10 @@ fn bench_rows_say_what_ran_and_reruns_leave_no_stale_images() {
         [
             "01_hard_8x16_g24.png",
             "01_hard_8x16_g24_err.png",
+            "01_hard_8x16_g24_flip.png",
             "02_hard_-x16__K_sp_off_.png",
             "02_hard_-x16__K_sp_off__err.png",
+            "02_hard_-x16__K_sp_off__flip.png",
             "notes.txt",
         ]
     );

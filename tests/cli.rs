@@ -161,6 +161,45 @@ fn compare_fills_error_and_writes_error_map() {
     assert!(mse > 0.0 && mse < 0.01, "mse {mse}");
     assert!(rel > 0.0 && rel < 0.1, "rel_mse {rel}");
     assert!(image::open(&map).unwrap().width() == 32);
+    // FLIP beside them, in the stats and on stderr; no SP clustering at 32×32 with K 3072: no
+    // border measure.
+    let flip = j["error"]["flip"].as_f64().unwrap();
+    assert!(flip > 0.0 && flip < 0.2, "flip {flip}");
+    assert!(j["error"].get("border").is_none(), "{j}");
+    assert!(
+        err.contains("MSE") && err.contains("rel_mse") && err.contains("FLIP"),
+        "{err}"
+    );
+    // With SP clusters the border measure is there; the FLIP map is drawn with --error-metric flip.
+    let (code, _, err) = run(&[
+        &base[..],
+        &[
+            "-o",
+            d.join("y.png").to_str().unwrap(),
+            "--sp-clusters",
+            "24",
+            "--weighting",
+            "hard",
+            "--compare",
+            r.to_str().unwrap(),
+            "--error-map",
+            map.to_str().unwrap(),
+            "--error-metric",
+            "flip",
+            "--stats",
+            stats.to_str().unwrap(),
+        ],
+    ]
+    .concat());
+    assert_eq!(code, 0, "{err}");
+    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    for k in ["flip", "border", "interior", "flip_border"] {
+        let v = j["error"][k].as_f64().unwrap_or(f64::NAN);
+        assert!(v.is_finite() && v >= 0.0, "{k}: {j}");
+    }
+    assert!(err.contains("border"), "{err}");
+    let m = image::open(&map).unwrap().into_rgb8();
+    assert_eq!(m.dimensions(), (32, 32));
 }
 
 #[test]
@@ -274,6 +313,10 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
         (
             vec!["render", "-o", &o, "--error-map", "e.png"],
             "--compare",
+        ),
+        (
+            vec!["render", "-o", &o, "--error-metric", "flip"],
+            "--error-map",
         ),
         (
             vec!["render", "-o", &o, "--no-such-option"],

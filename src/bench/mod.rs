@@ -20,6 +20,7 @@ use crate::gi::pipeline::{FRAME_KEY, Frame, Pass, RenderSettings, Renderer};
 use crate::gpu::GpuContext;
 use crate::scene::{Camera, Scene};
 use crate::settings::{ClusterSettings, FrameSettings};
+use crate::stats::ErrorStats;
 use crate::{export, metrics, stats};
 use csv::{Row, STAGES};
 use summary::{CameraSummary, SummaryInfo};
@@ -236,6 +237,15 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
                 .map(|k| (k.to_string(), t.get(*k).copied().unwrap_or(0.0)))
                 .collect();
             let frame_ms = stages_ms[FRAME_KEY];
+            let labels = renderer.sp_labels(&frame)?;
+            let (error, flip_map) = ErrorStats::measure(
+                &frame.radiance,
+                &reference.radiance,
+                frame.width,
+                frame.height,
+                exposure,
+                labels.as_deref(),
+            );
             let row = Row {
                 scene: plan.scene_name.clone(),
                 camera: cam_name.clone(),
@@ -259,8 +269,13 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
                 } else {
                     0.0
                 },
-                mse: metrics::mse(&frame.radiance, &reference.radiance),
-                rel_mse: metrics::rel_mse(&frame.radiance, &reference.radiance),
+                mse: error.mse,
+                rel_mse: error.rel_mse,
+                flip: Some(error.flip),
+                border: error.border,
+                interior: error.interior,
+                border_ratio: error.border_ratio,
+                flip_border: error.flip_border,
                 sp_clusters_used: frame.sp_clusters_used,
                 vpl_clusters_used: frame.vpl_clusters_used,
                 shadow_rays: frame.shadow_rays,
@@ -283,10 +298,19 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
                 frame.height,
                 metrics::error_map(&frame.radiance, &reference.radiance),
             )?;
-            files.extend([out.join(&img), out.join(&err)]);
+            let flip_png = format!("images/{stem}_flip.png");
+            export::write_png_rgb8(
+                &out.join(&flip_png),
+                frame.width,
+                frame.height,
+                metrics::flip_error_map(&flip_map, frame.width, frame.height),
+            )?;
+            files.extend([out.join(&img), out.join(&err), out.join(&flip_png)]);
             say(format!(
-                "camera {cam_name}: {label:<28} {:>9.2} ms  {:>6.1}x  MSE {:.3e}",
-                frame_ms, row.speedup, row.mse
+                "camera {cam_name}: {label:<28} {:>9.2} ms  {:>6.1}x  {}",
+                frame_ms,
+                row.speedup,
+                error.line()
             ));
             rows.push(row.clone());
             // Rewritten after every configuration, so an interrupted sweep keeps what it measured.
