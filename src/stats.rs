@@ -207,6 +207,17 @@ pub struct Stats {
     pub bvh_build_ms: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<ErrorStats>,
+    /// With `--target-ms`: the budget and the frames that chose the K's (`settings` holds the K's
+    /// chosen, the last step's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target: Option<Target>,
+}
+
+/// `--target-ms`: the budget and each frame the controller rendered (`gi::budget`).
+#[derive(Clone, Debug, Serialize)]
+pub struct Target {
+    pub target_ms: f64,
+    pub steps: Vec<crate::gi::budget::Step>,
 }
 
 /// Every timing key of the contract (`Pass::TIMED` and `frame`), so readers can index them; passes

@@ -272,3 +272,49 @@ fn camera_path_refuses_a_bad_path() {
     ]);
     assert_eq!(code, 2, "{err}");
 }
+
+/// `--target-ms`: after the sweep, one row per budget and mode, its K's chosen for the budget, with
+/// the sweep's best MSE at no more time beside it.
+#[test]
+fn target_ms_rows_follow_the_sweep() {
+    let d = common::scratch("bench-target");
+    let (code, _, err) = run(&[
+        "bench",
+        "builtin:cornell",
+        "--width",
+        "24",
+        "--height",
+        "16",
+        "--vpls",
+        "128",
+        "--modes",
+        "hard,weighted",
+        "--pairs",
+        "8/16,32/48",
+        "--target-ms",
+        "100000",
+        "--repeat",
+        "1",
+        "--out-dir",
+        d.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let rows = csv::from_csv(&std::fs::read_to_string(d.join("results.csv")).unwrap()).unwrap();
+    assert_eq!(rows.len(), 4 + 2, "{rows:?}");
+    for r in &rows[..4] {
+        assert_eq!((r.target_ms, r.front_mse), (None, None), "{r:?}");
+    }
+    for r in &rows[4..] {
+        assert_eq!(r.target_ms, Some(100000.0), "{r:?}");
+        assert!(r.label.starts_with("target 100000 ms "), "{r:?}");
+        // A budget above any frame: a quarter of the pixels as SP clusters.
+        assert_eq!(r.sp_clusters, 24 * 16 / 4, "{r:?}");
+        assert!(r.mse.is_finite() && r.flip.is_some(), "{r:?}");
+        // The front at its time, when a fixed setting was as fast: never above every fixed row.
+        if let Some(f) = r.front_mse {
+            assert!(rows[..4].iter().any(|x| x.mse == f), "{r:?}");
+        }
+    }
+    assert!(err.contains("best fixed setting") || rows[4..].iter().all(|r| r.front_mse.is_none()));
+    let _ = std::fs::remove_dir_all(&d);
+}

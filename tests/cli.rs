@@ -202,6 +202,54 @@ fn compare_fills_error_and_writes_error_map() {
     assert_eq!(m.dimensions(), (32, 32));
 }
 
+/// `--target-ms`: a few frames choose the K's; the stats hold the budget, each frame's K's and time,
+/// and the K's chosen (the last frame's) in `settings`.
+#[test]
+fn target_ms_chooses_the_cluster_counts_and_says_so() {
+    let d = common::scratch("cli-target");
+    let stats = d.join("s.json");
+    let png = d.join("t.exr");
+    let (code, _, err) = run(&[
+        "render",
+        "builtin:cornell",
+        "--width",
+        "48",
+        "--height",
+        "32",
+        "--vpls",
+        "256",
+        "--target-ms",
+        "100000",
+        "-o",
+        png.to_str().unwrap(),
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("--target-ms 100000: frame 1"), "{err}");
+    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    assert_eq!(j["settings"]["target_ms"].as_f64(), Some(100000.0), "{j}");
+    let steps = j["target"]["steps"].as_array().unwrap();
+    assert!(!steps.is_empty() && steps.len() <= 6, "{j}");
+    let last = steps.last().unwrap();
+    // A budget far above any frame: K_SP at its most, a quarter of the pixels; K_VPL on the line,
+    // at most half the VPLs.
+    assert_eq!(last["sp_clusters"], j["settings"]["sp_clusters"]);
+    assert_eq!(last["vpl_clusters"], j["settings"]["vpl_clusters"]);
+    assert_eq!(
+        j["settings"]["sp_clusters"].as_u64(),
+        Some(48 * 32 / 4),
+        "{j}"
+    );
+    assert!(
+        j["settings"]["vpl_clusters"].as_u64().unwrap() <= 128,
+        "{j}"
+    );
+    let (w, h, px) = fuzzy_vpl::export::read_exr(&png).unwrap();
+    assert_eq!((w, h), (48, 32));
+    assert!(common::all_finite(&px));
+}
+
 #[test]
 fn bad_input_exits_2_with_one_line() {
     let d = common::scratch("cli-bad");
@@ -317,6 +365,16 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
         (
             vec!["render", "-o", &o, "--error-metric", "flip"],
             "--error-map",
+        ),
+        (vec!["render", "-o", &o, "--target-ms", "0"], "--target-ms"),
+        (vec!["render", "-o", &o, "--target-ms", "-5"], "--target-ms"),
+        (
+            vec!["render", "-o", &o, "--target-ms", "inf"],
+            "--target-ms",
+        ),
+        (
+            vec!["render", "-o", &o, "--target-ms", "100", "--reference"],
+            "--target-ms",
         ),
         (
             vec!["render", "-o", &o, "--no-such-option"],

@@ -67,6 +67,11 @@ pub struct Row {
     pub interior: Option<f64>,
     pub border_ratio: Option<f64>,
     pub flip_border: Option<f64>,
+    /// `bench --target-ms`: the budget this row's K's were chosen for (empty for the sweep's rows).
+    pub target_ms: Option<f64>,
+    /// For a budget's row: the lowest MSE of the sweep's fixed settings (same camera) at no more
+    /// frame time than this row's: the Pareto front at its time (empty when none is as fast).
+    pub front_mse: Option<f64>,
 }
 
 impl Row {
@@ -120,7 +125,15 @@ pub fn header() -> Vec<String> {
 }
 
 /// The error columns added after `plane_gate_deg`, in order.
-pub const ERROR_COLUMNS: [&str; 5] = ["flip", "border", "interior", "border_ratio", "flip_border"];
+pub const ERROR_COLUMNS: [&str; 7] = [
+    "flip",
+    "border",
+    "interior",
+    "border_ratio",
+    "flip_border",
+    "target_ms",
+    "front_mse",
+];
 
 fn record(r: &Row) -> Vec<String> {
     let mut v = vec![
@@ -153,7 +166,18 @@ fn record(r: &Row) -> Vec<String> {
         r.plane_gate_deg.map_or(String::new(), |g| g.to_string()),
     ]);
     let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));
-    v.extend([r.flip, r.border, r.interior, r.border_ratio, r.flip_border].map(opt));
+    v.extend(
+        [
+            r.flip,
+            r.border,
+            r.interior,
+            r.border_ratio,
+            r.flip_border,
+            r.target_ms,
+            r.front_mse,
+        ]
+        .map(opt),
+    );
     v
 }
 
@@ -274,6 +298,8 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
             interior: opt_num("interior")?,
             border_ratio: opt_num("border_ratio")?,
             flip_border: opt_num("flip_border")?,
+            target_ms: opt_num("target_ms")?,
+            front_mse: opt_num("front_mse")?,
         });
     }
     Ok(rows)
@@ -338,6 +364,8 @@ pub(crate) mod tests {
             interior: Some(1e-4),
             border_ratio: Some(bias),
             flip_border: Some(bias * 0.06),
+            target_ms: None,
+            front_mse: None,
         }
     }
 

@@ -7,6 +7,7 @@ use clap::Args;
 
 use super::bad;
 use super::scene::{SceneArgs, check_size, check_vpls};
+use crate::gi::budget;
 use crate::gi::pipeline::{self, RenderSettings, Renderer};
 use crate::gpu::GpuContext;
 use crate::settings::{ClusterSettings, FrameSettings};
@@ -135,9 +136,35 @@ pub fn run(a: RenderArgs) -> Result<()> {
         let plan = pipeline::Plan::new(&scene, &settings);
         pipeline::check_visibility_size(&ctx, &plan, &settings).map_err(bad)?;
     }
+    if settings.cluster.target_ms.is_some() && (a.reference || a.path_trace.is_some()) {
+        return Err(bad(
+            "--target-ms: chooses the cluster counts; --reference and --path-trace cluster nothing",
+        ));
+    }
     let mut runs = Vec::new();
     let mut frame = None;
-    for _ in 0..a.repeat {
+    let mut target = None;
+    let mut settings = settings;
+    if let Some(t) = settings.cluster.target_ms {
+        let (chosen, budget, f) = budget::fit(&mut renderer, &camera, &settings, t)?;
+        for (i, st) in budget.steps.iter().enumerate() {
+            eprintln!(
+                "--target-ms {t}: frame {}: K_SP {} K_VPL {} -> {:.1} ms",
+                i + 1,
+                st.sp_clusters,
+                st.vpl_clusters,
+                st.frame_ms
+            );
+        }
+        settings = chosen;
+        runs.push(f.timings_ms.clone());
+        frame = Some(f);
+        target = Some(stats::Target {
+            target_ms: t,
+            steps: budget.steps,
+        });
+    }
+    for _ in runs.len() as u32..a.repeat {
         let f = match a.path_trace {
             Some(spp) => renderer.path_trace(&camera, &settings, spp)?,
             None => renderer.render(&camera, &settings)?,
@@ -226,6 +253,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
             mean_luminance: metrics::mean_luminance(&frame.radiance),
             bvh_build_ms: renderer.bvh.build_ms,
             error,
+            target,
         };
         export::write_json(p, &s)?;
     }
