@@ -72,6 +72,158 @@ pub fn error_map(x: &[[f32; 3]], reference: &[[f32; 3]]) -> Vec<u8> {
         .collect()
 }
 
+/// Display values as a PNG shows them: radiance × exposure (in f64), clamped to [0, 1], sRGB
+/// transfer, not quantised (`export::to_srgb8` is this × 255, rounded).
+pub fn display(radiance: &[[f32; 3]], exposure: f32) -> Vec<[f32; 3]> {
+    radiance
+        .iter()
+        .map(|p| {
+            p.map(|c| {
+                let v = (c as f64 * exposure as f64).min(1.0) as f32;
+                crate::export::linear_to_srgb(if c.is_nan() { 0.0 } else { v })
+            })
+        })
+        .collect()
+}
+
+/// The per-pixel FLIP error (Andersson et al. 2020, "FLIP: A difference evaluator for alternating
+/// images", NVIDIA's implementation through the `nv-flip` crate) of `x` against `reference`, both
+/// tone-mapped as the PNG and the viewer show them (`export::to_srgb8` with `exposure`: × exposure,
+/// clamped, sRGB, 8 bits), at FLIP's default 67 pixels per degree. Each value is in [0, 1].
+pub fn flip_map(
+    x: &[[f32; 3]],
+    reference: &[[f32; 3]],
+    width: u32,
+    height: u32,
+    exposure: f32,
+) -> Vec<f32> {
+    assert_eq!(x.len(), reference.len());
+    assert_eq!(x.len(), width as usize * height as usize);
+    if x.is_empty() {
+        return Vec::new();
+    }
+    let img = |p: &[[f32; 3]]| {
+        nv_flip::FlipImageRgb8::with_data(width, height, &crate::export::to_srgb8(p, exposure))
+    };
+    nv_flip::flip(img(reference), img(x), nv_flip::DEFAULT_PIXELS_PER_DEGREE).to_vec()
+}
+
+/// Mean FLIP error of `x` against `reference` (`flip_map`): 0 for identical images, at most 1.
+pub fn flip(x: &[[f32; 3]], reference: &[[f32; 3]], width: u32, height: u32, exposure: f32) -> f64 {
+    mean(&flip_map(x, reference, width, height, exposure))
+}
+
+fn mean(v: &[f32]) -> f64 {
+    v.iter().map(|&e| e as f64).sum::<f64>() / v.len().max(1) as f64
+}
+
+/// A FLIP map (`flip_map`) as FLIP draws it: the magma colour map from 0 (black) to 1 (pale
+/// yellow), RGB8.
+pub fn flip_error_map(map: &[f32], width: u32, height: u32) -> Vec<u8> {
+    nv_flip::FlipImageFloat::with_data(width, height, map)
+        .apply_color_lut(&nv_flip::magma_lut())
+        .to_vec()
+}
+
+/// A pixel without an SP cluster (the sky, or no clustering) in a label image.
+pub const NO_LABEL: u32 = u32::MAX;
+
+/// The error of the light's steps between neighbouring pixels: the paper's artifact is a step in
+/// the indirect light where the nearest SP cluster changes (its Fig. 5), which hard clustering
+/// shows and fuzzy clustering blends away, while the mean error barely moves.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BorderError {
+    /// Mean over border pairs (4-neighbours whose nearest SP clusters differ, where the reference
+    /// steps by at most `SMOOTH_STEP`) and RGB channels of ((x_p − x_q) − (ref_p − ref_q))², display
+    /// values (`display`).
+    pub border: f64,
+    /// The same over interior pairs (both in one cluster).
+    pub interior: f64,
+    /// border ÷ interior: how much more the steps are wrong across cluster borders than inside
+    /// clusters (1: borders invisible in the gradient). `None` when either count is 0 or interior
+    /// is 0.
+    pub ratio: Option<f64>,
+    /// Mean FLIP over border pixels (a pixel with a 4-neighbour in another cluster), when a FLIP map
+    /// was given.
+    pub flip_border: Option<f64>,
+    pub border_pairs: u64,
+    pub interior_pairs: u64,
+}
+
+/// The largest step of the reference between two neighbours (in display values, any channel) for
+/// the pair to count: the artifact is a step where the reference is smooth; at an edge of geometry
+/// or texture the reference steps itself and the clustering's error there is not a border's.
+pub const SMOOTH_STEP: f32 = 0.02;
+
+/// `BorderError` of `x` against `reference` (display values, e.g. `display` of each with the same
+/// exposure) over a `width` × `height` label image of each pixel's nearest SP cluster (`NO_LABEL`
+/// pixels and pairs with one are left out); `flip` is an optional per-pixel FLIP map of the same
+/// size. `None` when no pair has two labels.
+pub fn border_error(
+    x: &[[f32; 3]],
+    reference: &[[f32; 3]],
+    labels: &[u32],
+    width: u32,
+    height: u32,
+    flip: Option<&[f32]>,
+) -> Option<BorderError> {
+    let (w, h) = (width as usize, height as usize);
+    assert!(x.len() == w * h && reference.len() == w * h && labels.len() == w * h);
+    let mut sums = [0.0f64; 2];
+    let mut counts = [0u64; 2];
+    let mut on_border = vec![false; w * h];
+    let mut pair = |p: usize, q: usize| {
+        if labels[p] == NO_LABEL || labels[q] == NO_LABEL {
+            return;
+        }
+        if (0..3).any(|c| (reference[p][c] - reference[q][c]).abs() > SMOOTH_STEP) {
+            return;
+        }
+        let b = labels[p] != labels[q];
+        if b {
+            on_border[p] = true;
+            on_border[q] = true;
+        }
+        let mut s = 0.0;
+        for c in 0..3 {
+            let d = (x[p][c] as f64 - x[q][c] as f64)
+                - (reference[p][c] as f64 - reference[q][c] as f64);
+            s += d * d;
+        }
+        sums[b as usize] += s / 3.0;
+        counts[b as usize] += 1;
+    };
+    for y in 0..h {
+        for i in 0..w {
+            let p = y * w + i;
+            if i + 1 < w {
+                pair(p, p + 1);
+            }
+            if y + 1 < h {
+                pair(p, p + w);
+            }
+        }
+    }
+    if counts[0] + counts[1] == 0 {
+        return None;
+    }
+    let m = |k: usize| sums[k] / counts[k].max(1) as f64;
+    let (interior, border) = (m(0), m(1));
+    let flip_border = flip.filter(|_| counts[1] > 0).map(|f| {
+        assert_eq!(f.len(), w * h);
+        let v: Vec<f32> = (0..w * h).filter(|&p| on_border[p]).map(|p| f[p]).collect();
+        mean(&v)
+    });
+    Some(BorderError {
+        border,
+        interior,
+        ratio: (counts[0] > 0 && counts[1] > 0 && interior > 0.0).then(|| border / interior),
+        flip_border,
+        border_pairs: counts[1],
+        interior_pairs: counts[0],
+    })
+}
+
 /// A blue → cyan → green → yellow → red ramp.
 fn ramp(t: f32) -> [f32; 3] {
     let stops = [
@@ -120,5 +272,100 @@ mod tests {
         let r = (1.0 / 1.01 + 0.25 / 0.01) / 3.0;
         assert!((rel_mse(&a, &b) - r).abs() < 1e-9);
         assert_eq!(mse(&b, &b), 0.0);
+    }
+
+    /// FLIP of an image against itself is 0; against a different one it is positive, at most 1, and
+    /// grows with the difference; every value of the map is finite.
+    #[test]
+    fn flip_is_zero_for_identical_images_and_grows_with_the_difference() {
+        let (w, h) = (32u32, 24u32);
+        let img: Vec<[f32; 3]> = (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as f32 / w as f32, (i / w) as f32 / h as f32);
+                [x, y, 0.5 * (x + y)]
+            })
+            .collect();
+        let map = flip_map(&img, &img, w, h, 1.0);
+        assert!(map.iter().all(|e| e.is_finite()));
+        assert_eq!(flip(&img, &img, w, h, 1.0), 0.0);
+        let off = |k: f32| -> Vec<[f32; 3]> { img.iter().map(|p| p.map(|c| c * k)).collect() };
+        let small = flip(&off(0.9), &img, w, h, 1.0);
+        let large = flip(&off(0.5), &img, w, h, 1.0);
+        assert!(
+            small > 0.0 && small < large && large <= 1.0,
+            "{small} {large}"
+        );
+        // Black against white is FLIP's largest error.
+        let black = vec![[0.0f32; 3]; (w * h) as usize];
+        let white = vec![[1.0f32; 3]; (w * h) as usize];
+        let e = flip(&black, &white, w, h, 1.0);
+        assert!(e > 0.5 && e <= 1.0, "{e}");
+        assert_eq!(flip_error_map(&map, w, h).len(), (w * h * 3) as usize);
+        // The exposure is applied before the comparison: radiance halved and exposure doubled is
+        // the same picture.
+        let half = off(0.5);
+        assert_eq!(
+            flip(&half, &img, w, h, 1.0),
+            flip(&off(0.25), &half, w, h, 2.0)
+        );
+    }
+
+    /// Hand-worked: a 4×2 image in two clusters (columns 0–1 and 2–3). The reference is flat 0.5;
+    /// the test has 0.5 in the left cluster and 0.6 in the right one: a step of 0.1 across the
+    /// border and none inside. Pairs: 3 horizontal a row (1 across the border) and 4 vertical, so 2
+    /// border pairs with error 0.01 and 8 interior pairs with 0.
+    #[test]
+    fn border_error_of_a_known_step() {
+        let (w, h) = (4u32, 2u32);
+        let labels = [0, 0, 1, 1, 0, 0, 1, 1];
+        let reference = vec![[0.5f32; 3]; 8];
+        let x: Vec<[f32; 3]> = (0..8)
+            .map(|i| if i % 4 < 2 { [0.5; 3] } else { [0.6; 3] })
+            .collect();
+        let b = border_error(&x, &reference, &labels, w, h, None).unwrap();
+        assert_eq!((b.border_pairs, b.interior_pairs), (2, 8));
+        assert!((b.border - 0.01).abs() < 1e-7, "{}", b.border);
+        assert_eq!(b.interior, 0.0);
+        assert_eq!(b.ratio, None);
+        // Add a step of 0.05 inside the left cluster (pixel 0 at 0.55): interior pairs (0,1) and
+        // (0,4) get 0.0025 each, 0.005 / 8 in all; the ratio is 0.01 / 0.000625 = 16.
+        let mut x2 = x.clone();
+        x2[0] = [0.55; 3];
+        let flip_map = [0.0, 0.2, 0.4, 0.0, 0.0, 0.2, 0.4, 0.0];
+        let b = border_error(&x2, &reference, &labels, w, h, Some(&flip_map)).unwrap();
+        assert!((b.interior - 0.000625).abs() < 1e-8, "{}", b.interior);
+        assert!((b.ratio.unwrap() - 16.0).abs() < 1e-3, "{:?}", b.ratio);
+        // Border pixels are columns 1 and 2: FLIP 0.2, 0.4, 0.2, 0.4.
+        assert!((b.flip_border.unwrap() - 0.3).abs() < 1e-7);
+        // The same step in the reference is no error at all.
+        let b = border_error(&x, &x, &labels, w, h, None).unwrap();
+        assert_eq!((b.border, b.interior), (0.0, 0.0));
+        // Where the reference itself steps (an edge), the pair takes no part: a step of 0.4 between
+        // the clusters in the reference leaves only the 8 interior pairs.
+        let edge: Vec<[f32; 3]> = (0..8)
+            .map(|i| if i % 4 < 2 { [0.5; 3] } else { [0.9; 3] })
+            .collect();
+        let b = border_error(&x, &edge, &labels, w, h, None).unwrap();
+        assert_eq!((b.border_pairs, b.interior_pairs), (0, 8));
+        // Unlabelled pixels take no part; an image without a labelled pair has no measure.
+        let none = [NO_LABEL; 8];
+        assert_eq!(border_error(&x, &reference, &none, w, h, None), None);
+        let mut some = labels;
+        some[1] = NO_LABEL;
+        some[5] = NO_LABEL;
+        let b = border_error(&x, &reference, &some, w, h, None).unwrap();
+        assert_eq!((b.border_pairs, b.interior_pairs), (0, 5));
+        assert_eq!(b.ratio, None);
+    }
+
+    #[test]
+    fn display_matches_the_png() {
+        let img = [[0.0, 0.5, 2.0], [0.001, 0.2, f32::NAN]];
+        let d = display(&img, 1.5);
+        let png = crate::export::to_srgb8(&img, 1.5);
+        for (i, v) in d.iter().flatten().enumerate() {
+            assert!(v.is_finite());
+            assert_eq!((v * 255.0 + 0.5) as u8, png[i]);
+        }
     }
 }

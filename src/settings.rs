@@ -245,6 +245,12 @@ pub struct ClusterSettings {
     /// change (docs/temporal.md). A single `render` has no past: only --repeat's later renders reuse.
     #[arg(long, default_value = "off", value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub temporal: bool,
+    /// A GPU-time budget for the frame in ms (> 0): K_SP and K_VPL are chosen to meet it (`render`:
+    /// a few frames adjusting them, K_VPL following K_SP on the paper's line; `view`: adjusted while
+    /// the view changes). --sp-clusters and --vpl-clusters then only say which clusterings run.
+    #[arg(long, value_name = "MS", value_parser = parse_target_ms)]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target_ms: Option<f64>,
 }
 
 impl Default for ClusterSettings {
@@ -261,6 +267,7 @@ impl Default for ClusterSettings {
             plane_gate: None,
             weights_to_reps: false,
             temporal: false,
+            target_ms: None,
         }
     }
 }
@@ -408,6 +415,14 @@ pub fn parse_plane_gate(v: &str) -> Result<f32, Invalid> {
         v,
         |d: f32| d > 0.0 && d <= 90.0,
         "must be an angle in (0, 90] degrees",
+    )
+}
+
+pub fn parse_target_ms(v: &str) -> Result<f64, Invalid> {
+    in_range(
+        v,
+        |x: f64| x.is_finite() && x > 0.0 && x <= 1e7,
+        "must be a time in ms, > 0 and at most 1e7",
     )
 }
 

@@ -6,6 +6,7 @@ use serde::Serialize;
 
 use crate::exposure::Exposure;
 use crate::gi::pipeline::{Frame, Pass, RenderSettings};
+use crate::metrics;
 use crate::scene::Scene;
 use crate::settings::{ClusterSettings, FrameSettings, Gamma, LightSettings};
 
@@ -113,10 +114,81 @@ impl Counts {
     }
 }
 
+/// The error block (docs/design.md, "Error metrics").
 #[derive(Clone, Debug, Serialize)]
 pub struct ErrorStats {
     pub mse: f64,
     pub rel_mse: f64,
+    /// Mean FLIP of the tone-mapped images (both with the reference's exposure).
+    pub flip: f64,
+    /// The error of the steps across SP-cluster borders (`metrics::BorderError::border`); absent
+    /// when the frame clustered no shading points.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub border: Option<f64>,
+    /// The same inside clusters (`metrics::BorderError::interior`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub interior: Option<f64>,
+    /// border ÷ interior.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub border_ratio: Option<f64>,
+    /// Mean FLIP over the pixels next to an SP-cluster border.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flip_border: Option<f64>,
+}
+
+impl ErrorStats {
+    /// Every measure of `x` against `reference` (`width` × `height`), tone-mapped with `exposure`
+    /// (the reference's), with the cluster borders of `labels` (each pixel's nearest SP cluster,
+    /// `metrics::NO_LABEL` where none); also the per-pixel FLIP map.
+    pub fn measure(
+        x: &[[f32; 3]],
+        reference: &[[f32; 3]],
+        width: u32,
+        height: u32,
+        exposure: f32,
+        labels: Option<&[u32]>,
+    ) -> (ErrorStats, Vec<f32>) {
+        let map = metrics::flip_map(x, reference, width, height, exposure);
+        let border = labels.and_then(|l| {
+            metrics::border_error(
+                &metrics::display(x, exposure),
+                &metrics::display(reference, exposure),
+                l,
+                width,
+                height,
+                Some(&map),
+            )
+        });
+        let e = ErrorStats {
+            mse: metrics::mse(x, reference),
+            rel_mse: metrics::rel_mse(x, reference),
+            flip: map.iter().map(|&v| v as f64).sum::<f64>() / map.len().max(1) as f64,
+            border: border.map(|b| b.border),
+            interior: border.map(|b| b.interior),
+            border_ratio: border.and_then(|b| b.ratio),
+            flip_border: border.and_then(|b| b.flip_border),
+        };
+        (e, map)
+    }
+
+    /// One line for stderr: `MSE … rel_mse … FLIP …` and the border measures when there are.
+    pub fn line(&self) -> String {
+        let mut s = format!(
+            "MSE {:.4e}  rel_mse {:.4e}  FLIP {:.4}",
+            self.mse, self.rel_mse, self.flip
+        );
+        if let (Some(b), Some(i)) = (self.border, self.interior) {
+            s += &format!("  border {b:.3e} (interior {i:.3e}");
+            if let Some(r) = self.border_ratio {
+                s += &format!(", ratio {r:.2}");
+            }
+            s += ")";
+        }
+        if let Some(f) = self.flip_border {
+            s += &format!("  FLIP at borders {f:.4}");
+        }
+        s
+    }
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -135,6 +207,17 @@ pub struct Stats {
     pub bvh_build_ms: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<ErrorStats>,
+    /// With `--target-ms`: the budget and the frames that chose the K's (`settings` holds the K's
+    /// chosen, the last step's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target: Option<Target>,
+}
+
+/// `--target-ms`: the budget and each frame the controller rendered (`gi::budget`).
+#[derive(Clone, Debug, Serialize)]
+pub struct Target {
+    pub target_ms: f64,
+    pub steps: Vec<crate::gi::budget::Step>,
 }
 
 /// Every timing key of the contract (`Pass::TIMED` and `frame`), so readers can index them; passes

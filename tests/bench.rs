@@ -58,8 +58,16 @@ fn quick_bench_writes_csv_plots_and_summary() {
     assert!(md.contains("mean of the 3 best of 3"));
     assert_eq!(
         std::fs::read_dir(d.join("images")).unwrap().count(),
-        2 * rows.len()
+        3 * rows.len()
     );
+    // FLIP in every row; the border measure where SP clusters ran.
+    for r in &rows {
+        let f = r.flip.unwrap();
+        assert!(f.is_finite() && (0.0..=1.0).contains(&f), "{r:?}");
+        assert_eq!(r.border.is_some(), r.sp_clusters_used > 0, "{r:?}");
+        assert!(r.border.is_none_or(|b| b.is_finite() && b >= 0.0), "{r:?}");
+    }
+    assert!(md.contains("FLIP"));
     let _ = std::fs::remove_dir_all(&d);
 }
 
@@ -119,8 +127,10 @@ fn bench_rows_say_what_ran_and_reruns_leave_no_stale_images() {
         [
             "01_hard_8x16_g24.png",
             "01_hard_8x16_g24_err.png",
+            "01_hard_8x16_g24_flip.png",
             "02_hard_-x16__K_sp_off_.png",
             "02_hard_-x16__K_sp_off__err.png",
+            "02_hard_-x16__K_sp_off__flip.png",
             "notes.txt",
         ]
     );
@@ -301,4 +311,50 @@ fn header_has_the_contract_columns_in_order() {
     let csv = csv::to_csv(&[]);
     assert_eq!(csv.lines().count(), 1);
     assert_eq!(csv::split_line(csv.trim_end()), h);
+}
+
+/// `--target-ms`: after the sweep, one row per budget and mode, its K's chosen for the budget, with
+/// the sweep's best MSE at no more time beside it.
+#[test]
+fn target_ms_rows_follow_the_sweep() {
+    let d = common::scratch("bench-target");
+    let (code, _, err) = run(&[
+        "bench",
+        "builtin:cornell",
+        "--width",
+        "24",
+        "--height",
+        "16",
+        "--vpls",
+        "128",
+        "--modes",
+        "hard,weighted",
+        "--pairs",
+        "8/16,32/48",
+        "--target-ms",
+        "100000",
+        "--repeat",
+        "1",
+        "--out-dir",
+        d.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let rows = csv::from_csv(&std::fs::read_to_string(d.join("results.csv")).unwrap()).unwrap();
+    assert_eq!(rows.len(), 4 + 2, "{rows:?}");
+    for r in &rows[..4] {
+        assert_eq!((r.target_ms, r.front_mse), (None, None), "{r:?}");
+    }
+    for r in &rows[4..] {
+        assert_eq!(r.target_ms, Some(100000.0), "{r:?}");
+        assert!(r.label.starts_with("target 100000 ms "), "{r:?}");
+        // A budget above any frame: a quarter of the pixels as SP clusters.
+        assert_eq!(r.sp_clusters, 24 * 16 / 4, "{r:?}");
+        assert!(r.mse.is_finite() && r.flip.is_some(), "{r:?}");
+        // The front at its time, when a fixed setting was as fast: never above every fixed row.
+        if let Some(f) = r.front_mse {
+            assert!(rows[..4].iter().any(|x| x.mse == f), "{r:?}");
+        }
+    }
+    assert!(err.contains("best fixed setting") || rows[4..].iter().all(|r| r.front_mse.is_none()));
+    let _ = std::fs::remove_dir_all(&d);
 }

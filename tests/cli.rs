@@ -161,6 +161,93 @@ fn compare_fills_error_and_writes_error_map() {
     assert!(mse > 0.0 && mse < 0.01, "mse {mse}");
     assert!(rel > 0.0 && rel < 0.1, "rel_mse {rel}");
     assert!(image::open(&map).unwrap().width() == 32);
+    // FLIP beside them, in the stats and on stderr; no SP clustering at 32×32 with K 3072: no
+    // border measure.
+    let flip = j["error"]["flip"].as_f64().unwrap();
+    assert!(flip > 0.0 && flip < 0.2, "flip {flip}");
+    assert!(j["error"].get("border").is_none(), "{j}");
+    assert!(
+        err.contains("MSE") && err.contains("rel_mse") && err.contains("FLIP"),
+        "{err}"
+    );
+    // With SP clusters the border measure is there; the FLIP map is drawn with --error-metric flip.
+    let (code, _, err) = run(&[
+        &base[..],
+        &[
+            "-o",
+            d.join("y.png").to_str().unwrap(),
+            "--sp-clusters",
+            "24",
+            "--weighting",
+            "hard",
+            "--compare",
+            r.to_str().unwrap(),
+            "--error-map",
+            map.to_str().unwrap(),
+            "--error-metric",
+            "flip",
+            "--stats",
+            stats.to_str().unwrap(),
+        ],
+    ]
+    .concat());
+    assert_eq!(code, 0, "{err}");
+    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    for k in ["flip", "border", "interior", "flip_border"] {
+        let v = j["error"][k].as_f64().unwrap_or(f64::NAN);
+        assert!(v.is_finite() && v >= 0.0, "{k}: {j}");
+    }
+    assert!(err.contains("border"), "{err}");
+    let m = image::open(&map).unwrap().into_rgb8();
+    assert_eq!(m.dimensions(), (32, 32));
+}
+
+/// `--target-ms`: a few frames choose the K's; the stats hold the budget, each frame's K's and time,
+/// and the K's chosen (the last frame's) in `settings`.
+#[test]
+fn target_ms_chooses_the_cluster_counts_and_says_so() {
+    let d = common::scratch("cli-target");
+    let stats = d.join("s.json");
+    let png = d.join("t.exr");
+    let (code, _, err) = run(&[
+        "render",
+        "builtin:cornell",
+        "--width",
+        "48",
+        "--height",
+        "32",
+        "--vpls",
+        "256",
+        "--target-ms",
+        "100000",
+        "-o",
+        png.to_str().unwrap(),
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("--target-ms 100000: frame 1"), "{err}");
+    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    assert_eq!(j["settings"]["target_ms"].as_f64(), Some(100000.0), "{j}");
+    let steps = j["target"]["steps"].as_array().unwrap();
+    assert!(!steps.is_empty() && steps.len() <= 6, "{j}");
+    let last = steps.last().unwrap();
+    // A budget far above any frame: K_SP at its most, a quarter of the pixels; K_VPL on the line,
+    // at most half the VPLs.
+    assert_eq!(last["sp_clusters"], j["settings"]["sp_clusters"]);
+    assert_eq!(last["vpl_clusters"], j["settings"]["vpl_clusters"]);
+    assert_eq!(
+        j["settings"]["sp_clusters"].as_u64(),
+        Some(48 * 32 / 4),
+        "{j}"
+    );
+    assert!(
+        j["settings"]["vpl_clusters"].as_u64().unwrap() <= 128,
+        "{j}"
+    );
+    let (w, h, px) = fuzzy_vpl::export::read_exr(&png).unwrap();
+    assert_eq!((w, h), (48, 32));
+    assert!(common::all_finite(&px));
 }
 
 #[test]
@@ -274,6 +361,20 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
         (
             vec!["render", "-o", &o, "--error-map", "e.png"],
             "--compare",
+        ),
+        (
+            vec!["render", "-o", &o, "--error-metric", "flip"],
+            "--error-map",
+        ),
+        (vec!["render", "-o", &o, "--target-ms", "0"], "--target-ms"),
+        (vec!["render", "-o", &o, "--target-ms", "-5"], "--target-ms"),
+        (
+            vec!["render", "-o", &o, "--target-ms", "inf"],
+            "--target-ms",
+        ),
+        (
+            vec!["render", "-o", &o, "--target-ms", "100", "--reference"],
+            "--target-ms",
         ),
         (
             vec!["render", "-o", &o, "--no-such-option"],

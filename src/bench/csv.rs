@@ -57,6 +57,20 @@ pub struct Row {
     /// The plane gate of the F lists in degrees (`bench --plane-gate`), empty when off. Last column;
     /// older files without it read off.
     pub plane_gate_deg: Option<f32>,
+    /// Mean FLIP of the tone-mapped image against the reference's (`stats::ErrorStats::flip`).
+    /// Older files without it read empty, as do the border columns below.
+    pub flip: Option<f64>,
+    /// The error of the light's steps across SP-cluster borders, inside clusters, their ratio and
+    /// FLIP at border pixels (`metrics::BorderError`): empty without SP clustering.
+    pub border: Option<f64>,
+    pub interior: Option<f64>,
+    pub border_ratio: Option<f64>,
+    pub flip_border: Option<f64>,
+    /// `bench --target-ms`: the budget this row's K's were chosen for (empty for the sweep's rows).
+    pub target_ms: Option<f64>,
+    /// For a budget's row: the lowest MSE of the sweep's fixed settings (same camera) at no more
+    /// frame time than this row's: the Pareto front at its time (empty when none is as fast).
+    pub front_mse: Option<f64>,
 }
 
 impl Row {
@@ -105,8 +119,20 @@ pub fn header() -> Vec<String> {
         ]
         .map(String::from),
     );
+    h.extend(ERROR_COLUMNS.map(String::from));
     h
 }
+
+/// The error columns added after `plane_gate_deg`, in order.
+pub const ERROR_COLUMNS: [&str; 7] = [
+    "flip",
+    "border",
+    "interior",
+    "border_ratio",
+    "flip_border",
+    "target_ms",
+    "front_mse",
+];
 
 fn record(r: &Row) -> Vec<String> {
     let mut v = vec![
@@ -138,6 +164,19 @@ fn record(r: &Row) -> Vec<String> {
         r.gamma_used.map_or(String::new(), |g| g.to_string()),
         r.plane_gate_deg.map_or(String::new(), |g| g.to_string()),
     ]);
+    let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));
+    v.extend(
+        [
+            r.flip,
+            r.border,
+            r.interior,
+            r.border_ratio,
+            r.flip_border,
+            r.target_ms,
+            r.front_mse,
+        ]
+        .map(opt),
+    );
     v
 }
 
@@ -206,6 +245,12 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
                 .parse::<f64>()
                 .with_context(|| format!("line {}: {name} {:?}", i + 2, get(name)))
         };
+        let opt_num = |name: &str| -> Result<Option<f64>> {
+            match head.iter().any(|h| h == name) {
+                true if !get(name).is_empty() => Ok(Some(num(name)?)),
+                _ => Ok(None),
+            }
+        };
         rows.push(Row {
             scene: get("scene").into(),
             camera: get("camera").into(),
@@ -246,6 +291,13 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
                 true if !get("plane_gate_deg").is_empty() => Some(num("plane_gate_deg")? as f32),
                 _ => None,
             },
+            flip: opt_num("flip")?,
+            border: opt_num("border")?,
+            interior: opt_num("interior")?,
+            border_ratio: opt_num("border_ratio")?,
+            flip_border: opt_num("flip_border")?,
+            target_ms: opt_num("target_ms")?,
+            front_mse: opt_num("front_mse")?,
         });
     }
     Ok(rows)
@@ -299,6 +351,13 @@ pub(crate) mod tests {
             weight_exponent: 1.0,
             gamma_used: Some(4),
             plane_gate_deg: None,
+            flip: Some(bias * 0.05),
+            border: Some(bias * 1e-4),
+            interior: Some(1e-4),
+            border_ratio: Some(bias),
+            flip_border: Some(bias * 0.06),
+            target_ms: None,
+            front_mse: None,
         }
     }
 
@@ -324,14 +383,20 @@ pub(crate) mod tests {
         r.gamma_used = None;
         let csv = to_csv(std::slice::from_ref(&r));
         assert_eq!(from_csv(&csv).unwrap(), vec![r.clone()]);
-        // Drop the three columns added last (weight_exponent, gamma_used, plane_gate_deg).
-        let cut = |text: &str| {
+        // Drop the error columns: a file of the version before them.
+        let n = ERROR_COLUMNS.len();
+        let cut_n = |text: &str, n: usize| {
             write_records(text.lines().map(|l| {
                 let f = split_line(l);
-                f[..f.len() - 3].to_vec()
+                f[..f.len() - n].to_vec()
             }))
         };
-        let old = cut(&csv);
+        let before = from_csv(&cut_n(&csv, n)).unwrap();
+        assert_eq!((before[0].flip, before[0].border_ratio), (None, None));
+        assert_eq!(before[0].mse, r.mse);
+        // Drop also the three columns before them (weight_exponent, gamma_used, plane_gate_deg).
+        let cut = |text: &str| cut_n(text, 3);
+        let old = cut_n(&csv, n + 3);
         let back = from_csv(&old).unwrap();
         assert_eq!(back[0].weight_exponent, 1.0);
         assert_eq!(back[0].gamma_used, None);

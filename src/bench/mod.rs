@@ -16,10 +16,12 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use crate::gi::budget;
 use crate::gi::pipeline::{FRAME_KEY, Frame, Pass, RenderSettings, Renderer};
 use crate::gpu::GpuContext;
 use crate::scene::{Camera, Scene};
 use crate::settings::{ClusterSettings, FrameSettings};
+use crate::stats::ErrorStats;
 use crate::{export, metrics, stats};
 use csv::Row;
 use summary::{CameraSummary, SummaryInfo};
@@ -115,6 +117,16 @@ fn timed(
     Ok((last.expect("n >= 1"), stats::best_of_runs(&runs)))
 }
 
+/// The Pareto front of `(time, error)` points read at `t`: the lowest error of a point whose time is
+/// at most `t` (`None` when every point is slower).
+pub fn front_at(points: &[(f64, f64)], t: f64) -> Option<f64> {
+    points
+        .iter()
+        .filter(|p| p.0 <= t)
+        .map(|p| p.1)
+        .min_by(|a, b| a.total_cmp(b))
+}
+
 /// Whether `name` is a configuration's image as `run` names them: `NN[_camC]_<label>.png` or its
 /// `_err.png` (two or more digits, an underscore, a label).
 fn is_config_image(name: &str) -> bool {
@@ -158,8 +170,10 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
         .with_context(|| format!("{}: cannot create", img_dir.display()))?;
     remove_old_images(&img_dir)?;
     let configs: Vec<ClusterSettings> = plan.sweep.configs();
+    let budgets = plan.sweep.target_ms.len() as u64 * plan.sweep.modes.len() as u64;
     let frames = plan.cameras.len() as u64
-        * (plan.reference_repeat.max(1) as u64 + configs.len() as u64 * plan.repeat.max(1) as u64);
+        * (plan.reference_repeat.max(1) as u64
+            + (configs.len() as u64 + budgets) * plan.repeat.max(1) as u64);
     let pb = if plan.progress {
         ProgressBar::new(frames)
     } else {
@@ -221,20 +235,54 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
             metrics::mean_luminance(&reference.radiance)
         ));
         let mut cam_rows = Vec::new();
-        for (i, c) in configs.iter().enumerate() {
+        // The sweep's configurations, then each --target-ms budget for each mode (from the mode's
+        // first configuration).
+        let mut jobs: Vec<(ClusterSettings, Option<f64>)> =
+            configs.iter().map(|c| (c.clone(), None)).collect();
+        for &t in &plan.sweep.target_ms {
+            let mut seen = Vec::new();
+            for c in &configs {
+                let m = sweep::mode(c);
+                if !seen.contains(&m) {
+                    seen.push(m);
+                    jobs.push((c.clone(), Some(t)));
+                }
+            }
+        }
+        for (i, (c, target_ms)) in jobs.iter().enumerate() {
             pb.set_message(format!("camera {cam_name}: {}", sweep::label(c)));
+            let (c, steps) = match target_ms {
+                Some(t) => {
+                    let (chosen, b, _) = budget::fit(&mut renderer, camera, &plan.settings(c), *t)?;
+                    (chosen.cluster, Some(b.steps))
+                }
+                None => (c.clone(), None),
+            };
+            let c = &c;
             let s = plan.settings(c);
             let (frame, t) = timed(&mut renderer, camera, &s, plan.repeat, &pb)?;
-            let label = sweep::label_ran(
+            let mut label = sweep::label_ran(
                 c,
                 frame.ran(Pass::SpCluster),
                 frame.ran(Pass::VplCluster),
                 frame.gamma_used,
             );
+            if let Some(tm) = target_ms {
+                label = format!("target {tm} ms {label}");
+            }
             let stages_ms: BTreeMap<String, f64> = csv::stages()
                 .map(|k| (k.to_string(), t.get(k).copied().unwrap_or(0.0)))
                 .collect();
             let frame_ms = stages_ms[FRAME_KEY];
+            let labels = renderer.sp_labels(&frame)?;
+            let (error, flip_map) = ErrorStats::measure(
+                &frame.radiance,
+                &reference.radiance,
+                frame.width,
+                frame.height,
+                exposure,
+                labels.as_deref(),
+            );
             let row = Row {
                 scene: plan.scene_name.clone(),
                 camera: cam_name.clone(),
@@ -258,8 +306,15 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
                 } else {
                     0.0
                 },
-                mse: metrics::mse(&frame.radiance, &reference.radiance),
-                rel_mse: metrics::rel_mse(&frame.radiance, &reference.radiance),
+                mse: error.mse,
+                rel_mse: error.rel_mse,
+                flip: Some(error.flip),
+                border: error.border,
+                interior: error.interior,
+                border_ratio: error.border_ratio,
+                flip_border: error.flip_border,
+                target_ms: *target_ms,
+                front_mse: None,
                 sp_clusters_used: frame.sp_clusters_used,
                 vpl_clusters_used: frame.vpl_clusters_used,
                 shadow_rays: frame.shadow_rays,
@@ -282,16 +337,61 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
                 frame.height,
                 metrics::error_map(&frame.radiance, &reference.radiance),
             )?;
-            files.extend([out.join(&img), out.join(&err)]);
+            let flip_png = format!("images/{stem}_flip.png");
+            export::write_png_rgb8(
+                &out.join(&flip_png),
+                frame.width,
+                frame.height,
+                metrics::flip_error_map(&flip_map, frame.width, frame.height),
+            )?;
+            files.extend([out.join(&img), out.join(&err), out.join(&flip_png)]);
+            if let Some(steps) = &steps {
+                for (k, st) in steps.iter().enumerate() {
+                    say(format!(
+                        "camera {cam_name}: {label}: frame {}: K_SP {} K_VPL {} -> {:.1} ms",
+                        k + 1,
+                        st.sp_clusters,
+                        st.vpl_clusters,
+                        st.frame_ms
+                    ));
+                }
+            }
             say(format!(
-                "camera {cam_name}: {label:<28} {:>9.2} ms  {:>6.1}x  MSE {:.3e}",
-                frame_ms, row.speedup, row.mse
+                "camera {cam_name}: {label:<28} {:>9.2} ms  {:>6.1}x  {}",
+                frame_ms,
+                row.speedup,
+                error.line()
             ));
             rows.push(row.clone());
             // Rewritten after every configuration, so an interrupted sweep keeps what it measured.
             write_csv(&csv_path, &rows)?;
             cam_rows.push((row, img, err));
         }
+        // Each budget's row against the sweep's Pareto front: the lowest MSE of a fixed setting at
+        // no more frame time.
+        let fixed: Vec<(f64, f64)> = cam_rows
+            .iter()
+            .filter(|r| r.0.target_ms.is_none())
+            .map(|r| (r.0.frame_ms(), r.0.mse))
+            .collect();
+        for r in cam_rows.iter_mut().filter(|r| r.0.target_ms.is_some()) {
+            r.0.front_mse = front_at(&fixed, r.0.frame_ms());
+            if let Some(f) = r.0.front_mse {
+                say(format!(
+                    "camera {cam_name}: {}: MSE {:.4e} at {:.1} ms; the best fixed setting at no more time: {:.4e} ({:+.1}%)",
+                    r.0.label,
+                    r.0.mse,
+                    r.0.frame_ms(),
+                    f,
+                    (r.0.mse / f - 1.0) * 100.0
+                ));
+            }
+        }
+        let n = rows.len() - cam_rows.len();
+        for (k, r) in cam_rows.iter().enumerate() {
+            rows[n + k] = r.0.clone();
+        }
+        write_csv(&csv_path, &rows)?;
         let just: Vec<Row> = cam_rows.iter().map(|r| r.0.clone()).collect();
         let title = |what: &str| format!("{} — {what}", plan.scene_name);
         let mut plots = Vec::new();
@@ -373,6 +473,15 @@ mod tests {
         assert!(!is_config_image("1_hard.png"));
         assert!(!is_config_image("01_notes.txt"));
         assert!(!is_config_image("ab_hard.png"));
+    }
+
+    #[test]
+    fn the_front_is_the_best_error_at_no_more_time() {
+        let pts = [(10.0, 5.0), (20.0, 3.0), (30.0, 4.0), (40.0, 1.0)];
+        assert_eq!(front_at(&pts, 5.0), None);
+        assert_eq!(front_at(&pts, 10.0), Some(5.0));
+        assert_eq!(front_at(&pts, 35.0), Some(3.0));
+        assert_eq!(front_at(&pts, 40.0), Some(1.0));
     }
 
     #[test]

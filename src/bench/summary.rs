@@ -73,14 +73,14 @@ pub fn markdown(s: &SummaryInfo) -> String {
         let _ = writeln!(
             m,
             "| # | mode | K_sp | K_vpl | F | γ | frame ms | SP clustering | visibility | shade | gather \
-             | VPL clustering (resident) | speedup | MSE | rel. MSE | SP / VPL clusters used | shadow rays \
-             | image |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+             | VPL clustering (resident) | speedup | MSE | rel. MSE | FLIP | border ratio | SP / VPL clusters used | shadow rays \
+             | image |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
         );
         for (i, (r, img, err)) in c.rows.iter().enumerate() {
             let star = if front.contains(&i) { " ★" } else { "" };
             let _ = writeln!(
                 m,
-                "| {} | {}{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1}× | {:.3e} | {:.3e} \
+                "| {} | {}{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1}× | {:.3e} | {:.3e} | {} | {} \
                  | {} / {} | {} | [png]({}) · [error]({}) |",
                 i + 1,
                 r.mode,
@@ -98,6 +98,9 @@ pub fn markdown(s: &SummaryInfo) -> String {
                 r.speedup,
                 r.mse,
                 r.rel_mse,
+                r.flip.map_or("–".to_string(), |f| format!("{f:.4}")),
+                r.border_ratio
+                    .map_or("–".to_string(), |b| format!("{b:.2}")),
                 r.sp_clusters_used,
                 r.vpl_clusters_used,
                 r.shadow_rays,

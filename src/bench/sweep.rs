@@ -168,6 +168,11 @@ pub struct Sweep {
     /// light, intermediate and high settings at 640x480: 461/750,3072/2000,12288/4000.
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_pair)]
     pub pairs: Vec<Pair>,
+    /// GPU-time budgets in ms: after the sweep, each mode's K's are chosen for each budget (as
+    /// `render --target-ms`) and its error compared with the sweep's best fixed setting at no more
+    /// time (the `front_mse` column).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::settings::parse_target_ms)]
+    pub target_ms: Vec<f64>,
 }
 
 /// `v` without repeats, in order; `default` when empty.
@@ -214,6 +219,7 @@ impl Sweep {
             weight_exponent: or_default(&self.weight_exponent, &[c.weight_exponent]),
             plane_gate: or_default(&self.plane_gate, &[PlaneGate(None)]),
             pairs: or_default(&self.pairs, &[]),
+            target_ms: or_default(&self.target_ms, &[]),
         };
         s.validate()?;
         Ok(s)
@@ -289,6 +295,7 @@ impl Sweep {
                                             },
                                             weights_to_reps: false,
                                             temporal: false,
+                                            target_ms: None,
                                         };
                                         if !out.contains(&c) {
                                             out.push(c);

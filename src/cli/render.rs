@@ -7,6 +7,7 @@ use clap::Args;
 
 use super::bad;
 use super::scene::{SceneArgs, ShotArgs, check_size, check_vpls};
+use crate::gi::budget;
 use crate::gi::pipeline::{self, RenderSettings, Renderer};
 use crate::gpu::GpuContext;
 use crate::settings::FrameSettings;
@@ -30,9 +31,14 @@ pub struct RenderArgs {
     /// Fill the stats' error block against this reference EXR.
     #[arg(long)]
     compare: Option<PathBuf>,
-    /// Write a false-colour per-pixel error image against --compare (log10 rel. error, -4..0).
+    /// Write a false-colour per-pixel error image against --compare (log10 rel. error, -4..0; or
+    /// the FLIP map with --error-metric flip).
     #[arg(long, requires = "compare")]
     error_map: Option<PathBuf>,
+    /// What --error-map draws: rel-mse (log10 of the per-pixel relative error, blue to red) or flip
+    /// (the per-pixel FLIP error of the tone-mapped images, magma from 0 to 1).
+    #[arg(long, value_enum, default_value_t = ErrorMetric::RelMse, requires = "error_map")]
+    error_metric: ErrorMetric,
     #[command(flatten)]
     shot: ShotArgs,
     /// Render N times; timings are the mean of the 3 best (the paper's method).
@@ -46,6 +52,13 @@ pub struct RenderArgs {
     /// VPLs): the check of the VPL reference's own bias.
     #[arg(long, value_name = "SPP", conflicts_with = "reference", value_parser = clap::value_parser!(u32).range(1..))]
     path_trace: Option<u32>,
+}
+
+/// What `--error-map` draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ErrorMetric {
+    RelMse,
+    Flip,
 }
 
 /// The extension of `p`, lower case.
@@ -129,9 +142,35 @@ pub fn run(a: RenderArgs) -> Result<()> {
         let plan = pipeline::Plan::new(&scene, &settings);
         pipeline::check_visibility_size(&ctx, &plan, &settings).map_err(bad)?;
     }
+    if settings.cluster.target_ms.is_some() && (a.reference || a.path_trace.is_some()) {
+        return Err(bad(
+            "--target-ms: chooses the cluster counts; --reference and --path-trace cluster nothing",
+        ));
+    }
     let mut runs = Vec::new();
     let mut frame = None;
-    for _ in 0..a.repeat {
+    let mut target = None;
+    let mut settings = settings;
+    if let Some(t) = settings.cluster.target_ms {
+        let (chosen, budget, f) = budget::fit(&mut renderer, &camera, &settings, t)?;
+        for (i, st) in budget.steps.iter().enumerate() {
+            eprintln!(
+                "--target-ms {t}: frame {}: K_SP {} K_VPL {} -> {:.1} ms",
+                i + 1,
+                st.sp_clusters,
+                st.vpl_clusters,
+                st.frame_ms
+            );
+        }
+        settings = chosen;
+        runs.push(f.timings_ms.clone());
+        frame = Some(f);
+        target = Some(stats::Target {
+            target_ms: t,
+            steps: budget.steps,
+        });
+    }
+    for _ in runs.len() as u32..a.repeat {
         let f = match a.path_trace {
             Some(spp) => renderer.path_trace(&camera, &settings, spp)?,
             None => renderer.render(&camera, &settings)?,
@@ -164,14 +203,32 @@ pub fn run(a: RenderArgs) -> Result<()> {
     for out in &a.output {
         export::write_image(out, frame.width, frame.height, &frame.radiance, exposure)?;
     }
-    if let (Some(p), Some(r)) = (&a.error_map, &reference) {
-        let map = metrics::error_map(&frame.radiance, r);
+    // Compared as shown: both images tone-mapped with the reference's exposure.
+    let labels = match &reference {
+        Some(_) => renderer.sp_labels(&frame)?,
+        None => None,
+    };
+    let measured = reference.as_ref().map(|r| {
+        stats::ErrorStats::measure(
+            &frame.radiance,
+            r,
+            frame.width,
+            frame.height,
+            a.shot.frame.exposure.resolve(r),
+            labels.as_deref(),
+        )
+    });
+    if let (Some(p), Some(r), Some((_, flip))) = (&a.error_map, &reference, &measured) {
+        let map = match a.error_metric {
+            ErrorMetric::RelMse => metrics::error_map(&frame.radiance, r),
+            ErrorMetric::Flip => metrics::flip_error_map(flip, frame.width, frame.height),
+        };
         export::write_png_rgb8(p, frame.width, frame.height, map)?;
     }
-    let error = reference.as_ref().map(|r| stats::ErrorStats {
-        mse: metrics::mse(&frame.radiance, r),
-        rel_mse: metrics::rel_mse(&frame.radiance, r),
-    });
+    let error = measured.map(|m| m.0);
+    if let Some(e) = &error {
+        eprintln!("error against the reference: {}", e.line());
+    }
     let timings_ms = stats::best_of_runs(&runs);
     let outputs: Vec<String> = a.output.iter().map(|p| p.display().to_string()).collect();
     let passes: Vec<&str> = frame.passes.iter().map(|p| p.name()).collect();
@@ -205,6 +262,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
             mean_luminance: metrics::mean_luminance(&frame.radiance),
             bvh_build_ms: renderer.bvh.build_ms,
             error,
+            target,
         };
         export::write_json(p, &s)?;
     }

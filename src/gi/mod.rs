@@ -1,6 +1,7 @@
 //! The GI passes, one module per pass, each owning its pipeline and bind-group layout and driving the
 //! WGSL file of the same name. `pipeline` decides which passes run.
 
+pub mod budget;
 pub mod direct;
 pub mod dispatch;
 pub mod frame;

@@ -97,6 +97,35 @@ pub struct Renderer<'a> {
 }
 
 impl<'a> Renderer<'a> {
+    /// Each pixel's nearest SP cluster in the last frame (`frame`, the first of its F slots),
+    /// `metrics::NO_LABEL` where its primary ray missed: the label image of the cluster-border
+    /// measure (`metrics::border_error`) and the viewer's SP-cluster view. `None` when that frame
+    /// clustered no shading points.
+    pub fn sp_labels(&self, frame: &super::frame::Frame) -> Result<Option<Vec<u32>>> {
+        let Some(c) = &self.sp_clustering else {
+            return Ok(None);
+        };
+        let n = (frame.width * frame.height) as usize;
+        if frame.positions.len() != n {
+            return Ok(None);
+        }
+        let f = c.f().max(1) as usize;
+        let all: Vec<u32> = self.ctx.read_buffer(&c.assign, n * f)?;
+        Ok(Some(
+            all.iter()
+                .step_by(f)
+                .zip(&frame.positions)
+                .map(|(&l, p)| {
+                    if p[3] > 0.0 {
+                        l
+                    } else {
+                        crate::metrics::NO_LABEL
+                    }
+                })
+                .collect(),
+        ))
+    }
+
     pub fn new(ctx: &'a GpuContext, source: &'a Scene) -> Result<Self> {
         super::scene_gpu::check_fits(source, ctx.max_binding())?;
         let mut scene = std::borrow::Cow::Borrowed(source);
