@@ -66,6 +66,44 @@ impl Weighting {
     }
 }
 
+/// Which system computes the indirect light (docs/methods.md). Every method reuses the VPLs, the
+/// BVH, the primary rays, the direct light, the reference and the metrics, and adds only what its
+/// paper adds.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, Serialize, Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Colom, Marques, Santos 2022 (seed 000): fuzzy k-means of SPs and VPLs, visibility between
+    /// cluster representatives, Eq. (6) shading per pixel × VPL cluster.
+    #[default]
+    Colom,
+    /// Wang et al. 2009 (seed 001): adaptively seeded k-means of the SPs (§3.2, Eq. 2), irradiance
+    /// gathered only at the cluster centres, interpolated per pixel with the §3.4 weight.
+    Wang,
+}
+
+impl Method {
+    pub const ALL: [Method; 2] = [Method::Colom, Method::Wang];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Colom => "colom",
+            Method::Wang => "wang",
+        }
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// α of Wang et al.'s Eq. (2) (seed 001, §3.2): the weight of the position term, positions in units
+/// of the scene diagonal (the paper's "normalised scene scale"); the paper uses 0.1–0.5.
+pub const DEFAULT_WANG_ALPHA: f32 = 0.3;
+
 /// γ, the SP downsampling factor of Alg. 1's iterations: `auto` (the default) lets
 /// `Gamma::resolve` choose it from the pixels and K, or a fixed factor of at least 1.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -244,6 +282,14 @@ pub struct ClusterSettings {
     /// change (docs/temporal.md). A single `render` has no past: only --repeat's later renders reuse.
     #[arg(long, default_value = "off", value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub temporal: bool,
+    /// The method that computes the indirect light: colom (the paper this tool rebuilds), wang
+    /// (Wang et al. 2009: irradiance at SP-cluster centres, interpolated). docs/methods.md.
+    #[arg(long, value_enum, default_value_t = Method::Colom)]
+    pub method: Method,
+    /// wang: α of Eq. (2), the position term's weight with positions in scene diagonals, (0, 100]
+    /// (the paper: 0.1–0.5).
+    #[arg(long, default_value_t = DEFAULT_WANG_ALPHA, value_parser = parse_wang_alpha)]
+    pub wang_alpha: f32,
 }
 
 impl Default for ClusterSettings {
@@ -260,6 +306,8 @@ impl Default for ClusterSettings {
             plane_gate: None,
             weights_to_reps: false,
             temporal: false,
+            method: Method::Colom,
+            wang_alpha: DEFAULT_WANG_ALPHA,
         }
     }
 }
@@ -408,6 +456,14 @@ pub fn parse_plane_gate(v: &str) -> Result<f32, Invalid> {
     )
 }
 
+pub fn parse_wang_alpha(v: &str) -> Result<f32, Invalid> {
+    in_range(
+        v,
+        |a: f32| a > 0.0 && a <= 100.0,
+        "must be a number in (0, 100]",
+    )
+}
+
 pub fn parse_on_off(v: &str) -> Result<bool, Invalid> {
     match v.trim() {
         "on" => Ok(true),
@@ -521,6 +577,9 @@ mod tests {
         assert!(parse_direct_samples("0").is_err() && parse_direct_samples("65537").is_err());
         assert!(parse_side("0").is_err() && parse_side("16385").is_err());
         assert!(parse_light_scale("inf").is_err() && parse_light_scale("-1").is_err());
+        assert!(parse_wang_alpha("0").is_err() && parse_wang_alpha("-1").is_err());
+        assert!(parse_wang_alpha("NaN").is_err() && parse_wang_alpha("101").is_err());
+        assert_eq!(parse_wang_alpha("0.3"), Ok(0.3));
         assert_eq!(parse_on_off("on"), Ok(true));
         assert!(parse_on_off("yes").is_err());
     }

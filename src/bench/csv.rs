@@ -58,6 +58,12 @@ pub struct Row {
     /// The plane gate of the F lists in degrees (`bench --plane-gate`), empty when off. Last column;
     /// older files without it read off.
     pub plane_gate_deg: Option<f32>,
+    /// The method (`colom`, `wang`; docs/methods.md). Added after `plane_gate_deg`; older files
+    /// read `colom`.
+    pub method: String,
+    /// The indirect light's ms: `frame` less `primary` and `direct` (every method's own passes, the
+    /// measure its comparison uses). Last column; older files read `frame − primary − direct`.
+    pub indirect_ms: f64,
 }
 
 impl Row {
@@ -103,6 +109,8 @@ pub fn header() -> Vec<String> {
             "weight_exponent",
             "gamma_used",
             "plane_gate_deg",
+            "method",
+            "indirect_ms",
         ]
         .map(String::from),
     );
@@ -138,6 +146,8 @@ fn record(r: &Row) -> Vec<String> {
         r.weight_exponent.to_string(),
         r.gamma_used.map_or(String::new(), |g| g.to_string()),
         r.plane_gate_deg.map_or(String::new(), |g| g.to_string()),
+        r.method.clone(),
+        format!("{}", r.indirect_ms),
     ]);
     v
 }
@@ -248,7 +258,18 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
                 true if !get("plane_gate_deg").is_empty() => Some(num("plane_gate_deg")? as f32),
                 _ => None,
             },
+            method: match head.iter().any(|h| h == "method") {
+                true => get("method").into(),
+                false => "colom".into(),
+            },
+            indirect_ms: 0.0,
         });
+        let r = rows.last_mut().unwrap();
+        r.indirect_ms = if head.iter().any(|h| h == "indirect_ms") {
+            num("indirect_ms")?
+        } else {
+            r.frame_ms() - r.stage("primary") - r.stage("direct")
+        };
     }
     Ok(rows)
 }
@@ -281,7 +302,7 @@ pub(crate) mod tests {
             "uniform" => 1.3,
             _ => 1.0,
         };
-        Row {
+        let mut r = Row {
             scene: "builtin:cornell".into(),
             camera: "default".into(),
             width: 96,
@@ -307,7 +328,11 @@ pub(crate) mod tests {
             weight_exponent: 1.0,
             gamma_used: Some(4),
             plane_gate_deg: None,
-        }
+            method: "colom".into(),
+            indirect_ms: 0.0,
+        };
+        r.indirect_ms = r.frame_ms() - r.stage("primary") - r.stage("direct");
+        r
     }
 
     #[test]
@@ -371,11 +396,12 @@ pub(crate) mod tests {
         r.gamma_used = None;
         let csv = to_csv(std::slice::from_ref(&r));
         assert_eq!(from_csv(&csv).unwrap(), vec![r.clone()]);
-        // Drop the three columns added last (weight_exponent, gamma_used, plane_gate_deg).
+        // Drop the five columns added last (weight_exponent, gamma_used, plane_gate_deg, method,
+        // indirect_ms).
         let cut = |text: &str| {
             write_records(text.lines().map(|l| {
                 let f = split_line(l);
-                f[..f.len() - 3].to_vec()
+                f[..f.len() - 5].to_vec()
             }))
         };
         let old = cut(&csv);
@@ -383,6 +409,9 @@ pub(crate) mod tests {
         assert_eq!(back[0].weight_exponent, 1.0);
         assert_eq!(back[0].gamma_used, None);
         assert_eq!(back[0].plane_gate_deg, None);
+        assert_eq!(back[0].method, "colom");
+        let want = r.frame_ms() - r.stage("primary") - r.stage("direct");
+        assert!((back[0].indirect_ms - want).abs() < 1e-9);
         assert_eq!(back[0].label, r.label);
         // Not a prefix of the header, or short of `label`: refused.
         assert!(from_csv(&old.replacen("scene,camera", "camera,scene", 1)).is_err());

@@ -227,7 +227,7 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
             let (frame, t) = timed(&mut renderer, camera, &s, plan.repeat, &pb)?;
             let label = sweep::label_ran(
                 c,
-                frame.ran(Pass::SpCluster),
+                frame.ran(Pass::SpCluster) || frame.ran(Pass::WangCluster),
                 frame.ran(Pass::VplCluster),
                 frame.gamma_used,
             );
@@ -242,7 +242,7 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
                 width: frame.width,
                 height: frame.height,
                 vpls: frame.vpls,
-                mode: sweep::mode(c).name().into(),
+                mode: sweep::mode_name(c).into(),
                 vpl_clusters: c.vpl_clusters,
                 sp_clusters: c.sp_clusters,
                 fuzziness: c.fuzziness,
@@ -266,6 +266,10 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
                 shadow_rays: frame.shadow_rays,
                 repeat: plan.repeat,
                 label: label.clone(),
+                method: c.method.name().into(),
+                indirect_ms: frame_ms
+                    - t.get(Pass::Primary.name()).copied().unwrap_or(0.0)
+                    - t.get(Pass::Direct.name()).copied().unwrap_or(0.0),
             };
             let stem = format!("{:02}{suffix}_{}", i + 1, file_slug(&label));
             let img = format!("images/{stem}.png");

@@ -6,3 +6,4 @@ pub mod rng;
 pub mod shade;
 pub mod shading;
 pub mod vpl;
+pub mod wang;

@@ -16,3 +16,4 @@ pub mod shade;
 pub mod visibility;
 pub mod vpl_cluster;
 pub mod vpl_trace;
+pub mod wang;

@@ -9,6 +9,10 @@
 //! - `sp_cluster` (step 4) → `visibility` (step 5) → `shade` (step 6, Eq. 6 with Eq. 8 or 9), the lights
 //!   being VPL clusters ("both") or the VPLs ("SPs only").
 //!
+//! With `--method wang` (Wang et al. 2009, docs/methods.md) the SP passes are instead
+//! `wang_cluster` (§3.2) → `wang_gather` (irradiance and R_j at the sample points) → `wang_interp`
+//! (§3.4).
+//!
 //! `Plan::new` lists the passes; `Renderer::render` runs exactly that list, in order.
 
 use std::sync::Arc;
@@ -27,7 +31,7 @@ pub use super::resident::{LightKey, Renderer, VplKey};
 use super::shade::{ShadeInputs, ShadeParams};
 use super::visibility::Previous;
 use crate::scene::{Camera, Scene};
-use crate::settings::{ClusterSettings, FrameSettings, Weighting};
+use crate::settings::{ClusterSettings, FrameSettings, Method, Weighting};
 
 /// A pass of the frame graph. Its name keys the GPU timings (profiler labels), the stats JSON's
 /// `passes` and `timings_ms`, and the bench CSV's `<stage>_ms` columns.
@@ -53,11 +57,17 @@ pub enum Pass {
     Reference,
     /// The diffuse path tracer (`--path-trace`), instead of every pass above.
     PathTrace,
+    /// wang (seed 001, §3.2): adaptively seeded k-means of the SPs with Eq. (2), sample points.
+    WangCluster,
+    /// wang: irradiance at the sample points (every light with its own shadow ray) and §3.4's R_j.
+    WangGather,
+    /// wang (§3.4): every pixel interpolates the sample points' irradiance.
+    WangInterp,
 }
 
 impl Pass {
     /// The passes whose times the stats and the CSV report, in the contract's order.
-    pub const TIMED: [Pass; 9] = [
+    pub const TIMED: [Pass; 12] = [
         Pass::VplTrace,
         Pass::VplCluster,
         Pass::Primary,
@@ -67,6 +77,9 @@ impl Pass {
         Pass::Direct,
         Pass::Reference,
         Pass::Gather,
+        Pass::WangCluster,
+        Pass::WangGather,
+        Pass::WangInterp,
     ];
 
     pub const fn name(self) -> &'static str {
@@ -81,6 +94,9 @@ impl Pass {
             Pass::Gather => "gather",
             Pass::Reference => "reference",
             Pass::PathTrace => "pathtrace",
+            Pass::WangCluster => "wang_cluster",
+            Pass::WangGather => "wang_gather",
+            Pass::WangInterp => "wang_interp",
         }
     }
 
@@ -116,23 +132,26 @@ pub struct RenderSettings {
 pub struct Plan {
     pub indirect: bool,
     pub vpl_clustering: bool,
+    /// Colom's SP clustering (steps 4–6).
     pub sp_clustering: bool,
+    /// Wang's passes instead of steps 4–6 (`--method wang` with 0 < K_SP < pixels).
+    pub wang: bool,
 }
 
 impl Plan {
     pub fn new(scene: &Scene, s: &RenderSettings) -> Plan {
         let (f, c) = (&s.frame, &s.cluster);
         let indirect = f.vpls > 0 && scene.has_light();
+        let sp =
+            indirect && !s.reference && c.sp_clusters > 0 && c.sp_clusters < f.width * f.height;
         Plan {
             indirect,
             vpl_clustering: indirect
                 && !s.reference
                 && c.vpl_clusters > 0
                 && c.vpl_clusters < f.vpls,
-            sp_clustering: indirect
-                && !s.reference
-                && c.sp_clusters > 0
-                && c.sp_clusters < f.width * f.height,
+            sp_clustering: sp && c.method == Method::Colom,
+            wang: sp && c.method == Method::Wang,
         }
     }
 
@@ -149,6 +168,8 @@ impl Plan {
         if self.indirect {
             if self.sp_clustering {
                 p.extend([Pass::SpCluster, Pass::Visibility, Pass::Shade]);
+            } else if self.wang {
+                p.extend([Pass::WangCluster, Pass::WangGather, Pass::WangInterp]);
             } else if self.vpl_clustering {
                 p.push(Pass::Gather);
             } else {
@@ -178,6 +199,11 @@ struct FrameResources {
     indirect_rays: u64,
     rows_reused: u32,
     sp_used: u32,
+    /// wang: the clustering, the irradiance and R_j sums at its sample points, its CPU ms.
+    wang: Option<super::wang::WangClustering>,
+    wang_irradiance: Option<wgpu::Buffer>,
+    wang_radius: Option<wgpu::Buffer>,
+    cpu_ms: f64,
 }
 
 impl Renderer<'_> {
@@ -207,6 +233,10 @@ impl Renderer<'_> {
             indirect_rays: 0,
             rows_reused: 0,
             sp_used: 0,
+            wang: None,
+            wang_irradiance: None,
+            wang_radius: None,
+            cpu_ms: 0.0,
         };
         let previous_clustering = self.sp_clustering.take().filter(|_| s.cluster.temporal);
         for &pass in &passes {
@@ -240,6 +270,9 @@ impl Renderer<'_> {
                 Pass::Visibility => self.visibility(s, &mut r)?,
                 Pass::Shade => self.shade(s, &r),
                 Pass::Gather | Pass::Reference => self.gather(pass, s, &r)?,
+                Pass::WangCluster => self.wang_cluster(s, &mut r)?,
+                Pass::WangGather => self.wang_gather(s, &mut r)?,
+                Pass::WangInterp => self.wang_interp(&r),
                 Pass::PathTrace => unreachable!("the path tracer is `path_trace`"),
             }
         }
@@ -399,6 +432,91 @@ impl Renderer<'_> {
         Ok(())
     }
 
+    /// wang, §3.2: the SP clustering and its sample points.
+    fn wang_cluster(&mut self, s: &RenderSettings, r: &mut FrameResources) -> Result<()> {
+        let f = &s.frame;
+        let c = self.wang.cluster(
+            self.ctx,
+            &self.gpu,
+            &mut self.profiler,
+            Pass::WangCluster.name(),
+            &r.gbuffer,
+            (f.width, f.height),
+            s.cluster.sp_clusters,
+            s.cluster.wang_alpha / self.scene.extent(),
+            s.cluster.iterations,
+            f.seed,
+        )?;
+        r.cpu_ms += c.cpu_ms;
+        if std::env::var_os("FVPL_PROFILE_STEPS").is_some() {
+            eprintln!(
+                "wang_cluster: {:.1} ms of CPU steps, {} assignment passes",
+                c.cpu_ms, c.clusters.passes
+            );
+        }
+        r.sp_used = c.used;
+        r.wang = Some(c);
+        Ok(())
+    }
+
+    /// wang: the irradiance at the sample points (every light with its own shadow ray, the gather of
+    /// `reference.wgsl` on shading points of albedo 1) and §3.4's R_j there.
+    fn wang_gather(&mut self, s: &RenderSettings, r: &mut FrameResources) -> Result<()> {
+        let ctx = self.ctx;
+        let c = r.wang.as_ref().unwrap();
+        let lights = &self.lights.as_ref().unwrap().list;
+        let num_lights = lights.lights.len() as u32;
+        let k = c.k().max(1);
+        let irradiance = ctx.storage("wang irradiance", k as u64 * 16);
+        self.reference.record(
+            ctx,
+            &self.gpu,
+            &mut self.profiler,
+            &super::reference::GatherInputs {
+                gbuffer: &c.sample_gbuffer,
+                lights: &lights.buffer,
+                num_lights,
+                indirect: &irradiance,
+                pixels: c.k(),
+                d_min: s.frame.clamp * self.scene.extent(),
+                label: Pass::WangGather.name(),
+            },
+            &mut |_, _| true,
+        );
+        let radius = self.wang.radius(
+            ctx,
+            &self.gpu,
+            &mut self.profiler,
+            Pass::WangGather.name(),
+            c,
+            s.frame.seed,
+        );
+        r.indirect_rays =
+            c.used as u64 * (num_lights as u64 + crate::cpu::wang::RADIUS_RAYS as u64);
+        r.wang_irradiance = Some(irradiance);
+        r.wang_radius = Some(radius);
+        Ok(())
+    }
+
+    /// wang, §3.4: every pixel interpolates the sample points' irradiance.
+    fn wang_interp(&mut self, r: &FrameResources) {
+        let c = r.wang.as_ref().unwrap();
+        let (w, h) = (r.cam.size[0], r.cam.size[1]);
+        self.wang.interp(
+            self.ctx,
+            &self.gpu,
+            &mut self.profiler,
+            Pass::WangInterp.name(),
+            &r.gbuffer,
+            (w, h),
+            c,
+            r.wang_irradiance.as_ref().unwrap(),
+            r.wang_radius.as_ref().unwrap(),
+            self.scene.extent(),
+            &r.indirect,
+        );
+    }
+
     /// Reads the frame back, keeps what the next frame reuses, and adds the timings.
     fn finish(
         &mut self,
@@ -410,6 +528,12 @@ impl Renderer<'_> {
         let ctx = self.ctx;
         let n = r.pixels;
         let mut timings_ms = self.profiler.collect(ctx)?;
+        if plan.wang {
+            // The CPU steps of the wang clustering count as its time (docs/methods.md).
+            *timings_ms
+                .entry(Pass::WangCluster.name().into())
+                .or_insert(0.0) += r.cpu_ms;
+        }
         let frame_ms: f64 = timings_ms.values().sum();
         timings_ms.insert(FRAME_KEY.into(), frame_ms);
         if plan.indirect {
@@ -433,7 +557,7 @@ impl Renderer<'_> {
         let ind: Vec<[f32; 4]> = ctx.read_buffer(&r.indirect, n as usize)?;
         let sps: Vec<[f32; 4]> = ctx.read_buffer(&r.gbuffer, n as usize * 4)?;
         let valid = sps.chunks(4).filter(|sp| sp[0][3] > 0.0).count() as u32;
-        let indirect_rays = if plan.indirect && !plan.sp_clustering {
+        let indirect_rays = if plan.indirect && !plan.sp_clustering && !plan.wang {
             valid as u64 * num_lights as u64
         } else {
             r.indirect_rays
@@ -448,6 +572,15 @@ impl Renderer<'_> {
                 lights: self.lights.as_ref().unwrap().key,
             });
             self.sp_clustering = Some(c);
+        }
+        if let (Some(clustering), Some(irradiance), Some(radius)) =
+            (r.wang, r.wang_irradiance, r.wang_radius)
+        {
+            self.last_wang = Some(super::wang::WangFrame {
+                clustering,
+                irradiance,
+                radius,
+            });
         }
         self.gbuffer = Some((r.gbuffer, n));
         let direct: Vec<[f32; 3]> = px.iter().map(|p| self.to_scene_units(p)).collect();

@@ -31,6 +31,7 @@ pub const FILES: &[(&str, &str)] = wgsl![
     "kmeans.wgsl",
     "visibility.wgsl",
     "shade.wgsl",
+    "wang.wgsl",
 ];
 
 /// The pass shaders (top-level files), each composed and validated on its own.
