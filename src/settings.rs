@@ -81,15 +81,23 @@ pub enum Method {
     /// Wang et al. 2009 (seed 001): adaptively seeded k-means of the SPs (§3.2, Eq. 2), irradiance
     /// gathered only at the cluster centres, interpolated per pixel with the §3.4 weight.
     Wang,
+    /// LightCluster (seed 002): the VPLs clustered by the minimum-distance (leader) algorithm
+    /// (§3.1, d_min = d_init (1 − |C_pos| / z_far)), each cluster a disc light of radius d_min
+    /// whose visibility a few shadow rays over the disc estimate (§3.2), every VPL shaded with its
+    /// cluster's visibility.
+    #[value(name = "lightcluster")]
+    #[serde(rename = "lightcluster")]
+    LightCluster,
 }
 
 impl Method {
-    pub const ALL: [Method; 2] = [Method::Colom, Method::Wang];
+    pub const ALL: [Method; 3] = [Method::Colom, Method::Wang, Method::LightCluster];
 
     pub fn name(self) -> &'static str {
         match self {
             Method::Colom => "colom",
             Method::Wang => "wang",
+            Method::LightCluster => "lightcluster",
         }
     }
 }
@@ -103,6 +111,10 @@ impl fmt::Display for Method {
 /// α of Wang et al.'s Eq. (2) (seed 001, §3.2): the weight of the position term, positions in units
 /// of the scene diagonal (the paper's "normalised scene scale"); the paper uses 0.1–0.5.
 pub const DEFAULT_WANG_ALPHA: f32 = 0.3;
+
+/// d_init of LightCluster's d_min (seed 002, §3.1.2) in scene diagonals (the paper's scenes used
+/// 0.1–1.6 scene units).
+pub const DEFAULT_D_INIT: f32 = 1.0;
 
 /// γ, the SP downsampling factor of Alg. 1's iterations: `auto` (the default) lets
 /// `Gamma::resolve` choose it from the pixels and K, or a fixed factor of at least 1.
@@ -290,6 +302,10 @@ pub struct ClusterSettings {
     /// (the paper: 0.1–0.5).
     #[arg(long, default_value_t = DEFAULT_WANG_ALPHA, value_parser = parse_wang_alpha)]
     pub wang_alpha: f32,
+    /// lightcluster: d_init of d_min = d_init (1 − |C_pos| / z_far), in scene diagonals, (0, 10];
+    /// the cluster count is its outcome.
+    #[arg(long, default_value_t = DEFAULT_D_INIT, value_parser = parse_d_init)]
+    pub d_init: f32,
 }
 
 impl Default for ClusterSettings {
@@ -308,6 +324,7 @@ impl Default for ClusterSettings {
             temporal: false,
             method: Method::Colom,
             wang_alpha: DEFAULT_WANG_ALPHA,
+            d_init: DEFAULT_D_INIT,
         }
     }
 }
@@ -464,6 +481,14 @@ pub fn parse_wang_alpha(v: &str) -> Result<f32, Invalid> {
     )
 }
 
+pub fn parse_d_init(v: &str) -> Result<f32, Invalid> {
+    in_range(
+        v,
+        |d: f32| d > 0.0 && d <= 10.0,
+        "must be a distance in (0, 10] scene diagonals",
+    )
+}
+
 pub fn parse_on_off(v: &str) -> Result<bool, Invalid> {
     match v.trim() {
         "on" => Ok(true),
@@ -580,6 +605,9 @@ mod tests {
         assert!(parse_wang_alpha("0").is_err() && parse_wang_alpha("-1").is_err());
         assert!(parse_wang_alpha("NaN").is_err() && parse_wang_alpha("101").is_err());
         assert_eq!(parse_wang_alpha("0.3"), Ok(0.3));
+        assert!(parse_d_init("0").is_err() && parse_d_init("-0.1").is_err());
+        assert!(parse_d_init("inf").is_err() && parse_d_init("11").is_err());
+        assert_eq!(parse_d_init("0.5"), Ok(0.5));
         assert_eq!(parse_on_off("on"), Ok(true));
         assert!(parse_on_off("yes").is_err());
     }

@@ -146,6 +146,62 @@ fn wang_matches_cpu_twin() {
     }
 }
 
+/// lightcluster: the GPU's shading (every pixel × every VPL with its cluster's disc visibility)
+/// equals the CPU twin given the same clusters, and the clusters are the leader algorithm's.
+#[test]
+fn lightcluster_matches_cpu_twin() {
+    use fuzzy_vpl::cpu::lightcluster as lc;
+    let ctx = common::gpu();
+    for name in ["builtin:cornell", "builtin:conference"] {
+        let s = scene::load(name).unwrap();
+        let mut r = Renderer::new(&ctx, &s).unwrap();
+        let (w, h) = (24u32, 18u32);
+        let mut fs = settings(Method::LightCluster, w, h);
+        fs.frame.vpls = 256;
+        fs.cluster.d_init = 0.5;
+        let cam = s.default_camera();
+        let f = r.render(&cam, &fs).unwrap();
+        assert!(
+            f.ran(Pass::LightClusterShade) && !f.ran(Pass::VplCluster),
+            "{name}"
+        );
+        assert!(common::all_finite(&f.radiance), "{name}");
+        let sps: Vec<ShadingPoint> = r
+            .last_gbuffer()
+            .unwrap()
+            .chunks(4)
+            .map(ShadingPoint::from_gpu)
+            .collect();
+        let vpls = &r.vpl_set.as_ref().unwrap().set.vpls;
+        let eye = cam.transform.w_axis.truncate();
+        let (lo, hi) = s.bounds();
+        let z_far = (0..8)
+            .map(|i| {
+                Vec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                )
+                .distance(eye)
+            })
+            .fold(0.0f32, f32::max);
+        let c = lc::cluster(vpls, eye, z_far, 0.5 * s.extent());
+        assert_eq!(f.vpl_clusters_used as usize, c.discs.len(), "{name}");
+        assert!(c.discs.len() > 1 && c.discs.len() < vpls.len(), "{name}");
+        let cs = common::cpu_scene(&r, &s);
+        let d_min = fs.frame.clamp * s.extent();
+        let bad = sps
+            .iter()
+            .enumerate()
+            .filter(|(m, sp)| {
+                let want = lc::shade(&cs, sp, &c, d_min * d_min);
+                !close(want, Vec3::from(f.indirect[*m]), 1e-3)
+            })
+            .count();
+        assert!(bad * 100 <= sps.len(), "{name}: {bad} pixels differ");
+    }
+}
+
 /// Every method renders both built-in rooms with finite output and a mean luminance within 20% of
 /// the reference's (the target, here at 64×48 with 512 VPLs).
 #[test]

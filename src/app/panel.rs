@@ -228,13 +228,25 @@ impl Viewer {
                         "Wang et al. 2009: irradiance only at the SP clusters' sample points, \
                          interpolated per pixel (docs/methods.md)",
                     );
+                    ui.selectable_value(&mut s.cluster.method, Method::LightCluster, "lightcluster")
+                        .on_hover_text(
+                            "LightCluster: VPLs in minimum-distance clusters, each a disc light whose \
+                             visibility a few rays estimate; every VPL shaded (docs/methods.md)",
+                        );
                 });
                 let colom = s.cluster.method == Method::Colom;
-                if !colom {
+                if s.cluster.method == Method::Wang {
                     ui.add(
                         Slider::new(&mut s.cluster.wang_alpha, 0.01..=100.0)
                             .logarithmic(true)
                             .text("α (Eq. 2: position against normal)"),
+                    );
+                }
+                if s.cluster.method == Method::LightCluster {
+                    ui.add(
+                        Slider::new(&mut s.cluster.d_init, 0.001..=10.0)
+                            .logarithmic(true)
+                            .text("d_init (scene diagonals)"),
                     );
                 }
                 ui.add_enabled_ui(colom, |ui| {

@@ -4,7 +4,7 @@ use std::fmt;
 use std::str::FromStr;
 
 use crate::settings::{
-    ClusterSettings, Gamma, Invalid, Method, Weighting, parse_fuzziness, parse_gamma,
+    ClusterSettings, Gamma, Invalid, Method, Weighting, parse_d_init, parse_fuzziness, parse_gamma,
     parse_iterations, parse_normal_threshold, parse_plane_gate, parse_wang_alpha,
     parse_weight_exponent,
 };
@@ -149,6 +149,9 @@ pub struct Sweep {
     /// wang: α values of Eq. (2) (default 0.3).
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_wang_alpha)]
     pub wang_alpha: Vec<f32>,
+    /// lightcluster: d_init values in scene diagonals (default 1); the K's do not apply.
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_d_init)]
+    pub d_init: Vec<f32>,
     /// Modes to compare: hard,uniform,weighted,vpl-only,sp-only (default hard,uniform,weighted;
     /// quick: all five).
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_mode)]
@@ -212,6 +215,7 @@ impl Sweep {
         let s = Sweep {
             methods: or_default(&self.methods, &[Method::Colom]),
             wang_alpha: or_default(&self.wang_alpha, &[c.wang_alpha]),
+            d_init: or_default(&self.d_init, &[c.d_init]),
             modes: or_default(
                 &self.modes,
                 if quick {
@@ -278,6 +282,22 @@ impl Sweep {
         for &method in &self.methods {
             match method {
                 Method::Colom => self.colom_configs(&ks, &mut out),
+                Method::LightCluster => {
+                    for &d in &self.d_init {
+                        let c = ClusterSettings {
+                            method,
+                            sp_clusters: 0,
+                            vpl_clusters: 0,
+                            fuzziness: 1,
+                            weighting: Weighting::Hard,
+                            d_init: d,
+                            ..Default::default()
+                        };
+                        if !out.contains(&c) {
+                            out.push(c);
+                        }
+                    }
+                }
                 Method::Wang => {
                     for &(sp, vpl) in &ks {
                         for &iterations in &self.iterations {
@@ -391,6 +411,9 @@ fn label_in(mode: Mode, c: &ClusterSettings) -> String {
             v.to_string()
         }
     };
+    if c.method == Method::LightCluster {
+        return format!("lightcluster d{}", c.d_init);
+    }
     if c.method == Method::Wang {
         let mut s = format!(
             "wang {}/{} a{}",
@@ -501,6 +524,11 @@ mod tests {
         assert_eq!(mode_name(&c[1]), "wang");
         assert_eq!(c[2].method, Method::Wang);
         assert_eq!(parse(&[], true).unwrap().methods, vec![Method::Colom]);
+        let s = parse(&["--methods", "lightcluster", "--d-init", "0.05,0.2"], true).unwrap();
+        let labels: Vec<String> = s.configs().iter().map(label).collect();
+        assert_eq!(labels, ["lightcluster d0.05", "lightcluster d0.2"]);
+        assert_eq!(mode_name(&s.configs()[0]), "lightcluster");
+        assert!(parse(&["--d-init", "0"], true).is_err());
         let e = parse(&["--methods", "colom,foo"], true).unwrap_err();
         assert!(e.contains("--methods") && e.contains("foo"), "{e}");
         let e = parse(&["--wang-alpha", "0"], true).unwrap_err();

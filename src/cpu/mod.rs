@@ -2,6 +2,7 @@
 //! CPU traversal (`bvh::SceneBvh::closest` / `occluded`), which is also the traversal twin.
 
 pub mod kmeans;
+pub mod lightcluster;
 pub mod rng;
 pub mod shade;
 pub mod shading;

@@ -5,6 +5,7 @@ pub mod direct;
 pub mod dispatch;
 pub mod frame;
 pub mod kmeans;
+pub mod lightcluster;
 pub mod pathtrace;
 pub mod pipeline;
 pub mod primary;

@@ -63,11 +63,15 @@ pub enum Pass {
     WangGather,
     /// wang (§3.4): every pixel interpolates the sample points' irradiance.
     WangInterp,
+    /// lightcluster (seed 002, §3.1): the VPLs clustered by the minimum-distance algorithm (CPU).
+    LightClusterCluster,
+    /// lightcluster (§3.2): every pixel × every VPL with its cluster's disc visibility.
+    LightClusterShade,
 }
 
 impl Pass {
     /// The passes whose times the stats and the CSV report, in the contract's order.
-    pub const TIMED: [Pass; 12] = [
+    pub const TIMED: [Pass; 14] = [
         Pass::VplTrace,
         Pass::VplCluster,
         Pass::Primary,
@@ -80,6 +84,8 @@ impl Pass {
         Pass::WangCluster,
         Pass::WangGather,
         Pass::WangInterp,
+        Pass::LightClusterCluster,
+        Pass::LightClusterShade,
     ];
 
     pub const fn name(self) -> &'static str {
@@ -97,6 +103,8 @@ impl Pass {
             Pass::WangCluster => "wang_cluster",
             Pass::WangGather => "wang_gather",
             Pass::WangInterp => "wang_interp",
+            Pass::LightClusterCluster => "lightcluster_cluster",
+            Pass::LightClusterShade => "lightcluster_shade",
         }
     }
 
@@ -136,6 +144,8 @@ pub struct Plan {
     pub sp_clustering: bool,
     /// Wang's passes instead of steps 4–6 (`--method wang` with 0 < K_SP < pixels).
     pub wang: bool,
+    /// LightCluster's passes instead of steps 2 and 4–6 (`--method lightcluster`).
+    pub lightcluster: bool,
 }
 
 impl Plan {
@@ -144,14 +154,17 @@ impl Plan {
         let indirect = f.vpls > 0 && scene.has_light();
         let sp =
             indirect && !s.reference && c.sp_clusters > 0 && c.sp_clusters < f.width * f.height;
+        let lightcluster = indirect && !s.reference && c.method == Method::LightCluster;
         Plan {
             indirect,
             vpl_clustering: indirect
                 && !s.reference
+                && !lightcluster
                 && c.vpl_clusters > 0
                 && c.vpl_clusters < f.vpls,
             sp_clustering: sp && c.method == Method::Colom,
             wang: sp && c.method == Method::Wang,
+            lightcluster,
         }
     }
 
@@ -166,7 +179,9 @@ impl Plan {
         }
         p.extend([Pass::Primary, Pass::Direct]);
         if self.indirect {
-            if self.sp_clustering {
+            if self.lightcluster {
+                p.extend([Pass::LightClusterCluster, Pass::LightClusterShade]);
+            } else if self.sp_clustering {
                 p.extend([Pass::SpCluster, Pass::Visibility, Pass::Shade]);
             } else if self.wang {
                 p.extend([Pass::WangCluster, Pass::WangGather, Pass::WangInterp]);
@@ -203,6 +218,9 @@ struct FrameResources {
     wang: Option<super::wang::WangClustering>,
     wang_irradiance: Option<wgpu::Buffer>,
     wang_radius: Option<wgpu::Buffer>,
+    /// lightcluster: the frame's clusters.
+    light_clusters: Option<crate::cpu::lightcluster::LightClusters>,
+    /// CPU milliseconds of the wang or lightcluster clustering (added to its pass's time).
     cpu_ms: f64,
 }
 
@@ -236,6 +254,7 @@ impl Renderer<'_> {
             wang: None,
             wang_irradiance: None,
             wang_radius: None,
+            light_clusters: None,
             cpu_ms: 0.0,
         };
         let previous_clustering = self.sp_clustering.take().filter(|_| s.cluster.temporal);
@@ -273,6 +292,8 @@ impl Renderer<'_> {
                 Pass::WangCluster => self.wang_cluster(s, &mut r)?,
                 Pass::WangGather => self.wang_gather(s, &mut r)?,
                 Pass::WangInterp => self.wang_interp(&r),
+                Pass::LightClusterCluster => self.lightcluster_cluster(s, &mut r),
+                Pass::LightClusterShade => self.lightcluster_shade(s, &mut r),
                 Pass::PathTrace => unreachable!("the path tracer is `path_trace`"),
             }
         }
@@ -517,6 +538,45 @@ impl Renderer<'_> {
         );
     }
 
+    /// lightcluster, §3.1: the VPLs clustered for this camera (CPU, as the paper's §4). z_far, the
+    /// largest view distance, is the distance from the eye to the farthest corner of the scene's
+    /// bounds; d_init is in scene diagonals.
+    fn lightcluster_cluster(&mut self, s: &RenderSettings, r: &mut FrameResources) {
+        let eye = glam::Vec3::from_slice(&r.cam.eye[..3]);
+        let (lo, hi) = self.scene.bounds();
+        let z_far = (0..8)
+            .map(|i| {
+                let c = glam::Vec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                );
+                c.distance(eye)
+            })
+            .fold(0.0f32, f32::max);
+        let vpls = &self.vpl_set.as_ref().unwrap().set.vpls;
+        let d_init = s.cluster.d_init * self.scene.extent();
+        let (c, ms) = super::lightcluster::LightCluster::cluster(vpls, eye, z_far, d_init);
+        r.cpu_ms += ms;
+        r.light_clusters = Some(c);
+    }
+
+    /// lightcluster, §3.2: every pixel × every VPL with its cluster's disc visibility.
+    fn lightcluster_shade(&mut self, s: &RenderSettings, r: &mut FrameResources) {
+        let c = r.light_clusters.as_ref().unwrap();
+        self.lightcluster.record(
+            self.ctx,
+            &self.gpu,
+            &mut self.profiler,
+            Pass::LightClusterShade.name(),
+            &r.gbuffer,
+            c,
+            &r.indirect,
+            r.pixels,
+            s.frame.clamp * self.scene.extent(),
+        );
+    }
+
     /// Reads the frame back, keeps what the next frame reuses, and adds the timings.
     fn finish(
         &mut self,
@@ -528,11 +588,15 @@ impl Renderer<'_> {
         let ctx = self.ctx;
         let n = r.pixels;
         let mut timings_ms = self.profiler.collect(ctx)?;
-        if plan.wang {
-            // The CPU steps of the wang clustering count as its time (docs/methods.md).
-            *timings_ms
-                .entry(Pass::WangCluster.name().into())
-                .or_insert(0.0) += r.cpu_ms;
+        if plan.wang || plan.lightcluster {
+            // The CPU steps of the wang and lightcluster clusterings count as their time
+            // (docs/methods.md).
+            let pass = if plan.wang {
+                Pass::WangCluster
+            } else {
+                Pass::LightClusterCluster
+            };
+            *timings_ms.entry(pass.name().into()).or_insert(0.0) += r.cpu_ms;
         }
         let frame_ms: f64 = timings_ms.values().sum();
         timings_ms.insert(FRAME_KEY.into(), frame_ms);
@@ -557,7 +621,14 @@ impl Renderer<'_> {
         let ind: Vec<[f32; 4]> = ctx.read_buffer(&r.indirect, n as usize)?;
         let sps: Vec<[f32; 4]> = ctx.read_buffer(&r.gbuffer, n as usize * 4)?;
         let valid = sps.chunks(4).filter(|sp| sp[0][3] > 0.0).count() as u32;
-        let indirect_rays = if plan.indirect && !plan.sp_clustering && !plan.wang {
+        let clusters_lc = r
+            .light_clusters
+            .as_ref()
+            .map_or(0, |c| c.discs.len() as u32);
+        let indirect_rays = if plan.lightcluster {
+            // At most: a cluster's disc rays are traced only where one of its terms is positive.
+            valid as u64 * clusters_lc as u64 * crate::cpu::lightcluster::DISC_SAMPLES as u64
+        } else if plan.indirect && !plan.sp_clustering && !plan.wang {
             valid as u64 * num_lights as u64
         } else {
             r.indirect_rays
@@ -603,7 +674,11 @@ impl Renderer<'_> {
             shadow_rays: valid as u64 * (r.direct_samples as u64 + self.gpu.info.num_lights as u64)
                 + indirect_rays,
             sp_clusters_used: r.sp_used,
-            vpl_clusters_used: if plan.vpl_clustering { num_lights } else { 0 },
+            vpl_clusters_used: if plan.vpl_clustering {
+                num_lights
+            } else {
+                clusters_lc
+            },
             gamma_used,
             // In the caller's units (the G-buffer holds the unit frame's, `geometry_scale`).
             positions: sps

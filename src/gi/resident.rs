@@ -87,6 +87,7 @@ pub struct Renderer<'a> {
     pub(super) visibility: Visibility,
     pub(super) shade: Shade,
     pub(super) wang: Wang,
+    pub(super) lightcluster: super::lightcluster::LightCluster,
     /// The last frame's G-buffer and its pixel count (`direct_again`, `last_gbuffer`).
     pub(super) gbuffer: Option<(wgpu::Buffer, u32)>,
     pub vpl_set: Option<ResidentVpls>,
@@ -129,6 +130,7 @@ impl<'a> Renderer<'a> {
             visibility: Visibility::new(ctx, &gpu),
             shade: Shade::new(),
             wang: Wang::new(ctx, &gpu),
+            lightcluster: super::lightcluster::LightCluster::new(ctx, &gpu),
             profiler: Profiler::new(ctx),
             gbuffer: None,
             vpl_set: None,
@@ -181,6 +183,7 @@ impl<'a> Renderer<'a> {
             self.reference = Reference::new(ctx, &gpu);
             self.visibility = Visibility::new(ctx, &gpu);
             self.wang = Wang::new(ctx, &gpu);
+            self.lightcluster = super::lightcluster::LightCluster::new(ctx, &gpu);
         }
         self.gpu = gpu;
         self.vpl_set = None;

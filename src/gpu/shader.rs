@@ -32,6 +32,7 @@ pub const FILES: &[(&str, &str)] = wgsl![
     "visibility.wgsl",
     "shade.wgsl",
     "wang.wgsl",
+    "lightcluster.wgsl",
 ];
 
 /// The pass shaders (top-level files), each composed and validated on its own.
