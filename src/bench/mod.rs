@@ -326,6 +326,18 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
             "Modes: Pareto front of time and MSE".to_string(),
             pareto_png,
         ));
+        if just.iter().any(|r| r.method != just[0].method) {
+            let methods_png = format!("methods{suffix}.png");
+            plot::methods(
+                &out.join(&methods_png),
+                &title("methods: indirect-light time against MSE, each method's front"),
+                &just,
+            )?;
+            plots.push((
+                "Methods: each one's Pareto front of indirect time and MSE".to_string(),
+                methods_png,
+            ));
+        }
         files.extend(plots.iter().map(|p| out.join(&p.1)));
         cam_summaries.push(CameraSummary {
             camera: cam_name.clone(),
