@@ -355,7 +355,8 @@ pub fn method_colour(method: &str) -> RGBColor {
 /// (`indirect_ms`: the frame less primary rays and direct light, what the methods differ in)
 /// against its MSE, each method's own Pareto front as a line in its colour.
 pub fn methods(path: &Path, title: &str, rows: &[Row]) -> Result<()> {
-    let tmax = max_of(rows.iter().map(|r| r.indirect_ms)) * 1.15;
+    // Log time: the methods' times differ by orders of magnitude.
+    let (tlo, thi) = log_range(rows.iter().map(|r| r.indirect_ms.max(1e-3)));
     let (mlo, mhi) = log_range(rows.iter().map(|r| r.mse));
     let mut names: Vec<&str> = Vec::new();
     for r in rows {
@@ -369,11 +370,11 @@ pub fn methods(path: &Path, title: &str, rows: &[Row]) -> Result<()> {
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(70)
-            .build_cartesian_2d(0.0..tmax, (mlo..mhi).log_scale())
+            .build_cartesian_2d((tlo..thi).log_scale(), (mlo..mhi).log_scale())
             .map_err(plot_err)?;
         chart
             .configure_mesh()
-            .x_desc("indirect light: GPU ms per frame (frame - primary - direct)")
+            .x_desc("indirect light: GPU ms per frame (frame - primary - direct), log")
             .y_desc("MSE")
             .y_label_formatter(&sci)
             .label_style(("sans-serif", 13))
@@ -384,7 +385,7 @@ pub fn methods(path: &Path, title: &str, rows: &[Row]) -> Result<()> {
             let sel: Vec<&Row> = rows.iter().filter(|r| r.method == *m).collect();
             let pts: Vec<(f64, f64)> = sel
                 .iter()
-                .map(|r| (r.indirect_ms, r.mse.max(1e-12)))
+                .map(|r| (r.indirect_ms.max(1e-3), r.mse.max(1e-12)))
                 .collect();
             let line: Vec<(f64, f64)> = pareto_front(&pts).iter().map(|&i| pts[i]).collect();
             chart
