@@ -264,3 +264,48 @@ fn bad_method_knobs_exit_2_with_one_line() {
         assert!(lines[0].contains(needle), "{a:?}: {err}");
     }
 }
+
+/// `bench --methods`: a row per method configuration with its `method` column, `indirect_ms` the
+/// frame less primary and direct, and `methods.png` with every method's front.
+#[test]
+fn bench_compares_the_methods() {
+    let d = common::scratch("bench-methods");
+    let (code, _, err) = common::run_cli(&[
+        "bench",
+        "builtin:cornell",
+        "--out-dir",
+        d.to_str().unwrap(),
+        "--methods",
+        "colom,wang,lightcluster",
+        "--modes",
+        "weighted",
+        "--pairs",
+        "24/32",
+        "--d-init",
+        "2",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--vpls",
+        "256",
+        "--repeat",
+        "1",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(d.join("results.csv")).unwrap();
+    let rows = fuzzy_vpl::bench::csv::from_csv(&text).unwrap();
+    let methods: Vec<&str> = rows.iter().map(|r| r.method.as_str()).collect();
+    assert_eq!(methods, ["colom", "wang", "lightcluster"]);
+    let modes: Vec<&str> = rows.iter().map(|r| r.mode.as_str()).collect();
+    assert_eq!(modes, ["weighted", "wang", "lightcluster"]);
+    for r in &rows {
+        assert!(r.mse.is_finite() && r.indirect_ms > 0.0, "{r:?}");
+        let want = r.frame_ms() - r.stage("primary") - r.stage("direct");
+        assert!((r.indirect_ms - want).abs() <= 1e-6 * r.frame_ms(), "{r:?}");
+    }
+    assert!(rows[2].vpl_clusters_used > 0, "{:?}", rows[2]);
+    let img = image::open(d.join("methods.png")).unwrap();
+    assert!(img.width() > 100);
+    let _ = std::fs::remove_dir_all(&d);
+}
