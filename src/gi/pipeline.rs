@@ -456,18 +456,21 @@ impl Renderer<'_> {
     /// wang, §3.2: the SP clustering and its sample points.
     fn wang_cluster(&mut self, s: &RenderSettings, r: &mut FrameResources) -> Result<()> {
         let f = &s.frame;
-        let c = self.wang.cluster(
-            self.ctx,
-            &self.gpu,
-            &mut self.profiler,
-            Pass::WangCluster.name(),
-            &r.gbuffer,
-            (f.width, f.height),
-            s.cluster.sp_clusters,
-            s.cluster.wang_alpha / self.scene.extent(),
-            s.cluster.iterations,
-            f.seed,
-        )?;
+        let c = self
+            .wang
+            .get_or_init(|| super::wang::Wang::new(self.ctx, &self.gpu))
+            .cluster(
+                self.ctx,
+                &self.gpu,
+                &mut self.profiler,
+                Pass::WangCluster.name(),
+                &r.gbuffer,
+                (f.width, f.height),
+                s.cluster.sp_clusters,
+                s.cluster.wang_alpha / self.scene.extent(),
+                s.cluster.iterations,
+                f.seed,
+            )?;
         r.cpu_ms += c.cpu_ms;
         if std::env::var_os("FVPL_PROFILE_STEPS").is_some() {
             eprintln!(
@@ -504,14 +507,17 @@ impl Renderer<'_> {
             },
             &mut |_, _| true,
         );
-        let radius = self.wang.radius(
-            ctx,
-            &self.gpu,
-            &mut self.profiler,
-            Pass::WangGather.name(),
-            c,
-            s.frame.seed,
-        );
+        let radius = self
+            .wang
+            .get_or_init(|| super::wang::Wang::new(self.ctx, &self.gpu))
+            .radius(
+                ctx,
+                &self.gpu,
+                &mut self.profiler,
+                Pass::WangGather.name(),
+                c,
+                s.frame.seed,
+            );
         r.indirect_rays =
             c.used as u64 * (num_lights as u64 + crate::cpu::wang::RADIUS_RAYS as u64);
         r.wang_irradiance = Some(irradiance);
@@ -523,19 +529,21 @@ impl Renderer<'_> {
     fn wang_interp(&mut self, r: &FrameResources) {
         let c = r.wang.as_ref().unwrap();
         let (w, h) = (r.cam.size[0], r.cam.size[1]);
-        self.wang.interp(
-            self.ctx,
-            &self.gpu,
-            &mut self.profiler,
-            Pass::WangInterp.name(),
-            &r.gbuffer,
-            (w, h),
-            c,
-            r.wang_irradiance.as_ref().unwrap(),
-            r.wang_radius.as_ref().unwrap(),
-            self.scene.extent(),
-            &r.indirect,
-        );
+        self.wang
+            .get_or_init(|| super::wang::Wang::new(self.ctx, &self.gpu))
+            .interp(
+                self.ctx,
+                &self.gpu,
+                &mut self.profiler,
+                Pass::WangInterp.name(),
+                &r.gbuffer,
+                (w, h),
+                c,
+                r.wang_irradiance.as_ref().unwrap(),
+                r.wang_radius.as_ref().unwrap(),
+                self.scene.extent(),
+                &r.indirect,
+            );
     }
 
     /// lightcluster, §3.1: the VPLs clustered for this camera (CPU, as the paper's §4). z_far, the
@@ -564,17 +572,20 @@ impl Renderer<'_> {
     /// lightcluster, §3.2: every pixel × every VPL with its cluster's disc visibility.
     fn lightcluster_shade(&mut self, s: &RenderSettings, r: &mut FrameResources) {
         let c = r.light_clusters.as_ref().unwrap();
-        self.lightcluster.record(
-            self.ctx,
-            &self.gpu,
-            &mut self.profiler,
-            Pass::LightClusterShade.name(),
-            &r.gbuffer,
-            c,
-            &r.indirect,
-            r.pixels,
-            s.frame.clamp * self.scene.extent(),
-        );
+        let ctx = self.ctx;
+        self.lightcluster
+            .get_or_init(|| super::lightcluster::LightCluster::new(ctx, &self.gpu))
+            .record(
+                self.ctx,
+                &self.gpu,
+                &mut self.profiler,
+                Pass::LightClusterShade.name(),
+                &r.gbuffer,
+                c,
+                &r.indirect,
+                r.pixels,
+                s.frame.clamp * self.scene.extent(),
+            );
     }
 
     /// Reads the frame back, keeps what the next frame reuses, and adds the timings.

@@ -86,8 +86,9 @@ pub struct Renderer<'a> {
     pub(super) kmeans: KMeans,
     pub(super) visibility: Visibility,
     pub(super) shade: Shade,
-    pub(super) wang: Wang,
-    pub(super) lightcluster: super::lightcluster::LightCluster,
+    /// The other methods' passes, built the first time a frame uses them.
+    pub(super) wang: std::cell::OnceCell<Wang>,
+    pub(super) lightcluster: std::cell::OnceCell<super::lightcluster::LightCluster>,
     /// The last frame's G-buffer and its pixel count (`direct_again`, `last_gbuffer`).
     pub(super) gbuffer: Option<(wgpu::Buffer, u32)>,
     pub vpl_set: Option<ResidentVpls>,
@@ -129,8 +130,8 @@ impl<'a> Renderer<'a> {
             kmeans: KMeans::new(),
             visibility: Visibility::new(ctx, &gpu),
             shade: Shade::new(),
-            wang: Wang::new(ctx, &gpu),
-            lightcluster: super::lightcluster::LightCluster::new(ctx, &gpu),
+            wang: Default::default(),
+            lightcluster: Default::default(),
             profiler: Profiler::new(ctx),
             gbuffer: None,
             vpl_set: None,
@@ -182,8 +183,8 @@ impl<'a> Renderer<'a> {
             self.vpl_trace = VplTrace::new(ctx, &gpu);
             self.reference = Reference::new(ctx, &gpu);
             self.visibility = Visibility::new(ctx, &gpu);
-            self.wang = Wang::new(ctx, &gpu);
-            self.lightcluster = super::lightcluster::LightCluster::new(ctx, &gpu);
+            self.wang = Default::default();
+            self.lightcluster = Default::default();
         }
         self.gpu = gpu;
         self.vpl_set = None;
