@@ -1,4 +1,4 @@
-//! LightCluster (Eisemann-style many-light shadows; seed `002`, "LightCluster – Clustering Lights to
+//! LightCluster (Wiesenhütter, Klein et al.; seed `002`, "LightCluster – Clustering Lights to
 //! Accelerate Shadow Computation") adapted to VPLs and ray-traced visibility (docs/methods.md,
 //! "lightcluster"): the clustering itself (the paper runs it on the CPU as well, §4) and the CPU twin
 //! of `shaders-wgsl/lightcluster.wgsl`.

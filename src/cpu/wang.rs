@@ -1,4 +1,4 @@
-//! Wang, Wang, Zhou, Guo, Shum 2009, "An efficient GPU-based approach for interactive global
+//! Wang, Wang, Zhou, Pan, Bao 2009, "An efficient GPU-based approach for interactive global
 //! illumination" (seed `001`), adapted to VPL lighting and ray-traced visibility (docs/methods.md,
 //! "wang"): the math of `shaders-wgsl/wang.wgsl` on the CPU, and the steps of the method that run on
 //! the CPU in the frame as well (the quadtree seeding, the centre updates and the choice of each
