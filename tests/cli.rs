@@ -109,6 +109,8 @@ fn render_cornell_128_exr_with_stats() {
     // γ defaults to auto: 16,384 pixels are below the rule's 19,200 sampled points, so γ 4.
     assert_eq!(j["settings"]["gamma_auto"], true);
     assert_eq!(j["settings"]["gamma"], 4);
+    // The method (docs/methods.md): colom unless --method says otherwise.
+    assert_eq!(j["settings"]["method"], "colom");
     assert!(j["settings"]["normal_threshold_used"].as_f64().unwrap() < 1.0);
     assert!(j["settings"].get("path_trace_spp").is_none());
     assert!(j["settings"].get("plane_gate_deg").is_none());

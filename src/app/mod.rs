@@ -168,8 +168,19 @@ impl UiSettings {
     pub fn mode_label(&self) -> String {
         let p = self.cluster.weight_exponent;
         match (self.sp_on, self.vpl_on) {
+            _ if self.cluster.method == crate::settings::Method::LightCluster => {
+                format!("lightcluster d_init {}", self.cluster.d_init)
+            }
             (false, false) => "no clustering".into(),
             (false, true) => "VPL clusters only".into(),
+            (true, _) if self.cluster.method == crate::settings::Method::Wang => {
+                let m = format!("wang α {}", self.cluster.wang_alpha);
+                if self.vpl_on {
+                    m
+                } else {
+                    format!("{m}, all VPLs")
+                }
+            }
             (true, _) => {
                 let m = match self.cluster.weighting {
                     Weighting::Hard => "hard".to_string(),
@@ -194,6 +205,10 @@ impl UiSettings {
     pub fn short(&self) -> String {
         let c = &self.cluster;
         let mode = match c.weighting {
+            _ if c.method == crate::settings::Method::Wang => format!("wang-a{}", c.wang_alpha),
+            _ if c.method == crate::settings::Method::LightCluster => {
+                format!("lightcluster-d{}", c.d_init)
+            }
             Weighting::InverseDistance if c.weight_exponent == 1.0 => "weighted".to_string(),
             Weighting::InverseDistance => format!("weighted-p{}", c.weight_exponent),
             Weighting::Hard => "hard".to_string(),

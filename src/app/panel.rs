@@ -10,7 +10,7 @@ use super::Viewer;
 use super::camera::Mode as CamMode;
 use super::settings::Bookmark;
 use super::views::View;
-use crate::settings::Weighting;
+use crate::settings::{Method, Weighting};
 
 pub const PANEL_WIDTH: f32 = 310.0;
 
@@ -219,9 +219,42 @@ impl Viewer {
                 let s = &mut self.s;
                 let r = &self.ranges;
                 ui.horizontal(|ui| {
-                    ui.selectable_value(&mut s.cluster.weighting, Weighting::Hard, "hard");
-                    ui.selectable_value(&mut s.cluster.weighting, Weighting::Uniform, "fuzzy (uniform)");
-                    ui.selectable_value(&mut s.cluster.weighting, Weighting::InverseDistance, "weighted");
+                    ui.label("method");
+                    ui.selectable_value(&mut s.cluster.method, Method::Colom, "colom").on_hover_text(
+                        "Colom et al. 2022: fuzzy k-means of SPs and VPLs, Eq. (6) per pixel \
+                         and VPL cluster (docs/methods.md)",
+                    );
+                    ui.selectable_value(&mut s.cluster.method, Method::Wang, "wang").on_hover_text(
+                        "Wang et al. 2009: irradiance only at the SP clusters' sample points, \
+                         interpolated per pixel (docs/methods.md)",
+                    );
+                    ui.selectable_value(&mut s.cluster.method, Method::LightCluster, "lightcluster")
+                        .on_hover_text(
+                            "LightCluster: VPLs in minimum-distance clusters, each a disc light whose \
+                             visibility a few rays estimate; every VPL shaded (docs/methods.md)",
+                        );
+                });
+                let colom = s.cluster.method == Method::Colom;
+                if s.cluster.method == Method::Wang {
+                    ui.add(
+                        Slider::new(&mut s.cluster.wang_alpha, 0.01..=100.0)
+                            .logarithmic(true)
+                            .text("α (Eq. 2: position against normal)"),
+                    );
+                }
+                if s.cluster.method == Method::LightCluster {
+                    ui.add(
+                        Slider::new(&mut s.cluster.d_init, 0.001..=10.0)
+                            .logarithmic(true)
+                            .text("d_init (scene diagonals)"),
+                    );
+                }
+                ui.add_enabled_ui(colom, |ui| {
+                    ui.horizontal(|ui| {
+                        ui.selectable_value(&mut s.cluster.weighting, Weighting::Hard, "hard");
+                        ui.selectable_value(&mut s.cluster.weighting, Weighting::Uniform, "fuzzy (uniform)");
+                        ui.selectable_value(&mut s.cluster.weighting, Weighting::InverseDistance, "weighted");
+                    });
                 });
                 ui.horizontal(|ui| {
                     ui.checkbox(&mut s.sp_on, "SP clustering");
@@ -250,15 +283,15 @@ impl Viewer {
                         .text("VPLs"),
                 );
                 ui.add_enabled(
-                    s.cluster.weighting != Weighting::Hard,
+                    colom && s.cluster.weighting != Weighting::Hard,
                     Slider::new(&mut s.cluster.fuzziness, 1..=16).text("F (fuzziness)"),
                 );
                 ui.add_enabled(
-                    s.cluster.weighting == Weighting::InverseDistance,
+                    colom && s.cluster.weighting == Weighting::InverseDistance,
                     Slider::new(&mut s.cluster.weight_exponent, 0.0..=r.weight_exponent)
                         .text("p (weights = dist^-p; Eq. 10: 1)"),
                 );
-                ui.add_enabled_ui(s.cluster.weighting != Weighting::Hard, |ui| {
+                ui.add_enabled_ui(colom && s.cluster.weighting != Weighting::Hard, |ui| {
                     ui.horizontal(|ui| {
                         ui.checkbox(&mut s.plane_gate_on, "plane gate")
                             .on_hover_text(

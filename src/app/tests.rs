@@ -285,6 +285,29 @@ fn command_line_values_beyond_the_sliders_survive_the_panel() {
     assert_eq!(v.s, s);
 }
 
+/// The method selector: a wang frame's method and α survive the panel, name the series and the
+/// screenshot files, and reach the frame settings.
+#[test]
+fn the_method_and_its_knob_survive_the_panel() {
+    let fs = RenderSettings {
+        cluster: ClusterSettings {
+            method: crate::settings::Method::Wang,
+            wang_alpha: 0.7,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let s = UiSettings::new(&fs);
+    let mut v = viewer(s.clone());
+    draw(&mut v);
+    assert_eq!(v.s, s);
+    assert!(s.short().starts_with("wang-a0.7_"), "{}", s.short());
+    assert_eq!(s.mode_label(), "wang α 0.7");
+    let r = s.frame_settings(64, 48);
+    assert_eq!(r.cluster.method, crate::settings::Method::Wang);
+    assert_eq!(r.cluster.wang_alpha, 0.7);
+}
+
 #[test]
 fn gi_size_lowers_the_render_scale_to_what_the_device_holds() {
     assert_eq!(gi_size([640, 480], 0.5, 2_097_152), ((320, 240), None));

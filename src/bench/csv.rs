@@ -4,13 +4,14 @@
 use std::collections::BTreeMap;
 
 use crate::gi::pipeline::{FRAME_KEY, Pass};
-use crate::settings::Gamma;
+use crate::settings::{Gamma, Method};
 use anyhow::{Context, Result, bail};
 
 /// The passes with a `<stage>_ms` column, in the order of the CSV columns (`frame` follows them):
-/// every timed pass but the unclustered reference, which has `reference_ms`.
+/// the first `Pass::STAGES` of `Pass::TIMED` (the unclustered reference has `reference_ms`; the
+/// other methods' passes are summed in `indirect_ms`).
 pub fn stage_passes() -> impl Iterator<Item = Pass> {
-    Pass::TIMED.into_iter().filter(|&p| p != Pass::Reference)
+    Pass::TIMED.into_iter().take(Pass::STAGES)
 }
 
 /// The stage timings of a row, in the order of the CSV columns (`frame` last).
@@ -54,9 +55,15 @@ pub struct Row {
     /// γ Alg. 1 sampled with (`gamma` is the one asked; at most pixels / K): empty in the file
     /// when no SP clustering ran. Last column; older files without it read empty.
     pub gamma_used: Option<u32>,
-    /// The plane gate of the F lists in degrees (`bench --plane-gate`), empty when off. Last column;
-    /// older files without it read off.
+    /// The plane gate of the F lists in degrees (`bench --plane-gate`), empty when off; older files
+    /// without it read off.
     pub plane_gate_deg: Option<f32>,
+    /// The method (`settings::Method`: `colom`, `wang`, `lightcluster`; docs/methods.md), after
+    /// `plane_gate_deg`; files without the column read `colom`.
+    pub method: Method,
+    /// The indirect light's ms: `frame` less `primary` and `direct` (every method's own passes, the
+    /// measure the methods are compared by); files without it read `frame − primary − direct`.
+    pub indirect_ms: f64,
     /// Mean FLIP of the tone-mapped image against the reference's (`stats::ErrorStats::flip`).
     /// Older files without it read empty, as do the border columns below.
     pub flip: Option<f64>,
@@ -119,9 +126,14 @@ pub fn header() -> Vec<String> {
         ]
         .map(String::from),
     );
+    h.extend(METHOD_COLUMNS.map(String::from));
     h.extend(ERROR_COLUMNS.map(String::from));
     h
 }
+
+/// The method's columns, after `plane_gate_deg` and before the error columns: `method` (the
+/// `settings::Method`'s name) and `indirect_ms`. Files written before them have neither.
+pub const METHOD_COLUMNS: [&str; 2] = ["method", "indirect_ms"];
 
 /// The error columns added after `plane_gate_deg`, in order.
 pub const ERROR_COLUMNS: [&str; 7] = [
@@ -163,6 +175,8 @@ fn record(r: &Row) -> Vec<String> {
         r.weight_exponent.to_string(),
         r.gamma_used.map_or(String::new(), |g| g.to_string()),
         r.plane_gate_deg.map_or(String::new(), |g| g.to_string()),
+        r.method.name().into(),
+        format!("{}", r.indirect_ms),
     ]);
     let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));
     v.extend(
@@ -222,9 +236,16 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
         .collect();
     // The columns through `label` are required; a file from an older version may stop after any of
     // the later ones (they were added at the end).
+    // Files written before the method columns have the other columns in the same order.
     let full = header();
+    let before_methods: Vec<String> = full
+        .iter()
+        .filter(|h| !METHOD_COLUMNS.contains(&h.as_str()))
+        .cloned()
+        .collect();
+    let prefix_of = |h: &[String]| head.len() <= h.len() && head[..] == h[..head.len()];
     let required = full.iter().position(|h| h == "label").unwrap() + 1;
-    if head.len() < required || head.len() > full.len() || head[..] != full[..head.len()] {
+    if head.len() < required || !(prefix_of(&full) || prefix_of(&before_methods)) {
         bail!("unexpected CSV header: {}", head.join(","));
     }
     let col = |name: &str| head.iter().position(|h| h == name).unwrap();
@@ -298,7 +319,19 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
             flip_border: opt_num("flip_border")?,
             target_ms: opt_num("target_ms")?,
             front_mse: opt_num("front_mse")?,
+            method: match head.iter().any(|h| h == "method") {
+                true => <Method as clap::ValueEnum>::from_str(get("method"), false)
+                    .map_err(|e| anyhow::anyhow!("line {}: method: {e}", i + 2))?,
+                false => Method::Colom,
+            },
+            indirect_ms: 0.0,
         });
+        let r = rows.last_mut().unwrap();
+        r.indirect_ms = if head.iter().any(|h| h == "indirect_ms") {
+            num("indirect_ms")?
+        } else {
+            r.frame_ms() - r.stage("primary") - r.stage("direct")
+        };
     }
     Ok(rows)
 }
@@ -325,7 +358,7 @@ pub(crate) mod tests {
             "uniform" => 1.3,
             _ => 1.0,
         };
-        Row {
+        let mut r = Row {
             scene: "builtin:cornell".into(),
             camera: "default".into(),
             width: 96,
@@ -358,7 +391,11 @@ pub(crate) mod tests {
             flip_border: Some(bias * 0.06),
             target_ms: None,
             front_mse: None,
-        }
+            method: Method::Colom,
+            indirect_ms: 0.0,
+        };
+        r.indirect_ms = r.frame_ms() - r.stage("primary") - r.stage("direct");
+        r
     }
 
     #[test]
@@ -394,13 +431,26 @@ pub(crate) mod tests {
         let before = from_csv(&cut_n(&csv, n)).unwrap();
         assert_eq!((before[0].flip, before[0].border_ratio), (None, None));
         assert_eq!(before[0].mse, r.mse);
-        // Drop also the three columns before them (weight_exponent, gamma_used, plane_gate_deg).
+        // Drop the method columns only: a file of the version before them (with the error columns).
+        let m = header().len() - n - METHOD_COLUMNS.len();
+        let no_methods = write_records(csv.lines().map(|l| {
+            let mut f = split_line(l);
+            f.drain(m..m + METHOD_COLUMNS.len());
+            f
+        }));
+        let back = from_csv(&no_methods).unwrap();
+        assert_eq!((back[0].method, back[0].flip), (Method::Colom, r.flip));
+        // Drop also the five columns before them (weight_exponent, gamma_used, plane_gate_deg,
+        // method, indirect_ms).
         let cut = |text: &str| cut_n(text, 3);
-        let old = cut_n(&csv, n + 3);
+        let old = cut_n(&csv, n + 5);
         let back = from_csv(&old).unwrap();
         assert_eq!(back[0].weight_exponent, 1.0);
         assert_eq!(back[0].gamma_used, None);
         assert_eq!(back[0].plane_gate_deg, None);
+        assert_eq!(back[0].method, Method::Colom);
+        let want = r.frame_ms() - r.stage("primary") - r.stage("direct");
+        assert!((back[0].indirect_ms - want).abs() < 1e-9);
         assert_eq!(back[0].label, r.label);
         // Not a prefix of the header, or short of `label`: refused.
         assert!(from_csv(&old.replacen("scene,camera", "camera,scene", 1)).is_err());

@@ -20,7 +20,7 @@ use crate::gi::budget;
 use crate::gi::pipeline::{FRAME_KEY, Frame, Pass, RenderSettings, Renderer};
 use crate::gpu::GpuContext;
 use crate::scene::{Camera, Scene};
-use crate::settings::{ClusterSettings, FrameSettings};
+use crate::settings::{ClusterSettings, FrameSettings, Method};
 use crate::stats::ErrorStats;
 use crate::{export, metrics, stats};
 use csv::Row;
@@ -236,13 +236,13 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
         ));
         let mut cam_rows = Vec::new();
         // The sweep's configurations, then each --target-ms budget for each mode (from the mode's
-        // first configuration).
+        // first configuration; wang is a mode of its own, lightcluster has no K to choose).
         let mut jobs: Vec<(ClusterSettings, Option<f64>)> =
             configs.iter().map(|c| (c.clone(), None)).collect();
         for &t in &plan.sweep.target_ms {
             let mut seen = Vec::new();
-            for c in &configs {
-                let m = sweep::mode(c);
+            for c in configs.iter().filter(|c| c.method != Method::LightCluster) {
+                let m = sweep::mode_name(c);
                 if !seen.contains(&m) {
                     seen.push(m);
                     jobs.push((c.clone(), Some(t)));
@@ -263,7 +263,7 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
             let (frame, t) = timed(&mut renderer, camera, &s, plan.repeat, &pb)?;
             let mut label = sweep::label_ran(
                 c,
-                frame.ran(Pass::SpCluster),
+                frame.ran(Pass::SpCluster) || frame.ran(Pass::WangCluster),
                 frame.ran(Pass::VplCluster),
                 frame.gamma_used,
             );
@@ -289,7 +289,7 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
                 width: frame.width,
                 height: frame.height,
                 vpls: frame.vpls,
-                mode: sweep::mode(c).name().into(),
+                mode: sweep::mode_name(c).into(),
                 vpl_clusters: c.vpl_clusters,
                 sp_clusters: c.sp_clusters,
                 fuzziness: c.fuzziness,
@@ -320,6 +320,10 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
                 shadow_rays: frame.shadow_rays,
                 repeat: plan.repeat,
                 label: label.clone(),
+                method: c.method,
+                indirect_ms: frame_ms
+                    - t.get(Pass::Primary.name()).copied().unwrap_or(0.0)
+                    - t.get(Pass::Direct.name()).copied().unwrap_or(0.0),
             };
             let stem = format!("{:02}{suffix}_{}", i + 1, file_slug(&label));
             let img = format!("images/{stem}.png");
@@ -421,6 +425,18 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
             "Modes: Pareto front of time and MSE".to_string(),
             pareto_png,
         ));
+        if just.iter().any(|r| r.method != just[0].method) {
+            let methods_png = format!("methods{suffix}.png");
+            plot::methods(
+                &out.join(&methods_png),
+                &title("methods: indirect-light time against MSE, each method's front"),
+                &just,
+            )?;
+            plots.push((
+                "Methods: each one's Pareto front of indirect time and MSE".to_string(),
+                methods_png,
+            ));
+        }
         files.extend(plots.iter().map(|p| out.join(&p.1)));
         cam_summaries.push(CameraSummary {
             camera: cam_name.clone(),

@@ -12,6 +12,7 @@ use plotters::prelude::*;
 
 use super::csv::Row;
 use crate::export;
+use crate::settings::Method;
 
 pub const WIDTH: u32 = 960;
 pub const HEIGHT: u32 = 540;
@@ -34,6 +35,8 @@ pub fn mode_colour(mode: &str) -> RGBColor {
         "weighted" => RGBColor(31, 119, 180),
         "vpl-only" => RGBColor(44, 160, 44),
         "sp-only" => RGBColor(148, 103, 189),
+        "wang" | "colom" => RGBColor(140, 86, 75),
+        "lightcluster" => RGBColor(23, 190, 207),
         _ => RGBColor(90, 90, 90),
     }
 }
@@ -90,6 +93,19 @@ where
         .label_font(("sans-serif", 13))
         .draw()
         .map_err(plot_err)
+}
+
+/// The builder of a time-against-MSE chart: its title, margin and label areas.
+fn time_mse_chart<'a, 'b, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+) -> ChartBuilder<'a, 'b, DB> {
+    let mut b = ChartBuilder::on(root);
+    b.caption(title, ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70);
+    b
 }
 
 fn plot_err(e: impl std::fmt::Display) -> anyhow::Error {
@@ -258,11 +274,7 @@ fn scatter(
         .map(|r| (r.frame_ms(), r.mse.max(1e-12)))
         .collect();
     render_png(path, |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption(title, ("sans-serif", 22))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(70)
+        let mut chart = time_mse_chart(root, title)
             .build_cartesian_2d(0.0..tmax, (mlo..mhi).log_scale())
             .map_err(plot_err)?;
         chart
@@ -347,6 +359,72 @@ pub fn pareto(path: &Path, title: &str, rows: &[Row]) -> Result<()> {
     scatter(path, title, &sel, short, true)
 }
 
+/// Colour of a method in `methods.png`: colom's is its default mode's, the others' their `mode`
+/// column's (the method's name).
+pub fn method_colour(method: Method) -> RGBColor {
+    match method {
+        Method::Colom => mode_colour("weighted"),
+        m => mode_colour(m.name()),
+    }
+}
+
+/// (d) The methods side by side (docs/methods.md): each configuration's indirect-light time
+/// (`indirect_ms`: the frame less primary rays and direct light, what the methods differ in)
+/// against its MSE, each method's own Pareto front as a line in its colour.
+pub fn methods(path: &Path, title: &str, rows: &[Row]) -> Result<()> {
+    // Log time: the methods' times differ by orders of magnitude.
+    let (tlo, thi) = log_range(rows.iter().map(|r| r.indirect_ms.max(1e-3)));
+    let (mlo, mhi) = log_range(rows.iter().map(|r| r.mse));
+    let mut names: Vec<Method> = Vec::new();
+    for r in rows {
+        if !names.contains(&r.method) {
+            names.push(r.method);
+        }
+    }
+    render_png(path, |root| {
+        let mut chart = time_mse_chart(root, title)
+            .build_cartesian_2d((tlo..thi).log_scale(), (mlo..mhi).log_scale())
+            .map_err(plot_err)?;
+        chart
+            .configure_mesh()
+            .x_desc("indirect light: GPU ms per frame (frame - primary - direct), log")
+            .y_desc("MSE")
+            .y_label_formatter(&sci)
+            .label_style(("sans-serif", 13))
+            .draw()
+            .map_err(plot_err)?;
+        for &m in &names {
+            let c = method_colour(m);
+            let sel: Vec<&Row> = rows.iter().filter(|r| r.method == m).collect();
+            let pts: Vec<(f64, f64)> = sel
+                .iter()
+                .map(|r| (r.indirect_ms.max(1e-3), r.mse.max(1e-12)))
+                .collect();
+            let line: Vec<(f64, f64)> = pareto_front(&pts).iter().map(|&i| pts[i]).collect();
+            chart
+                .draw_series(LineSeries::new(line, c.stroke_width(2)))
+                .map_err(plot_err)?;
+            chart
+                .draw_series(pts.iter().map(|p| Circle::new(*p, 5, c.filled())))
+                .map_err(plot_err)?
+                .label(m.name())
+                .legend(move |(x, y)| Circle::new((x + 6, y), 5, c.filled()));
+            chart
+                .draw_series(sel.iter().zip(&pts).map(|(r, p)| {
+                    EmptyElement::at(*p)
+                        + Text::new(
+                            r.label.clone(),
+                            (7, -14),
+                            ("sans-serif", 12).into_font().color(&BLACK),
+                        )
+                }))
+                .map_err(plot_err)?;
+        }
+        legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+        Ok(())
+    })
+}
+
 /// `48/128`: K_sp/K_vpl, `all` where not clustered (every pixel or every VPL).
 fn short(r: &Row) -> String {
     let k = |v: u32| {
@@ -404,6 +482,7 @@ mod tests {
             ),
             ("grid.png", grid),
             ("pareto.png", pareto),
+            ("methods.png", methods),
         ];
         for (name, f) in files {
             let p = d.join(name);

@@ -4,8 +4,9 @@ use std::fmt;
 use std::str::FromStr;
 
 use crate::settings::{
-    ClusterSettings, Gamma, Invalid, Weighting, parse_fuzziness, parse_gamma, parse_iterations,
-    parse_normal_threshold, parse_plane_gate, parse_weight_exponent,
+    ClusterSettings, Gamma, Invalid, Method, Weighting, parse_d_init, parse_fuzziness, parse_gamma,
+    parse_iterations, parse_normal_threshold, parse_plane_gate, parse_wang_alpha,
+    parse_weight_exponent,
 };
 
 /// What is clustered, and how a pixel combines its SP clusters.
@@ -124,6 +125,15 @@ pub fn parse_gate(item: &str) -> Result<PlaneGate, Invalid> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlaneGate(pub Option<f32>);
 
+pub fn parse_method(item: &str) -> Result<Method, Invalid> {
+    <Method as clap::ValueEnum>::from_str(item.trim(), true).map_err(|_| {
+        Invalid(format!(
+            "unknown method (expected one of: {})",
+            Method::ALL.map(|m| m.name()).join(", ")
+        ))
+    })
+}
+
 pub fn parse_mode(item: &str) -> Result<Mode, Invalid> {
     item.parse().map_err(Invalid)
 }
@@ -133,6 +143,16 @@ pub fn parse_mode(item: &str) -> Result<Mode, Invalid> {
 #[derive(clap::Args, Clone, Debug, Default, PartialEq)]
 #[command(next_help_heading = "Sweep (comma-separated lists)")]
 pub struct Sweep {
+    /// Methods to compare: colom,wang (default colom; docs/methods.md). `--modes` and the fuzzy
+    /// knobs apply to colom; wang takes the K's, --iterations and --wang-alpha.
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_method)]
+    pub methods: Vec<Method>,
+    /// wang: α values of Eq. (2) (default 0.3).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_wang_alpha)]
+    pub wang_alpha: Vec<f32>,
+    /// lightcluster: d_init values in scene diagonals (default 1); the K's do not apply.
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_d_init)]
+    pub d_init: Vec<f32>,
     /// Modes to compare: hard,uniform,weighted,vpl-only,sp-only (default hard,uniform,weighted;
     /// quick: all five).
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_mode)]
@@ -199,6 +219,9 @@ impl Sweep {
         }
         let c = ClusterSettings::default();
         let s = Sweep {
+            methods: or_default(&self.methods, &[Method::Colom]),
+            wang_alpha: or_default(&self.wang_alpha, &[c.wang_alpha]),
+            d_init: or_default(&self.d_init, &[c.d_init]),
             modes: or_default(
                 &self.modes,
                 if quick {
@@ -236,11 +259,15 @@ impl Sweep {
                 "--pairs: a K of 0; use --modes vpl-only or sp-only for no clustering".into(),
             );
         }
-        let sp_modes = self.modes.iter().any(|m| m.clusters_sps());
+        let colom = self.methods.contains(&Method::Colom);
+        if self.methods.contains(&Method::Wang) && sps.contains(&0) {
+            return Err("--sp-clusters 0: wang needs SP clusters (its irradiance samples)".into());
+        }
+        let sp_modes = colom && self.modes.iter().any(|m| m.clusters_sps());
         if sp_modes && sps.contains(&0) {
             return Err("--sp-clusters 0: use --modes vpl-only for no SP clustering".into());
         }
-        let vpl_modes = self.modes.iter().any(|m| m.clusters_vpls());
+        let vpl_modes = colom && self.modes.iter().any(|m| m.clusters_vpls());
         if vpl_modes && vpls.contains(&0) {
             return Err("--vpl-clusters 0: use --modes sp-only for no VPL clustering".into());
         }
@@ -259,8 +286,54 @@ impl Sweep {
             self.pairs.iter().map(|p| (p.0, p.1)).collect()
         };
         let mut out: Vec<ClusterSettings> = Vec::new();
+        for &method in &self.methods {
+            match method {
+                Method::Colom => self.colom_configs(&ks, &mut out),
+                Method::LightCluster => {
+                    for &d in &self.d_init {
+                        let c = ClusterSettings {
+                            method,
+                            sp_clusters: 0,
+                            vpl_clusters: 0,
+                            fuzziness: 1,
+                            weighting: Weighting::Hard,
+                            d_init: d,
+                            ..Default::default()
+                        };
+                        if !out.contains(&c) {
+                            out.push(c);
+                        }
+                    }
+                }
+                Method::Wang => {
+                    for &(sp, vpl) in &ks {
+                        for &iterations in &self.iterations {
+                            for &a in &self.wang_alpha {
+                                let c = ClusterSettings {
+                                    method,
+                                    sp_clusters: sp,
+                                    vpl_clusters: vpl,
+                                    fuzziness: 1,
+                                    weighting: Weighting::Hard,
+                                    iterations,
+                                    wang_alpha: a,
+                                    ..Default::default()
+                                };
+                                if !out.contains(&c) {
+                                    out.push(c);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    fn colom_configs(&self, ks: &[(u32, u32)], out: &mut Vec<ClusterSettings>) {
         for &mode in &self.modes {
-            for &(sp, vpl) in &ks {
+            for &(sp, vpl) in ks {
                 for &f in &self.fuzziness {
                     for &g in &self.gamma {
                         for &n_t in &self.normal_threshold {
@@ -295,7 +368,7 @@ impl Sweep {
                                             },
                                             weights_to_reps: false,
                                             temporal: false,
-                                            target_ms: None,
+                                            ..Default::default()
                                         };
                                         if !out.contains(&c) {
                                             out.push(c);
@@ -308,7 +381,6 @@ impl Sweep {
                 }
             }
         }
-        out
     }
 }
 
@@ -323,7 +395,17 @@ pub fn mode(c: &ClusterSettings) -> Mode {
     }
 }
 
-/// Short name of a configuration for plots and the summary (`weighted 48/128 F6 gauto`).
+/// The `mode` column of a configuration: colom's mode, or the method's name for the other methods
+/// (each is its own series in the plots).
+pub fn mode_name(c: &ClusterSettings) -> &'static str {
+    match c.method {
+        Method::Colom => mode(c).name(),
+        m => m.name(),
+    }
+}
+
+/// Short name of a configuration for plots and the summary (`weighted 48/128 F6 gauto`,
+/// `wang 48/128 a0.3`).
 pub fn label(c: &ClusterSettings) -> String {
     label_in(mode(c), c)
 }
@@ -336,6 +418,21 @@ fn label_in(mode: Mode, c: &ClusterSettings) -> String {
             v.to_string()
         }
     };
+    if c.method == Method::LightCluster {
+        return format!("lightcluster d{}", c.d_init);
+    }
+    if c.method == Method::Wang {
+        let mut s = format!(
+            "wang {}/{} a{}",
+            k(c.sp_clusters),
+            k(c.vpl_clusters),
+            c.wang_alpha
+        );
+        if c.iterations != ClusterSettings::default().iterations {
+            s += &format!(" i{}", c.iterations);
+        }
+        return s;
+    }
     let mut s = format!("{} {}/{}", mode, k(c.sp_clusters), k(c.vpl_clusters));
     if mode.uses_fuzziness() {
         s += &format!(" F{}", c.fuzziness);
@@ -402,6 +499,49 @@ mod tests {
         let w = Wrap::try_parse_from(std::iter::once("bench").chain(args.iter().copied()))
             .map_err(|e| e.to_string())?;
         w.s.resolve(quick)
+    }
+
+    #[test]
+    fn methods_expand_with_their_own_knobs() {
+        let s = parse(
+            &[
+                "--methods",
+                "colom,wang",
+                "--modes",
+                "weighted",
+                "--pairs",
+                "48/128",
+                "--wang-alpha",
+                "0.1,0.5",
+            ],
+            true,
+        )
+        .unwrap();
+        let labels: Vec<String> = s.configs().iter().map(label).collect();
+        assert_eq!(
+            labels,
+            [
+                "weighted 48/128 F6 gauto",
+                "wang 48/128 a0.1",
+                "wang 48/128 a0.5"
+            ]
+        );
+        let c = s.configs();
+        assert_eq!(mode_name(&c[0]), "weighted");
+        assert_eq!(mode_name(&c[1]), "wang");
+        assert_eq!(c[2].method, Method::Wang);
+        assert_eq!(parse(&[], true).unwrap().methods, vec![Method::Colom]);
+        let s = parse(&["--methods", "lightcluster", "--d-init", "0.05,0.2"], true).unwrap();
+        let labels: Vec<String> = s.configs().iter().map(label).collect();
+        assert_eq!(labels, ["lightcluster d0.05", "lightcluster d0.2"]);
+        assert_eq!(mode_name(&s.configs()[0]), "lightcluster");
+        assert!(parse(&["--d-init", "0"], true).is_err());
+        let e = parse(&["--methods", "colom,foo"], true).unwrap_err();
+        assert!(e.contains("--methods") && e.contains("foo"), "{e}");
+        let e = parse(&["--wang-alpha", "0"], true).unwrap_err();
+        assert!(e.contains("--wang-alpha"), "{e}");
+        let e = parse(&["--methods", "wang", "--sp-clusters", "0"], true).unwrap_err();
+        assert!(e.contains("wang"), "{e}");
     }
 
     #[test]

@@ -31,6 +31,7 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
+#[allow(clippy::large_enum_variant)] // parsed once
 enum Command {
     /// Open the interactive viewer (the default with no subcommand: builtin:cornell).
     #[command(after_help = LIGHTS_HELP)]

@@ -2,7 +2,9 @@
 //! CPU traversal (`bvh::SceneBvh::closest` / `occluded`), which is also the traversal twin.
 
 pub mod kmeans;
+pub mod lightcluster;
 pub mod rng;
 pub mod shade;
 pub mod shading;
 pub mod vpl;
+pub mod wang;

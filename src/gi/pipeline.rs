@@ -9,6 +9,13 @@
 //! - `sp_cluster` (step 4) → `visibility` (step 5) → `shade` (step 6, Eq. 6 with Eq. 8 or 9), the lights
 //!   being VPL clusters ("both") or the VPLs ("SPs only").
 //!
+//! The other methods (`settings::Method`, docs/methods.md) reuse the VPLs, the primary rays, the
+//! direct light and the reference, and replace the clustered indirect passes with their own:
+//! - wang (Wang et al. 2009): `wang_cluster` (§3.2) → `wang_gather` (irradiance and R_j at the
+//!   sample points) → `wang_interp` (§3.4), `gi/wang.rs`;
+//! - lightcluster (LightCluster): `lightcluster_cluster` (§3.1, the VPLs clustered per frame, no
+//!   `vpl_cluster`) → `lightcluster_shade` (§3.2), `gi/lightcluster.rs`.
+//!
 //! `Plan::new` lists the passes; `Renderer::render` runs exactly that list, in order.
 
 use std::sync::Arc;
@@ -27,7 +34,7 @@ pub use super::resident::{LightKey, Renderer, VplKey};
 use super::shade::{ShadeInputs, ShadeParams};
 use super::visibility::Previous;
 use crate::scene::{Camera, Scene};
-use crate::settings::{ClusterSettings, FrameSettings, Weighting};
+use crate::settings::{ClusterSettings, FrameSettings, Method, Weighting};
 
 /// A pass of the frame graph. Its name keys the GPU timings (profiler labels), the stats JSON's
 /// `passes` and `timings_ms`, and the bench CSV's `<stage>_ms` columns.
@@ -53,12 +60,23 @@ pub enum Pass {
     Reference,
     /// The diffuse path tracer (`--path-trace`), instead of every pass above.
     PathTrace,
+    /// wang (seed 001, §3.2): adaptively seeded k-means of the SPs with Eq. (2), sample points.
+    WangCluster,
+    /// wang: irradiance at the sample points (every light with its own shadow ray) and §3.4's R_j.
+    WangGather,
+    /// wang (§3.4): every pixel interpolates the sample points' irradiance.
+    WangInterp,
+    /// lightcluster (seed 002, §3.1): the VPLs clustered by the minimum-distance algorithm (CPU).
+    LightClusterCluster,
+    /// lightcluster (§3.2): every pixel × every VPL with its cluster's disc visibility.
+    LightClusterShade,
 }
 
 impl Pass {
-    /// The passes whose times the stats report, in the order of the bench CSV's `<stage>_ms`
-    /// columns (which have all but `Reference`).
-    pub const TIMED: [Pass; 9] = [
+    /// The passes whose times the stats report. The first `STAGES`, in this order, are the bench
+    /// CSV's `<stage>_ms` columns (a contract: `bench::csv::stage_passes`); the unclustered
+    /// reference has its own column and the other methods' passes are summed in `indirect_ms`.
+    pub const TIMED: [Pass; 14] = [
         Pass::VplTrace,
         Pass::VplCluster,
         Pass::Primary,
@@ -68,7 +86,15 @@ impl Pass {
         Pass::Gather,
         Pass::Direct,
         Pass::Reference,
+        Pass::WangCluster,
+        Pass::WangGather,
+        Pass::WangInterp,
+        Pass::LightClusterCluster,
+        Pass::LightClusterShade,
     ];
+
+    /// How many of `TIMED` are the CSV's stage columns.
+    pub const STAGES: usize = 8;
 
     pub const fn name(self) -> &'static str {
         match self {
@@ -82,6 +108,11 @@ impl Pass {
             Pass::Gather => "gather",
             Pass::Reference => "reference",
             Pass::PathTrace => "pathtrace",
+            Pass::WangCluster => "wang_cluster",
+            Pass::WangGather => "wang_gather",
+            Pass::WangInterp => "wang_interp",
+            Pass::LightClusterCluster => "lightcluster_cluster",
+            Pass::LightClusterShade => "lightcluster_shade",
         }
     }
 
@@ -116,24 +147,35 @@ pub struct RenderSettings {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Plan {
     pub indirect: bool,
+    /// Step 2 (the resident VPL clustering, Colom's and wang's lights).
     pub vpl_clustering: bool,
+    /// Colom's SP clustering (steps 4–6).
     pub sp_clustering: bool,
+    /// The method whose own passes compute the indirect light: the one asked, or `Colom` (whose
+    /// unclustered passes `gather` and `reference` then run) for the reference and where the
+    /// method asked does not apply (wang without 0 < K_SP < pixels).
+    pub method: Method,
 }
 
 impl Plan {
     pub fn new(scene: &Scene, s: &RenderSettings) -> Plan {
         let (f, c) = (&s.frame, &s.cluster);
         let indirect = f.vpls > 0 && scene.has_light();
+        let clustered = indirect && !s.reference;
+        let sp = clustered && c.sp_clusters > 0 && c.sp_clusters < f.width * f.height;
+        let method = match c.method {
+            Method::Wang if sp => Method::Wang,
+            Method::LightCluster if clustered => Method::LightCluster,
+            _ => Method::Colom,
+        };
         Plan {
             indirect,
-            vpl_clustering: indirect
-                && !s.reference
+            vpl_clustering: clustered
+                && method != Method::LightCluster
                 && c.vpl_clusters > 0
                 && c.vpl_clusters < f.vpls,
-            sp_clustering: indirect
-                && !s.reference
-                && c.sp_clusters > 0
-                && c.sp_clusters < f.width * f.height,
+            sp_clustering: sp && method == Method::Colom,
+            method,
         }
     }
 
@@ -148,13 +190,15 @@ impl Plan {
         }
         p.extend([Pass::Primary, Pass::Direct]);
         if self.indirect {
-            if self.sp_clustering {
-                p.extend([Pass::SpCluster, Pass::Visibility, Pass::Shade]);
-            } else if self.vpl_clustering {
-                p.push(Pass::Gather);
-            } else {
-                p.push(Pass::Reference);
-            }
+            p.extend_from_slice(match self.method {
+                Method::Colom if self.sp_clustering => {
+                    &[Pass::SpCluster, Pass::Visibility, Pass::Shade][..]
+                }
+                Method::Colom if self.vpl_clustering => &[Pass::Gather],
+                Method::Colom => &[Pass::Reference],
+                Method::Wang => &[Pass::WangCluster, Pass::WangGather, Pass::WangInterp],
+                Method::LightCluster => &[Pass::LightClusterCluster, Pass::LightClusterShade],
+            });
         }
         p
     }
@@ -172,14 +216,15 @@ macro_rules! gpu {
 }
 pub(super) use gpu;
 
-/// A frame's buffers and what its passes hand on to the next ones.
-struct FrameResources {
-    pixels: u32,
-    cam: CameraParams,
-    gbuffer: wgpu::Buffer,
+/// A frame's buffers and what its passes hand on to the next ones (the other methods' passes,
+/// `gi/wang.rs` and `gi/lightcluster.rs`, read and write it too).
+pub(super) struct FrameResources {
+    pub pixels: u32,
+    pub cam: CameraParams,
+    pub gbuffer: wgpu::Buffer,
     /// Emission + direct light.
     radiance: wgpu::Buffer,
-    indirect: wgpu::Buffer,
+    pub indirect: wgpu::Buffer,
     /// Area-light samples a pixel the direct pass took.
     direct_samples: u32,
     /// The SP clustering (step 4) and, from step 5, its visibility matrix.
@@ -187,10 +232,19 @@ struct FrameResources {
     visibility: Option<Previous>,
     /// The previous frame's visibility matrix when its rows may be reused (temporal).
     previous_visibility: Option<LastVisibility>,
-    /// Shadow rays of the indirect passes, rows copied instead of traced, SP clusters used.
-    indirect_rays: u64,
+    /// Shadow rays of the indirect passes: in all, and for each valid shading point (the passes
+    /// that trace per pixel; `finish` counts the pixels).
+    pub indirect_rays: u64,
+    pub rays_per_point: u64,
+    /// Rows copied instead of traced, SP clusters used, VPL clusters of a per-frame clustering.
     rows_reused: u32,
-    sp_used: u32,
+    pub sp_used: u32,
+    pub vpl_clusters_used: u32,
+    /// CPU milliseconds of a pass's steps, added to its GPU time (wang's and lightcluster's
+    /// clusterings).
+    pub cpu_ms: Vec<(Pass, f64)>,
+    pub wang: super::wang::WangState,
+    pub light_clusters: Option<crate::cpu::lightcluster::LightClusters>,
 }
 
 impl Renderer<'_> {
@@ -218,8 +272,13 @@ impl Renderer<'_> {
             visibility: None,
             previous_visibility: None,
             indirect_rays: 0,
+            rays_per_point: 0,
             rows_reused: 0,
             sp_used: 0,
+            vpl_clusters_used: 0,
+            cpu_ms: Vec::new(),
+            wang: Default::default(),
+            light_clusters: None,
         };
         let previous_clustering = self.sp_clustering.take().filter(|_| s.cluster.temporal);
         for &pass in &passes {
@@ -247,7 +306,13 @@ impl Renderer<'_> {
                 Pass::SpCluster => self.sp_cluster(s, &mut r, previous_clustering.as_ref())?,
                 Pass::Visibility => self.visibility(s, &mut r)?,
                 Pass::Shade => self.shade(s, &r),
-                Pass::Gather | Pass::Reference => self.gather(pass, s, &r)?,
+                Pass::Gather | Pass::Reference => self.gather(pass, s, &mut r)?,
+                Pass::WangCluster | Pass::WangGather | Pass::WangInterp => {
+                    self.wang_pass(pass, s, &mut r)?
+                }
+                Pass::LightClusterCluster | Pass::LightClusterShade => {
+                    self.lightcluster_pass(pass, s, &mut r)
+                }
                 Pass::PathTrace => unreachable!("the path tracer is `path_trace`"),
             }
         }
@@ -358,9 +423,10 @@ impl Renderer<'_> {
 
     /// Every pixel × every light with its own shadow ray: the VPL clusters (`gather`) or the VPLs
     /// (`reference`, Eq. 5), reporting progress and stopping on `Control::cancel`.
-    fn gather(&mut self, pass: Pass, s: &RenderSettings, r: &FrameResources) -> Result<()> {
+    fn gather(&mut self, pass: Pass, s: &RenderSettings, r: &mut FrameResources) -> Result<()> {
         let ctx = self.ctx;
         let lights = &self.lights.as_ref().unwrap().list;
+        r.rays_per_point = lights.lights.len() as u64;
         let label = pass.name();
         let show = s.progress;
         let control = s.control.clone();
@@ -413,6 +479,10 @@ impl Renderer<'_> {
         let ctx = self.ctx;
         let n = r.pixels;
         let mut timings_ms = self.profiler.collect(ctx)?;
+        // A pass's CPU steps count as its time (docs/methods.md).
+        for &(pass, ms) in &r.cpu_ms {
+            *timings_ms.entry(pass.name().into()).or_insert(0.0) += ms;
+        }
         let frame_ms: f64 = timings_ms.values().sum();
         timings_ms.insert(FRAME_KEY.into(), frame_ms);
         if plan.indirect {
@@ -436,11 +506,7 @@ impl Renderer<'_> {
         let ind: Vec<[f32; 4]> = ctx.read_buffer(&r.indirect, n as usize)?;
         let sps: Vec<[f32; 4]> = ctx.read_buffer(&r.gbuffer, n as usize * 4)?;
         let valid = sps.chunks(4).filter(|sp| sp[0][3] > 0.0).count() as u32;
-        let indirect_rays = if plan.indirect && !plan.sp_clustering {
-            valid as u64 * num_lights as u64
-        } else {
-            r.indirect_rays
-        };
+        let indirect_rays = r.indirect_rays + valid as u64 * r.rays_per_point;
         let (mut sp_iterations, mut sp_warm_kept, mut gamma_used) = (0, None, None);
         if let (Some(c), Some(v)) = (r.clustering, r.visibility) {
             sp_iterations = c.iterations_run;
@@ -473,7 +539,11 @@ impl Renderer<'_> {
             shadow_rays: valid as u64 * (r.direct_samples as u64 + self.gpu.info.num_lights as u64)
                 + indirect_rays,
             sp_clusters_used: r.sp_used,
-            vpl_clusters_used: if plan.vpl_clustering { num_lights } else { 0 },
+            vpl_clusters_used: if plan.vpl_clustering {
+                num_lights
+            } else {
+                r.vpl_clusters_used
+            },
             gamma_used,
             // In the caller's units (the G-buffer holds the unit frame's, `geometry_scale`).
             positions: sps

@@ -15,6 +15,7 @@ use super::shade::Shade;
 use super::visibility::{self, Visibility};
 use super::vpl_cluster::{self, LightList};
 use super::vpl_trace::{VplSet, VplTrace};
+use super::wang::Wang;
 use crate::bvh::SceneBvh;
 use crate::gpu::{GpuContext, profiler::Profiler};
 use crate::scene::{Camera, PunctualLight, Scene};
@@ -85,6 +86,9 @@ pub struct Renderer<'a> {
     pub(super) kmeans: KMeans,
     pub(super) visibility: Visibility,
     pub(super) shade: Shade,
+    /// The other methods' passes, built the first time a frame uses them.
+    pub(super) wang: std::cell::OnceCell<Wang>,
+    pub(super) lightcluster: std::cell::OnceCell<super::lightcluster::LightCluster>,
     /// The last frame's G-buffer and its pixel count (`direct_again`, `last_gbuffer`).
     pub(super) gbuffer: Option<(wgpu::Buffer, u32)>,
     pub vpl_set: Option<ResidentVpls>,
@@ -94,6 +98,8 @@ pub struct Renderer<'a> {
     /// The last frame's SP clustering (for views, tests and temporal reuse).
     pub sp_clustering: Option<Clustering>,
     pub(super) last_visibility: Option<LastVisibility>,
+    /// The last `--method wang` frame's clustering, irradiance and R_j sums.
+    pub last_wang: Option<super::wang::WangFrame>,
 }
 
 impl<'a> Renderer<'a> {
@@ -153,6 +159,8 @@ impl<'a> Renderer<'a> {
             kmeans: KMeans::new(),
             visibility: Visibility::new(ctx, &gpu),
             shade: Shade::new(),
+            wang: Default::default(),
+            lightcluster: Default::default(),
             profiler: Profiler::new(ctx),
             gbuffer: None,
             vpl_set: None,
@@ -160,6 +168,7 @@ impl<'a> Renderer<'a> {
             lights: None,
             sp_clustering: None,
             last_visibility: None,
+            last_wang: None,
             bvh,
             gpu,
         })
@@ -203,6 +212,8 @@ impl<'a> Renderer<'a> {
             self.vpl_trace = VplTrace::new(ctx, &gpu);
             self.reference = Reference::new(ctx, &gpu);
             self.visibility = Visibility::new(ctx, &gpu);
+            self.wang = Default::default();
+            self.lightcluster = Default::default();
         }
         self.gpu = gpu;
         self.vpl_set = None;

@@ -38,6 +38,8 @@ pub const FILES: &[(&str, &str)] = wgsl![
     "kmeans.wgsl",
     "visibility.wgsl",
     "shade.wgsl",
+    "wang.wgsl",
+    "lightcluster.wgsl",
 ];
 
 /// The pass shaders (top-level files; `common/` holds shared code, `kmeans/` the steps of the

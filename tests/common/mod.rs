@@ -86,3 +86,13 @@ pub fn run_cli(args: &[&str]) -> (i32, String, String) {
         String::from_utf8_lossy(&o.stderr).into_owned(),
     )
 }
+
+/// Asserts that the CLI refuses `args` with exit 2 and one error line containing `needle`.
+pub fn assert_refused(args: &[&str], needle: &str) {
+    let (code, _, err) = run_cli(args);
+    assert_eq!(code, 2, "{args:?}: {err}");
+    let lines = error_lines(&err);
+    assert_eq!(lines.len(), 1, "{args:?}: {err}");
+    assert!(lines[0].contains(needle), "{args:?}: {err}");
+    assert!(!err.contains("panicked"), "{args:?}: {err}");
+}

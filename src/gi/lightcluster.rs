@@ -1,0 +1,157 @@
+//! The `lightcluster` method (LightCluster, seed 002; docs/methods.md): the VPLs clustered by the
+//! minimum-distance (leader) algorithm on the CPU each frame (§3.1; the paper's §4 runs it on the CPU
+//! too, `cpu::lightcluster::cluster`), then every pixel × every VPL with the visibility of its
+//! cluster's disc from `DISC_SAMPLES` shadow rays (§3.2; `shaders-wgsl/lightcluster.wgsl`). The
+//! passes are `Pass::LightClusterCluster` → `Pass::LightClusterShade` (`pipeline::Plan`).
+
+use std::time::Instant;
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+use super::dispatch::{Gpu, Kernel, Run};
+use super::pipeline::{FrameResources, Pass, RenderSettings, Renderer, gpu};
+use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
+use crate::cpu::lightcluster::{self as twin, LightClusters};
+use crate::gpu::GpuContext;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct LcParams {
+    d_min2: f32,
+    num_vpls: u32,
+    _pad: [u32; 2],
+}
+
+/// The most sorted VPLs one invocation walks per dispatch: at most this many clusters'
+/// `DISC_SAMPLES` rays (256), within lavapipe's loop budget (docs/architecture.md).
+pub const VPLS_PER_DISPATCH: u32 = 32;
+
+/// The kernel of `lightcluster.wgsl`, built the first time a frame uses it.
+pub struct LightCluster {
+    kernel: Kernel,
+}
+
+/// What §3.2's shading reads and writes.
+pub struct ShadeInputs<'a> {
+    pub gbuffer: &'a wgpu::Buffer,
+    pub clusters: &'a LightClusters,
+    /// vec4 a pixel, added to.
+    pub indirect: &'a wgpu::Buffer,
+    pub pixels: u32,
+    /// The G-term clamp distance in the rendered scene's units.
+    pub d_min: f32,
+}
+
+impl LightCluster {
+    pub fn new(ctx: &GpuContext, scene: &SceneGpu) -> Self {
+        let entries = [
+            uniform_layout(1),
+            storage_layout(2, true),
+            storage_layout(3, true),
+            storage_layout(4, true),
+            storage_layout(5, true),
+            storage_layout(6, false),
+        ];
+        LightCluster {
+            kernel: Kernel::new(ctx, scene, "lightcluster", &entries, &[]),
+        }
+    }
+
+    /// §3.2: adds every pixel's light from every VPL, shadowed by its cluster's disc, to
+    /// `indirect`.
+    pub fn record(&self, g: &mut Gpu, i: &ShadeInputs) {
+        let c = i.clusters;
+        let n = c.sorted.len() as u32;
+        if n == 0 || i.pixels == 0 {
+            return;
+        }
+        let ctx = g.ctx;
+        let params = LcParams {
+            d_min2: i.d_min * i.d_min,
+            num_vpls: n,
+            _pad: [0; 2],
+        };
+        let params = ctx.uniform("lightcluster params", &params);
+        let vpls = ctx.storage_init("lightcluster vpls", &c.sorted);
+        let cluster_of = ctx.storage_init("lightcluster cluster_of", &c.cluster_of);
+        let discs: Vec<[[f32; 4]; 2]> = c.discs.iter().map(|d| d.to_gpu()).collect();
+        let discs = ctx.storage_init("lightcluster discs", &discs);
+        let buffers = [
+            (1, &params),
+            (2, i.gbuffer),
+            (3, &vpls),
+            (4, &cluster_of),
+            (5, &discs),
+            (6, i.indirect),
+        ];
+        let bg = self.kernel.bind_group(ctx, &buffers);
+        let run = Run {
+            label: Pass::LightClusterShade.name(),
+            group: &bg,
+            seed: 0,
+        };
+        let pixels = (i.pixels, i.pixels.min(1 << 14));
+        self.kernel
+            .run_2d(g, run, pixels, (n, VPLS_PER_DISPATCH), &mut |_, _| true);
+    }
+}
+
+/// z_far of §3.1.2, the largest view distance: from `eye` to the farthest corner of the bounds.
+pub fn z_far(eye: Vec3, (lo, hi): (Vec3, Vec3)) -> f32 {
+    (0..8)
+        .map(|i| {
+            let corner = Vec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            );
+            corner.distance(eye)
+        })
+        .fold(0.0f32, f32::max)
+}
+
+impl Renderer<'_> {
+    /// Runs one of lightcluster's passes of the frame `r` (`Pass::LightClusterCluster`,
+    /// `LightClusterShade`).
+    pub(super) fn lightcluster_pass(
+        &mut self,
+        pass: Pass,
+        s: &RenderSettings,
+        r: &mut FrameResources,
+    ) {
+        let extent = self.scene.extent();
+        match pass {
+            // §3.1: the VPLs clustered for this camera on the CPU, as the paper's §4 (its time is
+            // the pass's); d_init is in scene diagonals.
+            Pass::LightClusterCluster => {
+                let t = Instant::now();
+                let eye = r.cam.eye_point();
+                let vpls = &self.vpl_set.as_ref().unwrap().set.vpls;
+                let far = z_far(eye, self.scene.bounds());
+                let c = twin::cluster(vpls, eye, far, s.cluster.d_init * extent);
+                r.cpu_ms.push((pass, t.elapsed().as_secs_f64() * 1e3));
+                r.vpl_clusters_used = c.discs.len() as u32;
+                // At most: a cluster's disc rays are traced only where one of its terms is positive.
+                r.rays_per_point = c.discs.len() as u64 * twin::DISC_SAMPLES as u64;
+                r.light_clusters = Some(c);
+            }
+            // §3.2: every pixel × every VPL with its cluster's disc visibility.
+            Pass::LightClusterShade => {
+                let ctx = self.ctx;
+                let lc = self
+                    .lightcluster
+                    .get_or_init(|| LightCluster::new(ctx, &self.gpu));
+                let inputs = ShadeInputs {
+                    gbuffer: &r.gbuffer,
+                    clusters: r.light_clusters.as_ref().expect("lightcluster_cluster ran"),
+                    indirect: &r.indirect,
+                    pixels: r.pixels,
+                    d_min: s.frame.clamp * extent,
+                };
+                lc.record(&mut gpu!(self), &inputs);
+            }
+            _ => unreachable!("{pass} is not lightcluster's"),
+        }
+    }
+}

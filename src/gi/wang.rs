@@ -1,0 +1,413 @@
+//! The `wang` method (Wang et al. 2009, seed 001; docs/methods.md): the shading points clustered
+//! by §3.2's adaptively seeded k-means with the Eq. (2) metric, the indirect irradiance gathered only
+//! at each cluster's sample point (every light with its own shadow ray: `reference.wgsl`), §3.4's
+//! R_j traced there, and every pixel interpolating from the sample points around it with §3.4's
+//! weight. Shaders: `shaders-wgsl/wang.wgsl` (`assign`, `radius`, `interp`); the CPU twin and the
+//! CPU steps (seeding, centre updates, sample points) are `cpu::wang`. The passes are
+//! `Pass::WangCluster` → `Pass::WangGather` → `Pass::WangInterp` (`pipeline::Plan`).
+
+use std::time::{Duration, Instant};
+
+use anyhow::Result;
+use bytemuck::{Pod, Zeroable};
+
+use super::dispatch::{Gpu, Kernel, Run, copy_to_texture, data_texture};
+use super::pipeline::{FrameResources, Pass, RenderSettings, Renderer, gpu};
+use super::reference::GatherInputs;
+use super::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
+use crate::cpu::shading::ShadingPoint;
+use crate::cpu::wang as twin;
+use crate::gpu::GpuContext;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, Default)]
+pub struct WangParams {
+    pub width: u32,
+    pub height: u32,
+    pub k: u32,
+    pub stride: u32,
+    pub alpha: f32,
+    pub seed: u32,
+    pub r_min: f32,
+    pub r_max: f32,
+    pub rays: u32,
+    pub step: u32,
+    pub _pad: [u32; 2],
+}
+
+/// A frame's clustering: the labels on the GPU, the sample points, and what the CPU steps took.
+pub struct WangClustering {
+    pub clusters: twin::WangClusters,
+    /// Per pixel its cluster (u32, `INVALID` for none).
+    pub labels: wgpu::Buffer,
+    /// Per cluster two vec4: the sample point (position, w = 1 when the cluster has one; normal).
+    pub samples: wgpu::Buffer,
+    /// The sample points as shading points of albedo 1 (what the gather reads).
+    pub sample_gbuffer: wgpu::Buffer,
+    /// Clusters with a sample point.
+    pub used: u32,
+    /// Milliseconds of the CPU steps (G-buffer read-back, seeding, centre updates, sample points),
+    /// added to the pass's GPU time.
+    pub cpu_ms: f64,
+}
+
+impl WangClustering {
+    pub fn k(&self) -> u32 {
+        self.clusters.centers.len() as u32
+    }
+}
+
+/// A wang frame's clustering and what its gather left at the sample points (the last frame's is
+/// `Renderer::last_wang`, for tests and views).
+pub struct WangFrame {
+    pub clustering: WangClustering,
+    /// vec4 a sample point: its gathered irradiance times 1/π.
+    pub irradiance: wgpu::Buffer,
+    /// vec4 a sample point: x the summed 1/t of its R_j rays (`cpu::wang::radius_from_sum`).
+    pub radius: wgpu::Buffer,
+}
+
+/// What wang's passes hand on within a frame.
+#[derive(Default)]
+pub(super) struct WangState {
+    clustering: Option<WangClustering>,
+    frame: Option<WangFrame>,
+}
+
+/// The frame's shading points on the GPU and the image's size.
+#[derive(Clone, Copy)]
+pub struct Image<'a> {
+    pub gbuffer: &'a wgpu::Buffer,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// Group 1 of a wang kernel: the parameters, the storage bindings 2, 4, 6, 7, 8 (`None`: a small
+/// buffer of its own, as one buffer may not be bound both read-only and writable in one dispatch)
+/// and the sources of the two data textures as (buffer, texels): the labels (binding 3, u32) and
+/// the points (binding 5, two vec4 a cluster), copied into textures first.
+struct Bindings<'a> {
+    params: WangParams,
+    buffers: [Option<&'a wgpu::Buffer>; 5],
+    labels: Option<(&'a wgpu::Buffer, u32)>,
+    points: Option<(&'a wgpu::Buffer, u32)>,
+}
+
+/// The kernels of `wang.wgsl`, built the first time a frame uses them.
+pub struct Wang {
+    assign: Kernel,
+    radius: Kernel,
+    interp: Kernel,
+}
+
+impl Wang {
+    pub fn new(ctx: &GpuContext, scene: &SceneGpu) -> Self {
+        let entries = [
+            uniform_layout(1),
+            storage_layout(2, true),
+            data_texture_layout(3, wgpu::TextureSampleType::Uint),
+            storage_layout(4, false),
+            data_texture_layout(5, wgpu::TextureSampleType::Float { filterable: false }),
+            storage_layout(6, true),
+            storage_layout(7, false),
+            storage_layout(8, false),
+        ];
+        let k = |entry| Kernel::with_entries(ctx, Some(scene), "wang", &[entry], &entries, &[]);
+        Wang {
+            assign: k("assign"),
+            radius: k("radius"),
+            interp: k("interp"),
+        }
+    }
+
+    fn bind(&self, kernel: &Kernel, ctx: &GpuContext, b: &Bindings) -> wgpu::BindGroup {
+        let p = ctx.uniform("wang params", &b.params);
+        let dummies: Vec<wgpu::Buffer> = (0..5).map(|_| ctx.storage("wang unused", 16)).collect();
+        let mut list: Vec<(u32, &wgpu::Buffer)> = vec![(1, &p)];
+        for (i, buf) in b.buffers.iter().enumerate() {
+            list.push(([2, 4, 6, 7, 8][i], buf.unwrap_or(&dummies[i])));
+        }
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        let mut texture =
+            |src: Option<(&wgpu::Buffer, u32)>, format: wgpu::TextureFormat, bytes| {
+                let texels = src.map_or(1, |s| s.1.max(1)) as u64;
+                let t = data_texture(ctx, "wang data", format, texels);
+                if let Some((buf, n)) = src
+                    && n > 0
+                {
+                    copy_to_texture(&mut enc, buf, &t, n as u64 * bytes);
+                }
+                t.create_view(&Default::default())
+            };
+        let lt = texture(b.labels, wgpu::TextureFormat::R32Uint, 4);
+        let pt = texture(b.points, wgpu::TextureFormat::Rgba32Float, 16);
+        ctx.queue.submit([enc.finish()]);
+        kernel.bind_group_with_textures(ctx, &list, &[(3, &lt), (5, &pt)])
+    }
+
+    /// Assignment passes (`assign`) on the GPU, one per stride of `run` in order, with its centres:
+    /// its labels in, the labels after the last pass out (read back once). The passes ping-pong
+    /// between two label buffers.
+    pub fn assign_passes(
+        &self,
+        g: &mut Gpu,
+        img: Image,
+        run: &twin::AssignRun,
+    ) -> Result<Vec<u32>> {
+        let ctx = g.ctx;
+        let (width, height) = (img.width, img.height);
+        let n = width * height;
+        // Both start as the run's labels: a pass writes the grid's pixels only, the others keep theirs.
+        let mut a = ctx.storage_init("wang labels a", run.labels);
+        let mut b = ctx.storage_init("wang labels b", run.labels);
+        let step = run.step.max(1);
+        let items = width.div_ceil(step) * height.div_ceil(step);
+        let pts: Vec<[[f32; 4]; 2]> = run.centers.iter().map(|c| c.to_gpu()).collect();
+        let pts = ctx.storage_init("wang centres", &or_one(&pts));
+        for &stride in run.strides {
+            let bg = self.bind(
+                &self.assign,
+                ctx,
+                &Bindings {
+                    params: WangParams {
+                        width,
+                        height,
+                        k: run.centers.len() as u32,
+                        stride,
+                        alpha: run.alpha,
+                        step,
+                        ..Default::default()
+                    },
+                    buffers: [Some(img.gbuffer), Some(&b), None, None, None],
+                    labels: Some((&a, n)),
+                    points: Some((&pts, 2 * run.centers.len() as u32)),
+                },
+            );
+            let run = Run {
+                label: Pass::WangCluster.name(),
+                group: &bg,
+                seed: 0,
+            };
+            self.assign.run(g, run, items, 1 << 18, &mut |_, _| {});
+            std::mem::swap(&mut a, &mut b);
+        }
+        ctx.read_buffer(&a, n as usize)
+    }
+
+    /// §3.2: the clustering of the frame's shading points into `k` clusters, the GPU doing the
+    /// assignment passes and the CPU the rest (`cpu::wang::cluster`); `alpha` is α per unit of length.
+    pub fn cluster(
+        &self,
+        g: &mut Gpu,
+        img: Image,
+        k: u32,
+        alpha: f32,
+        iterations: u32,
+        seed: u32,
+    ) -> Result<WangClustering> {
+        let ctx = g.ctx;
+        let n = img.width * img.height;
+        let mut cpu = Duration::ZERO;
+        let t = Instant::now();
+        let raw: Vec<[f32; 4]> = ctx.read_buffer(img.gbuffer, n as usize * 4)?;
+        let sps: Vec<ShadingPoint> = raw.chunks(4).map(ShadingPoint::from_gpu).collect();
+        cpu += t.elapsed();
+        let mut clock = Instant::now();
+        let cpu_img = twin::Image {
+            width: img.width,
+            height: img.height,
+            sps: &sps,
+        };
+        let clusters = twin::cluster(cpu_img, k, alpha, iterations, seed, &mut |run| {
+            cpu += clock.elapsed();
+            let out = self.assign_passes(g, img, run);
+            clock = Instant::now();
+            out
+        })?;
+        let t = Instant::now();
+        let samples = twin::sample_to_gpu(&sps, &clusters.samples);
+        let sample_gbuffer = twin::sample_gbuffer(&sps, &clusters.samples);
+        let used = clusters
+            .samples
+            .iter()
+            .filter(|&&s| s != twin::INVALID)
+            .count() as u32;
+        let labels = ctx.storage_init("wang labels", &or_one(&clusters.labels));
+        let samples = ctx.storage_init("wang samples", &or_one(&samples));
+        let sample_gbuffer = ctx.storage_init("wang sample gbuffer", &or_one(&sample_gbuffer));
+        cpu += clock.elapsed() + t.elapsed();
+        Ok(WangClustering {
+            clusters,
+            labels,
+            samples,
+            sample_gbuffer,
+            used,
+            cpu_ms: cpu.as_secs_f64() * 1e3,
+        })
+    }
+
+    /// §3.4's R_j at every sample point: `RADIUS_RAYS` rays each, `RADIUS_RAYS_PER_DISPATCH` an
+    /// invocation per dispatch. Returns the summed inverse distances (vec4 a sample, x).
+    pub fn radius(&self, g: &mut Gpu, c: &WangClustering, seed: u32) -> wgpu::Buffer {
+        let ctx = g.ctx;
+        let k = c.k().max(1);
+        let sums = ctx.storage("wang radius", k as u64 * 16);
+        let bg = self.bind(
+            &self.radius,
+            ctx,
+            &Bindings {
+                params: WangParams {
+                    k,
+                    seed,
+                    ..Default::default()
+                },
+                buffers: [None, None, None, None, Some(&sums)],
+                labels: None,
+                points: Some((&c.samples, 2 * c.k())),
+            },
+        );
+        let run = Run {
+            label: Pass::WangGather.name(),
+            group: &bg,
+            seed: 0,
+        };
+        let rays = (twin::RADIUS_RAYS, twin::RADIUS_RAYS_PER_DISPATCH);
+        self.radius
+            .run_2d(g, run, (k, 1 << 14), rays, &mut |_, _| true);
+        sums
+    }
+
+    /// §3.4's interpolation of `f`'s sample points into `indirect` (vec4 a pixel, written);
+    /// `diagonal` bounds R_j (`cpu::wang::radius_from_sum`).
+    pub fn interp(
+        &self,
+        g: &mut Gpu,
+        img: Image,
+        f: &WangFrame,
+        diagonal: f32,
+        indirect: &wgpu::Buffer,
+    ) {
+        let n = img.width * img.height;
+        let c = &f.clustering;
+        let bg = self.bind(
+            &self.interp,
+            g.ctx,
+            &Bindings {
+                params: WangParams {
+                    width: img.width,
+                    height: img.height,
+                    k: c.k(),
+                    stride: twin::interp_stride(n, c.k()),
+                    r_min: twin::RADIUS_MIN * diagonal,
+                    r_max: diagonal,
+                    rays: twin::RADIUS_RAYS,
+                    ..Default::default()
+                },
+                buffers: [
+                    Some(img.gbuffer),
+                    None,
+                    Some(&f.irradiance),
+                    Some(indirect),
+                    Some(&f.radius),
+                ],
+                labels: Some((&c.labels, n)),
+                points: Some((&c.samples, 2 * c.k())),
+            },
+        );
+        let run = Run {
+            label: Pass::WangInterp.name(),
+            group: &bg,
+            seed: 0,
+        };
+        self.interp.run(g, run, n, 1 << 18, &mut |_, _| {});
+    }
+}
+
+/// A storage buffer may not be empty: `v`, or one zeroed element.
+fn or_one<T: Pod>(v: &[T]) -> Vec<T> {
+    if v.is_empty() {
+        vec![T::zeroed()]
+    } else {
+        v.to_vec()
+    }
+}
+
+impl Renderer<'_> {
+    /// Runs one of wang's passes of the frame `r` (`Pass::WangCluster`, `WangGather`, `WangInterp`).
+    pub(super) fn wang_pass(
+        &mut self,
+        pass: Pass,
+        s: &RenderSettings,
+        r: &mut FrameResources,
+    ) -> Result<()> {
+        let ctx = self.ctx;
+        let wang = self.wang.get_or_init(|| Wang::new(ctx, &self.gpu));
+        let img = Image {
+            gbuffer: &r.gbuffer,
+            width: s.frame.width,
+            height: s.frame.height,
+        };
+        let extent = self.scene.extent();
+        match pass {
+            // §3.2: the SP clustering and its sample points.
+            Pass::WangCluster => {
+                let c = &s.cluster;
+                let alpha = c.wang_alpha / extent;
+                let w = wang.cluster(
+                    &mut gpu!(self),
+                    img,
+                    c.sp_clusters,
+                    alpha,
+                    c.iterations,
+                    s.frame.seed,
+                )?;
+                if std::env::var_os("FVPL_PROFILE_STEPS").is_some() {
+                    eprintln!(
+                        "wang_cluster: {:.1} ms of CPU steps, {} assignment passes",
+                        w.cpu_ms, w.clusters.passes
+                    );
+                }
+                r.cpu_ms.push((pass, w.cpu_ms));
+                r.sp_used = w.used;
+                r.wang.clustering = Some(w);
+            }
+            // The irradiance at the sample points (every light with its own shadow ray: the gather
+            // of `reference.wgsl` on shading points of albedo 1) and §3.4's R_j there.
+            Pass::WangGather => {
+                let c = r.wang.clustering.take().expect("wang_cluster ran");
+                let lights = &self.lights.as_ref().unwrap().list;
+                let num_lights = lights.lights.len() as u32;
+                let irradiance = ctx.storage("wang irradiance", c.k().max(1) as u64 * 16);
+                self.reference.record(
+                    &mut gpu!(self),
+                    &GatherInputs {
+                        gbuffer: &c.sample_gbuffer,
+                        lights: &lights.buffer,
+                        num_lights,
+                        indirect: &irradiance,
+                        pixels: c.k(),
+                        d_min: s.frame.clamp * extent,
+                        label: pass.name(),
+                    },
+                    &mut |_, _| true,
+                );
+                let radius = wang.radius(&mut gpu!(self), &c, s.frame.seed);
+                r.indirect_rays = c.used as u64 * (num_lights + twin::RADIUS_RAYS) as u64;
+                r.wang.frame = Some(WangFrame {
+                    clustering: c,
+                    irradiance,
+                    radius,
+                });
+            }
+            // §3.4: every pixel interpolates the sample points' irradiance; the frame's clustering
+            // stays as `last_wang`.
+            Pass::WangInterp => {
+                let f = r.wang.frame.take().expect("wang_gather ran");
+                wang.interp(&mut gpu!(self), img, &f, extent, &r.indirect);
+                self.last_wang = Some(f);
+            }
+            _ => unreachable!("{pass} is not wang's"),
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,310 @@
+//! The methods beside Colom's (`--method`, docs/methods.md): each GPU pass against its CPU twin on a
+//! small frame, finite output with sane light on the built-in rooms, and bad knob values at the CLI.
+
+mod common;
+
+use fuzzy_vpl::cpu::shading::ShadingPoint;
+use fuzzy_vpl::cpu::wang as twin;
+use fuzzy_vpl::gi::pipeline::{Pass, RenderSettings, Renderer};
+use fuzzy_vpl::metrics;
+use fuzzy_vpl::scene;
+use fuzzy_vpl::settings::{ClusterSettings, FrameSettings, Method};
+use glam::Vec3;
+
+fn settings(method: Method, w: u32, h: u32) -> RenderSettings {
+    RenderSettings {
+        frame: FrameSettings {
+            width: w,
+            height: h,
+            vpls: 512,
+            direct_samples: 4,
+            ..Default::default()
+        },
+        cluster: ClusterSettings {
+            method,
+            vpl_clusters: 64,
+            sp_clusters: 24,
+            iterations: 3,
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
+/// The built-in rooms with their names.
+fn rooms() -> impl Iterator<Item = (&'static str, scene::Scene)> {
+    ["builtin:cornell", "builtin:conference"]
+        .into_iter()
+        .map(|n| (n, scene::load(n).unwrap()))
+}
+
+/// The last frame's shading points.
+fn shading_points(r: &Renderer) -> Vec<ShadingPoint> {
+    r.last_gbuffer()
+        .unwrap()
+        .chunks(4)
+        .map(ShadingPoint::from_gpu)
+        .collect()
+}
+
+fn close(a: Vec3, b: Vec3, rel: f32) -> bool {
+    (a - b).abs().max_element() <= rel * (1.0 + a.abs().max_element())
+}
+
+/// wang: the GPU's clustering (assignment passes), gather at the sample points, R_j and
+/// interpolation equal the CPU twins (`cpu::wang`, `cpu::vpl`) on a 40×30 frame of each room.
+#[test]
+fn wang_matches_cpu_twin() {
+    let ctx = common::gpu();
+    for (name, s) in rooms() {
+        let mut r = Renderer::new(&ctx, &s).unwrap();
+        let (w, h) = (40u32, 30u32);
+        let fs = settings(Method::Wang, w, h);
+        let f = r.render(&s.default_camera(), &fs).unwrap();
+        assert!(
+            f.ran(Pass::WangCluster) && f.ran(Pass::WangInterp),
+            "{name}"
+        );
+        assert!(!f.ran(Pass::SpCluster) && !f.ran(Pass::Shade), "{name}");
+        assert!(common::all_finite(&f.radiance), "{name}");
+        let sps = shading_points(&r);
+        let wf = r.last_wang.as_ref().unwrap();
+        let c = &wf.clustering.clusters;
+        let alpha = fs.cluster.wang_alpha / s.extent();
+        // The whole clustering on the CPU (seeding and updates are the same code; the assignment
+        // passes are the twin's).
+        let img = twin::Image {
+            width: w,
+            height: h,
+            sps: &sps,
+        };
+        let cpu = twin::cluster(img, 24, alpha, 3, fs.frame.seed, &mut |run| {
+            Ok(twin::assign_passes(img, run))
+        })
+        .unwrap();
+        let same = cpu
+            .labels
+            .iter()
+            .zip(&c.labels)
+            .filter(|(a, b)| a == b)
+            .count();
+        assert!(
+            same * 100 >= 99 * sps.len(),
+            "{name}: {same} of {} labels agree",
+            sps.len()
+        );
+        assert_eq!(c.passes, cpu.passes);
+        let k = c.centers.len();
+        assert_eq!(k, 24, "{name}");
+        // Every valid pixel has a cluster, each cluster's sample point is one of its members.
+        for (m, sp) in sps.iter().enumerate() {
+            assert_eq!(sp.valid, c.labels[m] != twin::INVALID, "{name}: pixel {m}");
+        }
+        for (j, &p) in c.samples.iter().enumerate() {
+            if p != twin::INVALID {
+                assert_eq!(c.labels[p as usize], j as u32);
+            }
+        }
+        // Gather at the sample points: Eq. (5) with albedo 1 over the VPL clusters.
+        let lights = &r.lights.as_ref().unwrap().list.lights;
+        let cs = common::cpu_scene(&r, &s);
+        let d_min = fs.frame.clamp * s.extent();
+        let irr: Vec<[f32; 4]> = ctx.read_buffer(&wf.irradiance, k).unwrap();
+        let sums: Vec<[f32; 4]> = ctx.read_buffer(&wf.radius, k).unwrap();
+        let mut radius = Vec::new();
+        let mut samples = Vec::new();
+        let mut bad_r = 0;
+        for (j, &p) in c.samples.iter().enumerate() {
+            if p == twin::INVALID {
+                radius.push(1.0);
+                samples.push((Vec3::ZERO, Vec3::ZERO, false));
+                continue;
+            }
+            let sp = ShadingPoint {
+                albedo: Vec3::ONE,
+                ..sps[p as usize]
+            };
+            let want = cs.reference_indirect(&sp, lights, d_min * d_min);
+            let got = Vec3::new(irr[j][0], irr[j][1], irr[j][2]);
+            assert!(
+                close(want, got, 1e-3),
+                "{name}: sample {j}: {want} vs {got}"
+            );
+            let rw = twin::harmonic_radius(&cs, sp.pos, sp.normal, j as u32, fs.frame.seed);
+            let rg = twin::radius_from_sum(sums[j][0], s.extent());
+            if (rw - rg).abs() > 1e-3 * rw {
+                bad_r += 1;
+            }
+            radius.push(rg);
+            samples.push((sp.pos, sp.normal, true));
+        }
+        assert!(bad_r <= 1, "{name}: {bad_r} R_j differ");
+        // Interpolation from the GPU's own labels, samples, R_j and irradiance.
+        let e: Vec<Vec3> = irr.iter().map(|v| Vec3::new(v[0], v[1], v[2])).collect();
+        let at = twin::Samples {
+            labels: &c.labels,
+            points: &samples,
+            radius: &radius,
+            irradiance: &e,
+            stride: twin::interp_stride(w * h, k as u32),
+        };
+        let mut bad = 0;
+        for (m, sp) in sps.iter().enumerate() {
+            let want = twin::interpolate(w, h, m as u32, sp, &at);
+            if !close(want, Vec3::from(f.indirect[m]), 1e-3) {
+                bad += 1;
+            }
+        }
+        assert!(bad * 100 <= sps.len(), "{name}: {bad} pixels differ");
+    }
+}
+
+/// lightcluster: the GPU's shading (every pixel × every VPL with its cluster's disc visibility)
+/// equals the CPU twin given the same clusters, and the clusters are the leader algorithm's.
+#[test]
+fn lightcluster_matches_cpu_twin() {
+    use fuzzy_vpl::cpu::lightcluster as lc;
+    let ctx = common::gpu();
+    for (name, s) in rooms() {
+        let mut r = Renderer::new(&ctx, &s).unwrap();
+        let (w, h) = (24u32, 18u32);
+        let mut fs = settings(Method::LightCluster, w, h);
+        fs.frame.vpls = 256;
+        fs.cluster.d_init = 0.5;
+        let cam = s.default_camera();
+        let f = r.render(&cam, &fs).unwrap();
+        assert!(
+            f.ran(Pass::LightClusterShade) && !f.ran(Pass::VplCluster),
+            "{name}"
+        );
+        assert!(common::all_finite(&f.radiance), "{name}");
+        let sps = shading_points(&r);
+        let vpls = &r.vpl_set.as_ref().unwrap().set.vpls;
+        let eye = cam.transform.w_axis.truncate();
+        let z_far = fuzzy_vpl::gi::lightcluster::z_far(eye, s.bounds());
+        let c = lc::cluster(vpls, eye, z_far, 0.5 * s.extent());
+        assert_eq!(f.vpl_clusters_used as usize, c.discs.len(), "{name}");
+        assert!(c.discs.len() > 1 && c.discs.len() < vpls.len(), "{name}");
+        let cs = common::cpu_scene(&r, &s);
+        let d_min = fs.frame.clamp * s.extent();
+        let bad = sps
+            .iter()
+            .enumerate()
+            .filter(|(m, sp)| {
+                let want = lc::shade(&cs, sp, &c, d_min * d_min);
+                !close(want, Vec3::from(f.indirect[*m]), 1e-3)
+            })
+            .count();
+        assert!(bad * 100 <= sps.len(), "{name}: {bad} pixels differ");
+    }
+}
+
+/// Every method renders both built-in rooms with finite output and a mean luminance within 20% of
+/// the reference's (the target, here at 64×48 with 512 VPLs).
+#[test]
+fn every_method_has_sane_light_on_the_built_in_rooms() {
+    let ctx = common::gpu();
+    for (name, s) in rooms() {
+        let mut r = Renderer::new(&ctx, &s).unwrap();
+        let reference = RenderSettings {
+            reference: true,
+            ..settings(Method::Colom, 64, 48)
+        };
+        let refl = r.render(&s.default_camera(), &reference).unwrap();
+        let lum_ref = metrics::mean_luminance(&refl.radiance);
+        for method in Method::ALL {
+            let mut fs = settings(method, 64, 48);
+            fs.cluster.sp_clusters = 64;
+            let f = r.render(&s.default_camera(), &fs).unwrap();
+            assert!(common::all_finite(&f.radiance), "{name} {method}");
+            let lum = metrics::mean_luminance(&f.radiance);
+            assert!(
+                (lum - lum_ref).abs() <= 0.2 * lum_ref,
+                "{name} {method}: mean luminance {lum} vs reference {lum_ref}"
+            );
+            let mse = metrics::mse(&f.radiance, &refl.radiance);
+            println!("{name} {method}: luminance {lum:.4} (ref {lum_ref:.4}), MSE {mse:.3e}");
+        }
+    }
+}
+
+/// Bad method knobs exit 2 with one line naming the option.
+#[test]
+fn bad_method_knobs_exit_2_with_one_line() {
+    let d = common::scratch("methods-cli");
+    let o = d.join("o.png").display().to_string();
+    let b = d.join("b").display().to_string();
+    for (a, needle) in [
+        (vec!["render", "-o", &o, "--method", "foo"], "--method"),
+        (
+            vec!["render", "-o", &o, "--wang-alpha", "0"],
+            "--wang-alpha",
+        ),
+        (
+            vec!["render", "-o", &o, "--wang-alpha", "-1"],
+            "--wang-alpha",
+        ),
+        (
+            vec!["bench", "--out-dir", &b, "--methods", "colom,x"],
+            "--methods",
+        ),
+        (
+            vec!["bench", "--out-dir", &b, "--wang-alpha", "0,0.3"],
+            "--wang-alpha",
+        ),
+        (vec!["render", "-o", &o, "--d-init", "0"], "--d-init"),
+        (vec!["render", "-o", &o, "--d-init", "-0.5"], "--d-init"),
+        (vec!["render", "-o", &o, "--d-init", "NaN"], "--d-init"),
+        (
+            vec!["bench", "--out-dir", &b, "--d-init", "1,0"],
+            "--d-init",
+        ),
+    ] {
+        common::assert_refused(&a, needle);
+    }
+}
+
+/// `bench --methods`: a row per method configuration with its `method` column, `indirect_ms` the
+/// frame less primary and direct, and `methods.png` with every method's front.
+#[test]
+fn bench_compares_the_methods() {
+    let d = common::scratch("bench-methods");
+    let (code, _, err) = common::run_cli(&[
+        "bench",
+        "builtin:cornell",
+        "--out-dir",
+        d.to_str().unwrap(),
+        "--methods",
+        "colom,wang,lightcluster",
+        "--modes",
+        "weighted",
+        "--pairs",
+        "24/32",
+        "--d-init",
+        "2",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--vpls",
+        "256",
+        "--repeat",
+        "1",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(d.join("results.csv")).unwrap();
+    let rows = fuzzy_vpl::bench::csv::from_csv(&text).unwrap();
+    let methods: Vec<Method> = rows.iter().map(|r| r.method).collect();
+    assert_eq!(methods, Method::ALL);
+    let modes: Vec<&str> = rows.iter().map(|r| r.mode.as_str()).collect();
+    assert_eq!(modes, ["weighted", "wang", "lightcluster"]);
+    for r in &rows {
+        assert!(r.mse.is_finite() && r.indirect_ms > 0.0, "{r:?}");
+        let want = r.frame_ms() - r.stage("primary") - r.stage("direct");
+        assert!((r.indirect_ms - want).abs() <= 1e-6 * r.frame_ms(), "{r:?}");
+    }
+    assert!(rows[2].vpl_clusters_used > 0, "{:?}", rows[2]);
+    let img = image::open(d.join("methods.png")).unwrap();
+    assert!(img.width() > 100);
+    let _ = std::fs::remove_dir_all(&d);
+}
