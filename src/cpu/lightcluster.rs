@@ -15,7 +15,7 @@
 
 use glam::Vec3;
 
-use super::shading::{CpuScene, ShadingPoint};
+use super::shading::{CpuScene, ShadingPoint, onb};
 use super::vpl::eq5_vpl_radiance;
 use crate::gi::vpl_trace::Vpl;
 
@@ -137,12 +137,7 @@ pub fn cluster(vpls: &[Vpl], eye: Vec3, z_far: f32, d_init: f32) -> LightCluster
 /// The `DISC_SAMPLES` points of a disc the visibility rays aim at: a Vogel (golden-angle) spiral,
 /// r = R √((i + ½) / N), θ = 2.39996 i, in the disc's plane (Duff et al.'s basis of its normal).
 pub fn disc_points(d: &Disc) -> Vec<Vec3> {
-    let n = d.normal;
-    let s = if n.z >= 0.0 { 1.0 } else { -1.0 };
-    let a = -1.0 / (s + n.z);
-    let b = n.x * n.y * a;
-    let t = Vec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
-    let bt = Vec3::new(b, s + n.y * n.y * a, -n.y);
+    let (t, bt) = onb(d.normal);
     (0..DISC_SAMPLES)
         .map(|i| {
             let r = d.radius * ((i as f32 + 0.5) / DISC_SAMPLES as f32).sqrt();

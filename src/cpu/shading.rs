@@ -297,3 +297,14 @@ impl<'a> CpuScene<'a> {
         )
     }
 }
+
+/// Twin of `common/sampling.wgsl`'s `onb`: the two tangents completing unit normal `n` to an
+/// orthonormal basis (Duff et al. 2017; cosine rays, disc points).
+pub fn onb(n: Vec3) -> (Vec3, Vec3) {
+    let s = if n.z >= 0.0 { 1.0 } else { -1.0 };
+    let a = -1.0 / (s + n.z);
+    let b = n.x * n.y * a;
+    let t = Vec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
+    let bt = Vec3::new(b, s + n.y * n.y * a, -n.y);
+    (t, bt)
+}

@@ -21,7 +21,7 @@
 use glam::Vec3;
 
 use super::rng::{rng_next, rng_seed};
-use super::shading::{CpuScene, ShadingPoint};
+use super::shading::{CpuScene, ShadingPoint, onb};
 
 pub const INVALID: u32 = u32::MAX;
 
@@ -501,22 +501,17 @@ pub fn sample_to_gpu(sps: &[ShadingPoint], samples: &[u32]) -> Vec<[[f32; 4]; 2]
 }
 
 /// The sample points as shading points with albedo 1 (what the gather at the sample points reads:
-/// their irradiance times 1/π, `reference.wgsl` with ρ = 1/π).
+/// their irradiance times 1/π, `reference.wgsl` with ρ = 1/π); an empty cluster's all zero.
 pub fn sample_gbuffer(sps: &[ShadingPoint], samples: &[u32]) -> Vec<[[f32; 4]; 4]> {
-    samples
-        .iter()
-        .map(|&m| {
-            if m == INVALID {
-                [[0.0; 4]; 4]
+    sample_to_gpu(sps, samples)
+        .into_iter()
+        .map(|[p, n]| {
+            let albedo = if p[3] > 0.0 {
+                [1.0, 1.0, 1.0, 0.0]
             } else {
-                let s = &sps[m as usize];
-                [
-                    s.pos.extend(1.0).to_array(),
-                    s.normal.extend(0.0).to_array(),
-                    [1.0, 1.0, 1.0, 0.0],
-                    [0.0; 4],
-                ]
-            }
+                [0.0; 4]
+            };
+            [p, n, albedo, [0.0; 4]]
         })
         .collect()
 }
@@ -552,11 +547,7 @@ pub fn harmonic_radius(cpu: &CpuScene, p: Vec3, n: Vec3, j: u32, seed: u32) -> f
 
 /// Twin of `common/sampling.wgsl`'s `cosine_hemisphere` (Duff et al.'s basis).
 pub fn cosine_hemisphere(n: Vec3, u1: f32, u2: f32) -> Vec3 {
-    let s = if n.z >= 0.0 { 1.0 } else { -1.0 };
-    let a = -1.0 / (s + n.z);
-    let b = n.x * n.y * a;
-    let t = Vec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
-    let bt = Vec3::new(b, s + n.y * n.y * a, -n.y);
+    let (t, bt) = onb(n);
     let r = u1.sqrt();
     let phi = 2.0 * std::f32::consts::PI * u2;
     let l = Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u1).max(0.0).sqrt());
