@@ -4,7 +4,7 @@
 use std::sync::atomic::Ordering;
 
 use egui::{Color32, Key, PointerButton, RichText, Sense, Slider, Ui};
-use egui_plot::{Legend, Plot, Points};
+use egui_plot::{Plot, Points};
 
 use super::Viewer;
 use super::camera::Mode as CamMode;
@@ -12,16 +12,21 @@ use super::settings::Bookmark;
 use super::views::View;
 use crate::settings::Weighting;
 
-pub const PANEL_WIDTH: f32 = 310.0;
+pub const PANEL_WIDTH: f32 = 380.0;
 
 impl Viewer {
     /// The whole window's UI.
     pub fn ui(&mut self, ui: &mut Ui) {
         egui::Panel::left("panel")
-            .resizable(false)
-            .exact_size(PANEL_WIDTH)
+            .resizable(true)
+            .default_size(PANEL_WIDTH)
+            .size_range(PANEL_WIDTH * 0.8..=PANEL_WIDTH * 3.0)
             .show(ui, |ui| {
-                egui::ScrollArea::vertical().show(ui, |ui| self.panel(ui));
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    // Long lines wrap instead of being cut at the panel's edge.
+                    ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Wrap);
+                    self.panel(ui)
+                });
             });
         egui::CentralPanel::no_frame()
             .frame(egui::Frame::NONE.fill(Color32::from_gray(20)))
@@ -228,6 +233,20 @@ impl Viewer {
                     ui.checkbox(&mut s.vpl_on, "VPL clustering");
                     ui.checkbox(&mut s.direct_on, "direct");
                 });
+                ui.horizontal(|ui| {
+                    let mut on = s.cluster.target_ms.is_some();
+                    ui.checkbox(&mut on, "time budget")
+                        .on_hover_text("K_SP and K_VPL chosen to hold this GPU time a frame");
+                    let mut ms = s.cluster.target_ms.unwrap_or(500.0);
+                    ui.add_enabled(
+                        on,
+                        egui::DragValue::new(&mut ms)
+                            .range(1.0..=100_000.0)
+                            .speed(5.0)
+                            .suffix(" ms"),
+                    );
+                    s.cluster.target_ms = on.then_some(ms);
+                });
                 ui.checkbox(&mut s.cluster.temporal, "temporal reuse").on_hover_text(
                     "Reproject the last frame while moving, start the clusterings from the last \
                      frame's, accumulate the direct light at rest (docs/temporal.md)",
@@ -325,12 +344,13 @@ impl Viewer {
         egui::CollapsingHeader::new("Stats")
             .default_open(true)
             .show(ui, |ui| {
-                let fps = if self.ui_dt > 0.0 {
-                    1.0 / self.ui_dt
+                // The window redraws only on input or a new frame: a long gap before this frame
+                // means it was idle, not slow.
+                if self.ui_dt > 0.5 || self.ui_dt <= 0.0 {
+                    ui.label("UI idle (redraws on input or a new frame)");
                 } else {
-                    0.0
-                };
-                ui.label(format!("UI {fps:.0} fps"));
+                    ui.label(format!("UI {:.0} fps", 1.0 / self.ui_dt));
+                }
                 let Some(r) = &self.latest else {
                     ui.label("no GI frame yet");
                     return;
@@ -345,12 +365,26 @@ impl Viewer {
                     r.wall_ms,
                     if busy { " (next one rendering…)" } else { "" }
                 ));
-                if let Some((mse, rel)) = self.live_error {
+                if let Some(t) = r.job.settings.cluster.target_ms {
+                    let c = &r.job.settings.cluster;
+                    ui.label(format!(
+                        "time budget {t:.0} ms: K_SP {} · K_VPL {}{}",
+                        c.sp_clusters,
+                        c.vpl_clusters,
+                        if r.job.preview { " (moving)" } else { "" }
+                    ));
+                }
+                if let Some(e) = self.live_error {
                     ui.label(
-                        RichText::new(format!("MSE {mse:.3e} · rel MSE {rel:.3e}"))
-                            .color(Color32::LIGHT_GREEN),
+                        RichText::new(format!(
+                            "MSE {:.3e} · rel MSE {:.3e} · FLIP {:.4}",
+                            e.mse, e.rel_mse, e.flip
+                        ))
+                        .color(Color32::LIGHT_GREEN),
                     );
                 }
+                // Pass names and times on one line each (the panel's wrapping would break them).
+                ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Extend);
                 egui::Grid::new("timings").striped(true).show(ui, |ui| {
                     for p in f
                         .passes
@@ -364,6 +398,7 @@ impl Viewer {
                         ui.end_row();
                     }
                 });
+                ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Wrap);
                 ui.label(format!(
                     "VPLs {} · SPs {} · SP clusters {} · VPL clusters {}",
                     f.vpls, f.shading_points, f.sp_clusters_used, f.vpl_clusters_used
@@ -419,48 +454,181 @@ impl Viewer {
                         {
                             self.start_reference();
                         }
-                        if let Some(r) = &self.reference {
+                        if let Some(r) = &self.reference
+                            && r.image.is_some()
+                        {
                             ui.label(format!(
-                                "reference {}×{} in {:.1} s (moving the camera drops it)",
+                                "reference {}×{} in {:.1} s",
                                 r.job.settings.frame.width, r.job.settings.frame.height, r.secs
                             ));
                         }
                     }
                 }
+                let here = self
+                    .latest
+                    .as_ref()
+                    .is_some_and(|r| self.reference_for_view(r));
+                ui.label(
+                    RichText::new(format!(
+                        "{} reference(s) kept, one per view and reference setting{}",
+                        self.refs.len(),
+                        if here { "; this view has one" } else { "" }
+                    ))
+                    .small(),
+                );
+                let was = self.refs_on_disk;
+                ui.checkbox(
+                    &mut self.refs_on_disk,
+                    "keep references as EXR beside the scene",
+                )
+                .on_hover_text(
+                    self.refs_dir()
+                        .map_or("no folder for this scene".into(), |d| {
+                            d.display().to_string()
+                        }),
+                );
+                if self.refs_on_disk && !was {
+                    self.refs_missing.clear();
+                }
                 if !self.points.is_empty() {
-                    let mut series: Vec<&str> =
-                        self.points.iter().map(|p| p.series.as_str()).collect();
-                    series.sort();
-                    series.dedup();
-                    let items: Vec<Points> = series
-                        .iter()
-                        .map(|name| {
-                            let pts: Vec<[f64; 2]> = self
-                                .points
-                                .iter()
-                                .filter(|p| p.series == *name)
-                                .map(|p| [p.ms, p.mse])
-                                .collect();
-                            Points::new(*name, pts).radius(4.0)
-                        })
-                        .collect();
-                    Plot::new("error_plot")
-                        .height(180.0)
-                        .legend(Legend::default())
-                        .x_axis_label("GPU ms")
-                        .y_axis_label("MSE")
-                        .show(ui, |p| {
-                            for it in items {
-                                p.points(it);
-                            }
-                        });
-                    if ui.small_button("clear plot").clicked() {
-                        self.points.clear();
-                    }
+                    self.error_plot(ui);
                 }
             });
     }
 
+    /// Time against error, one series per mode: log axes, re-fitted whenever points arrive; the
+    /// wheel and drags zoom and pan only with "zoom" ticked; the legend below the plot.
+    fn error_plot(&mut self, ui: &mut Ui) {
+        ui.horizontal(|ui| {
+            ui.selectable_value(&mut self.plot_flip, false, "MSE");
+            ui.selectable_value(&mut self.plot_flip, true, "FLIP");
+            ui.checkbox(&mut self.plot_zoom, "zoom");
+            if ui.small_button("clear").clicked() {
+                self.points.clear();
+            }
+        });
+        if self.points.is_empty() {
+            return;
+        }
+        let mut series: Vec<&str> = self.points.iter().map(|p| p.series.as_str()).collect();
+        series.sort();
+        series.dedup();
+        let flip = self.plot_flip;
+        let items: Vec<(String, Color32, Vec<[f64; 2]>)> = series
+            .iter()
+            .enumerate()
+            .map(|(i, name)| {
+                let pts = self
+                    .points
+                    .iter()
+                    .filter(|p| p.series == *name)
+                    .map(|p| {
+                        let e = if flip { p.flip } else { p.mse };
+                        [p.ms.max(1e-3).log10(), e.max(1e-12).log10()]
+                    })
+                    .collect();
+                (name.to_string(), series_colour(i), pts)
+            })
+            .collect();
+        let refit = self.points.len() != self.plot_fitted || !self.plot_zoom;
+        self.plot_fitted = self.points.len();
+        let zoom = self.plot_zoom;
+        let mut plot = Plot::new("error_plot")
+            .height(200.0)
+            .x_axis_label("GPU ms (log)")
+            .y_axis_label(if flip { "FLIP (log)" } else { "MSE (log)" })
+            .x_grid_spacer(log_marks)
+            .y_grid_spacer(log_marks)
+            .x_axis_formatter(|m, _| pow10_label(m.value))
+            .y_axis_formatter(|m, _| pow10_label(m.value))
+            .label_formatter(move |h| match h {
+                egui_plot::HoverPosition::NearDataPoint {
+                    plot_name,
+                    position: p,
+                    ..
+                } => Some(format!(
+                    "{plot_name}\n{} ms, {} {}",
+                    pow10_label(p.x),
+                    if flip { "FLIP" } else { "MSE" },
+                    pow10_label(p.y)
+                )),
+                egui_plot::HoverPosition::Elsewhere { .. } => None,
+            })
+            .allow_zoom(zoom)
+            .allow_scroll(zoom)
+            .allow_drag(zoom)
+            .allow_boxed_zoom(zoom)
+            .auto_bounds(egui::Vec2b::new(true, true));
+        if refit {
+            plot = plot.reset();
+        }
+        plot.show(ui, |p| {
+            for (name, colour, pts) in &items {
+                p.points(
+                    Points::new(name.as_str(), pts.clone())
+                        .radius(4.0)
+                        .color(*colour),
+                );
+            }
+        });
+        ui.horizontal_wrapped(|ui| {
+            for (name, colour, _) in &items {
+                ui.label(RichText::new(format!("● {name}")).color(*colour).small());
+            }
+        });
+    }
+}
+
+/// The plot's series colours.
+fn series_colour(i: usize) -> Color32 {
+    const C: [Color32; 6] = [
+        Color32::from_rgb(240, 120, 60),
+        Color32::from_rgb(80, 170, 255),
+        Color32::from_rgb(120, 220, 110),
+        Color32::from_rgb(230, 200, 60),
+        Color32::from_rgb(200, 120, 230),
+        Color32::from_rgb(230, 230, 230),
+    ];
+    C[i % C.len()]
+}
+
+/// Grid marks of a log10 axis: 1, 2 and 5 times each power of ten in range (the decades strongest).
+fn log_marks(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
+    let (lo, hi) = input.bounds;
+    let mut out = Vec::new();
+    if !(lo.is_finite() && hi.is_finite()) || hi - lo > 40.0 {
+        return out;
+    }
+    let fine = hi - lo < 3.0;
+    for k in lo.floor() as i32..=hi.ceil() as i32 {
+        for (m, step) in [(1.0f64, 1.0), (2.0, 0.3), (5.0, 0.3)] {
+            if m != 1.0 && !fine {
+                continue;
+            }
+            let v = k as f64 + m.log10();
+            if v >= lo && v <= hi {
+                out.push(egui_plot::GridMark {
+                    value: v,
+                    step_size: step,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The value 10^v of a log10 axis, short: 300, 0.02, 2e-5.
+pub fn pow10_label(v: f64) -> String {
+    let x = 10f64.powf(v);
+    if (0.01..10000.0).contains(&x) {
+        let s = format!("{x:.2}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        format!("{x:.0e}")
+    }
+}
+
+impl Viewer {
     fn screenshot_section(&mut self, ui: &mut Ui) {
         egui::CollapsingHeader::new("Screenshots")
             .default_open(true)
@@ -518,6 +686,48 @@ impl Viewer {
                 egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
                 Color32::WHITE,
             );
+        }
+        if self.note.is_none()
+            && let Some((ramp, labels)) = crate::app::views::colour_bar(self.view, 64)
+        {
+            let bar = egui::Rect::from_min_size(
+                rect.left_bottom() + egui::vec2(12.0, -34.0),
+                egui::vec2((rect.width() - 24.0).clamp(40.0, 320.0), 12.0),
+            );
+            let n = ramp.len() as f32;
+            for (i, c) in ramp.iter().enumerate() {
+                let x0 = bar.left() + bar.width() * i as f32 / n;
+                let x1 = bar.left() + bar.width() * (i + 1) as f32 / n;
+                ui.painter().rect_filled(
+                    egui::Rect::from_x_y_ranges(x0..=x1, bar.y_range()),
+                    0.0,
+                    Color32::from_rgb(c[0], c[1], c[2]),
+                );
+            }
+            ui.painter().rect_stroke(
+                bar,
+                0.0,
+                egui::Stroke::new(1.0, Color32::WHITE),
+                egui::StrokeKind::Outside,
+            );
+            for (k, (label, align)) in labels
+                .iter()
+                .zip([
+                    egui::Align2::LEFT_TOP,
+                    egui::Align2::CENTER_TOP,
+                    egui::Align2::RIGHT_TOP,
+                ])
+                .enumerate()
+            {
+                let x = bar.left() + bar.width() * k as f32 / 2.0;
+                ui.painter().text(
+                    egui::pos2(x, bar.bottom() + 2.0),
+                    align,
+                    *label,
+                    egui::FontId::proportional(12.0),
+                    Color32::WHITE,
+                );
+            }
         }
         if let Some(note) = self.note {
             ui.painter().text(

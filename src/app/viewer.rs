@@ -57,8 +57,15 @@ impl Viewer {
             last_tick: Instant::now(),
             area_px: [opts.width, opts.height],
             reference: None,
+            refs: Vec::new(),
+            refs_on_disk: false,
+            refs_missing: Default::default(),
             points: Vec::new(),
             live_error: None,
+            plot_flip: false,
+            plot_zoom: false,
+            plot_fitted: 0,
+            budgets: [None, None],
             bookmarks: SceneSettings::default(),
             bookmarks_unreadable: false,
             bookmark_name: String::new(),
@@ -235,6 +242,7 @@ impl Viewer {
                 self.status = "reference cancelled: the camera moved".into();
             }
         }
+        // Points are of one view; finished references stay in `refs` for when the view returns.
         self.points.clear();
         self.live_error = None;
     }
@@ -263,11 +271,12 @@ impl Viewer {
         }
         let (w, h) = self.full_size();
         let preview = self.moving();
-        let settings = if preview {
+        let mut settings = if preview {
             preview_settings(self.s.frame_settings(w, h))
         } else {
             self.s.frame_settings(w, h)
         };
+        self.apply_budget(&mut settings, preview);
         let job = FrameJob {
             id: self.next_id,
             camera: self.cam.to_camera(),
@@ -281,6 +290,49 @@ impl Viewer {
             self.pending = job.id;
             self.next_id += 1;
             self.worker.send(Job::Frame(job));
+        }
+    }
+
+    /// With a time budget: the K's its controller chose for this kind of frame (preview or at
+    /// rest), or its first ones; a controller is made anew when the budget or the size changes.
+    fn apply_budget(&mut self, s: &mut crate::gi::pipeline::RenderSettings, preview: bool) {
+        let Some(t) = s.cluster.target_ms else {
+            self.budgets = [None, None];
+            return;
+        };
+        let pixels = s.frame.width * s.frame.height;
+        let slot = &mut self.budgets[preview as usize];
+        if slot
+            .as_ref()
+            .is_none_or(|(bt, px, _, _)| *bt != t || *px != pixels)
+        {
+            let b = crate::gi::budget::Budget::new(t, &s.cluster, pixels, s.frame.vpls);
+            let c = b.start(&s.cluster);
+            *slot = Some((t, pixels, b, (c.sp_clusters, c.vpl_clusters)));
+        }
+        let (_, _, _, (sp, vpl)) = slot.as_ref().expect("set");
+        s.cluster.sp_clusters = *sp;
+        s.cluster.vpl_clusters = *vpl;
+    }
+
+    /// A frame rendered under a time budget: its controller's next K's, kept when the frame missed
+    /// the budget by more than `budget::SETTLED` (within it, the K's stay and the view is steady).
+    fn budget_step(&mut self, r: &Rendered) {
+        use crate::gi::budget::{SETTLED, Split};
+        let Some(t) = r.job.settings.cluster.target_ms else {
+            return;
+        };
+        let pixels = r.frame.width * r.frame.height;
+        let Some((bt, px, b, k)) = self.budgets[r.job.preview as usize].as_mut() else {
+            return;
+        };
+        if *bt != t || *px != pixels {
+            return;
+        }
+        let c = &r.job.settings.cluster;
+        let next = b.step(c, Split::of(&r.frame, b.controlled));
+        if (r.frame.frame_ms() / t - 1.0).abs() > SETTLED {
+            *k = (next.sp_clusters, next.vpl_clusters);
         }
     }
 
@@ -320,28 +372,88 @@ impl Viewer {
         }
     }
 
-    /// Whether a frame is comparable with the finished reference (same view, size and VPLs).
+    /// The reference of the view `r` was rendered for: the one just finished or one kept from an
+    /// earlier visit of this view (same camera, size, VPLs, seed, bounces, clamp, direct samples and
+    /// lights).
     fn reference_for(&self, r: &Rendered) -> Option<&[[f32; 3]]> {
-        let rs = self.reference.as_ref()?;
-        let img = rs.image.as_ref()?;
-        let (a, b) = (&rs.job.settings, &r.job.settings);
-        (rs.job.camera == r.job.camera
-            && (
-                a.frame.width,
-                a.frame.height,
-                a.frame.vpls,
-                a.frame.seed,
-                a.frame.clamp.to_bits(),
-                a.frame.direct_samples,
-            ) == (
-                b.frame.width,
-                b.frame.height,
-                b.frame.vpls,
-                b.frame.seed,
-                b.frame.clamp.to_bits(),
-                b.frame.direct_samples,
-            ))
-            .then_some(img.as_slice())
+        let key = super::ref_key(&r.job.camera, &r.job.settings, &self.lights);
+        self.refs
+            .iter()
+            .rev()
+            .find(|c| c.key == key)
+            .map(|c| c.image.as_slice())
+    }
+
+    /// Whether `r`'s view has a reference (kept or just finished).
+    pub fn reference_for_view(&self, r: &Rendered) -> bool {
+        self.reference_for(r).is_some()
+    }
+
+    /// The folder references are kept in on disk: beside the scene's bookmarks file.
+    pub fn refs_dir(&self) -> Option<PathBuf> {
+        self.settings_path().map(|p| {
+            let mut name = p.file_name().unwrap_or_default().to_os_string();
+            name.push(".refs");
+            p.with_file_name(name)
+        })
+    }
+
+    /// Keeps a finished reference (in memory; on disk too when asked).
+    fn keep_reference(&mut self, key: String, image: Vec<[f32; 3]>, secs: f64, w: u32, h: u32) {
+        if self.refs_on_disk
+            && let Some(dir) = self.refs_dir()
+        {
+            let path = dir.join(format!("{:016x}.exr", super::key_hash(&key)));
+            let res = std::fs::create_dir_all(&dir)
+                .map_err(anyhow::Error::from)
+                .and_then(|_| crate::export::write_exr(&path, w, h, &image));
+            if let Err(e) = res {
+                self.status = format!("reference not kept on disk: {e:#}");
+            }
+        }
+        self.refs.retain(|c| c.key != key);
+        self.refs.push(super::CachedRef {
+            key,
+            image: Arc::new(image),
+            secs,
+        });
+        if self.refs.len() > super::MAX_CACHED_REFS {
+            self.refs.remove(0);
+        }
+    }
+
+    /// Looks for the latest frame's reference on disk (when references are kept there); returns
+    /// whether one was found.
+    fn load_reference_from_disk(&mut self) -> bool {
+        if !self.refs_on_disk {
+            return false;
+        }
+        let Some(r) = &self.latest else { return false };
+        let key = super::ref_key(&r.job.camera, &r.job.settings, &self.lights);
+        if self.refs.iter().any(|c| c.key == key) || self.refs_missing.contains(&key) {
+            return false;
+        }
+        let (w, h) = (r.frame.width, r.frame.height);
+        let Some(dir) = self.refs_dir() else {
+            return false;
+        };
+        let path = dir.join(format!("{:016x}.exr", super::key_hash(&key)));
+        match crate::export::read_exr(&path) {
+            Ok((rw, rh, px))
+                if (rw, rh) == (w, h) && px.iter().flatten().all(|c| c.is_finite()) =>
+            {
+                self.refs.push(super::CachedRef {
+                    key,
+                    image: Arc::new(px),
+                    secs: 0.0,
+                });
+                true
+            }
+            _ => {
+                self.refs_missing.insert(key);
+                false
+            }
+        }
     }
 
     fn record_error(&mut self) {
@@ -351,12 +463,14 @@ impl Viewer {
             return;
         };
         let img = r.frame.radiance.as_slice();
-        let (mse, rel) = (
-            metrics::mse(img, reference),
-            metrics::rel_mse(img, reference),
-        );
+        let (w, h) = (r.frame.width, r.frame.height);
+        let err = super::LiveError {
+            mse: metrics::mse(img, reference),
+            rel_mse: metrics::rel_mse(img, reference),
+            flip: metrics::flip(img, reference, w, h, self.s.exposure),
+        };
         let ms = r.frame.timings_ms.get("frame").copied().unwrap_or(0.0);
-        self.live_error = Some((mse, rel));
+        self.live_error = Some(err);
         let key = self.s.short();
         let series = self.s.mode_label();
         self.points.retain(|p| p.key != key);
@@ -364,7 +478,8 @@ impl Viewer {
             series,
             key,
             ms,
-            mse,
+            mse: err.mse,
+            flip: err.flip,
         });
     }
 
@@ -412,8 +527,10 @@ impl Viewer {
                     } else {
                         self.motion.rest = Some((gpu_ms, r.frame.width, r.frame.height));
                     }
+                    self.budget_step(&r);
                     self.latest = Some(r);
                     self.image_dirty = true;
+                    self.load_reference_from_disk();
                     self.record_error();
                 }
                 Reply::Reference(r) => {
@@ -422,6 +539,15 @@ impl Viewer {
                     {
                         rs.image = Some(r.frame.radiance.clone());
                         rs.secs = rs.started.elapsed().as_secs_f64();
+                        let key = super::ref_key(&rs.job.camera, &rs.job.settings, &self.lights);
+                        let secs = rs.secs;
+                        self.keep_reference(
+                            key,
+                            r.frame.radiance.clone(),
+                            secs,
+                            r.frame.width,
+                            r.frame.height,
+                        );
                         self.image_dirty = true;
                         self.record_error();
                     }
@@ -504,6 +630,13 @@ impl Viewer {
                     Some("no reference for this view yet: press \"compute reference\""),
                 ),
             },
+            View::Flip => match reference {
+                Some(img) => (views::flip(&r.frame.radiance, img, w, h, e), None),
+                None => (
+                    views::tonemap(&fin(), e),
+                    Some("no reference for this view yet: press \"compute reference\""),
+                ),
+            },
             View::Error => match reference {
                 Some(img) => (views::error(&r.frame.radiance, img), None),
                 None => (
@@ -526,7 +659,7 @@ impl Viewer {
             View::Indirect => r.frame.indirect.clone(),
             // Without a reference these views show the clustered frame: saving that under a
             // `_reference_` / `_error_` name would mislabel it.
-            View::Reference | View::Error if self.reference_for(r).is_none() => {
+            View::Reference | View::Error | View::Flip if self.reference_for(r).is_none() => {
                 self.last_shot =
                     "no reference for this view yet: nothing saved (press \"compute reference\")"
                         .into();
@@ -655,7 +788,9 @@ impl Viewer {
             self.view,
             self.s.exposure,
             self.s.direct_on,
-            self.reference.as_ref().is_some_and(|r| r.image.is_some()),
+            self.latest
+                .as_ref()
+                .is_some_and(|r| self.reference_for(r).is_some()),
             self.live_error.is_some()
         );
         if dk != self.display_key {
@@ -673,7 +808,11 @@ impl Viewer {
             .is_some_and(|r| self.animate || at_rest(r))
             && !self.image_dirty;
         if self.script.is_some() && self.view.needs_reference() && shown {
-            if self.reference.is_none() {
+            let has = self
+                .latest
+                .as_ref()
+                .is_some_and(|r| self.reference_for(r).is_some());
+            if self.reference.is_none() && !has {
                 self.start_reference();
             }
             shown = self.live_error.is_some();

@@ -19,10 +19,12 @@ pub enum View {
     VplPoints,
     Reference,
     Error,
+    /// The per-pixel FLIP error of the tone-mapped frame against the reference.
+    Flip,
 }
 
 impl View {
-    pub const ALL: [View; 7] = [
+    pub const ALL: [View; 8] = [
         View::Final,
         View::Direct,
         View::Indirect,
@@ -30,6 +32,7 @@ impl View {
         View::VplPoints,
         View::Reference,
         View::Error,
+        View::Flip,
     ];
     pub fn name(self) -> &'static str {
         match self {
@@ -40,17 +43,19 @@ impl View {
             View::VplPoints => "VPL clusters",
             View::Reference => "reference",
             View::Error => "error",
+            View::Flip => "FLIP",
         }
     }
     /// Views that need the reference image.
     pub fn needs_reference(self) -> bool {
-        matches!(self, View::Reference | View::Error)
+        matches!(self, View::Reference | View::Error | View::Flip)
     }
     /// A file-name-friendly name.
     pub fn slug(self) -> &'static str {
         match self {
             View::SpClusters => "spclusters",
             View::VplPoints => "vpls",
+            View::Flip => "flip",
             v => v.name(),
         }
     }
@@ -188,6 +193,40 @@ pub fn error(img: &[[f32; 3]], reference: &[[f32; 3]]) -> Vec<u8> {
         .chunks(3)
         .flat_map(|c| [c[0], c[1], c[2], 255])
         .collect()
+}
+
+/// The FLIP map of `img` against `reference` (both shown with `exposure`), magma, opaque RGBA8.
+pub fn flip(img: &[[f32; 3]], reference: &[[f32; 3]], w: u32, h: u32, exposure: f32) -> Vec<u8> {
+    let map = metrics::flip_map(img, reference, w, h, exposure);
+    metrics::flip_error_map(&map, w, h)
+        .chunks(3)
+        .flat_map(|c| [c[0], c[1], c[2], 255])
+        .collect()
+}
+
+/// The colour scale of an error view: `n` colours from its low end to its high end, and the labels
+/// of its ends and middle.
+pub fn colour_bar(view: View, n: usize) -> Option<(Vec<[u8; 3]>, [&'static str; 3])> {
+    let ramp: Vec<[u8; 3]> = match view {
+        View::Error => (0..n)
+            .map(|i| {
+                metrics::ramp(i as f32 / (n - 1).max(1) as f32).map(|c| (c * 255.0 + 0.5) as u8)
+            })
+            .collect(),
+        View::Flip => {
+            let map: Vec<f32> = (0..n).map(|i| i as f32 / (n - 1).max(1) as f32).collect();
+            metrics::flip_error_map(&map, n as u32, 1)
+                .chunks(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect()
+        }
+        _ => return None,
+    };
+    let labels = match view {
+        View::Error => ["rel. error 1e-4", "1e-2", "1"],
+        _ => ["FLIP 0", "0.5", "1"],
+    };
+    Some((ramp, labels))
 }
 
 #[cfg(test)]

@@ -1,12 +1,15 @@
-//! K for a time budget (`--target-ms`): a controller that moves K_SP and K_VPL along one line of
-//! settings until the frame's GPU time meets the budget.
+//! K for a time budget (`--target-ms`): a controller that moves K_VPL, with K_SP on one line of
+//! settings, until the frame's GPU time meets the budget.
 //!
-//! The line is the paper's: its light / intermediate / high settings are about 0.15% / 1% / 4% of the
-//! pixels as SP clusters with 750 / 2000 / 4000 of 8192 VPLs as VPL clusters, i.e. K_VPL grows as the
-//! square root of K_SP (`k_vpl_on_line`). Along it the frame's time is `fixed + V(x)`, where `fixed`
+//! The line passes through the paper's intermediate setting (1% of the pixels as SP clusters with
+//! 2000 of 8192 VPLs as VPL clusters) with K_SP growing as the square root of K_VPL
+//! (`k_sp_on_line`): on lavapipe the shading (pixels × K_VPL) costs most and SP clusters are cheap,
+//! while the error grows fast as K_SP falls (conference, 320×240: 8 SP clusters have 20× the MSE of
+//! 115), so the line keeps K_SP high where the paper's own light setting (0.15%, 750) drops it
+//! (docs/results.md, "K for a time budget"). Along it the frame's time is `fixed + V(x)`, where `fixed`
 //! is the passes that do not depend on K (primary rays, direct light) and V the others, modelled
 //! locally as c · x^e in the controlled K, x. The first exponent comes from the measured split of
-//! the frame (visibility grows as K_SP × K_VPL, x^1.5 on the line; shading as K_VPL, x^0.5); from the
+//! the frame (visibility grows as K_SP × K_VPL, x^1.5 on the line; shading as K_VPL, x^1); from the
 //! second frame on it is the secant of the last two frames. Each step solves fixed + c · x^e =
 //! budget for x.
 
@@ -27,19 +30,19 @@ pub const SETTLED: f64 = 0.1;
 pub const MIN_SP_CLUSTERS: u32 = 8;
 pub const MIN_VPL_CLUSTERS: u32 = 16;
 
-/// K_VPL on the paper's line for K_SP SP clusters of `pixels` pixels and `vpls` VPLs:
-/// 0.244 · vpls · sqrt(K_SP / (0.01 · pixels)) (2000 of 8192 VPLs at 1% of the pixels, 750 at
-/// 0.15%, 4000 at 4%), within [16, vpls / 2].
-pub fn k_vpl_on_line(k_sp: u32, pixels: u32, vpls: u32) -> u32 {
-    let frac = k_sp as f64 / (0.01 * pixels.max(1) as f64);
-    let k = 2000.0 / 8192.0 * vpls as f64 * frac.sqrt();
-    (k.round() as u32).clamp(MIN_VPL_CLUSTERS.min(vpls / 2).max(1), (vpls / 2).max(1))
+/// K_SP on the line for K_VPL VPL clusters of `vpls` VPLs and `pixels` pixels:
+/// 0.01 · pixels · sqrt(K_VPL / (0.244 · vpls)) (1% of the pixels at 2000 of 8192 VPLs, 0.35% at 250,
+/// 1.4% at 4000), within [8, pixels / 4].
+pub fn k_sp_on_line(k_vpl: u32, pixels: u32, vpls: u32) -> u32 {
+    let frac = k_vpl as f64 / (2000.0 / 8192.0 * vpls.max(1) as f64);
+    let k = 0.01 * pixels as f64 * frac.sqrt();
+    (k.round() as u32).clamp(MIN_SP_CLUSTERS.min(pixels).max(1), (pixels / 4).max(1))
 }
 
 /// Which K the controller moves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Controlled {
-    /// Both clusterings: K_SP, with K_VPL on the paper's line.
+    /// Both clusterings: K_VPL, with K_SP on the line.
     Both,
     /// SP clustering only (K_VPL off): K_SP.
     SpOnly,
@@ -78,7 +81,7 @@ impl Split {
             f.ms(Pass::Gather),
         );
         let weighted = match c {
-            Controlled::Both => 1.5 * vis + 0.5 * shade,
+            Controlled::Both => 1.5 * vis + shade,
             Controlled::SpOnly => vis,
             Controlled::VplOnly => gather + shade,
         };
@@ -130,24 +133,24 @@ impl Budget {
 
     fn range(&self) -> (u32, u32) {
         match self.controlled {
-            Controlled::Both | Controlled::SpOnly => (
+            Controlled::SpOnly => (
                 MIN_SP_CLUSTERS.min(self.pixels).max(1),
                 (self.pixels / 4).max(1),
             ),
-            Controlled::VplOnly => (
+            Controlled::Both | Controlled::VplOnly => (
                 MIN_VPL_CLUSTERS.min(self.vpls / 2).max(1),
                 (self.vpls / 2).max(1),
             ),
         }
     }
 
-    /// `c` with the controlled K set to `x` (and K_VPL on the line when both are controlled).
+    /// `c` with the controlled K set to `x` (and K_SP on the line when both are controlled).
     pub fn apply(&self, c: &ClusterSettings, x: u32) -> ClusterSettings {
         let mut c = c.clone();
         match self.controlled {
             Controlled::Both => {
-                c.sp_clusters = x;
-                c.vpl_clusters = k_vpl_on_line(x, self.pixels, self.vpls);
+                c.vpl_clusters = x;
+                c.sp_clusters = k_sp_on_line(x, self.pixels, self.vpls);
             }
             Controlled::SpOnly => c.sp_clusters = x,
             Controlled::VplOnly => c.vpl_clusters = x,
@@ -155,12 +158,12 @@ impl Budget {
         c
     }
 
-    /// The first frame's settings: the paper's intermediate setting (1% of the pixels as SP
-    /// clusters; K_VPL on the line), or the K given for a single clustering.
+    /// The first frame's settings: the paper's intermediate setting (2000 of 8192 VPLs as VPL
+    /// clusters, 1% of the pixels as SP clusters), or the K given for a single clustering.
     pub fn start(&self, c: &ClusterSettings) -> ClusterSettings {
         let (lo, hi) = self.range();
         let x = match self.controlled {
-            Controlled::Both => (self.pixels / 100).clamp(lo, hi),
+            Controlled::Both => ((2000.0 / 8192.0 * self.vpls as f64) as u32).clamp(lo, hi),
             Controlled::SpOnly => c.sp_clusters.clamp(lo, hi),
             Controlled::VplOnly => c.vpl_clusters.clamp(lo, hi),
         };
@@ -169,8 +172,8 @@ impl Budget {
 
     fn x_of(&self, c: &ClusterSettings) -> u32 {
         match self.controlled {
-            Controlled::Both | Controlled::SpOnly => c.sp_clusters,
-            Controlled::VplOnly => c.vpl_clusters,
+            Controlled::SpOnly => c.sp_clusters,
+            Controlled::Both | Controlled::VplOnly => c.vpl_clusters,
         }
     }
 
@@ -258,7 +261,7 @@ mod tests {
         Split {
             frame_ms: 20.0 + rest,
             fixed_ms: 20.0,
-            exponent: ((1.5 * vis + 0.5 * shade) / rest).clamp(0.2, 3.0),
+            exponent: ((1.5 * vis + shade) / rest).clamp(0.2, 3.0),
         }
     }
 
@@ -275,20 +278,20 @@ mod tests {
     }
 
     #[test]
-    fn the_line_passes_through_the_papers_settings() {
-        // 640×480, 8192 VPLs: 1% (3072) → 2000, 0.15% (461) → 775, 4% (12288) → 4000.
-        assert_eq!(k_vpl_on_line(3072, 640 * 480, 8192), 2000);
-        assert!((k_vpl_on_line(461, 640 * 480, 8192) as i32 - 750).abs() < 30);
-        assert_eq!(k_vpl_on_line(12288, 640 * 480, 8192), 4000);
-        // Bounded by half the VPLs and 16.
-        assert_eq!(k_vpl_on_line(100_000, 640 * 480, 8192), 4096);
-        assert_eq!(k_vpl_on_line(1, 640 * 480, 1024), 16);
+    fn the_line_passes_through_the_papers_intermediate_setting() {
+        // 640×480, 8192 VPLs: 2000 → 1% (3072); 250 → 0.35%; 4000 → 1.41%.
+        assert_eq!(k_sp_on_line(2000, 640 * 480, 8192), 3072);
+        assert_eq!(k_sp_on_line(250, 640 * 480, 8192), 1086);
+        assert_eq!(k_sp_on_line(4000, 640 * 480, 8192), 4344);
+        // Bounded by 8 and a quarter of the pixels.
+        assert_eq!(k_sp_on_line(1, 64 * 48, 8192), 8);
+        assert_eq!(k_sp_on_line(1 << 30, 64 * 48, 8192), 64 * 48 / 4);
     }
 
     #[test]
     fn meets_a_budget_of_a_known_time_model_within_a_few_frames() {
         let c = ClusterSettings::default();
-        for target in [40.0, 60.0, 100.0, 200.0, 400.0] {
+        for target in [40.0, 60.0, 100.0, 150.0] {
             let (b, s) = run(target, &c, 320 * 240, 8192);
             let last = b.steps.last().unwrap();
             assert!(
@@ -301,10 +304,7 @@ mod tests {
                 (last.sp_clusters, last.vpl_clusters),
                 (s.sp_clusters, s.vpl_clusters)
             );
-            assert_eq!(
-                s.vpl_clusters,
-                k_vpl_on_line(s.sp_clusters, 320 * 240, 8192)
-            );
+            assert_eq!(s.sp_clusters, k_sp_on_line(s.vpl_clusters, 320 * 240, 8192));
         }
     }
 
@@ -312,11 +312,11 @@ mod tests {
     fn a_budget_below_the_fixed_part_ends_at_the_fewest_clusters() {
         let c = ClusterSettings::default();
         let (b, s) = run(10.0, &c, 320 * 240, 8192);
-        assert_eq!(s.sp_clusters, MIN_SP_CLUSTERS);
+        assert_eq!(s.vpl_clusters, MIN_VPL_CLUSTERS);
         assert!(b.steps.len() as u32 <= MAX_FRAMES);
-        // A huge budget ends at the most: a quarter of the pixels.
+        // A huge budget ends at the most: half the VPLs.
         let (_, s) = run(1e9, &c, 160 * 120, 8192);
-        assert_eq!(s.sp_clusters, 160 * 120 / 4);
+        assert_eq!(s.vpl_clusters, 4096);
     }
 
     #[test]
