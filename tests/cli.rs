@@ -360,6 +360,9 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
             "--error-map",
         ),
         (vec!["render", "-o", &o, "--target-ms", "0"], "--target-ms"),
+        (vec!["view", "--b-fuzziness", "0"], "--b-fuzziness"),
+        (vec!["view", "--b-weighting", "soft"], "--b-weighting"),
+        (vec!["view", "--target-ms", "0"], "--target-ms"),
         (vec!["render", "-o", &o, "--target-ms", "-5"], "--target-ms"),
         (
             vec!["render", "-o", &o, "--target-ms", "inf"],

@@ -62,6 +62,8 @@ pub struct ViewOptions {
     pub stats: Option<PathBuf>,
     /// Where panel screenshots go.
     pub shot_dir: PathBuf,
+    /// The split view's B settings, pinned at start (`view --b-...`).
+    pub b: Option<UiSettings>,
 }
 
 pub fn run(opts: ViewOptions) -> Result<()> {
@@ -402,6 +404,10 @@ pub struct Viewer {
     pub refs_missing: std::collections::HashSet<String>,
     pub points: Vec<PlotPoint>,
     pub live_error: Option<LiveError>,
+    /// The split view's pinned B settings (`None`: nothing pinned).
+    pub b: Option<UiSettings>,
+    /// The split view's divider, a fraction of the image width from its left.
+    pub split: f32,
     /// The plot's y axis: FLIP instead of MSE.
     pub plot_flip: bool,
     /// The plot takes the wheel and drags (zoom, pan); off, it always fits its points.

@@ -216,6 +216,30 @@ impl Viewer {
                         ui.selectable_value(&mut self.view, v, v.name());
                     }
                 });
+                ui.horizontal_wrapped(|ui| {
+                    if ui
+                        .button("pin as B")
+                        .on_hover_text(
+                            "Keep the current settings as B; the A|B split and A−B views render \
+                             both for the same camera while A changes",
+                        )
+                        .clicked()
+                    {
+                        self.b = Some(self.s.clone());
+                        if !matches!(self.view, View::Split | View::Diff) {
+                            self.view = View::Split;
+                        }
+                    }
+                    if self.b.is_some() && ui.button("unpin B").clicked() {
+                        self.b = None;
+                    }
+                });
+                if let Some(b) = &self.b {
+                    ui.label(
+                        RichText::new(format!("A: {}\nB: {}", self.s.short(), b.short()))
+                            .small(),
+                    );
+                }
                 ui.separator();
                 // The γ the last frame sampled with: the slider starts there when auto is unticked.
                 let gamma_used = self.latest.as_ref().and_then(|l| l.frame.gamma_used);
@@ -663,8 +687,27 @@ impl Viewer {
             self.area_px = px;
         }
         let (rect, response) = ui.allocate_exact_size(size, Sense::click_and_drag());
+        // The split view's divider: a handle over the image that takes drags before the camera.
+        let split_view = self.view == View::Split;
+        let mut on_divider = false;
+        if split_view {
+            let x = rect.left() + rect.width() * self.split;
+            let handle = egui::Rect::from_x_y_ranges(x - 6.0..=x + 6.0, rect.y_range());
+            let h = ui.interact(handle, ui.unique_id().with("split_divider"), Sense::drag());
+            if h.dragged()
+                && let Some(p) = h.interact_pointer_pos()
+            {
+                self.split = ((p.x - rect.left()) / rect.width()).clamp(0.0, 1.0);
+            }
+            on_divider = h.dragged() || h.hovered();
+            if on_divider {
+                ui.ctx().set_cursor_icon(egui::CursorIcon::ResizeHorizontal);
+            }
+        }
         // Camera input first, so that this frame's image is already the new camera's.
-        self.camera_input(ui, &response);
+        if !on_divider {
+            self.camera_input(ui, &response);
+        }
         if self.image_stale()
             && let Some(img) = self.current_image()
         {
@@ -686,6 +729,33 @@ impl Viewer {
                 egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
                 Color32::WHITE,
             );
+        }
+        if split_view && self.note.is_none() {
+            let x = rect.left() + rect.width() * self.split;
+            ui.painter().line_segment(
+                [egui::pos2(x, rect.top()), egui::pos2(x, rect.bottom())],
+                egui::Stroke::new(2.0, Color32::WHITE),
+            );
+            for (label, pos, align) in [
+                (
+                    "A",
+                    egui::pos2(x - 8.0, rect.top() + 8.0),
+                    egui::Align2::RIGHT_TOP,
+                ),
+                (
+                    "B",
+                    egui::pos2(x + 8.0, rect.top() + 8.0),
+                    egui::Align2::LEFT_TOP,
+                ),
+            ] {
+                ui.painter().text(
+                    pos,
+                    align,
+                    label,
+                    egui::FontId::proportional(16.0),
+                    Color32::WHITE,
+                );
+            }
         }
         if self.note.is_none()
             && let Some((ramp, labels)) = crate::app::views::colour_bar(self.view, 64)

@@ -21,6 +21,7 @@ fn viewer(s: UiSettings) -> Viewer {
         animate: false,
         stats: None,
         shot_dir: std::env::temp_dir(),
+        b: None,
     };
     Viewer::new(opts, Arc::new(|| {}))
 }
@@ -302,4 +303,45 @@ fn gi_size_lowers_the_render_scale_to_what_the_device_holds() {
         w as u64 * h as u64 <= 2_097_152 && lower.is_some(),
         "{w}x{h}"
     );
+}
+
+/// The split view's divider follows a left-button drag over it, and the drag does not move the
+/// camera; away from the divider the same drag orbits/looks as before.
+#[test]
+fn the_split_divider_follows_a_drag_and_leaves_the_camera() {
+    let mut v = viewer(UiSettings::new(&RenderSettings::default()));
+    v.b = Some(v.s.clone());
+    v.view = View::Split;
+    let ctx = egui::Context::default();
+    let screen = egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(1200.0, 800.0));
+    let frame = |v: &mut Viewer, events: Vec<egui::Event>| {
+        let input = egui::RawInput {
+            screen_rect: Some(screen),
+            events,
+            ..Default::default()
+        };
+        let _ = ctx.run_ui(input, |ui| v.ui(ui));
+    };
+    frame(&mut v, vec![]);
+    // The image area starts right of the 380 px panel: the divider at its middle.
+    let (left, width) = (
+        super::panel::PANEL_WIDTH,
+        1200.0 - super::panel::PANEL_WIDTH,
+    );
+    let at = |f: f32| egui::pos2(left + width * f, 400.0);
+    let cam = v.cam;
+    let button = |pressed| egui::Event::PointerButton {
+        pos: at(if pressed { 0.5 } else { 0.25 }),
+        button: egui::PointerButton::Primary,
+        pressed,
+        modifiers: Default::default(),
+    };
+    frame(&mut v, vec![egui::Event::PointerMoved(at(0.5))]);
+    frame(&mut v, vec![button(true)]);
+    for f in [0.45, 0.4, 0.3, 0.25] {
+        frame(&mut v, vec![egui::Event::PointerMoved(at(f))]);
+    }
+    frame(&mut v, vec![button(false)]);
+    assert!((v.split - 0.25).abs() < 0.02, "split {}", v.split);
+    assert_eq!(v.cam, cam);
 }

@@ -62,6 +62,8 @@ impl Viewer {
             refs_missing: Default::default(),
             points: Vec::new(),
             live_error: None,
+            b: opts.b,
+            split: 0.5,
             plot_flip: false,
             plot_zoom: false,
             plot_fitted: 0,
@@ -277,14 +279,30 @@ impl Viewer {
             self.s.frame_settings(w, h)
         };
         self.apply_budget(&mut settings, preview);
+        // The split and difference views render B for the same camera, both without temporal reuse
+        // (one renderer's warm starts would alternate between A's and B's clusterings).
+        let b_settings = match (&self.b, self.view) {
+            (Some(b), View::Split | View::Diff) => {
+                settings.cluster.temporal = false;
+                let mut bs = b.frame_settings(w, h);
+                bs.cluster.temporal = false;
+                bs.cluster.target_ms = None;
+                Some(if preview { preview_settings(bs) } else { bs })
+            }
+            _ => None,
+        };
         let job = FrameJob {
             id: self.next_id,
             camera: self.cam.to_camera(),
             settings,
             want_sp_ids: self.view == View::SpClusters,
             preview,
+            b_settings,
         };
-        let key = format!("{:?} {:?} {}", job.camera, job.settings, job.want_sp_ids);
+        let key = format!(
+            "{:?} {:?} {} {:?}",
+            job.camera, job.settings, job.want_sp_ids, job.b_settings
+        );
         if self.last_sent.as_deref() != Some(key.as_str()) {
             self.last_sent = Some(key);
             self.pending = job.id;
@@ -352,6 +370,7 @@ impl Viewer {
             settings,
             want_sp_ids: false,
             preview: false,
+            b_settings: None,
         };
         self.next_id += 1;
         self.worker.send(Job::Reference(job.clone()));
@@ -630,6 +649,28 @@ impl Viewer {
                     Some("no reference for this view yet: press \"compute reference\""),
                 ),
             },
+            View::Split | View::Diff => match &r.b_frame {
+                Some(b) if b.radiance.len() == r.frame.radiance.len() => {
+                    let bf = views::final_image(&b.direct, &b.indirect, self.s.direct_on);
+                    if self.view == View::Split {
+                        let a = views::tonemap(&fin(), e);
+                        (
+                            views::split(&a, &views::tonemap(&bf, e), w, h, self.split),
+                            None,
+                        )
+                    } else {
+                        (views::error(&fin(), &bf), None)
+                    }
+                }
+                _ => (
+                    views::tonemap(&fin(), e),
+                    Some(if self.b.is_none() {
+                        "nothing pinned as B: press \"pin as B\""
+                    } else {
+                        "B is rendering…"
+                    }),
+                ),
+            },
             View::Flip => match reference {
                 Some(img) => (views::flip(&r.frame.radiance, img, w, h, e), None),
                 None => (
@@ -784,8 +825,9 @@ impl Viewer {
         self.ui_frames += 1;
         self.schedule();
         let dk = format!(
-            "{:?} {} {} {} {}",
+            "{:?} {} {} {} {} {}",
             self.view,
+            self.split,
             self.s.exposure,
             self.s.direct_on,
             self.latest

@@ -21,10 +21,15 @@ pub enum View {
     Error,
     /// The per-pixel FLIP error of the tone-mapped frame against the reference.
     Flip,
+    /// A/B: the current settings left of a draggable divider, the pinned B settings right of it,
+    /// same camera.
+    Split,
+    /// A against B: the per-pixel relative difference (as the error view, B as the reference).
+    Diff,
 }
 
 impl View {
-    pub const ALL: [View; 8] = [
+    pub const ALL: [View; 10] = [
         View::Final,
         View::Direct,
         View::Indirect,
@@ -33,6 +38,8 @@ impl View {
         View::Reference,
         View::Error,
         View::Flip,
+        View::Split,
+        View::Diff,
     ];
     pub fn name(self) -> &'static str {
         match self {
@@ -44,6 +51,8 @@ impl View {
             View::Reference => "reference",
             View::Error => "error",
             View::Flip => "FLIP",
+            View::Split => "A|B split",
+            View::Diff => "A−B",
         }
     }
     /// Views that need the reference image.
@@ -56,6 +65,8 @@ impl View {
             View::SpClusters => "spclusters",
             View::VplPoints => "vpls",
             View::Flip => "flip",
+            View::Split => "split",
+            View::Diff => "diff",
             v => v.name(),
         }
     }
@@ -208,7 +219,7 @@ pub fn flip(img: &[[f32; 3]], reference: &[[f32; 3]], w: u32, h: u32, exposure: 
 /// of its ends and middle.
 pub fn colour_bar(view: View, n: usize) -> Option<(Vec<[u8; 3]>, [&'static str; 3])> {
     let ramp: Vec<[u8; 3]> = match view {
-        View::Error => (0..n)
+        View::Error | View::Diff => (0..n)
             .map(|i| {
                 metrics::ramp(i as f32 / (n - 1).max(1) as f32).map(|c| (c * 255.0 + 0.5) as u8)
             })
@@ -224,14 +235,44 @@ pub fn colour_bar(view: View, n: usize) -> Option<(Vec<[u8; 3]>, [&'static str; 
     };
     let labels = match view {
         View::Error => ["rel. error 1e-4", "1e-2", "1"],
+        View::Diff => ["rel. A−B 1e-4", "1e-2", "1"],
         _ => ["FLIP 0", "0.5", "1"],
     };
     Some((ramp, labels))
 }
 
+/// The split view: `a`'s columns left of `split` (a fraction of the width), `b`'s from there on,
+/// both RGBA8 of `w` × `h`.
+pub fn split(a: &[u8], b: &[u8], w: u32, h: u32, split: f32) -> Vec<u8> {
+    let cut = ((split.clamp(0.0, 1.0) * w as f32).round() as usize).min(w as usize);
+    let mut out = a.to_vec();
+    for y in 0..h as usize {
+        let row = y * w as usize * 4;
+        out[row + cut * 4..row + w as usize * 4]
+            .copy_from_slice(&b[row + cut * 4..row + w as usize * 4]);
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn split_takes_a_left_and_b_right() {
+        let a = vec![1u8; 4 * 4 * 2];
+        let b = vec![2u8; 4 * 4 * 2];
+        let s = split(&a, &b, 4, 2, 0.5);
+        for y in 0..2 {
+            for x in 0..4 {
+                assert_eq!(s[(y * 4 + x) * 4], if x < 2 { 1 } else { 2 });
+            }
+        }
+        assert_eq!(split(&a, &b, 4, 2, 0.0), b);
+        assert_eq!(split(&a, &b, 4, 2, 1.0), a);
+        // The diff view has the error view's colour bar; final has none.
+        assert!(colour_bar(View::Diff, 8).is_some() && colour_bar(View::Final, 8).is_none());
+    }
 
     #[test]
     fn projection_hits_the_image_centre() {

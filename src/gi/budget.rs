@@ -4,7 +4,7 @@
 //! The line passes through the paper's intermediate setting (1% of the pixels as SP clusters with
 //! 2000 of 8192 VPLs as VPL clusters) with K_SP growing as the square root of K_VPL
 //! (`k_sp_on_line`): on lavapipe the shading (pixels × K_VPL) costs most and SP clusters are cheap,
-//! while the error grows fast as K_SP falls (conference, 320×240: 8 SP clusters have 20× the MSE of
+//! while the error grows fast as K_SP falls (conference, 320×240: 8 SP clusters have 18× the MSE of
 //! 115), so the line keeps K_SP high where the paper's own light setting (0.15%, 750) drops it
 //! (docs/results.md, "K for a time budget"). Along it the frame's time is `fixed + V(x)`, where `fixed`
 //! is the passes that do not depend on K (primary rays, direct light) and V the others, modelled
