@@ -44,7 +44,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     var sum = vec3<f32>(0.0);
     for (var j = chunk.sub_offset; j < chunk.sub_offset + chunk.sub_count; j++) {
         let v = vpls[j];
-        let c = vpl_term(p, n, sp.albedo.xyz, v, params.d_min2);
+        let c = eq5_vpl_radiance(p, n, sp.albedo.xyz, v, params.d_min2);
         if any(c > vec3<f32>(0.0)) && vpl_visible(p, n, v.pos.xyz, v.nrm.xyz) {
             sum += c;
         }

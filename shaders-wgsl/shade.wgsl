@@ -41,39 +41,38 @@ fn load_light(c: u32) -> Vpl {
     return Vpl(light_texel(3u * c), light_texel(3u * c + 1u), light_texel(3u * c + 2u));
 }
 
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let m = chunk_item(gid, nwg);
-    if m == INVALID {
-        return;
-    }
-    let sp = gbuffer[m];
-    if sp.pos.w <= 0.0 {
-        indirect[m] = vec4<f32>(0.0);
-        return;
-    }
-    // Slot j keeps its place; an unused slot (INVALID) has weight 0 and an empty row, so it adds
-    // exactly +0 to Ṽ and the sums are those of a loop over the used slots alone.
-    var rows: array<u32, MAX_F>;
-    var w: array<f32, MAX_F>;
+// Eq. (8) as weights: 1/F' for each of the pixel's F' used slots (rows[j] != INVALID), 0 for the
+// others, so that eq9_weighted_visibility with them is Eq. (8)'s mean. CPU twin:
+// cpu::shade::eq8_mean_weights.
+fn eq8_mean_weights(rows: array<u32, MAX_F>) -> array<f32, MAX_F> {
     var nf = 0u;
     for (var j = 0u; j < F; j++) {
-        let k = assign[m * F + j];
-        rows[j] = k;
-        w[j] = 0.0;
-        if k != INVALID {
-            w[j] = weights[m * F + j];
-            nf += 1u;
-        }
+        nf += select(0u, 1u, rows[j] != INVALID);
     }
-    if params.weighted == 0u {
-        for (var j = 0u; j < F; j++) {
-            w[j] = select(0.0, 1.0 / f32(nf), rows[j] != INVALID);
-        }
+    var w: array<f32, MAX_F>;
+    for (var j = 0u; j < F; j++) {
+        w[j] = select(0.0, 1.0 / f32(nf), rows[j] != INVALID);
     }
-    // Lights 32 at a time: one bit word per row serves 32 lights, and a light no row sees (Ṽ = 0,
-    // which would add exactly zero) is skipped. Lights are still summed in increasing order and Ṽ
-    // over j in order, so the sum is the same as a plain loop over all lights.
+    return w;
+}
+
+// Eq. (9): Ṽ(p, p_c) = Σ_f w_f V(p_f, p_c) over the pixel's slots, V(p_f, p_c) being bit b of row
+// f's word `rw[f]` (Eq. 8 with eq8_mean_weights). Summed over f in order. CPU twin:
+// cpu::shade::eq9_weighted_visibility.
+fn eq9_weighted_visibility(w: array<f32, MAX_F>, rw: array<u32, MAX_F>, b: u32) -> f32 {
+    var v = 0.0;
+    for (var j = 0u; j < F; j++) {
+        v += select(0.0, w[j], ((rw[j] >> b) & 1u) != 0u);
+    }
+    return v;
+}
+
+// Eq. (6) over this dispatch's lights: Σ_c I_c ρ G Ṽ(p, p_c), the lights being the VPL-cluster
+// representatives (or the VPLs) of words [chunk.sub_offset, + chunk.sub_count). Lights 32 at a time:
+// one bit word per row serves 32 lights, and a light no row sees (Ṽ = 0, which would add exactly
+// zero) is skipped. Lights are still summed in increasing order and Ṽ over j in order, so the sum is
+// the same as a plain loop over all lights. CPU twin: cpu::shade::eq6_indirect.
+fn eq6_indirect(sp: ShadingPoint, rows: array<u32, MAX_F>, w: array<f32, MAX_F>) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     var rw: array<u32, MAX_F>;
     // This dispatch's words [chunk.sub_offset, + chunk.sub_count) (src/gi/shade.rs bounds them:
@@ -90,16 +89,43 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         while seen != 0u {
             let b = firstTrailingBit(seen);
             seen &= seen - 1u;
-            let t = vpl_term(sp.pos.xyz, sp.nrm.xyz, sp.albedo.xyz, load_light(wd * 32u + b), params.d_min2);
+            let t = eq5_vpl_radiance(sp.pos.xyz, sp.nrm.xyz, sp.albedo.xyz, load_light(wd * 32u + b), params.d_min2);
             if any(t > vec3<f32>(0.0)) {
-                var v = 0.0;
-                for (var j = 0u; j < F; j++) {
-                    v += select(0.0, w[j], ((rw[j] >> b) & 1u) != 0u);
-                }
-                sum += t * v;
+                sum += t * eq9_weighted_visibility(w, rw, b);
             }
         }
     }
+    return sum;
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let m = chunk_item(gid, nwg);
+    if m == INVALID {
+        return;
+    }
+    let sp = gbuffer[m];
+    if sp.pos.w <= 0.0 {
+        indirect[m] = vec4<f32>(0.0);
+        return;
+    }
+    // Slot j keeps its place; an unused slot (INVALID) has weight 0 and an empty row, so it adds
+    // exactly +0 to Ṽ and the sums are those of a loop over the used slots alone.
+    var rows: array<u32, MAX_F>;
+    var w: array<f32, MAX_F>;
+    for (var j = 0u; j < F; j++) {
+        let k = assign[m * F + j];
+        rows[j] = k;
+        w[j] = 0.0;
+        if k != INVALID {
+            // Eq. (10)'s weights, from the final assignment.
+            w[j] = weights[m * F + j];
+        }
+    }
+    if params.weighted == 0u {
+        w = eq8_mean_weights(rows);
+    }
+    let sum = eq6_indirect(sp, rows, w);
     // The first range of words writes the pixel, the others add to it.
     if chunk.sub_offset == 0u {
         indirect[m] = vec4<f32>(sum, 0.0);

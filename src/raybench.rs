@@ -147,39 +147,30 @@ pub fn run(
                 r.d[3],
             )
         };
-        let cpu_t = best_of(3, || {
-            let t0 = Instant::now();
-            let n: usize = rays
-                .par_iter()
-                .map(|r| {
-                    let ray = to_ray(r);
-                    if any {
-                        bvh.occluded_obvhs(ray.origin, ray.direction, ray.tmin, ray.tmax) as usize
-                    } else {
-                        bvh.closest_obvhs(ray.origin, ray.direction, ray.tmin, ray.tmax)
-                            .is_some() as usize
-                    }
-                })
-                .sum();
-            std::hint::black_box(n);
-            Ok(t0.elapsed())
+        // Wall time of all rays on every CPU core, best of 3.
+        let on_cpu = |trace: &(dyn Fn(Ray) -> usize + Sync)| {
+            best_of(3, || {
+                let t0 = Instant::now();
+                let n: usize = rays.par_iter().map(|r| trace(to_ray(r))).sum();
+                std::hint::black_box(n);
+                Ok(t0.elapsed())
+            })
+        };
+        let cpu_t = on_cpu(&|ray| {
+            if any {
+                bvh.occluded_obvhs(ray.origin, ray.direction, ray.tmin, ray.tmax) as usize
+            } else {
+                bvh.closest_obvhs(ray.origin, ray.direction, ray.tmin, ray.tmax)
+                    .is_some() as usize
+            }
         })?;
-        let cw_t = best_of(3, || {
-            let t0 = Instant::now();
-            let n: usize = rays
-                .par_iter()
-                .map(|r| {
-                    let ray = to_ray(r);
-                    if any {
-                        !cw.ray_traverse_miss(ray, |r, i| cw_tris[i].intersect(r)) as usize
-                    } else {
-                        let mut hit = RayHit::none();
-                        cw.ray_traverse(ray, &mut hit, |r, i| cw_tris[i].intersect(r)) as usize
-                    }
-                })
-                .sum();
-            std::hint::black_box(n);
-            Ok(t0.elapsed())
+        let cw_t = on_cpu(&|ray| {
+            if any {
+                !cw.ray_traverse_miss(ray, |r, i| cw_tris[i].intersect(r)) as usize
+            } else {
+                let mut hit = RayHit::none();
+                cw.ray_traverse(ray, &mut hit, |r, i| cw_tris[i].intersect(r)) as usize
+            }
         })?;
         let g = mrays(rays.len(), gpu_t);
         let c = mrays(rays.len(), cpu_t);

@@ -196,6 +196,7 @@ pub const MAX_SIDE: u32 = 16384;
 
 /// The clustering of shading points and VPLs: the paper's knobs.
 #[derive(Args, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[command(next_help_heading = "Clustering (the paper's knobs)")]
 #[serde(default)]
 pub struct ClusterSettings {
     /// K of the shading-point clustering (0 = no SP clustering; off when ≥ the pixel count).
@@ -299,6 +300,7 @@ pub fn plane_gate_sine(deg: Option<f32>) -> f32 {
 /// What a frame is: its size, random seed, VPLs, bounce budget, direct-light samples, exposure and
 /// G-term clamp.
 #[derive(Args, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[command(next_help_heading = "Frame")]
 #[serde(default)]
 pub struct FrameSettings {
     /// Image width, 1..16384.
@@ -353,6 +355,7 @@ impl FrameSettings {
 
 /// Lights added to a scene (for scenes that ship without any) and the scale of its emitters.
 #[derive(Args, Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[command(next_help_heading = "Added lights")]
 pub struct LightSettings {
     /// Add a directional light: DX,DY,DZ,E[,R,G,B] (direction towards the sun).
     #[arg(long, value_name = "DX,DY,DZ,E[,R,G,B]", allow_hyphen_values = true)]

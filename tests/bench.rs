@@ -273,6 +273,46 @@ fn camera_path_refuses_a_bad_path() {
     assert_eq!(code, 2, "{err}");
 }
 
+/// The contract's columns (docs/design.md, "Bench outputs"), written out rather than taken from the code.
+#[test]
+fn header_has_the_contract_columns_in_order() {
+    let h = csv::header();
+    let want = [
+        "scene",
+        "camera",
+        "width",
+        "height",
+        "vpls",
+        "mode",
+        "vpl_clusters",
+        "sp_clusters",
+        "fuzziness",
+        "gamma",
+        "normal_threshold",
+        "iterations",
+        "vpl_trace_ms",
+        "vpl_cluster_ms",
+        "primary_ms",
+        "sp_cluster_ms",
+        "visibility_ms",
+        "shade_ms",
+        "gather_ms",
+        "direct_ms",
+        "frame_ms",
+        "reference_ms",
+        "speedup",
+        "mse",
+        "rel_mse",
+        "sp_clusters_used",
+        "vpl_clusters_used",
+        "shadow_rays",
+    ];
+    assert_eq!(&h[..want.len()], &want.map(String::from));
+    let csv = csv::to_csv(&[]);
+    assert_eq!(csv.lines().count(), 1);
+    assert_eq!(csv::split_line(csv.trim_end()), h);
+}
+
 /// `--target-ms`: after the sweep, one row per budget and mode, its K's chosen for the budget, with
 /// the sweep's best MSE at no more time beside it.
 #[test]

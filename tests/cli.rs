@@ -1147,3 +1147,53 @@ fn a_gltf_room_at_any_finite_scale_renders_the_same_image() {
         assert_eq!(common::error_lines(&err).len(), 1, "{err}");
     }
 }
+
+/// `render --trace` writes every timed dispatch as a Chrome trace event under its pass's name, with
+/// the stats' pass times as the sums of those events (`wgpu-profiler`'s queries).
+#[test]
+fn render_writes_a_chrome_trace_of_its_passes() {
+    let d = common::scratch("cli-trace");
+    let (trace, stats) = (d.join("t.json"), d.join("s.json"));
+    let (code, _, err) = common::run_cli(&[
+        "render",
+        "-o",
+        d.join("o.exr").to_str().unwrap(),
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--vpls",
+        "256",
+        "--vpl-clusters",
+        "32",
+        "--sp-clusters",
+        "48",
+        "--trace",
+        trace.to_str().unwrap(),
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let t: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&trace).unwrap()).expect("the trace is JSON");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let events = t["traceEvents"].as_array().unwrap();
+    for pass in s["passes"].as_array().unwrap() {
+        let name = pass.as_str().unwrap();
+        let dur_us: f64 = events
+            .iter()
+            .filter(|e| e["name"] == name)
+            .map(|e| e["dur"].as_f64().unwrap())
+            .sum();
+        assert!(dur_us > 0.0, "{name}: no trace event");
+        let ms = s["timings_ms"][name].as_f64().unwrap();
+        // Event durations are µs; the stats' the same queries summed in ms (measured: equal to
+        // rounding).
+        assert!(
+            (dur_us / 1e3 - ms).abs() <= 1e-6 * ms.max(1.0),
+            "{name}: {dur_us} µs vs {ms} ms"
+        );
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}

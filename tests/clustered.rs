@@ -61,14 +61,15 @@ fn shading_pairs(
     sps.iter()
         .enumerate()
         .map(|(m, sp)| {
-            let c = shade::shade(
+            let c = shade::eq6_indirect(
                 sp,
                 lights,
-                &bits,
-                words,
-                &assign[m * nf..m * nf + nf],
-                &weights[m * nf..m * nf + nf],
-                fs.cluster.weighting == Weighting::InverseDistance,
+                &shade::Bits { bits: &bits, words },
+                &shade::Slots {
+                    assign: &assign[m * nf..m * nf + nf],
+                    weights: &weights[m * nf..m * nf + nf],
+                    weighted: fs.cluster.weighting == Weighting::InverseDistance,
+                },
                 d_min * d_min,
             );
             (c, Vec3::from(f.indirect[m]))
@@ -88,12 +89,10 @@ fn clustered_shading_matches_cpu_twin() {
         Weighting::Uniform,
         Weighting::InverseDistance,
     ] {
-        let fs = RenderSettings {
-            cluster: ClusterSettings {
-                weighting,
-                ..clustered(w, h).cluster.clone()
-            },
-            ..clustered(w, h)
+        let fs = {
+            let mut rs = clustered(w, h);
+            rs.cluster.weighting = weighting;
+            rs
         };
         let f = r.render(&s.default_camera(), &fs).unwrap();
         let pairs = shading_pairs(&ctx, &r, &s, &f, &fs);
@@ -118,17 +117,12 @@ fn shading_131072_lights_matches_cpu_twin() {
     let ctx = common::gpu();
     let s = scene::load("builtin:conference").unwrap();
     let mut r = Renderer::new(&ctx, &s).unwrap();
-    let fs = RenderSettings {
-        frame: FrameSettings {
-            vpls: 131_072,
-            ..clustered(8, 6).frame
-        },
-        cluster: ClusterSettings {
-            vpl_clusters: 0,
-            sp_clusters: 4,
-            ..clustered(8, 6).cluster.clone()
-        },
-        ..clustered(8, 6)
+    let fs = {
+        let mut rs = clustered(8, 6);
+        rs.frame.vpls = 131_072;
+        rs.cluster.vpl_clusters = 0;
+        rs.cluster.sp_clusters = 4;
+        rs
     };
     let f = r.render(&s.default_camera(), &fs).unwrap();
     assert_eq!(r.lights.as_ref().unwrap().list.lights.len(), 131_072);
@@ -149,17 +143,12 @@ fn mse_order_and_speedup_on_the_conference_room() {
     let mut r = Renderer::new(&ctx, &s).unwrap();
     let cam = s.default_camera();
     let (w, h) = (80, 60);
-    let base = RenderSettings {
-        frame: FrameSettings {
-            vpls: 2048,
-            ..clustered(w, h).frame
-        },
-        cluster: ClusterSettings {
-            vpl_clusters: 256,
-            sp_clusters: 96,
-            ..clustered(w, h).cluster.clone()
-        },
-        ..clustered(w, h)
+    let base = {
+        let mut rs = clustered(w, h);
+        rs.frame.vpls = 2048;
+        rs.cluster.vpl_clusters = 256;
+        rs.cluster.sp_clusters = 96;
+        rs
     };
     let reference = r
         .render(
@@ -470,12 +459,10 @@ fn no_valid_shading_points() {
 fn work_per_submission_does_not_change_the_image() {
     let s = scene::load("builtin:conference").unwrap();
     let cam = s.default_camera();
-    let base = RenderSettings {
-        frame: FrameSettings {
-            vpls: 256,
-            ..clustered(200, 180).frame
-        },
-        ..clustered(200, 180)
+    let base = {
+        let mut rs = clustered(200, 180);
+        rs.frame.vpls = 256;
+        rs
     };
     let reference = RenderSettings {
         reference: true,

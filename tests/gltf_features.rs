@@ -270,12 +270,10 @@ fn checkerboard_shadow_in_clustered_reference_and_path_traced_frames() {
     let path = r
         .path_trace(
             &cam,
-            &RenderSettings {
-                frame: FrameSettings {
-                    bounces: 2,
-                    ..settings(true).frame
-                },
-                ..settings(true)
+            &{
+                let mut rs = settings(true);
+                rs.frame.bounces = 2;
+                rs
             },
             64,
         )
@@ -362,12 +360,10 @@ fn cpu_twins_agree_on_the_alpha_tested_scene() {
     assert!(indirect_bad * 100 <= n, "indirect: {indirect_bad} of {n}");
 
     // The clustered frame: the visibility matrix and shading from the GPU's own clustering.
-    let fs = RenderSettings {
-        cluster: ClusterSettings {
-            weighting: Weighting::InverseDistance,
-            ..settings(false).cluster.clone()
-        },
-        ..settings(false)
+    let fs = {
+        let mut rs = settings(false);
+        rs.cluster.weighting = Weighting::InverseDistance;
+        rs
     };
     let f: Frame = r.render(&cam, &fs).unwrap();
     let gbuf = r.last_gbuffer().unwrap();
@@ -384,14 +380,15 @@ fn cpu_twins_agree_on_the_alpha_tested_scene() {
     let (bits, words) = shade::visibility_bits(&cpu, &reps, lights);
     let mut bad = 0;
     for (m, sp) in sps.iter().enumerate() {
-        let c = shade::shade(
+        let c = shade::eq6_indirect(
             sp,
             lights,
-            &bits,
-            words,
-            &assign[m * nf..m * nf + nf],
-            &weights[m * nf..m * nf + nf],
-            true,
+            &shade::Bits { bits: &bits, words },
+            &shade::Slots {
+                assign: &assign[m * nf..m * nf + nf],
+                weights: &weights[m * nf..m * nf + nf],
+                weighted: true,
+            },
             d_min * d_min,
         );
         bad += !close(c, Vec3::from(f.indirect[m])) as u32;

@@ -6,7 +6,8 @@ mod common;
 use common::Rand;
 use fuzzy_vpl::bvh::SceneBvh;
 use fuzzy_vpl::cpu::kmeans::{self, Centroid, Point};
-use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KMeansTuning, KmParams, scan_groups};
+use fuzzy_vpl::gi::dispatch::Gpu;
+use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KMeansTuning, KmParams, Points, scan_groups};
 use fuzzy_vpl::gi::pipeline::{RenderSettings, Renderer};
 use fuzzy_vpl::gi::scene_gpu::SceneGpu;
 use fuzzy_vpl::gpu::{GpuContext, profiler::Profiler};
@@ -49,11 +50,17 @@ fn run_gpu_with(
     let mut prof = Profiler::new(ctx);
     let buf = ctx.storage_init("data", data);
     let m = data.len() as u32 / stride;
-    let c = km
-        .run(
-            ctx, &gpu, &mut prof, "test", &buf, m, stride, s, frame, None,
-        )
-        .unwrap();
+    let mut g = Gpu {
+        ctx,
+        scene: &gpu,
+        profiler: &mut prof,
+    };
+    let points = Points {
+        data: &buf,
+        count: m,
+        stride,
+    };
+    let c = km.run(&mut g, "test", &points, s, frame, None).unwrap();
     let p = c.params;
     let raw: Vec<[f32; 4]> = ctx.read_buffer(&c.centroids, p.k as usize * 2).unwrap();
     let centroids = raw
@@ -148,8 +155,8 @@ fn assign_mismatches(
                     || a == u32::MAX
                     || b == u32::MAX
                     || !near(
-                        kmeans::dist7(&pts[i / f], &cs[a as usize], n_t),
-                        kmeans::dist7(&pts[i / f], &cs[b as usize], n_t),
+                        kmeans::eq7_dist(&pts[i / f], &cs[a as usize], n_t),
+                        kmeans::eq7_dist(&pts[i / f], &cs[b as usize], n_t),
                     ))
         })
         .count()
@@ -251,12 +258,31 @@ fn compare(
         g.reps.len(),
         "{name}: representatives differ from the CPU twin's"
     );
-    // Within 1%, or both nothing but rounding (K above the point count: every point on a centroid).
-    assert!(
-        (og - oc).abs() <= 0.01 * oc + 1e-12,
-        "{name}: objective {og} vs {oc}"
-    );
+    // On a software adapter equal (measured: equal in every case on lavapipe, the same assignments
+    // and centroids); on a GPU within 1%, or both nothing but rounding (K above the point count).
+    if ctx.software {
+        assert_eq!(og, oc, "{name}: objective");
+    } else {
+        assert!(
+            (og - oc).abs() <= 0.01 * oc + 1e-12,
+            "{name}: objective {og} vs {oc}"
+        );
+    }
     (agree_s, agree_f)
+}
+
+/// Sampled and final assignments agree with the CPU twin's: on a software adapter exactly (measured
+/// 1.0 on lavapipe for every case here: the same f32 arithmetic), on a GPU at least 99% (near-ties of
+/// Eq. 7 may break the other way; see `TIE`).
+fn assert_agreement(name: &str, ctx: &GpuContext, s: f64, f: f64) {
+    if ctx.software {
+        assert!(
+            s == 1.0 && f == 1.0,
+            "{name}: agreement {s} {f}, must be equal"
+        );
+    } else {
+        assert!(s >= 0.99 && f >= 0.99, "{name}: agreement {s} {f}");
+    }
 }
 
 fn settings(k: u32, f: u32, gamma: u32, n_t: f32, iterations: u32) -> KMeansSettings {
@@ -280,7 +306,7 @@ fn gpu_kmeans_matches_cpu_on_random_surfaces() {
     let ctx = common::gpu();
     let data = box_points(20000, 11);
     let (s, f) = compare("random", &ctx, &data, 2, &settings(64, 4, 4, 0.866, 8), BOX);
-    assert!(s >= 0.99 && f >= 0.99, "agreement {s} {f}");
+    assert_agreement("random", &ctx, s, f);
 }
 
 /// The conference room and its shading points (G-buffer) at 96×72.
@@ -344,10 +370,11 @@ fn kmeans_extremes_stay_sane() {
         ("200 iterations", settings(32, 6, 4, 0.866, 200)),
         ("F=16", settings(64, 16, 4, 0.866, 5)),
     ] {
-        compare(name, &ctx, &data, 2, &s, BOX);
+        let (a_s, a_f) = compare(name, &ctx, &data, 2, &s, BOX);
+        assert_agreement(name, &ctx, a_s, a_f);
     }
     let one = [[0.5f32, 0.5, 0.0, 1.0], [0.0, 0.0, 1.0, 0.0]];
-    compare(
+    let (a_s, a_f) = compare(
         "single point",
         &ctx,
         &one,
@@ -355,6 +382,7 @@ fn kmeans_extremes_stay_sane() {
         &settings(8, 6, 4, 0.866, 3),
         BOX,
     );
+    assert_agreement("single point", &ctx, a_s, a_f);
 }
 
 /// Fixed-point accumulation at its bounds: 2^20 points at the far corner of the frame (exercising the

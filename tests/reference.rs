@@ -4,7 +4,8 @@
 mod common;
 
 use fuzzy_vpl::cpu::shading::ShadingPoint;
-use fuzzy_vpl::gi::pathtrace::PathTrace;
+use fuzzy_vpl::gi::dispatch::Gpu;
+use fuzzy_vpl::gi::pathtrace::{PathTrace, PtSamples};
 use fuzzy_vpl::gi::pipeline::{Frame, RenderSettings, Renderer};
 use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::metrics::{mean_luminance, rel_mse};
@@ -138,14 +139,20 @@ fn reference_and_path_trace(
     let cam = s.default_camera();
     let (w, h) = (32, 32);
     let f = r.render(&cam, &reference(w, h, 4096, 1)).unwrap();
+    let mut g = Gpu {
+        ctx,
+        scene: &r.gpu,
+        profiler: &mut r.profiler,
+    };
+    let samples = PtSamples {
+        spp: 1024,
+        per_pass: 64,
+    };
     let img = PathTrace::new(ctx, &r.gpu)
         .render(
-            ctx,
-            &r.gpu,
-            &mut r.profiler,
+            &mut g,
             &CameraParams::new(&cam, w, h),
-            1024,
-            64,
+            samples,
             1,
             fuzzy_vpl::gi::vpl_trace::MAX_DEPTH,
         )
@@ -192,17 +199,17 @@ fn light_sampling_matches_bsdf_sampling() {
     };
     let f = r.render(&cam, &fs).unwrap();
     let pt = PathTrace::with_nee(&ctx, &r.gpu, false);
+    let mut g = Gpu {
+        ctx: &ctx,
+        scene: &r.gpu,
+        profiler: &mut r.profiler,
+    };
+    let samples = PtSamples {
+        spp: 4096,
+        per_pass: 256,
+    };
     let img = pt
-        .render(
-            &ctx,
-            &r.gpu,
-            &mut r.profiler,
-            &CameraParams::new(&cam, w, h),
-            4096,
-            256,
-            3,
-            1,
-        )
+        .render(&mut g, &CameraParams::new(&cam, w, h), samples, 3, 1)
         .unwrap();
     let (a, b) = (mean_luminance(&f.direct), mean_luminance(&img));
     println!("direct pass {a:.5}, BSDF-sampled {b:.5}");

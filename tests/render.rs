@@ -163,17 +163,12 @@ fn rendering_is_scale_free() {
 #[test]
 fn extreme_light_power_scales_the_image_linearly() {
     let ctx = common::gpu();
-    let s = RenderSettings {
-        frame: FrameSettings {
-            vpls: 256,
-            ..settings(24, 18, 4).frame
-        },
-        cluster: ClusterSettings {
-            vpl_clusters: 64,
-            sp_clusters: 48,
-            ..settings(24, 18, 4).cluster.clone()
-        },
-        ..settings(24, 18, 4)
+    let s = {
+        let mut rs = settings(24, 18, 4);
+        rs.frame.vpls = 256;
+        rs.cluster.vpl_clusters = 64;
+        rs.cluster.sp_clusters = 48;
+        rs
     };
     let lum = |scene: &Scene| {
         let f = Renderer::new(&ctx, scene)
@@ -245,12 +240,10 @@ fn direct_light_sub_ranges_with_many_lights_match_cpu_twin() {
         let mut r = Renderer::new(&ctx, &s).unwrap();
         let (w, h) = (8u32, 6u32);
         let cam = s.default_camera();
-        let fs = RenderSettings {
-            frame: FrameSettings {
-                vpls: 0,
-                ..settings(w, h, spp).frame
-            },
-            ..settings(w, h, spp)
+        let fs = {
+            let mut rs = settings(w, h, spp);
+            rs.frame.vpls = 0;
+            rs
         };
         let f = r.render(&cam, &fs).unwrap();
         let (mut bad, mut lit) = (0, 0);
@@ -351,12 +344,10 @@ fn quad_diagonal_on_the_centre_line_has_no_crack() {
     let cam = fuzzy_vpl::scene::Camera::look_at("c", v(0., 0., 0.9), v(0., 0., -1.), Vec3::Y, 1.2);
     let (w, h) = (161u32, 121u32);
     let mut r = Renderer::new(&ctx, &s).unwrap();
-    let fs = RenderSettings {
-        frame: FrameSettings {
-            vpls: 1024,
-            ..settings(w, h, 4).frame
-        },
-        ..settings(w, h, 4)
+    let fs = {
+        let mut rs = settings(w, h, 4);
+        rs.frame.vpls = 1024;
+        rs
     };
     let f = r.render(&cam, &fs).unwrap();
     assert!(common::all_finite(&f.radiance));
@@ -389,17 +380,12 @@ fn any_finite_scale_renders_the_unscaled_image() {
     let ctx = common::gpu();
     for name in ["cornell", "conference"] {
         let base = scene::load(&format!("builtin:{name}")).unwrap();
-        let fs = RenderSettings {
-            frame: FrameSettings {
-                vpls: 512,
-                ..settings(64, 48, 4).frame
-            },
-            cluster: ClusterSettings {
-                vpl_clusters: 64,
-                sp_clusters: 96,
-                ..settings(64, 48, 4).cluster.clone()
-            },
-            ..settings(64, 48, 4)
+        let fs = {
+            let mut rs = settings(64, 48, 4);
+            rs.frame.vpls = 512;
+            rs.cluster.vpl_clusters = 64;
+            rs.cluster.sp_clusters = 96;
+            rs
         };
         let render = |k: f32| {
             let s = scaled(base.clone(), k);
@@ -479,16 +465,11 @@ fn a_mesh_past_one_storage_binding_renders() {
     let (w, h) = (40u32, 30u32);
     let mut r = Renderer::new(&ctx, &s).unwrap();
     let f = r
-        .render(
-            &cam,
-            &RenderSettings {
-                frame: FrameSettings {
-                    vpls: 0,
-                    ..settings(w, h, 1).frame
-                },
-                ..settings(w, h, 1)
-            },
-        )
+        .render(&cam, &{
+            let mut rs = settings(w, h, 1);
+            rs.frame.vpls = 0;
+            rs
+        })
         .unwrap();
     assert!(common::all_finite(&f.radiance));
     let gbuf = r.last_gbuffer().unwrap();
@@ -548,17 +529,12 @@ fn lights_set_at_any_scale_are_in_the_callers_units() {
         color: Vec3::ONE,
         intensity: 2.0 * (hi - lo).length_squared() * k * k,
     };
-    let fs = RenderSettings {
-        frame: FrameSettings {
-            vpls: 512,
-            ..settings(64, 48, 4).frame
-        },
-        cluster: ClusterSettings {
-            vpl_clusters: 64,
-            sp_clusters: 96,
-            ..settings(64, 48, 4).cluster.clone()
-        },
-        ..settings(64, 48, 4)
+    let fs = {
+        let mut rs = settings(64, 48, 4);
+        rs.frame.vpls = 512;
+        rs.cluster.vpl_clusters = 64;
+        rs.cluster.sp_clusters = 96;
+        rs
     };
     let render = |k: f32| {
         let s = scaled(base.clone(), k);

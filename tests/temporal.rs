@@ -6,7 +6,8 @@ mod common;
 use fuzzy_vpl::bench::path::CameraPath;
 use fuzzy_vpl::bvh::SceneBvh;
 use fuzzy_vpl::cpu::kmeans::{self, Centroid, Point, RepPoint};
-use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KmParams, Warm, warm_iterations};
+use fuzzy_vpl::gi::dispatch::Gpu;
+use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KmParams, Points, Warm, warm_iterations};
 use fuzzy_vpl::gi::pipeline::{RenderSettings, Renderer};
 use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::gi::scene_gpu::SceneGpu;
@@ -181,19 +182,18 @@ fn warm_start_keeps_what_the_view_still_sees() {
         k: previous.len() as u32,
         view: Some(cam),
     };
+    let on_gpu = Points {
+        data: &buf,
+        count: W * H,
+        stride: 4,
+    };
+    let mut on = Gpu {
+        ctx: &ctx,
+        scene: &gpu,
+        profiler: &mut prof,
+    };
     let g = KMeans::new()
-        .run(
-            &ctx,
-            &gpu,
-            &mut prof,
-            "t",
-            &buf,
-            W * H,
-            4,
-            &s,
-            frame,
-            Some(&warm),
-        )
+        .run(&mut on, "t", &on_gpu, &s, frame, Some(&warm))
         .unwrap();
     assert_eq!(g.warm_kept, Some(2));
     assert_eq!(g.iterations_run, 0);

@@ -12,7 +12,7 @@ struct Vpl {
 // One term of Eq. (5) without visibility: I_j(p) rho(p) G(p, p_j), with rho = albedo / pi and the
 // G-term's 1/d^2 clamped at d_min^2 (scale-free: d_min is a fraction of the scene diagonal).
 // Returns zero when either cosine is not positive.
-fn vpl_term(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, v: Vpl, d_min2: f32) -> vec3<f32> {
+fn eq5_vpl_radiance(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, v: Vpl, d_min2: f32) -> vec3<f32> {
     let d = v.pos.xyz - p;
     let d2 = dot(d, d);
     if !(d2 > 0.0) {

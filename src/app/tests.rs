@@ -156,15 +156,19 @@ fn exr_of_the_reference_view_without_a_reference_is_refused() {
     std::fs::remove_dir_all(&d).unwrap();
 }
 
+/// Panel settings for a quick frame with temporal reuse: 256 VPLs in 32 clusters, 64 SP clusters.
+fn small_temporal() -> UiSettings {
+    let mut s = UiSettings::new(&RenderSettings::default());
+    s.frame.vpls = 256;
+    s.cluster.vpl_clusters = 32;
+    s.cluster.sp_clusters = 64;
+    s.cluster.temporal = true;
+    s
+}
+
 #[test]
 fn the_direct_light_accumulates_at_rest() {
-    let mut s = UiSettings::new(&RenderSettings::default());
-    (
-        s.frame.vpls,
-        s.cluster.vpl_clusters,
-        s.cluster.sp_clusters,
-        s.cluster.temporal,
-    ) = (256, 32, 64, true);
+    let mut s = small_temporal();
     s.frame.direct_samples = 2;
     let mut v = viewer(s);
     poll_until(&mut v, |v| v.info.is_some());
@@ -202,13 +206,7 @@ fn the_direct_light_accumulates_at_rest() {
 
 #[test]
 fn lights_move_without_a_restart() {
-    let mut s = UiSettings::new(&RenderSettings::default());
-    (
-        s.frame.vpls,
-        s.cluster.vpl_clusters,
-        s.cluster.sp_clusters,
-        s.cluster.temporal,
-    ) = (256, 32, 64, true);
+    let s = small_temporal();
     let mut v = viewer(s);
     poll_until(&mut v, |v| v.info.is_some());
     v.schedule();

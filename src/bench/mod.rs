@@ -23,7 +23,7 @@ use crate::scene::{Camera, Scene};
 use crate::settings::{ClusterSettings, FrameSettings};
 use crate::stats::ErrorStats;
 use crate::{export, metrics, stats};
-use csv::{Row, STAGES};
+use csv::Row;
 use summary::{CameraSummary, SummaryInfo};
 use sweep::Sweep;
 
@@ -270,9 +270,8 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
             if let Some(tm) = target_ms {
                 label = format!("target {tm} ms {label}");
             }
-            let stages_ms: BTreeMap<String, f64> = STAGES
-                .iter()
-                .map(|k| (k.to_string(), t.get(*k).copied().unwrap_or(0.0)))
+            let stages_ms: BTreeMap<String, f64> = csv::stages()
+                .map(|k| (k.to_string(), t.get(k).copied().unwrap_or(0.0)))
                 .collect();
             let frame_ms = stages_ms[FRAME_KEY];
             let labels = renderer.sp_labels(&frame)?;

@@ -131,6 +131,7 @@ pub fn parse_mode(item: &str) -> Result<Mode, Invalid> {
 /// The lists a sweep multiplies out: every `ClusterSettings` knob as a comma-separated list (an
 /// empty list takes the default; `--quick` has its own defaults for the modes and the K's).
 #[derive(clap::Args, Clone, Debug, Default, PartialEq)]
+#[command(next_help_heading = "Sweep (comma-separated lists)")]
 pub struct Sweep {
     /// Modes to compare: hard,uniform,weighted,vpl-only,sp-only (default hard,uniform,weighted;
     /// quick: all five).

@@ -6,11 +6,11 @@ use anyhow::Result;
 use clap::Args;
 
 use super::bad;
-use super::scene::{SceneArgs, check_size, check_vpls};
+use super::scene::{SceneArgs, ShotArgs, check_size, check_vpls};
 use crate::gi::budget;
 use crate::gi::pipeline::{self, RenderSettings, Renderer};
 use crate::gpu::GpuContext;
-use crate::settings::{ClusterSettings, FrameSettings};
+use crate::settings::FrameSettings;
 use crate::{export, metrics, stats};
 
 #[derive(Args)]
@@ -24,6 +24,10 @@ pub struct RenderArgs {
     /// Write the stats JSON (docs/design.md, "Stats JSON") here.
     #[arg(long)]
     stats: Option<PathBuf>,
+    /// Write the GPU timer queries of the render (every dispatch of every pass) as a Chrome trace
+    /// (chrome://tracing, Perfetto) here.
+    #[arg(long, value_name = "TRACE.json")]
+    trace: Option<PathBuf>,
     /// Fill the stats' error block against this reference EXR.
     #[arg(long)]
     compare: Option<PathBuf>,
@@ -35,13 +39,8 @@ pub struct RenderArgs {
     /// (the per-pixel FLIP error of the tone-mapped images, magma from 0 to 1).
     #[arg(long, value_enum, default_value_t = ErrorMetric::RelMse, requires = "error_map")]
     error_metric: ErrorMetric,
-    /// Use the Nth glTF camera (0-based); default: the scene's first camera, else a view of its bounds.
-    #[arg(long)]
-    camera: Option<usize>,
     #[command(flatten)]
-    frame: FrameSettings,
-    #[command(flatten)]
-    cluster: ClusterSettings,
+    shot: ShotArgs,
     /// Render N times; timings are the mean of the 3 best (the paper's method).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     repeat: u32,
@@ -107,27 +106,34 @@ pub fn run(a: RenderArgs) -> Result<()> {
         )));
     }
     // Every output can be written: checked before the (possibly long) render.
-    for p in a.output.iter().chain(&a.stats).chain(&a.error_map) {
+    for p in a
+        .output
+        .iter()
+        .chain(&a.stats)
+        .chain(&a.error_map)
+        .chain(&a.trace)
+    {
         export::check_writable(p).map_err(bad)?;
     }
     let reference = a
         .compare
         .as_deref()
-        .map(|p| read_reference(p, &a.frame))
+        .map(|p| read_reference(p, &a.shot.frame))
         .transpose()?;
     let scene = a.scene.load()?;
-    let camera = a.scene.camera(&scene, a.camera)?;
+    let camera = a.scene.camera(&scene, a.shot.camera)?;
     let ctx = GpuContext::new_headless()?;
-    check_vpls(&ctx, a.frame.vpls)?;
+    check_vpls(&ctx, a.shot.frame.vpls)?;
     let bytes = match a.path_trace {
         Some(_) => pipeline::PATH_TRACE_PIXEL_BYTES,
         None => pipeline::PIXEL_BYTES,
     };
-    check_size(&ctx, a.frame.width, a.frame.height, bytes)?;
+    check_size(&ctx, a.shot.frame.width, a.shot.frame.height, bytes)?;
     let mut renderer = Renderer::new(&ctx, &scene)?;
+    renderer.profiler.keep_trace = a.trace.is_some();
     let settings = RenderSettings {
-        frame: a.frame,
-        cluster: a.cluster.clone(),
+        frame: a.shot.frame,
+        cluster: a.shot.cluster.clone(),
         reference: a.reference,
         progress: true,
         control: None,
@@ -173,6 +179,9 @@ pub fn run(a: RenderArgs) -> Result<()> {
         frame = Some(f);
     }
     let frame = frame.expect("repeat >= 1");
+    if let Some(p) = &a.trace {
+        renderer.profiler.write_trace(p)?;
+    }
     let non_finite = frame
         .radiance
         .iter()
@@ -190,7 +199,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
             a.scene.scene
         );
     }
-    let exposure = a.frame.exposure.resolve(&frame.radiance);
+    let exposure = a.shot.frame.exposure.resolve(&frame.radiance);
     for out in &a.output {
         export::write_image(out, frame.width, frame.height, &frame.radiance, exposure)?;
     }
@@ -205,7 +214,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
             r,
             frame.width,
             frame.height,
-            a.frame.exposure.resolve(r),
+            a.shot.frame.exposure.resolve(r),
             labels.as_deref(),
         )
     });

@@ -7,7 +7,7 @@ use clap::Args;
 use super::bad;
 use crate::gpu::GpuContext;
 use crate::scene::{self, Scene, extra_lights};
-use crate::settings::LightSettings;
+use crate::settings::{ClusterSettings, FrameSettings, LightSettings};
 
 #[derive(Args, Clone)]
 pub struct SceneArgs {
@@ -20,6 +20,19 @@ pub struct SceneArgs {
     /// (repeatable). Only for extensions that change neither geometry nor diffuse colour.
     #[arg(long, value_name = "NAME")]
     pub allow_extension: Vec<String>,
+}
+
+/// What a picture is made with: the camera, the frame and the clustering (`render` and `view`).
+#[derive(Args)]
+pub struct ShotArgs {
+    /// Use the Nth glTF camera (0-based); default: the scene's first camera, else a view of its
+    /// bounds.
+    #[arg(long)]
+    pub camera: Option<usize>,
+    #[command(flatten)]
+    pub frame: FrameSettings,
+    #[command(flatten)]
+    pub cluster: ClusterSettings,
 }
 
 impl SceneArgs {

@@ -6,26 +6,21 @@ use anyhow::Result;
 use clap::Args;
 
 use super::bad;
-use super::scene::{SceneArgs, check_vpls};
+use super::scene::{SceneArgs, ShotArgs, check_vpls};
 use crate::export;
 use crate::exposure::Exposure;
 use crate::gi::pipeline::RenderSettings;
 use crate::gpu::GpuContext;
-use crate::settings::{ClusterSettings, FrameSettings, Invalid};
+use crate::settings::Invalid;
 
 #[derive(Args)]
 pub struct ViewArgs {
     #[command(flatten)]
     scene: SceneArgs,
-    /// Start from the Nth glTF camera (0-based).
-    #[arg(long)]
-    camera: Option<usize>,
-    /// The frame; its size is the image area at start, logical pixels (the window adds the side
-    /// panel).
+    /// The camera, the frame and the clustering (in `view`, the frame's size is the image area at
+    /// start, logical pixels; the window adds the side panel).
     #[command(flatten)]
-    frame: FrameSettings,
-    #[command(flatten)]
-    cluster: ClusterSettings,
+    shot: ShotArgs,
     /// Render scale of the GI image relative to the image area, 0.1..1.
     #[arg(long, default_value_t = 0.5, value_parser = parse_render_scale)]
     render_scale: f32,
@@ -127,7 +122,7 @@ fn parse_render_scale(v: &str) -> Result<f32, Invalid> {
 }
 
 pub fn run(a: ViewArgs) -> Result<()> {
-    if a.frame.exposure == Exposure::Fixed(0.0) {
+    if a.shot.frame.exposure == Exposure::Fixed(0.0) {
         return Err(bad(
             "--exposure 0: the viewer needs an exposure > 0 (or auto)",
         ));
@@ -160,13 +155,13 @@ pub fn run(a: ViewArgs) -> Result<()> {
         .map_err(|e| bad(format!("--shot-dir {e}")))?;
     let scene = a.scene.load()?;
     // render's device limits apply to the viewer's GI worker too (it makes its own device).
-    check_vpls(&GpuContext::new_headless()?, a.frame.vpls)?;
-    if let Some(i) = a.camera {
+    check_vpls(&GpuContext::new_headless()?, a.shot.frame.vpls)?;
+    if let Some(i) = a.shot.camera {
         a.scene.camera(&scene, Some(i))?;
     }
     let rs = RenderSettings {
-        frame: a.frame,
-        cluster: a.cluster,
+        frame: a.shot.frame,
+        cluster: a.shot.cluster,
         ..Default::default()
     };
     let mut settings = crate::app::UiSettings::new(&rs);
@@ -182,9 +177,9 @@ pub fn run(a: ViewArgs) -> Result<()> {
         spec: a.scene.scene.clone(),
         scene,
         loader,
-        width: a.frame.width,
-        height: a.frame.height,
-        camera: a.camera,
+        width: a.shot.frame.width,
+        height: a.shot.frame.height,
+        camera: a.shot.camera,
         settings,
         frames: a.frames,
         screenshot: a.screenshot,

@@ -80,8 +80,9 @@ fn reseed_mix(p: &KmParams, x: u32, iteration: u32) -> u32 {
     (h >> 22) ^ h
 }
 
-/// Eq. (7).
-pub fn dist7(p: &Point, c: &Centroid, n_t: f32) -> f32 {
+/// Eq. (7): |p − c| when n_p · n_c > n_t, else ∞ (`f32::MAX`). Twin of `eq7_dist` in
+/// common/kmeans.wgsl.
+pub fn eq7_dist(p: &Point, c: &Centroid, n_t: f32) -> f32 {
     if p.nrm.dot(c.nrm) > n_t {
         (p.pos - c.pos).length()
     } else {
@@ -181,7 +182,7 @@ fn nearest(
                     }
                     for &k in &g.cells[g.index([x, y, z])] {
                         let r = if normals {
-                            dist7(pt, &cs[k as usize], n_t)
+                            eq7_dist(pt, &cs[k as usize], n_t)
                         } else {
                             (pt.pos - cs[k as usize].pos).length()
                         };
@@ -495,7 +496,7 @@ fn kmeans_from(
             .zip(&kept)
             .map(|(x, &keep)| if keep { x.1 } else { -1.0 })
             .collect();
-        let w = inverse_distance_weights(&d, p.weight_exponent);
+        let w = eq10_weights(&d, p.weight_exponent);
         for (j, &(kk, _)) in b.iter().enumerate() {
             if kept[j] {
                 assign[i * f + j] = kk;
@@ -572,7 +573,7 @@ pub fn exact_nearest(pt: &Point, cs: &[Centroid], n_t: f32) -> u32 {
         if !c.valid {
             continue;
         }
-        let r = dist7(pt, c, n_t);
+        let r = eq7_dist(pt, c, n_t);
         if r < f32::MAX && before(r, k as u32, best.1, best.0) {
             best = (k as u32, r);
         }
@@ -596,11 +597,11 @@ pub fn objective(points: &[Point], p: &KmParams, sample_assign: &[u32], cs: &[Ce
 /// A distance at or below this counts as 0 (`ZERO_DIST` in kmeans.wgsl).
 pub const ZERO_DIST: f32 = 1e-30;
 
-/// Eq. (10) generalised to w'_f = d_f^-p (twin of `inverse_distance_weights` in kmeans.wgsl): computed
+/// Eq. (10) generalised to w'_f = d_f^-p (twin of `eq10_weights` in kmeans/assign.wgsl): computed
 /// as (d_min / d_f)^p normalised, so no distance or p overflows; exact for p = 1 and 0. Negative
 /// distances mark unused slots (weight 0); the first distance of 0 (≤ `ZERO_DIST`) takes the whole
 /// weight.
-pub fn inverse_distance_weights(d: &[f32], p: f32) -> Vec<f32> {
+pub fn eq10_weights(d: &[f32], p: f32) -> Vec<f32> {
     let zero = d.iter().position(|&x| (0.0..=ZERO_DIST).contains(&x));
     let d_min = d
         .iter()
@@ -647,7 +648,7 @@ pub fn rep_weights(points: &[Point], f: usize, assign: &[u32], reps: &[u32], p: 
                 }
             })
             .collect();
-        let w = inverse_distance_weights(&d, p);
+        let w = eq10_weights(&d, p);
         out[m * f..m * f + f].copy_from_slice(&w);
     }
     out

@@ -4,7 +4,7 @@ use glam::Vec3;
 
 use super::kmeans::RepPoint;
 use super::shading::{CpuScene, ShadingPoint};
-use super::vpl::vpl_term;
+use super::vpl::eq5_vpl_radiance;
 use crate::gi::vpl_trace::Vpl;
 
 /// The visibility bit matrix: row k (SP cluster with representative point `reps[k]`, or none), bit c
@@ -30,40 +30,74 @@ pub fn visibility_bits(cpu: &CpuScene, reps: &[RepPoint], lights: &[Vpl]) -> (Ve
     (bits, words)
 }
 
-/// Eq. (6) for one pixel: Σ_c I_c ρ G Ṽ, with Ṽ the weighted (Eq. 9) or uniform (Eq. 8) mean of the
-/// visibility of the pixel's SP clusters (`assign` / `weights`: its F entries, u32::MAX unused).
-#[allow(clippy::too_many_arguments)]
-pub fn shade(
+/// The visibility bit matrix a pixel's slots read (`visibility_bits`): rows of `words` words.
+#[derive(Clone, Copy)]
+pub struct Bits<'a> {
+    pub bits: &'a [u32],
+    pub words: usize,
+}
+
+impl Bits<'_> {
+    /// V(p_f, p_c) of SP cluster `row` and light `c`.
+    pub fn visible(&self, row: u32, c: usize) -> bool {
+        self.bits[row as usize * self.words + c / 32] & (1 << (c % 32)) != 0
+    }
+}
+
+/// A pixel's F slots: its SP clusters (`u32::MAX` unused) and their Eq. (10) weights, used as they
+/// are (`weighted`, Eq. 9) or replaced by Eq. (8)'s uniform weights.
+#[derive(Clone, Copy)]
+pub struct Slots<'a> {
+    pub assign: &'a [u32],
+    pub weights: &'a [f32],
+    pub weighted: bool,
+}
+
+/// Eq. (8) as weights: 1/F' for each of the F' used slots, 0 for the others (twin of
+/// `eq8_mean_weights` in shade.wgsl).
+pub fn eq8_mean_weights(assign: &[u32]) -> Vec<f32> {
+    let nf = assign.iter().filter(|&&k| k != u32::MAX).count();
+    assign
+        .iter()
+        .map(|&k| if k != u32::MAX { 1.0 / nf as f32 } else { 0.0 })
+        .collect()
+}
+
+/// Eq. (9): Ṽ(p, p_c) = Σ_f w_f V(p_f, p_c), summed over the slots in order (twin of
+/// `eq9_weighted_visibility` in shade.wgsl; with `eq8_mean_weights` it is Eq. 8).
+pub fn eq9_weighted_visibility(w: &[f32], visible: impl Fn(usize) -> bool) -> f32 {
+    w.iter()
+        .enumerate()
+        .filter(|&(f, _)| visible(f))
+        .map(|(_, &w)| w)
+        .sum()
+}
+
+/// Eq. (6) for one pixel: Σ_c I_c ρ G Ṽ(p, p_c) over the lights (twin of `eq6_indirect` in
+/// shade.wgsl).
+pub fn eq6_indirect(
     sp: &ShadingPoint,
     lights: &[Vpl],
-    bits: &[u32],
-    words: usize,
-    assign: &[u32],
-    weights: &[f32],
-    weighted: bool,
+    bits: &Bits,
+    slots: &Slots,
     d_min2: f32,
 ) -> Vec3 {
     if !sp.valid {
         return Vec3::ZERO;
     }
-    let rows: Vec<(usize, f32)> = assign
-        .iter()
-        .zip(weights)
-        .filter(|(k, _)| **k != u32::MAX)
-        .map(|(&k, &w)| (k as usize, w))
-        .collect();
-    let nf = rows.len();
+    let w = if slots.weighted {
+        slots.weights.to_vec()
+    } else {
+        eq8_mean_weights(slots.assign)
+    };
     let mut sum = Vec3::ZERO;
     for (c, l) in lights.iter().enumerate() {
-        let t = vpl_term(sp.pos, sp.normal, sp.albedo, l, d_min2);
+        let t = eq5_vpl_radiance(sp.pos, sp.normal, sp.albedo, l, d_min2);
         if t.max_element() <= 0.0 {
             continue;
         }
-        let v: f32 = rows
-            .iter()
-            .filter(|(k, _)| bits[k * words + c / 32] & (1 << (c % 32)) != 0)
-            .map(|&(_, w)| if weighted { w } else { 1.0 / nf as f32 })
-            .sum();
+        let row = |f: usize| slots.assign[f];
+        let v = eq9_weighted_visibility(&w, |f| row(f) != u32::MAX && bits.visible(row(f), c));
         sum += t * v;
     }
     sum

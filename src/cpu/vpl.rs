@@ -6,7 +6,7 @@ use super::shading::{CpuScene, ShadingPoint};
 use crate::gi::vpl_trace::Vpl;
 
 /// One term of Eq. (5) without visibility: I_j(p) ρ(p) G(p, p_j), 1/d² clamped at d_min².
-pub fn vpl_term(p: Vec3, n: Vec3, albedo: Vec3, v: &Vpl, d_min2: f32) -> Vec3 {
+pub fn eq5_vpl_radiance(p: Vec3, n: Vec3, albedo: Vec3, v: &Vpl, d_min2: f32) -> Vec3 {
     let d = Vec3::new(v.pos[0], v.pos[1], v.pos[2]) - p;
     let d2 = d.dot(d);
     if d2 <= 0.0 || !d2.is_finite() {
@@ -47,7 +47,7 @@ impl CpuScene<'_> {
         }
         vpls.iter()
             .map(|v| {
-                let c = vpl_term(sp.pos, sp.normal, sp.albedo, v, d_min2);
+                let c = eq5_vpl_radiance(sp.pos, sp.normal, sp.albedo, v, d_min2);
                 if c.max_element() > 0.0 && self.vpl_visible(sp.pos, sp.normal, v) {
                     c
                 } else {

@@ -3,8 +3,10 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::dispatch::Kernel;
+use super::dispatch::{Gpu, Run};
+use super::pipeline::Pass;
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
-use crate::gpu::{GpuContext, profiler::Profiler};
+use crate::gpu::GpuContext;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -34,18 +36,16 @@ impl Direct {
     }
 
     /// Writes emission + direct light for `count` shading points into `radiance` (vec4 per pixel).
-    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
-        ctx: &GpuContext,
-        scene: &SceneGpu,
-        profiler: &mut Profiler,
+        g: &mut Gpu,
         gbuffer: &wgpu::Buffer,
         radiance: &wgpu::Buffer,
         count: u32,
         spp: u32,
         seed: u32,
     ) {
+        let ctx = g.ctx;
         let params = ctx.uniform("direct params", &DirectParams { spp, _pad: [0; 3] });
         let bg = self
             .kernel
@@ -53,18 +53,19 @@ impl Direct {
         // The samples (spp area samples, then the punctual lights) in sub ranges of at most
         // SAMPLES_PER_DISPATCH a pixel: lavapipe stops all loops of a SIMD batch after 65,535 trips
         // (direct.wgsl). About 2^20 shadow rays per submission.
-        let samples = spp.saturating_add(scene.info.num_lights);
+        let samples = spp.saturating_add(g.scene.info.num_lights);
         let per_dispatch = samples.clamp(1, SAMPLES_PER_DISPATCH);
         let per_chunk = ((1u32 << 20) / per_dispatch).max(1024);
+        let run = Run {
+            label: Pass::Direct.name(),
+            group: &bg,
+            seed,
+        };
         self.kernel.run_2d(
-            ctx,
-            profiler,
-            "direct",
-            scene,
-            &bg,
+            g,
+            run,
             (count, per_chunk),
             (samples.max(1), per_dispatch),
-            seed,
             &mut |_, _| true,
         );
     }

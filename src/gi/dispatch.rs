@@ -12,6 +12,22 @@ pub const WORKGROUP: u32 = 64;
 /// The most workgroups one dispatch row holds (WebGPU's guaranteed minimum per dimension).
 const MAX_GROUPS_X: u32 = 65535;
 
+/// What every pass records with: the device, the scene (bind group 0) and the GPU timer.
+pub struct Gpu<'a> {
+    pub ctx: &'a GpuContext,
+    pub scene: &'a SceneGpu,
+    pub profiler: &'a mut Profiler,
+}
+
+/// One run of a kernel: its profiler label, the pass's bind group (group 1) and the seed its
+/// `Chunk` carries.
+#[derive(Clone, Copy)]
+pub struct Run<'a> {
+    pub label: &'a str,
+    pub group: &'a wgpu::BindGroup,
+    pub seed: u32,
+}
+
 /// Records copies between the passes of `Kernel::run_entries`.
 pub type RecordCopies<'a> = dyn Fn(&mut wgpu::CommandEncoder) + 'a;
 
@@ -215,61 +231,24 @@ impl Kernel {
 
     /// Runs the kernel over items `0..total` in submissions of at most `per_chunk` items, timing each
     /// under `label`. `progress` is called after each submission with (done, total).
-    #[allow(clippy::too_many_arguments)]
     pub fn run(
         &self,
-        ctx: &GpuContext,
-        profiler: &mut Profiler,
-        label: &str,
-        scene: &SceneGpu,
-        group: &wgpu::BindGroup,
+        g: &mut Gpu,
+        r: Run,
         total: u32,
         per_chunk: u32,
-        seed: u32,
         progress: &mut dyn FnMut(u32, u32),
     ) {
-        self.run_2d(
-            ctx,
-            profiler,
-            label,
-            scene,
-            group,
-            (total, per_chunk),
-            (1, 1),
-            seed,
-            &mut |done, all| {
-                progress(done as u32, all as u32);
-                true
-            },
-        )
+        self.run_2d(g, r, (total, per_chunk), (1, 1), &mut |done, all| {
+            progress(done as u32, all as u32);
+            true
+        })
     }
 
     /// Runs entry point `entry` over `total` items in one submission (small kernels: k-means steps).
-    #[allow(clippy::too_many_arguments)]
-    pub fn run_entry(
-        &self,
-        ctx: &GpuContext,
-        profiler: &mut Profiler,
-        label: &str,
-        scene: &SceneGpu,
-        group: &wgpu::BindGroup,
-        entry: &str,
-        total: u32,
-        seed: u32,
-    ) {
+    pub fn run_entry(&self, g: &mut Gpu, r: Run, entry: &str, total: u32) {
         let index = self.entry_index(entry);
-        self.submit(
-            ctx,
-            profiler,
-            label,
-            scene,
-            group,
-            index,
-            total,
-            (0, 1),
-            seed,
-            0,
-        );
+        self.submit(g, r, index, total, (0, 1), 0);
     }
 
     /// Runs several small steps `(entry, items)` in order in one submission, then waits. The steps
@@ -279,19 +258,15 @@ impl Kernel {
     /// its own pass timed under `label.entry` (a diagnosis aid: every pass then adds its own start
     /// and end to the total). The chunk covers every invocation (offset 0, no count limit): each
     /// entry point must bound its items itself. For light work only (k-means steps).
-    #[allow(clippy::too_many_arguments)]
     pub fn run_entries(
         &self,
-        ctx: &GpuContext,
-        profiler: &mut Profiler,
-        label: &str,
-        scene: &SceneGpu,
-        group: &wgpu::BindGroup,
+        g: &mut Gpu,
+        r: Run,
         steps: &[(&str, u32)],
-        seed: u32,
         after: Option<(&str, &RecordCopies)>,
     ) {
-        self.write_chunk(ctx, 0, u32::MAX, (0, 1), seed);
+        let (ctx, label) = (g.ctx, r.label);
+        self.write_chunk(ctx, 0, u32::MAX, (0, 1), r.seed);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         let detail = std::env::var_os("FVPL_PROFILE_STEPS").is_some();
         let ends_pass = |entry: &str| detail || after.is_some_and(|(e, _)| e == entry);
@@ -306,13 +281,12 @@ impl Kernel {
             } else {
                 label.to_string()
             };
-            {
-                let mut pass = self.begin_pass(&mut enc, profiler, &name, scene, group);
+            self.in_pass(&mut enc, g, Run { label: &name, ..r }, |pass| {
                 for &(entry, total) in &steps[first..=last] {
                     pass.set_pipeline(&self.pipelines[self.entry_index(entry)].1);
-                    dispatch_items(&mut pass, total);
+                    dispatch_items(pass, total);
                 }
-            }
+            });
             if let Some((entry, record)) = after
                 && entry == steps[last].0
             {
@@ -320,26 +294,22 @@ impl Kernel {
             }
             first = last + 1;
         }
-        ctx.queue.submit([enc.finish()]);
+        g.profiler.submit(ctx, enc);
         let _ = ctx.wait();
     }
 
     /// Like `run`, over items × a second range (`sub`: total, per chunk), e.g. pixels × VPLs. Each
     /// submission covers one item range and one sub range; `progress` gets (chunks done, chunks) and
     /// returns whether to go on (false stops before the next submission).
-    #[allow(clippy::too_many_arguments)]
     pub fn run_2d(
         &self,
-        ctx: &GpuContext,
-        profiler: &mut Profiler,
-        label: &str,
-        scene: &SceneGpu,
-        group: &wgpu::BindGroup,
+        g: &mut Gpu,
+        r: Run,
         items: (u32, u32),
         sub: (u32, u32),
-        seed: u32,
         progress: &mut dyn FnMut(u64, u64) -> bool,
     ) {
+        let ctx = g.ctx;
         let (total, per_chunk) = items;
         let per_chunk = per_chunk.clamp(WORKGROUP, WORKGROUP * MAX_GROUPS_X);
         let (sub_total, sub_per) = (sub.0, sub.1.max(1));
@@ -359,18 +329,7 @@ impl Kernel {
             let mut sub_offset = 0;
             loop {
                 let sub_count = sub_per.min(sub_total.saturating_sub(sub_offset));
-                self.submit(
-                    ctx,
-                    profiler,
-                    label,
-                    scene,
-                    group,
-                    0,
-                    count,
-                    (sub_offset, sub_count),
-                    seed,
-                    offset,
-                );
+                self.submit(g, r, 0, count, (sub_offset, sub_count), offset);
                 done += 1;
                 if !progress(done, chunks) {
                     return;
@@ -385,24 +344,15 @@ impl Kernel {
     }
 
     /// One bounded submission of pipeline `index` over items `offset..offset + count`.
-    #[allow(clippy::too_many_arguments)]
-    fn submit(
-        &self,
-        ctx: &GpuContext,
-        profiler: &mut Profiler,
-        label: &str,
-        scene: &SceneGpu,
-        group: &wgpu::BindGroup,
-        index: usize,
-        count: u32,
-        sub: (u32, u32),
-        seed: u32,
-        offset: u32,
-    ) {
-        self.write_chunk(ctx, offset, count, sub, seed);
+    fn submit(&self, g: &mut Gpu, r: Run, index: usize, count: u32, sub: (u32, u32), offset: u32) {
+        let ctx = g.ctx;
+        self.write_chunk(ctx, offset, count, sub, r.seed);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
-        self.record_pass(&mut enc, profiler, label, scene, group, index, count);
-        ctx.queue.submit([enc.finish()]);
+        self.in_pass(&mut enc, g, r, |pass| {
+            pass.set_pipeline(&self.pipelines[index].1);
+            dispatch_items(pass, count);
+        });
+        g.profiler.submit(ctx, enc);
         // Waiting keeps each submission short and bounded on software drivers.
         let _ = ctx.wait();
     }
@@ -430,41 +380,23 @@ impl Kernel {
             .unwrap_or_else(|| panic!("{}: no entry point {entry}", self.name))
     }
 
-    /// A compute pass timed under `label` with the scene's and the pass's bind groups set.
-    fn begin_pass<'e>(
-        &self,
-        enc: &'e mut wgpu::CommandEncoder,
-        profiler: &mut Profiler,
-        label: &str,
-        scene: &SceneGpu,
-        group: &wgpu::BindGroup,
-    ) -> wgpu::ComputePass<'e> {
-        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(label),
-            timestamp_writes: profiler.pass(label),
-        });
-        if self.uses_scene {
-            pass.set_bind_group(0, &scene.bind_group, &[]);
-        }
-        pass.set_bind_group(1, group, &[]);
-        pass
-    }
-
-    /// One timed compute pass of pipeline `index` over `count` invocations.
-    #[allow(clippy::too_many_arguments)]
-    fn record_pass(
+    /// Records `f` in a compute pass timed under `label` with the scene's and the pass's bind
+    /// groups set.
+    fn in_pass(
         &self,
         enc: &mut wgpu::CommandEncoder,
-        profiler: &mut Profiler,
-        label: &str,
-        scene: &SceneGpu,
-        group: &wgpu::BindGroup,
-        index: usize,
-        count: u32,
+        g: &mut Gpu,
+        r: Run,
+        f: impl FnOnce(&mut wgpu::ComputePass<'_>),
     ) {
-        let mut pass = self.begin_pass(enc, profiler, label, scene, group);
-        pass.set_pipeline(&self.pipelines[index].1);
-        dispatch_items(&mut pass, count);
+        let scene = g.scene;
+        g.profiler.compute_pass(enc, r.label, |pass| {
+            if self.uses_scene {
+                pass.set_bind_group(0, &scene.bind_group, &[]);
+            }
+            pass.set_bind_group(1, r.group, &[]);
+            f(pass)
+        })
     }
 }
 

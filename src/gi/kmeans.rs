@@ -13,10 +13,11 @@ use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
+use super::dispatch::{Gpu, Run};
 use super::dispatch::{Kernel, RecordCopies, WORKGROUP, copy_to_texture, data_texture};
 use super::primary::CameraParams;
-use super::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
-use crate::gpu::{GpuContext, profiler::Profiler};
+use super::scene_gpu::{data_texture_layout, storage_layout, uniform_layout};
+use crate::gpu::GpuContext;
 use crate::settings::{ClusterSettings, Gamma, MAX_F, MAX_NORMAL_THRESHOLD, plane_gate_sine};
 
 pub const MAX_DIM: u32 = 64;
@@ -36,6 +37,15 @@ pub fn scan_groups(k: u32) -> u32 {
     let k = k as f64;
     let cells = k.powf(1.5) / (3.375 * 6f64.powf(1.5)) + k / 4.5 + 193.0;
     ((cells / 1024.0).ceil() as u64).clamp(1, SCAN_BLOCKS) as u32
+}
+
+/// The points a clustering reads: `count` points of `stride` vec4s each in `data` (position with
+/// w > 0 when valid, then normal).
+#[derive(Clone, Copy)]
+pub struct Points<'a> {
+    pub data: &'a wgpu::Buffer,
+    pub count: u32,
+    pub stride: u32,
 }
 
 /// Alg. 1 parameters.
@@ -298,23 +308,24 @@ impl KMeans {
         })
     }
 
-    /// Clusters `num_points` points of `data` (`stride` vec4s each: position with w > 0 when valid,
-    /// then normal), timing every step under `label`; from `warm`'s centroids where given
-    /// (`warm_centroids`), else from strata (Alg. 1 line 2).
-    #[allow(clippy::too_many_arguments)]
+    /// Clusters `points`, timing every step under `label`; from `warm`'s centroids where given
+    /// (`warm_centroids`), else from strata (Alg. 1 line 2). `frame`: bounds (lo, hi) containing every
+    /// point (the scene's bounds).
     pub fn run(
         &self,
-        ctx: &GpuContext,
-        scene: &SceneGpu,
-        profiler: &mut Profiler,
+        gpu: &mut Gpu,
         label: &str,
-        data: &wgpu::Buffer,
-        num_points: u32,
-        stride: u32,
+        points: &Points,
         settings: &KMeansSettings,
         frame: (Vec3, Vec3),
         warm: Option<&Warm>,
     ) -> Result<Clustering> {
+        let ctx = gpu.ctx;
+        let Points {
+            data,
+            count: num_points,
+            stride,
+        } = *points;
         let mut p = KmParams::new(num_points, stride, settings, frame);
         if let Some(w) = warm {
             p = p.with_warm(w.k, w.view.as_ref());
@@ -406,9 +417,12 @@ impl KMeans {
         ];
         // Small steps share a submission: one per iteration, then the final assignment and the
         // representatives (each bounded by the point count).
-        let mut run = |steps: &[(&str, u32)]| {
-            kernel.run_entries(ctx, profiler, label, scene, &bg, steps, seed, after)
+        let r = Run {
+            label,
+            group: &bg,
+            seed,
         };
+        let mut run = |steps: &[(&str, u32)]| kernel.run_entries(gpu, r, steps, after);
         let (mut iterations, mut warm_kept) = (settings.iterations, None);
         match warm {
             Some(w) => {

@@ -5,9 +5,11 @@ use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
 use super::dispatch::Kernel;
+use super::dispatch::{Gpu, Run};
+use super::pipeline::Pass;
 use super::primary::CameraParams;
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
-use crate::gpu::{GpuContext, profiler::Profiler};
+use crate::gpu::GpuContext;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -20,6 +22,13 @@ struct PtParams {
     right: [f32; 4],
     up: [f32; 4],
     forward: [f32; 4],
+}
+
+/// Samples a pixel, and how many an invocation traces per pass.
+#[derive(Clone, Copy, Debug)]
+pub struct PtSamples {
+    pub spp: u32,
+    pub per_pass: u32,
 }
 
 pub struct PathTrace {
@@ -47,21 +56,23 @@ impl PathTrace {
         }
     }
 
-    /// Renders `spp` samples per pixel (in passes of `spp_per_pass`) and returns the mean radiance.
+    /// Renders `samples.spp` samples per pixel (in passes of `samples.per_pass`) and returns the mean
+    /// radiance.
     /// Paths have at most `bounces + 1` surface vertices: the light transport the VPLs carry (a VPL
     /// path has at most `bounces` reflections before the shading point's own).
-    #[allow(clippy::too_many_arguments)]
     pub fn render(
         &self,
-        ctx: &GpuContext,
-        scene: &SceneGpu,
-        profiler: &mut Profiler,
+        g: &mut Gpu,
         cam: &CameraParams,
-        spp: u32,
-        spp_per_pass: u32,
+        samples: PtSamples,
         seed: u32,
         bounces: u32,
     ) -> Result<Vec<[f32; 3]>> {
+        let ctx = g.ctx;
+        let PtSamples {
+            spp,
+            per_pass: spp_per_pass,
+        } = samples;
         let (w, h) = (cam.size[0], cam.size[1]);
         let n = w * h;
         let accum = ctx.storage("pt accum", n as u64 * 16);
@@ -84,17 +95,12 @@ impl PathTrace {
             );
             let bg = self.kernel.bind_group(ctx, &[(1, &params), (2, &accum)]);
             let per = ((1u32 << 18) / k).max(64);
-            self.kernel.run(
-                ctx,
-                profiler,
-                "pathtrace",
-                scene,
-                &bg,
-                n,
-                per,
-                seed.wrapping_mul(7919).wrapping_add(pass),
-                &mut |_, _| {},
-            );
+            let run = Run {
+                label: Pass::PathTrace.name(),
+                group: &bg,
+                seed: seed.wrapping_mul(7919).wrapping_add(pass),
+            };
+            self.kernel.run(g, run, n, per, &mut |_, _| {});
             done += k;
             pass += 1;
         }

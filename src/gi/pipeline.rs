@@ -20,7 +20,7 @@ pub use super::frame::{
     Cancelled, Control, FRAME_KEY, Frame, PATH_TRACE_PIXEL_BYTES, PIXEL_BYTES, TooLarge,
     check_frame_size, check_visibility_size, max_pixels, visibility_bytes,
 };
-use super::kmeans::{Clustering, KMeansSettings};
+use super::kmeans::{Clustering, KMeansSettings, Points};
 use super::primary::{CameraParams, SP_BYTES};
 use super::resident::LastVisibility;
 pub use super::resident::{LightKey, Renderer, VplKey};
@@ -56,7 +56,8 @@ pub enum Pass {
 }
 
 impl Pass {
-    /// The passes whose times the stats and the CSV report, in the contract's order.
+    /// The passes whose times the stats report, in the order of the bench CSV's `<stage>_ms`
+    /// columns (which have all but `Reference`).
     pub const TIMED: [Pass; 9] = [
         Pass::VplTrace,
         Pass::VplCluster,
@@ -64,9 +65,9 @@ impl Pass {
         Pass::SpCluster,
         Pass::Visibility,
         Pass::Shade,
+        Pass::Gather,
         Pass::Direct,
         Pass::Reference,
-        Pass::Gather,
     ];
 
     pub const fn name(self) -> &'static str {
@@ -159,6 +160,18 @@ impl Plan {
     }
 }
 
+/// The `dispatch::Gpu` of a `Renderer` (a macro, so that the passes stay borrowable beside it).
+macro_rules! gpu {
+    ($r:ident) => {
+        super::dispatch::Gpu {
+            ctx: $r.ctx,
+            scene: &$r.gpu,
+            profiler: &mut $r.profiler,
+        }
+    };
+}
+pub(super) use gpu;
+
 /// A frame's buffers and what its passes hand on to the next ones.
 struct FrameResources {
     pixels: u32,
@@ -219,16 +232,11 @@ impl Renderer<'_> {
                     }
                 }
                 Pass::VplCluster => self.ensure_lights(s, &plan)?,
-                Pass::Primary => {
-                    self.primary
-                        .record(ctx, &self.gpu, &mut self.profiler, &r.cam, &r.gbuffer)
-                }
+                Pass::Primary => self.primary.record(&mut gpu!(self), &r.cam, &r.gbuffer),
                 Pass::Direct => {
                     r.direct_samples = self.direct_samples(s);
                     self.direct.record(
-                        ctx,
-                        &self.gpu,
-                        &mut self.profiler,
+                        &mut gpu!(self),
                         &r.gbuffer,
                         &r.radiance,
                         n,
@@ -259,14 +267,15 @@ impl Renderer<'_> {
             k: c.k(),
             view: Some(r.cam),
         });
+        let points = Points {
+            data: &r.gbuffer,
+            count: r.pixels,
+            stride: 4,
+        };
         let c = self.kmeans.run(
-            self.ctx,
-            &self.gpu,
-            &mut self.profiler,
+            &mut gpu!(self),
             Pass::SpCluster.name(),
-            &r.gbuffer,
-            r.pixels,
-            4,
+            &points,
             &KMeansSettings::shading_points(&s.cluster, s.frame.seed),
             self.scene.bounds(),
             warm.as_ref(),
@@ -289,9 +298,7 @@ impl Renderer<'_> {
         let c = r.clustering.as_ref().unwrap();
         let previous = r.previous_visibility.take();
         let (bits, words) = self.visibility.record(
-            ctx,
-            &self.gpu,
-            &mut self.profiler,
+            &mut gpu!(self),
             &c.rep_points,
             &lights.buffer,
             num_lights,
@@ -328,9 +335,7 @@ impl Renderer<'_> {
         let v = r.visibility.as_ref().unwrap();
         let d_min = s.frame.clamp * self.scene.extent();
         self.shade.record(
-            self.ctx,
-            &self.gpu,
-            &mut self.profiler,
+            &mut gpu!(self),
             &ShadeInputs {
                 gbuffer: &r.gbuffer,
                 lights: &lights.buffer,
@@ -361,9 +366,7 @@ impl Renderer<'_> {
         let control = s.control.clone();
         let mut last = 0u64;
         self.reference.record(
-            ctx,
-            &self.gpu,
-            &mut self.profiler,
+            &mut gpu!(self),
             &super::reference::GatherInputs {
                 gbuffer: &r.gbuffer,
                 lights: &lights.buffer,
@@ -506,16 +509,11 @@ impl Renderer<'_> {
         } else {
             16
         };
-        let img = pt.render(
-            ctx,
-            &self.gpu,
-            &mut self.profiler,
-            &cam,
-            spp.max(1),
+        let samples = super::pathtrace::PtSamples {
+            spp: spp.max(1),
             per_pass,
-            f.seed,
-            f.bounces,
-        )?;
+        };
+        let img = pt.render(&mut gpu!(self), &cam, samples, f.seed, f.bounces)?;
         let mut timings_ms = self.profiler.collect(ctx)?;
         let ms: f64 = timings_ms.values().sum();
         timings_ms.insert(FRAME_KEY.into(), ms);

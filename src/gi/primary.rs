@@ -4,8 +4,10 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use super::dispatch::Kernel;
+use super::dispatch::{Gpu, Run};
+use super::pipeline::Pass;
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
-use crate::gpu::{GpuContext, profiler::Profiler};
+use crate::gpu::GpuContext;
 use crate::scene::Camera;
 
 /// Bytes per shading point (`ShadingPoint` in `common/gbuffer.wgsl`).
@@ -85,27 +87,16 @@ impl Primary {
     }
 
     /// Fills `gbuffer` (width × height shading points) for `camera`.
-    pub fn record(
-        &self,
-        ctx: &GpuContext,
-        scene: &SceneGpu,
-        profiler: &mut Profiler,
-        camera: &CameraParams,
-        gbuffer: &wgpu::Buffer,
-    ) {
+    pub fn record(&self, g: &mut Gpu, camera: &CameraParams, gbuffer: &wgpu::Buffer) {
+        let ctx = g.ctx;
         let cam = ctx.uniform("camera", camera);
         let bg = self.kernel.bind_group(ctx, &[(1, &cam), (2, gbuffer)]);
         let n = camera.size[0] * camera.size[1];
-        self.kernel.run(
-            ctx,
-            profiler,
-            "primary",
-            scene,
-            &bg,
-            n,
-            1 << 17,
-            0,
-            &mut |_, _| {},
-        );
+        let run = Run {
+            label: Pass::Primary.name(),
+            group: &bg,
+            seed: 0,
+        };
+        self.kernel.run(g, run, n, 1 << 17, &mut |_, _| {});
     }
 }

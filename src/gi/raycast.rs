@@ -4,6 +4,7 @@ use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
 use super::dispatch::Kernel;
+use super::dispatch::{Gpu, Run};
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
 use crate::gpu::{GpuContext, profiler::Profiler};
 
@@ -68,17 +69,18 @@ impl Raycast {
         } else {
             "raycast_any"
         };
-        self.kernel.run(
+        let mut g = Gpu {
             ctx,
-            profiler,
-            label,
             scene,
-            &bg,
-            rays.len() as u32,
-            1 << 16,
-            0,
-            &mut |_, _| {},
-        );
+            profiler,
+        };
+        let run = Run {
+            label,
+            group: &bg,
+            seed: 0,
+        };
+        self.kernel
+            .run(&mut g, run, rays.len() as u32, 1 << 16, &mut |_, _| {});
         ctx.read_buffer(&out, rays.len())
     }
 

@@ -5,8 +5,9 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::dispatch::Kernel;
+use super::dispatch::{Gpu, Run};
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
-use crate::gpu::{GpuContext, profiler::Profiler};
+use crate::gpu::GpuContext;
 
 /// Shadow rays per submission: about a second of lavapipe work.
 pub const RAYS_PER_SUBMISSION: u32 = 1 << 20;
@@ -57,9 +58,7 @@ impl Reference {
     /// Adds the lights' light to `indirect` (vec4 per pixel, zeroed by the caller).
     pub fn record(
         &self,
-        ctx: &GpuContext,
-        scene: &SceneGpu,
-        profiler: &mut Profiler,
+        g: &mut Gpu,
         inputs: &GatherInputs,
         progress: &mut dyn FnMut(u64, u64) -> bool,
     ) {
@@ -75,6 +74,7 @@ impl Reference {
         if num_vpls == 0 || pixels == 0 {
             return;
         }
+        let ctx = g.ctx;
         let params = ctx.uniform(
             "reference params",
             &RefParams {
@@ -90,16 +90,12 @@ impl Reference {
         // batch after 65,535 trips (docs/architecture.md), and a small image would otherwise give each pixel
         // thousands of VPLs per dispatch.
         let vpl_chunk = (RAYS_PER_SUBMISSION / px_chunk).clamp(1, num_vpls.min(VPLS_PER_DISPATCH));
-        self.kernel.run_2d(
-            ctx,
-            profiler,
+        let run = Run {
             label,
-            scene,
-            &bg,
-            (pixels, px_chunk),
-            (num_vpls, vpl_chunk),
-            0,
-            progress,
-        );
+            group: &bg,
+            seed: 0,
+        };
+        self.kernel
+            .run_2d(g, run, (pixels, px_chunk), (num_vpls, vpl_chunk), progress);
     }
 }

@@ -7,7 +7,7 @@ use anyhow::Result;
 
 use super::direct::Direct;
 use super::kmeans::{Clustering, KMeans, KMeansSettings};
-use super::pipeline::{Plan, RenderSettings};
+use super::pipeline::{Plan, RenderSettings, gpu};
 use super::primary::Primary;
 use super::reference::Reference;
 use super::scene_gpu::SceneGpu;
@@ -223,15 +223,9 @@ impl<'a> Renderer<'a> {
                 trace: self.vpl_traces,
             };
             let _ = self.profiler.collect(self.ctx)?;
-            let set = self.vpl_trace.trace(
-                self.ctx,
-                &self.scene,
-                &self.gpu,
-                &mut self.profiler,
-                n,
-                seed,
-                bounces,
-            )?;
+            let set = self
+                .vpl_trace
+                .trace(&mut gpu!(self), &self.scene, n, seed, bounces)?;
             let ms: f64 = self.profiler.collect(self.ctx)?.values().sum();
             self.vpl_set = Some(ResidentVpls { set, key, ms });
         }
@@ -272,10 +266,8 @@ impl<'a> Renderer<'a> {
                     view: None,
                 });
             vpl_cluster::cluster(
-                self.ctx,
-                &self.gpu,
+                &mut gpu!(self),
                 &self.kmeans,
-                &mut self.profiler,
                 vpls,
                 &KMeansSettings::vpls(c, f.seed),
                 self.scene.bounds(),
@@ -300,16 +292,8 @@ impl<'a> Renderer<'a> {
         let radiance = ctx.storage("radiance", *n as u64 * 16);
         let spp = self.direct_samples(s);
         let _ = self.profiler.collect(ctx)?;
-        self.direct.record(
-            ctx,
-            &self.gpu,
-            &mut self.profiler,
-            gbuffer,
-            &radiance,
-            *n,
-            spp,
-            seed,
-        );
+        self.direct
+            .record(&mut gpu!(self), gbuffer, &radiance, *n, spp, seed);
         let ms: f64 = self.profiler.collect(ctx)?.values().sum();
         let px: Vec<[f32; 4]> = ctx.read_buffer(&radiance, *n as usize)?;
         Ok((px.iter().map(|p| self.to_scene_units(p)).collect(), ms))

@@ -5,9 +5,12 @@ use std::cell::OnceCell;
 
 use bytemuck::{Pod, Zeroable};
 
+use super::dispatch::{Gpu, Run};
 use super::dispatch::{Kernel, copy_to_texture, data_texture};
+use super::pipeline::Pass;
 use super::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
-use crate::gpu::{GpuContext, profiler::Profiler};
+use crate::gpu::GpuContext;
+use crate::settings::MAX_F;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -31,9 +34,6 @@ pub struct ShadeInputs<'a> {
     pub pixels: u32,
     pub params: ShadeParams,
 }
-
-/// The largest F (`MAX_F` in shade.wgsl).
-pub const MAX_F: u32 = 16;
 
 /// The most bit words (32 lights each) one invocation walks per dispatch: 16,384 lights, so the
 /// paper's settings (at most 8,192 lights) shade in one dispatch per pixel range as before.
@@ -66,13 +66,8 @@ impl Shade {
         })
     }
 
-    pub fn record(
-        &self,
-        ctx: &GpuContext,
-        scene: &SceneGpu,
-        profiler: &mut Profiler,
-        i: &ShadeInputs,
-    ) {
+    pub fn record(&self, g: &mut Gpu, i: &ShadeInputs) {
+        let ctx = g.ctx;
         let params = ctx.uniform("shade params", &i.params);
         // The lights as a texture (3 texels each; see shade.wgsl).
         let mut enc = ctx.device.create_command_encoder(&Default::default());
@@ -81,7 +76,7 @@ impl Shade {
         copy_to_texture(&mut enc, i.lights, &lights, 48 * n);
         ctx.queue.submit([enc.finish()]);
         let lights_view = lights.create_view(&Default::default());
-        let kernel = self.kernel(ctx, scene, i.params.f);
+        let kernel = self.kernel(ctx, g.scene, i.params.f);
         let bg = kernel.bind_group_with_textures(
             ctx,
             &[
@@ -102,15 +97,16 @@ impl Shade {
         let per_dispatch = words.min(WORDS_PER_DISPATCH);
         let lights = i.params.num_lights.clamp(1, per_dispatch * 32);
         let per = ((1u32 << 22) / lights).max(64);
+        let run = Run {
+            label: Pass::Shade.name(),
+            group: &bg,
+            seed: 0,
+        };
         kernel.run_2d(
-            ctx,
-            profiler,
-            "shade",
-            scene,
-            &bg,
+            g,
+            run,
             (i.pixels, per),
             (words, per_dispatch),
-            0,
             &mut |_, _| true,
         );
     }

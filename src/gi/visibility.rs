@@ -3,9 +3,11 @@
 
 use bytemuck::{Pod, Zeroable};
 
+use super::dispatch::{Gpu, Run};
 use super::dispatch::{Kernel, copy_to_texture, data_texture};
+use super::pipeline::Pass;
 use super::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
-use crate::gpu::{GpuContext, profiler::Profiler};
+use crate::gpu::GpuContext;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -43,18 +45,16 @@ impl Visibility {
     }
 
     /// Returns the bit matrix (`k_sp` rows of ceil(num_lights / 32) words) and the words per row.
-    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
-        ctx: &GpuContext,
-        scene: &SceneGpu,
-        profiler: &mut Profiler,
+        g: &mut Gpu,
         rep_points: &wgpu::Buffer,
         lights: &wgpu::Buffer,
         num_lights: u32,
         k_sp: u32,
         previous: Option<&Previous>,
     ) -> (wgpu::Buffer, u32) {
+        let ctx = g.ctx;
         let words = num_lights.div_ceil(32).max(1);
         let params = ctx.uniform(
             "visibility params",
@@ -88,17 +88,13 @@ impl Visibility {
             &[(4, &view)],
         );
         // About 2^20 rays per submission (32 per item).
-        self.kernel.run(
-            ctx,
-            profiler,
-            "visibility",
-            scene,
-            &bg,
-            k_sp * words,
-            1 << 15,
-            0,
-            &mut |_, _| {},
-        );
+        let run = Run {
+            label: Pass::Visibility.name(),
+            group: &bg,
+            seed: 0,
+        };
+        self.kernel
+            .run(g, run, k_sp * words, 1 << 15, &mut |_, _| {});
         (bits, words)
     }
 }

@@ -5,10 +5,12 @@
 use anyhow::Result;
 use glam::Vec3;
 
+use super::dispatch::Gpu;
+use super::kmeans::Points;
 use super::kmeans::{Clustering, KMeans, KMeansSettings, Warm};
-use super::scene_gpu::SceneGpu;
+use super::pipeline::Pass;
 use super::vpl_trace::{Vpl, VplSet};
-use crate::gpu::{GpuContext, profiler::Profiler};
+use crate::gpu::GpuContext;
 
 pub struct LightList {
     pub buffer: wgpu::Buffer,
@@ -31,31 +33,23 @@ pub fn unclustered(ctx: &GpuContext, vpls: &VplSet) -> LightList {
 /// from the GPU's assignment (N values, once per scene): exact and independent of the order of
 /// additions, so the same seed gives the same image. With `warm`, Alg. 1 starts from the last
 /// clustering's centroids (`kmeans::Warm`).
-#[allow(clippy::too_many_arguments)]
 pub fn cluster(
-    ctx: &GpuContext,
-    scene: &SceneGpu,
+    g: &mut Gpu,
     kmeans: &KMeans,
-    profiler: &mut Profiler,
     vpls: &VplSet,
     settings: &KMeansSettings,
     frame: (Vec3, Vec3),
     warm: Option<&Warm>,
 ) -> Result<LightList> {
+    let ctx = g.ctx;
     let n = vpls.vpls.len() as u32;
     let s = KMeansSettings { f: 1, ..*settings };
-    let c = kmeans.run(
-        ctx,
-        scene,
-        profiler,
-        "vpl_cluster",
-        &vpls.buffer,
-        n,
-        3,
-        &s,
-        frame,
-        warm,
-    )?;
+    let points = Points {
+        data: &vpls.buffer,
+        count: n,
+        stride: 3,
+    };
+    let c = kmeans.run(g, Pass::VplCluster.name(), &points, &s, frame, warm)?;
     let assign: Vec<u32> = ctx.read_buffer(&c.assign, n as usize)?;
     let reps: Vec<u32> = ctx.read_buffer(&c.reps, c.k() as usize * 2)?;
     let mut flux = vec![[0f64; 3]; c.k() as usize];

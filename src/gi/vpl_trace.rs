@@ -7,8 +7,10 @@ use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
 use super::dispatch::Kernel;
+use super::dispatch::{Gpu, Run};
+use super::pipeline::Pass;
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
-use crate::gpu::{GpuContext, profiler::Profiler};
+use crate::gpu::GpuContext;
 use crate::scene::{LightKind, Scene};
 
 /// The default for the most VPLs one light path leaves (its bounce count); Russian roulette usually
@@ -95,18 +97,17 @@ impl VplTrace {
         }
     }
 
-    #[allow(clippy::too_many_arguments)]
-    /// Traces light paths until `n` VPLs exist (or the lights reach nothing) and keeps the first `n`.
+    /// Traces light paths from the lights of `scene` (uploaded as `g.scene`) until `n` VPLs exist
+    /// (or the lights reach nothing) and keeps the first `n`.
     pub fn trace(
         &self,
-        ctx: &GpuContext,
+        g: &mut Gpu,
         scene: &Scene,
-        gpu: &SceneGpu,
-        profiler: &mut Profiler,
         n: u32,
         seed: u32,
         max_depth: u32,
     ) -> Result<VplSet> {
+        let (ctx, gpu) = (g.ctx, g.scene);
         let max_depth = max_depth.clamp(1, 64);
         let sources = source_table(scene, gpu);
         let has_power = sources.iter().any(|s| s[1] > 0.0);
@@ -140,17 +141,12 @@ impl VplTrace {
             let bg = self
                 .kernel
                 .bind_group(ctx, &[(1, &params), (2, &cdf), (3, &out), (4, &lens)]);
-            self.kernel.run(
-                ctx,
-                profiler,
-                "vpl_trace",
-                gpu,
-                &bg,
-                wave,
-                1 << 14,
+            let run = Run {
+                label: Pass::VplTrace.name(),
+                group: &bg,
                 seed,
-                &mut |_, _| {},
-            );
+            };
+            self.kernel.run(g, run, wave, 1 << 14, &mut |_, _| {});
             let lens: Vec<u32> = ctx.read_buffer(&lens, wave as usize)?;
             let out: Vec<Vpl> = ctx.read_buffer(&out, (wave * max_depth) as usize)?;
             for (k, &len) in lens.iter().enumerate() {

@@ -1,88 +1,104 @@
-//! GPU timestamp profiler: every compute pass gets a pair of timestamps; durations are summed per label.
+//! GPU timestamps by `wgpu-profiler`: every compute pass is a timer query under its label;
+//! durations are summed per label.
 //!
 //! Heavy passes are split into several dispatches (and submissions), so one label usually owns many
-//! pairs. The durations are GPU execution times only: gaps between submissions are not counted.
+//! queries. Every encoder with timed passes goes through `Profiler::submit` (which resolves its
+//! queries); `collect` ends the profiler's frame, waits for the results and sums them. The durations
+//! are GPU execution times only: gaps between submissions are not counted. With `keep_trace` the raw
+//! queries are also kept for a Chrome trace (`write_trace`, `render --trace`).
 
 use std::collections::BTreeMap;
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use wgpu_profiler::{GpuProfiler, GpuProfilerSettings, GpuTimerQueryResult};
 
 use super::GpuContext;
 
-const CAPACITY: u32 = 4096;
-
 pub struct Profiler {
-    query_set: Option<wgpu::QuerySet>,
-    resolve: Option<wgpu::Buffer>,
-    labels: Vec<String>,
-    period_ns: f64,
-    overflowed: bool,
+    inner: GpuProfiler,
+    period: f32,
+    /// Keep every query for `write_trace`.
+    pub keep_trace: bool,
+    trace: Vec<GpuTimerQueryResult>,
 }
 
 impl Profiler {
     pub fn new(ctx: &GpuContext) -> Self {
-        let (query_set, resolve) = if ctx.timestamps {
-            let qs = ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count: CAPACITY,
-            });
-            let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamp resolve"),
-                size: CAPACITY as u64 * 8,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            (Some(qs), Some(buf))
-        } else {
-            (None, None)
+        let settings = GpuProfilerSettings {
+            // Without TIMESTAMP_QUERY the passes run untimed and every label reads 0.
+            enable_timer_queries: ctx.timestamps,
+            enable_debug_groups: false,
+            max_num_pending_frames: 2,
         };
         Profiler {
-            query_set,
-            resolve,
-            labels: Vec::new(),
-            period_ns: ctx.queue.get_timestamp_period() as f64,
-            overflowed: false,
+            inner: GpuProfiler::new(&ctx.device, settings).expect("valid profiler settings"),
+            period: ctx.queue.get_timestamp_period(),
+            keep_trace: false,
+            trace: Vec::new(),
         }
     }
 
-    /// Timestamp writes for one compute pass under `label`, or `None` when timestamps are unsupported or
-    /// the query set is full (the pass then runs untimed and `overflowed()` reports it).
-    pub fn pass(&mut self, label: &str) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
-        let qs = self.query_set.as_ref()?;
-        let i = self.labels.len() as u32 * 2;
-        if i + 2 > CAPACITY {
-            self.overflowed = true;
-            return None;
-        }
-        self.labels.push(label.to_string());
-        Some(wgpu::ComputePassTimestampWrites {
-            query_set: qs,
-            beginning_of_pass_write_index: Some(i),
-            end_of_pass_write_index: Some(i + 1),
-        })
+    /// Records `f` in one compute pass timed under `label`.
+    pub fn compute_pass<R>(
+        &mut self,
+        enc: &mut wgpu::CommandEncoder,
+        label: &str,
+        f: impl FnOnce(&mut wgpu::ComputePass<'_>) -> R,
+    ) -> R {
+        let query = self.inner.begin_pass_query(label, enc);
+        let r = {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(label),
+                timestamp_writes: query.compute_pass_timestamp_writes(),
+            });
+            f(&mut pass)
+        };
+        self.inner.end_query(enc, query);
+        r
     }
 
-    pub fn overflowed(&self) -> bool {
-        self.overflowed
+    /// Resolves the timer queries of `enc` and submits it.
+    pub fn submit(&mut self, ctx: &GpuContext, mut enc: wgpu::CommandEncoder) {
+        self.inner.resolve_queries(&mut enc);
+        ctx.queue.submit([enc.finish()]);
     }
 
-    /// Reads all timestamps written since the last call and returns milliseconds per label (summed),
-    /// then resets. Must be called after the timed work has been submitted.
-    pub fn collect(&mut self, ctx: &GpuContext) -> anyhow::Result<BTreeMap<String, f64>> {
+    /// Milliseconds per label of every pass submitted since the last call (summed), then resets.
+    /// Must be called after the timed work has been submitted.
+    pub fn collect(&mut self, ctx: &GpuContext) -> Result<BTreeMap<String, f64>> {
+        self.inner
+            .end_frame()
+            .map_err(|e| anyhow::anyhow!("GPU profiler: {e}"))?;
+        let results = loop {
+            ctx.wait()?;
+            if let Some(r) = self.inner.process_finished_frame(self.period) {
+                break r;
+            }
+        };
         let mut out = BTreeMap::new();
-        let n = self.labels.len() as u32 * 2;
-        if let (Some(qs), Some(buf), true) = (&self.query_set, &self.resolve, n > 0) {
-            let mut enc = ctx.device.create_command_encoder(&Default::default());
-            enc.resolve_query_set(qs, 0..n, buf, 0);
-            ctx.queue.submit([enc.finish()]);
-            let ticks: Vec<u64> = ctx.read_buffer(buf, n as usize)?;
-            for (k, label) in self.labels.iter().enumerate() {
-                let (a, b) = (ticks[2 * k], ticks[2 * k + 1]);
-                let ms = b.saturating_sub(a) as f64 * self.period_ns * 1e-6;
-                *out.entry(label.clone()).or_insert(0.0) += ms;
+        for q in &results {
+            if let Some(t) = &q.time {
+                *out.entry(q.label.clone()).or_insert(0.0) += (t.end - t.start) * 1e3;
             }
         }
-        self.labels.clear();
-        self.overflowed = false;
+        if self.keep_trace {
+            self.trace.extend(results);
+        }
         Ok(out)
+    }
+
+    /// Writes the queries kept since `keep_trace` was set as a Chrome trace (chrome://tracing,
+    /// Perfetto) to `path`.
+    pub fn write_trace(&self, path: &Path) -> Result<()> {
+        // Written beside the target, then renamed: never a half-written file.
+        let name = path.file_name().unwrap_or_default().to_string_lossy();
+        let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
+        wgpu_profiler::chrometrace::write_chrometrace(&tmp, &self.trace)
+            .and_then(|()| std::fs::rename(&tmp, path))
+            .with_context(|| format!("{}: cannot write the trace", path.display()))
+            .inspect_err(|_| {
+                let _ = std::fs::remove_file(&tmp);
+            })
     }
 }

@@ -22,6 +22,13 @@ pub const FILES: &[(&str, &str)] = wgsl![
     "common/gbuffer.wgsl",
     "common/vpl.wgsl",
     "common/alpha.wgsl",
+    "common/kmeans.wgsl",
+    "common/nearest.wgsl",
+    "kmeans/init.wgsl",
+    "kmeans/grid.wgsl",
+    "kmeans/iterate.wgsl",
+    "kmeans/assign.wgsl",
+    "kmeans/reps.wgsl",
     "raycast.wgsl",
     "primary.wgsl",
     "direct.wgsl",
@@ -33,12 +40,13 @@ pub const FILES: &[(&str, &str)] = wgsl![
     "shade.wgsl",
 ];
 
-/// The pass shaders (top-level files), each composed and validated on its own.
+/// The pass shaders (top-level files; `common/` holds shared code, `kmeans/` the steps of the
+/// k-means pass), each composed and validated on its own.
 pub fn pass_names() -> impl Iterator<Item = &'static str> {
     FILES
         .iter()
         .map(|(p, _)| *p)
-        .filter(|p| !p.starts_with("common/"))
+        .filter(|p| !p.contains('/'))
         .map(|p| p.trim_end_matches(".wgsl"))
 }
 
@@ -116,7 +124,7 @@ mod tests {
     fn every_wgsl_file_is_listed() {
         let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/shaders-wgsl");
         let mut on_disk = Vec::new();
-        for sub in ["", "common/"] {
+        for sub in ["", "common/", "kmeans/"] {
             for e in std::fs::read_dir(format!("{dir}/{sub}")).unwrap() {
                 let name = e.unwrap().file_name().into_string().unwrap();
                 if name.ends_with(".wgsl") {

@@ -1,0 +1,193 @@
+#!/usr/bin/env python3
+"""WGSL mutation testing (docs/testing.md, "Mutation testing").
+
+Each mutant is one edit (file, exact original snippet, replacement) to a copy of shaders-wgsl/; the
+GPU test binaries run against it through FVPL_SHADER_DIR (the WGSL is read at run time, no rebuild).
+A mutant is *killed* when a test fails, *killed by compile* when its shader no longer validates (the
+failure names a WGSL parse / validation error), *survived* when every test passes, *timeout* when a
+binary exceeds its limit (counted as killed: the suite noticed).
+
+Usage (from the repository root, after `cargo test --release --no-run`):
+    python3 scripts/wgsl-mutants.py            # every mutant, stage 1 then stage 2
+    python3 scripts/wgsl-mutants.py -k clamp   # mutants whose name contains "clamp"
+    python3 scripts/wgsl-mutants.py --list
+Stage 1 is the oracle binary (tests/oracles.rs, seconds); a mutant it misses goes to stage 2, the
+twin tests of the passes it touches (a few minutes on lavapipe). `--full` runs stage 2 always.
+A snippet found other than exactly once stops the script (the shaders changed: fix the table).
+"""
+
+import argparse
+import glob
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+# (name, file under shaders-wgsl, original, replacement, paper part)
+MUTANTS = [
+    # --- Eq. (5): common/vpl.wgsl, one VPL term
+    ("eq5-gterm-clamp-dropped", "common/vpl.wgsl", "/ max(d2, d_min2)", "/ d2", "Eq. 5"),
+    ("eq5-gterm-clamp-min", "common/vpl.wgsl", "/ max(d2, d_min2)", "/ min(d2, d_min2)", "Eq. 5"),
+    ("eq5-gterm-distance-not-squared", "common/vpl.wgsl", "/ max(d2, d_min2)", "/ max(sqrt(d2), d_min2)", "Eq. 5"),
+    ("eq5-albedo-not-over-pi", "common/vpl.wgsl", "(albedo / PI)", "albedo", "Eq. 5"),
+    ("eq5-flux-not-over-pi", "common/vpl.wgsl", "(v.flux.xyz / PI)", "v.flux.xyz", "Eq. 5"),
+    ("eq5-vpl-cosine-sign", "common/vpl.wgsl", "dot(v.nrm.xyz, -wi)", "abs(dot(v.nrm.xyz, -wi))", "Eq. 5"),
+    # Not `if cos_v <= 0.0` alone: with cos_v > 0 a negative cos_p makes the term negative, which every
+    # caller drops (`any(t > 0)`): an equivalent mutant. Without both tests two negative cosines give
+    # a positive term.
+    ("eq5-cosine-tests-dropped", "common/vpl.wgsl", "if cos_p <= 0.0 || cos_v <= 0.0 {", "if false {", "Eq. 5"),
+    ("eq5-direction-not-normalised", "common/vpl.wgsl", "let wi = d * inverseSqrt(d2);", "let wi = d / d2;", "Eq. 5"),
+    ("eq5-visibility-inverted", "reference.wgsl", "&& vpl_visible(p, n, v.pos.xyz, v.nrm.xyz)", "&& !vpl_visible(p, n, v.pos.xyz, v.nrm.xyz)", "Eq. 5"),
+    ("eq5-shadow-ray-overshoots", "reference.wgsl", "dist * (1.0 - 1e-4)", "dist * 1.5", "Eq. 5"),
+    # --- Eq. (6), (8), (9): shade.wgsl
+    ("eq8-uniform-over-F-not-used-slots", "shade.wgsl", "1.0 / f32(nf)", "1.0 / f32(F)", "Eq. 8"),
+    ("eq8-eq9-switch-inverted", "shade.wgsl", "if params.weighted == 0u {", "if params.weighted != 0u {", "Eq. 8/9"),
+    ("eq8-used-slot-count-off", "shade.wgsl", "nf += select(0u, 1u, rows[j] != INVALID);", "nf += select(0u, 2u, rows[j] != INVALID);", "Eq. 8"),
+    ("eq9-visibility-bit-inverted", "shade.wgsl", "((rw[j] >> b) & 1u) != 0u", "((rw[j] >> b) & 1u) == 0u", "Eq. 9"),
+    ("eq9-slot-loop-skips-first", "shade.wgsl", "for (var j = 0u; j < F; j++) {\n        v +=", "for (var j = 1u; j < F; j++) {\n        v +=", "Eq. 9"),
+    ("eq9-weight-ignored", "shade.wgsl", "v += select(0.0, w[j],", "v += select(0.0, 1.0,", "Eq. 9"),
+    ("eq6-visibility-ignored", "shade.wgsl", "sum += t * eq9_weighted_visibility(w, rw, b);", "sum += t;", "Eq. 6"),
+    ("eq6-light-index-off-by-one", "shade.wgsl", "load_light(wd * 32u + b)", "load_light(wd * 32u + b + 1u)", "Eq. 6"),
+    # --- Eq. (7), Alg. 1: kmeans.wgsl
+    ("eq7-normal-test-swapped", "common/kmeans.wgsl", "return dot(n, nc) > params.normal_threshold;", "return dot(n, nc) < params.normal_threshold;", "Eq. 7"),
+    ("eq7-normal-test-dropped", "common/kmeans.wgsl", "return dot(n, nc) > params.normal_threshold;", "return true;", "Eq. 7"),
+    ("alg1-order-swapped", "common/nearest.wgsl", "return r < rd || (r == rd && k < rk);", "return r > rd || (r == rd && k < rk);", "Alg. 1/2"),
+    ("alg1-tie-break-swapped", "common/nearest.wgsl", "return r < rd || (r == rd && k < rk);", "return r < rd || (r == rd && k > rk);", "Alg. 1/2"),
+    ("alg2-insert-loop-off-by-one", "common/nearest.wgsl", "if j < slots && before(", "if j + 1u < slots && before(", "Alg. 2"),
+    ("alg1-mean-count-off-by-one", "kmeans/iterate.wgsl", "/ f32(count);\n}", "/ f32(count + 1u);\n}", "Alg. 1"),
+    ("alg1-mean-normal-not-normalised", "kmeans/iterate.wgsl", "c.nrm = vec4<f32>(nrm / l, 0.0);", "c.nrm = vec4<f32>(nrm, 0.0);", "Alg. 1"),
+    ("alg1-member-removal-swapped", "kmeans/iterate.wgsl", "        if remove {\n            sub64", "        if !remove {\n            sub64", "Alg. 1"),
+    ("alg1-change-flag-dropped", "kmeans/iterate.wgsl", "        set_flag(6u);\n        if old != INVALID {", "        if old != INVALID {", "Alg. 1"),
+    # --- Eq. (10), Alg. 2: kmeans.wgsl
+    ("eq10-zero-distance-dropped-in-final-assign", "kmeans/assign.wgsl", "if j < b.count && b.dist[j] <= ZERO_DIST && zero == INVALID {", "if false {", "Eq. 10"),
+    ("eq10-zero-distance-dropped-in-rep-weights", "kmeans/reps.wgsl", "if d[j] <= ZERO_DIST && zero == INVALID {", "if false {", "Eq. 10"),
+    ("eq10-zero-takes-none", "kmeans/assign.wgsl", "w[j] = select(0.0, 1.0, j == zero);", "w[j] = select(1.0, 0.0, j == zero);", "Eq. 10"),
+    ("eq10-ratio-inverted", "kmeans/assign.wgsl", "ratio_pow(d_min / d[j], params.weight_exponent)", "ratio_pow(d[j] / d_min, params.weight_exponent)", "Eq. 10"),
+    ("eq10-not-normalised", "kmeans/assign.wgsl", "w[j] /= wsum;", "w[j] /= 1.0;", "Eq. 10"),
+    ("eq10-p1-shortcut-wrong", "kmeans/assign.wgsl", "    if p == 1.0 {\n        return x;", "    if p == 1.0 {\n        return x * x;", "Eq. 10"),
+    ("eq10-weights-slot-off-by-one", "kmeans/assign.wgsl", "assign[m * f + j] = k;\n        weights[m * f + j] = w[j];", "assign[m * f + j] = k;\n        weights[m * f + j] = w[0];", "Eq. 10"),
+    ("alg2-rep-min-swapped", "kmeans/assign.wgsl", "if bits < atomicLoad(&reps[2u * k]) {", "if bits > atomicLoad(&reps[2u * k]) {", "reps"),
+    ("alg2-rep-lowest-index-swapped", "kmeans/reps.wgsl", "atomicMin(&reps[2u * k + 1u], m);", "atomicMax(&reps[2u * k + 1u], m);", "reps"),
+    # --- primary rays, visibility
+    ("camera-pixel-centre-dropped", "primary.wgsl", "let x = f32(px % w) + 0.5;", "let x = f32(px % w);", "camera"),
+    ("camera-y-flipped", "primary.wgsl", "let sy = 1.0 - 2.0 * y / f32(h);", "let sy = 2.0 * y / f32(h) - 1.0;", "camera"),
+    ("visibility-light-facing-test-swapped", "visibility.wgsl", "dot(l.nrm.xyz, d) >= 0.0", "dot(l.nrm.xyz, d) <= 0.0", "step 5"),
+    ("visibility-bit-off-by-one", "visibility.wgsl", "word |= 1u << (c - c0);", "word |= 1u << ((c - c0 + 1u) % 32u);", "step 5"),
+]
+
+# Stage 2: binary name → tests to run (a filter list; empty = the whole binary). Twin tests of each pass.
+STAGE2 = {
+    "kmeans": ["gpu_kmeans_matches_cpu_on_random_surfaces", "representative_weights_match_cpu",
+               "weight_exponent_matches_cpu_and_spans_uniform_to_hard"],
+    "clustered": ["clustered_shading_matches_cpu_twin"],
+    "reference": ["reference_matches_cpu_twin", "reference_is_close_to_path_tracing"],
+}
+
+COMPILE_MARKERS = ("Shader validation error", "shader parse", "naga", "WGSL", "Validation Error")
+
+
+def binaries(names):
+    """The test binaries of `names`, built (once) by cargo: its own list of executables."""
+    cmd = ["cargo", "test", "--release", "--no-run"] + [f"--test={n}" for n in names]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        sys.exit(r.stderr[-3000:])
+    out = {}
+    for line in r.stderr.splitlines():
+        line = line.strip()
+        if line.startswith("Executable tests/"):
+            n = line.split("tests/", 1)[1].split(".rs", 1)[0]
+            out[n] = line.split("(", 1)[1].rstrip(")")
+    return out
+
+
+def run(cmd, env, timeout):
+    try:
+        r = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=timeout)
+        return r.returncode, r.stdout + r.stderr
+    except subprocess.TimeoutExpired:
+        return "timeout", ""
+
+
+def verdict(rc, out):
+    if rc == 0:
+        return None
+    if rc == "timeout":
+        return "timeout"
+    if any(m in out for m in COMPILE_MARKERS) and "panicked" in out and "assert" not in out.split("panicked", 1)[1][:400]:
+        return "compile"
+    return "killed"
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("-k", default="", help="only mutants whose name contains this")
+    ap.add_argument("--list", action="store_true")
+    ap.add_argument("--full", action="store_true", help="run stage 2 even when stage 1 kills")
+    ap.add_argument("--timeout", type=int, default=300, help="seconds per test binary")
+    a = ap.parse_args()
+    todo = [m for m in MUTANTS if a.k in m[0]]
+    if a.list:
+        for m in todo:
+            print(f"{m[0]:48} {m[4]:9} {m[1]}")
+        return
+    # Every snippet must be found exactly once before anything runs.
+    for name, f, old, new, _ in MUTANTS:
+        n = open(os.path.join("shaders-wgsl", f)).read().count(old)
+        if n != 1:
+            sys.exit(f"{name}: snippet found {n} times in shaders-wgsl/{f}: {old!r}")
+    env = dict(os.environ)
+    env.setdefault("XDG_RUNTIME_DIR", "/tmp/xdg")
+    os.makedirs(env["XDG_RUNTIME_DIR"], exist_ok=True)
+    bins = binaries(["oracles"] + list(STAGE2))
+    stage1 = [bins["oracles"]]
+    stage2 = [[bins[b]] + (t + ["--exact"] if t else []) for b, t in STAGE2.items()]
+    # The unmutated shaders must pass, or every verdict is noise.
+    base = tempfile.mkdtemp(prefix="wgsl-base-")
+    shutil.copytree("shaders-wgsl", os.path.join(base, "s"))
+    env["FVPL_SHADER_DIR"] = os.path.join(base, "s")
+    rc, out = run(stage1, env, a.timeout)
+    if rc != 0:
+        sys.exit("the oracle tests fail on the unmutated shaders:\n" + out[-3000:])
+    shutil.rmtree(base)
+    rows = []
+    for name, f, old, new, part in todo:
+        d = tempfile.mkdtemp(prefix="wgsl-mutant-")
+        s = os.path.join(d, "s")
+        shutil.copytree("shaders-wgsl", s)
+        path = os.path.join(s, f)
+        src = open(path).read()
+        open(path, "w").write(src.replace(old, new, 1))
+        env["FVPL_SHADER_DIR"] = s
+        t0 = time.time()
+        by, v = "", None
+        rc, out = run(stage1, env, a.timeout)
+        v = verdict(rc, out)
+        if v:
+            by = "oracles"
+        if v is None or a.full:
+            for cmd in stage2:
+                rc, out2 = run(cmd, env, a.timeout)
+                v2 = verdict(rc, out2)
+                if v2:
+                    v = v or v2
+                    by = by or os.path.basename(cmd[0]).split("-")[0]
+                    if not a.full:
+                        break
+        rows.append((name, part, v or "SURVIVED", by, time.time() - t0))
+        print(f"{name:48} {part:9} {v or 'SURVIVED':9} {by:10} {time.time() - t0:6.1f}s", flush=True)
+        shutil.rmtree(d)
+    n = len(rows)
+    killed = sum(r[2] in ("killed", "timeout") for r in rows)
+    comp = sum(r[2] == "compile" for r in rows)
+    surv = [r[0] for r in rows if r[2] == "SURVIVED"]
+    print(f"\n{n} mutants: {killed} killed by a test, {comp} killed by compile, {len(surv)} survived"
+          f" ({100.0 * (killed + comp) / max(n, 1):.0f}% killed)")
+    for s in surv:
+        print(f"  survived: {s}")
+
+
+if __name__ == "__main__":
+    main()

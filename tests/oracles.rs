@@ -1,0 +1,792 @@
+//! Independent oracles for the paper's math (issue 22): every expected value here is worked by hand or
+//! in closed form, never by a CPU twin, so a bug written into both a kernel and its twin fails here.
+//! The GPU passes are driven on constructed inputs (a few points, two pixels, three lights); the
+//! bounds are the f32 rounding of the hand-computed values, measured on lavapipe (Mesa 22.3.6).
+//!
+//! Eq. (5) `gpu_reference_is_eq5_in_closed_form`, Eq. (6) + (8) / (9) `gpu_shading_is_eq6_by_hand`,
+//! Eq. (7) `eq7_distance_on_chosen_pairs` and the gated point of the k-means oracle, Eq. (10)
+//! `eq10_weights_closed_form` and `gpu_final_assignment_has_the_closed_form_weights`, Alg. 1 / 2 on a
+//! point set with a known optimum (same test), the G-term clamp (the near light of the Eq. 5 and 6
+//! tests), the light list's flux sums, the camera's frustum corners, EXR / PNG round trips.
+
+mod common;
+
+use std::f32::consts::PI;
+
+use fuzzy_vpl::bvh::SceneBvh;
+use fuzzy_vpl::cpu::kmeans::{Centroid, Point, eq7_dist, eq10_weights};
+use fuzzy_vpl::cpu::vpl::eq5_vpl_radiance;
+use fuzzy_vpl::export;
+use fuzzy_vpl::gi::dispatch::Gpu;
+use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, Points};
+use fuzzy_vpl::gi::pipeline::{RenderSettings, Renderer};
+use fuzzy_vpl::gi::primary::CameraParams;
+use fuzzy_vpl::gi::reference::{GatherInputs, Reference};
+use fuzzy_vpl::gi::scene_gpu::SceneGpu;
+use fuzzy_vpl::gi::shade::{Shade, ShadeInputs, ShadeParams};
+use fuzzy_vpl::gi::vpl_cluster;
+use fuzzy_vpl::gi::vpl_trace::{Vpl, VplSet};
+use fuzzy_vpl::gpu::{GpuContext, profiler::Profiler};
+use fuzzy_vpl::scene::{self, Camera};
+use fuzzy_vpl::settings::{FrameSettings, Gamma};
+use glam::Vec3;
+
+/// `a` within `rel` of `b` (relative, with an absolute floor of `rel` × 1e-3 for values near 0).
+fn close(a: f32, b: f32, rel: f32) -> bool {
+    (a - b).abs() <= rel * b.abs().max(1e-3)
+}
+
+fn close3(a: [f32; 3], b: [f32; 3], rel: f32) -> bool {
+    let worst = (0..3)
+        .map(|i| (a[i] - b[i]).abs() / b[i].abs().max(1e-3))
+        .fold(0f32, f32::max);
+    println!("relative difference {worst:e} (bound {rel:e})");
+    (0..3).all(|i| close(a[i], b[i], rel))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Eq. (7) and Eq. (10) on the CPU: chosen pairs, closed-form weights.
+
+fn pt(p: [f32; 3], n: [f32; 3]) -> Point {
+    Point {
+        pos: Vec3::from(p),
+        valid: true,
+        nrm: Vec3::from(n).normalize(),
+    }
+}
+
+fn ctr(p: [f32; 3], n: [f32; 3]) -> Centroid {
+    Centroid {
+        pos: Vec3::from(p),
+        valid: true,
+        nrm: Vec3::from(n).normalize(),
+    }
+}
+
+/// Eq. (7): the Euclidean distance where the normals agree (n·n_c > n_t), else infinite.
+#[test]
+fn eq7_distance_on_chosen_pairs() {
+    let up = [0.0, 0.0, 1.0];
+    let p = pt([1.0, 1.0, 0.0], up);
+    // A 3-4-5 triangle: exactly 5.
+    assert_eq!(eq7_dist(&p, &ctr([4.0, 5.0, 0.0], up), 0.866), 5.0);
+    assert_eq!(eq7_dist(&p, &ctr([1.0, 1.0, 0.0], up), 0.866), 0.0);
+    // Normals 29° apart agree at n_t = cos 30°, 31° apart do not.
+    let tilt = |deg: f32| [deg.to_radians().sin(), 0.0, deg.to_radians().cos()];
+    assert_eq!(eq7_dist(&p, &ctr([1.0, 4.0, 4.0], tilt(29.0)), 0.866), 5.0);
+    assert_eq!(
+        eq7_dist(&p, &ctr([1.0, 4.0, 4.0], tilt(31.0)), 0.866),
+        f32::MAX
+    );
+    // Perpendicular and opposite normals never agree at n_t ≥ 0; the test is strict (n·n_c = n_t
+    // does not agree).
+    assert_eq!(
+        eq7_dist(&p, &ctr([1.0, 1.0, 0.0], [1.0, 0.0, 0.0]), 0.0),
+        f32::MAX
+    );
+    assert_eq!(
+        eq7_dist(&p, &ctr([1.0, 1.0, 0.0], [0.0, 0.0, -1.0]), 0.5),
+        f32::MAX
+    );
+    assert_eq!(eq7_dist(&p, &ctr([1.0, 1.0, 3.0], up), 1.0), f32::MAX);
+    assert_eq!(eq7_dist(&p, &ctr([1.0, 1.0, 3.0], up), 0.999), 3.0);
+    // n_t = -1 lets every normal but the exact opposite through.
+    assert_eq!(
+        eq7_dist(&p, &ctr([1.0, 3.0, 1.0], [1.0, 0.0, 0.0]), -1.0),
+        5f32.sqrt()
+    );
+}
+
+/// Eq. (10): w_f = (1/d_f) / Σ 1/d_j, generalised to d^-p; a zero distance takes the whole weight,
+/// a negative distance is an unused slot.
+#[test]
+fn eq10_weights_closed_form() {
+    let w = |d: &[f32], p: f32| eq10_weights(d, p);
+    // Distances 1 and 2: weights 2/3 and 1/3 (f32 rounding of each: within 1 ulp).
+    let x = w(&[1.0, 2.0], 1.0);
+    assert!(
+        close(x[0], 2.0 / 3.0, 2e-7) && close(x[1], 1.0 / 3.0, 2e-7),
+        "{x:?}"
+    );
+    // 1, 2, 4: 4/7, 2/7, 1/7; the order of the slots does not matter.
+    let x = w(&[2.0, 4.0, 1.0], 1.0);
+    let want = [2.0 / 7.0, 1.0 / 7.0, 4.0 / 7.0];
+    assert!((0..3).all(|i| close(x[i], want[i], 3e-7)), "{x:?}");
+    // Scale-free: distances 1e-20 and 2e-20 (their reciprocals' sum would overflow nothing but
+    // 1/d² would) and 1e20, 2e20 give the same 2/3, 1/3.
+    for s in [1e-20f32, 1e20] {
+        let x = w(&[s, 2.0 * s], 1.0);
+        assert!(
+            close(x[0], 2.0 / 3.0, 2e-7) && close(x[1], 1.0 / 3.0, 2e-7),
+            "{s}: {x:?}"
+        );
+    }
+    // A zero distance: (1, 0, ...) at its slot, whatever the others.
+    assert_eq!(w(&[0.0, 1.0, 2.0], 1.0), vec![1.0, 0.0, 0.0]);
+    assert_eq!(w(&[3.0, 0.0, 2.0], 1.0), vec![0.0, 1.0, 0.0]);
+    assert_eq!(w(&[0.0, 0.0], 1.0), vec![1.0, 0.0]);
+    // Unused slots (negative) get 0 and leave the others normalised.
+    assert_eq!(w(&[1.0, -1.0], 1.0), vec![1.0, 0.0]);
+    let x = w(&[1.0, -1.0, 2.0], 1.0);
+    assert!(close(x[0], 2.0 / 3.0, 2e-7) && x[1] == 0.0 && close(x[2], 1.0 / 3.0, 2e-7));
+    // p = 2: 1 and 1/4 → 0.8, 0.2; p = 0: uniform.
+    let x = w(&[1.0, 2.0], 2.0);
+    assert!(close(x[0], 0.8, 2e-7) && close(x[1], 0.2, 3e-7), "{x:?}");
+    assert_eq!(w(&[1.0, 2.0, 4.0, 8.0], 0.0), vec![0.25; 4]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Alg. 1 / 2 and Eq. (7), (10) on the GPU: a point set with a known optimum.
+
+fn push(data: &mut Vec<[f32; 4]>, p: [f32; 3], n: [f32; 3]) {
+    data.push([p[0], p[1], p[2], 1.0]);
+    data.push([n[0], n[1], n[2], 0.0]);
+}
+
+/// Three clusters whose optimum is known: A around a = (2, 2, 0) and B around b = (5, 2, 0), normals
+/// +z; C around c = (2, 6, 2), normal +x. Every cluster is its centre, four points at ±0.25 about it
+/// and two points mirrored about it, so each mean is its centre exactly (dyadic coordinates in a
+/// frame of 16: the fixed-point sums are exact). Data order: A, B, C, each starting at its centre,
+/// so the strata's first points are the centres (K = 3, γ = 1).
+/// - q = (3, 2, 0) (in A) lies at 1 from a and 2 from b: F = 2 weights 2/3, 1/3; (4, 2, 0) in B
+///   the mirror: 1/3 for A, 2/3 for B.
+/// - the centres lie on their centroids: distance 0, weights (1, 0).
+/// - a + (0.25, 0, 0): distances 0.25 and 2.75: weights 11/12, 1/12.
+/// - g = (2, 2.5, 0) with normal +x (in C) is nearer to a and b than to c but its normal disagrees
+///   with theirs (Eq. 7): its only slot is C, weight 1, the second slot unused.
+/// - t = (3.5, 2, 0) lies 1.5 from a and from b (exact): the tie goes to the lower index (A), then
+///   weights 1/2, 1/2; had it gone to B, both means would move.
+///
+/// Nine points a cluster (indices 0–8, 9–17, 18–26).
+fn known_optimum() -> Vec<[f32; 4]> {
+    let mut d = Vec::new();
+    let z = [0.0, 0.0, 1.0];
+    let x = [1.0, 0.0, 0.0];
+    for c in [[2.0, 2.0, 0.0], [5.0, 2.0, 0.0]] {
+        push(&mut d, c, z);
+        for o in [[0.25, 0.0], [-0.25, 0.0], [0.0, 0.25], [0.0, -0.25]] {
+            push(&mut d, [c[0] + o[0], c[1] + o[1], 0.0], z);
+        }
+        push(&mut d, [c[0] + 1.0, c[1], 0.0], z);
+        push(&mut d, [c[0] - 1.0, c[1], 0.0], z);
+        // A: the tie (3.5, 2, 0), 1.5 from a and b, and its mirror; B: a pair at ±0.5 in y.
+        let pair = if c[0] == 2.0 { [1.5, 0.0] } else { [0.0, 0.5] };
+        // B's pair is tilted ±16° about x (normals (0, ±0.28, 0.96)): B's mean normal is +z only
+        // once normalised (length 0.991 before).
+        let tilt = |y: f32| if c[0] == 2.0 { z } else { [0.0, y, 0.96] };
+        push(&mut d, [c[0] + pair[0], c[1] + pair[1], 0.0], tilt(0.28));
+        push(&mut d, [c[0] - pair[0], c[1] - pair[1], 0.0], tilt(-0.28));
+    }
+    let c = [2.0, 6.0, 2.0];
+    push(&mut d, c, x);
+    for o in [[0.25, 0.0], [-0.25, 0.0], [0.0, 0.25], [0.0, -0.25]] {
+        push(&mut d, [c[0], c[1] + o[0], c[2] + o[1]], x);
+    }
+    // g and its mirror 2c − g.
+    push(&mut d, [2.0, 2.5, 0.0], x);
+    push(&mut d, [2.0, 9.5, 4.0], x);
+    push(&mut d, [c[0], c[1] + 0.5, c[2]], x);
+    push(&mut d, [c[0], c[1] - 0.5, c[2]], x);
+    d
+}
+
+struct Fuzzy {
+    centroids: Vec<[f32; 4]>,
+    normals: Vec<[f32; 4]>,
+    assign: Vec<u32>,
+    weights: Vec<f32>,
+    reps: Vec<u32>,
+    iterations_run: u32,
+}
+
+fn run_kmeans(ctx: &GpuContext, data: &[[f32; 4]], s: &KMeansSettings) -> Fuzzy {
+    let sc = scene::load("builtin:cornell").unwrap();
+    let bvh = SceneBvh::build(&sc).unwrap();
+    let gpu = SceneGpu::upload(ctx, &sc, &bvh);
+    let mut prof = Profiler::new(ctx);
+    let buf = ctx.storage_init("data", data);
+    let m = data.len() as u32 / 2;
+    let frame = (Vec3::ZERO, Vec3::splat(16.0));
+    let mut g = Gpu {
+        ctx,
+        scene: &gpu,
+        profiler: &mut prof,
+    };
+    let points = Points {
+        data: &buf,
+        count: m,
+        stride: 2,
+    };
+    let c = KMeans::new()
+        .run(&mut g, "oracle", &points, s, frame, None)
+        .unwrap();
+    let f = c.params.f as usize;
+    let raw: Vec<[f32; 4]> = ctx
+        .read_buffer(&c.centroids, c.params.k as usize * 2)
+        .unwrap();
+    let reps: Vec<u32> = ctx.read_buffer(&c.reps, c.params.k as usize * 2).unwrap();
+    Fuzzy {
+        centroids: raw.chunks(2).map(|c| c[0]).collect(),
+        normals: raw.chunks(2).map(|c| c[1]).collect(),
+        assign: ctx.read_buffer(&c.assign, m as usize * f).unwrap(),
+        weights: ctx.read_buffer(&c.weights, m as usize * f).unwrap(),
+        reps: reps.chunks(2).map(|r| r[1]).collect(),
+        iterations_run: c.iterations_run,
+    }
+}
+
+fn oracle_settings(f: u32, p: f32, to_reps: bool) -> KMeansSettings {
+    KMeansSettings {
+        k: 3,
+        f,
+        gamma: Gamma::Fixed(1),
+        normal_threshold: 0.866,
+        iterations: 10,
+        seed: 3,
+        weights_to_reps: to_reps,
+        weight_exponent: p,
+        plane_gate_deg: None,
+    }
+}
+
+/// Alg. 1 and 2 on the GPU reach the known optimum and write Eq. (10)'s closed-form weights (with
+/// centroid distances and with representative distances, which are the same points here), p = 1
+/// and 2, F = 2 and 1. Measured on lavapipe: centroids exact, weights within 1 ulp of the f32 of
+/// 2/3 (bound 2e-7 relative).
+#[test]
+fn gpu_final_assignment_has_the_closed_form_weights() {
+    let ctx = common::gpu();
+    let data = known_optimum();
+    const Q: usize = 5; // (3, 2, 0)
+    const QB: usize = 15; // (4, 2, 0)
+    const TIE: usize = 7; // (3.5, 2, 0)
+    const NEAR: usize = 1; // a + (0.25, 0, 0)
+    const G: usize = 23; // (2, 2.5, 0), normal +x
+    const NONE: u32 = u32::MAX;
+    for to_reps in [false, true] {
+        let r = run_kmeans(&ctx, &data, &oracle_settings(2, 1.0, to_reps));
+        let tag = format!("weights to reps {to_reps}");
+        // Alg. 1: the optimum, reached in the first iteration, stopped after the second.
+        let want = [[2.0, 2.0, 0.0], [5.0, 2.0, 0.0], [2.0, 6.0, 2.0]];
+        for (k, w) in want.iter().enumerate() {
+            assert_eq!(r.centroids[k][..3], w[..], "{tag}: centroid {k}");
+            assert!(r.centroids[k][3] > 0.0, "{tag}: centroid {k} invalid");
+            // The mean normal, normalised: +z (A, B) and +x (C). Measured: within 1e-7.
+            let n = Vec3::new(r.normals[k][0], r.normals[k][1], r.normals[k][2]);
+            let want_n = if k == 2 { Vec3::X } else { Vec3::Z };
+            assert!(
+                (n - want_n).length() < 1e-6,
+                "{tag}: centroid {k} normal {n}"
+            );
+        }
+        assert_eq!(r.iterations_run, 2, "{tag}");
+        // Representatives: the member nearest its centroid, the centre itself.
+        assert_eq!(r.reps, vec![0, 9, 18], "{tag}");
+        let slot = |m: usize| (&r.assign[2 * m..2 * m + 2], &r.weights[2 * m..2 * m + 2]);
+        // Every point's nearest cluster is its own (Eq. 7 on the data order).
+        for m in 0..27 {
+            assert_eq!(r.assign[2 * m], (m / 9) as u32, "{tag}: point {m}");
+        }
+        // Distance 0: the whole weight, for every centre.
+        for (m, other) in [(0, 1), (9, 0)] {
+            let (a, w) = slot(m);
+            assert_eq!(a[1], other, "{tag}: centre {m}");
+            assert_eq!(w, [1.0, 0.0], "{tag}: centre {m} on its centroid");
+        }
+        // Distances 1 and 2.
+        let (a, w) = slot(Q);
+        assert_eq!(a, [0, 1], "{tag}");
+        assert!(
+            close(w[0], 2.0 / 3.0, 2e-7) && close(w[1], 1.0 / 3.0, 2e-7),
+            "{tag}: {w:?}"
+        );
+        let (a, w) = slot(QB);
+        assert_eq!(a, [1, 0], "{tag}");
+        assert!(
+            close(w[0], 2.0 / 3.0, 2e-7) && close(w[1], 1.0 / 3.0, 2e-7),
+            "{tag}: {w:?}"
+        );
+        // 0.25 and 2.75: 11/12, 1/12.
+        let (a, w) = slot(NEAR);
+        assert_eq!(a, [0, 1], "{tag}");
+        assert!(
+            close(w[0], 11.0 / 12.0, 2e-7) && close(w[1], 1.0 / 12.0, 3e-7),
+            "{tag}: {w:?}"
+        );
+        // The tie: lower index first, equal weights.
+        let (a, w) = slot(TIE);
+        assert_eq!(a, [0, 1], "{tag}: the tie");
+        assert_eq!(w, [0.5, 0.5], "{tag}: the tie");
+        // Eq. (7): the +x point near a and b has only C.
+        let (a, w) = slot(G);
+        assert_eq!(a, [2, NONE], "{tag}");
+        assert_eq!(w, [1.0, 0.0], "{tag}");
+        // Every point's weights sum to 1.
+        for m in 0..27 {
+            let (_, w) = slot(m);
+            assert!(
+                (w[0] + w[1] - 1.0).abs() <= 1.2e-7,
+                "{tag}: point {m}: {w:?}"
+            );
+        }
+    }
+    // p = 2: 1 and 1/4 → 0.8, 0.2.
+    let r = run_kmeans(&ctx, &data, &oracle_settings(2, 2.0, false));
+    let w = &r.weights[2 * Q..2 * Q + 2];
+    assert!(
+        close(w[0], 0.8, 2e-7) && close(w[1], 0.2, 3e-7),
+        "p = 2: {w:?}"
+    );
+    // F = 1 (hard): the nearest cluster, weight 1.
+    let r = run_kmeans(&ctx, &data, &oracle_settings(1, 1.0, false));
+    for m in 0..27 {
+        assert_eq!(
+            (r.assign[m], r.weights[m]),
+            ((m / 9) as u32, 1.0),
+            "F = 1: point {m}"
+        );
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Eq. (5) and Eq. (6) with (8) / (9) on the GPU: two pixels, three lights, by hand.
+
+/// A shading point as the G-buffer holds it (4 vec4s).
+type Sp = [[f32; 4]; 4];
+
+fn sp(p: Vec3, n: [f32; 3], albedo: [f32; 3]) -> Sp {
+    [
+        [p.x, p.y, p.z, 1.0],
+        [n[0], n[1], n[2], 0.0],
+        [albedo[0], albedo[1], albedo[2], 0.0],
+        [0.0; 4],
+    ]
+}
+
+fn light(p: Vec3, n: [f32; 3], flux: [f32; 3]) -> Vpl {
+    Vpl {
+        pos: [p.x, p.y, p.z, 1.0],
+        nrm: [n[0], n[1], n[2], 0.0],
+        flux: [flux[0], flux[1], flux[2], 0.0],
+    }
+}
+
+const DOWN: [f32; 3] = [0.0, 0.0, -1.0];
+const UP: [f32; 3] = [0.0, 0.0, 1.0];
+/// π²: a VPL of flux π² lights a surface of albedo ρ with I ρ/π G = ρ G (I = flux/π).
+const PI2: f32 = PI * PI;
+/// d_min² of the clamp: d_min 0.2.
+const DMIN2: f32 = 0.04;
+
+/// Two pixels at o and o + (1, 0, 0), facing +z, and three lights facing −z: L0 at height 1 above
+/// pixel 0, L1 at height 1 above pixel 1 (flux π²·(1, 2, 3)), L2 at height 0.1 above pixel 0,
+/// nearer than d_min = 0.2. With flux π² the term is ρ cos cos / max(d², d_min²):
+/// - pixel 0 (ρ 0.5): L0 0.5; L1 (d² 2, cosines 1/√2) 0.5 · 0.25 · (1, 2, 3); L2 clamped:
+///   0.5 / 0.04 = 12.5 (50 without the clamp).
+/// - pixel 1 (ρ (1, 0.5, 0.25)): L0 0.25 ρ; L1 ρ · (1, 2, 3); L2 (d² 1.01, cosines 0.1/√1.01)
+///   ρ · 0.01 / 1.01².
+fn two_pixels_three_lights(o: Vec3) -> (Vec<Sp>, Vec<Vpl>, [[[f32; 3]; 3]; 2]) {
+    let ex = Vec3::X;
+    let sps = vec![sp(o, UP, [0.5; 3]), sp(o + ex, UP, [1.0, 0.5, 0.25])];
+    let lights = vec![
+        light(o + Vec3::Z, DOWN, [PI2; 3]),
+        light(o + ex + Vec3::Z, DOWN, [PI2, 2.0 * PI2, 3.0 * PI2]),
+        light(o + 0.1 * Vec3::Z, DOWN, [PI2; 3]),
+    ];
+    let g2 = 0.01 / (1.01f32 * 1.01);
+    let terms = [
+        [[0.5; 3], [0.125, 0.25, 0.375], [12.5; 3]],
+        [
+            [0.25, 0.125, 0.0625],
+            [1.0, 1.0, 0.75],
+            [g2, 0.5 * g2, 0.25 * g2],
+        ],
+    ];
+    (sps, lights, terms)
+}
+
+/// The G-term clamp and the cosines of Eq. (5)'s terms, on the CPU: the hand values above
+/// (measured ≤ 9.5e-8 relative: f32 rounding of π² / π / π; bound 1e-6).
+#[test]
+fn vpl_term_by_hand() {
+    let (sps, lights, terms) = two_pixels_three_lights(Vec3::ZERO);
+    for (i, s) in sps.iter().enumerate() {
+        for (j, l) in lights.iter().enumerate() {
+            let t = eq5_vpl_radiance(
+                Vec3::new(s[0][0], s[0][1], s[0][2]),
+                Vec3::new(s[1][0], s[1][1], s[1][2]),
+                Vec3::new(s[2][0], s[2][1], s[2][2]),
+                l,
+                DMIN2,
+            );
+            assert!(
+                close3(t.into(), terms[i][j], 1e-6),
+                "pixel {i} light {j}: {t}"
+            );
+        }
+    }
+    // Facing away (either cosine ≤ 0) gives 0.
+    let p = Vec3::ZERO;
+    let back = light(Vec3::Z, UP, [1.0; 3]);
+    assert_eq!(
+        eq5_vpl_radiance(p, Vec3::Z, Vec3::ONE, &back, DMIN2),
+        Vec3::ZERO
+    );
+    let below = light(-Vec3::Z, UP, [1.0; 3]);
+    assert_eq!(
+        eq5_vpl_radiance(p, Vec3::Z, Vec3::ONE, &below, DMIN2),
+        Vec3::ZERO
+    );
+    // Both cosines negative (a light under the surface facing away): their product is positive, the
+    // term still 0.
+    let away = light(-Vec3::Z, DOWN, [1.0; 3]);
+    assert_eq!(
+        eq5_vpl_radiance(p, Vec3::Z, Vec3::ONE, &away, DMIN2),
+        Vec3::ZERO
+    );
+    // Grazing: the light in the pixel's plane gives 0.
+    let side = light(Vec3::X, [-1.0, 0.0, 0.0], [1.0; 3]);
+    assert_eq!(
+        eq5_vpl_radiance(p, Vec3::Z, Vec3::ONE, &side, DMIN2),
+        Vec3::ZERO
+    );
+}
+
+fn cornell_gpu(ctx: &GpuContext) -> (scene::Scene, SceneGpu) {
+    let sc = scene::load("builtin:cornell").unwrap();
+    let bvh = SceneBvh::build(&sc).unwrap();
+    let gpu = SceneGpu::upload(ctx, &sc, &bvh);
+    (sc, gpu)
+}
+
+/// Eq. (6) with Ṽ of Eq. (9) and (8) on the GPU shading pass: two pixels, three lights, F = 2, two
+/// SP-cluster rows (row 0 sees L0 and L1, row 1 sees L0 and L2). Pixel 0 in rows (0, 1) with
+/// weights (0.75, 0.25): Ṽ = 1, 0.75, 0.25 (Eq. 9) or 1, 0.5, 0.5 (Eq. 8); pixel 1 in row 1 alone
+/// (second slot unused): Ṽ = 1, 0, 1. Measured on lavapipe: at most 2.2e-7 relative from the hand
+/// values (the f32 rounding of π², 1/π and inverseSqrt); bound 2e-6 (a 10× margin for GPUs).
+#[test]
+fn gpu_shading_is_eq6_by_hand() {
+    let ctx = common::gpu();
+    let (_sc, gpu) = cornell_gpu(&ctx);
+    let (sps, lights, t) = two_pixels_three_lights(Vec3::ZERO);
+    let gbuffer = ctx.storage_init("gbuffer", &sps);
+    let lights_buf = ctx.storage_init("lights", &lights);
+    let bits = ctx.storage_init("bits", &[0b011u32, 0b101]);
+    let assign = ctx.storage_init("assign", &[0u32, 1, 1, u32::MAX]);
+    let weights = ctx.storage_init("weights", &[0.75f32, 0.25, 1.0, 0.0]);
+    let shade = Shade::new();
+    let sum = |vs: [f32; 3], px: usize| -> [f32; 3] {
+        let mut s = [0f32; 3];
+        for (j, v) in vs.iter().enumerate() {
+            for c in 0..3 {
+                s[c] += t[px][j][c] * v;
+            }
+        }
+        s
+    };
+    for (weighted, v0) in [(1u32, [1.0, 0.75, 0.25]), (0, [1.0, 0.5, 0.5])] {
+        let indirect = ctx.storage("indirect", 2 * 16);
+        let mut prof = Profiler::new(&ctx);
+        let mut g = Gpu {
+            ctx: &ctx,
+            scene: &gpu,
+            profiler: &mut prof,
+        };
+        shade.record(
+            &mut g,
+            &ShadeInputs {
+                gbuffer: &gbuffer,
+                lights: &lights_buf,
+                bits: &bits,
+                assign: &assign,
+                weights: &weights,
+                indirect: &indirect,
+                pixels: 2,
+                params: ShadeParams {
+                    num_lights: 3,
+                    words: 1,
+                    f: 2,
+                    weighted,
+                    d_min2: DMIN2,
+                    _pad: [0; 3],
+                },
+            },
+        );
+        let out: Vec<[f32; 4]> = ctx.read_buffer(&indirect, 2).unwrap();
+        let want = [sum(v0, 0), sum([1.0, 0.0, 1.0], 1)];
+        for px in 0..2 {
+            let got = [out[px][0], out[px][1], out[px][2]];
+            assert!(
+                close3(got, want[px], 2e-6),
+                "weighted {weighted}, pixel {px}: {got:?}, by hand {:?}",
+                want[px]
+            );
+        }
+    }
+}
+
+/// Eq. (5) on the GPU reference pass, closed form: the two pixels and three lights above, far
+/// outside the Cornell box (nothing between them: every term counts), and a pixel under the box
+/// with a light above it (the box between them: V = 0), next to the same pair beside the box
+/// (V = 1: ρ / d²). Measured on lavapipe: at most 1.2e-7 relative from the hand values; bound 2e-6.
+#[test]
+fn gpu_reference_is_eq5_in_closed_form() {
+    let ctx = common::gpu();
+    let (sc, gpu) = cornell_gpu(&ctx);
+    let (lo, hi) = sc.bounds();
+    let o = hi + (hi - lo);
+    let (sps, lights, t) = two_pixels_three_lights(o);
+    let reference = Reference::new(&ctx, &gpu);
+    let run = |sps: &[Sp], lights: &[Vpl]| -> Vec<[f32; 4]> {
+        let gbuffer = ctx.storage_init("gbuffer", sps);
+        let vpls = ctx.storage_init("vpls", lights);
+        let indirect = ctx.storage("indirect", sps.len() as u64 * 16);
+        let mut prof = Profiler::new(&ctx);
+        let mut g = Gpu {
+            ctx: &ctx,
+            scene: &gpu,
+            profiler: &mut prof,
+        };
+        reference.record(
+            &mut g,
+            &GatherInputs {
+                gbuffer: &gbuffer,
+                lights: &vpls,
+                num_lights: lights.len() as u32,
+                indirect: &indirect,
+                pixels: sps.len() as u32,
+                d_min: DMIN2.sqrt(),
+                label: "reference",
+            },
+            &mut |_, _| true,
+        );
+        ctx.read_buffer(&indirect, sps.len()).unwrap()
+    };
+    let mut out = run(&sps, &lights);
+    // Under / over the box along y (the Cornell box's up), and the same pair beside it along x.
+    let c = 0.5 * (lo + hi);
+    let h = hi.y - lo.y + 2.0;
+    let (yu, yd) = ([0.0, 1.0, 0.0], [0.0, -1.0, 0.0]);
+    let beside = Vec3::new(hi.x - lo.x + 1.0, 0.0, 0.0);
+    for shift in [Vec3::ZERO, beside] {
+        let base = Vec3::new(c.x, lo.y - 1.0, c.z) + shift;
+        out.extend(run(
+            &[sp(base, yu, [0.5; 3])],
+            &[light(base + Vec3::new(0.0, h, 0.0), yd, [PI2; 3])],
+        ));
+    }
+    // A light under pixel 0's plane facing away from it: both cosines negative, nothing between
+    // them; Eq. (5) gives 0 (cos⁺ of both), not the positive product of the two negative cosines.
+    out.extend(run(&sps[..1], &[light(o - Vec3::Z, DOWN, [PI2; 3])]));
+    let got = |i: usize| [out[i][0], out[i][1], out[i][2]];
+    assert_eq!(
+        got(4),
+        [0.0; 3],
+        "a light behind the pixel facing away lights it"
+    );
+    for (px, terms) in t.iter().enumerate() {
+        let mut want = [0f32; 3];
+        for term in terms {
+            for ch in 0..3 {
+                want[ch] += term[ch];
+            }
+        }
+        assert!(
+            close3(got(px), want, 2e-6),
+            "pixel {px}: {:?}, by hand {want:?}",
+            got(px)
+        );
+    }
+    // The pixel under the box (its own dispatch) gets 0, the one beside it 0.5 / h².
+    assert_eq!(
+        got(2),
+        [0.0; 3],
+        "the box does not shadow the pixel under it"
+    );
+    let beside_want = 0.5 / (h * h);
+    assert!(
+        close3(got(3), [beside_want; 3], 2e-6),
+        "beside: {:?}, by hand {beside_want}",
+        got(3)
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// The light list, the camera, the image files.
+
+/// The VPL-cluster light list carries every VPL's flux: per channel its sum equals the VPLs' sum
+/// (f64 sums of f32 fluxes, rounded once to f32 per cluster: measured 1 ulp; bound 1e-6 relative),
+/// and each light is one of the VPLs (a representative, on a real surface).
+#[test]
+fn light_list_flux_sums_to_the_vpls_flux() {
+    let ctx = common::gpu();
+    let (_sc, gpu) = cornell_gpu(&ctx);
+    let mut r = common::Rand(7);
+    let vpls: Vec<Vpl> = (0..600)
+        .map(|i| {
+            let p = Vec3::new(r.f32(), r.f32(), 0.0) * 4.0;
+            let n = if i % 3 == 0 { [1.0, 0.0, 0.0] } else { UP };
+            light(p, n, [r.f32(), 2.0 * r.f32(), 0.5 * r.f32()])
+        })
+        .collect();
+    let set = VplSet {
+        buffer: ctx.storage_init("vpls", &vpls),
+        vpls: vpls.clone(),
+        paths: 600,
+    };
+    let s = KMeansSettings {
+        k: 40,
+        ..oracle_settings(1, 1.0, false)
+    };
+    let mut prof = Profiler::new(&ctx);
+    let frame = (Vec3::ZERO, Vec3::splat(4.0));
+    let mut g = Gpu {
+        ctx: &ctx,
+        scene: &gpu,
+        profiler: &mut prof,
+    };
+    let list = vpl_cluster::cluster(&mut g, &KMeans::new(), &set, &s, frame, None).unwrap();
+    assert!(
+        list.lights.len() > 20 && list.lights.len() <= 40,
+        "{}",
+        list.lights.len()
+    );
+    for ch in 0..3 {
+        let a: f64 = vpls.iter().map(|v| v.flux[ch] as f64).sum();
+        let b: f64 = list.lights.iter().map(|v| v.flux[ch] as f64).sum();
+        assert!(
+            (a - b).abs() <= 1e-6 * a,
+            "channel {ch}: VPLs {a}, lights {b}"
+        );
+    }
+    for l in &list.lights {
+        assert!(
+            vpls.iter().any(|v| v.pos == l.pos && v.nrm == l.nrm),
+            "{l:?}"
+        );
+    }
+    let back: Vec<Vpl> = ctx.read_buffer(&list.buffer, list.lights.len()).unwrap();
+    assert_eq!(
+        bytemuck::cast_slice::<Vpl, u8>(&back),
+        bytemuck::cast_slice::<Vpl, u8>(&list.lights)
+    );
+}
+
+/// The camera's frustum: the rays through the corner pixels' centres make the angles the vertical
+/// field of view and the aspect give, worked from tan(yfov/2) by hand: for a camera looking down −z
+/// with +y up, pixel (x, y) of a w × h image looks along (sx·t·w/h, sy·t, −1), sx = (2x+1)/w − 1,
+/// sy = 1 − (2y+1)/h, t = tan(yfov/2). Checked on `CameraParams::ray` and on the GPU's primary
+/// rays (the G-buffer positions of a tiny frame lie on those rays: measured sine of the angle
+/// ≤ 1e-6; bound 2e-5).
+#[test]
+fn camera_rays_at_the_frustum_corners() {
+    let (w, h) = (8u32, 6u32);
+    let yfov = 1.0f32; // radians
+    let t = (0.5f32).tan();
+    let hand = |x: u32, y: u32| {
+        let sx = (2 * x + 1) as f32 / w as f32 - 1.0;
+        let sy = 1.0 - (2 * y + 1) as f32 / h as f32;
+        Vec3::new(sx * t * w as f32 / h as f32, sy * t, -1.0).normalize()
+    };
+    let corners = [(0, 0), (w - 1, 0), (0, h - 1), (w - 1, h - 1)];
+    // CPU: an axis-aligned camera.
+    let cam = Camera::look_at("t", Vec3::ZERO, -Vec3::Z, Vec3::Y, yfov);
+    let cp = CameraParams::new(&cam, w, h);
+    for &(x, y) in &corners {
+        let d = cp.ray(x as f32 + 0.5, y as f32 + 0.5).normalize();
+        assert!(
+            (d - hand(x, y)).length() < 1e-6,
+            "({x}, {y}): {d} vs {}",
+            hand(x, y)
+        );
+    }
+    // The top-left corner is up and left: a sign or axis swap shows here.
+    let d = hand(0, 0);
+    assert!(d.x < 0.0 && d.y > 0.0);
+    // GPU: from the Cornell box's centre towards the back wall (the default camera's direction).
+    let ctx = common::gpu();
+    let sc = scene::load("builtin:cornell").unwrap();
+    let (lo, hi) = sc.bounds();
+    let eye = 0.5 * (lo + hi);
+    let look = sc.default_camera().forward();
+    let cam = Camera::look_at("t", eye, eye + look, Vec3::Y, yfov);
+    let mut r = Renderer::new(&ctx, &sc).unwrap();
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            width: w,
+            height: h,
+            vpls: 0,
+            direct_samples: 1,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    r.render(&cam, &fs).unwrap();
+    let g = r.last_gbuffer().unwrap();
+    let rc = r.to_render_units(&cam);
+    // The camera's basis in world space (look_at: right = f × up).
+    let f = rc.forward();
+    let right = f.cross(Vec3::Y).normalize();
+    let up = right.cross(f);
+    for &(x, y) in &corners {
+        let px = (y * w + x) as usize;
+        let p = g[4 * px];
+        assert!(p[3] > 0.0, "corner ({x}, {y}) sees nothing");
+        let d = (Vec3::new(p[0], p[1], p[2]) - rc.eye()).normalize();
+        let c = hand(x, y);
+        let want = right * c.x + up * c.y - f * c.z;
+        assert!(
+            d.cross(want).length() < 2e-5 && d.dot(want) > 0.0,
+            "({x}, {y}): {d} vs {want}"
+        );
+    }
+}
+
+/// EXR holds linear radiance: a write / read round trip gives every value back in its channel
+/// (distinct R, G, B per pixel, values across 1e-6 … 1e6; exact: f32 EXR).
+#[test]
+fn exr_round_trip_by_value_and_channel() {
+    let dir = common::scratch("oracle-exr");
+    let path = dir.join("a.exr");
+    let (w, h) = (5u32, 3u32);
+    let img: Vec<[f32; 3]> = (0..w * h)
+        .map(|i| {
+            let i = i as f32;
+            [1.0 + i, 1000.0 + 0.5 * i, 1e-6 * (i + 1.0)]
+        })
+        .collect();
+    let mut img = img;
+    img[0] = [1e6, 0.0, 0.25];
+    export::write_exr(&path, w, h, &img).unwrap();
+    let (rw, rh, back) = export::read_exr(&path).unwrap();
+    assert_eq!((rw, rh), (w, h));
+    assert_eq!(back, img);
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// PNG is radiance × exposure, clamped, sRGB-encoded, in R, G, B order: linear 0, 1, 0.5 and 0.001
+/// are 0, 255, 188 (1.055·0.5^(1/2.4) − 0.055 = 0.7354) and 3 (12.92·0.001 = 0.0129); exposure 2
+/// makes 0.25 into 188; values over 1 and NaN / negative are 255 and 0.
+#[test]
+fn png_round_trip_by_value_and_channel() {
+    assert_eq!(
+        export::linear_to_srgb(0.5),
+        1.055 * 0.5f32.powf(1.0 / 2.4) - 0.055
+    );
+    assert!((export::linear_to_srgb(0.5) - 0.735_356_6).abs() < 1e-6);
+    assert!((export::linear_to_srgb(0.001) - 0.01292).abs() < 1e-9);
+    let dir = common::scratch("oracle-png");
+    let path = dir.join("a.png");
+    let img = [[0.0, 1.0, 0.5], [0.001, 7.0, f32::NAN], [0.25, -1.0, 0.125]];
+    export::write_image(&path, 3, 1, &img, 2.0).unwrap();
+    let back = image::open(&path).unwrap().into_rgb8();
+    assert_eq!(back.dimensions(), (3, 1));
+    // Exposure 2: 0 → 0, 2 → 255, 1 → 255; 0.002 → 12.92·0.002 → 7; 14 → 255; NaN → 0;
+    // 0.5 → 188; −2 → 0; 0.25 → 137 (1.055·0.25^(1/2.4) − 0.055 = 0.5371).
+    assert_eq!(
+        back.into_raw(),
+        vec![0, 255, 255, 7, 255, 0, 188, 0, 137],
+        "R, G, B of three pixels"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
