@@ -470,6 +470,8 @@ pub fn preview_settings(s: RenderSettings) -> RenderSettings {
     }
 }
 
+mod plot;
+mod references;
 #[cfg(test)]
 mod tests;
 mod viewer;

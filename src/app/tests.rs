@@ -36,7 +36,8 @@ fn draw(v: &mut Viewer) {
         )),
         ..Default::default()
     };
-    let _ = ctx.run_ui(input, |ui| v.ui(ui));
+    // The textures it uploads are not applied here: cleared, as egui asks.
+    ctx.run_ui(input, |ui| v.ui(ui)).textures_delta.clear();
 }
 
 /// Polls until `done` holds (the worker replies on lavapipe within seconds).
@@ -318,7 +319,8 @@ fn the_split_divider_follows_a_drag_and_leaves_the_camera() {
             events,
             ..Default::default()
         };
-        let _ = ctx.run_ui(input, |ui| v.ui(ui));
+        // The textures it uploads are not applied here: cleared, as egui asks.
+        ctx.run_ui(input, |ui| v.ui(ui)).textures_delta.clear();
     };
     frame(&mut v, vec![]);
     // The image area starts right of the 380 px panel: the divider at its middle.
