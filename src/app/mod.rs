@@ -64,6 +64,8 @@ pub struct ViewOptions {
     pub shot_dir: PathBuf,
     /// The split view's B settings, pinned at start (`view --b-...`).
     pub b: Option<UiSettings>,
+    /// Keep references on disk too (`view --keep-references`).
+    pub refs_on_disk: bool,
 }
 
 pub fn run(opts: ViewOptions) -> Result<()> {

@@ -51,7 +51,15 @@ impl Viewer {
     /// earlier visit of this view (same camera, size, VPLs, seed, bounces, clamp, direct samples and
     /// lights).
     pub(super) fn reference_for(&self, r: &Rendered) -> Option<&[[f32; 3]]> {
-        let key = super::ref_key(&r.job.camera, &r.job.settings, &self.lights);
+        self.kept_reference(&super::ref_key(
+            &r.job.camera,
+            &r.job.settings,
+            &self.lights,
+        ))
+    }
+
+    /// The reference kept under `key` (`ref_key`), if any.
+    pub(super) fn kept_reference(&self, key: &str) -> Option<&[[f32; 3]]> {
         self.refs
             .iter()
             .rev()
@@ -107,15 +115,22 @@ impl Viewer {
     /// Looks for the latest frame's reference on disk (when references are kept there); returns
     /// whether one was found.
     pub(super) fn load_reference_from_disk(&mut self) -> bool {
-        if !self.refs_on_disk {
-            return false;
-        }
         let Some(r) = &self.latest else { return false };
         let key = super::ref_key(&r.job.camera, &r.job.settings, &self.lights);
-        if self.refs.iter().any(|c| c.key == key) || self.refs_missing.contains(&key) {
+        let size = (r.frame.width, r.frame.height);
+        self.load_kept_reference(key, size)
+    }
+
+    /// Reads the reference of `key` and `size` from disk into memory (when references are kept
+    /// there and it is not in memory yet); returns whether one was read. A missing, unreadable or
+    /// mismatched file is remembered and not looked for again.
+    pub(super) fn load_kept_reference(&mut self, key: String, (w, h): (u32, u32)) -> bool {
+        if !self.refs_on_disk
+            || self.refs.iter().any(|c| c.key == key)
+            || self.refs_missing.contains(&key)
+        {
             return false;
         }
-        let (w, h) = (r.frame.width, r.frame.height);
         let Some(dir) = self.refs_dir() else {
             return false;
         };

@@ -22,6 +22,7 @@ fn viewer(s: UiSettings) -> Viewer {
         stats: None,
         shot_dir: std::env::temp_dir(),
         b: None,
+        refs_on_disk: false,
     };
     Viewer::new(opts, Arc::new(|| {}))
 }
@@ -344,4 +345,82 @@ fn the_split_divider_follows_a_drag_and_leaves_the_camera() {
     frame(&mut v, vec![button(false)]);
     assert!((v.split - 0.25).abs() < 0.02, "split {}", v.split);
     assert_eq!(v.cam, cam);
+}
+
+/// References are kept per view and per setting that changes the reference: a view's reference
+/// comes back when the view does (in memory, and from disk with `--keep-references` in a new
+/// viewer), while another camera, VPL count, seed, size, light or direct sample count misses it and
+/// a change of clustering does not.
+#[test]
+fn references_are_kept_per_view_and_per_reference_setting() {
+    let dir = std::env::temp_dir().join(format!("fvpl-refs-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let spec = dir.join("room.gltf").to_string_lossy().into_owned();
+    let mut v = viewer(UiSettings::new(&RenderSettings::default()));
+    v.spec = spec.clone();
+    v.refs_on_disk = true;
+    let (w, h) = (8, 6);
+    let s = v.s.frame_settings(w, h);
+    let cam = v.cam.to_camera();
+    let key = super::ref_key(&cam, &s, &v.lights);
+    let image: Vec<[f32; 3]> = (0..w * h).map(|i| [i as f32, 0.5, 1.0]).collect();
+    v.keep_reference(key.clone(), image.clone(), 1.0, w, h);
+    assert_eq!(v.kept_reference(&key), Some(image.as_slice()));
+
+    // What the reference depends on changes the key; the clustering does not.
+    let other = |f: &dyn Fn(&mut RenderSettings)| {
+        let mut t = s.clone();
+        f(&mut t);
+        super::ref_key(&cam, &t, &v.lights)
+    };
+    for changed in [
+        other(&|t| t.frame.vpls += 1),
+        other(&|t| t.frame.seed += 1),
+        other(&|t| t.frame.width += 1),
+        other(&|t| t.frame.direct_samples += 1),
+        other(&|t| t.frame.bounces += 1),
+    ] {
+        assert_ne!(changed, key);
+        assert!(v.kept_reference(&changed).is_none());
+    }
+    let mut moved = cam.clone();
+    moved.yfov *= 0.9;
+    assert_ne!(super::ref_key(&moved, &s, &v.lights), key);
+    let mut lights = v.lights.clone();
+    lights.emitter_scale *= 2.0;
+    assert_ne!(super::ref_key(&cam, &s, &lights), key);
+    assert_eq!(
+        other(&|t| {
+            t.cluster.sp_clusters += 7;
+            t.cluster.fuzziness = 1;
+            t.cluster.weighting = Weighting::Hard;
+        }),
+        key
+    );
+
+    // A new viewer on the same scene reads it from disk, once asked to keep references there.
+    let mut u = viewer(UiSettings::new(&RenderSettings::default()));
+    u.spec = spec;
+    assert!(
+        !u.load_kept_reference(key.clone(), (w, h)),
+        "off by default"
+    );
+    u.refs_on_disk = true;
+    assert!(u.load_kept_reference(key.clone(), (w, h)));
+    assert_eq!(u.kept_reference(&key), Some(image.as_slice()));
+    // Another size under the same key is a miss (and not looked for again).
+    let mut x = viewer(UiSettings::new(&RenderSettings::default()));
+    x.spec = u.spec.clone();
+    x.refs_on_disk = true;
+    assert!(!x.load_kept_reference(key.clone(), (w + 1, h)));
+    assert!(x.refs_missing.contains(&key));
+
+    // At most MAX_CACHED_REFS in memory, the oldest dropped first.
+    v.refs_on_disk = false;
+    for i in 0..MAX_CACHED_REFS {
+        v.keep_reference(format!("k{i}"), image.clone(), 1.0, w, h);
+    }
+    assert_eq!(v.refs.len(), MAX_CACHED_REFS);
+    assert!(v.kept_reference(&key).is_none());
+    std::fs::remove_dir_all(&dir).unwrap();
 }

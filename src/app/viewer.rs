@@ -55,7 +55,7 @@ impl Viewer {
             area_px: [opts.width, opts.height],
             reference: None,
             refs: Vec::new(),
-            refs_on_disk: false,
+            refs_on_disk: opts.refs_on_disk,
             refs_missing: Default::default(),
             points: Vec::new(),
             live_error: None,
@@ -321,9 +321,16 @@ impl Viewer {
             .as_ref()
             .is_none_or(|(bt, px, _, _)| *bt != t || *px != pixels)
         {
-            let b = crate::gi::budget::Budget::new(t, &s.cluster, pixels, s.frame.vpls);
-            let c = b.start(&s.cluster);
-            *slot = Some((t, pixels, b, (c.sp_clusters, c.vpl_clusters)));
+            // K only: the direct light accumulates at rest, and a reference is kept per direct
+            // sample count, which a cut would change.
+            let b = crate::gi::budget::Budget::new(t, s).k_only();
+            let n = b.start(s);
+            *slot = Some((
+                t,
+                pixels,
+                b,
+                (n.cluster.sp_clusters, n.cluster.vpl_clusters),
+            ));
         }
         let (_, _, _, (sp, vpl)) = slot.as_ref().expect("set");
         s.cluster.sp_clusters = *sp;
@@ -344,10 +351,9 @@ impl Viewer {
         if *bt != t || *px != pixels {
             return;
         }
-        let c = &r.job.settings.cluster;
-        let next = b.step(c, Split::of(&r.frame, b.controlled));
+        let next = b.step(&r.job.settings, Split::of(&r.frame, b.controlled));
         if (r.frame.frame_ms() / t - 1.0).abs() > SETTLED {
-            *k = (next.sp_clusters, next.vpl_clusters);
+            *k = (next.cluster.sp_clusters, next.cluster.vpl_clusters);
         }
     }
 

@@ -46,6 +46,12 @@ pub struct ViewArgs {
     /// Directory for the panel's screenshots.
     #[arg(long, default_value = ".")]
     shot_dir: PathBuf,
+    /// Keep each finished reference as EXR beside the scene's bookmarks file (in
+    /// `SCENE.fuzzy-vpl.json.refs/`; for built-ins in `$XDG_CONFIG_HOME/fuzzy-vpl/`, else
+    /// `~/.config/fuzzy-vpl/`), and read a view's reference from there when it comes back; the
+    /// panel's "keep on disk".
+    #[arg(long)]
+    keep_references: bool,
     #[command(flatten)]
     b: BArgs,
 }
@@ -188,5 +194,6 @@ pub fn run(a: ViewArgs) -> Result<()> {
         stats: a.stats,
         shot_dir: a.shot_dir,
         b,
+        refs_on_disk: a.keep_references,
     })
 }
