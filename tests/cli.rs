@@ -230,8 +230,11 @@ fn target_ms_chooses_the_cluster_counts_and_says_so() {
     let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
     assert_eq!(j["settings"]["target_ms"].as_f64(), Some(100000.0), "{j}");
     let steps = j["target"]["steps"].as_array().unwrap();
-    assert!(!steps.is_empty() && steps.len() <= 6, "{j}");
+    assert!(!steps.is_empty() && steps.len() <= 8, "{j}");
     let last = steps.last().unwrap();
+    // Far above any frame: the direct light keeps the user's 16 samples.
+    assert_eq!(last["direct_samples"].as_u64(), Some(16), "{j}");
+    assert_eq!(j["settings"]["direct_samples"].as_u64(), Some(16), "{j}");
     // A budget far above any frame: K_VPL at its most, half the VPLs; K_SP on the line,
     // 1% of the pixels × sqrt(128 / (0.244 × 256)) = 22.
     assert_eq!(last["sp_clusters"], j["settings"]["sp_clusters"]);
