@@ -334,8 +334,10 @@ mod tests {
     }
 
     fn settings(c: &ClusterSettings, pixels: (u32, u32), vpls: u32) -> RenderSettings {
-        let mut s = RenderSettings::default();
-        s.cluster = c.clone();
+        let mut s = RenderSettings {
+            cluster: c.clone(),
+            ..Default::default()
+        };
         (s.frame.width, s.frame.height) = pixels;
         s.frame.vpls = vpls;
         s.frame.direct_samples = 16;
