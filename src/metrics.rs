@@ -224,8 +224,8 @@ pub fn border_error(
     })
 }
 
-/// A blue → cyan → green → yellow → red ramp.
-fn ramp(t: f32) -> [f32; 3] {
+/// A blue → cyan → green → yellow → red ramp (the rel_mse error map's).
+pub fn ramp(t: f32) -> [f32; 3] {
     let stops = [
         [0.05, 0.05, 0.35],
         [0.0, 0.6, 0.9],

@@ -302,7 +302,8 @@ pub struct ClusterSettings {
     #[arg(long, default_value = "off", value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub temporal: bool,
     /// A GPU-time budget for the frame in ms (> 0): K_SP and K_VPL are chosen to meet it (`render`:
-    /// a few frames adjusting them, K_VPL following K_SP on the paper's line; `view`: adjusted while
+    /// a few frames adjusting them, K_SP following K_VPL on a line through the paper's intermediate
+    /// setting; `view`: adjusted while
     /// the view changes). --sp-clusters and --vpl-clusters then only say which clusterings run.
     #[arg(long, value_name = "MS", value_parser = parse_target_ms)]
     #[serde(skip_serializing_if = "Option::is_none")]

@@ -361,8 +361,8 @@ fn target_ms_rows_follow_the_sweep() {
     for r in &rows[4..] {
         assert_eq!(r.target_ms, Some(100000.0), "{r:?}");
         assert!(r.label.starts_with("target 100000 ms "), "{r:?}");
-        // A budget above any frame: a quarter of the pixels as SP clusters.
-        assert_eq!(r.sp_clusters, 24 * 16 / 4, "{r:?}");
+        // A budget above any frame: half the VPLs as VPL clusters.
+        assert_eq!(r.vpl_clusters, 128 / 2, "{r:?}");
         assert!(r.mse.is_finite() && r.flip.is_some(), "{r:?}");
         // The front at its time, when a fixed setting was as fast: never above every fixed row.
         if let Some(f) = r.front_mse {

@@ -232,21 +232,17 @@ fn target_ms_chooses_the_cluster_counts_and_says_so() {
     let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
     assert_eq!(j["settings"]["target_ms"].as_f64(), Some(100000.0), "{j}");
     let steps = j["target"]["steps"].as_array().unwrap();
-    assert!(!steps.is_empty() && steps.len() <= 6, "{j}");
+    assert!(!steps.is_empty() && steps.len() <= 8, "{j}");
     let last = steps.last().unwrap();
-    // A budget far above any frame: K_SP at its most, a quarter of the pixels; K_VPL on the line,
-    // at most half the VPLs.
+    // Far above any frame: the direct light keeps the user's 16 samples.
+    assert_eq!(last["direct_samples"].as_u64(), Some(16), "{j}");
+    assert_eq!(j["settings"]["direct_samples"].as_u64(), Some(16), "{j}");
+    // A budget far above any frame: K_VPL at its most, half the VPLs; K_SP on the line,
+    // 1% of the pixels × sqrt(128 / (0.244 × 256)) = 22.
     assert_eq!(last["sp_clusters"], j["settings"]["sp_clusters"]);
     assert_eq!(last["vpl_clusters"], j["settings"]["vpl_clusters"]);
-    assert_eq!(
-        j["settings"]["sp_clusters"].as_u64(),
-        Some(48 * 32 / 4),
-        "{j}"
-    );
-    assert!(
-        j["settings"]["vpl_clusters"].as_u64().unwrap() <= 128,
-        "{j}"
-    );
+    assert_eq!(j["settings"]["vpl_clusters"].as_u64(), Some(128), "{j}");
+    assert_eq!(j["settings"]["sp_clusters"].as_u64(), Some(22), "{j}");
     let (w, h, px) = fuzzy_vpl::export::read_exr(&png).unwrap();
     assert_eq!((w, h), (48, 32));
     assert!(common::all_finite(&px));
@@ -369,6 +365,9 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
             "--error-map",
         ),
         (vec!["render", "-o", &o, "--target-ms", "0"], "--target-ms"),
+        (vec!["view", "--b-fuzziness", "0"], "--b-fuzziness"),
+        (vec!["view", "--b-weighting", "soft"], "--b-weighting"),
+        (vec!["view", "--target-ms", "0"], "--target-ms"),
         (vec!["render", "-o", &o, "--target-ms", "-5"], "--target-ms"),
         (
             vec!["render", "-o", &o, "--target-ms", "inf"],

@@ -243,6 +243,7 @@ fn worker_replies_with_an_error_for_a_frame_too_large_for_the_device() {
         },
         want_sp_ids: false,
         preview: false,
+        b_settings: None,
     }));
     match w.rx.recv_timeout(t) {
         Ok(Reply::Failed(msg)) => assert!(msg.contains(&format!("{width}x{height}")), "{msg}"),

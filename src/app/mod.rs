@@ -62,6 +62,10 @@ pub struct ViewOptions {
     pub stats: Option<PathBuf>,
     /// Where panel screenshots go.
     pub shot_dir: PathBuf,
+    /// The split view's B settings, pinned at start (`view --b-...`).
+    pub b: Option<UiSettings>,
+    /// Keep references on disk too (`view --keep-references`).
+    pub refs_on_disk: bool,
 }
 
 pub fn run(opts: ViewOptions) -> Result<()> {
@@ -304,6 +308,45 @@ pub struct RefState {
     pub secs: f64,
 }
 
+/// A finished reference kept for its view (`Viewer::refs`): returning to that camera with the same
+/// reference settings shows it again at no cost.
+pub struct CachedRef {
+    /// `ref_key` of the view it was rendered for.
+    pub key: String,
+    pub image: Arc<Vec<[f32; 3]>>,
+    pub secs: f64,
+}
+
+/// The most references kept in memory (a 640×480 one is 3.7 MB).
+pub const MAX_CACHED_REFS: usize = 32;
+
+/// What a reference depends on: the camera, the image size, and the settings that change the
+/// unclustered image (VPLs, seed, bounces, clamp, direct samples) and the lights; never the clustering.
+pub fn ref_key(
+    camera: &crate::scene::Camera,
+    s: &RenderSettings,
+    lights: &lights::LightSet,
+) -> String {
+    let f = &s.frame;
+    format!(
+        "{camera:?} {}x{} vpls {} seed {} bounces {} clamp {} direct {} lights {lights:?}",
+        f.width,
+        f.height,
+        f.vpls,
+        f.seed,
+        f.bounces,
+        f.clamp.to_bits(),
+        f.direct_samples
+    )
+}
+
+/// A stable 64-bit FNV-1a hash of `key`, the file name of a reference kept on disk.
+pub fn key_hash(key: &str) -> u64 {
+    key.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
 /// A scripted run (`view --frames N`).
 #[derive(Clone, Debug)]
 pub struct Script {
@@ -321,6 +364,20 @@ pub struct PlotPoint {
     pub key: String,
     pub ms: f64,
     pub mse: f64,
+    pub flip: f64,
+}
+
+/// A time-budget controller of the viewer: the budget and pixel count it was made for, the
+/// controller, and the K_SP and K_VPL it chose last.
+pub type BudgetState = (f64, u32, crate::gi::budget::Budget, (u32, u32));
+
+/// The latest frame's error against its view's reference.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LiveError {
+    pub mse: f64,
+    pub rel_mse: f64,
+    /// Mean FLIP of the two images as displayed (the panel's exposure).
+    pub flip: f64,
 }
 
 /// Everything the viewer holds apart from the window and its GPU objects.
@@ -355,8 +412,29 @@ pub struct Viewer {
     /// The image area in physical pixels.
     pub area_px: [u32; 2],
     pub reference: Option<RefState>,
+    /// Finished references by view (`ref_key`), newest last.
+    pub refs: Vec<CachedRef>,
+    /// Also keep references as EXR in `refs_dir` (beside the scene's bookmarks file), and read them
+    /// from there.
+    pub refs_on_disk: bool,
+    /// Keys looked for on disk and not found (not looked for again).
+    pub refs_missing: std::collections::HashSet<String>,
     pub points: Vec<PlotPoint>,
-    pub live_error: Option<(f64, f64)>,
+    pub live_error: Option<LiveError>,
+    /// The split view's pinned B settings (`None`: nothing pinned).
+    pub b: Option<UiSettings>,
+    /// The split view's divider, a fraction of the image width from its left.
+    pub split: f32,
+    /// The plot's y axis: FLIP instead of MSE.
+    pub plot_flip: bool,
+    /// The plot takes the wheel and drags (zoom, pan); off, it always fits its points.
+    pub plot_zoom: bool,
+    /// Points the plot last fitted to (it re-fits when this changes).
+    pub plot_fitted: usize,
+    /// The time-budget controllers of `--target-ms` (the panel's "time budget"), one for the
+    /// previews while moving and one for the frames at rest, with the K's each chose last and the
+    /// budget and pixel count they were made for.
+    pub budgets: [Option<BudgetState>; 2],
     pub bookmarks: SceneSettings,
     /// The scene's settings file exists but failed to load: never save over it.
     pub bookmarks_unreadable: bool,
@@ -409,6 +487,8 @@ pub fn preview_settings(s: RenderSettings) -> RenderSettings {
     }
 }
 
+mod plot;
+mod references;
 #[cfg(test)]
 mod tests;
 mod viewer;

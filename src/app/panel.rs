@@ -1,10 +1,9 @@
-//! The side panel (scene, camera, settings, stats, reference and error plot, screenshots) and the
-//! image area with its camera input.
+//! The side panel (scene, camera, settings, stats, reference, screenshots; the error plot is in
+//! `plot.rs`) and the image area with its camera input.
 
 use std::sync::atomic::Ordering;
 
 use egui::{Color32, Key, PointerButton, RichText, Sense, Slider, Ui};
-use egui_plot::{Legend, Plot, Points};
 
 use super::Viewer;
 use super::camera::Mode as CamMode;
@@ -12,16 +11,21 @@ use super::settings::Bookmark;
 use super::views::View;
 use crate::settings::{Method, Weighting};
 
-pub const PANEL_WIDTH: f32 = 310.0;
+pub const PANEL_WIDTH: f32 = 380.0;
 
 impl Viewer {
     /// The whole window's UI.
     pub fn ui(&mut self, ui: &mut Ui) {
         egui::Panel::left("panel")
-            .resizable(false)
-            .exact_size(PANEL_WIDTH)
+            .resizable(true)
+            .default_size(PANEL_WIDTH)
+            .size_range(PANEL_WIDTH * 0.8..=PANEL_WIDTH * 3.0)
             .show(ui, |ui| {
-                egui::ScrollArea::vertical().show(ui, |ui| self.panel(ui));
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    // Long lines wrap instead of being cut at the panel's edge.
+                    ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Wrap);
+                    self.panel(ui)
+                });
             });
         egui::CentralPanel::no_frame()
             .frame(egui::Frame::NONE.fill(Color32::from_gray(20)))
@@ -211,6 +215,30 @@ impl Viewer {
                         ui.selectable_value(&mut self.view, v, v.name());
                     }
                 });
+                ui.horizontal_wrapped(|ui| {
+                    if ui
+                        .button("pin as B")
+                        .on_hover_text(
+                            "Keep the current settings as B; the A|B split and A−B views render \
+                             both for the same camera while A changes",
+                        )
+                        .clicked()
+                    {
+                        self.b = Some(self.s.clone());
+                        if !matches!(self.view, View::Split | View::Diff) {
+                            self.view = View::Split;
+                        }
+                    }
+                    if self.b.is_some() && ui.button("unpin B").clicked() {
+                        self.b = None;
+                    }
+                });
+                if let Some(b) = &self.b {
+                    ui.label(
+                        RichText::new(format!("A: {}\nB: {}", self.s.short(), b.short()))
+                            .small(),
+                    );
+                }
                 ui.separator();
                 // The γ the last frame sampled with: the slider starts there when auto is unticked.
                 let gamma_used = self.latest.as_ref().and_then(|l| l.frame.gamma_used);
@@ -260,6 +288,20 @@ impl Viewer {
                     ui.checkbox(&mut s.sp_on, "SP clustering");
                     ui.checkbox(&mut s.vpl_on, "VPL clustering");
                     ui.checkbox(&mut s.direct_on, "direct");
+                });
+                ui.horizontal(|ui| {
+                    let mut on = s.cluster.target_ms.is_some();
+                    ui.checkbox(&mut on, "time budget")
+                        .on_hover_text("K_SP and K_VPL chosen to hold this GPU time a frame");
+                    let mut ms = s.cluster.target_ms.unwrap_or(500.0);
+                    ui.add_enabled(
+                        on,
+                        egui::DragValue::new(&mut ms)
+                            .range(1.0..=100_000.0)
+                            .speed(5.0)
+                            .suffix(" ms"),
+                    );
+                    s.cluster.target_ms = on.then_some(ms);
                 });
                 ui.checkbox(&mut s.cluster.temporal, "temporal reuse").on_hover_text(
                     "Reproject the last frame while moving, start the clusterings from the last \
@@ -358,12 +400,13 @@ impl Viewer {
         egui::CollapsingHeader::new("Stats")
             .default_open(true)
             .show(ui, |ui| {
-                let fps = if self.ui_dt > 0.0 {
-                    1.0 / self.ui_dt
+                // The window redraws only on input or a new frame: a long gap before this frame
+                // means it was idle, not slow.
+                if self.ui_dt > 0.5 || self.ui_dt <= 0.0 {
+                    ui.label("UI idle (redraws on input or a new frame)");
                 } else {
-                    0.0
-                };
-                ui.label(format!("UI {fps:.0} fps"));
+                    ui.label(format!("UI {:.0} fps", 1.0 / self.ui_dt));
+                }
                 let Some(r) = &self.latest else {
                     ui.label("no GI frame yet");
                     return;
@@ -378,12 +421,26 @@ impl Viewer {
                     r.wall_ms,
                     if busy { " (next one rendering…)" } else { "" }
                 ));
-                if let Some((mse, rel)) = self.live_error {
+                if let Some(t) = r.job.settings.cluster.target_ms {
+                    let c = &r.job.settings.cluster;
+                    ui.label(format!(
+                        "time budget {t:.0} ms: K_SP {} · K_VPL {}{}",
+                        c.sp_clusters,
+                        c.vpl_clusters,
+                        if r.job.preview { " (moving)" } else { "" }
+                    ));
+                }
+                if let Some(e) = self.live_error {
                     ui.label(
-                        RichText::new(format!("MSE {mse:.3e} · rel MSE {rel:.3e}"))
-                            .color(Color32::LIGHT_GREEN),
+                        RichText::new(format!(
+                            "MSE {:.3e} · rel MSE {:.3e} · FLIP {:.4}",
+                            e.mse, e.rel_mse, e.flip
+                        ))
+                        .color(Color32::LIGHT_GREEN),
                     );
                 }
+                // Pass names and times on one line each (the panel's wrapping would break them).
+                ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Extend);
                 egui::Grid::new("timings").striped(true).show(ui, |ui| {
                     for p in f
                         .passes
@@ -397,6 +454,7 @@ impl Viewer {
                         ui.end_row();
                     }
                 });
+                ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Wrap);
                 ui.label(format!(
                     "VPLs {} · SPs {} · SP clusters {} · VPL clusters {}",
                     f.vpls, f.shading_points, f.sp_clusters_used, f.vpl_clusters_used
@@ -452,44 +510,44 @@ impl Viewer {
                         {
                             self.start_reference();
                         }
-                        if let Some(r) = &self.reference {
+                        if let Some(r) = &self.reference
+                            && r.image.is_some()
+                        {
                             ui.label(format!(
-                                "reference {}×{} in {:.1} s (moving the camera drops it)",
+                                "reference {}×{} in {:.1} s",
                                 r.job.settings.frame.width, r.job.settings.frame.height, r.secs
                             ));
                         }
                     }
                 }
+                let here = self
+                    .latest
+                    .as_ref()
+                    .is_some_and(|r| self.reference_for_view(r));
+                ui.label(
+                    RichText::new(format!(
+                        "{} reference(s) kept, one per view and reference setting{}",
+                        self.refs.len(),
+                        if here { "; this view has one" } else { "" }
+                    ))
+                    .small(),
+                );
+                let was = self.refs_on_disk;
+                ui.checkbox(
+                    &mut self.refs_on_disk,
+                    "keep references as EXR beside the scene",
+                )
+                .on_hover_text(
+                    self.refs_dir()
+                        .map_or("no folder for this scene".into(), |d| {
+                            d.display().to_string()
+                        }),
+                );
+                if self.refs_on_disk && !was {
+                    self.refs_missing.clear();
+                }
                 if !self.points.is_empty() {
-                    let mut series: Vec<&str> =
-                        self.points.iter().map(|p| p.series.as_str()).collect();
-                    series.sort();
-                    series.dedup();
-                    let items: Vec<Points> = series
-                        .iter()
-                        .map(|name| {
-                            let pts: Vec<[f64; 2]> = self
-                                .points
-                                .iter()
-                                .filter(|p| p.series == *name)
-                                .map(|p| [p.ms, p.mse])
-                                .collect();
-                            Points::new(*name, pts).radius(4.0)
-                        })
-                        .collect();
-                    Plot::new("error_plot")
-                        .height(180.0)
-                        .legend(Legend::default())
-                        .x_axis_label("GPU ms")
-                        .y_axis_label("MSE")
-                        .show(ui, |p| {
-                            for it in items {
-                                p.points(it);
-                            }
-                        });
-                    if ui.small_button("clear plot").clicked() {
-                        self.points.clear();
-                    }
+                    self.error_plot(ui);
                 }
             });
     }
@@ -528,8 +586,27 @@ impl Viewer {
             self.area_px = px;
         }
         let (rect, response) = ui.allocate_exact_size(size, Sense::click_and_drag());
+        // The split view's divider: a handle over the image that takes drags before the camera.
+        let split_view = self.view == View::Split;
+        let mut on_divider = false;
+        if split_view {
+            let x = rect.left() + rect.width() * self.split;
+            let handle = egui::Rect::from_x_y_ranges(x - 6.0..=x + 6.0, rect.y_range());
+            let h = ui.interact(handle, ui.unique_id().with("split_divider"), Sense::drag());
+            if h.dragged()
+                && let Some(p) = h.interact_pointer_pos()
+            {
+                self.split = ((p.x - rect.left()) / rect.width()).clamp(0.0, 1.0);
+            }
+            on_divider = h.dragged() || h.hovered();
+            if on_divider {
+                ui.ctx().set_cursor_icon(egui::CursorIcon::ResizeHorizontal);
+            }
+        }
         // Camera input first, so that this frame's image is already the new camera's.
-        self.camera_input(ui, &response);
+        if !on_divider {
+            self.camera_input(ui, &response);
+        }
         if self.image_stale()
             && let Some(img) = self.current_image()
         {
@@ -551,6 +628,75 @@ impl Viewer {
                 egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
                 Color32::WHITE,
             );
+        }
+        if split_view && self.note.is_none() {
+            let x = rect.left() + rect.width() * self.split;
+            ui.painter().line_segment(
+                [egui::pos2(x, rect.top()), egui::pos2(x, rect.bottom())],
+                egui::Stroke::new(2.0, Color32::WHITE),
+            );
+            for (label, pos, align) in [
+                (
+                    "A",
+                    egui::pos2(x - 8.0, rect.top() + 8.0),
+                    egui::Align2::RIGHT_TOP,
+                ),
+                (
+                    "B",
+                    egui::pos2(x + 8.0, rect.top() + 8.0),
+                    egui::Align2::LEFT_TOP,
+                ),
+            ] {
+                ui.painter().text(
+                    pos,
+                    align,
+                    label,
+                    egui::FontId::proportional(16.0),
+                    Color32::WHITE,
+                );
+            }
+        }
+        if self.note.is_none()
+            && let Some((ramp, labels)) = crate::app::views::colour_bar(self.view, 64)
+        {
+            let bar = egui::Rect::from_min_size(
+                rect.left_bottom() + egui::vec2(12.0, -34.0),
+                egui::vec2((rect.width() - 24.0).clamp(40.0, 320.0), 12.0),
+            );
+            let n = ramp.len() as f32;
+            for (i, c) in ramp.iter().enumerate() {
+                let x0 = bar.left() + bar.width() * i as f32 / n;
+                let x1 = bar.left() + bar.width() * (i + 1) as f32 / n;
+                ui.painter().rect_filled(
+                    egui::Rect::from_x_y_ranges(x0..=x1, bar.y_range()),
+                    0.0,
+                    Color32::from_rgb(c[0], c[1], c[2]),
+                );
+            }
+            ui.painter().rect_stroke(
+                bar,
+                0.0,
+                egui::Stroke::new(1.0, Color32::WHITE),
+                egui::StrokeKind::Outside,
+            );
+            for (k, (label, align)) in labels
+                .iter()
+                .zip([
+                    egui::Align2::LEFT_TOP,
+                    egui::Align2::CENTER_TOP,
+                    egui::Align2::RIGHT_TOP,
+                ])
+                .enumerate()
+            {
+                let x = bar.left() + bar.width() * k as f32 / 2.0;
+                ui.painter().text(
+                    egui::pos2(x, bar.bottom() + 2.0),
+                    align,
+                    *label,
+                    egui::FontId::proportional(12.0),
+                    Color32::WHITE,
+                );
+            }
         }
         if let Some(note) = self.note {
             ui.painter().text(

@@ -21,6 +21,8 @@ fn viewer(s: UiSettings) -> Viewer {
         animate: false,
         stats: None,
         shot_dir: std::env::temp_dir(),
+        b: None,
+        refs_on_disk: false,
     };
     Viewer::new(opts, Arc::new(|| {}))
 }
@@ -35,7 +37,8 @@ fn draw(v: &mut Viewer) {
         )),
         ..Default::default()
     };
-    let _ = ctx.run_ui(input, |ui| v.ui(ui));
+    // The textures it uploads are not applied here: cleared, as egui asks.
+    ctx.run_ui(input, |ui| v.ui(ui)).textures_delta.clear();
 }
 
 /// Polls until `done` holds (the worker replies on lavapipe within seconds).
@@ -323,4 +326,124 @@ fn gi_size_lowers_the_render_scale_to_what_the_device_holds() {
         w as u64 * h as u64 <= 2_097_152 && lower.is_some(),
         "{w}x{h}"
     );
+}
+
+/// The split view's divider follows a left-button drag over it, and the drag does not move the
+/// camera; away from the divider the same drag orbits/looks as before.
+#[test]
+fn the_split_divider_follows_a_drag_and_leaves_the_camera() {
+    let mut v = viewer(UiSettings::new(&RenderSettings::default()));
+    v.b = Some(v.s.clone());
+    v.view = View::Split;
+    let ctx = egui::Context::default();
+    let screen = egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(1200.0, 800.0));
+    let frame = |v: &mut Viewer, events: Vec<egui::Event>| {
+        let input = egui::RawInput {
+            screen_rect: Some(screen),
+            events,
+            ..Default::default()
+        };
+        // The textures it uploads are not applied here: cleared, as egui asks.
+        ctx.run_ui(input, |ui| v.ui(ui)).textures_delta.clear();
+    };
+    frame(&mut v, vec![]);
+    // The image area starts right of the 380 px panel: the divider at its middle.
+    let (left, width) = (
+        super::panel::PANEL_WIDTH,
+        1200.0 - super::panel::PANEL_WIDTH,
+    );
+    let at = |f: f32| egui::pos2(left + width * f, 400.0);
+    let cam = v.cam;
+    let button = |pressed| egui::Event::PointerButton {
+        pos: at(if pressed { 0.5 } else { 0.25 }),
+        button: egui::PointerButton::Primary,
+        pressed,
+        modifiers: Default::default(),
+    };
+    frame(&mut v, vec![egui::Event::PointerMoved(at(0.5))]);
+    frame(&mut v, vec![button(true)]);
+    for f in [0.45, 0.4, 0.3, 0.25] {
+        frame(&mut v, vec![egui::Event::PointerMoved(at(f))]);
+    }
+    frame(&mut v, vec![button(false)]);
+    assert!((v.split - 0.25).abs() < 0.02, "split {}", v.split);
+    assert_eq!(v.cam, cam);
+}
+
+/// References are kept per view and per setting that changes the reference: a view's reference
+/// comes back when the view does (in memory, and from disk with `--keep-references` in a new
+/// viewer), while another camera, VPL count, seed, size, light or direct sample count misses it and
+/// a change of clustering does not.
+#[test]
+fn references_are_kept_per_view_and_per_reference_setting() {
+    let dir = std::env::temp_dir().join(format!("fvpl-refs-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let spec = dir.join("room.gltf").to_string_lossy().into_owned();
+    let mut v = viewer(UiSettings::new(&RenderSettings::default()));
+    v.spec = spec.clone();
+    v.refs_on_disk = true;
+    let (w, h) = (8, 6);
+    let s = v.s.frame_settings(w, h);
+    let cam = v.cam.to_camera();
+    let key = super::ref_key(&cam, &s, &v.lights);
+    let image: Vec<[f32; 3]> = (0..w * h).map(|i| [i as f32, 0.5, 1.0]).collect();
+    v.keep_reference(key.clone(), image.clone(), 1.0, w, h);
+    assert_eq!(v.kept_reference(&key), Some(image.as_slice()));
+
+    // What the reference depends on changes the key; the clustering does not.
+    let other = |f: &dyn Fn(&mut RenderSettings)| {
+        let mut t = s.clone();
+        f(&mut t);
+        super::ref_key(&cam, &t, &v.lights)
+    };
+    for changed in [
+        other(&|t| t.frame.vpls += 1),
+        other(&|t| t.frame.seed += 1),
+        other(&|t| t.frame.width += 1),
+        other(&|t| t.frame.direct_samples += 1),
+        other(&|t| t.frame.bounces += 1),
+    ] {
+        assert_ne!(changed, key);
+        assert!(v.kept_reference(&changed).is_none());
+    }
+    let mut moved = cam.clone();
+    moved.yfov *= 0.9;
+    assert_ne!(super::ref_key(&moved, &s, &v.lights), key);
+    let mut lights = v.lights.clone();
+    lights.emitter_scale *= 2.0;
+    assert_ne!(super::ref_key(&cam, &s, &lights), key);
+    assert_eq!(
+        other(&|t| {
+            t.cluster.sp_clusters += 7;
+            t.cluster.fuzziness = 1;
+            t.cluster.weighting = Weighting::Hard;
+        }),
+        key
+    );
+
+    // A new viewer on the same scene reads it from disk, once asked to keep references there.
+    let mut u = viewer(UiSettings::new(&RenderSettings::default()));
+    u.spec = spec;
+    assert!(
+        !u.load_kept_reference(key.clone(), (w, h)),
+        "off by default"
+    );
+    u.refs_on_disk = true;
+    assert!(u.load_kept_reference(key.clone(), (w, h)));
+    assert_eq!(u.kept_reference(&key), Some(image.as_slice()));
+    // Another size under the same key is a miss (and not looked for again).
+    let mut x = viewer(UiSettings::new(&RenderSettings::default()));
+    x.spec = u.spec.clone();
+    x.refs_on_disk = true;
+    assert!(!x.load_kept_reference(key.clone(), (w + 1, h)));
+    assert!(x.refs_missing.contains(&key));
+
+    // At most MAX_CACHED_REFS in memory, the oldest dropped first.
+    v.refs_on_disk = false;
+    for i in 0..MAX_CACHED_REFS {
+        v.keep_reference(format!("k{i}"), image.clone(), 1.0, w, h);
+    }
+    assert_eq!(v.refs.len(), MAX_CACHED_REFS);
+    assert!(v.kept_reference(&key).is_none());
+    std::fs::remove_dir_all(&dir).unwrap();
 }

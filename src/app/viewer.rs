@@ -1,15 +1,12 @@
 //! The viewer's state machine: camera and panel input, jobs to the GI worker, what each window
-//! frame shows, references, screenshots and the scripted run.
+//! frame shows, screenshots and the scripted run (references: `references.rs`).
 
 use super::camera::ViewCamera;
 use super::settings::SceneSettings;
 use super::views::View;
 use super::worker::{FrameJob, Job, Rendered, Reply, SceneInfo, Source, Worker};
-use super::{
-    PlotPoint, RefState, Script, SliderRanges, ViewOptions, Viewer, gi_size, preview_settings,
-};
-use super::{camera, lights, motion, reproject, screenshot, settings, views, worker};
-use crate::metrics;
+use super::{Script, SliderRanges, ViewOptions, Viewer, gi_size, preview_settings};
+use super::{camera, lights, motion, reproject, screenshot, settings, views};
 use anyhow::Result;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -57,8 +54,17 @@ impl Viewer {
             last_tick: Instant::now(),
             area_px: [opts.width, opts.height],
             reference: None,
+            refs: Vec::new(),
+            refs_on_disk: opts.refs_on_disk,
+            refs_missing: Default::default(),
             points: Vec::new(),
             live_error: None,
+            b: opts.b,
+            split: 0.5,
+            plot_flip: false,
+            plot_zoom: false,
+            plot_fitted: 0,
+            budgets: [None, None],
             bookmarks: SceneSettings::default(),
             bookmarks_unreadable: false,
             bookmark_name: String::new(),
@@ -235,6 +241,7 @@ impl Viewer {
                 self.status = "reference cancelled: the camera moved".into();
             }
         }
+        // Points are of one view; finished references stay in `refs` for when the view returns.
         self.points.clear();
         self.live_error = None;
     }
@@ -263,10 +270,23 @@ impl Viewer {
         }
         let (w, h) = self.full_size();
         let preview = self.moving();
-        let settings = if preview {
+        let mut settings = if preview {
             preview_settings(self.s.frame_settings(w, h))
         } else {
             self.s.frame_settings(w, h)
+        };
+        self.apply_budget(&mut settings, preview);
+        // The split and difference views render B for the same camera, both without temporal reuse
+        // (one renderer's warm starts would alternate between A's and B's clusterings).
+        let b_settings = match (&self.b, self.view) {
+            (Some(b), View::Split | View::Diff) => {
+                settings.cluster.temporal = false;
+                let mut bs = b.frame_settings(w, h);
+                bs.cluster.temporal = false;
+                bs.cluster.target_ms = None;
+                Some(if preview { preview_settings(bs) } else { bs })
+            }
+            _ => None,
         };
         let job = FrameJob {
             id: self.next_id,
@@ -274,8 +294,12 @@ impl Viewer {
             settings,
             want_sp_ids: self.view == View::SpClusters,
             preview,
+            b_settings,
         };
-        let key = format!("{:?} {:?} {}", job.camera, job.settings, job.want_sp_ids);
+        let key = format!(
+            "{:?} {:?} {} {:?}",
+            job.camera, job.settings, job.want_sp_ids, job.b_settings
+        );
         if self.last_sent.as_deref() != Some(key.as_str()) {
             self.last_sent = Some(key);
             self.pending = job.id;
@@ -284,88 +308,53 @@ impl Viewer {
         }
     }
 
-    /// Starts the reference of the current view at full scale.
-    pub fn start_reference(&mut self) {
-        if let Some(r) = self.reference.take() {
-            r.control.cancel();
-        }
-        let (w, h) = self.full_size();
-        let control = worker::control();
-        let mut settings = self.s.frame_settings(w, h);
-        settings.reference = true;
-        settings.control = Some(control.clone());
-        let job = FrameJob {
-            id: self.next_id,
-            camera: self.cam.to_camera(),
-            settings,
-            want_sp_ids: false,
-            preview: false,
-        };
-        self.next_id += 1;
-        self.worker.send(Job::Reference(job.clone()));
-        self.reference = Some(RefState {
-            job,
-            control,
-            started: Instant::now(),
-            image: None,
-            secs: 0.0,
-        });
-        self.points.clear();
-        self.status.clear();
-    }
-
-    pub fn cancel_reference(&mut self) {
-        if let Some(r) = self.reference.take() {
-            r.control.cancel();
-        }
-    }
-
-    /// Whether a frame is comparable with the finished reference (same view, size and VPLs).
-    fn reference_for(&self, r: &Rendered) -> Option<&[[f32; 3]]> {
-        let rs = self.reference.as_ref()?;
-        let img = rs.image.as_ref()?;
-        let (a, b) = (&rs.job.settings, &r.job.settings);
-        (rs.job.camera == r.job.camera
-            && (
-                a.frame.width,
-                a.frame.height,
-                a.frame.vpls,
-                a.frame.seed,
-                a.frame.clamp.to_bits(),
-                a.frame.direct_samples,
-            ) == (
-                b.frame.width,
-                b.frame.height,
-                b.frame.vpls,
-                b.frame.seed,
-                b.frame.clamp.to_bits(),
-                b.frame.direct_samples,
-            ))
-            .then_some(img.as_slice())
-    }
-
-    fn record_error(&mut self) {
-        let Some(r) = &self.latest else { return };
-        let Some(reference) = self.reference_for(r) else {
-            self.live_error = None;
+    /// With a time budget: the K's its controller chose for this kind of frame (preview or at
+    /// rest), or its first ones; a controller is made anew when the budget or the size changes.
+    fn apply_budget(&mut self, s: &mut crate::gi::pipeline::RenderSettings, preview: bool) {
+        let Some(t) = s.cluster.target_ms else {
+            self.budgets = [None, None];
             return;
         };
-        let img = r.frame.radiance.as_slice();
-        let (mse, rel) = (
-            metrics::mse(img, reference),
-            metrics::rel_mse(img, reference),
-        );
-        let ms = r.frame.timings_ms.get("frame").copied().unwrap_or(0.0);
-        self.live_error = Some((mse, rel));
-        let key = self.s.short();
-        let series = self.s.mode_label();
-        self.points.retain(|p| p.key != key);
-        self.points.push(PlotPoint {
-            series,
-            key,
-            ms,
-            mse,
-        });
+        let pixels = s.frame.width * s.frame.height;
+        let slot = &mut self.budgets[preview as usize];
+        if slot
+            .as_ref()
+            .is_none_or(|(bt, px, _, _)| *bt != t || *px != pixels)
+        {
+            // K only: the direct light accumulates at rest, and a reference is kept per direct
+            // sample count, which a cut would change.
+            let b = crate::gi::budget::Budget::new(t, s).k_only();
+            let n = b.start(s);
+            *slot = Some((
+                t,
+                pixels,
+                b,
+                (n.cluster.sp_clusters, n.cluster.vpl_clusters),
+            ));
+        }
+        let (_, _, _, (sp, vpl)) = slot.as_ref().expect("set");
+        s.cluster.sp_clusters = *sp;
+        s.cluster.vpl_clusters = *vpl;
+    }
+
+    /// A frame rendered under a time budget: its controller's next K's, kept when the frame missed
+    /// the budget by more than `budget::SETTLED` (within it, the K's stay and the view is steady).
+    fn budget_step(&mut self, r: &Rendered) {
+        use crate::gi::budget::{SETTLED, Split};
+        let Some(t) = r.job.settings.cluster.target_ms else {
+            return;
+        };
+        let pixels = r.frame.width * r.frame.height;
+        let Some((bt, px, b, k)) = self.budgets[r.job.preview as usize].as_mut() else {
+            return;
+        };
+        if *bt != t || *px != pixels {
+            return;
+        }
+        let next = b.step(&r.job.settings, Split::of(&r.frame, b.controlled));
+        if (r.frame.frame_ms() / t - 1.0).abs() > SETTLED {
+            *k = (next.cluster.sp_clusters, next.cluster.vpl_clusters);
+        }
     }
 
     /// Handles the worker's replies; returns whether anything changed.
@@ -412,8 +401,10 @@ impl Viewer {
                     } else {
                         self.motion.rest = Some((gpu_ms, r.frame.width, r.frame.height));
                     }
+                    self.budget_step(&r);
                     self.latest = Some(r);
                     self.image_dirty = true;
+                    self.load_reference_from_disk();
                     self.record_error();
                 }
                 Reply::Reference(r) => {
@@ -422,6 +413,15 @@ impl Viewer {
                     {
                         rs.image = Some(r.frame.radiance.clone());
                         rs.secs = rs.started.elapsed().as_secs_f64();
+                        let key = super::ref_key(&rs.job.camera, &rs.job.settings, &self.lights);
+                        let secs = rs.secs;
+                        self.keep_reference(
+                            key,
+                            r.frame.radiance.clone(),
+                            secs,
+                            r.frame.width,
+                            r.frame.height,
+                        );
                         self.image_dirty = true;
                         self.record_error();
                     }
@@ -504,6 +504,35 @@ impl Viewer {
                     Some("no reference for this view yet: press \"compute reference\""),
                 ),
             },
+            View::Split | View::Diff => match &r.b_frame {
+                Some(b) if b.radiance.len() == r.frame.radiance.len() => {
+                    let bf = views::final_image(&b.direct, &b.indirect, self.s.direct_on);
+                    if self.view == View::Split {
+                        let a = views::tonemap(&fin(), e);
+                        (
+                            views::split(&a, &views::tonemap(&bf, e), w, h, self.split),
+                            None,
+                        )
+                    } else {
+                        (views::error(&fin(), &bf), None)
+                    }
+                }
+                _ => (
+                    views::tonemap(&fin(), e),
+                    Some(if self.b.is_none() {
+                        "nothing pinned as B: press \"pin as B\""
+                    } else {
+                        "B is rendering…"
+                    }),
+                ),
+            },
+            View::Flip => match reference {
+                Some(img) => (views::flip(&r.frame.radiance, img, w, h, e), None),
+                None => (
+                    views::tonemap(&fin(), e),
+                    Some("no reference for this view yet: press \"compute reference\""),
+                ),
+            },
             View::Error => match reference {
                 Some(img) => (views::error(&r.frame.radiance, img), None),
                 None => (
@@ -526,7 +555,7 @@ impl Viewer {
             View::Indirect => r.frame.indirect.clone(),
             // Without a reference these views show the clustered frame: saving that under a
             // `_reference_` / `_error_` name would mislabel it.
-            View::Reference | View::Error if self.reference_for(r).is_none() => {
+            View::Reference | View::Error | View::Flip if self.reference_for(r).is_none() => {
                 self.last_shot =
                     "no reference for this view yet: nothing saved (press \"compute reference\")"
                         .into();
@@ -651,11 +680,14 @@ impl Viewer {
         self.ui_frames += 1;
         self.schedule();
         let dk = format!(
-            "{:?} {} {} {} {}",
+            "{:?} {} {} {} {} {}",
             self.view,
+            self.split,
             self.s.exposure,
             self.s.direct_on,
-            self.reference.as_ref().is_some_and(|r| r.image.is_some()),
+            self.latest
+                .as_ref()
+                .is_some_and(|r| self.reference_for(r).is_some()),
             self.live_error.is_some()
         );
         if dk != self.display_key {
@@ -673,7 +705,11 @@ impl Viewer {
             .is_some_and(|r| self.animate || at_rest(r))
             && !self.image_dirty;
         if self.script.is_some() && self.view.needs_reference() && shown {
-            if self.reference.is_none() {
+            let has = self
+                .latest
+                .as_ref()
+                .is_some_and(|r| self.reference_for(r).is_some());
+            if self.reference.is_none() && !has {
                 self.start_reference();
             }
             shown = self.live_error.is_some();

@@ -19,10 +19,17 @@ pub enum View {
     VplPoints,
     Reference,
     Error,
+    /// The per-pixel FLIP error of the tone-mapped frame against the reference.
+    Flip,
+    /// A/B: the current settings left of a draggable divider, the pinned B settings right of it,
+    /// same camera.
+    Split,
+    /// A against B: the per-pixel relative difference (as the error view, B as the reference).
+    Diff,
 }
 
 impl View {
-    pub const ALL: [View; 7] = [
+    pub const ALL: [View; 10] = [
         View::Final,
         View::Direct,
         View::Indirect,
@@ -30,6 +37,9 @@ impl View {
         View::VplPoints,
         View::Reference,
         View::Error,
+        View::Flip,
+        View::Split,
+        View::Diff,
     ];
     pub fn name(self) -> &'static str {
         match self {
@@ -40,17 +50,23 @@ impl View {
             View::VplPoints => "VPL clusters",
             View::Reference => "reference",
             View::Error => "error",
+            View::Flip => "FLIP",
+            View::Split => "A|B split",
+            View::Diff => "A−B",
         }
     }
     /// Views that need the reference image.
     pub fn needs_reference(self) -> bool {
-        matches!(self, View::Reference | View::Error)
+        matches!(self, View::Reference | View::Error | View::Flip)
     }
     /// A file-name-friendly name.
     pub fn slug(self) -> &'static str {
         match self {
             View::SpClusters => "spclusters",
             View::VplPoints => "vpls",
+            View::Flip => "flip",
+            View::Split => "split",
+            View::Diff => "diff",
             v => v.name(),
         }
     }
@@ -190,9 +206,73 @@ pub fn error(img: &[[f32; 3]], reference: &[[f32; 3]]) -> Vec<u8> {
         .collect()
 }
 
+/// The FLIP map of `img` against `reference` (both shown with `exposure`), magma, opaque RGBA8.
+pub fn flip(img: &[[f32; 3]], reference: &[[f32; 3]], w: u32, h: u32, exposure: f32) -> Vec<u8> {
+    let map = metrics::flip_map(img, reference, w, h, exposure);
+    metrics::flip_error_map(&map, w, h)
+        .chunks(3)
+        .flat_map(|c| [c[0], c[1], c[2], 255])
+        .collect()
+}
+
+/// The colour scale of an error view: `n` colours from its low end to its high end, and the labels
+/// of its ends and middle.
+pub fn colour_bar(view: View, n: usize) -> Option<(Vec<[u8; 3]>, [&'static str; 3])> {
+    let ramp: Vec<[u8; 3]> = match view {
+        View::Error | View::Diff => (0..n)
+            .map(|i| {
+                metrics::ramp(i as f32 / (n - 1).max(1) as f32).map(|c| (c * 255.0 + 0.5) as u8)
+            })
+            .collect(),
+        View::Flip => {
+            let map: Vec<f32> = (0..n).map(|i| i as f32 / (n - 1).max(1) as f32).collect();
+            metrics::flip_error_map(&map, n as u32, 1)
+                .chunks(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect()
+        }
+        _ => return None,
+    };
+    let labels = match view {
+        View::Error => ["rel. error 1e-4", "1e-2", "1"],
+        View::Diff => ["rel. A−B 1e-4", "1e-2", "1"],
+        _ => ["FLIP 0", "0.5", "1"],
+    };
+    Some((ramp, labels))
+}
+
+/// The split view: `a`'s columns left of `split` (a fraction of the width), `b`'s from there on,
+/// both RGBA8 of `w` × `h`.
+pub fn split(a: &[u8], b: &[u8], w: u32, h: u32, split: f32) -> Vec<u8> {
+    let cut = ((split.clamp(0.0, 1.0) * w as f32).round() as usize).min(w as usize);
+    let mut out = a.to_vec();
+    for y in 0..h as usize {
+        let row = y * w as usize * 4;
+        out[row + cut * 4..row + w as usize * 4]
+            .copy_from_slice(&b[row + cut * 4..row + w as usize * 4]);
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn split_takes_a_left_and_b_right() {
+        let a = vec![1u8; 4 * 4 * 2];
+        let b = vec![2u8; 4 * 4 * 2];
+        let s = split(&a, &b, 4, 2, 0.5);
+        for y in 0..2 {
+            for x in 0..4 {
+                assert_eq!(s[(y * 4 + x) * 4], if x < 2 { 1 } else { 2 });
+            }
+        }
+        assert_eq!(split(&a, &b, 4, 2, 0.0), b);
+        assert_eq!(split(&a, &b, 4, 2, 1.0), a);
+        // The diff view has the error view's colour bar; final has none.
+        assert!(colour_bar(View::Diff, 8).is_some() && colour_bar(View::Final, 8).is_none());
+    }
 
     #[test]
     fn projection_hits_the_image_centre() {

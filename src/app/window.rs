@@ -230,7 +230,17 @@ impl App {
         v.poll();
         v.animate_step();
         let input = g.state.take_egui_input(&g.window);
-        let out = g.egui.run_ui(input, |ui| v.ui(ui));
+        let mut out = g.egui.run_ui(input, |ui| v.ui(ui));
+        // Textures are uploaded before the surface is asked for (a lost surface returns early) and
+        // freed after the frame; egui asks that the delta be cleared once handled.
+        let mut textures = std::mem::take(&mut out.textures_delta);
+        for (id, deltas) in &textures.set {
+            for delta in deltas {
+                g.renderer.update_texture(&g.device, &g.queue, *id, delta);
+            }
+        }
+        let freed = std::mem::take(&mut textures.free);
+        textures.clear();
         v.tick();
         if v.script_started.is_some() {
             v.script_frames += 1;
@@ -246,21 +256,20 @@ impl App {
         let frame = match g.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
             | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                g.surface.configure(&g.device, &g.config);
-                g.window.request_redraw();
-                return Ok(());
-            }
-            _ => {
+            other => {
+                if matches!(
+                    other,
+                    wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost
+                ) {
+                    g.surface.configure(&g.device, &g.config);
+                }
+                for id in &freed {
+                    g.renderer.free_texture(id);
+                }
                 g.window.request_redraw();
                 return Ok(());
             }
         };
-        for (id, deltas) in &out.textures_delta.set {
-            for delta in deltas {
-                g.renderer.update_texture(&g.device, &g.queue, *id, delta);
-            }
-        }
         let sd = egui_wgpu::ScreenDescriptor {
             size_in_pixels: [g.config.width, g.config.height],
             pixels_per_point: out.pixels_per_point,
@@ -317,7 +326,7 @@ impl App {
         g.queue.present(frame);
         v.presented(Instant::now());
         v.motion.input_at = None;
-        for id in &out.textures_delta.free {
+        for id in &freed {
             g.renderer.free_texture(id);
         }
         if let Some((path, tex)) = shot {

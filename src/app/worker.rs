@@ -47,6 +47,8 @@ pub struct FrameJob {
     pub want_sp_ids: bool,
     /// A preview rendered while the camera moves (`preview_settings`).
     pub preview: bool,
+    /// The split view's pinned B settings: rendered for the same camera right after this frame.
+    pub b_settings: Option<RenderSettings>,
 }
 
 pub enum Job {
@@ -76,6 +78,8 @@ pub struct Rendered {
     /// GPU ms of (VPL trace, VPL clustering) when this frame traced new VPLs (the first frame, a
     /// light change, a new VPL count or seed).
     pub relit: Option<(f64, f64)>,
+    /// The B settings' frame of the same camera (split view), when the job had them.
+    pub b_frame: Option<Frame>,
 }
 
 pub enum Reply {
@@ -377,6 +381,11 @@ fn render(
         }
         _ => None,
     };
+    // B after the SP ids are read (they are A's clustering's).
+    let b_frame = match &job.b_settings {
+        Some(b) => Some(renderer.render(&job.camera, b)?),
+        None => None,
+    };
     let wall_ms = t.elapsed().as_secs_f64() * 1e3;
     let relit = match &renderer.vpl_set {
         Some(v) if cache.vpl_key != Some(v.key) => {
@@ -420,6 +429,7 @@ fn render(
         wall_ms,
         refined: None,
         relit,
+        b_frame,
     })
 }
 

@@ -251,15 +251,16 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
         }
         for (i, (c, target_ms)) in jobs.iter().enumerate() {
             pb.set_message(format!("camera {cam_name}: {}", sweep::label(c)));
-            let (c, steps) = match target_ms {
+            // Under a budget the controller chooses the K's (and the direct light's samples where
+            // the fewest clusters miss it).
+            let (s, steps) = match target_ms {
                 Some(t) => {
                     let (chosen, b, _) = budget::fit(&mut renderer, camera, &plan.settings(c), *t)?;
-                    (chosen.cluster, Some(b.steps))
+                    (chosen, Some(b.steps))
                 }
-                None => (c.clone(), None),
+                None => (plan.settings(c), None),
             };
-            let c = &c;
-            let s = plan.settings(c);
+            let c = &s.cluster;
             let (frame, t) = timed(&mut renderer, camera, &s, plan.repeat, &pb)?;
             let mut label = sweep::label_ran(
                 c,

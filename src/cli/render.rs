@@ -155,10 +155,11 @@ pub fn run(a: RenderArgs) -> Result<()> {
         let (chosen, budget, f) = budget::fit(&mut renderer, &camera, &settings, t)?;
         for (i, st) in budget.steps.iter().enumerate() {
             eprintln!(
-                "--target-ms {t}: frame {}: K_SP {} K_VPL {} -> {:.1} ms",
+                "--target-ms {t}: frame {}: K_SP {} K_VPL {} direct samples {} -> {:.1} ms",
                 i + 1,
                 st.sp_clusters,
                 st.vpl_clusters,
+                st.direct_samples,
                 st.frame_ms
             );
         }

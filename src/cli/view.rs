@@ -46,6 +46,78 @@ pub struct ViewArgs {
     /// Directory for the panel's screenshots.
     #[arg(long, default_value = ".")]
     shot_dir: PathBuf,
+    /// Keep each finished reference as EXR beside the scene's bookmarks file (in
+    /// `SCENE.fuzzy-vpl.json.refs/`; for built-ins in `$XDG_CONFIG_HOME/fuzzy-vpl/`, else
+    /// `~/.config/fuzzy-vpl/`), and read a view's reference from there when it comes back; the
+    /// panel's "keep on disk".
+    #[arg(long)]
+    keep_references: bool,
+    #[command(flatten)]
+    b: BArgs,
+}
+
+/// The split view's B settings: the A settings (the ones above) with these changed. Giving any
+/// pins B at start (`--view split` or `--view diff` shows it).
+#[derive(Args, Clone, Debug, Default)]
+#[command(next_help_heading = "Split view (B settings)")]
+pub struct BArgs {
+    /// B's weighting (hard, uniform, inverse-distance).
+    #[arg(id = "b_weighting", long = "b-weighting", value_enum)]
+    weighting: Option<crate::settings::Weighting>,
+    /// B's K_SP.
+    #[arg(id = "b_sp_clusters", long = "b-sp-clusters")]
+    sp_clusters: Option<u32>,
+    /// B's K_VPL.
+    #[arg(id = "b_vpl_clusters", long = "b-vpl-clusters")]
+    vpl_clusters: Option<u32>,
+    /// B's F, 1..16.
+    #[arg(id = "b_fuzziness", long = "b-fuzziness", value_parser = crate::settings::parse_fuzziness)]
+    fuzziness: Option<u32>,
+    /// B's n_t (a cosine in [-1, 1]).
+    #[arg(id = "b_normal_threshold", long = "b-normal-threshold", value_parser = crate::settings::parse_normal_threshold, allow_hyphen_values = true)]
+    normal_threshold: Option<f32>,
+    /// B's p of the inverse-distance weights, [0, 64].
+    #[arg(id = "b_weight_exponent", long = "b-weight-exponent", value_parser = crate::settings::parse_weight_exponent)]
+    weight_exponent: Option<f32>,
+}
+
+impl BArgs {
+    /// `a` with the B options applied, when any was given.
+    fn pin(&self, a: &crate::app::UiSettings) -> Option<crate::app::UiSettings> {
+        let b = self.clone();
+        if b.weighting.is_none()
+            && b.sp_clusters.is_none()
+            && b.vpl_clusters.is_none()
+            && b.fuzziness.is_none()
+            && b.normal_threshold.is_none()
+            && b.weight_exponent.is_none()
+        {
+            return None;
+        }
+        let mut s = a.clone();
+        let c = &mut s.cluster;
+        if let Some(w) = b.weighting {
+            c.weighting = w;
+        }
+        if let Some(k) = b.sp_clusters {
+            s.sp_on = k > 0;
+            c.sp_clusters = k.max(1);
+        }
+        if let Some(k) = b.vpl_clusters {
+            s.vpl_on = k > 0;
+            c.vpl_clusters = k.max(1);
+        }
+        if let Some(f) = b.fuzziness {
+            c.fuzziness = f;
+        }
+        if let Some(n) = b.normal_threshold {
+            s.nt_degrees = n.clamp(-1.0, 1.0).acos().to_degrees();
+        }
+        if let Some(p) = b.weight_exponent {
+            c.weight_exponent = p;
+        }
+        Some(s)
+    }
 }
 
 fn parse_render_scale(v: &str) -> Result<f32, Invalid> {
@@ -100,6 +172,7 @@ pub fn run(a: ViewArgs) -> Result<()> {
     };
     let mut settings = crate::app::UiSettings::new(&rs);
     settings.render_scale = a.render_scale;
+    let b = a.b.pin(&settings);
     let args = a.scene.clone();
     let loader: crate::app::worker::Loader = std::sync::Arc::new(move |spec: &str| {
         let mut sa = args.clone();
@@ -120,5 +193,7 @@ pub fn run(a: ViewArgs) -> Result<()> {
         animate: a.animate,
         stats: a.stats,
         shot_dir: a.shot_dir,
+        b,
+        refs_on_disk: a.keep_references,
     })
 }
