@@ -38,6 +38,7 @@ pub const FILES: &[(&str, &str)] = wgsl![
     "kmeans.wgsl",
     "visibility.wgsl",
     "shade.wgsl",
+    "cvrtgi.wgsl",
 ];
 
 /// The pass shaders (top-level files; `common/` holds shared code, `kmeans/` the steps of the
