@@ -384,8 +384,9 @@ pub struct CvrtgiSettings {
     /// Voxels along the longest axis of the scene bounds (§4.1), 1..=256.
     #[arg(long, default_value_t = 32, value_parser = parse_voxel_res)]
     pub voxel_res: u32,
-    /// Spacing in voxels of the SLIC seeds (§4.2, Achanta et al.'s S), 1..=64.
-    #[arg(long, default_value_t = 4, value_parser = parse_cluster_step)]
+    /// Spacing in voxels of the SLIC seeds (§4.2, Achanta et al.'s S), 1..=64. Fewer, larger
+    /// clusters are found by more of a face's rays (docs/cvrtgi.md measures 4, 6 and 8).
+    #[arg(long, default_value_t = 8, value_parser = parse_cluster_step)]
     pub cluster_step: u32,
     /// Iterations of Alg. 1's loop (the paper: 10), 0..=100.
     #[arg(long, default_value_t = 10, value_parser = parse_cluster_iterations)]
@@ -394,9 +395,9 @@ pub struct CvrtgiSettings {
     /// 35), (0, 180].
     #[arg(long, default_value_t = 35.0, value_parser = parse_cluster_angle)]
     pub cluster_angle: f32,
-    /// Rays per exposed voxel face for the cluster visibility cache (§4.3; the paper: 32..128),
-    /// 1..=1024.
-    #[arg(long, default_value_t = 64, value_parser = parse_face_rays)]
+    /// Rays per exposed voxel face for the cluster visibility cache (§4.3; the paper: 32..128,
+    /// 128 by default), 1..=1024.
+    #[arg(long, default_value_t = 128, value_parser = parse_face_rays)]
     pub face_rays: u32,
     /// Clusters nearer than this many voxels to a face give their lit voxels one by one instead of
     /// the cluster as one light (§4.4), [0, 64].
@@ -415,10 +416,10 @@ impl Default for CvrtgiSettings {
     fn default() -> Self {
         CvrtgiSettings {
             voxel_res: 32,
-            cluster_step: 4,
+            cluster_step: 8,
             cluster_iterations: 10,
             cluster_angle: 35.0,
-            face_rays: 64,
+            face_rays: 128,
             near_voxels: 2.0,
             filter_radius: 2,
             filter_passes: 2,
