@@ -182,22 +182,26 @@ impl Voxels {
                 }
             })
             .collect();
-        for i in 0..self.voxels.len() {
-            let c = self.grid.coord_of_key(self.voxels[i].key);
-            let mut exposed = 0;
-            for dir in 0..6 {
-                if self.find(c + face_axis(dir).as_ivec3()).is_none() {
-                    exposed |= 1 << dir;
-                }
-            }
-            self.voxels[i].exposed = exposed;
-            self.voxels[i].normal = normals[i];
+        let exposed: Vec<u32> = self
+            .voxels
+            .iter()
+            .map(|v| {
+                let c = self.grid.coord_of_key(v.key);
+                (0..6)
+                    .filter(|&dir| self.find(c + face_axis(dir).as_ivec3()).is_none())
+                    .fold(0, |m, dir| m | 1 << dir)
+            })
+            .collect();
+        for ((v, n), e) in self.voxels.iter_mut().zip(normals).zip(exposed) {
+            v.normal = n;
+            v.exposed = e;
         }
     }
 
     /// §4.2's heuristic normal (Fig. 7): of the six axis directions, the one whose 3×3 slab of
-    /// neighbours next to the voxel has the fewest occupied voxels; a tie between the two directions
-    /// of an axis goes to the one nearer the fragments' normals (`mean`, their area-weighted sum).
+    /// neighbours next to the voxel has the fewest occupied voxels; a tie goes to the direction nearer
+    /// the fragments' normals (`mean`, their area-weighted sum; the paper breaks ties between the
+    /// two directions of an axis so), then to the first in the order +x, -x, +y, -y, +z, -z.
     pub fn heuristic_normal(&self, i: usize, mean: Vec3) -> Vec3 {
         let c = self.grid.coord_of_key(self.voxels[i].key);
         let mut best = (u32::MAX, f32::MAX, 0u32);
