@@ -518,6 +518,22 @@ fn measure() {
         c.ms, c.cached_ms
     );
     let rel = fuzzy_vpl::metrics::rel_mse(tot, &reference.radiance);
+    // CV_OUT=DIR: the reference and CVRTGI totals and indirect images as PNG, at the reference's
+    // auto exposure (indirect at 4x that).
+    if let Ok(dir) = std::env::var("CV_OUT") {
+        let e = fuzzy_vpl::exposure::auto_exposure(&reference.radiance);
+        let tag = format!("{}_{}", scene_name.replace("builtin:", ""), cs.voxel_res);
+        let (w, h) = (size.0, size.1);
+        for (name, img, k) in [
+            ("reference", &reference.radiance, 1.0),
+            ("cvrtgi", tot, 1.0),
+            ("reference_indirect", &reference.indirect, 4.0),
+            ("cvrtgi_indirect", ind, 4.0),
+        ] {
+            let path = std::path::Path::new(&dir).join(format!("cvrtgi_{tag}_{name}.png"));
+            fuzzy_vpl::export::write_image(&path, w, h, img, e * k).unwrap();
+        }
+    }
     println!(
         "{scene_name} {size:?} {cs:?}\n{report:?}\nmean luminance total {:.4} vs reference {:.4} (ratio {:.3}); indirect {:.4} vs {:.4} (ratio {:.3}); relMSE {rel:.4}; {:.1} s",
         mean_luminance(tot),
