@@ -412,6 +412,11 @@ fn irradiance_is_kept_across_camera_moves_and_redone_for_new_vpls() {
     assert!(!second.geometry_built && !second.light_built, "{second:?}");
     assert_eq!(second.visibility_rays, 0);
     assert_ne!(a, b, "the moved camera sees other pixels");
+    // The cached stages give the moved view what a pass built from scratch for it gives.
+    let mut fresh = Cvrtgi::new();
+    let (c, built) = cvrtgi_indirect(&ctx, &mut r, &mut fresh, &cs, 0.02);
+    assert!(built.geometry_built && built.light_built);
+    assert_eq!(b, c, "cached and fresh irradiance differ");
     // New VPLs (another seed): the light stage again, the geometry kept.
     let _ = r.render(&cam, &settings(24, 18, 128, 2)).unwrap();
     let (_, third) = cvrtgi_indirect(&ctx, &mut r, &mut pass, &cs, 0.02);

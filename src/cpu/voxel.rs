@@ -84,6 +84,28 @@ pub fn dominant_face(n: Vec3) -> u32 {
     2 * axis + (n[axis as usize] < 0.0) as u32
 }
 
+/// A voxel fragment: position, normal, albedo, area.
+pub type Fragment = (Vec3, Vec3, Vec3, f32);
+
+/// Per voxel key the area-weighted sums of its fragments (position, normal, albedo) and their area.
+#[derive(Default)]
+struct Accumulator(HashMap<u32, (Vec3, Vec3, Vec3, f32)>);
+
+impl Accumulator {
+    fn add(&mut self, grid: &Grid, (p, n, a, w): Fragment) {
+        if let Some(k) = grid.key(grid.coord(p)) {
+            let e = self
+                .0
+                .entry(k)
+                .or_insert((Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, 0.0));
+            e.0 += p * w;
+            e.1 += n * w;
+            e.2 += a * w;
+            e.3 += w;
+        }
+    }
+}
+
 /// An occupied voxel.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Voxel {
@@ -124,19 +146,16 @@ impl Voxels {
     }
 
     /// Builds the set from fragments (position, normal, albedo, area), as voxelisation does.
-    pub fn from_fragments(grid: Grid, frags: &[(Vec3, Vec3, Vec3, f32)]) -> Voxels {
-        let mut acc: HashMap<u32, (Vec3, Vec3, Vec3, f32)> = HashMap::new();
-        for &(p, n, a, w) in frags {
-            if let Some(k) = grid.key(grid.coord(p)) {
-                let e = acc
-                    .entry(k)
-                    .or_insert((Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, 0.0));
-                e.0 += p * w;
-                e.1 += n * w;
-                e.2 += a * w;
-                e.3 += w;
-            }
+    pub fn from_fragments(grid: Grid, frags: &[Fragment]) -> Voxels {
+        let mut acc = Accumulator::default();
+        for &f in frags {
+            acc.add(&grid, f);
         }
+        Voxels::from_accumulated(grid, acc)
+    }
+
+    fn from_accumulated(grid: Grid, acc: Accumulator) -> Voxels {
+        let acc = acc.0;
         let mut keys: Vec<u32> = acc.keys().copied().collect();
         keys.sort_unstable();
         let voxels = keys
@@ -237,7 +256,7 @@ pub fn voxelise(scene: &Scene, res: u32) -> Voxels {
     let (lo, hi) = scene.bounds();
     let grid = Grid::new(lo, hi, res);
     let h = grid.size / 3.0;
-    let mut frags = Vec::new();
+    let mut acc = Accumulator::default();
     for t in &scene.triangles {
         let m = &scene.materials[t.material as usize];
         let longest = (t.p[1] - t.p[0])
@@ -260,11 +279,11 @@ pub fn voxelise(scene: &Scene, res: u32) -> Voxels {
                 };
                 let col = (b0 * t.color[0] + b1 * t.color[1] + b2 * t.color[2]).truncate();
                 let a = (m.base_color.truncate() * col).clamp(Vec3::ZERO, Vec3::ONE);
-                frags.push((p, n, a, w));
+                acc.add(&grid, (p, n, a, w));
             }
         }
     }
-    Voxels::from_fragments(grid, &frags)
+    Voxels::from_accumulated(grid, acc)
 }
 
 /// Eq. (1): whether voxel normal `n1` may join a cluster of normal `n0`: the angle between them
