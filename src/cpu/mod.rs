@@ -1,10 +1,12 @@
 //! CPU twins of the GPU kernels' math, used by tests to check the shaders. Ray queries use obvhs' own
 //! CPU traversal (`bvh::SceneBvh::closest` / `occluded`), which is also the traversal twin.
 
+pub mod cvrtgi;
 pub mod kmeans;
 pub mod lightcluster;
 pub mod rng;
 pub mod shade;
 pub mod shading;
+pub mod voxel;
 pub mod vpl;
 pub mod wang;

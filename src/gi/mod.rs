@@ -2,6 +2,7 @@
 //! WGSL file of the same name. `pipeline` decides which passes run.
 
 pub mod budget;
+pub mod cvrtgi;
 pub mod direct;
 pub mod dispatch;
 pub mod frame;

@@ -40,6 +40,7 @@ pub const FILES: &[(&str, &str)] = wgsl![
     "shade.wgsl",
     "wang.wgsl",
     "lightcluster.wgsl",
+    "cvrtgi.wgsl",
 ];
 
 /// The pass shaders (top-level files; `common/` holds shared code, `kmeans/` the steps of the

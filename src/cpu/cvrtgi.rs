@@ -1,0 +1,346 @@
+//! CPU twin of `shaders-wgsl/cvrtgi.wgsl` (CVRTGI, Cosin Ayerbe & Patow 2022, seed 003; docs/cvrtgi.md)
+//! and the CPU step between the clustering and the kernels: the VPLs' light pulled into their voxels
+//! and clusters (§4.4's lit voxels and lit clusters). One function per kernel step, same formulas.
+
+use glam::{IVec3, Vec3};
+
+use super::rng::pcg_hash;
+use super::voxel::{Voxels, face_axis};
+use crate::bvh::SceneBvh;
+use crate::cpu::shading::ShadingPoint;
+use crate::gi::vpl_trace::Vpl;
+
+pub const INVALID: u32 = u32::MAX;
+
+/// The exposed faces: `of_voxel[6 v + dir]` is face `dir`'s index or `INVALID`, `voxel_dir[f]` is
+/// 6 v + dir of face f. Only exposed faces (the neighbour across is empty) get irradiance.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Faces {
+    pub of_voxel: Vec<u32>,
+    pub voxel_dir: Vec<u32>,
+}
+
+pub fn faces(v: &Voxels) -> Faces {
+    let mut of_voxel = vec![INVALID; 6 * v.voxels.len()];
+    let mut voxel_dir = Vec::new();
+    for (i, vx) in v.voxels.iter().enumerate() {
+        for dir in 0..6 {
+            if vx.exposed & (1 << dir) != 0 {
+                of_voxel[6 * i + dir as usize] = voxel_dir.len() as u32;
+                voxel_dir.push(6 * i as u32 + dir);
+            }
+        }
+    }
+    Faces {
+        of_voxel,
+        voxel_dir,
+    }
+}
+
+/// The lights the faces gather from: per cluster one light (the flux of the VPLs in its voxels at
+/// their flux-weighted mean position and normal; `pos.w` its first lit voxel in `lit`, `nrm.w` their
+/// count, as f32 bits) with its box (two vec4), and per lit voxel one light (the same over its own
+/// VPLs), sorted by cluster.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Lighting {
+    pub clusters: Vec<[[f32; 4]; 5]>,
+    pub lit: Vec<Vpl>,
+    /// VPLs that fell in no voxel or in a voxel of no cluster (their light is lost, §4.2).
+    pub dropped: u32,
+    pub lit_clusters: u32,
+}
+
+fn lum(c: [f32; 4]) -> f32 {
+    (c[0] + c[1] + c[2]).max(0.0)
+}
+
+/// Sums VPLs into one light: flux, and flux-weighted position and normal.
+fn merge(vpls: &[&Vpl]) -> Vpl {
+    let (mut p, mut n, mut f, mut w) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, 0.0f32);
+    for v in vpls {
+        let l = lum(v.flux).max(1e-30);
+        p += Vec3::from_slice(&v.pos[..3]) * l;
+        n += Vec3::from_slice(&v.nrm[..3]) * l;
+        f += Vec3::from_slice(&v.flux[..3]);
+        w += l;
+    }
+    let p = p / w.max(1e-30);
+    let n = n.normalize_or_zero();
+    Vpl {
+        pos: [p.x, p.y, p.z, 0.0],
+        nrm: [n.x, n.y, n.z, 0.0],
+        flux: [f.x, f.y, f.z, 0.0],
+    }
+}
+
+/// §4.4's injection with VPLs as the lit surface: each VPL lies on a surface its light path reached
+/// (the path's rays were the emitter visibility test the paper does with a distance shadow map),
+/// so its voxel is lit and its flux is pulled into the voxel's cluster.
+pub fn inject(v: &Voxels, num_clusters: usize, vpls: &[Vpl]) -> Lighting {
+    let mut per_cluster: Vec<Vec<(u32, &Vpl)>> = vec![Vec::new(); num_clusters];
+    let mut dropped = 0;
+    for vpl in vpls {
+        let p = Vec3::from_slice(&vpl.pos[..3]);
+        let n = Vec3::from_slice(&vpl.nrm[..3]);
+        match v.at_surface(p, -n) {
+            Some(i) if v.voxels[i as usize].cluster != INVALID => {
+                per_cluster[v.voxels[i as usize].cluster as usize].push((i, vpl));
+            }
+            _ => dropped += 1,
+        }
+    }
+    let mut out = Lighting {
+        dropped,
+        ..Default::default()
+    };
+    for list in per_cluster.iter_mut() {
+        list.sort_by_key(|(i, _)| *i);
+        let first = out.lit.len() as u32;
+        let mut k = 0;
+        while k < list.len() {
+            let mut e = k;
+            while e < list.len() && list[e].0 == list[k].0 {
+                e += 1;
+            }
+            let group: Vec<&Vpl> = list[k..e].iter().map(|x| x.1).collect();
+            out.lit.push(merge(&group));
+            k = e;
+        }
+        let count = out.lit.len() as u32 - first;
+        let all: Vec<&Vpl> = list.iter().map(|x| x.1).collect();
+        let mut light = if all.is_empty() {
+            bytemuck::Zeroable::zeroed()
+        } else {
+            merge(&all)
+        };
+        light.pos[3] = f32::from_bits(first);
+        light.nrm[3] = f32::from_bits(count);
+        out.lit_clusters += (count > 0) as u32;
+        out.clusters
+            .push([light.pos, light.nrm, light.flux, [0.0; 4], [0.0; 4]]);
+    }
+    out
+}
+
+/// Sets the boxes of `l`'s clusters (vec4 3 and 4) from the voxel clustering.
+pub fn set_boxes(l: &mut Lighting, clusters: &[super::voxel::Cluster]) {
+    for (c, cl) in l.clusters.iter_mut().zip(clusters) {
+        c[3] = cl.min.extend(0.0).into();
+        c[4] = cl.max.extend(0.0).into();
+    }
+}
+
+/// Van der Corput radical inverse in base 2.
+fn radical_inverse(k: u32) -> f32 {
+    (k.reverse_bits() >> 8) as f32 * (1.0 / 16777216.0)
+}
+
+/// Ray `k` of `rays` from face `f` (direction `dir`): a Hammersley point over the hemisphere about
+/// the face's axis, uniform in solid angle (cos θ = (k + ½) / rays), turned about the axis by a
+/// per-face angle (`pcg_hash(f)`) so neighbouring faces do not share directions (§4.3: the paper's
+/// rays into the upper hemisphere).
+pub fn face_ray(f: u32, dir: u32, k: u32, rays: u32) -> Vec3 {
+    let cos_t = (k as f32 + 0.5) / rays as f32;
+    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+    let turn = (pcg_hash(f) >> 8) as f32 * (1.0 / 16777216.0);
+    let phi = 2.0 * std::f32::consts::PI * (radical_inverse(k) + turn).fract();
+    let a = (dir / 2) as usize;
+    let mut t = Vec3::ZERO;
+    t[(a + 1) % 3] = 1.0;
+    let mut b = Vec3::ZERO;
+    b[(a + 2) % 3] = 1.0;
+    t * (sin_t * phi.cos()) + b * (sin_t * phi.sin()) + face_axis(dir) * cos_t
+}
+
+/// Where face `f`'s rays start: the face's centre, off it along its axis like `offset_origin`.
+pub fn face_origin(v: &Voxels, voxel_dir: u32, eps: f32) -> Vec3 {
+    let (i, dir) = (voxel_dir / 6, voxel_dir % 6);
+    let c = v.grid.coord_of_key(v.voxels[i as usize].key);
+    let p = v.grid.centre(c) + face_axis(dir) * (0.5 * v.grid.size);
+    p + face_axis(dir) * (eps + 4e-6 * p.abs().max_element())
+}
+
+/// §4.3: the clusters face `f` sees, in the order its rays first meet them: each ray's first hit
+/// (BVH traversal, not the paper's Bresenham walk through the voxels) gives the occupied voxel there
+/// (`Voxels::at_surface`) and its cluster, kept once. Twin of the `visibility` entry point.
+pub fn visible_clusters(
+    bvh: &SceneBvh,
+    v: &Voxels,
+    faces: &Faces,
+    f: u32,
+    rays: u32,
+    eps: f32,
+) -> Vec<u32> {
+    let vd = faces.voxel_dir[f as usize];
+    let o = face_origin(v, vd, eps);
+    let mut seen = Vec::new();
+    for k in 0..rays {
+        let d = face_ray(f, vd % 6, k, rays);
+        let Some(hit) = bvh.closest(o.into(), d.into(), 0.0, f32::MAX) else {
+            continue;
+        };
+        let h = o + d * hit.t;
+        if let Some(i) = v.at_surface(h, d) {
+            let c = v.voxels[i as usize].cluster;
+            if c != INVALID && !seen.contains(&c) {
+                seen.push(c);
+            }
+        }
+    }
+    seen
+}
+
+/// §4.4's differential-area form factor from a light to a receiving face: the irradiance at `x`
+/// (face axis `n`) from `light` (flux Φ at a point with normal n_l), E = Φ/π cos θ cos θ_l / max(d²,
+/// d_min²): seed 000's Eq. (5) term with ρ/π left out, so that ρ/π · E is Eq. (5)'s radiance and the
+/// pixels compare with the reference in its units.
+pub fn face_irradiance(x: Vec3, n: Vec3, light: &Vpl, d_min2: f32) -> Vec3 {
+    super::vpl::eq5_vpl_radiance(x, n, Vec3::splat(std::f32::consts::PI), light, d_min2)
+}
+
+fn bits(x: f32) -> u32 {
+    x.to_bits()
+}
+
+/// The distance from `x` to the box of cluster light `c`.
+fn box_distance(x: Vec3, c: &[[f32; 4]; 5]) -> f32 {
+    let (lo, hi) = (Vec3::from_slice(&c[3][..3]), Vec3::from_slice(&c[4][..3]));
+    (lo - x).max(x - hi).max(Vec3::ZERO).length()
+}
+
+/// §4.4's gathering at face `f`: every lit cluster it sees (`visible`, its cached list) adds its
+/// light, or, when nearer than `near` (its box), each of its lit voxels' lights. The receiving point
+/// is the voxel's mean surface position, the normal the face's axis. Twin of `gather`.
+pub fn gather_face(
+    v: &Voxels,
+    faces: &Faces,
+    l: &Lighting,
+    f: u32,
+    visible: &[u32],
+    near: f32,
+    d_min2: f32,
+) -> Vec3 {
+    let vd = faces.voxel_dir[f as usize];
+    let x = v.voxels[(vd / 6) as usize].pos;
+    let n = face_axis(vd % 6);
+    let mut e = Vec3::ZERO;
+    for &c in visible {
+        if c == INVALID {
+            break;
+        }
+        let cl = &l.clusters[c as usize];
+        let count = bits(cl[1][3]);
+        if count == 0 {
+            continue;
+        }
+        if box_distance(x, cl) < near {
+            let first = bits(cl[0][3]);
+            for light in &l.lit[first as usize..(first + count) as usize] {
+                e += face_irradiance(x, n, light, d_min2);
+            }
+        } else {
+            let light = Vpl {
+                pos: cl[0],
+                nrm: cl[1],
+                flux: cl[2],
+            };
+            e += face_irradiance(x, n, &light, d_min2);
+        }
+    }
+    e
+}
+
+/// One pass of §4.4's Gaussian filter at face `f`: the same-direction faces of the voxels within
+/// `radius` (a (2r+1)³ kernel), weight exp(-|Δ|² / 2σ²) with σ = max(r, 1) / 2, weight 0 for an
+/// empty neighbour, one whose face is not exposed, or an unlit one (zero irradiance) other than the
+/// face itself; renormalised. Twin of `filter`.
+pub fn filter_face(v: &Voxels, faces: &Faces, irr: &[Vec3], f: u32, radius: u32) -> Vec3 {
+    let vd = faces.voxel_dir[f as usize];
+    let (i, dir) = (vd / 6, vd % 6);
+    let c = v.grid.coord_of_key(v.voxels[i as usize].key);
+    let r = radius as i32;
+    let sigma = (radius.max(1) as f32) * 0.5;
+    let k = 1.0 / (2.0 * sigma * sigma);
+    let (mut sum, mut wsum) = (Vec3::ZERO, 0.0f32);
+    for dz in -r..=r {
+        for dy in -r..=r {
+            for dx in -r..=r {
+                let d = IVec3::new(dx, dy, dz);
+                let Some(u) = v.find(c + d) else { continue };
+                let g = faces.of_voxel[(6 * u + dir) as usize];
+                if g == INVALID {
+                    continue;
+                }
+                let e = irr[g as usize];
+                if g != f && e.max_element() <= 0.0 {
+                    continue;
+                }
+                let w = (-(d.length_squared() as f32) * k).exp();
+                sum += w * e;
+                wsum += w;
+            }
+        }
+    }
+    if wsum > 0.0 {
+        sum / wsum
+    } else {
+        irr[f as usize]
+    }
+}
+
+/// §4.5: a pixel's indirect light, ρ/π times the irradiance of the face most similar to its normal,
+/// interpolated trilinearly between the 8 voxel centres around it (weight 0 where that voxel is
+/// empty or its face not exposed); where none has one, the exposed face of the pixel's own voxel
+/// nearest its normal. Twin of `lookup`.
+pub fn lookup_pixel(v: &Voxels, faces: &Faces, irr: &[Vec3], sp: &ShadingPoint) -> Vec3 {
+    if !sp.valid {
+        return Vec3::ZERO;
+    }
+    let g = v.grid;
+    let dir = super::voxel::dominant_face(sp.normal);
+    let q = (sp.pos - g.origin) / g.size - 0.5;
+    let b = q.floor();
+    let t = q - b;
+    let base = b.as_ivec3();
+    let (mut sum, mut wsum) = (Vec3::ZERO, 0.0f32);
+    for corner in 0..8 {
+        let o = IVec3::new(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+        let w = [0, 1, 2]
+            .map(|a| if o[a] == 1 { t[a] } else { 1.0 - t[a] })
+            .iter()
+            .product::<f32>();
+        let Some(u) = v.find(base + o) else { continue };
+        let f = faces.of_voxel[(6 * u + dir) as usize];
+        if f != INVALID {
+            sum += w * irr[f as usize];
+            wsum += w;
+        }
+    }
+    let e = if wsum > 0.0 {
+        sum / wsum
+    } else {
+        nearest_face(v, faces, irr, sp.pos, sp.normal)
+    };
+    sp.albedo / std::f32::consts::PI * e
+}
+
+/// The fallback of `lookup_pixel`: the exposed face of the voxel at `p` whose axis is nearest `n`
+/// (cos > 0), zero when there is none.
+fn nearest_face(v: &Voxels, faces: &Faces, irr: &[Vec3], p: Vec3, n: Vec3) -> Vec3 {
+    let Some(u) = v.at_surface(p, -n) else {
+        return Vec3::ZERO;
+    };
+    let mut best = (0.0f32, INVALID);
+    for dir in 0..6 {
+        let f = faces.of_voxel[(6 * u + dir) as usize];
+        let c = face_axis(dir).dot(n);
+        if f != INVALID && c > best.0 {
+            best = (c, f);
+        }
+    }
+    if best.1 == INVALID {
+        Vec3::ZERO
+    } else {
+        irr[best.1 as usize]
+    }
+}

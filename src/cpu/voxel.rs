@@ -1,0 +1,459 @@
+//! The CPU steps of CVRTGI (Cosin Ayerbe & Patow 2022, seed 003; `gi::cvrtgi`, docs/cvrtgi.md):
+//! the scene's voxelisation (§4.1) with each occupied voxel's mean normal and albedo, the paper's
+//! heuristic normal (§4.2, Fig. 7) where the mean normal cancels out, the exposed faces, and the
+//! SLIC-style voxel clustering (§4.2, Eq. (1), Alg. 1). The paper runs these on the GPU once per
+//! static scene; here they run once per scene and settings on the CPU (the result is resident).
+
+use std::collections::HashMap;
+
+use glam::{IVec3, Vec3};
+
+use crate::scene::Scene;
+
+/// A uniform grid over the scene bounds: `res` voxels of side `size` along the longest axis, the
+/// bounds centred in the grid (a point on the bounds' faces lies half a voxel inside it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Grid {
+    pub origin: Vec3,
+    pub size: f32,
+    pub dims: [u32; 3],
+}
+
+impl Grid {
+    pub fn new(lo: Vec3, hi: Vec3, res: u32) -> Grid {
+        let ext = (hi - lo).max(Vec3::ZERO);
+        let size = (ext.max_element() / res.max(1) as f32).max(1e-30);
+        let dims = [0, 1, 2].map(|a| (ext[a] / size).floor() as u32 + 1);
+        let span = Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32) * size;
+        Grid {
+            origin: lo - 0.5 * (span - ext),
+            size,
+            dims,
+        }
+    }
+
+    /// The voxel coordinates of point `p` (possibly outside the grid).
+    pub fn coord(&self, p: Vec3) -> IVec3 {
+        ((p - self.origin) / self.size).floor().as_ivec3()
+    }
+
+    /// The linear key x + X (y + Y z) of `c`, `None` outside the grid.
+    pub fn key(&self, c: IVec3) -> Option<u32> {
+        let d = self.dims;
+        if c.cmplt(IVec3::ZERO).any()
+            || c.x >= d[0] as i32
+            || c.y >= d[1] as i32
+            || c.z >= d[2] as i32
+        {
+            return None;
+        }
+        Some(c.x as u32 + d[0] * (c.y as u32 + d[1] * c.z as u32))
+    }
+
+    pub fn coord_of_key(&self, k: u32) -> IVec3 {
+        let d = self.dims;
+        IVec3::new(
+            (k % d[0]) as i32,
+            (k / d[0] % d[1]) as i32,
+            (k / (d[0] * d[1])) as i32,
+        )
+    }
+
+    pub fn centre(&self, c: IVec3) -> Vec3 {
+        self.origin + (c.as_vec3() + 0.5) * self.size
+    }
+}
+
+/// The direction of face `dir` (0..6: +x, -x, +y, -y, +z, -z).
+pub fn face_axis(dir: u32) -> Vec3 {
+    let mut v = Vec3::ZERO;
+    v[(dir / 2) as usize] = if dir.is_multiple_of(2) { 1.0 } else { -1.0 };
+    v
+}
+
+/// The face most similar to `n` (its dominant axis with its sign), as §4.5 picks it.
+pub fn dominant_face(n: Vec3) -> u32 {
+    let a = n.abs();
+    let axis = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    };
+    2 * axis + (n[axis as usize] < 0.0) as u32
+}
+
+/// A voxel fragment: position, normal, albedo, area.
+pub type Fragment = (Vec3, Vec3, Vec3, f32);
+
+/// Per voxel key the area-weighted sums of its fragments (position, normal, albedo) and their area.
+#[derive(Default)]
+struct Accumulator(HashMap<u32, (Vec3, Vec3, Vec3, f32)>);
+
+impl Accumulator {
+    fn add(&mut self, grid: &Grid, (p, n, a, w): Fragment) {
+        if let Some(k) = grid.key(grid.coord(p)) {
+            let e = self
+                .0
+                .entry(k)
+                .or_insert((Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, 0.0));
+            e.0 += p * w;
+            e.1 += n * w;
+            e.2 += a * w;
+            e.3 += w;
+        }
+    }
+}
+
+/// An occupied voxel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Voxel {
+    pub key: u32,
+    /// Area-weighted mean of its fragments' positions (where its surface is).
+    pub pos: Vec3,
+    /// Mean normal (area-weighted fragment normals), or the heuristic normal where they cancel.
+    pub normal: Vec3,
+    pub albedo: Vec3,
+    /// Total fragment area.
+    pub area: f32,
+    /// Bit `dir` set when the neighbour across face `dir` is empty (or outside the grid).
+    pub exposed: u32,
+    /// Its cluster (`u32::MAX`: none).
+    pub cluster: u32,
+}
+
+/// The occupied voxels sorted by key (the paper's compacted buffers, Fig. 4).
+#[derive(Clone, Debug)]
+pub struct Voxels {
+    pub grid: Grid,
+    pub voxels: Vec<Voxel>,
+    index: HashMap<u32, u32>,
+}
+
+impl Voxels {
+    pub fn find(&self, c: IVec3) -> Option<u32> {
+        self.grid.key(c).and_then(|k| self.index.get(&k).copied())
+    }
+
+    /// The occupied voxel at surface point `p`, trying `p`, then `p + d h` and `p - d h` (h = half a
+    /// voxel; `d` points into the surface): a point on a voxel boundary may fall on either side.
+    pub fn at_surface(&self, p: Vec3, d: Vec3) -> Option<u32> {
+        let h = 0.5 * self.grid.size;
+        [p, p + d * h, p - d * h]
+            .into_iter()
+            .find_map(|q| self.find(self.grid.coord(q)))
+    }
+
+    /// Builds the set from fragments (position, normal, albedo, area), as voxelisation does.
+    pub fn from_fragments(grid: Grid, frags: &[Fragment]) -> Voxels {
+        let mut acc = Accumulator::default();
+        for &f in frags {
+            acc.add(&grid, f);
+        }
+        Voxels::from_accumulated(grid, acc)
+    }
+
+    fn from_accumulated(grid: Grid, acc: Accumulator) -> Voxels {
+        let acc = acc.0;
+        let mut keys: Vec<u32> = acc.keys().copied().collect();
+        keys.sort_unstable();
+        let voxels = keys
+            .iter()
+            .map(|&k| {
+                let (p, n, a, w) = acc[&k];
+                let w = w.max(1e-30);
+                Voxel {
+                    key: k,
+                    pos: p / w,
+                    normal: n / w,
+                    albedo: a / w,
+                    area: w,
+                    exposed: 0,
+                    cluster: u32::MAX,
+                }
+            })
+            .collect();
+        let index = keys
+            .iter()
+            .enumerate()
+            .map(|(i, &k)| (k, i as u32))
+            .collect();
+        let mut v = Voxels {
+            grid,
+            voxels,
+            index,
+        };
+        v.finish_normals_and_faces();
+        v
+    }
+
+    /// Normalises the mean normals (the heuristic normal where the fragments' normals cancel:
+    /// |mean| < 0.1) and marks the exposed faces.
+    fn finish_normals_and_faces(&mut self) {
+        let normals: Vec<Vec3> = (0..self.voxels.len())
+            .map(|i| {
+                let n = self.voxels[i].normal;
+                if n.length() >= 0.1 {
+                    n.normalize()
+                } else {
+                    self.heuristic_normal(i, n)
+                }
+            })
+            .collect();
+        let exposed: Vec<u32> = self
+            .voxels
+            .iter()
+            .map(|v| {
+                let c = self.grid.coord_of_key(v.key);
+                (0..6)
+                    .filter(|&dir| self.find(c + face_axis(dir).as_ivec3()).is_none())
+                    .fold(0, |m, dir| m | 1 << dir)
+            })
+            .collect();
+        for ((v, n), e) in self.voxels.iter_mut().zip(normals).zip(exposed) {
+            v.normal = n;
+            v.exposed = e;
+        }
+    }
+
+    /// §4.2's heuristic normal (Fig. 7): of the six axis directions, the one whose 3×3 slab of
+    /// neighbours next to the voxel has the fewest occupied voxels; a tie goes to the direction nearer
+    /// the fragments' normals (`mean`, their area-weighted sum; the paper breaks ties between the
+    /// two directions of an axis so), then to the first in the order +x, -x, +y, -y, +z, -z.
+    pub fn heuristic_normal(&self, i: usize, mean: Vec3) -> Vec3 {
+        let c = self.grid.coord_of_key(self.voxels[i].key);
+        let mut best = (u32::MAX, f32::MAX, 0u32);
+        for dir in 0..6 {
+            let axis = (dir / 2) as usize;
+            let s = if dir % 2 == 0 { 1 } else { -1 };
+            let mut occupied = 0;
+            for a in -1..=1 {
+                for b in -1..=1 {
+                    let mut d = IVec3::ZERO;
+                    d[axis] = s;
+                    d[(axis + 1) % 3] = a;
+                    d[(axis + 2) % 3] = b;
+                    occupied += self.find(c + d).is_some() as u32;
+                }
+            }
+            // The accumulated angle to the fragments' normals, as -cos (smaller is nearer).
+            let angle = -mean.dot(face_axis(dir));
+            if (occupied, angle) < (best.0, best.1) {
+                best = (occupied, angle, dir);
+            }
+        }
+        face_axis(best.2)
+    }
+}
+
+/// §4.1: voxelises the triangles of `scene` into a grid of `res` voxels along its longest axis.
+/// Fragments are points on each triangle on a barycentric lattice spaced at most a third of a voxel
+/// (the paper rasterises from the three axes; this samples the same surface), each carrying the
+/// triangle's interpolated shading normal, its albedo (base colour × vertex colour; textures are
+/// not sampled) and an equal share of its area.
+pub fn voxelise(scene: &Scene, res: u32) -> Voxels {
+    let (lo, hi) = scene.bounds();
+    let grid = Grid::new(lo, hi, res);
+    let h = grid.size / 3.0;
+    let mut acc = Accumulator::default();
+    for t in &scene.triangles {
+        let m = &scene.materials[t.material as usize];
+        let longest = (t.p[1] - t.p[0])
+            .length()
+            .max((t.p[2] - t.p[1]).length())
+            .max((t.p[0] - t.p[2]).length());
+        let steps = ((longest / h).ceil() as u32).clamp(1, 4096);
+        let count = (steps + 1) * (steps + 2) / 2;
+        let w = t.area() / count as f32;
+        for i in 0..=steps {
+            for j in 0..=steps - i {
+                let (b1, b2) = (i as f32 / steps as f32, j as f32 / steps as f32);
+                let b0 = 1.0 - b1 - b2;
+                let p = b0 * t.p[0] + b1 * t.p[1] + b2 * t.p[2];
+                let n = b0 * t.n[0] + b1 * t.n[1] + b2 * t.n[2];
+                let n = if n.length() > 1e-12 {
+                    n.normalize()
+                } else {
+                    t.geometric_normal()
+                };
+                let col = (b0 * t.color[0] + b1 * t.color[1] + b2 * t.color[2]).truncate();
+                let a = (m.base_color.truncate() * col).clamp(Vec3::ZERO, Vec3::ONE);
+                acc.add(&grid, (p, n, a, w));
+            }
+        }
+    }
+    Voxels::from_accumulated(grid, acc)
+}
+
+/// Eq. (1): whether voxel normal `n1` may join a cluster of normal `n0`: the angle between them
+/// is below `max_deg` (the paper's 35°).
+pub fn eq1_within_angle(n0: Vec3, n1: Vec3, max_deg: f32) -> bool {
+    let c = n0.dot(n1) / (n0.length() * n1.length()).max(1e-30);
+    c.clamp(-1.0, 1.0).acos().to_degrees() < max_deg
+}
+
+/// A voxel cluster after Alg. 1 (line 15's cluster info).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cluster {
+    /// Mean position of its voxels.
+    pub centre: Vec3,
+    /// Mean normal of its voxels (its "main direction").
+    pub normal: Vec3,
+    /// Mean reflectance of its voxels.
+    pub albedo: Vec3,
+    /// World-space box of its voxels.
+    pub min: Vec3,
+    pub max: Vec3,
+    pub voxels: u32,
+}
+
+/// The SLIC knobs of Alg. 1.
+#[derive(Clone, Copy, Debug)]
+pub struct SlicSettings {
+    /// Seed spacing S in voxels; each cluster searches the (2S+1)³ voxels around its centre.
+    pub step: u32,
+    pub iterations: u32,
+    /// Eq. (1)'s angle in degrees.
+    pub angle: f32,
+}
+
+/// A voxel's distance to a cluster as the assignment minimises it: Eq. (1) gates and SLIC's
+/// spatial term orders. Within the angle, the distance between centres in units of S (< √3 in the
+/// search window); beyond it (or for a cluster without a normal yet), 2 + that, so the cluster
+/// takes the voxel only if no cluster within the angle reaches it: "a cluster will always add a
+/// voxel tested for the first time, even if the angle ... is larger than 35°" (§4.2).
+pub fn slic_distance(cluster: (Vec3, Vec3), voxel: (Vec3, Vec3), step: f32, angle: f32) -> f32 {
+    let spatial = (voxel.0 - cluster.0).length() / step;
+    let gated = cluster.1 == Vec3::ZERO || !eq1_within_angle(cluster.1, voxel.1, angle);
+    spatial + if gated { 2.0 } else { 0.0 }
+}
+
+/// Alg. 1: clusters the voxels and sets each voxel's `cluster`. Seeds on a uniform grid of spacing
+/// S (Achanta et al.), each moved to the occupied voxel nearest its cell's centre and taking that
+/// voxel's normal (a seed whose cell is empty is dropped); then `iterations` times: every voxel
+/// starts at the largest distance (line 3), every cluster offers itself to the occupied voxels of
+/// its (2S+1)³ window and a voxel keeps the cluster of least `slic_distance` (lines 4-12; ties to
+/// the lower cluster index, so the result does not depend on the order), and the clusters move to
+/// their voxels' mean position and mean normal (line 13). Last, clusters left without voxels are
+/// dropped and the rest numbered in order (line 16's compaction) with their info (line 15). A
+/// voxel no cluster window reached stays unassigned (`u32::MAX`), as in the paper.
+pub fn slic(v: &mut Voxels, s: &SlicSettings) -> Vec<Cluster> {
+    let step = s.step.max(1) as i32;
+    let g = v.grid;
+    let half = step / 2;
+    // Seeds: one per grid cell holding an occupied voxel (line 1's mean normals are the voxels').
+    let mut centres: Vec<(Vec3, Vec3)> = Vec::new();
+    let cells = g.dims.map(|d| d.div_ceil(step as u32) as i32);
+    for cz in 0..cells[2] {
+        for cy in 0..cells[1] {
+            for cx in 0..cells[0] {
+                let mid = IVec3::new(cx, cy, cz) * step + half;
+                let mut best: Option<(i32, u32)> = None;
+                for dz in 0..step {
+                    for dy in 0..step {
+                        for dx in 0..step {
+                            let c = IVec3::new(cx, cy, cz) * step + IVec3::new(dx, dy, dz);
+                            if let Some(i) = v.find(c) {
+                                let d = (c - mid).length_squared();
+                                if best.is_none_or(|b| d < b.0) {
+                                    best = Some((d, i));
+                                }
+                            }
+                        }
+                    }
+                }
+                if let Some((_, i)) = best {
+                    let vx = &v.voxels[i as usize];
+                    centres.push((g.coord_of_key(vx.key).as_vec3(), vx.normal));
+                }
+            }
+        }
+    }
+    let n = v.voxels.len();
+    let mut assign = vec![u32::MAX; n];
+    for _ in 0..s.iterations.max(1) {
+        let mut best = vec![f32::MAX; n];
+        assign.fill(u32::MAX);
+        for (k, &(c, cn)) in centres.iter().enumerate() {
+            let base = c.round().as_ivec3();
+            for dz in -step..=step {
+                for dy in -step..=step {
+                    for dx in -step..=step {
+                        let cc = base + IVec3::new(dx, dy, dz);
+                        let Some(i) = v.find(cc) else { continue };
+                        let i = i as usize;
+                        let d = slic_distance(
+                            (c, cn),
+                            (cc.as_vec3(), v.voxels[i].normal),
+                            step as f32,
+                            s.angle,
+                        );
+                        if d < best[i] {
+                            best[i] = d;
+                            assign[i] = k as u32;
+                        }
+                    }
+                }
+            }
+        }
+        // Line 13: new centres and mean normals.
+        let mut sums = vec![(Vec3::ZERO, Vec3::ZERO, 0u32); centres.len()];
+        for (i, &k) in assign.iter().enumerate() {
+            if k != u32::MAX {
+                let e = &mut sums[k as usize];
+                e.0 += g.coord_of_key(v.voxels[i].key).as_vec3();
+                e.1 += v.voxels[i].normal;
+                e.2 += 1;
+            }
+        }
+        for (c, &(p, nsum, count)) in centres.iter_mut().zip(&sums) {
+            if count > 0 {
+                c.0 = p / count as f32;
+                c.1 = nsum.normalize_or(c.1);
+            }
+        }
+    }
+    // Lines 15-16: drop empty clusters, number the rest in order, their info.
+    let mut renum = vec![u32::MAX; centres.len()];
+    let mut out: Vec<Cluster> = Vec::new();
+    let mut sums: Vec<(Vec3, Vec3, Vec3, u32)> = Vec::new();
+    for (i, &k) in assign.iter().enumerate() {
+        if k == u32::MAX {
+            v.voxels[i].cluster = u32::MAX;
+            continue;
+        }
+        if renum[k as usize] == u32::MAX {
+            renum[k as usize] = out.len() as u32;
+            out.push(Cluster {
+                centre: Vec3::ZERO,
+                normal: centres[k as usize].1,
+                albedo: Vec3::ZERO,
+                min: Vec3::splat(f32::MAX),
+                max: Vec3::splat(f32::MIN),
+                voxels: 0,
+            });
+            sums.push((Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, 0));
+        }
+        let j = renum[k as usize];
+        v.voxels[i].cluster = j;
+        let vx = v.voxels[i];
+        let c = g.coord_of_key(vx.key);
+        let e = &mut sums[j as usize];
+        e.0 += g.centre(c);
+        e.1 += vx.normal;
+        e.2 += vx.albedo;
+        e.3 += 1;
+        let cl = &mut out[j as usize];
+        cl.min = cl.min.min(g.origin + c.as_vec3() * g.size);
+        cl.max = cl.max.max(g.origin + (c.as_vec3() + 1.0) * g.size);
+    }
+    for (cl, &(p, nsum, a, count)) in out.iter_mut().zip(&sums) {
+        let k = count.max(1) as f32;
+        cl.centre = p / k;
+        cl.normal = nsum.normalize_or(cl.normal);
+        cl.albedo = a / k;
+        cl.voxels = count;
+    }
+    out
+}

@@ -1,0 +1,539 @@
+//! The CVRTGI method (Cosin Ayerbe & Patow 2022, "Clustered voxel real-time global illumination",
+//! seed 003; docs/cvrtgi.md) as one pass that writes a frame's indirect light in the form of colom's
+//! `shade` (ρ/π × irradiance, vec4 a pixel, render units), so the direct light, exposure, metrics and
+//! the reference are shared.
+//!
+//! Stages and what each is keyed on (the paper's Fig. 5: the costly part is not redone for a camera
+//! move while the lights stay):
+//! 1. geometry (scene + voxel/cluster/ray settings), resident: the voxelisation (§4.1) and the SLIC
+//!    clustering (§4.2, Eq. 1, Alg. 1) on the CPU (`cpu::voxel`), then the per-face cluster visibility
+//!    cache (§4.3) on the GPU (`visibility`, BVH rays);
+//! 2. light (+ the VPL set, near distance, filter, clamp), resident: the VPLs pulled into their voxels
+//!    and clusters on the CPU (`cpu::cvrtgi::inject`), the per-face gathering (§4.4, `gather`) and the
+//!    Gaussian filter passes (`filter`) on the GPU;
+//! 3. per frame: each pixel reads its face's filtered irradiance (§4.5, `lookup`).
+//!
+//! Shader: `shaders-wgsl/cvrtgi.wgsl`; CPU twin of every kernel: `cpu::cvrtgi`.
+
+use std::cell::OnceCell;
+use std::time::Instant;
+
+use anyhow::{Result, bail};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+use super::dispatch::{Gpu, Kernel, Run};
+use super::resident::VplKey;
+use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
+use super::vpl_trace::VplSet;
+use crate::cpu::cvrtgi::{self as twin, Faces, Lighting};
+use crate::cpu::voxel::{self, Cluster, SlicSettings, Voxels};
+use crate::gpu::GpuContext;
+use crate::scene::Scene;
+use crate::settings::CvrtgiSettings;
+
+/// The profiler labels of the four kernels (what the GPU timings are keyed by).
+pub const LABELS: [&str; 4] = [
+    "cvrtgi.visibility",
+    "cvrtgi.gather",
+    "cvrtgi.filter",
+    "cvrtgi.lookup",
+];
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct CvParams {
+    origin: [f32; 4],
+    dims: [u32; 4],
+    num_faces: u32,
+    rays: u32,
+    num_clusters: u32,
+    radius: u32,
+    d_min2: f32,
+    near: f32,
+    inv_two_sigma2: f32,
+    _pad: u32,
+}
+
+/// What one frame's CVRTGI pass reads and writes. The caller (the frame graph) provides the scene as
+/// rendered (`Renderer::scene`, in render units: the G-buffer's and the VPLs' units), the resident
+/// VPLs with their key, the frame's G-buffer (`common/gbuffer.wgsl`, from the primary pass) and the
+/// `indirect` image to write (vec4 a pixel, overwritten), like `ShadeInputs`.
+pub struct CvrtgiInputs<'a> {
+    pub scene: &'a Scene,
+    pub vpls: &'a VplSet,
+    pub vpl_key: VplKey,
+    pub gbuffer: &'a wgpu::Buffer,
+    pub pixels: u32,
+    pub indirect: &'a wgpu::Buffer,
+    /// The G-term clamp distance in render units (`FrameSettings::clamp` × scene diagonal), as the
+    /// reference's.
+    pub d_min: f32,
+}
+
+/// What a `record` did: sizes, and which resident stages it (re)built.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CvrtgiReport {
+    pub voxels: u32,
+    pub clusters: u32,
+    pub unassigned_voxels: u32,
+    pub faces: u32,
+    pub lit_clusters: u32,
+    pub lit_voxels: u32,
+    pub dropped_vpls: u32,
+    /// Rays traced for the visibility cache this call (0 when it was resident).
+    pub visibility_rays: u64,
+    pub geometry_built: bool,
+    pub light_built: bool,
+    /// CPU milliseconds of the stages rebuilt this call (voxelisation, clustering, injection).
+    pub cpu_ms: f64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct GeometryKey {
+    voxel_res: u32,
+    step: u32,
+    iterations: u32,
+    angle: u32,
+    rays: u32,
+    triangles: usize,
+    bounds: [u32; 6],
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct LightKey {
+    geometry: GeometryKey,
+    vpls: VplKey,
+    near: u32,
+    radius: u32,
+    passes: u32,
+    d_min: u32,
+}
+
+/// The resident geometry stage: voxels, clusters, faces and the visibility cache.
+pub struct CvrtgiGeometry {
+    pub voxels: Voxels,
+    pub clusters: Vec<Cluster>,
+    pub faces: Faces,
+    pub rays: u32,
+    voxel_buf: wgpu::Buffer,
+    faces_buf: wgpu::Buffer,
+    /// Per face `rays` cluster ids (`visibility`).
+    pub vis: wgpu::Buffer,
+}
+
+/// The resident light stage: the lights and the per-face irradiance before and after filtering.
+pub struct CvrtgiLight {
+    pub lighting: Lighting,
+    lights_buf: wgpu::Buffer,
+    /// vec4 a face: `gather`'s output.
+    pub gathered: wgpu::Buffer,
+    /// vec4 a face: after the filter passes (the buffer `lookup` reads).
+    pub filtered: wgpu::Buffer,
+}
+
+/// The kernels, one per entry point of `cvrtgi.wgsl` (each with its own chunk uniform).
+struct Kernels {
+    visibility: Kernel,
+    gather: Kernel,
+    filter: Kernel,
+    lookup: Kernel,
+    overrides: Vec<(&'static str, f64)>,
+}
+
+/// The CVRTGI pass: its pipelines (built on first use) and its resident stages.
+#[derive(Default)]
+pub struct Cvrtgi {
+    kernels: OnceCell<Kernels>,
+    geometry: Option<(GeometryKey, CvrtgiGeometry)>,
+    light: Option<(LightKey, CvrtgiLight)>,
+}
+
+fn entries() -> Vec<wgpu::BindGroupLayoutEntry> {
+    vec![
+        uniform_layout(1),
+        storage_layout(2, true),
+        storage_layout(3, true),
+        storage_layout(4, true),
+        storage_layout(5, false),
+        storage_layout(6, true),
+        storage_layout(7, false),
+        storage_layout(8, true),
+    ]
+}
+
+/// The buffers of one bind group (a binding the entry point does not use gets a small buffer of
+/// its own: one buffer may not be bound read-only and writable in one dispatch).
+struct Bindings<'a> {
+    params: &'a wgpu::Buffer,
+    voxels: &'a wgpu::Buffer,
+    faces: &'a wgpu::Buffer,
+    lights: Option<&'a wgpu::Buffer>,
+    vis: Option<&'a wgpu::Buffer>,
+    irr_in: Option<&'a wgpu::Buffer>,
+    out: Option<&'a wgpu::Buffer>,
+    gbuffer: Option<&'a wgpu::Buffer>,
+}
+
+impl Bindings<'_> {
+    fn group(&self, ctx: &GpuContext, k: &Kernel) -> wgpu::BindGroup {
+        let dummy: Vec<wgpu::Buffer> = (0..5).map(|_| ctx.storage("cvrtgi unused", 16)).collect();
+        let opt = [self.lights, self.vis, self.irr_in, self.out, self.gbuffer];
+        let mut list: Vec<(u32, &wgpu::Buffer)> =
+            vec![(1, self.params), (2, self.voxels), (3, self.faces)];
+        for (i, b) in opt.iter().enumerate() {
+            list.push((4 + i as u32, b.unwrap_or(&dummy[i])));
+        }
+        k.bind_group(ctx, &list)
+    }
+}
+
+fn f32_bits(v: Vec3) -> [u32; 3] {
+    [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()]
+}
+
+impl Cvrtgi {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn kernels(&mut self, ctx: &GpuContext, scene: &SceneGpu) -> &Kernels {
+        if self
+            .kernels
+            .get()
+            .is_some_and(|k| k.overrides != scene.overrides())
+        {
+            self.kernels = OnceCell::new();
+        }
+        self.kernels.get_or_init(|| {
+            let k =
+                |entry| Kernel::with_entries(ctx, Some(scene), "cvrtgi", &[entry], &entries(), &[]);
+            Kernels {
+                visibility: k("visibility"),
+                gather: k("gather"),
+                filter: k("filter_faces"),
+                lookup: k("lookup"),
+                overrides: scene.overrides(),
+            }
+        })
+    }
+
+    /// The resident geometry stage, if built.
+    pub fn geometry(&self) -> Option<&CvrtgiGeometry> {
+        self.geometry.as_ref().map(|g| &g.1)
+    }
+
+    /// The resident light stage, if built.
+    pub fn light(&self) -> Option<&CvrtgiLight> {
+        self.light.as_ref().map(|l| &l.1)
+    }
+
+    fn params(&self, s: &CvrtgiSettings, d_min: f32) -> CvParams {
+        let geo = &self.geometry.as_ref().unwrap().1;
+        let g = geo.voxels.grid;
+        let sigma = s.filter_radius.max(1) as f32 * 0.5;
+        CvParams {
+            origin: g.origin.extend(g.size).into(),
+            dims: [
+                g.dims[0],
+                g.dims[1],
+                g.dims[2],
+                geo.voxels.voxels.len() as u32,
+            ],
+            num_faces: geo.faces.voxel_dir.len() as u32,
+            rays: geo.rays,
+            num_clusters: geo.clusters.len() as u32,
+            radius: s.filter_radius,
+            d_min2: d_min * d_min,
+            near: s.near_voxels * g.size,
+            inv_two_sigma2: 1.0 / (2.0 * sigma * sigma),
+            _pad: 0,
+        }
+    }
+
+    /// Writes the frame's indirect light into `i.indirect`: rebuilds the geometry stage when the
+    /// scene or its settings changed, the light stage when the VPLs or its settings changed, and
+    /// always runs the per-pixel lookup. Errors when the visibility cache would not fit one storage
+    /// binding of this adapter.
+    pub fn record(
+        &mut self,
+        g: &mut Gpu,
+        i: &CvrtgiInputs,
+        s: &CvrtgiSettings,
+    ) -> Result<CvrtgiReport> {
+        let ctx = g.ctx;
+        let mut report = CvrtgiReport::default();
+        let (lo, hi) = i.scene.bounds();
+        let (l, h) = (f32_bits(lo), f32_bits(hi));
+        let gkey = GeometryKey {
+            voxel_res: s.voxel_res,
+            step: s.cluster_step,
+            iterations: s.cluster_iterations,
+            angle: s.cluster_angle.to_bits(),
+            rays: s.face_rays,
+            triangles: i.scene.triangles.len(),
+            bounds: [l[0], l[1], l[2], h[0], h[1], h[2]],
+        };
+        self.kernels(ctx, g.scene);
+        if self.geometry.as_ref().map(|x| x.0) != Some(gkey) {
+            self.light = None;
+            self.geometry = None;
+            let t = Instant::now();
+            let mut voxels = voxel::voxelise(i.scene, s.voxel_res.max(1));
+            let slic = SlicSettings {
+                step: s.cluster_step,
+                iterations: s.cluster_iterations,
+                angle: s.cluster_angle,
+            };
+            let clusters = voxel::slic(&mut voxels, &slic);
+            let faces = twin::faces(&voxels);
+            report.cpu_ms += t.elapsed().as_secs_f64() * 1e3;
+            let rays = s.face_rays.max(1);
+            let vis_bytes = faces.voxel_dir.len() as u64 * rays as u64 * 4;
+            if vis_bytes > ctx.max_binding() {
+                bail!(
+                    "cvrtgi: the visibility cache ({} faces × {rays} rays, {vis_bytes} bytes) exceeds this adapter's storage binding ({} bytes); lower --voxel-res or --face-rays",
+                    faces.voxel_dir.len(),
+                    ctx.max_binding()
+                );
+            }
+            let packed: Vec<[f32; 4]> = voxels
+                .voxels
+                .iter()
+                .flat_map(|v| {
+                    [
+                        v.pos.extend(f32::from_bits(v.cluster)).into(),
+                        v.normal.extend(f32::from_bits(v.key)).into(),
+                    ]
+                })
+                .collect();
+            let mut face_words = faces.of_voxel.clone();
+            face_words.extend_from_slice(&faces.voxel_dir);
+            // Empty scenes still bind something.
+            face_words.push(twin::INVALID);
+            let mut packed = packed;
+            if packed.is_empty() {
+                packed.push([0.0; 4]);
+            }
+            let geo = CvrtgiGeometry {
+                voxel_buf: ctx.storage_init("cvrtgi voxels", &packed),
+                faces_buf: ctx.storage_init("cvrtgi faces", &face_words),
+                vis: ctx.storage("cvrtgi visibility", vis_bytes.max(4)),
+                voxels,
+                clusters,
+                faces,
+                rays,
+            };
+            self.geometry = Some((gkey, geo));
+            report.visibility_rays = self.run_visibility(g, s, i.d_min);
+            report.geometry_built = true;
+        }
+        let lkey = LightKey {
+            geometry: gkey,
+            vpls: i.vpl_key,
+            near: s.near_voxels.to_bits(),
+            radius: s.filter_radius,
+            passes: s.filter_passes,
+            d_min: i.d_min.to_bits(),
+        };
+        if self.light.as_ref().map(|x| x.0) != Some(lkey) {
+            let t = Instant::now();
+            let geo = &self.geometry.as_ref().unwrap().1;
+            let mut lighting = twin::inject(&geo.voxels, geo.clusters.len(), &i.vpls.vpls);
+            twin::set_boxes(&mut lighting, &geo.clusters);
+            report.cpu_ms += t.elapsed().as_secs_f64() * 1e3;
+            let light = self.run_light(g, s, i.d_min, lighting);
+            self.light = Some((lkey, light));
+            report.light_built = true;
+        }
+        self.run_lookup(g, s, i);
+        let geo = &self.geometry.as_ref().unwrap().1;
+        let light = &self.light.as_ref().unwrap().1;
+        report.voxels = geo.voxels.voxels.len() as u32;
+        report.clusters = geo.clusters.len() as u32;
+        report.unassigned_voxels = geo
+            .voxels
+            .voxels
+            .iter()
+            .filter(|v| v.cluster == twin::INVALID)
+            .count() as u32;
+        report.faces = geo.faces.voxel_dir.len() as u32;
+        report.lit_clusters = light.lighting.lit_clusters;
+        report.lit_voxels = light.lighting.lit.len() as u32;
+        report.dropped_vpls = light.lighting.dropped;
+        Ok(report)
+    }
+
+    /// §4.3 on the GPU: fills the visibility cache; returns the rays traced.
+    fn run_visibility(&self, g: &mut Gpu, s: &CvrtgiSettings, d_min: f32) -> u64 {
+        let ctx = g.ctx;
+        let geo = &self.geometry.as_ref().unwrap().1;
+        let k = &self.kernels.get().unwrap().visibility;
+        let params = ctx.uniform("cvrtgi params", &self.params(s, d_min));
+        let bg = Bindings {
+            params: &params,
+            voxels: &geo.voxel_buf,
+            faces: &geo.faces_buf,
+            lights: None,
+            vis: Some(&geo.vis),
+            irr_in: None,
+            out: None,
+            gbuffer: None,
+        }
+        .group(ctx, k);
+        let faces = geo.faces.voxel_dir.len() as u32;
+        // About 2^18 rays a submission.
+        let per = ((1u32 << 18) / geo.rays).max(64);
+        let run = Run {
+            label: LABELS[0],
+            group: &bg,
+            seed: 0,
+        };
+        if faces > 0 {
+            k.run(g, run, faces, per, &mut |_, _| {});
+        }
+        faces as u64 * geo.rays as u64
+    }
+
+    /// §4.4 on the GPU: the gathering, then the filter passes (ping-pong).
+    fn run_light(
+        &self,
+        g: &mut Gpu,
+        s: &CvrtgiSettings,
+        d_min: f32,
+        lighting: Lighting,
+    ) -> CvrtgiLight {
+        let ctx = g.ctx;
+        let geo = &self.geometry.as_ref().unwrap().1;
+        let ks = self.kernels.get().unwrap();
+        let params = ctx.uniform("cvrtgi params", &self.params(s, d_min));
+        let mut words: Vec<[f32; 4]> = lighting.clusters.iter().flatten().copied().collect();
+        for l in &lighting.lit {
+            words.extend([l.pos, l.nrm, l.flux]);
+        }
+        if words.is_empty() {
+            words.push([0.0; 4]);
+        }
+        let lights_buf = ctx.storage_init("cvrtgi lights", &words);
+        let faces = geo.faces.voxel_dir.len() as u32;
+        let bytes = faces.max(1) as u64 * 16;
+        let gathered = ctx.storage("cvrtgi gathered", bytes);
+        let base = Bindings {
+            params: &params,
+            voxels: &geo.voxel_buf,
+            faces: &geo.faces_buf,
+            lights: Some(&lights_buf),
+            vis: Some(&geo.vis),
+            irr_in: None,
+            out: Some(&gathered),
+            gbuffer: None,
+        };
+        let bg = base.group(ctx, &ks.gather);
+        if faces > 0 {
+            ks.gather.run(
+                g,
+                Run {
+                    label: LABELS[1],
+                    group: &bg,
+                    seed: 0,
+                },
+                faces,
+                1 << 14,
+                &mut |_, _| {},
+            );
+        }
+        let ping = [
+            ctx.storage("cvrtgi filtered a", bytes),
+            ctx.storage("cvrtgi filtered b", bytes),
+        ];
+        let mut src = &gathered;
+        for p in 0..s.filter_passes as usize {
+            let dst = &ping[p % 2];
+            let bg = Bindings {
+                lights: None,
+                vis: None,
+                irr_in: Some(src),
+                out: Some(dst),
+                ..base
+            }
+            .group(ctx, &ks.filter);
+            if faces > 0 {
+                ks.filter.run(
+                    g,
+                    Run {
+                        label: LABELS[2],
+                        group: &bg,
+                        seed: 0,
+                    },
+                    faces,
+                    1 << 14,
+                    &mut |_, _| {},
+                );
+            }
+            src = dst;
+        }
+        let filtered = if s.filter_passes == 0 {
+            let copy = ctx.storage("cvrtgi filtered", bytes);
+            let mut enc = ctx.device.create_command_encoder(&Default::default());
+            enc.copy_buffer_to_buffer(&gathered, 0, &copy, 0, bytes);
+            ctx.queue.submit([enc.finish()]);
+            copy
+        } else {
+            let [a, b] = ping;
+            if s.filter_passes % 2 == 1 { a } else { b }
+        };
+        CvrtgiLight {
+            lighting,
+            lights_buf,
+            gathered,
+            filtered,
+        }
+    }
+
+    /// §4.5 on the GPU: every pixel's indirect light from its face's filtered irradiance.
+    fn run_lookup(&self, g: &mut Gpu, s: &CvrtgiSettings, i: &CvrtgiInputs) {
+        let ctx = g.ctx;
+        let geo = &self.geometry.as_ref().unwrap().1;
+        let light = &self.light.as_ref().unwrap().1;
+        let k = &self.kernels.get().unwrap().lookup;
+        let params = ctx.uniform("cvrtgi params", &self.params(s, i.d_min));
+        let bg = Bindings {
+            params: &params,
+            voxels: &geo.voxel_buf,
+            faces: &geo.faces_buf,
+            lights: Some(&light.lights_buf),
+            vis: None,
+            irr_in: Some(&light.filtered),
+            out: Some(i.indirect),
+            gbuffer: Some(i.gbuffer),
+        }
+        .group(ctx, k);
+        let run = Run {
+            label: LABELS[3],
+            group: &bg,
+            seed: 0,
+        };
+        if i.pixels > 0 {
+            k.run(g, run, i.pixels, 1 << 17, &mut |_, _| {});
+        }
+    }
+
+    /// Reads a vec4-a-face buffer of the light stage back as RGB (tests, views).
+    pub fn read_faces(&self, ctx: &GpuContext, buf: &wgpu::Buffer) -> Result<Vec<Vec3>> {
+        let n = self
+            .geometry()
+            .map_or(0, |g| g.faces.voxel_dir.len())
+            .max(1);
+        let raw: Vec<[f32; 4]> = ctx.read_buffer(buf, n)?;
+        Ok(raw.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect())
+    }
+
+    /// Reads the visibility cache back: `rays` cluster ids a face.
+    pub fn read_visibility(&self, ctx: &GpuContext) -> Result<Vec<u32>> {
+        let Some(geo) = self.geometry() else {
+            bail!("cvrtgi: no geometry stage yet");
+        };
+        let n = (geo.faces.voxel_dir.len() * geo.rays as usize).max(1);
+        ctx.read_buffer(&geo.vis, n)
+    }
+}

@@ -1,0 +1,552 @@
+//! CVRTGI (seed 003; `gi::cvrtgi`, docs/cvrtgi.md): hand-worked oracles of Eq. (1), the heuristic
+//! normal, SLIC (Alg. 1) and the face form factor; the GPU kernels against their CPU twins on a small
+//! Cornell box; the irradiance kept across camera moves (Fig. 5); and the total image's mean
+//! luminance against the reference. `measure` (ignored) prints the figures of docs/cvrtgi.md.
+
+mod common;
+
+use fuzzy_vpl::cpu::cvrtgi::{self as twin, Faces, INVALID, Lighting};
+use fuzzy_vpl::cpu::shading::ShadingPoint;
+use fuzzy_vpl::cpu::voxel::{self, Grid, SlicSettings, Voxels, eq1_within_angle};
+use fuzzy_vpl::gi::cvrtgi::{Cvrtgi, CvrtgiInputs, CvrtgiReport};
+use fuzzy_vpl::gi::dispatch::Gpu;
+use fuzzy_vpl::gi::pipeline::{Frame, RenderSettings, Renderer};
+use fuzzy_vpl::gi::vpl_trace::Vpl;
+use fuzzy_vpl::gpu::GpuContext;
+use fuzzy_vpl::metrics::mean_luminance;
+use fuzzy_vpl::scene::{self, Camera};
+use fuzzy_vpl::settings::{CvrtgiSettings, FrameSettings};
+use std::collections::BTreeMap;
+
+use glam::Vec3;
+
+#[test]
+fn eq1_accepts_34_degrees_and_refuses_36() {
+    let n0 = Vec3::Y;
+    let at = |deg: f32| {
+        let r = deg.to_radians();
+        Vec3::new(r.sin(), r.cos(), 0.0)
+    };
+    assert!(eq1_within_angle(n0, at(34.0), 35.0));
+    assert!(!eq1_within_angle(n0, at(36.0), 35.0));
+    assert!(
+        eq1_within_angle(n0, n0 * 3.0, 35.0),
+        "lengths do not matter"
+    );
+    assert!(!eq1_within_angle(n0, -n0, 35.0));
+    // Another angle knob moves the threshold.
+    assert!(eq1_within_angle(n0, at(44.0), 45.0) && !eq1_within_angle(n0, at(46.0), 45.0));
+}
+
+/// Unit voxels at integer coordinates: fragments at the voxel centres with the given normals.
+fn hand_voxels(dims: u32, cells: &[([i32; 3], Vec3)]) -> Voxels {
+    let grid = Grid {
+        origin: Vec3::ZERO,
+        size: 1.0,
+        dims: [dims; 3],
+    };
+    let frags: Vec<_> = cells
+        .iter()
+        .map(|(c, n)| {
+            let p = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) + 0.5;
+            (p, *n, Vec3::splat(0.5), 1.0)
+        })
+        .collect();
+    Voxels::from_fragments(grid, &frags)
+}
+
+#[test]
+fn grid_centres_the_bounds_and_keys_round_trip() {
+    let g = Grid::new(Vec3::ZERO, Vec3::new(4.0, 2.0, 1.0), 4);
+    assert_eq!(g.size, 1.0);
+    assert_eq!(g.dims, [5, 3, 2]);
+    // Bounds centred: a point on the min face lies half a voxel inside voxel 0.
+    assert_eq!(g.coord(Vec3::ZERO), glam::IVec3::ZERO);
+    assert_eq!(g.coord(Vec3::new(4.0, 2.0, 1.0)), glam::IVec3::new(4, 2, 1));
+    for k in 0..30 {
+        assert_eq!(g.key(g.coord_of_key(k)), Some(k));
+    }
+    assert_eq!(g.key(glam::IVec3::new(5, 0, 0)), None);
+}
+
+#[test]
+fn exposed_faces_and_heuristic_normal_on_a_hand_made_wall() {
+    // A 3x3 wall in the plane z = 1 (normals +z), and one voxel in its middle whose fragments'
+    // normals cancel (+z and -z): the heuristic normal (Fig. 7) picks an axis with an empty 3x3 slab:
+    // x and y slabs hold 3 wall voxels each, z slabs none; +z wins the tie (the accumulated angle to
+    // its fragments is equal, so the first direction in order, +z before -z).
+    let mut cells = vec![];
+    for y in 0..3 {
+        for x in 0..3 {
+            if (x, y) != (1, 1) {
+                cells.push(([x + 1, y + 1, 1], Vec3::Z));
+            }
+        }
+    }
+    let grid = Grid {
+        origin: Vec3::ZERO,
+        size: 1.0,
+        dims: [5; 3],
+    };
+    let mut frags: Vec<_> = cells
+        .iter()
+        .map(|(c, n)| {
+            (
+                Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) + 0.5,
+                *n,
+                Vec3::ONE,
+                1.0,
+            )
+        })
+        .collect();
+    frags.push((Vec3::new(2.5, 2.5, 1.5), Vec3::Z, Vec3::ONE, 1.0));
+    frags.push((Vec3::new(2.4, 2.5, 1.5), -Vec3::Z, Vec3::ONE, 1.0));
+    let v = Voxels::from_fragments(grid, &frags);
+    let mid = v.find(glam::IVec3::new(2, 2, 1)).unwrap() as usize;
+    assert_eq!(v.voxels[mid].normal.abs(), Vec3::Z);
+    // The middle voxel: only its ±z faces are exposed; a corner voxel also two sides.
+    assert_eq!(v.voxels[mid].exposed, 0b110000);
+    let corner = v.find(glam::IVec3::new(1, 1, 1)).unwrap() as usize;
+    assert_eq!(v.voxels[corner].exposed, 0b110000 | 0b1010);
+    // With a mean tilted towards -z the tie goes to -z.
+    assert_eq!(v.heuristic_normal(mid, -Vec3::Z * 0.05), -Vec3::Z);
+}
+
+#[test]
+fn slic_separates_a_floor_from_a_wall_by_the_35_degree_rule() {
+    // An L: a 4x4 floor (y = 0, normal +y) and a 4x4 wall (z = 0, normal +z) sharing the edge row
+    // y = 0, z = 0 (those voxels take the floor). Step 4: one seed cell holds everything; the wall
+    // gets its own cluster once the floor's normal is set.
+    let mut cells = vec![];
+    for z in 0..4 {
+        for x in 0..4 {
+            cells.push(([x, 0, z], Vec3::Y));
+        }
+    }
+    for y in 1..4 {
+        for x in 0..4 {
+            cells.push(([x, y, 0], Vec3::Z));
+        }
+    }
+    let mut v = hand_voxels(4, &cells);
+    let s = SlicSettings {
+        step: 2,
+        iterations: 10,
+        angle: 35.0,
+    };
+    let clusters = voxel::slic(&mut v, &s);
+    assert!(
+        v.voxels.iter().all(|x| x.cluster != INVALID),
+        "all assigned"
+    );
+    for a in &v.voxels {
+        for b in &v.voxels {
+            if a.normal != b.normal {
+                assert_ne!(a.cluster, b.cluster, "{a:?} {b:?}");
+            }
+        }
+        // Each cluster's normal is its voxels' normal (Eq. (1) kept them apart).
+        assert!((clusters[a.cluster as usize].normal - a.normal).length() < 1e-6);
+    }
+    let total: u32 = clusters.iter().map(|c| c.voxels).sum();
+    assert_eq!(total, 28);
+    // Hand-worked: seeds on a step-2 grid, one per 2x2x2 cell holding voxels: the floor's 4 cells
+    // (y 0..2) and the wall's cells at y 2..4 (z 0..2) give 4 + 2 = 6 seeds; the wall rows y = 1 lie
+    // in floor cells and go to the wall's clusters by Eq. (1) after the first iteration.
+    assert_eq!(clusters.len(), 6, "{clusters:?}");
+    // A flat 4x4 floor with step 4: one cluster, centred on the floor, with every voxel.
+    let mut flat = hand_voxels(4, &cells[..16]);
+    let c = voxel::slic(&mut flat, &SlicSettings { step: 4, ..s });
+    assert_eq!(c.len(), 1);
+    assert_eq!(c[0].voxels, 16);
+    assert!(
+        (c[0].centre - Vec3::new(2.0, 0.5, 2.0)).length() < 1e-6,
+        "{:?}",
+        c[0]
+    );
+    assert_eq!((c[0].min, c[0].max), (Vec3::ZERO, Vec3::new(4.0, 1.0, 4.0)));
+}
+
+#[test]
+fn a_face_under_one_cluster_gets_its_closed_form_irradiance() {
+    // One receiving floor voxel at the origin and a lit ceiling cluster 4 voxels above, facing down:
+    // E = Φ/π cos θ cos θ' / d² = Φ / (π d²) with d = 4 (d_min below it), both cosines 1.
+    let cells = [([0, 0, 0], Vec3::Y), ([0, 4, 0], -Vec3::Y)];
+    let mut v = hand_voxels(8, &cells);
+    let clusters = voxel::slic(
+        &mut v,
+        &SlicSettings {
+            step: 1,
+            iterations: 1,
+            angle: 35.0,
+        },
+    );
+    assert_eq!(clusters.len(), 2);
+    let faces: Faces = twin::faces(&v);
+    let vpl = Vpl {
+        pos: [0.5, 4.5, 0.5, 0.0],
+        nrm: [0.0, -1.0, 0.0, 0.0],
+        flux: [2.0, 4.0, 8.0, 0.0],
+    };
+    let mut l: Lighting = twin::inject(&v, clusters.len(), &[vpl]);
+    twin::set_boxes(&mut l, &clusters);
+    assert_eq!((l.lit_clusters, l.dropped, l.lit.len()), (1, 0, 1));
+    let floor = v.find(glam::IVec3::ZERO).unwrap();
+    let up = faces.of_voxel[6 * floor as usize + 2];
+    let ceiling = v.voxels[v.find(glam::IVec3::new(0, 4, 0)).unwrap() as usize].cluster;
+    let pi = std::f32::consts::PI;
+    let want = Vec3::new(2.0, 4.0, 8.0) / (pi * 16.0);
+    // Far (the cluster as one light) and near (its lit voxels) give the same here.
+    for near in [0.0, 10.0] {
+        let e = twin::gather_face(&v, &faces, &l, up, &[ceiling, INVALID], near, 0.01);
+        assert!((e - want).length() < 1e-6 * want.length(), "{e} vs {want}");
+    }
+    // The d_min clamp: at d_min = 8 the distance term is 1/64.
+    let e = twin::gather_face(&v, &faces, &l, up, &[ceiling], 0.0, 64.0);
+    assert!((e - want * 16.0 / 64.0).length() < 1e-6);
+    // The face below the floor sees it from behind: nothing.
+    let down = faces.of_voxel[6 * floor as usize + 3];
+    assert_eq!(
+        twin::gather_face(&v, &faces, &l, down, &[ceiling], 0.0, 0.01),
+        Vec3::ZERO
+    );
+    // A pixel on the floor at the voxel centre reads ρ/π E with its albedo.
+    let irr: Vec<Vec3> = (0..faces.voxel_dir.len())
+        .map(|f| if f as u32 == up { want } else { Vec3::ZERO })
+        .collect();
+    let sp = ShadingPoint {
+        valid: true,
+        pos: Vec3::new(0.5, 0.5, 0.5),
+        normal: Vec3::Y,
+        material: 0,
+        albedo: Vec3::splat(0.5),
+        emission: Vec3::ZERO,
+    };
+    let px = twin::lookup_pixel(&v, &faces, &irr, &sp);
+    assert!((px - want * 0.5 / pi).length() < 1e-7, "{px}");
+    // The filter keeps a lone face's value (no neighbours).
+    let f = twin::filter_face(&v, &faces, &irr, up, 2);
+    assert_eq!(f, want);
+}
+
+// ---- on the GPU ----
+
+fn settings(w: u32, h: u32, vpls: u32, seed: u32) -> RenderSettings {
+    RenderSettings {
+        frame: FrameSettings {
+            width: w,
+            height: h,
+            seed,
+            vpls,
+            ..Default::default()
+        },
+        reference: true,
+        ..Default::default()
+    }
+}
+
+/// The CVRTGI indirect image (scene units) of the last frame `r` rendered, and what the pass did.
+fn cvrtgi_indirect(
+    ctx: &GpuContext,
+    r: &mut Renderer,
+    pass: &mut Cvrtgi,
+    s: &CvrtgiSettings,
+    clamp: f32,
+) -> (Vec<[f32; 3]>, CvrtgiReport) {
+    let (img, report, _) = cvrtgi_timed(ctx, r, pass, s, clamp);
+    (img, report)
+}
+
+/// `cvrtgi_indirect` with the GPU ms of each kernel label.
+fn cvrtgi_timed(
+    ctx: &GpuContext,
+    r: &mut Renderer,
+    pass: &mut Cvrtgi,
+    s: &CvrtgiSettings,
+    clamp: f32,
+) -> (Vec<[f32; 3]>, CvrtgiReport, BTreeMap<String, f64>) {
+    let _ = r.profiler.collect(ctx);
+    let gbuf = r.last_gbuffer().unwrap();
+    let pixels = (gbuf.len() / 4) as u32;
+    let gbuffer = ctx.storage_init("gbuffer", &gbuf);
+    let indirect = ctx.storage("indirect", pixels as u64 * 16);
+    let resident = r.vpl_set.as_ref().unwrap();
+    let inputs = CvrtgiInputs {
+        scene: &r.scene,
+        vpls: &resident.set,
+        vpl_key: resident.key,
+        gbuffer: &gbuffer,
+        pixels,
+        indirect: &indirect,
+        d_min: clamp * r.scene.extent(),
+    };
+    let mut g = Gpu {
+        ctx,
+        scene: &r.gpu,
+        profiler: &mut r.profiler,
+    };
+    let report = pass.record(&mut g, &inputs, s).unwrap();
+    let ms = r.profiler.collect(ctx).unwrap();
+    let raw: Vec<[f32; 4]> = ctx.read_buffer(&indirect, pixels as usize).unwrap();
+    let k = r.output_scale;
+    let img = raw.iter().map(|p| [p[0] * k, p[1] * k, p[2] * k]).collect();
+    (img, report, ms)
+}
+
+fn total(direct: &[[f32; 3]], ind: &[[f32; 3]]) -> Vec<[f32; 3]> {
+    direct
+        .iter()
+        .zip(ind)
+        .map(|(a, b)| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
+        .collect()
+}
+
+fn rel(a: Vec3, b: Vec3) -> f32 {
+    (a - b).length() / b.length().max(1e-6)
+}
+
+#[test]
+fn gpu_kernels_match_their_cpu_twins() {
+    let ctx = common::gpu();
+    let s = scene::load("builtin:cornell").unwrap();
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let cam = s.default_camera();
+    let rs = settings(32, 24, 256, 3);
+    let _ = r.render(&cam, &rs).unwrap();
+    let cs = CvrtgiSettings {
+        voxel_res: 12,
+        face_rays: 32,
+        cluster_step: 3,
+        ..Default::default()
+    };
+    let mut pass = Cvrtgi::new();
+    let (img, report) = cvrtgi_indirect(&ctx, &mut r, &mut pass, &cs, rs.frame.clamp);
+    println!("{report:?}");
+    assert!(common::all_finite(&img));
+    let geo = pass.geometry().unwrap();
+    let light = pass.light().unwrap();
+    let (v, faces, rays) = (&geo.voxels, &geo.faces, geo.rays as usize);
+    let cpu = common::cpu_scene(&r, &r.scene);
+    // Visibility (BVH rays on both sides): the same cluster lists, in the same order.
+    let vis = pass.read_visibility(&ctx).unwrap();
+    let nf = faces.voxel_dir.len();
+    let mut same = 0;
+    for f in 0..nf {
+        let want = twin::visible_clusters(&r.bvh, v, faces, f as u32, rays as u32, cpu.info.eps);
+        let got: Vec<u32> = vis[f * rays..(f + 1) * rays]
+            .iter()
+            .copied()
+            .take_while(|&c| c != INVALID)
+            .collect();
+        same += (got == want) as usize;
+    }
+    println!("visibility lists equal: {same} of {nf}");
+    assert!(same as f64 >= 0.98 * nf as f64, "{same} of {nf}");
+    // Gather on the GPU's own lists, the filter on the GPU's gathered values, the lookup on the
+    // GPU's filtered ones: the same math.
+    let d_min = rs.frame.clamp * r.scene.extent();
+    let gathered = pass.read_faces(&ctx, &light.gathered).unwrap();
+    let mut worst = 0.0f32;
+    for f in 0..nf {
+        let want = twin::gather_face(
+            v,
+            faces,
+            &light.lighting,
+            f as u32,
+            &vis[f * rays..(f + 1) * rays],
+            cs.near_voxels * v.grid.size,
+            d_min * d_min,
+        );
+        worst = worst.max(rel(gathered[f], want));
+    }
+    println!("gather worst relative error {worst:e}");
+    assert!(worst < 1e-4);
+    let mut irr = gathered.clone();
+    for _ in 0..cs.filter_passes {
+        irr = (0..nf)
+            .map(|f| twin::filter_face(v, faces, &irr, f as u32, cs.filter_radius))
+            .collect();
+    }
+    let filtered = pass.read_faces(&ctx, &light.filtered).unwrap();
+    let worst = (0..nf)
+        .map(|f| rel(filtered[f], irr[f]))
+        .fold(0.0, f32::max);
+    println!("filter worst relative error {worst:e}");
+    assert!(worst < 1e-4);
+    let gbuf = r.last_gbuffer().unwrap();
+    let mut worst = 0.0f32;
+    for (px, got) in img.iter().enumerate() {
+        let sp = ShadingPoint::from_gpu(&gbuf[px * 4..px * 4 + 4]);
+        let want = twin::lookup_pixel(v, faces, &filtered, &sp) * r.output_scale;
+        worst = worst.max(rel(Vec3::from(*got), want));
+    }
+    println!("lookup worst relative error {worst:e}");
+    assert!(worst < 1e-4);
+}
+
+#[test]
+fn irradiance_is_kept_across_camera_moves_and_redone_for_new_vpls() {
+    let ctx = common::gpu();
+    let s = scene::load("builtin:cornell").unwrap();
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let cam = s.default_camera();
+    let cs = CvrtgiSettings {
+        voxel_res: 12,
+        face_rays: 16,
+        cluster_step: 3,
+        ..Default::default()
+    };
+    let mut pass = Cvrtgi::new();
+    let _ = r.render(&cam, &settings(24, 18, 128, 1)).unwrap();
+    let (a, first) = cvrtgi_indirect(&ctx, &mut r, &mut pass, &cs, 0.02);
+    assert!(first.geometry_built && first.light_built);
+    // Another camera, the same VPLs (a frame without indirect light leaves them resident).
+    let moved = Camera {
+        transform: cam.transform * glam::Mat4::from_rotation_y(0.2),
+        ..cam.clone()
+    };
+    let mut direct_only = settings(24, 18, 0, 1);
+    direct_only.reference = false;
+    let _ = r.render(&moved, &direct_only).unwrap();
+    let (b, second) = cvrtgi_indirect(&ctx, &mut r, &mut pass, &cs, 0.02);
+    assert!(!second.geometry_built && !second.light_built, "{second:?}");
+    assert_eq!(second.visibility_rays, 0);
+    assert_ne!(a, b, "the moved camera sees other pixels");
+    // The cached stages give the moved view what a pass built from scratch for it gives.
+    let mut fresh = Cvrtgi::new();
+    let (c, built) = cvrtgi_indirect(&ctx, &mut r, &mut fresh, &cs, 0.02);
+    assert!(built.geometry_built && built.light_built);
+    assert_eq!(b, c, "cached and fresh irradiance differ");
+    // New VPLs (another seed): the light stage again, the geometry kept.
+    let _ = r.render(&cam, &settings(24, 18, 128, 2)).unwrap();
+    let (_, third) = cvrtgi_indirect(&ctx, &mut r, &mut pass, &cs, 0.02);
+    assert!(!third.geometry_built && third.light_built, "{third:?}");
+    // Another voxel resolution: everything again.
+    let finer = CvrtgiSettings {
+        voxel_res: 14,
+        ..cs
+    };
+    let (_, fourth) = cvrtgi_indirect(&ctx, &mut r, &mut pass, &finer, 0.02);
+    assert!(fourth.geometry_built && fourth.light_built);
+}
+
+/// Renders the reference and the CVRTGI indirect light of `scene` at w×h with `vpls` VPLs:
+/// (reference frame, CVRTGI total image, CVRTGI indirect, report).
+fn compare(scene_name: &str, (w, h, vpls): (u32, u32, u32), cs: &CvrtgiSettings) -> Compared {
+    let ctx = common::gpu();
+    let s = scene::load(scene_name).unwrap();
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let cam = s.default_camera();
+    let rs = settings(w, h, vpls, 1);
+    let reference = r.render(&cam, &rs).unwrap();
+    let mut pass = Cvrtgi::new();
+    let (ind, report, ms) = cvrtgi_timed(&ctx, &mut r, &mut pass, cs, rs.frame.clamp);
+    // The same frame again: only the per-pixel lookup runs (the stages are resident).
+    let (again, cached, cached_ms) = cvrtgi_timed(&ctx, &mut r, &mut pass, cs, rs.frame.clamp);
+    assert!(!cached.geometry_built && !cached.light_built);
+    assert_eq!(again, ind);
+    let total = total(&reference.direct, &ind);
+    Compared {
+        reference,
+        total,
+        indirect: ind,
+        report,
+        ms,
+        cached_ms,
+    }
+}
+
+struct Compared {
+    reference: Frame,
+    total: Vec<[f32; 3]>,
+    indirect: Vec<[f32; 3]>,
+    report: CvrtgiReport,
+    /// GPU ms by kernel label: the first frame (every stage built), the second (lookup only).
+    ms: BTreeMap<String, f64>,
+    cached_ms: BTreeMap<String, f64>,
+}
+
+#[test]
+fn cornell_mean_luminance_is_near_the_reference() {
+    let cs = CvrtgiSettings::default();
+    let Compared {
+        reference,
+        total: tot,
+        indirect: ind,
+        report,
+        ..
+    } = compare("builtin:cornell", (96, 72, 1024), &cs);
+    assert!(common::all_finite(&tot) && common::all_finite(&ind));
+    let (lr, lc) = (mean_luminance(&reference.radiance), mean_luminance(&tot));
+    let (ir, ic) = (mean_luminance(&reference.indirect), mean_luminance(&ind));
+    println!(
+        "{report:?}\ntotal: cvrtgi {lc:.4} reference {lr:.4} ratio {:.3}; indirect: cvrtgi {ic:.4} reference {ir:.4} ratio {:.3}",
+        lc / lr,
+        ic / ir
+    );
+    assert!((lc / lr - 1.0).abs() <= 0.2, "total ratio {}", lc / lr);
+}
+
+fn env_u32(name: &str, default: u32) -> u32 {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+/// Measurement for docs/cvrtgi.md: `CV_SCENE=builtin:cornell CV_W=96 CV_H=72 CV_VPLS=1024 CV_RES=32
+/// CV_RAYS=128 CV_STEP=8 CV_FILTER=2 CV_PASSES=2 cargo test --release --test cvrtgi measure -- --ignored
+/// --nocapture`.
+#[test]
+#[ignore]
+fn measure() {
+    let scene_name = std::env::var("CV_SCENE").unwrap_or("builtin:cornell".into());
+    let size = (
+        env_u32("CV_W", 96),
+        env_u32("CV_H", 72),
+        env_u32("CV_VPLS", 1024),
+    );
+    let cs = CvrtgiSettings {
+        voxel_res: env_u32("CV_RES", 32),
+        face_rays: env_u32("CV_RAYS", 128),
+        filter_radius: env_u32("CV_FILTER", 2),
+        filter_passes: env_u32("CV_PASSES", 2),
+        cluster_step: env_u32("CV_STEP", 8),
+        ..Default::default()
+    };
+    let t = std::time::Instant::now();
+    let c = compare(&scene_name, size, &cs);
+    let (reference, tot, ind, report) = (&c.reference, &c.total, &c.indirect, &c.report);
+    println!("reference GPU ms {:?}", reference.timings_ms);
+    println!(
+        "cvrtgi GPU ms, first frame {:?}; cached frame {:?}",
+        c.ms, c.cached_ms
+    );
+    let rel = fuzzy_vpl::metrics::rel_mse(tot, &reference.radiance);
+    // CV_OUT=DIR: the reference and CVRTGI totals and indirect images as PNG, at the reference's
+    // auto exposure (indirect at 4x that).
+    if let Ok(dir) = std::env::var("CV_OUT") {
+        let e = fuzzy_vpl::exposure::auto_exposure(&reference.radiance);
+        let tag = format!("{}_{}", scene_name.replace("builtin:", ""), cs.voxel_res);
+        let (w, h) = (size.0, size.1);
+        for (name, img, k) in [
+            ("reference", &reference.radiance, 1.0),
+            ("cvrtgi", tot, 1.0),
+            ("reference_indirect", &reference.indirect, 4.0),
+            ("cvrtgi_indirect", ind, 4.0),
+        ] {
+            let path = std::path::Path::new(&dir).join(format!("cvrtgi_{tag}_{name}.png"));
+            fuzzy_vpl::export::write_image(&path, w, h, img, e * k).unwrap();
+        }
+    }
+    println!(
+        "{scene_name} {size:?} {cs:?}\n{report:?}\nmean luminance total {:.4} vs reference {:.4} (ratio {:.3}); indirect {:.4} vs {:.4} (ratio {:.3}); relMSE {rel:.4}; {:.1} s",
+        mean_luminance(tot),
+        mean_luminance(&reference.radiance),
+        mean_luminance(tot) / mean_luminance(&reference.radiance),
+        mean_luminance(ind),
+        mean_luminance(&reference.indirect),
+        mean_luminance(ind) / mean_luminance(&reference.indirect),
+        t.elapsed().as_secs_f64()
+    );
+}
