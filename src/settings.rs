@@ -90,16 +90,26 @@ pub enum Method {
     #[value(name = "lightcluster")]
     #[serde(rename = "lightcluster")]
     LightCluster,
+    /// CVRTGI (Cosin Ayerbe & Patow 2022, seed 003): the scene voxelised, voxels clustered by SLIC
+    /// with the 35° normal rule (Eq. 1, Alg. 1), per-voxel-face irradiance from the lit clusters a
+    /// face's rays find, filtered, read by every pixel; cached while the lights stay.
+    Cvrtgi,
 }
 
 impl Method {
-    pub const ALL: [Method; 3] = [Method::Colom, Method::Wang, Method::LightCluster];
+    pub const ALL: [Method; 4] = [
+        Method::Colom,
+        Method::Wang,
+        Method::LightCluster,
+        Method::Cvrtgi,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             Method::Colom => "colom",
             Method::Wang => "wang",
             Method::LightCluster => "lightcluster",
+            Method::Cvrtgi => "cvrtgi",
         }
     }
 }
@@ -310,7 +320,8 @@ pub struct ClusterSettings {
     pub target_ms: Option<f64>,
     /// The method that computes the indirect light: colom (the paper this tool rebuilds), wang
     /// (Wang et al. 2009: irradiance at SP-cluster centres, interpolated), lightcluster
-    /// (LightCluster: VPLs clustered by distance, a disc's visibility per cluster). docs/methods.md.
+    /// (LightCluster: VPLs clustered by distance, a disc's visibility per cluster), cvrtgi (clustered
+    /// voxel GI: irradiance per voxel face from voxel clusters). docs/methods.md.
     #[arg(long, value_enum, default_value_t = Method::Colom, help_heading = METHOD_HEADING)]
     pub method: Method,
     /// wang: α of Eq. (2), the position term's weight with positions in scene diagonals, (0, 100]
@@ -321,6 +332,10 @@ pub struct ClusterSettings {
     /// the cluster count is its outcome.
     #[arg(long, default_value_t = DEFAULT_D_INIT, value_parser = parse_d_init, help_heading = METHOD_HEADING)]
     pub d_init: f32,
+    /// cvrtgi's knobs (voxel grid, clusters, rays per face, filter).
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub cvrtgi: CvrtgiSettings,
 }
 
 impl Default for ClusterSettings {
@@ -341,6 +356,7 @@ impl Default for ClusterSettings {
             method: Method::Colom,
             wang_alpha: DEFAULT_WANG_ALPHA,
             d_init: DEFAULT_D_INIT,
+            cvrtgi: CvrtgiSettings::default(),
         }
     }
 }
@@ -449,7 +465,7 @@ pub struct LightSettings {
 pub const MAX_VOXEL_RES: u32 = 256;
 
 /// The knobs of the CVRTGI method (Cosin Ayerbe & Patow 2022, seed 003; `gi::cvrtgi`,
-/// docs/cvrtgi.md). Not yet flattened into a subcommand: `--method cvrtgi` will add it.
+/// docs/methods.md), flattened into `ClusterSettings` and so into `render`, `view` and `bench`.
 #[derive(Args, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[command(next_help_heading = "CVRTGI (voxel clusters)")]
 #[serde(default)]

@@ -175,6 +175,10 @@ impl UiSettings {
             _ if self.cluster.method == crate::settings::Method::LightCluster => {
                 format!("lightcluster d_init {}", self.cluster.d_init)
             }
+            _ if self.cluster.method == crate::settings::Method::Cvrtgi => {
+                let v = &self.cluster.cvrtgi;
+                format!("cvrtgi {}³ step {}", v.voxel_res, v.cluster_step)
+            }
             (false, false) => "no clustering".into(),
             (false, true) => "VPL clusters only".into(),
             (true, _) if self.cluster.method == crate::settings::Method::Wang => {
@@ -212,6 +216,13 @@ impl UiSettings {
             _ if c.method == crate::settings::Method::Wang => format!("wang-a{}", c.wang_alpha),
             _ if c.method == crate::settings::Method::LightCluster => {
                 format!("lightcluster-d{}", c.d_init)
+            }
+            _ if c.method == crate::settings::Method::Cvrtgi => {
+                let v = &c.cvrtgi;
+                format!(
+                    "cvrtgi-v{}-s{}-r{}",
+                    v.voxel_res, v.cluster_step, v.face_rays
+                )
             }
             Weighting::InverseDistance if c.weight_exponent == 1.0 => "weighted".to_string(),
             Weighting::InverseDistance => format!("weighted-p{}", c.weight_exponent),

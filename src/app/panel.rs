@@ -261,6 +261,12 @@ impl Viewer {
                             "LightCluster: VPLs in minimum-distance clusters, each a disc light whose \
                              visibility a few rays estimate; every VPL shaded (docs/methods.md)",
                         );
+                    ui.selectable_value(&mut s.cluster.method, Method::Cvrtgi, "cvrtgi")
+                        .on_hover_text(
+                            "CVRTGI: voxel clusters (SLIC, 35° rule) light every voxel face; pixels \
+                             read their face's filtered irradiance, cached while the lights stay \
+                             (docs/methods.md)",
+                        );
                 });
                 let colom = s.cluster.method == Method::Colom;
                 if s.cluster.method == Method::Wang {
@@ -269,6 +275,17 @@ impl Viewer {
                             .logarithmic(true)
                             .text("α (Eq. 2: position against normal)"),
                     );
+                }
+                if s.cluster.method == Method::Cvrtgi {
+                    let v = &mut s.cluster.cvrtgi;
+                    ui.add(Slider::new(&mut v.voxel_res, 8..=128).text("voxels (longest axis)"));
+                    ui.add(Slider::new(&mut v.cluster_step, 1..=32).text("SLIC seed spacing"));
+                    ui.add(
+                        Slider::new(&mut v.face_rays, 8..=512)
+                            .logarithmic(true)
+                            .text("rays per face"),
+                    );
+                    ui.add(Slider::new(&mut v.filter_passes, 0..=8).text("filter passes"));
                 }
                 if s.cluster.method == Method::LightCluster {
                     ui.add(

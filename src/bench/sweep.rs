@@ -4,9 +4,9 @@ use std::fmt;
 use std::str::FromStr;
 
 use crate::settings::{
-    ClusterSettings, Gamma, Invalid, Method, Weighting, parse_d_init, parse_fuzziness, parse_gamma,
-    parse_iterations, parse_normal_threshold, parse_plane_gate, parse_wang_alpha,
-    parse_weight_exponent,
+    ClusterSettings, CvrtgiSettings, Gamma, Invalid, Method, Weighting, parse_cluster_step,
+    parse_d_init, parse_fuzziness, parse_gamma, parse_iterations, parse_normal_threshold,
+    parse_plane_gate, parse_voxel_res, parse_wang_alpha, parse_weight_exponent,
 };
 
 /// What is clustered, and how a pixel combines its SP clusters.
@@ -153,6 +153,12 @@ pub struct Sweep {
     /// lightcluster: d_init values in scene diagonals (default 1); the K's do not apply.
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_d_init)]
     pub d_init: Vec<f32>,
+    /// cvrtgi: voxel resolutions along the scene's longest axis (default 32); the K's do not apply.
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_voxel_res)]
+    pub voxel_res: Vec<u32>,
+    /// cvrtgi: SLIC seed spacings in voxels (default 8), each with every --voxel-res.
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_cluster_step)]
+    pub cluster_step: Vec<u32>,
     /// Modes to compare: hard,uniform,weighted,vpl-only,sp-only (default hard,uniform,weighted;
     /// quick: all five).
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_mode)]
@@ -222,6 +228,8 @@ impl Sweep {
             methods: or_default(&self.methods, &[Method::Colom]),
             wang_alpha: or_default(&self.wang_alpha, &[c.wang_alpha]),
             d_init: or_default(&self.d_init, &[c.d_init]),
+            voxel_res: or_default(&self.voxel_res, &[c.cvrtgi.voxel_res]),
+            cluster_step: or_default(&self.cluster_step, &[c.cvrtgi.cluster_step]),
             modes: or_default(
                 &self.modes,
                 if quick {
@@ -302,6 +310,28 @@ impl Sweep {
                         };
                         if !out.contains(&c) {
                             out.push(c);
+                        }
+                    }
+                }
+                Method::Cvrtgi => {
+                    for &voxel_res in &self.voxel_res {
+                        for &cluster_step in &self.cluster_step {
+                            let c = ClusterSettings {
+                                method,
+                                sp_clusters: 0,
+                                vpl_clusters: 0,
+                                fuzziness: 1,
+                                weighting: Weighting::Hard,
+                                cvrtgi: CvrtgiSettings {
+                                    voxel_res,
+                                    cluster_step,
+                                    ..Default::default()
+                                },
+                                ..Default::default()
+                            };
+                            if !out.contains(&c) {
+                                out.push(c);
+                            }
                         }
                     }
                 }
@@ -420,6 +450,10 @@ fn label_in(mode: Mode, c: &ClusterSettings) -> String {
     };
     if c.method == Method::LightCluster {
         return format!("lightcluster d{}", c.d_init);
+    }
+    if c.method == Method::Cvrtgi {
+        let v = &c.cvrtgi;
+        return format!("cvrtgi v{} s{}", v.voxel_res, v.cluster_step);
     }
     if c.method == Method::Wang {
         let mut s = format!(

@@ -23,8 +23,9 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use super::dispatch::{Gpu, Kernel, Run};
+use super::pipeline::{FrameResources, Pass, RenderSettings, Renderer, gpu};
 use super::resident::VplKey;
-use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
+use super::scene_gpu::{SceneGpu, TooBig, storage_layout, uniform_layout};
 use super::vpl_trace::VplSet;
 use crate::cpu::cvrtgi::{self as twin, Faces, Lighting};
 use crate::cpu::voxel::{self, Cluster, SlicSettings, Voxels};
@@ -291,11 +292,12 @@ impl Cvrtgi {
             let rays = s.face_rays.max(1);
             let vis_bytes = faces.voxel_dir.len() as u64 * rays as u64 * 4;
             if vis_bytes > ctx.max_binding() {
-                bail!(
+                return Err(TooBig(format!(
                     "cvrtgi: the visibility cache ({} faces × {rays} rays, {vis_bytes} bytes) exceeds this adapter's storage binding ({} bytes); lower --voxel-res or --face-rays",
                     faces.voxel_dir.len(),
                     ctx.max_binding()
-                );
+                ))
+                .into());
             }
             let packed: Vec<[f32; 4]> = voxels
                 .voxels
@@ -535,5 +537,29 @@ impl Cvrtgi {
         };
         let n = (geo.faces.voxel_dir.len() * geo.rays as usize).max(1);
         ctx.read_buffer(&geo.vis, n)
+    }
+}
+
+impl Renderer<'_> {
+    /// `Pass::Cvrtgi`: the frame's indirect light by CVRTGI, from the resident VPLs (no VPL
+    /// clustering: a VPL is injected into the cluster of its voxel). Its CPU stages (voxelisation,
+    /// SLIC, injection) count as the pass's time when they run.
+    pub(super) fn cvrtgi_pass(&mut self, s: &RenderSettings, r: &mut FrameResources) -> Result<()> {
+        let vpls = self.vpl_set.as_ref().expect("vpl_trace ran before cvrtgi");
+        let inputs = CvrtgiInputs {
+            scene: &self.scene,
+            vpls: &vpls.set,
+            vpl_key: vpls.key,
+            gbuffer: &r.gbuffer,
+            pixels: r.pixels,
+            indirect: &r.indirect,
+            d_min: s.frame.clamp * self.scene.extent(),
+        };
+        let report = self
+            .cvrtgi
+            .record(&mut gpu!(self), &inputs, &s.cluster.cvrtgi)?;
+        r.cpu_ms.push((Pass::Cvrtgi, report.cpu_ms));
+        r.vpl_clusters_used = report.lit_clusters;
+        Ok(())
     }
 }

@@ -70,13 +70,18 @@ pub enum Pass {
     LightClusterCluster,
     /// lightcluster (§3.2): every pixel × every VPL with its cluster's disc visibility.
     LightClusterShade,
+    /// cvrtgi (seed 003): voxels, clusters and the per-face visibility cache (resident while the
+    /// scene and its knobs stay), the lit clusters' per-face irradiance, filtered (resident while
+    /// the VPLs stay), and every pixel's lookup (`gi::cvrtgi`; GPU times under `cvrtgi.*`, the
+    /// CPU stages under `cvrtgi`).
+    Cvrtgi,
 }
 
 impl Pass {
     /// The passes whose times the stats report. The first `STAGES`, in this order, are the bench
     /// CSV's `<stage>_ms` columns (a contract: `bench::csv::stage_passes`); the unclustered
     /// reference has its own column and the other methods' passes are summed in `indirect_ms`.
-    pub const TIMED: [Pass; 14] = [
+    pub const TIMED: [Pass; 15] = [
         Pass::VplTrace,
         Pass::VplCluster,
         Pass::Primary,
@@ -91,6 +96,7 @@ impl Pass {
         Pass::WangInterp,
         Pass::LightClusterCluster,
         Pass::LightClusterShade,
+        Pass::Cvrtgi,
     ];
 
     /// How many of `TIMED` are the CSV's stage columns.
@@ -113,6 +119,7 @@ impl Pass {
             Pass::WangInterp => "wang_interp",
             Pass::LightClusterCluster => "lightcluster_cluster",
             Pass::LightClusterShade => "lightcluster_shade",
+            Pass::Cvrtgi => "cvrtgi",
         }
     }
 
@@ -166,12 +173,13 @@ impl Plan {
         let method = match c.method {
             Method::Wang if sp => Method::Wang,
             Method::LightCluster if clustered => Method::LightCluster,
+            Method::Cvrtgi if clustered => Method::Cvrtgi,
             _ => Method::Colom,
         };
         Plan {
             indirect,
             vpl_clustering: clustered
-                && method != Method::LightCluster
+                && matches!(method, Method::Colom | Method::Wang)
                 && c.vpl_clusters > 0
                 && c.vpl_clusters < f.vpls,
             sp_clustering: sp && method == Method::Colom,
@@ -198,6 +206,7 @@ impl Plan {
                 Method::Colom => &[Pass::Reference],
                 Method::Wang => &[Pass::WangCluster, Pass::WangGather, Pass::WangInterp],
                 Method::LightCluster => &[Pass::LightClusterCluster, Pass::LightClusterShade],
+                Method::Cvrtgi => &[Pass::Cvrtgi],
             });
         }
         p
@@ -313,6 +322,7 @@ impl Renderer<'_> {
                 Pass::LightClusterCluster | Pass::LightClusterShade => {
                     self.lightcluster_pass(pass, s, &mut r)
                 }
+                Pass::Cvrtgi => self.cvrtgi_pass(s, &mut r)?,
                 Pass::PathTrace => unreachable!("the path tracer is `path_trace`"),
             }
         }

@@ -89,6 +89,8 @@ pub struct Renderer<'a> {
     /// The other methods' passes, built the first time a frame uses them.
     pub(super) wang: std::cell::OnceCell<Wang>,
     pub(super) lightcluster: std::cell::OnceCell<super::lightcluster::LightCluster>,
+    /// cvrtgi's pipelines and resident stages (built on its first frame).
+    pub(super) cvrtgi: super::cvrtgi::Cvrtgi,
     /// The last frame's G-buffer and its pixel count (`direct_again`, `last_gbuffer`).
     pub(super) gbuffer: Option<(wgpu::Buffer, u32)>,
     pub vpl_set: Option<ResidentVpls>,
@@ -161,6 +163,7 @@ impl<'a> Renderer<'a> {
             shade: Shade::new(),
             wang: Default::default(),
             lightcluster: Default::default(),
+            cvrtgi: Default::default(),
             profiler: Profiler::new(ctx),
             gbuffer: None,
             vpl_set: None,
@@ -214,6 +217,7 @@ impl<'a> Renderer<'a> {
             self.visibility = Visibility::new(ctx, &gpu);
             self.wang = Default::default();
             self.lightcluster = Default::default();
+            self.cvrtgi = Default::default();
         }
         self.gpu = gpu;
         self.vpl_set = None;
