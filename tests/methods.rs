@@ -259,6 +259,17 @@ fn bad_method_knobs_exit_2_with_one_line() {
             vec!["bench", "--out-dir", &b, "--d-init", "1,0"],
             "--d-init",
         ),
+        (vec!["render", "-o", &o, "--voxel-res", "0"], "--voxel-res"),
+        (vec!["render", "-o", &o, "--voxel-res", "257"], "--voxel-res"),
+        (vec!["render", "-o", &o, "--face-rays", "0"], "--face-rays"),
+        (
+            vec!["bench", "--out-dir", &b, "--voxel-res", "32,0"],
+            "--voxel-res",
+        ),
+        (
+            vec!["bench", "--out-dir", &b, "--cluster-step", "0"],
+            "--cluster-step",
+        ),
     ] {
         common::assert_refused(&a, needle);
     }
@@ -275,7 +286,11 @@ fn bench_compares_the_methods() {
         "--out-dir",
         d.to_str().unwrap(),
         "--methods",
-        "colom,wang,lightcluster",
+        "colom,wang,lightcluster,cvrtgi",
+        "--voxel-res",
+        "12",
+        "--cluster-step",
+        "4",
         "--modes",
         "weighted",
         "--pairs",
@@ -297,7 +312,8 @@ fn bench_compares_the_methods() {
     let methods: Vec<Method> = rows.iter().map(|r| r.method).collect();
     assert_eq!(methods, Method::ALL);
     let modes: Vec<&str> = rows.iter().map(|r| r.mode.as_str()).collect();
-    assert_eq!(modes, ["weighted", "wang", "lightcluster"]);
+    assert_eq!(modes, ["weighted", "wang", "lightcluster", "cvrtgi"]);
+    assert!(rows[3].label.contains("cvrtgi v12 s4"), "{:?}", rows[3]);
     for r in &rows {
         assert!(r.mse.is_finite() && r.indirect_ms > 0.0, "{r:?}");
         let want = r.frame_ms() - r.stage("primary") - r.stage("direct");
