@@ -31,7 +31,6 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
-#[allow(clippy::large_enum_variant)] // parsed once
 enum Command {
     /// Open the interactive viewer (the default with no subcommand: builtin:cornell).
     #[command(after_help = LIGHTS_HELP)]
@@ -46,7 +45,7 @@ enum Command {
     Raybench(raybench::RaybenchArgs),
     /// Error against run time over a sweep of clustering settings: results.csv, plots, summary.md.
     #[command(after_help = bench::BENCH_HELP)]
-    Bench(bench::BenchArgs),
+    Bench(Box<bench::BenchArgs>),
 }
 
 /// The command line. Every option that takes a value accepts a negative number as that value
@@ -201,7 +200,7 @@ pub fn main() -> ExitCode {
         Some(Command::Raybench(a)) => raybench::run(a),
         Some(Command::Bench(a)) => {
             let given: Vec<&str> = given.iter().map(String::as_str).collect();
-            bench::run(a, &given)
+            bench::run(*a, &given)
         }
     };
     match result {
