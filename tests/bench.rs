@@ -311,8 +311,6 @@ fn header_has_the_contract_columns_in_order() {
         "weight_exponent",
         "gamma_used",
         "plane_gate_deg",
-        "method",
-        "indirect_ms",
         "flip",
         "border",
         "interior",
@@ -320,6 +318,8 @@ fn header_has_the_contract_columns_in_order() {
         "flip_border",
         "target_ms",
         "front_mse",
+        "method",
+        "indirect_ms",
     ];
     assert_eq!(h, want.map(String::from));
     let csv = csv::to_csv(&[]);

@@ -260,7 +260,10 @@ fn bad_method_knobs_exit_2_with_one_line() {
             "--d-init",
         ),
         (vec!["render", "-o", &o, "--voxel-res", "0"], "--voxel-res"),
-        (vec!["render", "-o", &o, "--voxel-res", "257"], "--voxel-res"),
+        (
+            vec!["render", "-o", &o, "--voxel-res", "257"],
+            "--voxel-res",
+        ),
         (vec!["render", "-o", &o, "--face-rays", "0"], "--face-rays"),
         (
             vec!["bench", "--out-dir", &b, "--voxel-res", "32,0"],

@@ -126,12 +126,12 @@ pub fn header() -> Vec<String> {
         ]
         .map(String::from),
     );
-    h.extend(METHOD_COLUMNS.map(String::from));
     h.extend(ERROR_COLUMNS.map(String::from));
+    h.extend(METHOD_COLUMNS.map(String::from));
     h
 }
 
-/// The method's columns, after `plane_gate_deg` and before the error columns: `method` (the
+/// The method's columns, the last ones (after the error columns): `method` (the
 /// `settings::Method`'s name) and `indirect_ms`. Files written before them have neither.
 pub const METHOD_COLUMNS: [&str; 2] = ["method", "indirect_ms"];
 
@@ -175,8 +175,6 @@ fn record(r: &Row) -> Vec<String> {
         r.weight_exponent.to_string(),
         r.gamma_used.map_or(String::new(), |g| g.to_string()),
         r.plane_gate_deg.map_or(String::new(), |g| g.to_string()),
-        r.method.name().into(),
-        format!("{}", r.indirect_ms),
     ]);
     let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));
     v.extend(
@@ -191,6 +189,7 @@ fn record(r: &Row) -> Vec<String> {
         ]
         .map(opt),
     );
+    v.extend([r.method.name().into(), format!("{}", r.indirect_ms)]);
     v
 }
 
@@ -236,16 +235,10 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
         .collect();
     // The columns through `label` are required; a file from an older version may stop after any of
     // the later ones (they were added at the end).
-    // Files written before the method columns have the other columns in the same order.
     let full = header();
-    let before_methods: Vec<String> = full
-        .iter()
-        .filter(|h| !METHOD_COLUMNS.contains(&h.as_str()))
-        .cloned()
-        .collect();
     let prefix_of = |h: &[String]| head.len() <= h.len() && head[..] == h[..head.len()];
     let required = full.iter().position(|h| h == "label").unwrap() + 1;
-    if head.len() < required || !(prefix_of(&full) || prefix_of(&before_methods)) {
+    if head.len() < required || !prefix_of(&full) {
         bail!("unexpected CSV header: {}", head.join(","));
     }
     let col = |name: &str| head.iter().position(|h| h == name).unwrap();
@@ -420,30 +413,24 @@ pub(crate) mod tests {
         r.gamma_used = None;
         let csv = to_csv(std::slice::from_ref(&r));
         assert_eq!(from_csv(&csv).unwrap(), vec![r.clone()]);
-        // Drop the error columns: a file of the version before them.
-        let n = ERROR_COLUMNS.len();
         let cut_n = |text: &str, n: usize| {
             write_records(text.lines().map(|l| {
                 let f = split_line(l);
                 f[..f.len() - n].to_vec()
             }))
         };
-        let before = from_csv(&cut_n(&csv, n)).unwrap();
+        // Drop the method columns: a file of the version before them (with the error columns).
+        let m = METHOD_COLUMNS.len();
+        let back = from_csv(&cut_n(&csv, m)).unwrap();
+        assert_eq!((back[0].method, back[0].flip), (Method::Colom, r.flip));
+        // Drop also the error columns: a file of the version before them.
+        let n = ERROR_COLUMNS.len();
+        let before = from_csv(&cut_n(&csv, m + n)).unwrap();
         assert_eq!((before[0].flip, before[0].border_ratio), (None, None));
         assert_eq!(before[0].mse, r.mse);
-        // Drop the method columns only: a file of the version before them (with the error columns).
-        let m = header().len() - n - METHOD_COLUMNS.len();
-        let no_methods = write_records(csv.lines().map(|l| {
-            let mut f = split_line(l);
-            f.drain(m..m + METHOD_COLUMNS.len());
-            f
-        }));
-        let back = from_csv(&no_methods).unwrap();
-        assert_eq!((back[0].method, back[0].flip), (Method::Colom, r.flip));
-        // Drop also the five columns before them (weight_exponent, gamma_used, plane_gate_deg,
-        // method, indirect_ms).
+        // Drop also the three columns before them (weight_exponent, gamma_used, plane_gate_deg).
         let cut = |text: &str| cut_n(text, 3);
-        let old = cut_n(&csv, n + 5);
+        let old = cut_n(&csv, m + n + 3);
         let back = from_csv(&old).unwrap();
         assert_eq!(back[0].weight_exponent, 1.0);
         assert_eq!(back[0].gamma_used, None);
