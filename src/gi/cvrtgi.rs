@@ -148,7 +148,15 @@ pub struct Cvrtgi {
     kernels: OnceCell<Kernels>,
     geometry: Option<(GeometryKey, CvrtgiGeometry)>,
     light: Option<(LightKey, CvrtgiLight)>,
+    /// The times of the resident stages when they were last built (`RESIDENT_KEYS`).
+    last_build: std::collections::BTreeMap<String, f64>,
 }
+
+/// The timing keys of cvrtgi's resident stages: its CPU stages (`Pass::Cvrtgi`'s key:
+/// voxelisation, SLIC, injection) and the kernels that run only when their stage is rebuilt. Like
+/// `vpl_trace` and `vpl_cluster` they are not in `frame` (a frame with the same scene and VPLs runs
+/// only `cvrtgi.lookup`); the stats report their last build's times.
+pub const RESIDENT_KEYS: [&str; 4] = ["cvrtgi", LABELS[0], LABELS[1], LABELS[2]];
 
 fn entries() -> Vec<wgpu::BindGroupLayoutEntry> {
     vec![
@@ -194,6 +202,20 @@ fn f32_bits(v: Vec3) -> [u32; 3] {
 }
 
 impl Cvrtgi {
+    /// Takes the resident stages' times out of a frame's `timings` (they are not the frame's),
+    /// keeps those this frame built as the last build's, and returns the last build's times.
+    pub fn take_build_times(
+        &mut self,
+        timings: &mut std::collections::BTreeMap<String, f64>,
+    ) -> std::collections::BTreeMap<String, f64> {
+        for k in RESIDENT_KEYS {
+            if let Some(ms) = timings.remove(k).filter(|&ms| ms > 0.0) {
+                self.last_build.insert(k.to_string(), ms);
+            }
+        }
+        self.last_build.clone()
+    }
+
     pub fn new() -> Self {
         Self::default()
     }

@@ -493,8 +493,14 @@ impl Renderer<'_> {
         for &(pass, ms) in &r.cpu_ms {
             *timings_ms.entry(pass.name().into()).or_insert(0.0) += ms;
         }
+        // cvrtgi's resident stages are not the frame's (as the VPLs and their clustering).
+        let resident = match plan.method {
+            Method::Cvrtgi if plan.indirect => self.cvrtgi.take_build_times(&mut timings_ms),
+            _ => Default::default(),
+        };
         let frame_ms: f64 = timings_ms.values().sum();
         timings_ms.insert(FRAME_KEY.into(), frame_ms);
+        timings_ms.extend(resident);
         if plan.indirect {
             timings_ms.insert(
                 Pass::VplTrace.name().into(),
