@@ -5,13 +5,15 @@
 //!
 //! - `ClusterSettings`: the paper's knobs (K_SP, K_VPL, F, γ, n_t, iterations, weighting, p, the
 //!   plane gate, temporal reuse, the time target) and the `Method` with the other methods' knobs
-//!   (wang's α, lightcluster's d_init);
+//!   (wang's α, lightcluster's d_init, cvrtgi's `CvrtgiSettings` in `cvrtgi.rs`);
 //! - `FrameSettings`: what a frame is (size, seed, VPLs, bounces, direct samples, exposure, clamp);
 //! - `LightSettings`: the lights added to or scaled in a scene.
 //!
 //! Ranges are checked by the value parsers below; a value out of range is refused by clap with one
 //! line naming the option and the value, exit 2 (`cli::parse`).
 
+mod cvrtgi;
+pub use cvrtgi::*;
 use std::fmt;
 use std::str::FromStr;
 
@@ -458,64 +460,6 @@ pub struct LightSettings {
     pub light_scale: f32,
 }
 
-/// The most voxels along the longest axis of the scene (`--voxel-res`): the paper's largest grid
-/// (256³). The per-face visibility cache holds `--face-rays` cluster ids for every exposed voxel
-/// face (about 12 N² faces for a closed room), 256 × 64 rays is already ~200 MiB, past one storage
-/// binding on lavapipe (128 MiB); `gi::cvrtgi` checks the actual size against the adapter.
-pub const MAX_VOXEL_RES: u32 = 256;
-
-/// The knobs of the CVRTGI method (Cosin Ayerbe & Patow 2022, seed 003; `gi::cvrtgi`,
-/// docs/methods.md), flattened into `ClusterSettings` and so into `render`, `view` and `bench`.
-#[derive(Args, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[command(next_help_heading = "CVRTGI (voxel clusters)")]
-#[serde(default)]
-pub struct CvrtgiSettings {
-    /// Voxels along the longest axis of the scene bounds (§4.1), 1..=256.
-    #[arg(long, default_value_t = 32, value_parser = parse_voxel_res)]
-    pub voxel_res: u32,
-    /// Spacing in voxels of the SLIC seeds (§4.2, Achanta et al.'s S), 1..=64. Fewer, larger
-    /// clusters are found by more of a face's rays (docs/cvrtgi.md measures 4, 6 and 8).
-    #[arg(long, default_value_t = 8, value_parser = parse_cluster_step)]
-    pub cluster_step: u32,
-    /// Iterations of Alg. 1's loop (the paper: 10), 0..=100.
-    #[arg(long, default_value_t = 10, value_parser = parse_cluster_iterations)]
-    pub cluster_iterations: u32,
-    /// Eq. (1)'s angle in degrees: a voxel joins a cluster whose normal is within it (the paper:
-    /// 35), (0, 180].
-    #[arg(long, default_value_t = 35.0, value_parser = parse_cluster_angle)]
-    pub cluster_angle: f32,
-    /// Rays per exposed voxel face for the cluster visibility cache (§4.3; the paper: 32..128,
-    /// 128 by default), 1..=1024.
-    #[arg(long, default_value_t = 128, value_parser = parse_face_rays)]
-    pub face_rays: u32,
-    /// Clusters nearer than this many voxels to a face give their lit voxels one by one instead of
-    /// the cluster as one light (§4.4), [0, 64].
-    #[arg(long, default_value_t = 2.0, value_parser = parse_near_voxels)]
-    pub near_voxels: f32,
-    /// Radius r of the Gaussian filter over same-direction faces of neighbouring voxels (§4.4: a
-    /// 5³ kernel is r = 2), 0..=4.
-    #[arg(long, default_value_t = 2, value_parser = parse_filter_radius)]
-    pub filter_radius: u32,
-    /// Times the filter is applied (the paper: twice), 0..=8.
-    #[arg(long, default_value_t = 2, value_parser = parse_filter_passes)]
-    pub filter_passes: u32,
-}
-
-impl Default for CvrtgiSettings {
-    fn default() -> Self {
-        CvrtgiSettings {
-            voxel_res: 32,
-            cluster_step: 8,
-            cluster_iterations: 10,
-            cluster_angle: 35.0,
-            face_rays: 128,
-            near_voxels: 2.0,
-            filter_radius: 2,
-            filter_passes: 2,
-        }
-    }
-}
-
 // ---- value parsers: one line each, `cli::parse` prefixes the option and the value ----
 
 fn in_range<T: PartialOrd + Copy + FromStr>(
@@ -629,53 +573,6 @@ pub fn parse_light_scale(v: &str) -> Result<f32, Invalid> {
     )
 }
 
-pub fn parse_voxel_res(v: &str) -> Result<u32, Invalid> {
-    match v.trim().parse::<u32>() {
-        Ok(0) => invalid("must be at least 1 (voxels along the scene's longest axis)"),
-        Ok(n) if n > MAX_VOXEL_RES => invalid(format!(
-            "at most {MAX_VOXEL_RES}: beyond it the per-face cluster visibility cache outgrows GPU memory"
-        )),
-        Ok(n) => Ok(n),
-        Err(_) => invalid("must be a whole number 1..=256"),
-    }
-}
-
-pub fn parse_cluster_step(v: &str) -> Result<u32, Invalid> {
-    in_range(v, |n: u32| (1..=64).contains(&n), "must be 1..=64 voxels")
-}
-
-pub fn parse_cluster_iterations(v: &str) -> Result<u32, Invalid> {
-    in_range(v, |n: u32| n <= 100, "must be 0..=100")
-}
-
-pub fn parse_cluster_angle(v: &str) -> Result<f32, Invalid> {
-    in_range(
-        v,
-        |d: f32| d > 0.0 && d <= 180.0,
-        "must be an angle in (0, 180] degrees",
-    )
-}
-
-pub fn parse_face_rays(v: &str) -> Result<u32, Invalid> {
-    in_range(v, |n: u32| (1..=1024).contains(&n), "must be 1..=1024")
-}
-
-pub fn parse_near_voxels(v: &str) -> Result<f32, Invalid> {
-    in_range(
-        v,
-        |d: f32| (0.0..=64.0).contains(&d),
-        "must be a number of voxels in [0, 64]",
-    )
-}
-
-pub fn parse_filter_radius(v: &str) -> Result<u32, Invalid> {
-    in_range(v, |n: u32| n <= 4, "must be 0..=4 (a (2r+1)³ kernel)")
-}
-
-pub fn parse_filter_passes(v: &str) -> Result<u32, Invalid> {
-    in_range(v, |n: u32| n <= 8, "must be 0..=8")
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -769,25 +666,6 @@ mod tests {
             assert_eq!(j, format!("\"{}\"", m.name()));
             assert_eq!(serde_json::from_str::<Method>(&j).unwrap(), m);
         }
-    }
-
-    #[test]
-    fn cvrtgi_parsers_refuse_zero_and_beyond_memory() {
-        assert_eq!(parse_voxel_res("32"), Ok(32));
-        assert_eq!(parse_voxel_res("256"), Ok(256));
-        let zero = parse_voxel_res("0").unwrap_err().0;
-        assert!(zero.contains("at least 1"), "{zero}");
-        let big = parse_voxel_res("257").unwrap_err().0;
-        assert!(big.contains("memory") && !big.contains('\n'), "{big}");
-        assert!(parse_voxel_res("x").is_err());
-        assert!(parse_cluster_step("0").is_err() && parse_cluster_step("65").is_err());
-        assert!(parse_cluster_angle("0").is_err() && parse_cluster_angle("NaN").is_err());
-        assert!(parse_face_rays("0").is_err() && parse_face_rays("1025").is_err());
-        assert!(parse_near_voxels("-1").is_err());
-        assert!(parse_filter_radius("5").is_err() && parse_filter_passes("9").is_err());
-        let c = CvrtgiSettings::default();
-        let j = serde_json::to_string(&c).unwrap();
-        assert_eq!(serde_json::from_str::<CvrtgiSettings>(&j).unwrap(), c);
     }
 
     #[test]
