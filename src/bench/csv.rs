@@ -369,7 +369,7 @@ pub(crate) mod tests {
             speedup: 50.0 / frame,
             mse: bias * 1e-2 / k.sqrt(),
             rel_mse: bias * 1e-1 / k.sqrt(),
-            sp_clusters_used: sp - 1,
+            sp_clusters_used: sp.saturating_sub(1),
             vpl_clusters_used: vpl,
             shadow_rays: 123_456_789_012,
             repeat: 3,
