@@ -40,6 +40,17 @@ impl Viewer {
                 (name.to_string(), series_colour(i), pts)
             })
             .collect();
+        // The fitted range: the points' with a margin, at least 0.6 decades on each axis so that a
+        // 1-2-5 tick (and its label) always falls inside it.
+        let range = |axis: usize| {
+            let vs = items
+                .iter()
+                .flat_map(|(_, _, p)| p.iter().map(move |q| q[axis]));
+            let (lo, hi) = vs.fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
+            let (mid, half) = ((lo + hi) / 2.0, ((hi - lo) / 2.0 * 1.15).max(0.3));
+            (mid - half, mid + half)
+        };
+        let (x_range, y_range) = (range(0), range(1));
         let refit = self.points.len() != self.plot_fitted || !self.plot_zoom;
         self.plot_fitted = self.points.len();
         let zoom = self.plot_zoom;
@@ -57,10 +68,10 @@ impl Viewer {
                     position: p,
                     ..
                 } => Some(format!(
-                    "{plot_name}\n{} ms, {} {}",
-                    pow10_label(p.x),
+                    "{plot_name}\n{:.1} ms, {} {:.3e}",
+                    10f64.powf(p.x),
                     if flip { "FLIP" } else { "MSE" },
-                    pow10_label(p.y)
+                    10f64.powf(p.y)
                 )),
                 egui_plot::HoverPosition::Elsewhere { .. } => None,
             })
@@ -68,7 +79,11 @@ impl Viewer {
             .allow_scroll(zoom)
             .allow_drag(zoom)
             .allow_boxed_zoom(zoom)
-            .auto_bounds(egui::Vec2b::new(true, true));
+            .auto_bounds(egui::Vec2b::new(true, true))
+            .include_x(x_range.0)
+            .include_x(x_range.1)
+            .include_y(y_range.0)
+            .include_y(y_range.1);
         if refit {
             plot = plot.reset();
         }
@@ -83,7 +98,10 @@ impl Viewer {
         });
         ui.horizontal_wrapped(|ui| {
             for (name, colour, _) in &items {
-                ui.label(RichText::new(format!("● {name}")).color(*colour).small());
+                // A painted dot: egui's default fonts have no glyph for "●".
+                let (dot, _) = ui.allocate_exact_size(egui::vec2(8.0, 8.0), egui::Sense::hover());
+                ui.painter().circle_filled(dot.center(), 3.5, *colour);
+                ui.label(RichText::new(name).color(*colour).small());
             }
         });
     }
