@@ -143,9 +143,9 @@ pub fn parse_mode(item: &str) -> Result<Mode, Invalid> {
 #[derive(clap::Args, Clone, Debug, Default, PartialEq)]
 #[command(next_help_heading = "Sweep (comma-separated lists)")]
 pub struct Sweep {
-    /// Methods to compare: colom,wang,lightcluster (default colom; docs/methods.md). `--modes` and
-    /// the fuzzy knobs apply to colom; wang takes the K's, --iterations and --wang-alpha,
-    /// lightcluster --d-init.
+    /// Methods to compare: colom,wang,lightcluster,cvrtgi (default colom; docs/methods.md).
+    /// `--modes` and the fuzzy knobs apply to colom; wang takes the K's, --iterations and
+    /// --wang-alpha, lightcluster --d-init, cvrtgi --voxel-res and --cluster-step.
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_method)]
     pub methods: Vec<Method>,
     /// wang: α values of Eq. (2) (default 0.3).
