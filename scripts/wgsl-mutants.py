@@ -40,7 +40,7 @@ MUTANTS = [
     ("eq5-cosine-tests-dropped", "common/vpl.wgsl", "if cos_p <= 0.0 || cos_v <= 0.0 {", "if false {", "Eq. 5"),
     ("eq5-direction-not-normalised", "common/vpl.wgsl", "let wi = d * inverseSqrt(d2);", "let wi = d / d2;", "Eq. 5"),
     ("eq5-visibility-inverted", "reference.wgsl", "&& vpl_visible(p, n, v.pos.xyz, v.nrm.xyz)", "&& !vpl_visible(p, n, v.pos.xyz, v.nrm.xyz)", "Eq. 5"),
-    ("eq5-shadow-ray-overshoots", "reference.wgsl", "dist * (1.0 - 1e-4)", "dist * 1.5", "Eq. 5"),
+    ("eq5-shadow-ray-overshoots", "common/bvh.wgsl", "dist * (1.0 - 1e-4)", "dist * 1.5", "Eq. 5"),
     # --- Eq. (6), (8), (9): shade.wgsl
     ("eq8-uniform-over-F-not-used-slots", "shade.wgsl", "1.0 / f32(nf)", "1.0 / f32(F)", "Eq. 8"),
     ("eq8-eq9-switch-inverted", "shade.wgsl", "if params.weighted == 0u {", "if params.weighted != 0u {", "Eq. 8/9"),

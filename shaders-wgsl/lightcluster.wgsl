@@ -7,6 +7,7 @@
 #import common/bvh.wgsl
 #import common/chunk.wgsl
 #import common/gbuffer.wgsl
+#import common/sampling.wgsl
 #import common/vpl.wgsl
 
 struct LcParams {
@@ -32,21 +33,13 @@ const DISC_SAMPLES: u32 = 8u;
 fn disc_visibility(p: vec3<f32>, n: vec3<f32>, c: u32) -> f32 {
     let a = discs[2u * c];
     let dn = discs[2u * c + 1u].xyz;
-    let s = select(-1.0, 1.0, dn.z >= 0.0);
-    let aa = -1.0 / (s + dn.z);
-    let b = dn.x * dn.y * aa;
-    let t = vec3<f32>(1.0 + s * dn.x * dn.x * aa, s * b, -s * dn.x);
-    let bt = vec3<f32>(b, s + dn.y * dn.y * aa, -dn.y);
-    let o = offset_origin(p, n);
+    let b = onb(dn);
     var seen = 0u;
     for (var i = 0u; i < DISC_SAMPLES; i++) {
         let r = a.w * sqrt((f32(i) + 0.5) / f32(DISC_SAMPLES));
         let th = 2.399963 * f32(i);
-        let q = a.xyz + (t * cos(th) + bt * sin(th)) * r;
-        let e = offset_origin(q, dn);
-        let d = e - o;
-        let dist = length(d);
-        if dist > 0.0 && !trace_any(Ray(o, d / dist, 0.0, dist * (1.0 - 1e-4))) {
+        let q = a.xyz + (b[0] * cos(th) + b[1] * sin(th)) * r;
+        if vpl_visible(p, n, q, dn) {
             seen += 1u;
         }
     }

@@ -17,18 +17,6 @@ struct RefParams {
 @group(1) @binding(3) var<storage, read> vpls: array<Vpl>;
 @group(1) @binding(4) var<storage, read_write> indirect: array<vec4<f32>>;
 
-// V(p, q) of Eq. (5): the segment from p (offset along n) to q (offset along the VPL normal) is free.
-fn vpl_visible(p: vec3<f32>, n: vec3<f32>, q: vec3<f32>, qn: vec3<f32>) -> bool {
-    let o = offset_origin(p, n);
-    let t = offset_origin(q, qn);
-    let d = t - o;
-    let dist = length(d);
-    if !(dist > 0.0) {
-        return false;
-    }
-    return !trace_any(Ray(o, d / dist, 0.0, dist * (1.0 - 1e-4)));
-}
-
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = chunk_item(gid, nwg);

@@ -57,11 +57,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
             if dot(n, d) <= 0.0 || dot(l.nrm.xyz, d) >= 0.0 {
                 continue;
             }
-            let o = offset_origin(p, n);
-            let t = offset_origin(l.pos.xyz, l.nrm.xyz);
-            let dd = t - o;
-            let dist = length(dd);
-            if dist > 0.0 && !trace_any(Ray(o, dd / dist, 0.0, dist * (1.0 - 1e-4))) {
+            if vpl_visible(p, n, l.pos.xyz, l.nrm.xyz) {
                 word |= 1u << (c - c0);
             }
         }

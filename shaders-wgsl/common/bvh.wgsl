@@ -208,3 +208,16 @@ fn trace_any(ray_in: Ray) -> bool {
     }
     return false;
 }
+
+// V(p, q) of Eq. (5), the shadow ray between two surface points: the segment from p (offset along
+// its normal n) to q (offset along its normal qn) is free. CPU twin: `CpuScene::vpl_visible`.
+fn vpl_visible(p: vec3<f32>, n: vec3<f32>, q: vec3<f32>, qn: vec3<f32>) -> bool {
+    let o = offset_origin(p, n);
+    let t = offset_origin(q, qn);
+    let d = t - o;
+    let dist = length(d);
+    if !(dist > 0.0) {
+        return false;
+    }
+    return !trace_any(Ray(o, d / dist, 0.0, dist * (1.0 - 1e-4)));
+}
