@@ -42,27 +42,26 @@ fn load_light(c: u32) -> Vpl {
 }
 
 // Eq. (8) as weights: 1/F' for each of the pixel's F' used slots (rows[j] != INVALID), 0 for the
-// others, so that eq9_weighted_visibility with them is Eq. (8)'s mean. CPU twin:
-// cpu::shade::eq8_mean_weights.
-fn eq8_mean_weights(rows: array<u32, MAX_F>) -> array<f32, MAX_F> {
+// others, written to `w`, so that eq9_weighted_visibility with them is Eq. (8)'s mean. CPU twin:
+// cpu::shade::eq8_mean_weights. Arrays go by pointer, never by value (docs/architecture.md, "WGSL
+// for real GPUs": a by-value array is copied through local memory on every call).
+fn eq8_mean_weights(rows: ptr<function, array<u32, MAX_F>>, w: ptr<function, array<f32, MAX_F>>) {
     var nf = 0u;
     for (var j = 0u; j < F; j++) {
-        nf += select(0u, 1u, rows[j] != INVALID);
+        nf += select(0u, 1u, (*rows)[j] != INVALID);
     }
-    var w: array<f32, MAX_F>;
     for (var j = 0u; j < F; j++) {
-        w[j] = select(0.0, 1.0 / f32(nf), rows[j] != INVALID);
+        (*w)[j] = select(0.0, 1.0 / f32(nf), (*rows)[j] != INVALID);
     }
-    return w;
 }
 
 // Eq. (9): Ṽ(p, p_c) = Σ_f w_f V(p_f, p_c) over the pixel's slots, V(p_f, p_c) being bit b of row
 // f's word `rw[f]` (Eq. 8 with eq8_mean_weights). Summed over f in order. CPU twin:
 // cpu::shade::eq9_weighted_visibility.
-fn eq9_weighted_visibility(w: array<f32, MAX_F>, rw: array<u32, MAX_F>, b: u32) -> f32 {
+fn eq9_weighted_visibility(w: ptr<function, array<f32, MAX_F>>, rw: ptr<function, array<u32, MAX_F>>, b: u32) -> f32 {
     var v = 0.0;
     for (var j = 0u; j < F; j++) {
-        v += select(0.0, w[j], ((rw[j] >> b) & 1u) != 0u);
+        v += select(0.0, (*w)[j], (((*rw)[j] >> b) & 1u) != 0u);
     }
     return v;
 }
@@ -72,7 +71,7 @@ fn eq9_weighted_visibility(w: array<f32, MAX_F>, rw: array<u32, MAX_F>, b: u32) 
 // one bit word per row serves 32 lights, and a light no row sees (Ṽ = 0, which would add exactly
 // zero) is skipped. Lights are still summed in increasing order and Ṽ over j in order, so the sum is
 // the same as a plain loop over all lights. CPU twin: cpu::shade::eq6_indirect.
-fn eq6_indirect(sp: ShadingPoint, rows: array<u32, MAX_F>, w: array<f32, MAX_F>) -> vec3<f32> {
+fn eq6_indirect(sp: ShadingPoint, rows: ptr<function, array<u32, MAX_F>>, w: ptr<function, array<f32, MAX_F>>) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     var rw: array<u32, MAX_F>;
     // This dispatch's words [chunk.sub_offset, + chunk.sub_count) (src/gi/shade.rs bounds them:
@@ -81,8 +80,8 @@ fn eq6_indirect(sp: ShadingPoint, rows: array<u32, MAX_F>, w: array<f32, MAX_F>)
         var seen = 0u;
         for (var j = 0u; j < F; j++) {
             rw[j] = 0u;
-            if rows[j] != INVALID {
-                rw[j] = bits[rows[j] * params.words + wd];
+            if (*rows)[j] != INVALID {
+                rw[j] = bits[(*rows)[j] * params.words + wd];
             }
             seen |= rw[j];
         }
@@ -91,7 +90,7 @@ fn eq6_indirect(sp: ShadingPoint, rows: array<u32, MAX_F>, w: array<f32, MAX_F>)
             seen &= seen - 1u;
             let t = eq5_vpl_radiance(sp.pos.xyz, sp.nrm.xyz, sp.albedo.xyz, load_light(wd * 32u + b), params.d_min2);
             if any(t > vec3<f32>(0.0)) {
-                sum += t * eq9_weighted_visibility(w, rw, b);
+                sum += t * eq9_weighted_visibility(w, &rw, b);
             }
         }
     }
@@ -123,9 +122,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         }
     }
     if params.weighted == 0u {
-        w = eq8_mean_weights(rows);
+        eq8_mean_weights(&rows, &w);
     }
-    let sum = eq6_indirect(sp, rows, w);
+    let sum = eq6_indirect(sp, &rows, &w);
     // The first range of words writes the pixel, the others add to it.
     if chunk.sub_offset == 0u {
         indirect[m] = vec4<f32>(sum, 0.0);

@@ -22,35 +22,35 @@ fn ratio_pow(x: f32, p: f32) -> f32 {
     return exp2(p * log2(x));
 }
 
-// Slots from F on are 0. Every loop runs over the pipeline's F slots (a constant) with the count as a
-// guard, so the arrays stay in registers: a loop to the run-time count indexes them at run time,
-// which put them in memory (on lavapipe a per-lane scatter; final_assign spent more time here than in
-// its search).
-fn eq10_weights(d: array<f32, MAX_F>, count: u32, zero: u32) -> array<f32, MAX_F> {
-    var w: array<f32, MAX_F>;
+// The weights go to `*w` (slots from F on untouched). Arrays go by pointer, never by value
+// (docs/architecture.md, "WGSL for real GPUs"). Every loop runs over the pipeline's F slots (a
+// constant) with the count as a guard, so the arrays stay in registers: a loop to the run-time count
+// indexes them at run time, which put them in memory (on lavapipe a per-lane scatter; final_assign
+// spent more time here than in its search).
+fn eq10_weights(d: ptr<function, array<f32, MAX_F>>, count: u32, zero: u32, w: ptr<function, array<f32, MAX_F>>) {
     var d_min = 3.4e38;
     for (var j = 0u; j < F; j++) {
-        if j < count && d[j] >= 0.0 {
-            d_min = min(d_min, d[j]);
+        (*w)[j] = 0.0;
+        if j < count && (*d)[j] >= 0.0 {
+            d_min = min(d_min, (*d)[j]);
         }
     }
     var wsum = 0.0;
     for (var j = 0u; j < F; j++) {
-        if j < count && d[j] >= 0.0 {
+        if j < count && (*d)[j] >= 0.0 {
             if zero != INVALID {
-                w[j] = select(0.0, 1.0, j == zero);
+                (*w)[j] = select(0.0, 1.0, j == zero);
             } else {
-                w[j] = ratio_pow(d_min / d[j], params.weight_exponent);
+                (*w)[j] = ratio_pow(d_min / (*d)[j], params.weight_exponent);
             }
-            wsum += w[j];
+            wsum += (*w)[j];
         }
     }
     if zero == INVALID && wsum > 0.0 {
         for (var j = 0u; j < F; j++) {
-            w[j] /= wsum;
+            (*w)[j] /= wsum;
         }
     }
-    return w;
 }
 
 // The plane gate (off unless asked; not in the paper): slot j >= 2 keeps cluster k only when its
@@ -92,7 +92,8 @@ fn final_assign(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
             zero = j;
         }
     }
-    let w = eq10_weights(dists, b.count, zero);
+    var w: array<f32, MAX_F>;
+    eq10_weights(&dists, b.count, zero, &w);
     for (var j = 0u; j < f; j++) {
         var k = INVALID;
         if j < b.count && dists[j] >= 0.0 {

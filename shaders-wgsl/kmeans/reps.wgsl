@@ -88,7 +88,8 @@ fn rep_weights(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
             }
         }
     }
-    let w = eq10_weights(d, f, zero);
+    var w: array<f32, MAX_F>;
+    eq10_weights(&d, f, zero, &w);
     for (var j = 0u; j < f; j++) {
         weights[m * f + j] = w[j];
     }

@@ -103,6 +103,42 @@ pub fn validate(name: &str) -> Result<naga::Module, String> {
     Ok(module)
 }
 
+/// Whether values of type `ty` hold an array (an array, or a struct with one at any depth).
+fn holds_array(types: &naga::UniqueArena<naga::Type>, ty: naga::Handle<naga::Type>) -> bool {
+    match &types[ty].inner {
+        naga::TypeInner::Array { .. } | naga::TypeInner::BindingArray { .. } => true,
+        naga::TypeInner::Struct { members, .. } => {
+            members.iter().any(|m| holds_array(types, m.ty))
+        }
+        _ => false,
+    }
+}
+
+/// The functions of `module` with a parameter that is an array, or a struct holding one, passed by
+/// value, as `function(parameter)`. A GPU compiler copies such an argument through local memory on
+/// every call: `eq9_weighted_visibility` taking two 16-element arrays by value, called once per
+/// light per pixel, made the fuzzy shade pass 8-13x slower on an H100 with the same images
+/// (docs/architecture.md, "WGSL for real GPUs"). Pass a `ptr<function, ...>` instead. Read from
+/// naga's IR, so comments, formatting and aliases cannot hide one.
+pub fn by_value_array_parameters(module: &naga::Module) -> Vec<String> {
+    let functions = module
+        .functions
+        .iter()
+        .map(|(_, f)| f)
+        .chain(module.entry_points.iter().map(|e| &e.function));
+    let mut found = Vec::new();
+    for f in functions {
+        for (i, a) in f.arguments.iter().enumerate() {
+            if holds_array(&module.types, a.ty) {
+                let name = f.name.as_deref().unwrap_or("<unnamed>");
+                let arg = a.name.clone().unwrap_or_else(|| format!("#{i}"));
+                found.push(format!("{name}({arg})"));
+            }
+        }
+    }
+    found
+}
+
 /// Creates the shader module for pass `name`.
 pub fn module(device: &wgpu::Device, name: &str) -> wgpu::ShaderModule {
     let desc = wgpu::ShaderModuleDescriptor {
@@ -153,5 +189,56 @@ mod tests {
             n += 1;
         }
         assert!(n >= 3);
+    }
+
+    /// The rule of docs/architecture.md, "WGSL for real GPUs": no function takes an array by value.
+    #[test]
+    fn no_wgsl_function_takes_an_array_by_value() {
+        let mut found = Vec::new();
+        for name in pass_names() {
+            let module = validate(name).unwrap_or_else(|e| panic!("{name}.wgsl: {e}"));
+            found.extend(
+                by_value_array_parameters(&module)
+                    .into_iter()
+                    .map(|f| format!("{name}.wgsl: {f}")),
+            );
+        }
+        assert!(
+            found.is_empty(),
+            "WGSL functions taking an array (or a struct holding one) by value; pass a \
+             ptr<function, ...> instead (docs/architecture.md):\n{}",
+            found.join("\n")
+        );
+    }
+
+    /// The rule finds a planted by-value array, directly, in a struct, behind an alias and in a
+    /// nested struct, and lets pointers and plain values through.
+    #[test]
+    fn the_by_value_rule_names_planted_functions() {
+        let src = "
+            alias Row = array<u32, 4>;
+            struct Slots { w: array<f32, 4>, n: u32 }
+            struct Outer { s: Slots }
+            struct Plain { a: vec4<f32>, b: u32 }
+            fn direct(a: array<f32, 4>) -> f32 { return a[0]; }
+            fn aliased(x: u32, r: Row) -> u32 { return r[x & 3u]; }
+            fn in_struct(s: Slots) -> f32 { return s.w[0]; }
+            fn nested(o: Outer) -> u32 { return o.s.n; }
+            fn by_pointer(a: ptr<function, array<f32, 4>>) -> f32 { return (*a)[0]; }
+            fn plain(p: Plain, v: vec3<f32>) -> f32 { return p.a.x + v.y; }
+            @compute @workgroup_size(1)
+            fn main() {
+                var a: array<f32, 4>;
+                var s: Slots;
+                var o: Outer;
+                let x = direct(a) + in_struct(s) + by_pointer(&a) + plain(Plain(), vec3<f32>());
+                let y = aliased(1u, Row()) + nested(o);
+            }
+        ";
+        let module = naga::front::wgsl::parse_str(src).unwrap();
+        assert_eq!(
+            by_value_array_parameters(&module),
+            ["direct(a)", "aliased(r)", "in_struct(s)", "nested(o)"]
+        );
     }
 }
