@@ -32,6 +32,10 @@ const MAX_F: u32 = 16u;
 // unroll the loops over the F slots, so `rows`, `w` and `rw` live in registers; with a run-time F a GPU
 // spills them to local memory and re-reads them for every light.
 override F: u32 = 6u;
+// Visibility patterns a word's table holds (eq6_indirect), at most MAX_PATTERNS; 0: every light runs
+// Eq. (9)'s loop. src/gi/shade.rs sets it (`shade::patterns`); the image is the same bit for bit.
+const MAX_PATTERNS: u32 = 8u;
+override PATTERNS: u32 = 0u;
 
 fn light_texel(i: u32) -> vec4<f32> {
     return textureLoad(lights_tex, vec2<u32>(i & 4095u, i >> 12u), 0);
@@ -66,32 +70,69 @@ fn eq9_weighted_visibility(w: ptr<function, array<f32, MAX_F>>, rw: ptr<function
     return v;
 }
 
+// The lights of a word that every slot sees as it sees light b (the same visibility pattern over
+// the F slots, bit b's), as a mask: Eq. (9)'s Ṽ is one value over them. An unused slot's word is 0,
+// the same for every light. CPU twin: cpu::shade::same_visibility.
+fn same_visibility(rw: ptr<function, array<u32, MAX_F>>, b: u32) -> u32 {
+    var same = 0xffffffffu;
+    for (var j = 0u; j < F; j++) {
+        let r = (*rw)[j];
+        same &= select(~r, r, ((r >> b) & 1u) != 0u);
+    }
+    return same;
+}
+
 // Eq. (6) over this dispatch's lights: Σ_c I_c ρ G Ṽ(p, p_c), the lights being the VPL-cluster
 // representatives (or the VPLs) of words [chunk.sub_offset, + chunk.sub_count). Lights 32 at a time:
 // one bit word per row serves 32 lights, and a light no row sees (Ṽ = 0, which would add exactly
-// zero) is skipped. Lights are still summed in increasing order and Ṽ over j in order, so the sum is
-// the same as a plain loop over all lights. CPU twin: cpu::shade::eq6_indirect.
+// zero) is skipped. Ṽ (Eq. 9, over j in order) depends only on a light's visibility pattern over the
+// F slots, and a word's lights fall in few patterns (all slots see the light, or a shadow edge
+// crosses some): a word's first PATTERNS patterns and their Ṽ are found once (a table in registers),
+// and a light picks its Ṽ from the table with PATTERNS selects instead of an F-slot loop, without a
+// branch that would split a SIMD group; a light of a further pattern runs the loop. Lights are summed
+// in increasing order, each with Ṽ bit for bit as eq9_weighted_visibility gives it, so the sum is the
+// same as a plain loop over all lights. CPU twin: cpu::shade::eq6_indirect.
 fn eq6_indirect(sp: ShadingPoint, rows: ptr<function, array<u32, MAX_F>>, w: ptr<function, array<f32, MAX_F>>) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     var rw: array<u32, MAX_F>;
+    var masks: array<u32, MAX_PATTERNS>;
+    var vs: array<f32, MAX_PATTERNS>;
     // This dispatch's words [chunk.sub_offset, + chunk.sub_count) (src/gi/shade.rs bounds them:
     // lavapipe ends all loops of a SIMD batch after 65,535 trips, and this walk takes one a light).
     for (var wd = chunk.sub_offset; wd < min(chunk.sub_offset + chunk.sub_count, params.words); wd++) {
-        var seen = 0u;
+        var todo = 0u;
         for (var j = 0u; j < F; j++) {
             rw[j] = 0u;
             if (*rows)[j] != INVALID {
                 rw[j] = bits[(*rows)[j] * params.words + wd];
             }
-            seen |= rw[j];
+            todo |= rw[j];
         }
-        while seen != 0u {
-            let b = firstTrailingBit(seen);
-            seen &= seen - 1u;
-            let t = eq5_vpl_radiance(sp.pos.xyz, sp.nrm.xyz, sp.albedo.xyz, load_light(wd * 32u + b), params.d_min2);
-            if any(t > vec3<f32>(0.0)) {
-                sum += t * eq9_weighted_visibility(w, &rw, b);
+        // The table: pattern k's lights and Ṽ, in the order of their first lights.
+        var rest = todo;
+        for (var k = 0u; k < PATTERNS; k++) {
+            masks[k] = 0u;
+            vs[k] = 0.0;
+            if rest != 0u {
+                let first = firstTrailingBit(rest);
+                masks[k] = rest & same_visibility(&rw, first);
+                vs[k] = eq9_weighted_visibility(w, &rw, first);
+                rest &= ~masks[k];
             }
+        }
+        while todo != 0u {
+            let b = firstTrailingBit(todo);
+            todo &= todo - 1u;
+            let t = eq5_vpl_radiance(sp.pos.xyz, sp.nrm.xyz, sp.albedo.xyz, load_light(wd * 32u + b), params.d_min2);
+            var v = 0.0;
+            for (var k = 0u; k < PATTERNS; k++) {
+                v = select(v, vs[k], ((masks[k] >> b) & 1u) != 0u);
+            }
+            // A light past the table's patterns (every light with PATTERNS = 0) that adds light.
+            if ((rest >> b) & 1u) != 0u && any(t > vec3<f32>(0.0)) {
+                v = eq9_weighted_visibility(w, &rw, b);
+            }
+            sum += t * v;
         }
     }
     return sum;

@@ -73,6 +73,16 @@ pub fn eq9_weighted_visibility(w: &[f32], visible: impl Fn(usize) -> bool) -> f3
         .sum()
 }
 
+/// The lights of a 32-light word that every slot sees as it sees light `b` (its visibility pattern
+/// over the slots), as a mask; `rw[f]` is slot f's word (0 for an unused slot). Twin of
+/// `same_visibility` in shade.wgsl, whose pattern table gives each light of a pattern the Ṽ of its
+/// first light.
+pub fn same_visibility(rw: &[u32], b: u32) -> u32 {
+    rw.iter().fold(u32::MAX, |same, &r| {
+        same & if (r >> b) & 1 != 0 { r } else { !r }
+    })
+}
+
 /// Eq. (6) for one pixel: Σ_c I_c ρ G Ṽ(p, p_c) over the lights (twin of `eq6_indirect` in
 /// shade.wgsl).
 pub fn eq6_indirect(
@@ -101,4 +111,25 @@ pub fn eq6_indirect(
         sum += t * v;
     }
     sum
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Hand-worked: slot words 0b1101, 0b0111 and an unused slot (0). Light 0: seen by slot 0 only
+    /// (pattern 10-); light 1: slot 1 only (01-); light 2: both (11-); light 3: slot 0 only (10-);
+    /// lights 4..31: none (00-).
+    #[test]
+    fn same_visibility_by_hand() {
+        let rw = [0b1101, 0b0111, 0];
+        assert_eq!(same_visibility(&rw, 0), 0b1001);
+        assert_eq!(same_visibility(&rw, 3), 0b1001);
+        assert_eq!(same_visibility(&rw, 1), 0b0010);
+        assert_eq!(same_visibility(&rw, 2), 0b0100);
+        assert_eq!(same_visibility(&rw, 4), !0b1111);
+        // One slot: the lights it sees, or those it does not.
+        assert_eq!(same_visibility(&[0xf0f0_0000], 20), 0xf0f0_0000);
+        assert_eq!(same_visibility(&[0xf0f0_0000], 0), 0x0f0f_ffff);
+    }
 }

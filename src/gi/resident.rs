@@ -134,6 +134,31 @@ impl<'a> Renderer<'a> {
         ))
     }
 
+    /// The shade pass's `PATTERNS` (`gi::shade::patterns`, 0..8): its pipelines are built again.
+    /// The image does not depend on it.
+    pub fn set_shade_patterns(&mut self, patterns: u32) {
+        self.shade = Shade::with_patterns(patterns);
+    }
+
+    /// Before timing `s` at `camera`: on a hardware adapter one untimed render (its pipelines built,
+    /// its buffers sized: work a first timed run would otherwise leave the GPU idle for), then `ms`
+    /// of GPU work (`GpuContext::warm_up`, `--warmup-ms`). 0 does nothing. Returns the ms of the
+    /// busy kernel.
+    pub fn warm_up(
+        &mut self,
+        camera: &crate::scene::Camera,
+        s: &super::pipeline::RenderSettings,
+        ms: f64,
+    ) -> Result<f64> {
+        if ms <= 0.0 {
+            return Ok(0.0);
+        }
+        if !self.ctx.software {
+            self.render(camera, s)?;
+        }
+        self.ctx.warm_up(ms)
+    }
+
     pub fn new(ctx: &'a GpuContext, source: &'a Scene) -> Result<Self> {
         super::scene_gpu::check_fits(source, ctx.max_binding())?;
         let mut scene = std::borrow::Cow::Borrowed(source);

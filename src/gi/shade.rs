@@ -39,16 +39,39 @@ pub struct ShadeInputs<'a> {
 /// paper's settings (at most 8,192 lights) shade in one dispatch per pixel range as before.
 pub const WORDS_PER_DISPATCH: u32 = 512;
 
+/// The most visibility patterns a word's table holds (`MAX_PATTERNS` in shade.wgsl).
+pub const MAX_PATTERNS: u32 = 8;
+
+/// The shader's `PATTERNS`: the visibility patterns of a word whose Eq. (9) Ṽ `eq6_indirect`
+/// tabulates once instead of computing it per light; `FVPL_SHADE_PATTERNS` (0..8) chooses, default
+/// 0 (Ṽ per light). The image is the same bit for bit for every value (tests/clustered.rs). 0 is
+/// the fastest on lavapipe, measured (docs/architecture.md); on a GPU `scripts/gpu-bench` times
+/// both.
+pub fn patterns() -> u32 {
+    std::env::var("FVPL_SHADE_PATTERNS")
+        .ok()
+        .and_then(|v| v.parse::<u32>().ok())
+        .map_or(0, |p| p.min(MAX_PATTERNS))
+}
+
 #[derive(Default)]
 pub struct Shade {
     /// One pipeline per F (the shader's `override F`), built the first time that F is shaded.
     kernels: [OnceCell<Kernel>; MAX_F as usize],
+    /// The shader's `PATTERNS` (`patterns()` when built).
+    patterns: u32,
 }
 
 impl Shade {
     pub fn new() -> Self {
+        Self::with_patterns(patterns())
+    }
+
+    /// With `PATTERNS` = `patterns` (at most `MAX_PATTERNS`).
+    pub fn with_patterns(patterns: u32) -> Self {
         Shade {
             kernels: Default::default(),
+            patterns: patterns.min(MAX_PATTERNS),
         }
     }
 
@@ -62,7 +85,8 @@ impl Shade {
             ];
             entries.extend((4..=6).map(|b| storage_layout(b, true)));
             entries.push(storage_layout(7, false));
-            Kernel::new(ctx, scene, "shade", &entries, &[("F", f as f64)])
+            let overrides = [("F", f as f64), ("PATTERNS", self.patterns as f64)];
+            Kernel::new(ctx, scene, "shade", &entries, &overrides)
         })
     }
 
