@@ -64,6 +64,10 @@ pub struct Row {
     /// The indirect light's ms: `frame` less `primary` and `direct` (every method's own passes, the
     /// measure the methods are compared by); files without it read `frame − primary − direct`.
     pub indirect_ms: f64,
+    /// The adapter and its driver the times were taken on (`GpuContext::adapter_name`,
+    /// `gpu::driver_name`), the last two columns; files without them read empty.
+    pub adapter: String,
+    pub driver: String,
     /// Mean FLIP of the tone-mapped image against the reference's (`stats::ErrorStats::flip`).
     /// Older files without it read empty, as do the border columns below.
     pub flip: Option<f64>,
@@ -128,8 +132,12 @@ pub fn header() -> Vec<String> {
     );
     h.extend(ERROR_COLUMNS.map(String::from));
     h.extend(METHOD_COLUMNS.map(String::from));
+    h.extend(ADAPTER_COLUMNS.map(String::from));
     h
 }
+
+/// The device's columns, after the method's: files written before them have neither.
+pub const ADAPTER_COLUMNS: [&str; 2] = ["adapter", "driver"];
 
 /// The method's columns, the last ones (after the error columns): `method` (the
 /// `settings::Method`'s name) and `indirect_ms`. Files written before them have neither.
@@ -190,6 +198,7 @@ fn record(r: &Row) -> Vec<String> {
         .map(opt),
     );
     v.extend([r.method.name().into(), format!("{}", r.indirect_ms)]);
+    v.extend([r.adapter.clone(), r.driver.clone()]);
     v
 }
 
@@ -254,6 +263,10 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
             );
         }
         let get = |name: &str| f[col(name)].as_str();
+        let get_or_empty = |name: &str| match head.iter().any(|h| h == name) {
+            true => get(name),
+            false => "",
+        };
         let num = |name: &str| -> Result<f64> {
             get(name)
                 .parse::<f64>()
@@ -318,6 +331,8 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
                 false => Method::Colom,
             },
             indirect_ms: 0.0,
+            adapter: get_or_empty("adapter").into(),
+            driver: get_or_empty("driver").into(),
         });
         let r = rows.last_mut().unwrap();
         r.indirect_ms = if head.iter().any(|h| h == "indirect_ms") {
@@ -386,6 +401,8 @@ pub(crate) mod tests {
             front_mse: None,
             method: Method::Colom,
             indirect_ms: 0.0,
+            adapter: "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Mesa 22.3.6 (LLVM 15.0.6))".into(),
+            driver: "llvmpipe Mesa 22.3.6 (LLVM 15.0.6)".into(),
         };
         r.indirect_ms = r.frame_ms() - r.stage("primary") - r.stage("direct");
         r
@@ -419,6 +436,15 @@ pub(crate) mod tests {
                 f[..f.len() - n].to_vec()
             }))
         };
+        // Drop the adapter columns: a file of the version before them.
+        let a = ADAPTER_COLUMNS.len();
+        let csv = cut_n(&csv, a);
+        let back = from_csv(&csv).unwrap();
+        assert_eq!(
+            (back[0].adapter.as_str(), back[0].driver.as_str()),
+            ("", "")
+        );
+        assert_eq!(back[0].indirect_ms, r.indirect_ms);
         // Drop the method columns: a file of the version before them (with the error columns).
         let m = METHOD_COLUMNS.len();
         let back = from_csv(&cut_n(&csv, m)).unwrap();

@@ -11,7 +11,7 @@ pub mod sweep;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -41,6 +41,8 @@ pub struct BenchPlan {
     pub cameras: Vec<(String, Camera)>,
     pub repeat: u32,
     pub reference_repeat: u32,
+    /// The warm-up before each timed configuration, reference and camera-path frame.
+    pub timing: crate::settings::TimingSettings,
     /// Draw the progress bar (it hides itself when stderr is not a terminal).
     pub progress: bool,
 }
@@ -83,29 +85,19 @@ fn file_slug(label: &str) -> String {
         .collect()
 }
 
-/// Renders `n` frames with `s`, returns the last frame and the per-key mean of the 3 best timings.
-/// Wall time a GPU renders a configuration untimed before its timed runs: a GPU whose clock was left
-/// to the driver slows down while the bench writes images between configurations, and without this
-/// the first runs of the next one are timed at that lower clock (on the H100, passes identical in every
-/// configuration took up to 40% longer in some). Not on a CPU adapter (lavapipe), whose frames are slow.
-const GPU_WARMUP: Duration = Duration::from_millis(300);
-
+/// Renders `n` frames with `s` after the warm-up (`Renderer::warm_up`: on a GPU one untimed render,
+/// then `warmup_ms` of GPU work, so no configuration is timed at the low clock the CPU work between
+/// configurations leaves a GPU in); returns the last frame and the per-key mean of the 3 best
+/// timings.
 fn timed(
     renderer: &mut Renderer,
     camera: &Camera,
     s: &RenderSettings,
     n: u32,
+    warmup_ms: f64,
     pb: &ProgressBar,
 ) -> Result<(Frame, BTreeMap<String, f64>)> {
-    if renderer.ctx.adapter.get_info().device_type != wgpu::DeviceType::Cpu {
-        let t0 = Instant::now();
-        for _ in 0..50 {
-            renderer.render(camera, s)?;
-            if t0.elapsed() >= GPU_WARMUP {
-                break;
-            }
-        }
-    }
+    renderer.warm_up(camera, s, warmup_ms)?;
     let mut runs = Vec::new();
     let mut last = None;
     for _ in 0..n.max(1) {
@@ -208,6 +200,7 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
             camera,
             &ref_settings,
             plan.reference_repeat,
+            plan.timing.warmup_ms,
             &pb,
         )?;
         let reference_ms = ref_t[FRAME_KEY];
@@ -255,13 +248,21 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
             // the fewest clusters miss it).
             let (s, steps) = match target_ms {
                 Some(t) => {
+                    renderer.warm_up(camera, &plan.settings(c), plan.timing.warmup_ms)?;
                     let (chosen, b, _) = budget::fit(&mut renderer, camera, &plan.settings(c), *t)?;
                     (chosen, Some(b.steps))
                 }
                 None => (plan.settings(c), None),
             };
             let c = &s.cluster;
-            let (frame, t) = timed(&mut renderer, camera, &s, plan.repeat, &pb)?;
+            let (frame, t) = timed(
+                &mut renderer,
+                camera,
+                &s,
+                plan.repeat,
+                plan.timing.warmup_ms,
+                &pb,
+            )?;
             let mut label = sweep::label_ran(
                 c,
                 frame.ran(Pass::SpCluster) || frame.ran(Pass::WangCluster),
@@ -325,6 +326,8 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
                 indirect_ms: frame_ms
                     - t.get(Pass::Primary.name()).copied().unwrap_or(0.0)
                     - t.get(Pass::Direct.name()).copied().unwrap_or(0.0),
+                adapter: ctx.adapter_name.clone(),
+                driver: ctx.driver.clone(),
             };
             let stem = format!("{:02}{suffix}_{}", i + 1, file_slug(&label));
             let img = format!("images/{stem}.png");
@@ -454,6 +457,9 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
     let md = summary::markdown(&SummaryInfo {
         scene: &plan.scene_name,
         adapter: &ctx.adapter_name,
+        driver: &ctx.driver,
+        software: ctx.software,
+        warmup_ms: plan.timing.warmup_ms,
         width: base.width,
         height: base.height,
         vpls: base.vpls,

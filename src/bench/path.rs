@@ -106,6 +106,9 @@ pub struct PathRow {
     /// GPU ms of the visibility pass, and its rows copied from the previous frame.
     pub visibility_ms: f64,
     pub visibility_rows_reused: u32,
+    /// The adapter and its driver (the last columns).
+    pub adapter: String,
+    pub driver: String,
 }
 
 pub fn to_csv(rows: &[PathRow]) -> String {
@@ -159,6 +162,7 @@ pub fn run(
     let reference_settings = plan.reference_settings();
     let mut references: Vec<(Vec<[f32; 3]>, f64)> = Vec::new();
     for (i, cam) in cameras.iter().enumerate() {
+        renderer.warm_up(cam, &reference_settings, plan.timing.warmup_ms)?;
         let f = renderer.render(cam, &reference_settings)?;
         eprintln!(
             "path: reference {}/{} in {:.0} ms GPU",
@@ -176,10 +180,15 @@ pub fn run(
                 temporal: on,
                 ..c.clone()
             });
-            // Each run starts with no past.
+            // Pipelines built (one untimed frame on a GPU), then each run starts with no past.
+            renderer.warm_up(&cameras[0], &s, plan.timing.warmup_ms)?;
             renderer.sp_clustering = None;
             let mut prev: Option<Frame> = None;
             for (i, cam) in cameras.iter().enumerate() {
+                // A frame is timed once (its past is its predecessor's), right after GPU work that
+                // touches no renderer state: not at the clock the CPU work since the last frame
+                // (its error measures) left the GPU in.
+                ctx.warm_up(plan.timing.warmup_ms)?;
                 let f = renderer.render(cam, &s)?;
                 let label = sweep::label_ran(
                     c,
@@ -206,6 +215,8 @@ pub fn run(
                     reference_ms: *reference_ms,
                     visibility_ms: f.ms(Pass::Visibility),
                     visibility_rows_reused: f.visibility_rows_reused,
+                    adapter: ctx.adapter_name.clone(),
+                    driver: ctx.driver.clone(),
                 };
                 eprintln!(
                     "path: {} temporal {} frame {i}: {:.1} ms (SP clustering {:.1} ms, {} iteration(s), kept {}), MSE {:.3e}, instability {}",
@@ -394,6 +405,8 @@ mod tests {
             reference_ms: 100.0,
             visibility_ms: 5.0,
             visibility_rows_reused: 0,
+            adapter: "an adapter, with a comma".into(),
+            driver: "a driver".into(),
         };
         let rows = vec![
             row(0, false, 100.0, 9.0, None),

@@ -9,6 +9,10 @@ use super::plot::pareto_front;
 pub struct SummaryInfo<'a> {
     pub scene: &'a str,
     pub adapter: &'a str,
+    pub driver: &'a str,
+    /// A software driver (lavapipe): its times say little about a GPU's, and the summary says so.
+    pub software: bool,
+    pub warmup_ms: f64,
     pub width: u32,
     pub height: u32,
     pub vpls: u32,
@@ -44,16 +48,31 @@ pub fn markdown(s: &SummaryInfo) -> String {
     let _ = writeln!(m, "# fuzzy-vpl bench: `{}`\n", s.scene);
     let _ = writeln!(
         m,
-        "- adapter: **{}**\n- {}×{} pixels, {} VPLs, seed {}\n- times are **GPU timestamp** durations \
+        "- adapter: **{}**, driver {}{}\n- {}×{} pixels, {} VPLs, seed {}\n- times are **GPU timestamp** durations \
          (wgpu timestamp queries, summed per pass), each the **mean of the 3 best of {}** runs (the \
-         paper's method); the references are timed the same way over {} run(s); on a GPU adapter each \
-         configuration first renders untimed for 0.3 s (clock warm-up)\n- `frame` is the whole \
+         paper's method); the references are timed the same way over {} run(s); before each \
+         configuration's and reference's timed runs the GPU is kept busy for {} ms (clock warm-up; \
+         on a GPU adapter after one untimed render)\n- `frame` is the whole \
          per-frame GPU time (primary rays, direct light, SP clustering, visibility, shading or gather); \
          VPL tracing and VPL clustering are resident work, built once per setting and listed apart\n\
          - speedup = reference frame time ÷ configuration frame time; MSE is the paper's (RGB clamped \
          to [0, 1]) against the unclustered reference, rel. MSE is (x − ref)² / (ref² + 0.01)\n\
          - the sweep took {:.0} s of wall time\n",
-        s.adapter, s.width, s.height, s.vpls, s.seed, s.repeat, s.reference_repeat, s.wall_s
+        s.adapter,
+        s.driver,
+        if s.software {
+            " — **a software driver (CPU)**: these times say little about a GPU's"
+        } else {
+            ""
+        },
+        s.width,
+        s.height,
+        s.vpls,
+        s.seed,
+        s.repeat,
+        s.reference_repeat,
+        s.warmup_ms,
+        s.wall_s
     );
     for c in &s.cameras {
         let _ = writeln!(
@@ -156,6 +175,9 @@ mod tests {
         let s = SummaryInfo {
             scene: "builtin:cornell",
             adapter: "llvmpipe (LLVM 19, 256 bits)",
+            driver: "llvmpipe Mesa 25.0",
+            software: true,
+            warmup_ms: 200.0,
             width: 96,
             height: 72,
             vpls: 1024,
@@ -173,6 +195,15 @@ mod tests {
         };
         let md = markdown(&s);
         assert!(md.contains("llvmpipe"));
+        assert!(
+            md.contains("driver llvmpipe Mesa 25.0 — **a software driver"),
+            "{md}"
+        );
+        let md = markdown(&SummaryInfo {
+            software: false,
+            ..s
+        });
+        assert!(!md.contains("a software driver (CPU)"), "{md}");
         assert!(md.contains("![Stage times](stages.png)"));
         assert!(md.contains("mean of the 3 best of 3"));
         assert!(md.contains("GPU timestamp"));

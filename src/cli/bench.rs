@@ -11,7 +11,7 @@ use crate::bench::{self, path::CameraPath, sweep::Sweep};
 use crate::export;
 use crate::gi::pipeline;
 use crate::gpu::GpuContext;
-use crate::settings::{FrameSettings, parse_on_off};
+use crate::settings::{FrameSettings, TimingSettings, parse_on_off};
 
 pub const BENCH_HELP: &str = "\
 Lists are comma-separated; the sweep is every combination of modes x SP K x VPL K x F x gamma x n_t x
@@ -59,6 +59,8 @@ pub struct BenchArgs {
     /// Renders of the reference (slow on a software driver), timed the same way.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     reference_repeat: u32,
+    #[command(flatten)]
+    timing: TimingSettings,
 }
 
 /// `a` with --quick's frame where the command line did not give one (`given`: the options it gave,
@@ -123,6 +125,7 @@ pub fn run(a: BenchArgs, given: &[&str]) -> Result<()> {
         cameras,
         repeat,
         reference_repeat: a.reference_repeat,
+        timing: a.timing,
         progress: true,
     };
     // Every configuration's visibility matrix fits the adapter: checked before any work.

@@ -10,7 +10,7 @@ use super::scene::{SceneArgs, ShotArgs, check_size, check_vpls};
 use crate::gi::budget;
 use crate::gi::pipeline::{self, RenderSettings, Renderer};
 use crate::gpu::GpuContext;
-use crate::settings::FrameSettings;
+use crate::settings::{FrameSettings, TimingSettings};
 use crate::{export, metrics, stats};
 
 #[derive(Args)]
@@ -44,6 +44,8 @@ pub struct RenderArgs {
     /// Render N times; timings are the mean of the 3 best (the paper's method).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     repeat: u32,
+    #[command(flatten)]
+    timing: TimingSettings,
     /// Indirect light without any clustering: every pixel gathers every VPL with its own shadow ray
     /// (Eq. 5; the paper's reference).
     #[arg(long)]
@@ -151,6 +153,12 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let mut frame = None;
     let mut target = None;
     let mut settings = settings;
+    // The GPU at its working clock before anything is timed (the path tracer: the busy kernel
+    // alone).
+    let warmup_ms = match a.path_trace {
+        Some(_) => ctx.warm_up(a.timing.warmup_ms)?,
+        None => renderer.warm_up(&camera, &settings, a.timing.warmup_ms)?,
+    };
     if let Some(t) = settings.cluster.target_ms {
         let (chosen, budget, f) = budget::fit(&mut renderer, &camera, &settings, t)?;
         for (i, st) in budget.steps.iter().enumerate() {
@@ -260,6 +268,9 @@ pub fn run(a: RenderArgs) -> Result<()> {
             passes: passes.iter().map(|s| s.to_string()).collect(),
             timings_ms,
             repeat: a.repeat,
+            warmup_ms,
+            driver: ctx.driver.clone(),
+            device_type: ctx.kind().into(),
             mean_luminance: metrics::mean_luminance(&frame.radiance),
             bvh_build_ms: renderer.bvh.build_ms,
             error,

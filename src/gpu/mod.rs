@@ -2,6 +2,7 @@
 
 pub mod profiler;
 pub mod shader;
+pub mod warmup;
 
 use anyhow::{Context as _, Result, anyhow};
 use wgpu::util::DeviceExt;
@@ -24,6 +25,22 @@ pub struct GpuContext {
     /// A CPU adapter (lavapipe): passes that can read their data two ways pick the one a software
     /// driver runs faster (e.g. the k-means search through textures). Results do not depend on it.
     pub software: bool,
+    /// The driver: `adapter.get_info()`'s driver and driver info ("llvmpipe"'s is Mesa's version),
+    /// for stats and CSVs.
+    pub driver: String,
+    /// The warm-up kernel (`warm_up`), built on first use.
+    pub(crate) warmup: std::cell::OnceCell<warmup::Warmup>,
+}
+
+/// The driver as `adapter.get_info()` names it: "NVIDIA 580.82.07", "llvmpipe Mesa 22.3.6 (LLVM
+/// 15.0.6)"; "unknown" when the backend says nothing.
+pub fn driver_name(info: &wgpu::AdapterInfo) -> String {
+    let s = [info.driver.trim(), info.driver_info.trim()]
+        .into_iter()
+        .filter(|s| !s.is_empty())
+        .collect::<Vec<_>>()
+        .join(" ");
+    if s.is_empty() { "unknown".into() } else { s }
 }
 
 /// Limits requested explicitly: what our passes need, clamped to what the adapter has. lavapipe allows
@@ -121,7 +138,26 @@ impl GpuContext {
             timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
             work_scale,
             software: info.device_type == wgpu::DeviceType::Cpu,
+            driver: driver_name(&info),
+            warmup: Default::default(),
         })
+    }
+
+    /// Keeps the GPU busy for at least `ms` milliseconds of work before timing (`warmup.rs`);
+    /// returns the milliseconds spent.
+    pub fn warm_up(&self, ms: f64) -> Result<f64> {
+        self.warmup
+            .get_or_init(|| warmup::Warmup::new(self))
+            .run(self, ms)
+    }
+
+    /// "software" or "hardware": what a summary says of where a figure came from.
+    pub fn kind(&self) -> &'static str {
+        if self.software {
+            "software"
+        } else {
+            "hardware"
+        }
     }
 
     /// A storage buffer initialised from `data` (at least 256 bytes so an empty array still binds to any struct).

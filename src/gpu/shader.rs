@@ -41,6 +41,7 @@ pub const FILES: &[(&str, &str)] = wgsl![
     "wang.wgsl",
     "lightcluster.wgsl",
     "cvrtgi.wgsl",
+    "warmup.wgsl",
 ];
 
 /// The pass shaders (top-level files; `common/` holds shared code, `kmeans/` the steps of the
@@ -107,9 +108,7 @@ pub fn validate(name: &str) -> Result<naga::Module, String> {
 fn holds_array(types: &naga::UniqueArena<naga::Type>, ty: naga::Handle<naga::Type>) -> bool {
     match &types[ty].inner {
         naga::TypeInner::Array { .. } | naga::TypeInner::BindingArray { .. } => true,
-        naga::TypeInner::Struct { members, .. } => {
-            members.iter().any(|m| holds_array(types, m.ty))
-        }
+        naga::TypeInner::Struct { members, .. } => members.iter().any(|m| holds_array(types, m.ty)),
         _ => false,
     }
 }

@@ -684,3 +684,32 @@ mod tests {
         assert_eq!(serde_json::from_str::<FrameSettings>(&j).unwrap(), f);
     }
 }
+
+/// The default warm-up before timing, in ms of GPU work (`TimingSettings::warmup_ms`).
+pub const WARMUP_MS: f64 = 200.0;
+
+/// How GPU times are taken (`render`, `bench`, `bench --camera-path`).
+#[derive(Args, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[command(next_help_heading = "Timing")]
+#[serde(default)]
+pub struct TimingSettings {
+    /// Milliseconds of GPU work before the timed renders (a busy kernel, src/gpu/warmup.rs), so
+    /// the GPU runs at its working clock; before each camera-path frame too. 0: none.
+    #[arg(long, value_name = "MS", default_value_t = WARMUP_MS, value_parser = parse_warmup_ms)]
+    pub warmup_ms: f64,
+}
+
+impl Default for TimingSettings {
+    fn default() -> Self {
+        TimingSettings {
+            warmup_ms: WARMUP_MS,
+        }
+    }
+}
+
+fn parse_warmup_ms(v: &str) -> Result<f64, String> {
+    match v.parse::<f64>() {
+        Ok(ms) if (0.0..=60_000.0).contains(&ms) => Ok(ms),
+        _ => Err(format!("{v}: milliseconds from 0 to 60000")),
+    }
+}
