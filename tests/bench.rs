@@ -372,3 +372,68 @@ fn target_ms_rows_follow_the_sweep() {
     assert!(err.contains("best fixed setting") || rows[4..].iter().all(|r| r.front_mse.is_none()));
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `scripts/gpu-bench --quick` end to end on lavapipe (CI has no GPU): every run of the script
+/// finishes and the table has a row for each configuration, named adapter and driver, the software
+/// warning, and finite figures.
+#[test]
+fn gpu_bench_script_runs_and_prints_one_table() {
+    let d = common::scratch("gpu-bench-quick");
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/gpu-bench");
+    let out = std::process::Command::new(script)
+        .args(["--quick", "--out", d.to_str().unwrap()])
+        .args(["--bin", env!("CARGO_BIN_EXE_fuzzy-vpl")])
+        .output()
+        .unwrap();
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(out.status.success(), "{stderr}");
+    assert_eq!(std::fs::read_to_string(d.join("table.md")).unwrap(), stdout);
+    let rows: Vec<&str> = stdout
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| ---"))
+        .collect();
+    // Header; paper 6 (3 settings x hard, weighted); patterns3 1; orbit 2 (off, on); methods 6
+    // (colom and wang at 2 settings each, lightcluster, cvrtgi); dense 2 + 2.
+    assert_eq!(rows.len(), 1 + 6 + 1 + 2 + 6 + 4, "{stdout}");
+    for run in [
+        "paper",
+        "patterns3",
+        "orbit",
+        "methods",
+        "dense-3m",
+        "dense-8m",
+    ] {
+        assert!(
+            rows.iter().any(|r| r.starts_with(&format!("| {run} |"))),
+            "no {run} row"
+        );
+    }
+    assert!(
+        stdout.contains("llvmpipe") && stdout.contains("driver "),
+        "{stdout}"
+    );
+    assert!(stdout.contains("A software driver"), "{stdout}");
+    assert!(stdout.contains("builtin:dense-8m"), "{stdout}");
+    assert!(
+        !stdout.contains("NaN") && !stdout.contains("inf"),
+        "{stdout}"
+    );
+    // The pattern table changes no image: its row's MSE is the weighted intermediate row's.
+    let mse = |run: &str| {
+        let r = rows
+            .iter()
+            .find(|r| r.starts_with(&format!("| {run} |")) && r.contains("weighted 48/192"))
+            .unwrap();
+        r.split('|').nth(16).unwrap().trim().to_string()
+    };
+    assert_eq!(mse("paper"), mse("patterns3"));
+    // Bad arguments: one line, exit 2.
+    let bad = std::process::Command::new(script)
+        .arg("--nope")
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+}

@@ -8,6 +8,7 @@ pub mod path;
 pub mod plot;
 pub mod summary;
 pub mod sweep;
+pub mod table;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -106,9 +106,13 @@ pub struct PathRow {
     /// GPU ms of the visibility pass, and its rows copied from the previous frame.
     pub visibility_ms: f64,
     pub visibility_rows_reused: u32,
-    /// The adapter and its driver (the last columns).
+    /// The adapter and its driver, the scene and the frame (the last columns).
     pub adapter: String,
     pub driver: String,
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub vpls: u32,
 }
 
 pub fn to_csv(rows: &[PathRow]) -> String {
@@ -217,6 +221,10 @@ pub fn run(
                     visibility_rows_reused: f.visibility_rows_reused,
                     adapter: ctx.adapter_name.clone(),
                     driver: ctx.driver.clone(),
+                    scene: plan.scene_name.clone(),
+                    width: f.width,
+                    height: f.height,
+                    vpls: f.vpls,
                 };
                 eprintln!(
                     "path: {} temporal {} frame {i}: {:.1} ms (SP clustering {:.1} ms, {} iteration(s), kept {}), MSE {:.3e}, instability {}",
@@ -407,6 +415,10 @@ mod tests {
             visibility_rows_reused: 0,
             adapter: "an adapter, with a comma".into(),
             driver: "a driver".into(),
+            scene: "builtin:conference".into(),
+            width: 160,
+            height: 120,
+            vpls: 4096,
         };
         let rows = vec![
             row(0, false, 100.0, 9.0, None),

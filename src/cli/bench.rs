@@ -240,3 +240,28 @@ fn sweep_table(
     );
     Ok(())
 }
+
+/// `fuzzy-vpl bench-table`: one markdown table of bench runs (`scripts/gpu-bench`).
+#[derive(Args)]
+pub struct BenchTableArgs {
+    /// Bench output folders (each with results.csv, path.csv or both); a row per configuration.
+    #[arg(required = true)]
+    dirs: Vec<PathBuf>,
+    /// The commit the binary was built from, as printed above the table.
+    #[arg(long, default_value = "unknown")]
+    commit: String,
+    /// The date printed above the table.
+    #[arg(long, default_value = "unknown")]
+    date: String,
+}
+
+pub fn table(a: BenchTableArgs) -> Result<()> {
+    let dirs: Vec<&std::path::Path> = a.dirs.iter().map(|d| d.as_path()).collect();
+    let info = bench::table::TableInfo {
+        commit: &a.commit,
+        date: &a.date,
+    };
+    let md = bench::table::markdown(&dirs, &info).map_err(|e| bad(format!("{e:#}")))?;
+    print!("{md}");
+    Ok(())
+}

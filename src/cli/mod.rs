@@ -46,6 +46,9 @@ enum Command {
     /// Error against run time over a sweep of clustering settings: results.csv, plots, summary.md.
     #[command(after_help = bench::BENCH_HELP)]
     Bench(Box<bench::BenchArgs>),
+    /// One markdown table of bench output folders (scripts/gpu-bench): adapter, driver, commit,
+    /// date, ms per pass, speed-up, MSE and FLIP.
+    BenchTable(bench::BenchTableArgs),
 }
 
 /// The command line. Every option that takes a value accepts a negative number as that value
@@ -202,6 +205,7 @@ pub fn main() -> ExitCode {
             let given: Vec<&str> = given.iter().map(String::as_str).collect();
             bench::run(*a, &given)
         }
+        Some(Command::BenchTable(a)) => bench::table(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,341 @@
+//! `fuzzy-vpl bench-table`: one markdown table of several bench runs (`scripts/gpu-bench`): the
+//! adapter, driver, commit and date above it, a row per configuration of each run's `results.csv`
+//! (ms per pass, speed-up over the reference, MSE, FLIP) and a row per configuration and temporal
+//! setting of each run's `path.csv` (means over the frames after the first).
+
+use std::collections::BTreeMap;
+use std::fmt::Write;
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+
+use super::csv::{Row, from_csv};
+
+/// What the table states above its rows.
+pub struct TableInfo<'a> {
+    pub commit: &'a str,
+    pub date: &'a str,
+}
+
+fn ms(v: f64) -> String {
+    if v == 0.0 {
+        "–".into()
+    } else if v < 10.0 {
+        format!("{v:.2}")
+    } else {
+        format!("{v:.1}")
+    }
+}
+
+fn sci(v: f64) -> String {
+    format!("{v:.2e}")
+}
+
+/// The per-pass columns of the table (then `indirect`, the method's own passes in all, and frame).
+const PASSES: [&str; 5] = ["primary", "direct", "sp_cluster", "visibility", "shade"];
+
+const HEADER: &str = "| run | scene | size | VPLs | setting | temporal | primary | direct | \
+                      sp_cluster | visibility | shade | indirect | frame ms | reference ms | \
+                      speed-up | MSE | FLIP |";
+
+fn sweep_row(run: &str, r: &Row) -> String {
+    let mut cells = vec![
+        run.to_string(),
+        format!("`{}`", r.scene),
+        format!("{}×{}", r.width, r.height),
+        r.vpls.to_string(),
+        r.label.clone(),
+        "off".into(),
+    ];
+    cells.extend(PASSES.iter().map(|p| ms(r.stage(p))));
+    cells.extend([
+        ms(r.indirect_ms),
+        format!("**{}**", ms(r.frame_ms())),
+        ms(r.reference_ms),
+        format!("{:.1}×", r.speedup),
+        sci(r.mse),
+        r.flip.map_or("–".into(), |f| format!("{f:.4}")),
+    ]);
+    format!("| {} |", cells.join(" | "))
+}
+
+/// A `path.csv`'s rows grouped by (label, temporal): the means over frames after the first of
+/// frame_ms, sp_cluster_ms, visibility_ms, reference_ms and mse; the adapter and driver.
+struct PathGroup {
+    /// Scene, size and VPLs as the file gives them ("–" for files without the columns).
+    scene: String,
+    size: String,
+    vpls: String,
+    label: String,
+    temporal: String,
+    frames: usize,
+    sums: BTreeMap<&'static str, f64>,
+}
+
+const PATH_MEANS: [&str; 5] = [
+    "frame_ms",
+    "sp_cluster_ms",
+    "visibility_ms",
+    "reference_ms",
+    "mse",
+];
+
+/// An adapter and its driver.
+type Device = (String, String);
+
+fn read_path(text: &str) -> Result<(Vec<PathGroup>, Option<Device>)> {
+    let mut rd = ::csv::ReaderBuilder::new().from_reader(text.as_bytes());
+    let head: Vec<String> = rd.headers()?.iter().map(String::from).collect();
+    let col = |name: &str| {
+        head.iter()
+            .position(|h| h == name)
+            .with_context(|| format!("no {name} column"))
+    };
+    let (label, temporal, frame) = (col("label")?, col("temporal")?, col("frame")?);
+    let means: Vec<usize> = PATH_MEANS.iter().map(|m| col(m)).collect::<Result<_>>()?;
+    let device = match (col("adapter"), col("driver")) {
+        (Ok(a), Ok(d)) => Some((a, d)),
+        _ => None,
+    };
+    let frame_cols = ["scene", "width", "height", "vpls"].map(|c| col(c).ok());
+    let mut groups: Vec<PathGroup> = Vec::new();
+    let mut seen_device = None;
+    for (i, rec) in rd.records().enumerate() {
+        let rec = rec?;
+        let get = |c: usize| rec.get(c).unwrap_or("");
+        if let Some((a, d)) = device {
+            seen_device = Some((get(a).to_string(), get(d).to_string()));
+        }
+        if get(frame)
+            .parse::<u32>()
+            .with_context(|| format!("line {}: frame", i + 2))?
+            == 0
+        {
+            continue;
+        }
+        let key = (get(label).to_string(), get(temporal).to_string());
+        let at = match groups
+            .iter()
+            .position(|g| (&g.label, &g.temporal) == (&key.0, &key.1))
+        {
+            Some(at) => at,
+            None => {
+                let [scene, w, h, vpls] = frame_cols.map(|c| c.map_or("–", get).to_string());
+                groups.push(PathGroup {
+                    scene: format!("`{scene}`"),
+                    size: format!("{w}×{h}"),
+                    vpls,
+                    label: key.0,
+                    temporal: key.1,
+                    frames: 0,
+                    sums: BTreeMap::new(),
+                });
+                groups.len() - 1
+            }
+        };
+        let g = &mut groups[at];
+        g.frames += 1;
+        for (m, &c) in PATH_MEANS.iter().zip(&means) {
+            let v: f64 = get(c)
+                .parse()
+                .with_context(|| format!("line {}: {m} {:?}", i + 2, get(c)))?;
+            *g.sums.entry(m).or_default() += v;
+        }
+    }
+    Ok((groups, seen_device))
+}
+
+fn path_row(run: &str, g: &PathGroup) -> String {
+    let mean = |m: &str| g.sums.get(m).copied().unwrap_or(0.0) / g.frames.max(1) as f64;
+    let frame = mean("frame_ms");
+    let cells = [
+        run.to_string(),
+        g.scene.clone(),
+        g.size.clone(),
+        g.vpls.clone(),
+        format!("{}, path of {} frames", g.label, g.frames),
+        g.temporal.clone(),
+        "–".into(),
+        "–".into(),
+        ms(mean("sp_cluster_ms")),
+        ms(mean("visibility_ms")),
+        "–".into(),
+        "–".into(),
+        format!("**{}**", ms(frame)),
+        ms(mean("reference_ms")),
+        if frame > 0.0 {
+            format!("{:.1}×", mean("reference_ms") / frame)
+        } else {
+            "–".into()
+        },
+        sci(mean("mse")),
+        "–".into(),
+    ];
+    format!("| {} |", cells.join(" | "))
+}
+
+/// The table of the runs in `dirs` (each holding `results.csv`, `path.csv` or both; the run is
+/// named by the folder's name).
+pub fn markdown(dirs: &[&Path], info: &TableInfo) -> Result<String> {
+    let mut rows = Vec::new();
+    let mut devices: Vec<Device> = Vec::new();
+    let mut note = |a: &str, d: &str| {
+        let dev = (a.to_string(), d.to_string());
+        if !a.is_empty() && !devices.contains(&dev) {
+            devices.push(dev);
+        }
+    };
+    for dir in dirs {
+        let run = dir
+            .file_name()
+            .map_or_else(|| dir.display().to_string(), |n| n.to_string_lossy().into());
+        let (results, path) = (dir.join("results.csv"), dir.join("path.csv"));
+        if !results.exists() && !path.exists() {
+            bail!("{}: holds neither results.csv nor path.csv", dir.display());
+        }
+        if results.exists() {
+            let text = std::fs::read_to_string(&results)
+                .with_context(|| format!("{}: cannot read", results.display()))?;
+            for r in from_csv(&text).with_context(|| format!("{}", results.display()))? {
+                note(&r.adapter, &r.driver);
+                rows.push(sweep_row(&run, &r));
+            }
+        }
+        if path.exists() {
+            let text = std::fs::read_to_string(&path)
+                .with_context(|| format!("{}: cannot read", path.display()))?;
+            let (groups, device) =
+                read_path(&text).with_context(|| format!("{}", path.display()))?;
+            if let Some((a, d)) = device {
+                note(&a, &d);
+            }
+            for g in &groups {
+                rows.push(path_row(&run, g));
+            }
+        }
+    }
+    let mut m = String::new();
+    let adapters: Vec<String> = devices
+        .iter()
+        .map(|(a, d)| format!("**{a}**, driver {d}"))
+        .collect();
+    let _ = writeln!(
+        m,
+        "- adapter: {}\n- commit `{}`, {}\n- GPU timestamp ms (mean of the 3 best of each run's \
+         repeats; a path frame once, after the warm-up); `indirect` is the method's own passes in \
+         all (frame less primary and direct); path rows are means over the frames after the first; \
+         speed-up = reference ÷ frame\n",
+        if adapters.is_empty() {
+            "unknown (files without the adapter columns)".into()
+        } else {
+            adapters.join("; ")
+        },
+        info.commit,
+        info.date
+    );
+    if devices.iter().any(|(a, _)| a.contains("llvmpipe")) {
+        let _ = writeln!(
+            m,
+            "**A software driver (lavapipe, on the CPU): these times say little about a GPU's.**\n"
+        );
+    }
+    let _ = writeln!(m, "{HEADER}");
+    let _ = writeln!(m, "|{}", " --- |".repeat(HEADER.matches(" | ").count() + 1));
+    for r in rows {
+        let _ = writeln!(m, "{r}");
+    }
+    Ok(m)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::csv::{tests::synthetic, to_csv};
+    use super::super::path::{PathRow, to_csv as path_csv};
+    use super::*;
+
+    fn path_rows() -> Vec<PathRow> {
+        let row = |frame: u32, on: bool, ms: f64| PathRow {
+            label: "weighted 8000/2000".into(),
+            temporal: on,
+            frame,
+            frame_ms: ms,
+            sp_cluster_ms: ms / 4.0,
+            mse: 1e-5,
+            rel_mse: 1e-3,
+            instability: None,
+            sp_iterations: 3,
+            sp_warm_kept: None,
+            sp_clusters_used: 8000,
+            reference_ms: 400.0,
+            visibility_ms: 2.0,
+            visibility_rows_reused: 0,
+            adapter: "NVIDIA H100 80GB HBM3 (Vulkan, 580.82.07)".into(),
+            driver: "NVIDIA 580.82.07".into(),
+            scene: "builtin:conference".into(),
+            width: 1024,
+            height: 720,
+            vpls: 8192,
+        };
+        vec![
+            row(0, false, 99.0),
+            row(1, false, 20.0),
+            row(2, false, 30.0),
+            row(0, true, 99.0),
+            row(1, true, 10.0),
+        ]
+    }
+
+    #[test]
+    fn one_table_of_sweeps_and_paths() {
+        let tmp = std::env::temp_dir().join(format!("fvpl-table-{}", std::process::id()));
+        let (a, b) = (tmp.join("paper"), tmp.join("orbit"));
+        std::fs::create_dir_all(&a).unwrap();
+        std::fs::create_dir_all(&b).unwrap();
+        let rows = [
+            synthetic("weighted", 8000, 2000),
+            synthetic("hard", 8000, 2000),
+        ];
+        std::fs::write(a.join("results.csv"), to_csv(&rows)).unwrap();
+        std::fs::write(b.join("path.csv"), path_csv(&path_rows())).unwrap();
+        let info = TableInfo {
+            commit: "abc1234",
+            date: "2026-11-26",
+        };
+        let md = markdown(&[a.as_path(), b.as_path()], &info).unwrap();
+        let table: Vec<&str> = md.lines().filter(|l| l.starts_with('|')).collect();
+        // Header, rule, two sweep rows, two path groups (off and on).
+        assert_eq!(table.len(), 6, "{md}");
+        let columns = table[0].matches('|').count();
+        assert!(
+            table.iter().all(|l| l.matches('|').count() == columns),
+            "{md}"
+        );
+        assert!(md.contains("commit `abc1234`, 2026-11-26"));
+        assert!(
+            md.contains("llvmpipe") && md.contains("NVIDIA H100"),
+            "{md}"
+        );
+        assert!(md.contains("A software driver"), "{md}");
+        // The path means leave frame 0 out: off (20 + 30) / 2 = 25, on 10; speed-up 400 / 25.
+        let off = table
+            .iter()
+            .find(|l| l.contains("| off |") && l.contains("orbit"))
+            .unwrap();
+        assert!(off.contains("**25.0**") && off.contains("16.0×"), "{off}");
+        assert!(
+            off.contains("path of 2 frames") && off.contains("1024×720 | 8192"),
+            "{off}"
+        );
+        let on = table.iter().find(|l| l.contains("| on |")).unwrap();
+        assert!(on.contains("**10.0**") && on.contains("40.0×"), "{on}");
+        // A sweep row: its frame, speed-up and FLIP as the CSV holds them.
+        let r = &rows[0];
+        let w = table.iter().find(|l| l.contains(&r.label)).unwrap();
+        assert!(w.contains(&format!("**{}**", ms(r.frame_ms()))), "{w}");
+        assert!(w.contains(&format!("{:.1}×", r.speedup)), "{w}");
+        // A folder with neither file is an error naming it.
+        let e = markdown(&[tmp.as_path()], &info).unwrap_err().to_string();
+        assert!(e.contains("neither"), "{e}");
+        std::fs::remove_dir_all(&tmp).unwrap();
+    }
+}
