@@ -88,8 +88,9 @@ fn same_visibility(rw: ptr<function, array<u32, MAX_F>>, b: u32) -> u32 {
 // zero) is skipped. Ṽ (Eq. 9, over j in order) depends only on a light's visibility pattern over the
 // F slots, and a word's lights fall in few patterns (all slots see the light, or a shadow edge
 // crosses some): a word's first PATTERNS patterns and their Ṽ are found once (a table in registers),
-// and a light picks its Ṽ from the table with PATTERNS selects instead of an F-slot loop, without a
-// branch that would split a SIMD group; a light of a further pattern runs the loop. Lights are summed
+// and a light picks its Ṽ from the table with PATTERNS selects instead of an F-slot loop; a light of
+// a further pattern runs the loop. PATTERNS = 0 (the default) runs the loop for every light. A light
+// adding nothing (t = 0: it faces away or lies behind the pixel) skips Ṽ. Lights are summed
 // in increasing order, each with Ṽ bit for bit as eq9_weighted_visibility gives it, so the sum is the
 // same as a plain loop over all lights. CPU twin: cpu::shade::eq6_indirect.
 fn eq6_indirect(sp: ShadingPoint, rows: ptr<function, array<u32, MAX_F>>, w: ptr<function, array<f32, MAX_F>>) -> vec3<f32> {
@@ -124,15 +125,22 @@ fn eq6_indirect(sp: ShadingPoint, rows: ptr<function, array<u32, MAX_F>>, w: ptr
             let b = firstTrailingBit(todo);
             todo &= todo - 1u;
             let t = eq5_vpl_radiance(sp.pos.xyz, sp.nrm.xyz, sp.albedo.xyz, load_light(wd * 32u + b), params.d_min2);
-            var v = 0.0;
-            for (var k = 0u; k < PATTERNS; k++) {
-                v = select(v, vs[k], ((masks[k] >> b) & 1u) != 0u);
+            if any(t > vec3<f32>(0.0)) {
+                var v = 0.0;
+                // PATTERNS is a pipeline constant: a driver keeps one branch.
+                if PATTERNS == 0u {
+                    v = eq9_weighted_visibility(w, &rw, b);
+                } else {
+                    for (var k = 0u; k < PATTERNS; k++) {
+                        v = select(v, vs[k], ((masks[k] >> b) & 1u) != 0u);
+                    }
+                    // A light past the table's patterns.
+                    if ((rest >> b) & 1u) != 0u {
+                        v = eq9_weighted_visibility(w, &rw, b);
+                    }
+                }
+                sum += t * v;
             }
-            // A light past the table's patterns (every light with PATTERNS = 0) that adds light.
-            if ((rest >> b) & 1u) != 0u && any(t > vec3<f32>(0.0)) {
-                v = eq9_weighted_visibility(w, &rw, b);
-            }
-            sum += t * v;
         }
     }
     return sum;
