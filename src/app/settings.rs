@@ -62,15 +62,79 @@ pub fn settings_path(spec: &str) -> Option<PathBuf> {
     Some(p.with_file_name(format!("{file}.fuzzy-vpl.json")))
 }
 
+/// The largest settings file read (a thousand bookmarks take about 200 KB).
+pub const MAX_FILE_BYTES: u64 = 1 << 20;
+/// The most bookmarks a file may hold.
+pub const MAX_BOOKMARKS: usize = 1000;
+
 impl SceneSettings {
-    /// Reads the file; a missing file gives empty settings.
+    /// Reads the file; a missing file gives empty settings. Bounded like every input: only a regular
+    /// file (a FIFO or device would block or never end) of at most `MAX_FILE_BYTES`, at most
+    /// `MAX_BOOKMARKS` bookmarks, each finite with a name of at most 200 characters; anything else
+    /// is a one-line error naming the file.
     pub fn load(path: &Path) -> Result<Self> {
-        match std::fs::read_to_string(path) {
-            Ok(text) => serde_json::from_str(&text)
-                .with_context(|| format!("{}: not a fuzzy-vpl settings file", path.display())),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Self::default()),
-            Err(e) => Err(e).with_context(|| format!("{}: cannot read", path.display())),
+        use std::io::Read;
+        let meta = match std::fs::metadata(path) {
+            Ok(m) => m,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Self::default()),
+            Err(e) => return Err(e).with_context(|| format!("{}: cannot read", path.display())),
+        };
+        if !meta.is_file() {
+            anyhow::bail!("{}: not a regular file", path.display());
         }
+        if meta.len() > MAX_FILE_BYTES {
+            anyhow::bail!(
+                "{}: {} bytes, more than a settings file's {MAX_FILE_BYTES}",
+                path.display(),
+                meta.len()
+            );
+        }
+        let mut text = String::new();
+        std::fs::File::open(path)
+            .and_then(|f| f.take(MAX_FILE_BYTES + 1).read_to_string(&mut text))
+            .with_context(|| format!("{}: cannot read", path.display()))?;
+        if text.len() as u64 > MAX_FILE_BYTES {
+            anyhow::bail!("{}: grew past {MAX_FILE_BYTES} bytes", path.display());
+        }
+        let s: Self = serde_json::from_str(&text)
+            .with_context(|| format!("{}: not a fuzzy-vpl settings file", path.display()))?;
+        s.check()
+            .map_err(|why| anyhow::anyhow!("{}: {why}", path.display()))?;
+        Ok(s)
+    }
+
+    /// Bookmarks a viewer can use: at most `MAX_BOOKMARKS`, finite, a positive field of view.
+    fn check(&self) -> std::result::Result<(), String> {
+        if self.bookmarks.len() > MAX_BOOKMARKS {
+            return Err(format!(
+                "{} bookmarks, more than {MAX_BOOKMARKS}",
+                self.bookmarks.len()
+            ));
+        }
+        for (i, b) in self.bookmarks.iter().enumerate() {
+            let numbers = b.eye.iter().chain([&b.yaw, &b.pitch, &b.yfov, &b.distance]);
+            if numbers.clone().any(|v| !v.is_finite()) {
+                return Err(format!(
+                    "bookmark {} ({:?}): a value is not finite",
+                    i + 1,
+                    b.name
+                ));
+            }
+            if !(b.yfov > 0.0 && b.yfov < std::f32::consts::PI) || b.distance < 0.0 {
+                return Err(format!(
+                    "bookmark {} ({:?}): field of view or distance out of range",
+                    i + 1,
+                    b.name
+                ));
+            }
+            if b.name.chars().count() > 200 {
+                return Err(format!(
+                    "bookmark {}: name longer than 200 characters",
+                    i + 1
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Saves to `path` without losing a file there that failed to load (`unreadable`): that file is
@@ -114,6 +178,57 @@ impl SceneSettings {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Oversized, endless, non-regular and nonsensical files are one-line errors, never a hang.
+    #[test]
+    fn bad_and_oversized_files_are_refused_quickly() {
+        let dir = std::env::temp_dir().join(format!("fvpl-bookmarks-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let one_line = |p: &Path| {
+            let t = std::time::Instant::now();
+            let e = format!("{:#}", SceneSettings::load(p).unwrap_err());
+            assert!(t.elapsed().as_secs() < 5, "{e}");
+            assert!(
+                !e.contains('\n') && e.contains(&p.display().to_string()),
+                "{e}"
+            );
+            e
+        };
+        let big = dir.join("big.json");
+        std::fs::write(&big, vec![b' '; MAX_FILE_BYTES as usize + 1]).unwrap();
+        assert!(one_line(&big).contains("bytes"));
+        // A directory, and a FIFO (opening one without a writer would block).
+        assert!(one_line(&dir).contains("not a regular file"));
+        let fifo = dir.join("fifo.json");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if made.is_ok_and(|s| s.success()) {
+            assert!(one_line(&fifo).contains("not a regular file"));
+        }
+        let bad = |name: &str, json: &str| {
+            let p = dir.join(name);
+            std::fs::write(&p, json).unwrap();
+            one_line(&p)
+        };
+        let mark = |eye: &str, yfov: &str| {
+            format!(r#"{{"name":"a","eye":{eye},"yaw":0,"pitch":0,"yfov":{yfov},"distance":1}}"#)
+        };
+        let file = |marks: Vec<String>| format!(r#"{{"bookmarks":[{}]}}"#, marks.join(","));
+        // 1e39 is past f32: serde_json reads it as infinity.
+        assert!(bad("huge.json", &file(vec![mark("[0,0,1e39]", "0.8")])).contains("not finite"));
+        assert!(bad("text.json", "{\"bookmarks\": 3}").contains("not a fuzzy-vpl"));
+        assert!(bad("fov.json", &file(vec![mark("[0,0,0]", "0")])).contains("out of range"));
+        let many = file(
+            (0..=MAX_BOOKMARKS)
+                .map(|_| mark("[0,0,0]", "0.8"))
+                .collect(),
+        );
+        assert!(bad("many.json", &many).contains("bookmarks, more than"));
+        // A good file still loads.
+        let good = dir.join("good.json");
+        std::fs::write(&good, file(vec![mark("[1,2,3]", "0.8")])).unwrap();
+        assert_eq!(SceneSettings::load(&good).unwrap().bookmarks.len(), 1);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn bookmarks_round_trip_through_the_file() {

@@ -117,16 +117,16 @@ pub fn eq6_indirect(
 mod tests {
     use super::*;
 
-    /// Hand-worked: slot words 0b1101, 0b0111 and an unused slot (0). Light 0: seen by slot 0 only
-    /// (pattern 10-); light 1: slot 1 only (01-); light 2: both (11-); light 3: slot 0 only (10-);
-    /// lights 4..31: none (00-).
+    /// Hand-worked: slot words 0b1101 (lights 0, 2, 3), 0b0111 (lights 0, 1, 2) and an unused slot
+    /// (0). Lights 0 and 2: both slots (pattern 11-); light 1: slot 1 only (01-); light 3: slot 0
+    /// only (10-); lights 4..31: none (00-).
     #[test]
     fn same_visibility_by_hand() {
         let rw = [0b1101, 0b0111, 0];
-        assert_eq!(same_visibility(&rw, 0), 0b1001);
-        assert_eq!(same_visibility(&rw, 3), 0b1001);
+        assert_eq!(same_visibility(&rw, 0), 0b0101);
+        assert_eq!(same_visibility(&rw, 2), 0b0101);
         assert_eq!(same_visibility(&rw, 1), 0b0010);
-        assert_eq!(same_visibility(&rw, 2), 0b0100);
+        assert_eq!(same_visibility(&rw, 3), 0b1000);
         assert_eq!(same_visibility(&rw, 4), !0b1111);
         // One slot: the lights it sees, or those it does not.
         assert_eq!(same_visibility(&[0xf0f0_0000], 20), 0xf0f0_0000);
