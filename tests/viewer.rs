@@ -252,8 +252,9 @@ fn worker_replies_with_an_error_for_a_frame_too_large_for_the_device() {
     }
 }
 
-/// `view --animate --frames N --stats`: the viewer measures itself while orbiting (camera change to
-/// image, GI frames while moving) and at rest, and writes it as JSON.
+/// `view --animate --frames N --stats`: the viewer measures itself while moving (camera change to
+/// image, GI frames while moving, the lit fraction of their pixels) and at rest, and writes it as
+/// JSON. The conference room: an orbit about its centre used to leave it through a side wall.
 #[test]
 fn animated_view_reports_motion() {
     let x = display();
@@ -264,7 +265,7 @@ fn animated_view_reports_motion() {
         &x,
         &dir,
         &[
-            "builtin:cornell",
+            "builtin:conference",
             "--animate",
             "--frames",
             "30",
@@ -299,6 +300,9 @@ fn animated_view_reports_motion() {
     let p95 = num(&["motion", "image_latency_ms_p95"]);
     assert!(p95 > 0.0 && p95.is_finite(), "{v}");
     assert!(num(&["motion", "gi_frame_ms_mean"]) > 0.0, "{v}");
+    // The motion stays inside the room: every frame rendered while moving sees surfaces.
+    let lit = num(&["motion", "lit_fraction_min"]);
+    assert!((0.9..=1.0).contains(&lit), "{v}");
     assert!(num(&["rest", "gi_frame_ms"]) > 0.0, "{v}");
     // The frame at rest is the full render scale (0.5 of 160x120); the previews are half of it.
     assert_eq!(num(&["rest", "width"]), 80.0, "{v}");

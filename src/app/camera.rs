@@ -92,6 +92,23 @@ impl ViewCamera {
         self.eye = t - self.forward() * self.distance;
     }
 
+    /// The self-measurement's motion (`view --animate`) at `t` seconds from `self`: the eye circles
+    /// in the horizontal plane, radius 2.5% of the scene's `diagonal`, through the start eye (so it
+    /// stays within 5% of it, in the free space the start camera sees from), one turn in about 10 s,
+    /// while the view pans ±20° about the eye, period about 12.6 s. An orbit about a point across
+    /// the scene would take the eye through walls (the conference room: within 2–3 s).
+    pub fn animated(&self, diagonal: f32, t: f32) -> ViewCamera {
+        let r = 0.025 * diagonal;
+        let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z).normalize_or_zero();
+        let (fwd, right) = (flat(self.forward()), flat(self.right()));
+        let a = 0.6 * t;
+        let centre = self.eye + right * r;
+        let mut c = *self;
+        c.eye = centre - right * (r * a.cos()) + fwd * (r * a.sin());
+        c.yaw = self.yaw + 0.35 * (0.5 * t).sin();
+        c
+    }
+
     /// Orbit: scales the distance to the target by `factor` (the target stays put).
     pub fn zoom(&mut self, factor: f32) {
         let t = self.target();
@@ -171,6 +188,29 @@ mod tests {
         c.look(0.0, 10.0);
         assert!(c.pitch <= MAX_PITCH + 1e-6);
         assert!(c.to_camera().forward().is_finite());
+    }
+
+    /// The animation starts at the start camera, stays within 5% of the diagonal of its eye, at
+    /// its height, pans at most 0.35 rad, and moves.
+    #[test]
+    fn the_animation_stays_near_the_start_eye() {
+        let c0 = ViewCamera::from_camera(
+            &Camera::look_at("t", Vec3::new(3.6, 1.5, 0.8), Vec3::ZERO, Vec3::Y, 1.0),
+            4.0,
+        );
+        let diag = 9.9;
+        let a0 = c0.animated(diag, 0.0);
+        assert!(close(a0.eye, c0.eye) && (a0.yaw - c0.yaw).abs() < 1e-6);
+        let mut far = 0.0f32;
+        for i in 0..600 {
+            let a = c0.animated(diag, i as f32 * 0.05);
+            let d = (a.eye - c0.eye).length();
+            assert!(d <= 0.05 * diag + 1e-4, "t {}: {d}", i as f32 * 0.05);
+            assert!((a.eye.y - c0.eye.y).abs() < 1e-5);
+            assert!((a.yaw - c0.yaw).abs() <= 0.35 + 1e-6 && a.pitch == c0.pitch);
+            far = far.max(d);
+        }
+        assert!(far > 0.04 * diag, "it hardly moves: {far}");
     }
 
     #[test]

@@ -56,7 +56,7 @@ pub struct ViewOptions {
     pub screenshot: Option<PathBuf>,
     /// The view to start in; a scripted run in `reference` or `error` computes the reference first.
     pub view: View,
-    /// Keep orbiting the camera (for measuring frame rates while moving).
+    /// Keep moving the camera (`ViewCamera::animated`, for measuring frame rates while moving).
     pub animate: bool,
     /// Scripted run: write the motion stats JSON here once done.
     pub stats: Option<PathBuf>,
@@ -462,6 +462,8 @@ pub struct Viewer {
     /// Window frames since the scripted run's first full GI frame.
     pub script_frames: u64,
     pub animate: bool,
+    /// When the animation started and from which camera (`ViewCamera::animated`).
+    pub anim_origin: Option<(std::time::Instant, camera::ViewCamera)>,
     /// Scripted run: window frames left, where to save the window (PNG) and the stats (JSON).
     pub script: Option<Script>,
     /// Latency and GI frame times while moving (`motion.rs`).

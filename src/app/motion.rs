@@ -17,6 +17,8 @@ pub struct Motion {
     pub latencies_ms: Vec<f64>,
     /// GPU ms (timestamps) of the GI frames that finished while the camera moved.
     pub moving_gi_ms: Vec<f64>,
+    /// The fraction of those frames' pixels whose primary ray hit a surface (`lit_fraction`).
+    pub lit_fractions: Vec<f64>,
     /// (GPU ms, width, height) of the last GI frame at rest.
     pub rest: Option<(f64, u32, u32)>,
 }
@@ -32,6 +34,15 @@ pub struct MotionStats {
     /// `None` when no GI frame finished while moving.
     pub gi_frame_ms_mean: Option<f64>,
     pub gi_frames: usize,
+    /// The smallest fraction of image pixels with a surface hit over the GI frames rendered while
+    /// moving (`None` when none finished): a motion that leaves the scene shows black.
+    pub lit_fraction_min: Option<f64>,
+}
+
+/// The fraction of a frame's pixels whose primary ray hit a surface (`Frame::positions`' w > 0).
+pub fn lit_fraction(positions: &[[f32; 4]]) -> f64 {
+    let hit = positions.iter().filter(|p| p[3] > 0.0).count();
+    hit as f64 / positions.len().max(1) as f64
 }
 
 #[derive(Debug, Serialize, PartialEq)]
@@ -77,6 +88,7 @@ impl Motion {
             changes: self.latencies_ms.len(),
             gi_frame_ms_mean: (!self.moving_gi_ms.is_empty()).then(|| mean(&self.moving_gi_ms)),
             gi_frames: self.moving_gi_ms.len(),
+            lit_fraction_min: self.lit_fractions.iter().copied().reduce(f64::min),
         })
     }
 
@@ -125,7 +137,18 @@ mod tests {
         m.shown(t0 + Duration::from_millis(130));
         assert!((m.latencies_ms[1] - 30.0).abs() < 1e-6);
         m.moving_gi_ms = vec![10.0, 30.0];
+        m.lit_fractions = vec![1.0, 0.75];
         let s = m.stats().unwrap();
+        assert_eq!(s.lit_fraction_min, Some(0.75));
+        assert_eq!(
+            lit_fraction(&[
+                [0.0, 0.0, 0.0, 1.0],
+                [0.0; 4],
+                [1.0, 2.0, 3.0, 1.0],
+                [0.0; 4]
+            ]),
+            0.5
+        );
         assert_eq!((s.changes, s.gi_frames), (2, 2));
         assert_eq!(s.gi_frame_ms_mean, Some(20.0));
         assert!((s.image_latency_ms_p95 - 50.0).abs() < 1e-6);

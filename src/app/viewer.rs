@@ -79,6 +79,7 @@ impl Viewer {
             ui_frames: 0,
             script_frames: 0,
             animate: opts.animate,
+            anim_origin: None,
             script: opts.frames.map(|n| Script {
                 left: n.max(1),
                 screenshot: opts.screenshot.clone(),
@@ -398,6 +399,9 @@ impl Viewer {
                     let gpu_ms = r.frame.timings_ms.get("frame").copied().unwrap_or(0.0);
                     if r.job.preview {
                         self.motion.moving_gi_ms.push(gpu_ms);
+                        self.motion
+                            .lit_fractions
+                            .push(motion::lit_fraction(&r.frame.positions));
                     } else {
                         self.motion.rest = Some((gpu_ms, r.frame.width, r.frame.height));
                     }
@@ -588,12 +592,12 @@ impl Viewer {
 
     /// The animation's step (`--animate`), at the start of a window frame so the frame shows it.
     pub fn animate_step(&mut self) {
-        if self.animate && self.info.is_some() {
-            let dt = self.last_tick.elapsed().as_secs_f32();
-            let mut c = self.cam;
-            c.orbit(0.6 * dt.min(0.2), 0.0);
-            self.set_camera(c);
-        }
+        let Some(info) = self.info.as_ref().filter(|_| self.animate) else {
+            return;
+        };
+        let diagonal = (info.bounds.1 - info.bounds.0).length();
+        let (t0, start) = *self.anim_origin.get_or_insert((Instant::now(), self.cam));
+        self.set_camera(start.animated(diagonal, t0.elapsed().as_secs_f32()));
     }
 
     /// The image the area shows now, as an egui image: the latest frame's view, reprojected to the
