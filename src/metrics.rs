@@ -50,6 +50,92 @@ pub fn instability(
     s / (3 * x.len().max(1)) as f64
 }
 
+/// One frame of a camera path as `instability_world` reads it: the image, its reference, and per
+/// pixel the surface point (w > 0 where the primary ray hit) and its normal, row-major.
+pub struct PathFrame<'a> {
+    pub x: &'a [[f32; 3]],
+    pub reference: &'a [[f32; 3]],
+    pub positions: &'a [[f32; 4]],
+    pub normals: &'a [[f32; 4]],
+    pub width: usize,
+}
+
+/// Two surface points are the same when their depths along the previous view agree within this
+/// fraction of the depth...
+pub const SAME_SURFACE_DEPTH: f32 = 0.02;
+/// ... and their normals within this cosine (about 25°).
+pub const SAME_SURFACE_COS: f32 = 0.9;
+
+/// Flicker where the eye sees it: for each pixel of `cur` with a surface point, that point is
+/// projected into the previous frame (`project_prev`: world point → pixel x, y, pixel centres at
+/// half-integers, and depth; `None` behind the eye), and its error (x − ref, channels clamped to [0, 1] as
+/// for `mse`) is compared with the previous frame's error there, bilinearly over the four pixels
+/// around it that show the same surface (depth within `SAME_SURFACE_DEPTH`, normal within
+/// `SAME_SURFACE_COS`; the weights renormalised over those). The mean squared difference over the
+/// matched pixels and channels; `None` when no pixel matched. Unlike `instability`, a shadow edge
+/// of the reference that moves across pixels as the camera moves does not count: only a change of
+/// the error at a surface point does.
+pub fn instability_world(
+    cur: &PathFrame,
+    prev: &PathFrame,
+    project_prev: impl Fn(glam::Vec3) -> Option<(f32, f32, f32)>,
+) -> Option<f64> {
+    use glam::Vec3;
+    let c = |v: f32| v.clamp(0.0, 1.0) as f64;
+    let err = |f: &PathFrame, i: usize, ch: usize| c(f.x[i][ch]) - c(f.reference[i][ch]);
+    let (w, h) = (prev.width as i64, (prev.x.len() / prev.width.max(1)) as i64);
+    let xyz = |p: [f32; 4]| Vec3::new(p[0], p[1], p[2]);
+    let (mut sum, mut matched) = (0.0f64, 0usize);
+    for i in 0..cur.x.len() {
+        let p = cur.positions[i];
+        if p[3].is_nan() || p[3] <= 0.0 {
+            continue;
+        }
+        let Some((px, py, z)) = project_prev(xyz(p)) else {
+            continue;
+        };
+        let n = xyz(cur.normals[i]);
+        let (fx, fy) = (px - 0.5, py - 0.5);
+        let (x0, y0) = (fx.floor(), fy.floor());
+        let (tx, ty) = (fx - x0, fy - y0);
+        let mut acc = [0.0f64; 3];
+        let mut wsum = 0.0f64;
+        for (dx, dy, wt) in [
+            (0, 0, (1.0 - tx) * (1.0 - ty)),
+            (1, 0, tx * (1.0 - ty)),
+            (0, 1, (1.0 - tx) * ty),
+            (1, 1, tx * ty),
+        ] {
+            let (xx, yy) = (x0 as i64 + dx, y0 as i64 + dy);
+            if wt <= 0.0 || xx < 0 || yy < 0 || xx >= w || yy >= h {
+                continue;
+            }
+            let j = (yy * w + xx) as usize;
+            let q = prev.positions[j];
+            if q[3].is_nan() || q[3] <= 0.0 || n.dot(xyz(prev.normals[j])) < SAME_SURFACE_COS {
+                continue;
+            }
+            match project_prev(xyz(q)) {
+                Some((_, _, zq)) if (zq - z).abs() <= SAME_SURFACE_DEPTH * z => {}
+                _ => continue,
+            }
+            for (ch, a) in acc.iter_mut().enumerate() {
+                *a += wt as f64 * err(prev, j, ch);
+            }
+            wsum += wt as f64;
+        }
+        if wsum <= 1e-6 {
+            continue;
+        }
+        matched += 1;
+        for (ch, a) in acc.iter().enumerate() {
+            let d = err(cur, i, ch) - a / wsum;
+            sum += d * d;
+        }
+    }
+    (matched > 0).then(|| sum / (3 * matched) as f64)
+}
+
 /// Rec. 709 luminance.
 pub fn luminance(p: [f32; 3]) -> f32 {
     0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
@@ -243,6 +329,95 @@ pub fn ramp(t: f32) -> [f32; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Hand-worked: the previous frame is 2 × 1 pixels showing points (0, 0, 1) and (1, 0, 1),
+    /// errors 0.1 and 0.3 (x against a black reference); the view maps a point to pixel
+    /// x = p.x + 0.5 at depth p.z. A current pixel at (0.5, 0, 1) lands between the two centres:
+    /// the previous error there is 0.2, its own is 0.25, so (0.05)^2 = 0.0025.
+    #[test]
+    fn instability_world_by_hand() {
+        let project = |p: glam::Vec3| Some((p.x + 0.5, 0.5, p.z));
+        let (black, up) = ([[0.0; 3]; 2], [[0.0, 0.0, -1.0, 0.0]; 2]);
+        let prev_x = [[0.1; 3], [0.3; 3]];
+        let mut prev_pos = [[0.0, 0.0, 1.0, 1.0], [1.0, 0.0, 1.0, 1.0]];
+        fn frame<'a>(
+            x: &'a [[f32; 3]],
+            black: &'a [[f32; 3]],
+            pos: &'a [[f32; 4]],
+            up: &'a [[f32; 4]],
+        ) -> PathFrame<'a> {
+            PathFrame {
+                x,
+                reference: black,
+                positions: pos,
+                normals: up,
+                width: 2,
+            }
+        }
+        let cur_pos = [[0.5, 0.0, 1.0, 1.0]];
+        let cur = PathFrame {
+            x: &[[0.25; 3]],
+            reference: &[[0.0; 3]],
+            positions: &cur_pos,
+            normals: &[[0.0, 0.0, -1.0, 0.0]],
+            width: 1,
+        };
+        let v = instability_world(&cur, &frame(&prev_x, &black, &prev_pos, &up), project).unwrap();
+        assert!((v - 0.0025).abs() < 1e-9, "{v}");
+        // The second pixel shows another surface (depth 2, not 1): only the first is taken.
+        prev_pos[1][2] = 2.0;
+        let v = instability_world(&cur, &frame(&prev_x, &black, &prev_pos, &up), project).unwrap();
+        assert!((v - 0.15f64.powi(2)).abs() < 1e-9, "{v}");
+        // Another normal on both: nothing matches. A pixel that saw the sky is not measured.
+        let side = [[1.0, 0.0, 0.0, 0.0]; 2];
+        let turned = PathFrame {
+            normals: &side,
+            ..frame(&prev_x, &black, &prev_pos, &up)
+        };
+        assert_eq!(instability_world(&cur, &turned, project), None);
+        let sky = PathFrame {
+            positions: &[[0.5, 0.0, 1.0, 0.0]],
+            ..cur
+        };
+        assert_eq!(instability_world(&sky, &frame(&prev_x, &black, &prev_pos, &up), project), None);
+    }
+
+    /// An error that moves with the surface is no flicker: the camera moved one pixel, the errors
+    /// stayed on their points. The screen-space `instability` counts it, `instability_world` not.
+    #[test]
+    fn an_error_moving_with_the_surface_is_not_flicker() {
+        let prev_pos = [
+            [0.0, 0.0, 1.0, 1.0],
+            [1.0, 0.0, 1.0, 1.0],
+            [2.0, 0.0, 1.0, 1.0],
+        ];
+        let cur_pos = [
+            [1.0, 0.0, 1.0, 1.0],
+            [2.0, 0.0, 1.0, 1.0],
+            [3.0, 0.0, 1.0, 1.0],
+        ];
+        let up = [[0.0, 0.0, -1.0, 0.0]; 3];
+        let black = [[0.0; 3]; 3];
+        let prev_x = [[0.1; 3], [0.3; 3], [0.6; 3]];
+        let cur_x = [[0.3; 3], [0.6; 3], [0.9; 3]];
+        let prev = PathFrame {
+            x: &prev_x,
+            reference: &black,
+            positions: &prev_pos,
+            normals: &up,
+            width: 3,
+        };
+        let cur = PathFrame {
+            x: &cur_x,
+            reference: &black,
+            positions: &cur_pos,
+            normals: &up,
+            width: 3,
+        };
+        let project = |p: glam::Vec3| Some((p.x + 0.5, 0.5, p.z));
+        assert_eq!(instability_world(&cur, &prev, project), Some(0.0));
+        assert!(instability(&cur_x, &black, &prev_x, &black) > 0.05);
+    }
 
     #[test]
     fn instability_is_the_change_of_the_clamped_error() {

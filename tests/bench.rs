@@ -320,6 +320,8 @@ fn header_has_the_contract_columns_in_order() {
         "front_mse",
         "method",
         "indirect_ms",
+        "adapter",
+        "driver",
     ];
     assert_eq!(h, want.map(String::from));
     let csv = csv::to_csv(&[]);

@@ -1144,7 +1144,10 @@ fn load_dispatches_builtin_and_paths() {
     assert!(!s.triangles.is_empty());
     let e = scene::load("builtin:nope").unwrap_err().to_string();
     assert!(e.contains("builtin:nope") && e.contains("cornell"), "{e}");
-    assert_eq!(builtin::NAMES, ["cornell", "conference"]);
+    assert_eq!(
+        builtin::NAMES,
+        ["cornell", "conference", "dense-3m", "dense-8m"]
+    );
 
     let dir = temp_dir("dispatch");
     let mut d = Doc::new();

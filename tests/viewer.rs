@@ -158,6 +158,58 @@ fn view(x: &Xvfb, dir: &std::path::Path, args: &[&str]) -> std::process::Output 
         .unwrap()
 }
 
+/// `view --frames N --screenshot S.exr`: the image as displayed, linear radiance at the image area's
+/// resolution (320 × 240 here, rendered at render scale 0.5: 160 × 120, resampled bilinearly), no
+/// UI: finite and lit. A PNG keeps its meaning (the window, tested above).
+#[test]
+fn scripted_view_saves_the_displayed_image_as_exr() {
+    let x = display();
+    let dir = std::env::temp_dir().join(format!("fuzzy-vpl-viewer-exr-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let exr = dir.join("view.exr");
+    let out = view(
+        &x,
+        &dir,
+        &[
+            "builtin:cornell",
+            "--frames",
+            "3",
+            "--screenshot",
+            exr.to_str().unwrap(),
+            "--width",
+            "320",
+            "--height",
+            "240",
+            "--vpls",
+            "1024",
+            "--sp-clusters",
+            "256",
+            "--vpl-clusters",
+            "128",
+        ],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    let (w, h, px) = fuzzy_vpl::export::read_exr(&exr).expect("the EXR");
+    assert_eq!((w, h), (320, 240));
+    assert!(px.iter().flatten().all(|c| c.is_finite() && *c >= 0.0));
+    let mean = px.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / px.len() as f32;
+    assert!(mean > 0.01, "mean {mean}");
+    // A bad extension is refused with one line, exit 2.
+    let bad = view(
+        &x,
+        &dir,
+        &["builtin:cornell", "--frames", "1", "--screenshot", "a.tiff"],
+    );
+    assert_eq!(bad.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        err.contains(".exr") && err.trim().lines().count() == 1,
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// A window wider than 8192 px (wgpu's default texture limit) presents: the window device asks for
 /// the adapter's own limit. One wider than the adapter can present is refused with one line, exit 2.
 #[test]

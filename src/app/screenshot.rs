@@ -40,6 +40,34 @@ fn sanitize(s: &str) -> String {
         .collect()
 }
 
+/// `img` (`w` × `h`, row-major) resampled to `to_w` × `to_h` bilinearly between pixel centres
+/// (edges clamped), as a texture is magnified.
+pub fn resample_bilinear(img: &[[f32; 3]], w: u32, h: u32, to_w: u32, to_h: u32) -> Vec<[f32; 3]> {
+    let (w, h) = (w.max(1) as usize, h.max(1) as usize);
+    let at = |x: usize, y: usize| img[y.min(h - 1) * w + x.min(w - 1)];
+    let mut out = Vec::with_capacity(to_w as usize * to_h as usize);
+    for ty in 0..to_h {
+        let fy = ((ty as f32 + 0.5) * h as f32 / to_h as f32 - 0.5).max(0.0);
+        let (y0, wy) = (fy.floor() as usize, fy.fract());
+        for tx in 0..to_w {
+            let fx = ((tx as f32 + 0.5) * w as f32 / to_w as f32 - 0.5).max(0.0);
+            let (x0, wx) = (fx.floor() as usize, fx.fract());
+            let (a, b, c, d) = (
+                at(x0, y0),
+                at(x0 + 1, y0),
+                at(x0, y0 + 1),
+                at(x0 + 1, y0 + 1),
+            );
+            out.push([0, 1, 2].map(|k| {
+                let top = a[k] + (b[k] - a[k]) * wx;
+                let bottom = c[k] + (d[k] - c[k]) * wx;
+                top + (bottom - top) * wy
+            }));
+        }
+    }
+    out
+}
+
 /// Reads an RGBA8 / BGRA8 texture (COPY_SRC) back as RGB8.
 pub fn read_texture_rgb8(
     device: &wgpu::Device,
@@ -113,6 +141,18 @@ pub fn read_texture_rgb8(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Same size: the image itself. Doubled: pixel centres of the small image at 0.5, 1.5 fall
+    /// between the large one's, so a 2 × 1 ramp 0, 1 becomes 0, 0.25, 0.75, 1 (edges clamped).
+    #[test]
+    fn bilinear_resampling_by_hand() {
+        let img = [[0.0; 3], [1.0; 3]];
+        assert_eq!(resample_bilinear(&img, 2, 1, 2, 1), img.to_vec());
+        let big = resample_bilinear(&img, 2, 1, 4, 2);
+        let row: Vec<f32> = big[..4].iter().map(|p| p[0]).collect();
+        assert_eq!(row, [0.0, 0.25, 0.75, 1.0]);
+        assert_eq!(big[4..].to_vec(), big[..4].to_vec());
+    }
 
     #[test]
     fn names_never_overwrite() {

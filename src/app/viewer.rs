@@ -548,11 +548,11 @@ impl Viewer {
         Some((w, h, img, note))
     }
 
-    /// Writes the current view's linear radiance (as displayed: direct toggle applied) as EXR.
-    pub fn save_exr(&mut self) {
+    /// The current view's linear radiance (as displayed: direct toggle applied) at the frame's size,
+    /// or why there is none.
+    fn view_radiance(&self) -> std::result::Result<(u32, u32, Vec<[f32; 3]>), String> {
         let Some(r) = &self.latest else {
-            self.last_shot = "no frame yet".into();
-            return;
+            return Err("no frame yet".into());
         };
         let img = match self.view {
             View::Direct => r.frame.direct.clone(),
@@ -560,13 +560,25 @@ impl Viewer {
             // Without a reference these views show the clustered frame: saving that under a
             // `_reference_` / `_error_` name would mislabel it.
             View::Reference | View::Error | View::Flip if self.reference_for(r).is_none() => {
-                self.last_shot =
+                return Err(
                     "no reference for this view yet: nothing saved (press \"compute reference\")"
-                        .into();
-                return;
+                        .into(),
+                );
             }
             View::Reference => self.reference_for(r).expect("checked").to_vec(),
             _ => views::final_image(&r.frame.direct, &r.frame.indirect, self.s.direct_on),
+        };
+        Ok((r.frame.width, r.frame.height, img))
+    }
+
+    /// Writes the current view's linear radiance (as displayed: direct toggle applied) as EXR.
+    pub fn save_exr(&mut self) {
+        let (w, h, img) = match self.view_radiance() {
+            Ok(v) => v,
+            Err(e) => {
+                self.last_shot = e;
+                return;
+            }
         };
         let path = screenshot::unique_path(
             &self.shot_dir,
@@ -574,11 +586,20 @@ impl Viewer {
             &format!("{}_{}", self.s.short(), self.view.slug()),
             "exr",
         );
-        self.last_shot = match crate::export::write_exr(&path, r.frame.width, r.frame.height, &img)
-        {
+        self.last_shot = match crate::export::write_exr(&path, w, h, &img) {
             Ok(()) => format!("saved {}", path.display()),
             Err(e) => format!("{e:#}"),
         };
+    }
+
+    /// `view --screenshot S.exr`: the image as displayed, linear radiance at the image area's
+    /// resolution (the frame resampled bilinearly, as the display magnifies it), no UI.
+    fn write_displayed_exr(&self, path: &std::path::Path) -> Result<()> {
+        let (w, h, img) = self.view_radiance().map_err(anyhow::Error::msg)?;
+        let [aw, ah] = self.area_px;
+        let (aw, ah) = (aw.max(1), ah.max(1));
+        let out = screenshot::resample_bilinear(&img, w, h, aw, ah);
+        crate::export::write_exr(path, aw, ah, &out)
     }
 
     pub fn request_png(&mut self) {
@@ -703,11 +724,14 @@ impl Viewer {
         let at_rest = move |r: &Rendered| {
             !r.job.preview && (r.frame.width, r.frame.height) == full && r.job.id == pending
         };
+        // Moving, every window frame once there is a GI frame counts (the worker may deliver a new
+        // preview every window frame, leaving the image "dirty" at each tick); at rest, a frame
+        // whose image has been drawn.
         let mut shown = self
             .latest
             .as_ref()
             .is_some_and(|r| self.animate || at_rest(r))
-            && !self.image_dirty;
+            && (self.animate || !self.image_dirty);
         if self.script.is_some() && self.view.needs_reference() && shown {
             let has = self
                 .latest
@@ -746,6 +770,9 @@ impl Viewer {
             return;
         }
         match shot {
+            Some(p) if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) => {
+                self.exit = Some(self.write_displayed_exr(&p).map_err(|e| format!("{e:#}")));
+            }
             Some(p) => {
                 if self.png_request.is_none() {
                     self.png_request = Some(p);

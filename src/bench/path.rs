@@ -14,6 +14,7 @@ use super::BenchPlan;
 use super::sweep;
 use crate::bvh::SceneBvh;
 use crate::gi::pipeline::{Frame, Pass, Renderer};
+use crate::gi::primary::CameraParams;
 use crate::gpu::GpuContext;
 use crate::scene::{Camera, Scene};
 use crate::settings::ClusterSettings;
@@ -113,6 +114,9 @@ pub struct PathRow {
     pub width: u32,
     pub height: u32,
     pub vpls: u32,
+    /// Flicker at the same surface point: frame t's error against frame t−1's where the same
+    /// surface was (`metrics::instability_world`); empty at frame 0 or when no pixel matched.
+    pub instability_world: Option<f64>,
 }
 
 pub fn to_csv(rows: &[PathRow]) -> String {
@@ -131,7 +135,7 @@ fn on_off<S: serde::Serializer>(on: &bool, s: S) -> Result<S::Ok, S::Error> {
 
 /// Means over frames 1.. (the frames that can reuse) of one label and temporal setting: (frame ms,
 /// SP clustering ms, MSE, instability).
-pub fn means(rows: &[PathRow], label: &str, temporal: bool) -> Option<[f64; 4]> {
+pub fn means(rows: &[PathRow], label: &str, temporal: bool) -> Option<[f64; 5]> {
     let sel: Vec<&PathRow> = rows
         .iter()
         .filter(|r| r.label == label && r.temporal == temporal && r.frame >= 1)
@@ -146,7 +150,19 @@ pub fn means(rows: &[PathRow], label: &str, temporal: bool) -> Option<[f64; 4]> 
         mean(&|r| r.sp_cluster_ms),
         mean(&|r| r.mse),
         mean(&|r| r.instability.unwrap_or(0.0)),
+        mean(&|r| r.instability_world.unwrap_or(0.0)),
     ])
+}
+
+/// A frame and its reference as `metrics::instability_world` reads them.
+fn path_frame<'a>(f: &'a Frame, reference: &'a [[f32; 3]]) -> metrics::PathFrame<'a> {
+    metrics::PathFrame {
+        x: &f.radiance,
+        reference,
+        positions: &f.positions,
+        normals: &f.normals,
+        width: f.width as usize,
+    }
 }
 
 /// Renders every configuration of `plan` along `path` with each of `temporal`, against one reference
@@ -204,6 +220,15 @@ pub fn run(
                 let instability = prev.as_ref().map(|p| {
                     metrics::instability(&f.radiance, reference, &p.radiance, &references[i - 1].0)
                 });
+                let instability_world = prev.as_ref().and_then(|p| {
+                    let cam = CameraParams::new(&cameras[i - 1], p.width, p.height);
+                    let eye = cam.eye_point();
+                    metrics::instability_world(
+                        &path_frame(&f, reference),
+                        &path_frame(p, &references[i - 1].0),
+                        |q| cam.project(q - eye, 1e-6),
+                    )
+                });
                 let row = PathRow {
                     label,
                     temporal: on,
@@ -225,9 +250,10 @@ pub fn run(
                     width: f.width,
                     height: f.height,
                     vpls: f.vpls,
+                    instability_world,
                 };
                 eprintln!(
-                    "path: {} temporal {} frame {i}: {:.1} ms (SP clustering {:.1} ms, {} iteration(s), kept {}), MSE {:.3e}, instability {}",
+                    "path: {} temporal {} frame {i}: {:.1} ms (SP clustering {:.1} ms, {} iteration(s), kept {}), MSE {:.3e}, instability {} (world {})",
                     row.label,
                     if on { "on" } else { "off" },
                     row.frame_ms,
@@ -235,7 +261,9 @@ pub fn run(
                     row.sp_iterations,
                     row.sp_warm_kept.map_or("-".into(), |k| k.to_string()),
                     row.mse,
-                    row.instability.map_or("-".into(), |v| format!("{v:.3e}"))
+                    row.instability.map_or("-".into(), |v| format!("{v:.3e}")),
+                    row.instability_world
+                        .map_or("-".into(), |v| format!("{v:.3e}"))
                 );
                 rows.push(row);
                 prev = Some(f);
@@ -419,6 +447,7 @@ mod tests {
             width: 160,
             height: 120,
             vpls: 4096,
+            instability_world: inst.map(|v| v / 2.0),
         };
         let rows = vec![
             row(0, false, 100.0, 9.0, None),
@@ -430,11 +459,11 @@ mod tests {
         // Frame 0 is left out of the means.
         assert_eq!(
             means(&rows, "weighted 192/512", false),
-            Some([10.0, 5.0, 2.0, 3.0])
+            Some([10.0, 5.0, 2.0, 3.0, 1.5])
         );
         assert_eq!(
             means(&rows, "weighted 192/512", true),
-            Some([10.0, 1.0, 2.0, 1.0])
+            Some([10.0, 1.0, 2.0, 1.0, 0.5])
         );
         assert_eq!(means(&rows, "other", true), None);
         let csv = to_csv(&rows);

@@ -275,6 +275,7 @@ mod tests {
             width: 1024,
             height: 720,
             vpls: 8192,
+            instability_world: None,
         };
         vec![
             row(0, false, 99.0),

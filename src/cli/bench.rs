@@ -172,8 +172,14 @@ fn along_path(
     );
     let rows = bench::path::run(ctx, scene, plan, path, temporal)?;
     println!(
-        "{:<32} {:>8} {:>10} {:>12} {:>11} {:>12}",
-        "configuration", "temporal", "frame ms", "SP clust. ms", "MSE", "instability"
+        "{:<32} {:>8} {:>10} {:>12} {:>11} {:>12} {:>12}",
+        "configuration",
+        "temporal",
+        "frame ms",
+        "SP clust. ms",
+        "MSE",
+        "instability",
+        "inst. world"
     );
     let mut seen = Vec::new();
     for r in &rows {
@@ -181,9 +187,9 @@ fn along_path(
             continue;
         }
         seen.push((&r.label, r.temporal));
-        if let Some([f, sp, mse, inst]) = bench::path::means(&rows, &r.label, r.temporal) {
+        if let Some([f, sp, mse, inst, world]) = bench::path::means(&rows, &r.label, r.temporal) {
             println!(
-                "{:<32} {:>8} {f:>10.2} {sp:>12.2} {mse:>11.3e} {inst:>12.3e}",
+                "{:<32} {:>8} {f:>10.2} {sp:>12.2} {mse:>11.3e} {inst:>12.3e} {world:>12.3e}",
                 r.label,
                 if r.temporal { "on" } else { "off" }
             );

@@ -25,11 +25,12 @@ pub struct ViewArgs {
     #[arg(long, default_value_t = 0.5, value_parser = parse_render_scale)]
     render_scale: f32,
     /// Scripted run: draw N window frames once the first full GI frame is shown (with --animate: N
-    /// frames of orbiting, then one frame at rest), save the window to --screenshot and the
+    /// frames of moving, then one frame at rest), save the window to --screenshot and the
     /// measurements to --stats, exit.
     #[arg(long)]
     frames: Option<u32>,
-    /// Where a scripted run saves the window (PNG, UI included).
+    /// Where a scripted run saves the window (.png, UI included) or the image as displayed (.exr:
+    /// linear radiance of the current view at the image area's resolution, no UI).
     #[arg(long, requires = "frames")]
     screenshot: Option<PathBuf>,
     /// Where a scripted run writes its JSON: settings, `motion` (camera change to image latency,
@@ -137,10 +138,10 @@ pub fn run(a: ViewArgs) -> Result<()> {
         && !p
             .extension()
             .and_then(|e| e.to_str())
-            .is_some_and(|e| e.eq_ignore_ascii_case("png"))
+            .is_some_and(|e| e.eq_ignore_ascii_case("png") || e.eq_ignore_ascii_case("exr"))
     {
         return Err(bad(format!(
-            "{}: --screenshot must end in .png",
+            "{}: --screenshot must end in .png (the window) or .exr (the image, linear)",
             p.display()
         )));
     }

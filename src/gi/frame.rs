@@ -162,6 +162,9 @@ pub struct Frame {
     /// The shading point of each pixel: world position, w = 1 where the primary ray hit (0: sky).
     /// What the viewer reprojects a frame with.
     pub positions: Vec<[f32; 4]>,
+    /// The shading normal of each pixel's shading point (xyz; zero where the ray missed): with
+    /// `positions`, what tells two frames' pixels show the same surface (`metrics::instability_world`).
+    pub normals: Vec<[f32; 4]>,
     /// Alg. 1 iterations the SP clustering ran (0 when none ran).
     pub sp_iterations: u32,
     /// SP centroids a temporal warm start kept from the previous frame (`None`: a cold start).

@@ -571,6 +571,13 @@ impl Renderer<'_> {
                     [q.x as f32, q.y as f32, q.z as f32, p[3]]
                 })
                 .collect(),
+            normals: sps
+                .chunks(4)
+                .map(|sp| {
+                    let n = sp[1];
+                    [n[0], n[1], n[2], 0.0]
+                })
+                .collect(),
             sp_iterations,
             sp_warm_kept,
             visibility_rows_reused: r.rows_reused,
@@ -624,6 +631,7 @@ impl Renderer<'_> {
             vpl_clusters_used: 0,
             gamma_used: None,
             positions: Vec::new(),
+            normals: Vec::new(),
             sp_iterations: 0,
             sp_warm_kept: None,
             visibility_rows_reused: 0,
