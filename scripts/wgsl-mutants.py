@@ -75,6 +75,18 @@ MUTANTS = [
     ("camera-y-flipped", "primary.wgsl", "let sy = 1.0 - 2.0 * y / f32(h);", "let sy = 2.0 * y / f32(h) - 1.0;", "camera"),
     ("visibility-light-facing-test-swapped", "visibility.wgsl", "dot(l.nrm.xyz, d) >= 0.0", "dot(l.nrm.xyz, d) <= 0.0", "step 5"),
     ("visibility-bit-off-by-one", "visibility.wgsl", "word |= 1u << (c - c0);", "word |= 1u << ((c - c0 + 1u) % 32u);", "step 5"),
+    ("visibility-facing-away-test-dropped", "visibility.wgsl", "dot(n, d) <= 0.0 || dot(l.nrm.xyz, d) >= 0.0", "dot(n, d) <= 0.0", "step 5"),
+    ("visibility-plane-test-dropped", "visibility.wgsl", "dot(n, d) <= 0.0 || dot(l.nrm.xyz, d) >= 0.0", "dot(l.nrm.xyz, d) >= 0.0", "step 5"),
+    ("visibility-plane-test-not-strict", "visibility.wgsl", "dot(n, d) <= 0.0 ||", "dot(n, d) < 0.0 ||", "step 5"),
+    ("visibility-traced-without-rep", "visibility.wgsl", "    if rep.w > 0.0 {\n        let p", "    if true {\n        let p", "step 5"),
+    ("visibility-reuse-kept-flag-dropped", "visibility.wgsl", " && rep_points[2u * k + 1u].w == 1.0", "", "step 5"),
+    ("visibility-reuse-rows-ignored", "visibility.wgsl", "k < params.reuse_rows &&", "params.reuse_rows > 0u &&", "step 5"),
+    ("visibility-reuse-without-rep", "visibility.wgsl", "k < params.reuse_rows && rep.w > 0.0 &&", "k < params.reuse_rows &&", "step 5"),
+    # Equivalent on lavapipe, so not listed (tried 2026-11-26, both pass every oracle): dropping
+    # `if i == INVALID { return; }` (an invocation past the chunk reads its representative out of
+    # bounds, as zeros: no representative, and its write past the matrix is dropped by wgpu's bounds
+    # checks) and `min(c0 + 32u, params.num_lights)` → `c0 + 32u` (the light texture past the last
+    # light is zero-initialised: a zero normal fails the facing test, no bit).
 ]
 
 # Stage 2: binary name → tests to run (a filter list; empty = the whole binary). Twin tests of each pass.
