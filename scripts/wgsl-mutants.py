@@ -12,7 +12,7 @@ Usage (from the repository root, after `cargo test --release --no-run`):
     python3 scripts/wgsl-mutants.py -k clamp   # mutants whose name contains "clamp"
     python3 scripts/wgsl-mutants.py --list
 Stage 1 is the oracle binary (tests/oracles.rs, seconds); a mutant it misses goes to stage 2, the
-twin tests of the passes it touches (a few minutes on lavapipe). `--full` runs stage 2 always.
+closed-form tests and the twin tests of the passes it touches (a few minutes on lavapipe). `--full` runs stage 2 always.
 A snippet found other than exactly once stops the script (the shaders changed: fix the table).
 """
 
@@ -82,6 +82,19 @@ MUTANTS = [
     ("visibility-reuse-kept-flag-dropped", "visibility.wgsl", " && rep_points[2u * k + 1u].w == 1.0", "", "step 5"),
     ("visibility-reuse-rows-ignored", "visibility.wgsl", "k < params.reuse_rows &&", "params.reuse_rows > 0u &&", "step 5"),
     ("visibility-reuse-without-rep", "visibility.wgsl", "k < params.reuse_rows && rep.w > 0.0 &&", "k < params.reuse_rows &&", "step 5"),
+    # --- direct light against closed forms (tests/closed_form.rs, stage 2)
+    ("triangle-sampling-not-uniform", "common/sampling.wgsl", "let s = sqrt(u1);", "let s = u1;", "direct"),
+    ("emitter-pdf-area-dropped", "common/lights.wgsl", "s.pdf_area = (e.power / scene.emit_power) / e.area;", "s.pdf_area = e.power / scene.emit_power;", "direct"),
+    ("spot-falloff-linear", "common/lights.wgsl", "falloff = t * t;", "falloff = t;", "direct"),
+    ("spot-cone-swapped", "common/lights.wgsl", "let t = clamp((cd - co) / max(ci - co, 1e-4), 0.0, 1.0);", "let t = clamp((cd - ci) / max(co - ci, 1e-4), 0.0, 1.0);", "direct"),
+    ("punctual-not-inverse-square", "common/lights.wgsl", "s.e = l.color_cos_inner.xyz * falloff / d2;", "s.e = l.color_cos_inner.xyz * falloff / s.dist;", "direct"),
+    ("direct-emitter-cosine-dropped", "direct.wgsl", "area_sum += ls.le * cos_p * cos_l / (d2 * ls.pdf_area);", "area_sum += ls.le * cos_p / (d2 * ls.pdf_area);", "direct"),
+    ("direct-punctual-cosine-dropped", "direct.wgsl", "sum += ps.e * cos_p;", "sum += ps.e;", "direct"),
+    ("direct-albedo-not-over-pi", "direct.wgsl", "return sp.albedo.xyz / PI * sum;", "return sp.albedo.xyz * sum;", "direct"),
+    # Not listed, equivalent for the closed-form scenes: swapping sample_triangle's two barycentrics
+    # (the uniform density on a triangle is symmetric in them), and the emitter stratum's jitter
+    # halved (one square emitter of two equal triangles: every stratum still picks each half
+    # alike).
     # Equivalent on lavapipe, so not listed (tried 2026-11-26, both pass every oracle): dropping
     # `if i == INVALID { return; }` (an invocation past the chunk reads its representative out of
     # bounds, as zeros: no representative, and its write past the matrix is dropped by wgpu's bounds
@@ -91,6 +104,7 @@ MUTANTS = [
 
 # Stage 2: binary name → tests to run (a filter list; empty = the whole binary). Twin tests of each pass.
 STAGE2 = {
+    "closed_form": [],
     "kmeans": ["gpu_kmeans_matches_cpu_on_random_surfaces", "representative_weights_match_cpu",
                "weight_exponent_matches_cpu_and_spans_uniform_to_hard"],
     "clustered": ["clustered_shading_matches_cpu_twin"],

@@ -835,7 +835,9 @@ fn gpu_visibility_matrix_and_its_radiance_by_hand() {
         rows,
         words,
     };
-    let cases: [(&str, [bool; 3], u32, u32, [u32; 6]); 4] = [
+    // (name, kept flags, previous rows, previous words a row, the matrix by hand)
+    type Case<'a> = (&'a str, [bool; 3], u32, u32, [u32; 6]);
+    let cases: [Case; 4] = [
         // Every row kept, the previous matrix 2 rows of 2 words: row 0 copied; row 1 has no
         // representative (0, not the markers); row 2 is past the previous rows (traced).
         (
