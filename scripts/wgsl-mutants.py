@@ -91,6 +91,19 @@ MUTANTS = [
     ("direct-emitter-cosine-dropped", "direct.wgsl", "area_sum += ls.le * cos_p * cos_l / (d2 * ls.pdf_area);", "area_sum += ls.le * cos_p / (d2 * ls.pdf_area);", "direct"),
     ("direct-punctual-cosine-dropped", "direct.wgsl", "sum += ps.e * cos_p;", "sum += ps.e;", "direct"),
     ("direct-albedo-not-over-pi", "direct.wgsl", "return sp.albedo.xyz / PI * sum;", "return sp.albedo.xyz * sum;", "direct"),
+    ("cosine-sampling-not-sqrt", "common/sampling.wgsl", "let r = sqrt(u1);", "let r = u1;", "sampling"),
+    ("cosine-sampling-uniform", "common/sampling.wgsl", "let local = vec3<f32>(r * cos(phi), r * sin(phi), sqrt(max(0.0, 1.0 - u1)));", "let local = vec3<f32>(sqrt(max(0.0, u1 * (2.0 - u1))) * cos(phi), sqrt(max(0.0, u1 * (2.0 - u1))) * sin(phi), 1.0 - u1);", "sampling"),
+    ("cosine-sampling-half-azimuth", "common/sampling.wgsl", "let phi = 2.0 * PI * u2;", "let phi = PI * u2;", "sampling"),
+    ("onb-sign-flipped", "common/sampling.wgsl", "let s = select(-1.0, 1.0, n.z >= 0.0);", "let s = select(1.0, -1.0, n.z >= 0.0);", "sampling"),
+    ("vpl-roulette-not-divided", "vpl_trace.wgsl", "            flux /= q;", "            flux /= 1.0;", "VPLs"),
+    ("vpl-emitter-flux-not-times-pi", "vpl_trace.wgsl", "flux = ls.le * PI / (p_src * ls.pdf_area);", "flux = ls.le / (p_src * ls.pdf_area);", "VPLs"),
+    ("pt-roulette-not-divided", "pathtrace.wgsl", "                throughput /= q;", "                throughput /= 1.0;", "path tr."),
+    ("pt-nee-albedo-not-over-pi", "pathtrace.wgsl", "return albedo / PI * sum;", "return albedo * sum;", "path tr."),
+    ("pt-emission-at-every-vertex", "pathtrace.wgsl", "                if v == 0u {\n                    total += surf.emission;", "                if true {\n                    total += surf.emission;", "path tr."),
+    ("pt-throughput-albedo-dropped", "pathtrace.wgsl", "throughput *= surf.albedo;", "throughput *= 1.0;", "path tr."),
+    # Not listed, equivalent in expectation: Russian roulette from the first bounce on in the VPL
+    # tracer, or with another survival probability in the path tracer (each divides by its own q:
+    # unbiased, only noisier).
     # Not listed, equivalent for the closed-form scenes: swapping sample_triangle's two barycentrics
     # (the uniform density on a triangle is symmetric in them), and the emitter stratum's jitter
     # halved (one square emitter of two equal triangles: every stratum still picks each half
