@@ -101,6 +101,13 @@ MUTANTS = [
     ("pt-nee-albedo-not-over-pi", "pathtrace.wgsl", "return albedo / PI * sum;", "return albedo * sum;", "path tr."),
     ("pt-emission-at-every-vertex", "pathtrace.wgsl", "                if v == 0u {\n                    total += surf.emission;", "                if true {\n                    total += surf.emission;", "path tr."),
     ("pt-throughput-albedo-dropped", "pathtrace.wgsl", "throughput *= surf.albedo;", "throughput *= 1.0;", "path tr."),
+    ("vpl-spot-power-whole-sphere", "vpl_trace.wgsl", "flux = intensity * (t * t) * 2.0 * PI * (1.0 - co) / p_src;", "flux = intensity * (t * t) * 4.0 * PI / p_src;", "VPLs"),
+    ("vpl-spot-falloff-linear", "vpl_trace.wgsl", "flux = intensity * (t * t) * 2.0 * PI * (1.0 - co) / p_src;", "flux = intensity * t * 2.0 * PI * (1.0 - co) / p_src;", "VPLs"),
+    ("vpl-spot-cone-not-uniform", "vpl_trace.wgsl", "let cz = 1.0 - rng_next(&rng) * (1.0 - co);", "let cz = 1.0 - rng_next(&rng) * rng_next(&rng) * (1.0 - co);", "VPLs"),
+    ("vpl-point-power-half-sphere", "vpl_trace.wgsl", "flux = intensity * 4.0 * PI / p_src;", "flux = intensity * 2.0 * PI / p_src;", "VPLs"),
+    ("vpl-point-sphere-not-uniform", "vpl_trace.wgsl", "let z = 1.0 - 2.0 * u1;", "let z = 1.0 - 2.0 * u1 * u1;", "VPLs"),
+    ("vpl-sun-disc-not-uniform", "vpl_trace.wgsl", "let r = params.radius * sqrt(rng_next(&rng));", "let r = params.radius * rng_next(&rng);", "VPLs"),
+    ("vpl-sun-power-radius-not-squared", "vpl_trace.wgsl", "flux = intensity * PI * params.radius * params.radius / p_src;", "flux = intensity * PI * params.radius / p_src;", "VPLs"),
     # Not listed, equivalent in expectation: Russian roulette from the first bounce on in the VPL
     # tracer, or with another survival probability in the path tracer (each divides by its own q:
     # unbiased, only noisier).
