@@ -318,7 +318,7 @@ fn an_opaque_quad_casts_no_checkerboard() {
     assert!((ok as f64) < 0.8 * n as f64, "{ok} of {n}");
 }
 
-/// Bounds of the twin comparisons on lavapipe (`common::twin_tol`; docs/testing.md, "Twin
+/// Bounds of the twin comparisons on lavapipe (`common::assert_twins`; docs/testing.md, "Twin
 /// tolerances"): primary hit points (over the scene's size), direct light, the reference's indirect.
 const TOL_POSITION: f32 = 5.4e-7; // measured 2.7e-7
 const TOL_DIRECT: f32 = 0.0; // measured: bit-exact
@@ -346,7 +346,7 @@ fn cpu_twins_agree_on_the_alpha_tested_scene() {
     // the scene's size), the direct and indirect light within the measured bounds (pixels whose
     // alpha sits at the cutoff within rounding, at cell edges, could differ; measured: none do).
     let ext = s.extent();
-    let (mut valid_differ, mut pos) = (0, 0f32);
+    let (mut valid_differ, mut pos, mut far) = (0, 0f32, 0);
     let (mut direct, mut indirect) = (Vec::new(), Vec::new());
     for px in 0..W * H {
         let c = cpu.primary(&params, px);
@@ -357,6 +357,11 @@ fn cpu_twins_agree_on_the_alpha_tested_scene() {
         }
         if c.valid {
             pos = pos.max((c.pos - g.pos).length() / ext);
+            // On a GPU (not measured) a hit point more than 1e-4 off is left out, as before.
+            if !ctx.software && (c.pos - g.pos).length() > 1e-4 {
+                far += 1;
+                continue;
+            }
         }
         let d = cpu.direct(g, px, fs.frame.seed, fs.frame.direct_samples);
         direct.push((d, Vec3::from(f.direct[px as usize])));
@@ -364,19 +369,18 @@ fn cpu_twins_agree_on_the_alpha_tested_scene() {
         indirect.push((i, Vec3::from(f.indirect[px as usize])));
     }
     println!("primary: {valid_differ} hit / miss differ, worst position {pos:.3e}");
-    assert_eq!(valid_differ, 0, "primary rays hit / miss differently");
-    let pos_tol = if ctx.software { TOL_POSITION } else { 1e-4 };
-    assert!(pos <= pos_tol, "primary: hit points {pos} apart");
-    common::assert_twins(
-        "alpha-tested direct",
-        direct,
-        common::twin_tol(&ctx, TOL_DIRECT),
-    );
-    common::assert_twins(
-        "alpha-tested reference",
-        indirect,
-        common::twin_tol(&ctx, TOL_REFERENCE),
-    );
+    if ctx.software {
+        assert_eq!(valid_differ, 0, "primary rays hit / miss differently");
+        assert!(pos <= TOL_POSITION, "primary: hit points {pos} apart");
+    } else {
+        // The former rule: at most 0.5% of the primary rays differ.
+        assert!(
+            (valid_differ + far) * 200 <= W * H,
+            "primary: {valid_differ} + {far} differ"
+        );
+    }
+    common::assert_twins(&ctx, "alpha-tested direct", direct, TOL_DIRECT);
+    common::assert_twins(&ctx, "alpha-tested reference", indirect, TOL_REFERENCE);
     let n = W * H;
 
     // The clustered frame: the visibility matrix and shading from the GPU's own clustering.

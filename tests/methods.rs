@@ -47,7 +47,7 @@ fn shading_points(r: &Renderer) -> Vec<ShadingPoint> {
         .collect()
 }
 
-/// Bounds of the twin comparisons on lavapipe (`common::twin_tol`; docs/testing.md, "Twin
+/// Bounds of the twin comparisons on lavapipe (`common::assert_twins`; docs/testing.md, "Twin
 /// tolerances"): wang's gather at the sample points, R_j (relative), interpolation; lightcluster's
 /// shading.
 const TOL_WANG_GATHER: f32 = 4.8e-8; // measured 2.4e-8
@@ -121,7 +121,7 @@ fn wang_matches_cpu_twin() {
         let sums: Vec<[f32; 4]> = ctx.read_buffer(&wf.radius, k).unwrap();
         let mut radius = Vec::new();
         let mut samples = Vec::new();
-        let (mut gathered, mut worst_r) = (Vec::new(), 0f32);
+        let (mut gathered, mut r_diff) = (Vec::new(), Vec::new());
         for (j, &p) in c.samples.iter().enumerate() {
             if p == twin::INVALID {
                 radius.push(1.0);
@@ -137,21 +137,28 @@ fn wang_matches_cpu_twin() {
             let rw = twin::harmonic_radius(&cs, sp.pos, sp.normal, j as u32, fs.frame.seed);
             let rg = twin::radius_from_sum(sums[j][0], s.extent());
             assert!(rw.is_finite() && rg.is_finite(), "{name}: R_{j} {rw} {rg}");
-            worst_r = worst_r.max((rw - rg).abs() / rw);
+            r_diff.push((rw - rg).abs() / rw);
             radius.push(rg);
             samples.push((sp.pos, sp.normal, true));
         }
         common::assert_twins(
+            &ctx,
             &format!("{name} wang gather"),
             gathered,
-            common::twin_tol(&ctx, TOL_WANG_GATHER),
+            TOL_WANG_GATHER,
         );
+        let worst_r = r_diff.iter().cloned().fold(0f32, f32::max);
         println!("{name}: R_j worst relative difference {worst_r:.3e}");
-        let r_tol = common::twin_tol(&ctx, TOL_WANG_RADIUS);
-        assert!(
-            worst_r <= r_tol,
-            "{name}: R_j differ by {worst_r} > {r_tol}"
-        );
+        if ctx.software {
+            assert!(
+                worst_r <= TOL_WANG_RADIUS,
+                "{name}: R_j differ by {worst_r}"
+            );
+        } else {
+            // On a GPU, not measured: one R_j may be off by more than 1e-3 (a ray grazing an edge).
+            let bad = r_diff.iter().filter(|&&d| d > 1e-3).count();
+            assert!(bad <= 1, "{name}: {bad} R_j differ");
+        }
         // Interpolation from the GPU's own labels, samples, R_j and irradiance.
         let e: Vec<Vec3> = irr.iter().map(|v| Vec3::new(v[0], v[1], v[2])).collect();
         let at = twin::Samples {
@@ -168,9 +175,10 @@ fn wang_matches_cpu_twin() {
             )
         });
         common::assert_twins(
+            &ctx,
             &format!("{name} wang interpolation"),
             pairs,
-            common::twin_tol(&ctx, TOL_WANG_INTERP),
+            TOL_WANG_INTERP,
         );
     }
 }
@@ -210,9 +218,10 @@ fn lightcluster_matches_cpu_twin() {
             )
         });
         common::assert_twins(
+            &ctx,
             &format!("{name} lightcluster"),
             pairs,
-            common::twin_tol(&ctx, TOL_LIGHTCLUSTER),
+            TOL_LIGHTCLUSTER,
         );
     }
 }

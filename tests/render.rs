@@ -52,7 +52,7 @@ fn cornell_128_is_finite_and_lit() {
     assert!(f.timings_ms["frame"] > 0.0);
 }
 
-/// Bounds of the twin comparisons on lavapipe (`common::twin_tol`; docs/testing.md, "Twin
+/// Bounds of the twin comparisons on lavapipe (`common::assert_twins`; docs/testing.md, "Twin
 /// tolerances"): the shading points' position (over the scene's size), normal (1 − cos), albedo and
 /// emission, then the direct light.
 // Measured 3.9e-7, 6.0e-8, 6.0e-8 (1 ulp), 0.
@@ -78,13 +78,17 @@ fn gpu_primary_and_direct_match_cpu_twin() {
         assert!(common::all_finite(&f.radiance), "{name}");
         // The shading points: hit or miss alike everywhere; position (over the scene's size),
         // normal (1 − cos), albedo and emission as far apart as the worst pixel.
-        let (mut valid_differ, mut worst) = (0, [0f32; 4]);
+        // On a GPU, not measured, the former rule: at most 0.1% of the shading points beyond
+        // 1e-4 (position), 1e-4 (normal), 1e-5 (albedo), 1e-4 (emission) or hit / miss flipped.
+        let gpu_sp = [1e-4, 1e-4, 1e-5, 1e-4];
+        let (mut valid_differ, mut worst, mut sp_bad) = (0, [0f32; 4], 0);
         let mut pairs = Vec::new();
         for px in 0..w * h {
             let g = ShadingPoint::from_gpu(&gbuf[px as usize * 4..px as usize * 4 + 4]);
             let c = cpu.primary(&cp, px);
             if g.valid != c.valid {
                 valid_differ += 1;
+                sp_bad += 1;
             } else if g.valid {
                 let d = [
                     (g.pos - c.pos).length() / ext,
@@ -95,6 +99,7 @@ fn gpu_primary_and_direct_match_cpu_twin() {
                 for i in 0..4 {
                     worst[i] = worst[i].max(d[i]);
                 }
+                sp_bad += (0..4).any(|i| d[i] > gpu_sp[i]) as u32;
             }
             // Direct light from the GPU's own SP, so the two differ only in the shading kernel.
             pairs.push((
@@ -106,28 +111,26 @@ fn gpu_primary_and_direct_match_cpu_twin() {
             "{name}: {valid_differ} hit / miss differ; worst position {:.3e}, normal {:.3e}, albedo {:.3e}, emission {:.3e}",
             worst[0], worst[1], worst[2], worst[3]
         );
-        assert_eq!(valid_differ, 0, "{name}: hit / miss differ");
-        let sp_tol = if ctx.software {
-            TOL_SP
+        if ctx.software {
+            assert_eq!(valid_differ, 0, "{name}: hit / miss differ");
+            for (i, what) in ["position", "normal", "albedo", "emission"]
+                .iter()
+                .enumerate()
+            {
+                assert!(
+                    worst[i] <= TOL_SP[i],
+                    "{name}: shading point {what} differs by {} > {}",
+                    worst[i],
+                    TOL_SP[i]
+                );
+            }
         } else {
-            [1e-4, 1e-4, 1e-5, 1e-4]
-        };
-        for (i, what) in ["position", "normal", "albedo", "emission"]
-            .iter()
-            .enumerate()
-        {
             assert!(
-                worst[i] <= sp_tol[i],
-                "{name}: shading point {what} differs by {} > {}",
-                worst[i],
-                sp_tol[i]
+                sp_bad * 1000 <= w * h,
+                "{name}: {sp_bad} shading points differ"
             );
         }
-        common::assert_twins(
-            &format!("{name} direct"),
-            pairs,
-            common::twin_tol(&ctx, TOL_DIRECT),
-        );
+        common::assert_twins(&ctx, &format!("{name} direct"), pairs, TOL_DIRECT);
     }
 }
 
@@ -146,11 +149,7 @@ fn direct_light_with_thousands_of_samples_matches_cpu_twin() {
     assert!(common::all_finite(&f.radiance));
     let pairs = direct_pairs(&r, &s, &f, spp);
     let lit = pairs.iter().filter(|(l, _)| l.max_element() > 0.01).count() as u32;
-    common::assert_twins(
-        "direct, 8192 samples",
-        pairs,
-        common::twin_tol(&ctx, TOL_DIRECT_MANY),
-    );
+    common::assert_twins(&ctx, "direct, 8192 samples", pairs, TOL_DIRECT_MANY);
     assert!(lit * 2 > w * h, "only {lit} pixels lit");
 }
 
@@ -286,9 +285,10 @@ fn direct_light_sub_ranges_with_many_lights_match_cpu_twin() {
         let pairs = direct_pairs(&r, &s, &f, spp);
         let lit = pairs.iter().filter(|(l, _)| l.max_element() > 0.01).count() as u32;
         common::assert_twins(
+            &ctx,
             &format!("direct, area {with_area}, {spp} samples, {nl} lights"),
             pairs,
-            common::twin_tol(&ctx, TOL_DIRECT_LIGHTS),
+            TOL_DIRECT_LIGHTS,
         );
         assert!(lit * 2 > w * h, "only {lit} pixels lit");
     }
