@@ -44,11 +44,11 @@ MUTANTS = [
     # --- Eq. (6), (8), (9): shade.wgsl
     ("eq8-uniform-over-F-not-used-slots", "shade.wgsl", "1.0 / f32(nf)", "1.0 / f32(F)", "Eq. 8"),
     ("eq8-eq9-switch-inverted", "shade.wgsl", "if params.weighted == 0u {", "if params.weighted != 0u {", "Eq. 8/9"),
-    ("eq8-used-slot-count-off", "shade.wgsl", "nf += select(0u, 1u, rows[j] != INVALID);", "nf += select(0u, 2u, rows[j] != INVALID);", "Eq. 8"),
-    ("eq9-visibility-bit-inverted", "shade.wgsl", "((rw[j] >> b) & 1u) != 0u", "((rw[j] >> b) & 1u) == 0u", "Eq. 9"),
+    ("eq8-used-slot-count-off", "shade.wgsl", "nf += select(0u, 1u, (*rows)[j] != INVALID);", "nf += select(0u, 2u, (*rows)[j] != INVALID);", "Eq. 8"),
+    ("eq9-visibility-bit-inverted", "shade.wgsl", "(((*rw)[j] >> b) & 1u) != 0u", "(((*rw)[j] >> b) & 1u) == 0u", "Eq. 9"),
     ("eq9-slot-loop-skips-first", "shade.wgsl", "for (var j = 0u; j < F; j++) {\n        v +=", "for (var j = 1u; j < F; j++) {\n        v +=", "Eq. 9"),
-    ("eq9-weight-ignored", "shade.wgsl", "v += select(0.0, w[j],", "v += select(0.0, 1.0,", "Eq. 9"),
-    ("eq6-visibility-ignored", "shade.wgsl", "sum += t * eq9_weighted_visibility(w, rw, b);", "sum += t;", "Eq. 6"),
+    ("eq9-weight-ignored", "shade.wgsl", "v += select(0.0, (*w)[j],", "v += select(0.0, 1.0,", "Eq. 9"),
+    ("eq6-visibility-ignored", "shade.wgsl", "sum += t * v;", "sum += t;", "Eq. 6"),
     ("eq6-light-index-off-by-one", "shade.wgsl", "load_light(wd * 32u + b)", "load_light(wd * 32u + b + 1u)", "Eq. 6"),
     # --- Eq. (7), Alg. 1: kmeans.wgsl
     ("eq7-normal-test-swapped", "common/kmeans.wgsl", "return dot(n, nc) > params.normal_threshold;", "return dot(n, nc) < params.normal_threshold;", "Eq. 7"),
@@ -63,9 +63,9 @@ MUTANTS = [
     # --- Eq. (10), Alg. 2: kmeans.wgsl
     ("eq10-zero-distance-dropped-in-final-assign", "kmeans/assign.wgsl", "if j < b.count && b.dist[j] <= ZERO_DIST && zero == INVALID {", "if false {", "Eq. 10"),
     ("eq10-zero-distance-dropped-in-rep-weights", "kmeans/reps.wgsl", "if d[j] <= ZERO_DIST && zero == INVALID {", "if false {", "Eq. 10"),
-    ("eq10-zero-takes-none", "kmeans/assign.wgsl", "w[j] = select(0.0, 1.0, j == zero);", "w[j] = select(1.0, 0.0, j == zero);", "Eq. 10"),
-    ("eq10-ratio-inverted", "kmeans/assign.wgsl", "ratio_pow(d_min / d[j], params.weight_exponent)", "ratio_pow(d[j] / d_min, params.weight_exponent)", "Eq. 10"),
-    ("eq10-not-normalised", "kmeans/assign.wgsl", "w[j] /= wsum;", "w[j] /= 1.0;", "Eq. 10"),
+    ("eq10-zero-takes-none", "kmeans/assign.wgsl", "(*w)[j] = select(0.0, 1.0, j == zero);", "(*w)[j] = select(1.0, 0.0, j == zero);", "Eq. 10"),
+    ("eq10-ratio-inverted", "kmeans/assign.wgsl", "ratio_pow(d_min / (*d)[j], params.weight_exponent)", "ratio_pow((*d)[j] / d_min, params.weight_exponent)", "Eq. 10"),
+    ("eq10-not-normalised", "kmeans/assign.wgsl", "(*w)[j] /= wsum;", "(*w)[j] /= 1.0;", "Eq. 10"),
     ("eq10-p1-shortcut-wrong", "kmeans/assign.wgsl", "    if p == 1.0 {\n        return x;", "    if p == 1.0 {\n        return x * x;", "Eq. 10"),
     ("eq10-weights-slot-off-by-one", "kmeans/assign.wgsl", "assign[m * f + j] = k;\n        weights[m * f + j] = w[j];", "assign[m * f + j] = k;\n        weights[m * f + j] = w[0];", "Eq. 10"),
     ("alg2-rep-min-swapped", "kmeans/assign.wgsl", "if bits < atomicLoad(&reps[2u * k]) {", "if bits > atomicLoad(&reps[2u * k]) {", "reps"),
