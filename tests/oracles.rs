@@ -720,8 +720,9 @@ fn run_visibility(
 /// point in row 1 0; P1 in row 2 gets 30 lights at d = 0.5, each 0.5 / 0.25 = 2: 60. The reference
 /// pass (Eq. 5, its own shadow rays) on the same points: 0.438625, 0.438625, 60.
 ///
-/// The early exits: the cosine tests (c2 facing away, c3 under the plane, c4 grazing: lights no
-/// shadow ray reaches would otherwise have their bits set), no representative (row 1), and the
+/// The early exits: the cosine tests (c2 facing away, c3 under the plane, c4 grazing: nothing
+/// blocks their shadow rays, so without the tests their bits would be set), no representative
+/// (row 1), and the
 /// warm start's copied rows, checked with a previous matrix of marker words unlike the traced
 /// ones: a row is copied only when its index is below the previous matrix's rows, it has a
 /// representative, that representative was kept (normal w = 1), and the previous matrix has as many
