@@ -12,7 +12,7 @@ Usage (from the repository root, after `cargo test --release --no-run`):
     python3 scripts/wgsl-mutants.py -k clamp   # mutants whose name contains "clamp"
     python3 scripts/wgsl-mutants.py --list
 Stage 1 is the oracle binary (tests/oracles.rs, seconds); a mutant it misses goes to stage 2, the
-twin tests of the passes it touches (a few minutes on lavapipe). `--full` runs stage 2 always.
+closed-form tests and the twin tests of the passes it touches (a few minutes on lavapipe). `--full` runs stage 2 always.
 A snippet found other than exactly once stops the script (the shaders changed: fix the table).
 """
 
@@ -44,11 +44,11 @@ MUTANTS = [
     # --- Eq. (6), (8), (9): shade.wgsl
     ("eq8-uniform-over-F-not-used-slots", "shade.wgsl", "1.0 / f32(nf)", "1.0 / f32(F)", "Eq. 8"),
     ("eq8-eq9-switch-inverted", "shade.wgsl", "if params.weighted == 0u {", "if params.weighted != 0u {", "Eq. 8/9"),
-    ("eq8-used-slot-count-off", "shade.wgsl", "nf += select(0u, 1u, rows[j] != INVALID);", "nf += select(0u, 2u, rows[j] != INVALID);", "Eq. 8"),
-    ("eq9-visibility-bit-inverted", "shade.wgsl", "((rw[j] >> b) & 1u) != 0u", "((rw[j] >> b) & 1u) == 0u", "Eq. 9"),
+    ("eq8-used-slot-count-off", "shade.wgsl", "nf += select(0u, 1u, (*rows)[j] != INVALID);", "nf += select(0u, 2u, (*rows)[j] != INVALID);", "Eq. 8"),
+    ("eq9-visibility-bit-inverted", "shade.wgsl", "(((*rw)[j] >> b) & 1u) != 0u", "(((*rw)[j] >> b) & 1u) == 0u", "Eq. 9"),
     ("eq9-slot-loop-skips-first", "shade.wgsl", "for (var j = 0u; j < F; j++) {\n        v +=", "for (var j = 1u; j < F; j++) {\n        v +=", "Eq. 9"),
-    ("eq9-weight-ignored", "shade.wgsl", "v += select(0.0, w[j],", "v += select(0.0, 1.0,", "Eq. 9"),
-    ("eq6-visibility-ignored", "shade.wgsl", "sum += t * eq9_weighted_visibility(w, rw, b);", "sum += t;", "Eq. 6"),
+    ("eq9-weight-ignored", "shade.wgsl", "v += select(0.0, (*w)[j],", "v += select(0.0, 1.0,", "Eq. 9"),
+    ("eq6-visibility-ignored", "shade.wgsl", "sum += t * v;", "sum += t;", "Eq. 6"),
     ("eq6-light-index-off-by-one", "shade.wgsl", "load_light(wd * 32u + b)", "load_light(wd * 32u + b + 1u)", "Eq. 6"),
     # --- Eq. (7), Alg. 1: kmeans.wgsl
     ("eq7-normal-test-swapped", "common/kmeans.wgsl", "return dot(n, nc) > params.normal_threshold;", "return dot(n, nc) < params.normal_threshold;", "Eq. 7"),
@@ -63,9 +63,9 @@ MUTANTS = [
     # --- Eq. (10), Alg. 2: kmeans.wgsl
     ("eq10-zero-distance-dropped-in-final-assign", "kmeans/assign.wgsl", "if j < b.count && b.dist[j] <= ZERO_DIST && zero == INVALID {", "if false {", "Eq. 10"),
     ("eq10-zero-distance-dropped-in-rep-weights", "kmeans/reps.wgsl", "if d[j] <= ZERO_DIST && zero == INVALID {", "if false {", "Eq. 10"),
-    ("eq10-zero-takes-none", "kmeans/assign.wgsl", "w[j] = select(0.0, 1.0, j == zero);", "w[j] = select(1.0, 0.0, j == zero);", "Eq. 10"),
-    ("eq10-ratio-inverted", "kmeans/assign.wgsl", "ratio_pow(d_min / d[j], params.weight_exponent)", "ratio_pow(d[j] / d_min, params.weight_exponent)", "Eq. 10"),
-    ("eq10-not-normalised", "kmeans/assign.wgsl", "w[j] /= wsum;", "w[j] /= 1.0;", "Eq. 10"),
+    ("eq10-zero-takes-none", "kmeans/assign.wgsl", "(*w)[j] = select(0.0, 1.0, j == zero);", "(*w)[j] = select(1.0, 0.0, j == zero);", "Eq. 10"),
+    ("eq10-ratio-inverted", "kmeans/assign.wgsl", "ratio_pow(d_min / (*d)[j], params.weight_exponent)", "ratio_pow((*d)[j] / d_min, params.weight_exponent)", "Eq. 10"),
+    ("eq10-not-normalised", "kmeans/assign.wgsl", "(*w)[j] /= wsum;", "(*w)[j] /= 1.0;", "Eq. 10"),
     ("eq10-p1-shortcut-wrong", "kmeans/assign.wgsl", "    if p == 1.0 {\n        return x;", "    if p == 1.0 {\n        return x * x;", "Eq. 10"),
     ("eq10-weights-slot-off-by-one", "kmeans/assign.wgsl", "assign[m * f + j] = k;\n        weights[m * f + j] = w[j];", "assign[m * f + j] = k;\n        weights[m * f + j] = w[0];", "Eq. 10"),
     ("alg2-rep-min-swapped", "kmeans/assign.wgsl", "if bits < atomicLoad(&reps[2u * k]) {", "if bits > atomicLoad(&reps[2u * k]) {", "reps"),
@@ -75,10 +75,56 @@ MUTANTS = [
     ("camera-y-flipped", "primary.wgsl", "let sy = 1.0 - 2.0 * y / f32(h);", "let sy = 2.0 * y / f32(h) - 1.0;", "camera"),
     ("visibility-light-facing-test-swapped", "visibility.wgsl", "dot(l.nrm.xyz, d) >= 0.0", "dot(l.nrm.xyz, d) <= 0.0", "step 5"),
     ("visibility-bit-off-by-one", "visibility.wgsl", "word |= 1u << (c - c0);", "word |= 1u << ((c - c0 + 1u) % 32u);", "step 5"),
+    ("visibility-facing-away-test-dropped", "visibility.wgsl", "dot(n, d) <= 0.0 || dot(l.nrm.xyz, d) >= 0.0", "dot(n, d) <= 0.0", "step 5"),
+    ("visibility-plane-test-dropped", "visibility.wgsl", "dot(n, d) <= 0.0 || dot(l.nrm.xyz, d) >= 0.0", "dot(l.nrm.xyz, d) >= 0.0", "step 5"),
+    ("visibility-plane-test-not-strict", "visibility.wgsl", "dot(n, d) <= 0.0 ||", "dot(n, d) < 0.0 ||", "step 5"),
+    ("visibility-traced-without-rep", "visibility.wgsl", "    if rep.w > 0.0 {\n        let p", "    if true {\n        let p", "step 5"),
+    ("visibility-reuse-kept-flag-dropped", "visibility.wgsl", " && rep_points[2u * k + 1u].w == 1.0", "", "step 5"),
+    ("visibility-reuse-rows-ignored", "visibility.wgsl", "k < params.reuse_rows &&", "params.reuse_rows > 0u &&", "step 5"),
+    ("visibility-reuse-without-rep", "visibility.wgsl", "k < params.reuse_rows && rep.w > 0.0 &&", "k < params.reuse_rows &&", "step 5"),
+    # --- direct light against closed forms (tests/closed_form.rs, stage 2)
+    ("triangle-sampling-not-uniform", "common/sampling.wgsl", "let s = sqrt(u1);", "let s = u1;", "direct"),
+    ("emitter-pdf-area-dropped", "common/lights.wgsl", "s.pdf_area = (e.power / scene.emit_power) / e.area;", "s.pdf_area = e.power / scene.emit_power;", "direct"),
+    ("spot-falloff-linear", "common/lights.wgsl", "falloff = t * t;", "falloff = t;", "direct"),
+    ("spot-cone-swapped", "common/lights.wgsl", "let t = clamp((cd - co) / max(ci - co, 1e-4), 0.0, 1.0);", "let t = clamp((cd - ci) / max(co - ci, 1e-4), 0.0, 1.0);", "direct"),
+    ("punctual-not-inverse-square", "common/lights.wgsl", "s.e = l.color_cos_inner.xyz * falloff / d2;", "s.e = l.color_cos_inner.xyz * falloff / s.dist;", "direct"),
+    ("direct-emitter-cosine-dropped", "direct.wgsl", "area_sum += ls.le * cos_p * cos_l / (d2 * ls.pdf_area);", "area_sum += ls.le * cos_p / (d2 * ls.pdf_area);", "direct"),
+    ("direct-punctual-cosine-dropped", "direct.wgsl", "sum += ps.e * cos_p;", "sum += ps.e;", "direct"),
+    ("direct-albedo-not-over-pi", "direct.wgsl", "return sp.albedo.xyz / PI * sum;", "return sp.albedo.xyz * sum;", "direct"),
+    ("cosine-sampling-not-sqrt", "common/sampling.wgsl", "let r = sqrt(u1);", "let r = u1;", "sampling"),
+    ("cosine-sampling-uniform", "common/sampling.wgsl", "let local = vec3<f32>(r * cos(phi), r * sin(phi), sqrt(max(0.0, 1.0 - u1)));", "let local = vec3<f32>(sqrt(max(0.0, u1 * (2.0 - u1))) * cos(phi), sqrt(max(0.0, u1 * (2.0 - u1))) * sin(phi), 1.0 - u1);", "sampling"),
+    ("cosine-sampling-half-azimuth", "common/sampling.wgsl", "let phi = 2.0 * PI * u2;", "let phi = PI * u2;", "sampling"),
+    ("onb-sign-flipped", "common/sampling.wgsl", "let s = select(-1.0, 1.0, n.z >= 0.0);", "let s = select(1.0, -1.0, n.z >= 0.0);", "sampling"),
+    ("vpl-roulette-not-divided", "vpl_trace.wgsl", "            flux /= q;", "            flux /= 1.0;", "VPLs"),
+    ("vpl-emitter-flux-not-times-pi", "vpl_trace.wgsl", "flux = ls.le * PI / (p_src * ls.pdf_area);", "flux = ls.le / (p_src * ls.pdf_area);", "VPLs"),
+    ("pt-roulette-not-divided", "pathtrace.wgsl", "                throughput /= q;", "                throughput /= 1.0;", "path tr."),
+    ("pt-nee-albedo-not-over-pi", "pathtrace.wgsl", "return albedo / PI * sum;", "return albedo * sum;", "path tr."),
+    ("pt-emission-at-every-vertex", "pathtrace.wgsl", "                if v == 0u {\n                    total += surf.emission;", "                if true {\n                    total += surf.emission;", "path tr."),
+    ("pt-throughput-albedo-dropped", "pathtrace.wgsl", "throughput *= surf.albedo;", "throughput *= 1.0;", "path tr."),
+    ("vpl-spot-power-whole-sphere", "vpl_trace.wgsl", "flux = intensity * (t * t) * 2.0 * PI * (1.0 - co) / p_src;", "flux = intensity * (t * t) * 4.0 * PI / p_src;", "VPLs"),
+    ("vpl-spot-falloff-linear", "vpl_trace.wgsl", "flux = intensity * (t * t) * 2.0 * PI * (1.0 - co) / p_src;", "flux = intensity * t * 2.0 * PI * (1.0 - co) / p_src;", "VPLs"),
+    ("vpl-spot-cone-not-uniform", "vpl_trace.wgsl", "let cz = 1.0 - rng_next(&rng) * (1.0 - co);", "let cz = 1.0 - rng_next(&rng) * rng_next(&rng) * (1.0 - co);", "VPLs"),
+    ("vpl-point-power-half-sphere", "vpl_trace.wgsl", "flux = intensity * 4.0 * PI / p_src;", "flux = intensity * 2.0 * PI / p_src;", "VPLs"),
+    ("vpl-point-sphere-not-uniform", "vpl_trace.wgsl", "let z = 1.0 - 2.0 * u1;", "let z = 1.0 - 2.0 * u1 * u1;", "VPLs"),
+    ("vpl-sun-disc-not-uniform", "vpl_trace.wgsl", "let r = params.radius * sqrt(rng_next(&rng));", "let r = params.radius * rng_next(&rng);", "VPLs"),
+    ("vpl-sun-power-radius-not-squared", "vpl_trace.wgsl", "flux = intensity * PI * params.radius * params.radius / p_src;", "flux = intensity * PI * params.radius / p_src;", "VPLs"),
+    # Not listed, equivalent in expectation: Russian roulette from the first bounce on in the VPL
+    # tracer, or with another survival probability in the path tracer (each divides by its own q:
+    # unbiased, only noisier).
+    # Not listed, equivalent for the closed-form scenes: swapping sample_triangle's two barycentrics
+    # (the uniform density on a triangle is symmetric in them), and the emitter stratum's jitter
+    # halved (one square emitter of two equal triangles: every stratum still picks each half
+    # alike).
+    # Equivalent on lavapipe, so not listed (tried 2026-11-26, both pass every oracle): dropping
+    # `if i == INVALID { return; }` (an invocation past the chunk reads its representative out of
+    # bounds, as zeros: no representative, and its write past the matrix is dropped by wgpu's bounds
+    # checks) and `min(c0 + 32u, params.num_lights)` → `c0 + 32u` (the light texture past the last
+    # light is zero-initialised: a zero normal fails the facing test, no bit).
 ]
 
 # Stage 2: binary name → tests to run (a filter list; empty = the whole binary). Twin tests of each pass.
 STAGE2 = {
+    "closed_form": [],
     "kmeans": ["gpu_kmeans_matches_cpu_on_random_surfaces", "representative_weights_match_cpu",
                "weight_exponent_matches_cpu_and_spans_uniform_to_hard"],
     "clustered": ["clustered_shading_matches_cpu_twin"],

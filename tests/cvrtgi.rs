@@ -301,6 +301,12 @@ fn total(direct: &[[f32; 3]], ind: &[[f32; 3]]) -> Vec<[f32; 3]> {
         .collect()
 }
 
+/// Bounds of the twin comparisons on lavapipe (`rel`; docs/testing.md, "Twin tolerances"): gather,
+/// filter and lookup (on a GPU 1e-4, not measured).
+const TOL_GATHER: f32 = 4.4e-7; // measured 2.2e-7
+const TOL_FILTER: f32 = 1.1e-6; // measured 5.3e-7
+const TOL_LOOKUP: f32 = 0.0; // measured: bit-exact
+
 fn rel(a: Vec3, b: Vec3) -> f32 {
     (a - b).length() / b.length().max(1e-6)
 }
@@ -341,7 +347,14 @@ fn gpu_kernels_match_their_cpu_twins() {
         same += (got == want) as usize;
     }
     println!("visibility lists equal: {same} of {nf}");
-    assert!(same as f64 >= 0.98 * nf as f64, "{same} of {nf}");
+    // On a software adapter every face's list (measured: all 1,666 equal); on a GPU 98% (rays
+    // grazing an edge, where one ulp decides).
+    if ctx.software {
+        assert_eq!(same, nf, "visibility lists");
+    } else {
+        assert!(same as f64 >= 0.98 * nf as f64, "{same} of {nf}");
+    }
+    let tol = |software: f32| if ctx.software { software } else { 1e-4 };
     // Gather on the GPU's own lists, the filter on the GPU's gathered values, the lookup on the
     // GPU's filtered ones: the same math.
     let d_min = rs.frame.clamp * r.scene.extent();
@@ -360,7 +373,7 @@ fn gpu_kernels_match_their_cpu_twins() {
         worst = worst.max(rel(gathered[f], want));
     }
     println!("gather worst relative error {worst:e}");
-    assert!(worst < 1e-4);
+    assert!(worst <= tol(TOL_GATHER), "gather: {worst}");
     let mut irr = gathered.clone();
     for _ in 0..cs.filter_passes {
         irr = (0..nf)
@@ -372,7 +385,7 @@ fn gpu_kernels_match_their_cpu_twins() {
         .map(|f| rel(filtered[f], irr[f]))
         .fold(0.0, f32::max);
     println!("filter worst relative error {worst:e}");
-    assert!(worst < 1e-4);
+    assert!(worst <= tol(TOL_FILTER), "filter: {worst}");
     let gbuf = r.last_gbuffer().unwrap();
     let mut worst = 0.0f32;
     for (px, got) in img.iter().enumerate() {
@@ -381,7 +394,7 @@ fn gpu_kernels_match_their_cpu_twins() {
         worst = worst.max(rel(Vec3::from(*got), want));
     }
     println!("lookup worst relative error {worst:e}");
-    assert!(worst < 1e-4);
+    assert!(worst <= tol(TOL_LOOKUP), "lookup: {worst}");
 }
 
 #[test]

@@ -338,7 +338,7 @@ fn gpu_kmeans_matches_cpu_on_shading_points() {
         &settings(96, 6, 4, 0.866, 10),
         sc.bounds(),
     );
-    assert!(s >= 0.99 && f >= 0.99, "agreement {s} {f}");
+    assert_agreement("conference SPs", &ctx, s, f);
     // How often the 27-cell search misses the exact nearest centroid (reported in docs/clustering.md).
     let g = run_gpu(&ctx, &gbuf, 4, &settings(96, 1, 1, 0.866, 10), sc.bounds());
     let pts = points_of(&gbuf, 4);
@@ -487,7 +487,8 @@ fn representative_weights_match_cpu() {
     let w = kmeans::rep_weights(&pts, g.params.f as usize, &g.assign, &g.reps, 1.0);
     let worst = worst_difference(&w, &g.weights);
     println!("representative weights: worst difference {worst:e}");
-    assert!(worst < 1e-5, "{worst}");
+    // Measured on lavapipe: bit-exact; on a GPU 1e-5.
+    assert!(worst <= if ctx.software { 0.0 } else { 1e-5 }, "{worst}");
     for (m, pt) in pts.iter().enumerate() {
         let row = &g.weights[m * 6..m * 6 + 6];
         if pt.valid {
@@ -516,9 +517,10 @@ fn weight_exponent_matches_cpu_and_spans_uniform_to_hard() {
         assert_eq!(n, 0, "p {p}: assignment differs");
         let worst = worst_difference(&g.weights, &c.weights);
         println!("p {p}: worst weight difference GPU vs CPU {worst:e}");
-        // (d_min / d)^p = exp2(p log2(d_min / d)): a GPU's exp2 and log2 errors grow with p.
+        // (d_min / d)^p = exp2(p log2(d_min / d)): a GPU's exp2 and log2 errors grow with p. On
+        // lavapipe measured 0 at p = 0 and 1, 2.4e-7 at 2.5, 1.25e-6 at 64: bound 2.6e-6.
         let tolerance = if ctx.software {
-            1e-5
+            2.6e-6
         } else {
             1e-5 * p.max(1.0)
         };
@@ -834,10 +836,14 @@ fn plane_gate_drops_parallel_surfaces_and_matches_cpu() {
         "gated rows equal to the CPU twin's: {rows_equal} of {}",
         pts.len()
     );
-    assert!(rows_equal * 1000 >= pts.len() * 999, "{rows_equal}");
+    // On a software adapter every row (measured: all); on a GPU 99.9% (near-ties, `TIE`).
+    let need = if ctx.software { 1000 } else { 999 };
+    assert!(rows_equal * 1000 >= pts.len() * need, "{rows_equal}");
     let worst = worst_difference(&g_on.weights, &c.weights);
+    println!("gated weights: worst difference {worst:.3e}");
+    // Measured on lavapipe: bit-exact; on a GPU 1e-5.
     assert!(
-        worst < 1e-5,
+        worst <= if ctx.software { 0.0 } else { 1e-5 },
         "weights differ from the CPU twin's by {worst}"
     );
     assert_eq!(g_on.reps, c.reps);
@@ -853,7 +859,7 @@ fn plane_gate_matches_cpu_on_shading_points() {
         ..settings(96, 6, 4, 0.866, 10)
     };
     let (a, f) = compare("conference SPs, gated", &ctx, &gbuf, 4, &s, sc.bounds());
-    assert!(a >= 0.99 && f >= 0.99, "agreement {a} {f}");
+    assert_agreement("conference SPs, gated", &ctx, a, f);
     // Every slot, not only the first: the GPU's gated rows are the twin's, and the gate dropped
     // slots the ungated twin keeps.
     let g = run_gpu(&ctx, &gbuf, 4, &s, sc.bounds());
@@ -878,11 +884,15 @@ fn plane_gate_matches_cpu_on_shading_points() {
         .filter(|&m| row(&c.assign, m) != row(&ungated.assign, m))
         .count();
     println!("gated rows equal to the twin's: {equal} of {n}; rows the gate changed: {gated}");
-    assert!(equal * 100 >= n * 99, "{equal} of {n}");
+    // On a software adapter every row and the weights bit for bit (measured: all rows, weights
+    // equal); on a GPU 99% of the rows and 1e-4 (near-ties, `TIE`).
+    let (need, tol) = if ctx.software { (100, 0.0) } else { (99, 1e-4) };
+    assert!(equal * 100 >= n * need, "{equal} of {n}");
     assert!(gated * 20 >= n, "the gate changed only {gated} of {n} rows");
     let worst = worst_difference(&g.weights, &c.weights);
+    println!("gated weights on shading points: worst difference {worst:.3e}");
     assert!(
-        worst < 1e-4,
+        worst <= tol,
         "weights differ from the CPU twin's by {worst}"
     );
 }

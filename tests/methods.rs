@@ -47,9 +47,13 @@ fn shading_points(r: &Renderer) -> Vec<ShadingPoint> {
         .collect()
 }
 
-fn close(a: Vec3, b: Vec3, rel: f32) -> bool {
-    (a - b).abs().max_element() <= rel * (1.0 + a.abs().max_element())
-}
+/// Bounds of the twin comparisons on lavapipe (`common::assert_twins`; docs/testing.md, "Twin
+/// tolerances"): wang's gather at the sample points, R_j (relative), interpolation; lightcluster's
+/// shading.
+const TOL_WANG_GATHER: f32 = 4.8e-8; // measured 2.4e-8
+const TOL_WANG_RADIUS: f32 = 4.6e-7; // measured 2.3e-7
+const TOL_WANG_INTERP: f32 = 2.7e-8; // measured 1.35e-8
+const TOL_LIGHTCLUSTER: f32 = 1.8e-7; // measured 8.8e-8
 
 /// wang: the GPU's clustering (assignment passes), gather at the sample points, R_j and
 /// interpolation equal the CPU twins (`cpu::wang`, `cpu::vpl`) on a 40×30 frame of each room.
@@ -88,8 +92,12 @@ fn wang_matches_cpu_twin() {
             .zip(&c.labels)
             .filter(|(a, b)| a == b)
             .count();
+        println!("{name}: {same} of {} labels agree", sps.len());
+        // On a software adapter every label (measured: all, both rooms); on a GPU 99% (near-ties
+        // may break the other way).
+        let need = if ctx.software { 100 } else { 99 };
         assert!(
-            same * 100 >= 99 * sps.len(),
+            same * 100 >= need * sps.len(),
             "{name}: {same} of {} labels agree",
             sps.len()
         );
@@ -113,7 +121,7 @@ fn wang_matches_cpu_twin() {
         let sums: Vec<[f32; 4]> = ctx.read_buffer(&wf.radius, k).unwrap();
         let mut radius = Vec::new();
         let mut samples = Vec::new();
-        let mut bad_r = 0;
+        let (mut gathered, mut r_diff) = (Vec::new(), Vec::new());
         for (j, &p) in c.samples.iter().enumerate() {
             if p == twin::INVALID {
                 radius.push(1.0);
@@ -125,20 +133,32 @@ fn wang_matches_cpu_twin() {
                 ..sps[p as usize]
             };
             let want = cs.reference_indirect(&sp, lights, d_min * d_min);
-            let got = Vec3::new(irr[j][0], irr[j][1], irr[j][2]);
-            assert!(
-                close(want, got, 1e-3),
-                "{name}: sample {j}: {want} vs {got}"
-            );
+            gathered.push((want, Vec3::new(irr[j][0], irr[j][1], irr[j][2])));
             let rw = twin::harmonic_radius(&cs, sp.pos, sp.normal, j as u32, fs.frame.seed);
             let rg = twin::radius_from_sum(sums[j][0], s.extent());
-            if (rw - rg).abs() > 1e-3 * rw {
-                bad_r += 1;
-            }
+            assert!(rw.is_finite() && rg.is_finite(), "{name}: R_{j} {rw} {rg}");
+            r_diff.push((rw - rg).abs() / rw);
             radius.push(rg);
             samples.push((sp.pos, sp.normal, true));
         }
-        assert!(bad_r <= 1, "{name}: {bad_r} R_j differ");
+        common::assert_twins(
+            &ctx,
+            &format!("{name} wang gather"),
+            gathered,
+            TOL_WANG_GATHER,
+        );
+        let worst_r = r_diff.iter().cloned().fold(0f32, f32::max);
+        println!("{name}: R_j worst relative difference {worst_r:.3e}");
+        if ctx.software {
+            assert!(
+                worst_r <= TOL_WANG_RADIUS,
+                "{name}: R_j differ by {worst_r}"
+            );
+        } else {
+            // On a GPU, not measured: one R_j may be off by more than 1e-3 (a ray grazing an edge).
+            let bad = r_diff.iter().filter(|&&d| d > 1e-3).count();
+            assert!(bad <= 1, "{name}: {bad} R_j differ");
+        }
         // Interpolation from the GPU's own labels, samples, R_j and irradiance.
         let e: Vec<Vec3> = irr.iter().map(|v| Vec3::new(v[0], v[1], v[2])).collect();
         let at = twin::Samples {
@@ -148,14 +168,18 @@ fn wang_matches_cpu_twin() {
             irradiance: &e,
             stride: twin::interp_stride(w * h, k as u32),
         };
-        let mut bad = 0;
-        for (m, sp) in sps.iter().enumerate() {
-            let want = twin::interpolate(w, h, m as u32, sp, &at);
-            if !close(want, Vec3::from(f.indirect[m]), 1e-3) {
-                bad += 1;
-            }
-        }
-        assert!(bad * 100 <= sps.len(), "{name}: {bad} pixels differ");
+        let pairs = sps.iter().enumerate().map(|(m, sp)| {
+            (
+                twin::interpolate(w, h, m as u32, sp, &at),
+                Vec3::from(f.indirect[m]),
+            )
+        });
+        common::assert_twins(
+            &ctx,
+            &format!("{name} wang interpolation"),
+            pairs,
+            TOL_WANG_INTERP,
+        );
     }
 }
 
@@ -187,15 +211,18 @@ fn lightcluster_matches_cpu_twin() {
         assert!(c.discs.len() > 1 && c.discs.len() < vpls.len(), "{name}");
         let cs = common::cpu_scene(&r, &s);
         let d_min = fs.frame.clamp * s.extent();
-        let bad = sps
-            .iter()
-            .enumerate()
-            .filter(|(m, sp)| {
-                let want = lc::shade(&cs, sp, &c, d_min * d_min);
-                !close(want, Vec3::from(f.indirect[*m]), 1e-3)
-            })
-            .count();
-        assert!(bad * 100 <= sps.len(), "{name}: {bad} pixels differ");
+        let pairs = sps.iter().enumerate().map(|(m, sp)| {
+            (
+                lc::shade(&cs, sp, &c, d_min * d_min),
+                Vec3::from(f.indirect[m]),
+            )
+        });
+        common::assert_twins(
+            &ctx,
+            &format!("{name} lightcluster"),
+            pairs,
+            TOL_LIGHTCLUSTER,
+        );
     }
 }
 

@@ -278,14 +278,17 @@ fn warm_sp_clustering_matches_its_twin_on_a_moving_view() {
     assert_eq!(twin_kept, kept);
     assert_eq!(twin.iterations_run, c.iterations_run);
     let gpu_centroids = read_centroids(&ctx, &c.centroids, c.k());
+    let mut worst = 0f32;
     for (k, (g, t)) in gpu_centroids.iter().zip(&twin.centroids).enumerate() {
         assert_eq!(g.valid, t.valid, "centroid {k}");
-        // Fixed-point sums are exact; the means differ by float rounding only (measured ≤ 2e-6 m).
-        assert!(
-            (g.pos - t.pos).length() < 1e-4,
-            "centroid {k}: {g:?} vs {t:?}"
-        );
+        assert!(g.pos.is_finite(), "centroid {k}: {g:?}");
+        worst = worst.max((g.pos - t.pos).length());
     }
+    // Fixed-point sums are exact and the means the same f32 arithmetic: measured equal on lavapipe
+    // (bound 0); on a GPU the means' rounding may differ, 1e-4.
+    println!("warm centroids: worst distance from the twin's {worst:.3e}");
+    let tol = if ctx.software { 0.0 } else { 1e-4 };
+    assert!(worst <= tol, "warm centroids {worst} from the twin's");
     let assign: Vec<u32> = ctx
         .read_buffer(&c.assign, 64 * 48 * c.f() as usize)
         .unwrap();

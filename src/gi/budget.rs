@@ -362,6 +362,141 @@ mod tests {
         }
     }
 
+    /// A frame that took `frame_ms` in all with these passes' times (the others did not run).
+    fn timed(frame_ms: f64, passes: &[(Pass, f64)]) -> Frame {
+        let mut timings_ms: std::collections::BTreeMap<String, f64> = passes
+            .iter()
+            .map(|&(p, ms)| (p.name().to_string(), ms))
+            .collect();
+        timings_ms.insert(super::super::frame::FRAME_KEY.to_string(), frame_ms);
+        Frame {
+            width: 0,
+            height: 0,
+            radiance: Vec::new(),
+            direct: Vec::new(),
+            indirect: Vec::new(),
+            vpls: 0,
+            passes: passes.iter().map(|&(p, _)| p).collect(),
+            timings_ms,
+            shading_points: 0,
+            shadow_rays: 0,
+            sp_clusters_used: 0,
+            vpl_clusters_used: 0,
+            gamma_used: None,
+            positions: Vec::new(),
+            sp_iterations: 0,
+            sp_warm_kept: None,
+            visibility_rows_reused: 0,
+        }
+    }
+
+    /// `Split::of` by hand. The fixed part is primary rays + direct light; the rest is the frame
+    /// less it; the exponent is the controlled passes' time weighted by their exponent (visibility
+    /// 1.5 on the line, shading and gather 1) over the rest, within [0.2, 3].
+    #[test]
+    fn split_of_a_frame_by_hand() {
+        use Pass::*;
+        // Primary 10, direct 20, SP clustering 10, visibility 30, shading 40: frame 110, fixed 30,
+        // rest 80.
+        let f = timed(
+            110.0,
+            &[
+                (Primary, 10.0),
+                (Direct, 20.0),
+                (SpCluster, 10.0),
+                (Visibility, 30.0),
+                (Shade, 40.0),
+            ],
+        );
+        let both = Split::of(&f, Controlled::Both);
+        assert_eq!(
+            (both.frame_ms, both.fixed_ms, both.direct_ms),
+            (110.0, 30.0, 20.0)
+        );
+        // Both: (1.5 · 30 + 40) / 80 = 85 / 80 = 1.0625.
+        assert_eq!(both.exponent, 1.0625);
+        // SP clustering alone: visibility only, 30 / 80 = 0.375.
+        assert_eq!(Split::of(&f, Controlled::SpOnly).exponent, 0.375);
+        // VPL clustering alone: gather + shading, here 40 / 80 = 0.5.
+        assert_eq!(Split::of(&f, Controlled::VplOnly).exponent, 0.5);
+        // VPL clustering alone with the gather (K_SP off): primary 5, direct 15, gather 12,
+        // shading 36, frame 80: fixed 20, rest 60, (12 + 36) / 60 = 0.8; Both weighs shading only:
+        // 36 / 60 = 0.6.
+        let g = timed(
+            80.0,
+            &[
+                (Primary, 5.0),
+                (Direct, 15.0),
+                (Gather, 12.0),
+                (Shade, 36.0),
+            ],
+        );
+        let vpl = Split::of(&g, Controlled::VplOnly);
+        assert_eq!(
+            (vpl.fixed_ms, vpl.direct_ms, vpl.exponent),
+            (20.0, 15.0, 0.8)
+        );
+        assert_eq!(Split::of(&g, Controlled::Both).exponent, 0.6);
+        // Clamped: visibility 100 of a rest of 40 (the passes overlap the frame's own timestamps)
+        // gives 1.5 · 100 / 40 = 3.75 → 3; visibility 1 of 40 alone gives 0.025 → 0.2.
+        let h = timed(50.0, &[(Primary, 10.0), (Visibility, 100.0)]);
+        assert_eq!(Split::of(&h, Controlled::Both).exponent, 3.0);
+        let l = timed(50.0, &[(Primary, 10.0), (Visibility, 1.0)]);
+        assert_eq!(Split::of(&l, Controlled::SpOnly).exponent, 0.2);
+        // Nothing but the fixed part (rest 0), or a frame shorter than its fixed passes (rest
+        // negative, read as 0): exponent 1, the fixed part as measured.
+        let z = timed(30.0, &[(Primary, 10.0), (Direct, 20.0), (Shade, 5.0)]);
+        assert_eq!(Split::of(&z, Controlled::Both).exponent, 1.0);
+        let n = timed(25.0, &[(Primary, 10.0), (Direct, 20.0), (Shade, 5.0)]);
+        let s = Split::of(&n, Controlled::Both);
+        assert_eq!((s.fixed_ms, s.exponent), (30.0, 1.0));
+        // A frame with no direct light (no emitter, no punctual light): direct 0.
+        let d = timed(60.0, &[(Primary, 12.0), (Shade, 48.0)]);
+        let s = Split::of(&d, Controlled::Both);
+        assert_eq!((s.fixed_ms, s.direct_ms, s.exponent), (12.0, 0.0, 1.0));
+    }
+
+    /// One step of the controller from a split worked by hand: frame 110 ms, fixed 30, exponent
+    /// 1.0625 (above), budget 70 ms: K_VPL 1000 · ((70 − 30) / 80)^(1 / 1.0625) = 1000 · 0.5^0.941
+    /// = 520.8 → 521; the next step's exponent is the secant of the two frames.
+    #[test]
+    fn a_step_solves_the_fitted_model() {
+        use Pass::*;
+        let f = timed(
+            110.0,
+            &[
+                (Primary, 10.0),
+                (Direct, 20.0),
+                (SpCluster, 10.0),
+                (Visibility, 30.0),
+                (Shade, 40.0),
+            ],
+        );
+        let c = ClusterSettings {
+            vpl_clusters: 1000,
+            ..ClusterSettings::default()
+        };
+        let s = settings(&c, (320, 240), 8192);
+        let mut b = Budget::new(70.0, &s);
+        let s = RenderSettings {
+            cluster: b.apply(&s.cluster, 1000),
+            ..s
+        };
+        let next = b.step(&s, Split::of(&f, b.controlled));
+        assert_eq!(next.cluster.vpl_clusters, 521);
+        assert_eq!(next.cluster.sp_clusters, k_sp_on_line(521, 320 * 240, 8192));
+        assert_eq!(next.frame.direct_samples, 16);
+        assert!(!b.done(&next));
+        // The second frame at K 521 took 30 + 50 ms (80): the secant exponent
+        // ln(50 / 80) / ln(521 / 1000) = 0.7209 (not the split's own 1), and K = 521 · (40 /
+        // 50)^(1 / 0.7209) = 382.3 → 382.
+        let g = timed(80.0, &[(Primary, 10.0), (Direct, 20.0), (Shade, 50.0)]);
+        let after = b.step(&next, Split::of(&g, b.controlled));
+        assert_eq!(after.cluster.vpl_clusters, 382);
+        assert_eq!(b.steps.len(), 2);
+        assert_eq!((b.steps[1].vpl_clusters, b.steps[1].frame_ms), (521, 80.0));
+    }
+
     #[test]
     fn the_line_passes_through_the_papers_intermediate_setting() {
         // 640×480, 8192 VPLs: 2000 → 1% (3072); 250 → 0.35%; 4000 → 1.41%.

@@ -96,3 +96,51 @@ pub fn assert_refused(args: &[&str], needle: &str) {
     assert!(lines[0].contains(needle), "{args:?}: {err}");
     assert!(!err.contains("panicked"), "{args:?}: {err}");
 }
+
+/// How far a GPU value is from its CPU twin's: the largest channel difference over 1 + the twin's
+/// largest channel (relative above 1, absolute below).
+pub fn twin_diff(c: glam::Vec3, g: glam::Vec3) -> f32 {
+    (c - g).abs().max_element() / (1.0 + c.abs().max_element())
+}
+
+/// A twin comparison's bound on a scalar measure: `software` on a software adapter (lavapipe: the
+/// measured maximum × 2, or 0 where the twins are bit-exact; docs/testing.md, "Twin tolerances"); on
+/// a GPU 1e-3, not measured (other rounding, fused multiply-adds).
+pub fn twin_tol(ctx: &GpuContext, software: f32) -> f32 {
+    if ctx.software { software } else { 1e-3 }
+}
+
+/// Asserts every (CPU twin, GPU) pair finite and, on a software adapter, every one within `software`
+/// (`twin_diff`; docs/testing.md, "Twin tolerances"); on a GPU, not measured, the former rule: at most
+/// 1% of them beyond 1e-3 (rays grazing an edge may go another way there). Prints the worst
+/// difference (the figure docs/testing.md records) and returns it.
+pub fn assert_twins(
+    ctx: &GpuContext,
+    name: &str,
+    pairs: impl IntoIterator<Item = (glam::Vec3, glam::Vec3)>,
+    software: f32,
+) -> f32 {
+    let (mut worst, mut at, mut n, mut beyond) = (0f32, None, 0usize, 0usize);
+    for (i, (c, g)) in pairs.into_iter().enumerate() {
+        assert!(
+            c.is_finite() && g.is_finite(),
+            "{name}: item {i}: CPU {c}, GPU {g}"
+        );
+        let d = twin_diff(c, g);
+        if d > worst {
+            (worst, at) = (d, Some((i, c, g)));
+        }
+        beyond += (d > 1e-3) as usize;
+        n += 1;
+    }
+    println!("twin {name}: worst {worst:.3e} of {n} (bound {software:.1e} on software) at {at:?}");
+    if ctx.software {
+        assert!(
+            worst <= software,
+            "{name}: worst difference {worst:e} > {software:e} at (item, CPU, GPU) {at:?}"
+        );
+    } else {
+        assert!(beyond * 100 <= n, "{name}: {beyond} of {n} beyond 1e-3");
+    }
+    worst
+}
