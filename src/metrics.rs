@@ -379,7 +379,10 @@ mod tests {
             positions: &[[0.5, 0.0, 1.0, 0.0]],
             ..cur
         };
-        assert_eq!(instability_world(&sky, &frame(&prev_x, &black, &prev_pos, &up), project), None);
+        assert_eq!(
+            instability_world(&sky, &frame(&prev_x, &black, &prev_pos, &up), project),
+            None
+        );
     }
 
     /// An error that moves with the surface is no flicker: the camera moved one pixel, the errors

@@ -384,6 +384,7 @@ mod tests {
             vpl_clusters_used: 0,
             gamma_used: None,
             positions: Vec::new(),
+            normals: Vec::new(),
             sp_iterations: 0,
             sp_warm_kept: None,
             visibility_rows_reused: 0,
