@@ -93,6 +93,12 @@ fn render_cornell_128_exr_with_stats() {
         assert!(j["timings_ms"][k].is_number(), "timings_ms lacks {k}");
     }
     assert!(j["timings_ms"]["frame"].as_f64().unwrap() > 0.0);
+    // The warm-up before the timed render (default 200 ms of GPU work) and the device it ran on.
+    assert!(j["warmup_ms"].as_f64().unwrap() >= 200.0, "{j}");
+    assert!(!j["driver"].as_str().unwrap().is_empty(), "{j}");
+    let software = j["adapter"].as_str().unwrap().contains("llvmpipe");
+    let kind = if software { "software" } else { "hardware" };
+    assert_eq!(j["device_type"], kind, "{j}");
     assert_eq!(j["counts"]["triangles"], 32);
     // The contract's settings, and the values the k-means used (γ at most pixels / K).
     for k in [
