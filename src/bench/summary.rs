@@ -33,7 +33,8 @@ pub struct CameraSummary {
     pub rows: Vec<(Row, String, String)>,
 }
 
-fn fmt_ms(v: f64) -> String {
+/// A time in ms as tables show it: "–" for 0, two decimals below 10, one above.
+pub(crate) fn fmt_ms(v: f64) -> String {
     if v == 0.0 {
         "–".into()
     } else if v < 10.0 {

@@ -10,21 +10,12 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 
 use super::csv::{Row, from_csv};
+use super::summary::fmt_ms as ms;
 
 /// What the table states above its rows.
 pub struct TableInfo<'a> {
     pub commit: &'a str,
     pub date: &'a str,
-}
-
-fn ms(v: f64) -> String {
-    if v == 0.0 {
-        "–".into()
-    } else if v < 10.0 {
-        format!("{v:.2}")
-    } else {
-        format!("{v:.1}")
-    }
 }
 
 fn sci(v: f64) -> String {
