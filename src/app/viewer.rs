@@ -651,6 +651,7 @@ impl Viewer {
             reprojected = reproject::reproject(
                 rgba,
                 &r.frame.positions,
+                &r.frame.normals,
                 &crate::gi::primary::CameraParams::new(from, w, h),
                 &crate::gi::primary::CameraParams::new(&now, w, h),
             );
