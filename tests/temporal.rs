@@ -522,3 +522,50 @@ fn direct_light_estimates_average_towards_the_converged_image() {
     // estimates). Estimates that repeated one seed would give 1×.
     assert!(e16 < e1 / 8.0, "{e16} vs {e1}");
 }
+
+/// The warm-up before timing (`Renderer::warm_up`) leaves no past: on a hardware adapter it renders
+/// one untimed frame (forced here on lavapipe), yet a temporal frame after it is bit for bit the
+/// cold-started frame a renderer without the warm-up gives, and a past that was there stays.
+#[test]
+fn the_warm_up_leaves_no_past() {
+    let mut ctx = common::gpu();
+    ctx.software = false;
+    let s = scene::load("builtin:conference").unwrap();
+    let cam = s.default_camera();
+    let rs = RenderSettings {
+        frame: FrameSettings {
+            width: 48,
+            height: 36,
+            vpls: 512,
+            direct_samples: 2,
+            ..Default::default()
+        },
+        cluster: ClusterSettings {
+            vpl_clusters: 64,
+            sp_clusters: 24,
+            temporal: true,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let cold = Renderer::new(&ctx, &s).unwrap().render(&cam, &rs).unwrap();
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let spent = r.warm_up(&cam, &rs, 5.0).unwrap();
+    assert!(spent >= 5.0);
+    assert!(
+        r.sp_clustering.is_none(),
+        "the untimed frame left its clustering"
+    );
+    let after = r.render(&cam, &rs).unwrap();
+    assert!(common::all_finite(&after.radiance));
+    assert_eq!(after.sp_warm_kept, None, "a warm start after the warm-up");
+    assert!(
+        after.radiance == cold.radiance,
+        "the warm-up changed the frame"
+    );
+    // With a past, the warm-up puts it back: the next frame is warm-started from it.
+    r.warm_up(&cam, &rs, 5.0).unwrap();
+    assert!(r.sp_clustering.is_some());
+    let next = r.render(&cam, &rs).unwrap();
+    assert!(next.sp_warm_kept.is_some());
+}

@@ -200,9 +200,9 @@ pub fn run(
                 temporal: on,
                 ..c.clone()
             });
-            // Pipelines built (one untimed frame on a GPU), then each run starts with no past.
-            renderer.warm_up(&cameras[0], &s, plan.timing.warmup_ms)?;
+            // Pipelines built (one untimed frame on a GPU); each run starts with no past.
             renderer.sp_clustering = None;
+            renderer.warm_up(&cameras[0], &s, plan.timing.warmup_ms)?;
             let mut prev: Option<Frame> = None;
             for (i, cam) in cameras.iter().enumerate() {
                 // A frame is timed once (its past is its predecessor's), right after GPU work that

@@ -141,9 +141,9 @@ impl<'a> Renderer<'a> {
     }
 
     /// Before timing `s` at `camera`: on a hardware adapter one untimed render (its pipelines built,
-    /// its buffers sized: work a first timed run would otherwise leave the GPU idle for), then `ms`
-    /// of GPU work (`GpuContext::warm_up`, `--warmup-ms`). 0 does nothing. Returns the ms of the
-    /// busy kernel.
+    /// its buffers sized: work a first timed run would otherwise leave the GPU idle for; the temporal
+    /// state it found is put back), then `ms` of GPU work (`GpuContext::warm_up`, `--warmup-ms`).
+    /// 0 does nothing. Returns the ms of the busy kernel.
     pub fn warm_up(
         &mut self,
         camera: &crate::scene::Camera,
@@ -154,7 +154,10 @@ impl<'a> Renderer<'a> {
             return Ok(0.0);
         }
         if !self.ctx.software {
+            // The untimed frame leaves no past: the timed ones start as they would without it.
+            let (clustering, visibility) = (self.sp_clustering.take(), self.last_visibility.take());
             self.render(camera, s)?;
+            (self.sp_clustering, self.last_visibility) = (clustering, visibility);
         }
         self.ctx.warm_up(ms)
     }
