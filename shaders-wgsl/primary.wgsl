@@ -10,7 +10,7 @@ struct CameraParams {
     right: vec4<f32>,
     up: vec4<f32>,
     forward: vec4<f32>,
-    // width, height
+    // width, height, and the rays' sub-pixel jitter (x, y as f32 bits; 0: pixel centres).
     size: vec4<u32>,
 }
 
@@ -20,8 +20,8 @@ struct CameraParams {
 fn camera_ray(px: u32) -> Ray {
     let w = cam.size.x;
     let h = cam.size.y;
-    let x = f32(px % w) + 0.5;
-    let y = f32(px / w) + 0.5;
+    let x = f32(px % w) + 0.5 + bitcast<f32>(cam.size.z);
+    let y = f32(px / w) + 0.5 + bitcast<f32>(cam.size.w);
     let sx = 2.0 * x / f32(w) - 1.0;
     let sy = 1.0 - 2.0 * y / f32(h);
     let d = normalize(cam.forward.xyz + sx * cam.right.xyz + sy * cam.up.xyz);

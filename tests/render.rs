@@ -134,6 +134,52 @@ fn gpu_primary_and_direct_match_cpu_twin() {
     }
 }
 
+/// Anti-aliasing at rest traces the primary rays through a sub-pixel offset of the pixel centres
+/// (`CameraParams::with_jitter`): the jittered G-buffer equals the CPU twin's rays through the same
+/// offsets, at the centred twin's bounds, and at an edge of the Cornell box's geometry some pixels
+/// change surface (the offset is really applied).
+#[test]
+fn jittered_primary_rays_match_cpu_twin() {
+    let ctx = common::gpu();
+    let s = scene::load("builtin:cornell").unwrap();
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let (w, h) = (48u32, 36u32);
+    let cam = s.default_camera();
+    r.render(&cam, &settings(w, h, 1)).unwrap();
+    let centred = r.last_gbuffer().unwrap();
+    let ext = s.extent();
+    let jitters = [[0.3f32, -0.2f32], [-0.45, 0.45]];
+    let traced: Vec<Vec<[f32; 4]>> = jitters
+        .iter()
+        .map(|&j| r.jittered_gbuffer(j).unwrap())
+        .collect();
+    let cpu = common::cpu_scene(&r, &s);
+    for (jitter, gbuf) in jitters.into_iter().zip(traced) {
+        let cp = CameraParams::new(&cam, w, h).with_jitter(jitter);
+        let (mut worst, mut moved) = (0f32, 0);
+        for px in 0..(w * h) as usize {
+            let g = ShadingPoint::from_gpu(&gbuf[px * 4..px * 4 + 4]);
+            let c = cpu.primary(&cp, px as u32);
+            assert_eq!(g.valid, c.valid, "pixel {px}: hit / miss");
+            if g.valid {
+                assert!(g.pos.is_finite() && g.normal.is_finite());
+                worst = worst.max((g.pos - c.pos).length() / ext);
+            }
+            let old = ShadingPoint::from_gpu(&centred[px * 4..px * 4 + 4]);
+            moved += (old.pos != g.pos) as u32;
+        }
+        println!("jitter {jitter:?}: worst position {worst:.3e}, {moved} pixels moved");
+        assert!(
+            worst <= common::twin_tol(&ctx, TOL_SP[0]),
+            "{jitter:?}: {worst}"
+        );
+        assert!(
+            moved as usize > (w * h) as usize / 2,
+            "{jitter:?}: {moved} moved"
+        );
+    }
+}
+
 /// Thousands of area-light samples per pixel give the same direct light as the CPU twin, not a
 /// fraction of it: lavapipe ends every loop of a SIMD batch after 65,535 trips in all, so 8192 samples
 /// in one invocation kept only about 2,000 of them (the image got darker as samples were added) until

@@ -480,8 +480,13 @@ fn direct_light_estimates_average_towards_the_converged_image() {
         ..Default::default()
     };
     let f = r.render(&cam, &one).unwrap();
-    let (again, ms) = r.direct_again(&one, one.frame.seed).unwrap();
+    let (again, ms) = r.direct_again(&one, one.frame.seed, None).unwrap();
     assert_eq!(again, f.direct, "the same seed gives the same estimate");
+    // Traced again through the pixel centres (jitter 0): the same shading points, the same light.
+    let (centred, _) = r
+        .direct_again(&one, one.frame.seed, Some([0.0, 0.0]))
+        .unwrap();
+    assert_eq!(centred, f.direct, "re-traced at the centres");
     assert!(ms > 0.0);
     let mut sum = vec![[0f64; 3]; f.direct.len()];
     for i in 0..16u32 {
@@ -489,6 +494,7 @@ fn direct_light_estimates_average_towards_the_converged_image() {
             .direct_again(
                 &one,
                 one.frame.seed.wrapping_add(i.wrapping_mul(0x9e37_79b9)),
+                None,
             )
             .unwrap();
         assert!(common::all_finite(&d));

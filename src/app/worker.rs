@@ -293,6 +293,24 @@ fn take(
     }
 }
 
+/// The sub-pixel offset of the `k`-th direct-light estimate at rest: the Halton (2, 3) point k,
+/// centred, in (-0.5, 0.5)²; k = 0 (the frame itself) is the pixel centre.
+pub fn subpixel_jitter(k: u32) -> [f32; 2] {
+    fn radical_inverse(mut k: u32, base: u32) -> f32 {
+        let (mut f, mut r) = (1.0f32, 0.0f32);
+        while k > 0 {
+            f /= base as f32;
+            r += f * (k % base) as f32;
+            k /= base;
+        }
+        r
+    }
+    if k == 0 {
+        return [0.0, 0.0];
+    }
+    [radical_inverse(k, 2) - 0.5, radical_inverse(k, 3) - 0.5]
+}
+
 /// How many direct-light estimates a frame at rest accumulates (64 × 16 samples a pixel by default).
 pub const MAX_ESTIMATES: u32 = 64;
 
@@ -322,7 +340,9 @@ impl Accumulation {
             .frame
             .seed
             .wrapping_add(self.estimates.wrapping_mul(0x9e37_79b9));
-        let (direct, gpu_ms) = renderer.direct_again(&self.settings, seed)?;
+        // Anti-aliasing at rest: each estimate's primary rays through another sub-pixel offset.
+        let jitter = subpixel_jitter(self.estimates);
+        let (direct, gpu_ms) = renderer.direct_again(&self.settings, seed, Some(jitter))?;
         anyhow::ensure!(direct.len() == self.sum.len(), "the frame changed size");
         for (s, d) in self.sum.iter_mut().zip(&direct) {
             for c in 0..3 {
@@ -436,4 +456,30 @@ fn render(
 /// A fresh control for a reference job.
 pub fn control() -> Arc<Control> {
     Arc::new(Control::default())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Halton (2, 3), centred: k = 1 is (0.5, 1/3) − 0.5, k = 2 (0.25, 2/3) − 0.5; every offset
+    /// inside the pixel; the first 64 cover its four quadrants evenly.
+    #[test]
+    fn subpixel_jitter_is_halton() {
+        assert_eq!(subpixel_jitter(0), [0.0, 0.0]);
+        let close =
+            |a: [f32; 2], b: [f32; 2]| (a[0] - b[0]).abs() < 1e-6 && (a[1] - b[1]).abs() < 1e-6;
+        assert!(close(subpixel_jitter(1), [0.0, 1.0 / 3.0 - 0.5]));
+        assert!(close(subpixel_jitter(2), [-0.25, 2.0 / 3.0 - 0.5]));
+        let mut quadrants = [0; 4];
+        for k in 1..=64 {
+            let [x, y] = subpixel_jitter(k);
+            assert!(x.abs() < 0.5 && y.abs() < 0.5);
+            quadrants[(x >= 0.0) as usize * 2 + (y >= 0.0) as usize] += 1;
+        }
+        assert!(
+            quadrants.iter().all(|&q| (12..=20).contains(&q)),
+            "{quadrants:?}"
+        );
+    }
 }

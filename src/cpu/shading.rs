@@ -141,8 +141,9 @@ impl<'a> CpuScene<'a> {
     /// Twin of `primary.wgsl` for one pixel.
     pub fn primary(&self, cam: &CameraParams, pixel: u32) -> ShadingPoint {
         let w = cam.size[0];
-        let x = (pixel % w) as f32 + 0.5;
-        let y = (pixel / w) as f32 + 0.5;
+        let [jx, jy] = cam.jitter();
+        let x = (pixel % w) as f32 + 0.5 + jx;
+        let y = (pixel / w) as f32 + 0.5 + jy;
         let dir = cam.ray(x, y).normalize();
         let eye = cam.eye_point();
         let none = ShadingPoint {

@@ -535,6 +535,7 @@ impl Renderer<'_> {
             self.sp_clustering = Some(c);
         }
         self.gbuffer = Some((r.gbuffer, n));
+        self.last_camera = Some(r.cam);
         let direct: Vec<[f32; 3]> = px.iter().map(|p| self.to_scene_units(p)).collect();
         let indirect: Vec<[f32; 3]> = ind.iter().map(|p| self.to_scene_units(p)).collect();
         let radiance = direct

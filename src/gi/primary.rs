@@ -1,4 +1,5 @@
-//! Step 3: primary rays through pixel centres → shading points (`shaders-wgsl/primary.wgsl`).
+//! Step 3: primary rays through pixel centres (or a sub-pixel offset of them, `with_jitter`) →
+//! shading points (`shaders-wgsl/primary.wgsl`).
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -20,6 +21,7 @@ pub struct CameraParams {
     pub right: [f32; 4],
     pub up: [f32; 4],
     pub forward: [f32; 4],
+    /// width, height, and the sub-pixel jitter of the rays (x, y as f32 bits; 0: pixel centres).
     pub size: [u32; 4],
 }
 
@@ -42,6 +44,19 @@ impl CameraParams {
 
     fn axis(a: [f32; 4]) -> Vec3 {
         Vec3::new(a[0], a[1], a[2])
+    }
+
+    /// The same view with every primary ray through (x + 0.5 + jx, y + 0.5 + jy) instead of the
+    /// pixel centre, `jitter` in (-0.5, 0.5)² (anti-aliasing at rest).
+    pub fn with_jitter(mut self, jitter: [f32; 2]) -> Self {
+        self.size[2] = jitter[0].to_bits();
+        self.size[3] = jitter[1].to_bits();
+        self
+    }
+
+    /// The sub-pixel offset of the primary rays (`with_jitter`).
+    pub fn jitter(&self) -> [f32; 2] {
+        [f32::from_bits(self.size[2]), f32::from_bits(self.size[3])]
     }
 
     pub fn eye_point(&self) -> Vec3 {

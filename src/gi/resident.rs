@@ -93,6 +93,8 @@ pub struct Renderer<'a> {
     pub(super) cvrtgi: super::cvrtgi::Cvrtgi,
     /// The last frame's G-buffer and its pixel count (`direct_again`, `last_gbuffer`).
     pub(super) gbuffer: Option<(wgpu::Buffer, u32)>,
+    /// The last frame's camera (render units), for `direct_again`'s jittered primary rays.
+    pub(super) last_camera: Option<super::primary::CameraParams>,
     pub vpl_set: Option<ResidentVpls>,
     /// VPL traces so far (`VplKey::trace`).
     vpl_traces: u32,
@@ -194,6 +196,7 @@ impl<'a> Renderer<'a> {
             cvrtgi: Default::default(),
             profiler: Profiler::new(ctx),
             gbuffer: None,
+            last_camera: None,
             vpl_set: None,
             vpl_traces: 0,
             lights: None,
@@ -326,20 +329,53 @@ impl<'a> Renderer<'a> {
 
     /// The direct light (emission + direct, as `Frame::direct`) of the last frame's shading points
     /// again, with another seed: an independent estimate to average with it (the viewer accumulates
-    /// these while the camera rests). Returns it with its GPU ms.
-    pub fn direct_again(&mut self, s: &RenderSettings, seed: u32) -> Result<(Vec<[f32; 3]>, f64)> {
+    /// these while the camera rests). With `jitter` the shading points are traced again first, each
+    /// primary ray through that sub-pixel offset of its pixel centre (`CameraParams::with_jitter`):
+    /// averaged over offsets, edges are anti-aliased. Returns it with its GPU ms.
+    pub fn direct_again(
+        &mut self,
+        s: &RenderSettings,
+        seed: u32,
+        jitter: Option<[f32; 2]>,
+    ) -> Result<(Vec<[f32; 3]>, f64)> {
         let ctx = self.ctx;
-        let Some((gbuffer, n)) = &self.gbuffer else {
+        let Some((gbuffer, n)) = self.gbuffer.clone() else {
             anyhow::bail!("no frame rendered yet");
         };
-        let radiance = ctx.storage("radiance", *n as u64 * 16);
+        let radiance = ctx.storage("radiance", n as u64 * 16);
         let spp = self.direct_samples(s);
         let _ = self.profiler.collect(ctx)?;
+        let gbuffer = match jitter {
+            Some(j) => self.trace_jittered(j)?,
+            None => gbuffer,
+        };
         self.direct
-            .record(&mut gpu!(self), gbuffer, &radiance, *n, spp, seed);
+            .record(&mut gpu!(self), &gbuffer, &radiance, n, spp, seed);
         let ms: f64 = self.profiler.collect(ctx)?.values().sum();
-        let px: Vec<[f32; 4]> = ctx.read_buffer(&radiance, *n as usize)?;
+        let px: Vec<[f32; 4]> = ctx.read_buffer(&radiance, n as usize)?;
         Ok((px.iter().map(|p| self.to_scene_units(p)).collect(), ms))
+    }
+
+    /// The last frame's shading points traced again, each primary ray through sub-pixel offset
+    /// `jitter` of its pixel centre (a new G-buffer).
+    fn trace_jittered(&mut self, jitter: [f32; 2]) -> Result<wgpu::Buffer> {
+        let (Some((_, n)), Some(cam)) = (&self.gbuffer, self.last_camera) else {
+            anyhow::bail!("no frame rendered yet");
+        };
+        let buffer = self
+            .ctx
+            .storage("gbuffer (jittered)", *n as u64 * super::primary::SP_BYTES);
+        self.primary
+            .record(&mut gpu!(self), &cam.with_jitter(jitter), &buffer);
+        Ok(buffer)
+    }
+
+    /// `trace_jittered` read back (4 vec4s a pixel, as `last_gbuffer`): what the twins compare.
+    pub fn jittered_gbuffer(&mut self, jitter: [f32; 2]) -> Result<Vec<[f32; 4]>> {
+        let n = self.gbuffer.as_ref().map_or(0, |g| g.1) as usize;
+        let b = self.trace_jittered(jitter)?;
+        let _ = self.profiler.collect(self.ctx)?;
+        self.ctx.read_buffer(&b, n * 4)
     }
 
     /// Area-light samples a pixel: the settings', or 0 in a scene without emitters (the direct pass
