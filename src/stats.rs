@@ -210,6 +210,9 @@ pub struct Stats {
     pub driver: String,
     pub device_type: String,
     pub mean_luminance: f64,
+    /// The indirect light alone (`Frame::indirect`, linear): where the methods differ, about a
+    /// quarter of the image's light in the built-in rooms.
+    pub mean_luminance_indirect: f64,
     pub bvh_build_ms: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<ErrorStats>,

@@ -1208,3 +1208,64 @@ fn render_writes_a_chrome_trace_of_its_passes() {
     }
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// `render --layer final|direct|indirect` writes that light, and the stats' `mean_luminance_indirect`
+/// is the indirect layer's: final = direct + indirect pixel by pixel, the indirect light is part
+/// of the image, not all of it.
+#[test]
+fn render_layers_add_up_and_the_stats_name_the_indirect_light() {
+    let d = common::scratch("cli-layers");
+    let mut images = Vec::new();
+    for layer in ["final", "direct", "indirect"] {
+        let exr = d.join(format!("{layer}.exr"));
+        let stats = d.join(format!("{layer}.json"));
+        let (code, _, err) = common::run_cli(&[
+            "render",
+            "builtin:cornell",
+            "--width",
+            "48",
+            "--height",
+            "36",
+            "--vpls",
+            "512",
+            "--vpl-clusters",
+            "64",
+            "--sp-clusters",
+            "16",
+            "--warmup-ms",
+            "0",
+            "--layer",
+            layer,
+            "-o",
+            exr.to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{err}");
+        let (_, _, px) = fuzzy_vpl::export::read_exr(&exr).unwrap();
+        assert!(common::all_finite(&px));
+        let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+        images.push((px, j));
+    }
+    let (fin, direct, indirect) = (&images[0].0, &images[1].0, &images[2].0);
+    for ((f, d), i) in fin.iter().zip(direct).zip(indirect) {
+        for c in 0..3 {
+            assert!(
+                (f[c] - (d[c] + i[c])).abs() <= 1e-6 * (1.0 + f[c]),
+                "{f:?} {d:?} {i:?}"
+            );
+        }
+    }
+    let lum = fuzzy_vpl::metrics::mean_luminance;
+    let stated = images[0].1["mean_luminance_indirect"].as_f64().unwrap();
+    assert!(
+        (stated - lum(indirect)).abs() <= 1e-6 * lum(indirect),
+        "{stated}"
+    );
+    assert!(lum(indirect) > 0.05 * lum(fin) && lum(indirect) < 0.9 * lum(fin));
+    // The same frame whatever the layer: the stats agree.
+    assert_eq!(images[0].1["mean_luminance"], images[2].1["mean_luminance"]);
+    // A bad layer: one line, exit 2.
+    let (code, _, err) = common::run_cli(&["render", "--layer", "albedo", "-o", "x.png"]);
+    assert_eq!(code, 2, "{err}");
+}

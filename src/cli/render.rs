@@ -46,6 +46,11 @@ pub struct RenderArgs {
     repeat: u32,
     #[command(flatten)]
     timing: TimingSettings,
+    /// Which light the output images hold: final (emission + direct + indirect), direct (emission
+    /// + direct) or indirect (the VPLs' light alone). --compare and the stats' error are of the final
+    /// image whatever the layer.
+    #[arg(long, value_enum, default_value_t = Layer::Final)]
+    layer: Layer,
     /// Indirect light without any clustering: every pixel gathers every VPL with its own shadow ray
     /// (Eq. 5; the paper's reference).
     #[arg(long)]
@@ -54,6 +59,14 @@ pub struct RenderArgs {
     /// VPLs): the check of the VPL reference's own bias.
     #[arg(long, value_name = "SPP", conflicts_with = "reference", value_parser = clap::value_parser!(u32).range(1..))]
     path_trace: Option<u32>,
+}
+
+/// What `render -o` writes (`--layer`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Layer {
+    Final,
+    Direct,
+    Indirect,
 }
 
 /// What `--error-map` draws.
@@ -208,9 +221,14 @@ pub fn run(a: RenderArgs) -> Result<()> {
             a.scene.scene
         );
     }
-    let exposure = a.shot.frame.exposure.resolve(&frame.radiance);
+    let image = match a.layer {
+        Layer::Final => &frame.radiance,
+        Layer::Direct => &frame.direct,
+        Layer::Indirect => &frame.indirect,
+    };
+    let exposure = a.shot.frame.exposure.resolve(image);
     for out in &a.output {
-        export::write_image(out, frame.width, frame.height, &frame.radiance, exposure)?;
+        export::write_image(out, frame.width, frame.height, image, exposure)?;
     }
     // Compared as shown: both images tone-mapped with the reference's exposure.
     let labels = match &reference {
@@ -272,6 +290,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
             driver: ctx.driver.clone(),
             device_type: ctx.kind().into(),
             mean_luminance: metrics::mean_luminance(&frame.radiance),
+            mean_luminance_indirect: metrics::mean_luminance(&frame.indirect),
             bvh_build_ms: renderer.bvh.build_ms,
             error,
             target,
