@@ -46,9 +46,9 @@ pub struct RenderArgs {
     repeat: u32,
     #[command(flatten)]
     timing: TimingSettings,
-    /// Which light the output images hold: final (emission + direct + indirect), direct (emission
-    /// + direct) or indirect (the VPLs' light alone). --compare and the stats' error are of the final
-    /// image whatever the layer.
+    /// Which light the output images hold: final (emission, direct and indirect light), direct
+    /// (emission and direct light) or indirect (the VPLs' light alone). --compare and the stats'
+    /// error are of the final image whatever the layer.
     #[arg(long, value_enum, default_value_t = Layer::Final)]
     layer: Layer,
     /// Indirect light without any clustering: every pixel gathers every VPL with its own shadow ray
