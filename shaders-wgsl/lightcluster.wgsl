@@ -3,7 +3,9 @@
 // own Eq. (5) term times the visibility of its cluster's disc (radius d_min, §3.2.2), estimated with
 // DISC_SAMPLES shadow rays to fixed points of the disc (the paper filters a cube shadow map with
 // PCSS). The VPLs come sorted by cluster; a dispatch walks the range [sub_offset, + sub_count) of
-// them and traces a cluster's rays once, where a term of it is positive.
+// them and traces a cluster's rays once per pixel, where a term of it is positive: the cluster
+// whose disc was traced last and its visibility carry from one range to the next in `state`, so a
+// cluster spanning several ranges is not traced again in each.
 #import common/bvh.wgsl
 #import common/chunk.wgsl
 #import common/gbuffer.wgsl
@@ -26,6 +28,9 @@ struct LcParams {
 // Two vec4 a cluster: the centre VPL's position with the disc radius in w, its normal.
 @group(1) @binding(5) var<storage, read> discs: array<vec4<f32>>;
 @group(1) @binding(6) var<storage, read_write> indirect: array<vec4<f32>>;
+// Per pixel, across the ranges: the cluster traced last, its visibility (f32 bits), and the discs
+// traced so far (`shadow_rays` = their sum × DISC_SAMPLES).
+@group(1) @binding(7) var<storage, read_write> state: array<vec4<u32>>;
 
 const DISC_SAMPLES: u32 = 8u;
 
@@ -59,6 +64,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     var sum = vec3<f32>(0.0);
     var cur = INVALID;
     var vis = 0.0;
+    var traced = 0u;
+    if chunk.sub_offset != 0u {
+        let s = state[i];
+        cur = s.x;
+        vis = bitcast<f32>(s.y);
+        traced = s.z;
+    }
     for (var j = chunk.sub_offset; j < min(chunk.sub_offset + chunk.sub_count, params.num_vpls); j++) {
         let t = eq5_vpl_radiance(sp.pos.xyz, sp.nrm.xyz, sp.albedo.xyz, vpls[j], params.d_min2);
         if any(t > vec3<f32>(0.0)) {
@@ -66,9 +78,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
             if c != cur {
                 cur = c;
                 vis = disc_visibility(sp.pos.xyz, sp.nrm.xyz, c);
+                traced += 1u;
             }
             sum += t * vis;
         }
     }
     indirect[i] += vec4<f32>(sum, 0.0);
+    state[i] = vec4<u32>(cur, bitcast<u32>(vis), traced, 0u);
 }

@@ -4,6 +4,7 @@
 mod common;
 
 use fuzzy_vpl::cpu::shading::ShadingPoint;
+use fuzzy_vpl::cpu::vpl::eq5_vpl_radiance;
 use fuzzy_vpl::cpu::wang as twin;
 use fuzzy_vpl::gi::pipeline::{Pass, RenderSettings, Renderer};
 use fuzzy_vpl::metrics;
@@ -222,6 +223,43 @@ fn lightcluster_matches_cpu_twin() {
             &format!("{name} lightcluster"),
             pairs,
             TOL_LIGHTCLUSTER,
+        );
+        // Each cluster's disc is traced once per pixel where one of its terms is positive, however
+        // many 32-VPL ranges the cluster spans (clusters straddle the ranges' borders),
+        // and shadow_rays counts the rays so traced: DISC_SAMPLES a disc, besides the direct light's.
+        let spans = (0..c.discs.len() as u32)
+            .filter(|&k| {
+                let at = |i: Option<usize>| i.map(|i| i / 32);
+                let first = c.cluster_of.iter().position(|&o| o == k);
+                let last = c.cluster_of.iter().rposition(|&o| o == k);
+                at(first) != at(last)
+            })
+            .count();
+        assert!(spans > 0, "{name}: no cluster spans two ranges");
+        let discs: u64 = sps
+            .iter()
+            .filter(|sp| sp.valid)
+            .map(|sp| {
+                let mut seen: Vec<u32> = c
+                    .sorted
+                    .iter()
+                    .zip(&c.cluster_of)
+                    .filter(|(v, _)| {
+                        let t = eq5_vpl_radiance(sp.pos, sp.normal, sp.albedo, v, d_min * d_min);
+                        t.max_element() > 0.0
+                    })
+                    .map(|(_, &k)| k)
+                    .collect();
+                seen.dedup();
+                seen.len() as u64
+            })
+            .sum();
+        let valid = sps.iter().filter(|sp| sp.valid).count() as u64;
+        let direct = valid * (fs.frame.direct_samples as u64 + s.lights.len() as u64);
+        assert_eq!(
+            f.shadow_rays - direct,
+            discs * lc::DISC_SAMPLES as u64,
+            "{name}: disc rays"
         );
     }
 }

@@ -52,6 +52,7 @@ impl LightCluster {
             storage_layout(4, true),
             storage_layout(5, true),
             storage_layout(6, false),
+            storage_layout(7, false),
         ];
         LightCluster {
             kernel: Kernel::new(ctx, scene, "lightcluster", &entries, &[]),
@@ -59,12 +60,13 @@ impl LightCluster {
     }
 
     /// §3.2: adds every pixel's light from every VPL, shadowed by its cluster's disc, to
-    /// `indirect`.
-    pub fn record(&self, g: &mut Gpu, i: &ShadeInputs) {
+    /// `indirect`. Returns the per-pixel state buffer (`lightcluster.wgsl`: 4 u32 a pixel, the third
+    /// the discs it traced; `None` when nothing ran).
+    pub fn record(&self, g: &mut Gpu, i: &ShadeInputs) -> Option<wgpu::Buffer> {
         let c = i.clusters;
         let n = c.sorted.len() as u32;
         if n == 0 || i.pixels == 0 {
-            return;
+            return None;
         }
         let ctx = g.ctx;
         let params = LcParams {
@@ -77,6 +79,7 @@ impl LightCluster {
         let cluster_of = ctx.storage_init("lightcluster cluster_of", &c.cluster_of);
         let discs: Vec<[[f32; 4]; 2]> = c.discs.iter().map(|d| d.to_gpu()).collect();
         let discs = ctx.storage_init("lightcluster discs", &discs);
+        let state = ctx.storage("lightcluster state", i.pixels as u64 * 16);
         let buffers = [
             (1, &params),
             (2, i.gbuffer),
@@ -84,6 +87,7 @@ impl LightCluster {
             (4, &cluster_of),
             (5, &discs),
             (6, i.indirect),
+            (7, &state),
         ];
         let bg = self.kernel.bind_group(ctx, &buffers);
         let run = Run {
@@ -94,6 +98,7 @@ impl LightCluster {
         let pixels = (i.pixels, i.pixels.min(1 << 14));
         self.kernel
             .run_2d(g, run, pixels, (n, VPLS_PER_DISPATCH), &mut |_, _| true);
+        Some(state)
     }
 }
 
@@ -119,7 +124,7 @@ impl Renderer<'_> {
         pass: Pass,
         s: &RenderSettings,
         r: &mut FrameResources,
-    ) {
+    ) -> anyhow::Result<()> {
         let extent = self.scene.extent();
         match pass {
             // §3.1: the VPLs clustered for this camera on the CPU, as the paper's §4 (its time is
@@ -132,8 +137,6 @@ impl Renderer<'_> {
                 let c = twin::cluster(vpls, eye, far, s.cluster.d_init * extent);
                 r.cpu_ms.push((pass, t.elapsed().as_secs_f64() * 1e3));
                 r.vpl_clusters_used = c.discs.len() as u32;
-                // At most: a cluster's disc rays are traced only where one of its terms is positive.
-                r.rays_per_point = c.discs.len() as u64 * twin::DISC_SAMPLES as u64;
                 r.light_clusters = Some(c);
             }
             // §3.2: every pixel × every VPL with its cluster's disc visibility.
@@ -149,9 +152,16 @@ impl Renderer<'_> {
                     pixels: r.pixels,
                     d_min: s.frame.clamp * extent,
                 };
-                lc.record(&mut gpu!(self), &inputs);
+                // The rays traced: each pixel's discs (a disc where one of its cluster's terms is
+                // positive, once) × DISC_SAMPLES.
+                if let Some(state) = lc.record(&mut gpu!(self), &inputs) {
+                    let st: Vec<[u32; 4]> = ctx.read_buffer(&state, r.pixels as usize)?;
+                    let discs: u64 = st.iter().map(|p| p[2] as u64).sum();
+                    r.indirect_rays += discs * twin::DISC_SAMPLES as u64;
+                }
             }
             _ => unreachable!("{pass} is not lightcluster's"),
         }
+        Ok(())
     }
 }

@@ -320,7 +320,7 @@ impl Renderer<'_> {
                     self.wang_pass(pass, s, &mut r)?
                 }
                 Pass::LightClusterCluster | Pass::LightClusterShade => {
-                    self.lightcluster_pass(pass, s, &mut r)
+                    self.lightcluster_pass(pass, s, &mut r)?
                 }
                 Pass::Cvrtgi => self.cvrtgi_pass(s, &mut r)?,
                 Pass::PathTrace => unreachable!("the path tracer is `path_trace`"),
