@@ -11,8 +11,11 @@ Usage (from the repository root, after `cargo test --release --no-run`):
     python3 scripts/wgsl-mutants.py            # every mutant, stage 1 then stage 2
     python3 scripts/wgsl-mutants.py -k clamp   # mutants whose name contains "clamp"
     python3 scripts/wgsl-mutants.py --list
-Stage 1 is the oracle binary (tests/oracles.rs, seconds); a mutant it misses goes to stage 2, the
-closed-form tests and the twin tests of the passes it touches (a few minutes on lavapipe). `--full` runs stage 2 always.
+First both stages run on the unmutated shaders: a failing binary stops the script with one line that
+names it and its failed tests. Stage 1 is the oracle binary (tests/oracles.rs, about a second); a
+mutant it misses goes to stage 2, every other test binary that uses the GPU, whole (STAGE2, about two
+minutes on lavapipe for a survivor), each under its own limit (5x its baseline time, at least 30 s,
+at most --timeout), stopping at the first failure. `--full` runs stage 2 always.
 A snippet found other than exactly once stops the script (the shaders changed: fix the table).
 """
 
@@ -122,21 +125,30 @@ MUTANTS = [
     # light is zero-initialised: a zero normal fails the facing test, no bit).
 ]
 
-# Stage 2: binary name → tests to run (a filter list; empty = the whole binary). Twin tests of each pass.
-STAGE2 = {
-    "closed_form": [],
-    "kmeans": ["gpu_kmeans_matches_cpu_on_random_surfaces", "representative_weights_match_cpu",
-               "weight_exponent_matches_cpu_and_spans_uniform_to_hard"],
-    "clustered": ["clustered_shading_matches_cpu_twin"],
-    "reference": ["reference_matches_cpu_twin", "reference_is_close_to_path_tracing"],
+# Stage 2: every test binary that uses the GPU (tests/*.rs but NO_GPU), whole, in this order (fast or
+# most likely to kill first; a binary not named here runs after these), stopping at the first that
+# fails. A mutant's file may name binaries to try first (HINTS): only the order changes.
+STAGE2 = ["closed_form", "traversal", "cvrtgi", "gltf_features", "methods", "budget", "viewer",
+          "temporal", "reference", "clustered", "kmeans", "cli", "render", "bench"]
+NO_GPU = {"scene_load"}
+HINTS = {
+    "raycast.wgsl": ["traversal"],
+    "cvrtgi.wgsl": ["cvrtgi"],
+    "wang.wgsl": ["methods"],
+    "lightcluster.wgsl": ["methods"],
+    "common/alpha.wgsl": ["gltf_features"],
+    "common/surface.wgsl": ["gltf_features"],
+    "kmeans/grid.wgsl": ["kmeans"],
+    "kmeans/init.wgsl": ["kmeans", "temporal"],
+    "shade.wgsl": ["clustered"],
 }
 
 COMPILE_MARKERS = ("Shader validation error", "shader parse", "naga", "WGSL", "Validation Error")
 
 
-def binaries(names):
-    """The test binaries of `names`, built (once) by cargo: its own list of executables."""
-    cmd = ["cargo", "test", "--release", "--no-run"] + [f"--test={n}" for n in names]
+def binaries():
+    """Every test binary, built (once) by cargo: its own list of executables, name → path."""
+    cmd = ["cargo", "test", "--release", "--no-run", "--tests"]
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
         sys.exit(r.stderr[-3000:])
@@ -148,6 +160,11 @@ def binaries(names):
             out[n] = line.split("(", 1)[1].rstrip(")")
     return out
 
+
+def failing_tests(out):
+    """The names of the failed tests in a libtest output (`test NAME ... FAILED`)."""
+    names = [l.split()[1] for l in out.splitlines() if l.startswith("test ") and l.rstrip().endswith("FAILED")]
+    return ", ".join(names) or "(no test named; see its output)"
 
 def run(cmd, env, timeout):
     try:
@@ -187,17 +204,26 @@ def main():
     env = dict(os.environ)
     env.setdefault("XDG_RUNTIME_DIR", "/tmp/xdg")
     os.makedirs(env["XDG_RUNTIME_DIR"], exist_ok=True)
-    bins = binaries(["oracles"] + list(STAGE2))
-    stage1 = [bins["oracles"]]
-    stage2 = [[bins[b]] + (t + ["--exact"] if t else []) for b, t in STAGE2.items()]
-    # The unmutated shaders must pass, or every verdict is noise.
+    bins = binaries()
+    names = ["oracles"] + [b for b in STAGE2 if b in bins]
+    names += sorted(b for b in bins if b not in names and b not in NO_GPU)
+    # The unmutated shaders must pass both stages, or every verdict is noise. Each binary's time on
+    # them sets its limit for the mutants: 5x that (at least 30 s), at most --timeout.
     base = tempfile.mkdtemp(prefix="wgsl-base-")
     shutil.copytree("shaders-wgsl", os.path.join(base, "s"))
     env["FVPL_SHADER_DIR"] = os.path.join(base, "s")
-    rc, out = run(stage1, env, a.timeout)
-    if rc != 0:
-        sys.exit("the oracle tests fail on the unmutated shaders:\n" + out[-3000:])
+    limit = {}
+    t_base = time.time()
+    for b in names:
+        t0 = time.time()
+        rc, out = run([bins[b]], env, a.timeout)
+        if rc != 0:
+            what = f"timed out after {a.timeout} s" if rc == "timeout" else "fails: " + failing_tests(out)
+            sys.exit(f"baseline: tests/{b}.rs {what} on the unmutated shaders; no mutant run")
+        limit[b] = min(a.timeout, max(30, 5 * (time.time() - t0)))
     shutil.rmtree(base)
+    print(f"baseline: {len(names)} GPU test binaries pass on the unmutated shaders"
+          f" ({time.time() - t_base:.0f} s)", flush=True)
     rows = []
     for name, f, old, new, part in todo:
         d = tempfile.mkdtemp(prefix="wgsl-mutant-")
@@ -208,22 +234,21 @@ def main():
         open(path, "w").write(src.replace(old, new, 1))
         env["FVPL_SHADER_DIR"] = s
         t0 = time.time()
-        by, v = "", None
-        rc, out = run(stage1, env, a.timeout)
+        rc, out = run([bins["oracles"]], env, limit["oracles"])
         v = verdict(rc, out)
-        if v:
-            by = "oracles"
+        by = "oracles" if v else ""
         if v is None or a.full:
-            for cmd in stage2:
-                rc, out2 = run(cmd, env, a.timeout)
+            first = [b for b in HINTS.get(f, []) if b in names]
+            for b in first + [b for b in names[1:] if b not in first]:
+                rc, out2 = run([bins[b]], env, limit[b])
                 v2 = verdict(rc, out2)
                 if v2:
                     v = v or v2
-                    by = by or os.path.basename(cmd[0]).split("-")[0]
+                    by = by or b
                     if not a.full:
                         break
-        rows.append((name, part, v or "SURVIVED", by, time.time() - t0))
-        print(f"{name:48} {part:9} {v or 'SURVIVED':9} {by:10} {time.time() - t0:6.1f}s", flush=True)
+        rows.append((name, part, v or "SURVIVED", by, time.time() - t0, f))
+        print(f"{name:48} {part:9} {v or 'SURVIVED':9} {by:13} {time.time() - t0:6.1f}s", flush=True)
         shutil.rmtree(d)
     n = len(rows)
     killed = sum(r[2] in ("killed", "timeout") for r in rows)
@@ -233,6 +258,11 @@ def main():
           f" ({100.0 * (killed + comp) / max(n, 1):.0f}% killed)")
     for s in surv:
         print(f"  survived: {s}")
+    per = {}
+    for r in rows:
+        k, n_ = per.get(r[5], (0, 0))
+        per[r[5]] = (k + (r[2] != "SURVIVED"), n_ + 1)
+    print("per file: " + ", ".join(f"{f} {k}/{n_}" for f, (k, n_) in sorted(per.items())))
 
 
 if __name__ == "__main__":
