@@ -631,6 +631,119 @@ fn vertex_colours_multiply_the_base_colour_and_their_alpha_is_tested() {
     assert!(coloured > 300 && kept > 100 && cut > 100);
 }
 
+/// The sRGB decode of one 8-bit channel (glTF base colour and emissive textures).
+fn srgb(v: u8) -> f32 {
+    let c = v as f32 / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Bilinear, repeat-wrapped lookup of texture `t` at `uv` with texel centres at half-integers,
+/// every channel sRGB-decoded: worked here, apart from the renderer's CPU twin.
+fn bilinear_srgb(t: &Texture, uv: Vec2) -> Vec3 {
+    let (w, h) = (t.width as i32, t.height as i32);
+    let f = (uv - uv.floor()) * Vec2::new(w as f32, h as f32) - 0.5;
+    let (i, a) = (f.floor(), f - f.floor());
+    let texel = |x: i32, y: i32| {
+        let c = t.rgba8[(y.rem_euclid(h) * w + x.rem_euclid(w)) as usize];
+        Vec3::new(srgb(c[0]), srgb(c[1]), srgb(c[2]))
+    };
+    let (x, y) = (i.x as i32, i.y as i32);
+    let top = texel(x, y).lerp(texel(x + 1, y), a.x);
+    let bottom = texel(x, y + 1).lerp(texel(x + 1, y + 1), a.x);
+    top.lerp(bottom, a.y)
+}
+
+/// A base colour texture (4 × 2 texels) and an emissive texture (2 × 3) on a floor whose uv runs
+/// over [-0.5, 1.5]: every pixel's G-buffer albedo and emission against the bilinear, repeat-wrapped
+/// sRGB decode worked by hand, at the uv of the pixel's own hit point. The texels include values on
+/// both sides of sRGB's linear segment (v <= 10) and the view crosses uv = 0 and 1 (the wrap).
+/// Bound 1e-5 absolute (measured 6.6e-7 on lavapipe, the hit point's rounding); dropping the linear
+/// segment moves a black texel by 8e-4.
+#[test]
+fn textures_are_bilinear_repeat_wrapped_and_srgb_decoded() {
+    let ctx = common::gpu();
+    const LEVELS: [u8; 8] = [0, 7, 10, 11, 60, 128, 200, 255];
+    let texture = |name: &str, width: u32, height: u32, k: usize| Texture {
+        name: name.into(),
+        width,
+        height,
+        rgba8: (0..(width * height) as usize)
+            .map(|i| {
+                let v = |c: usize| LEVELS[(3 * i + 5 * c + k) % LEVELS.len()];
+                [v(0), v(1), v(2), 255]
+            })
+            .collect(),
+    };
+    let base = Vec3::new(0.9, 0.7, 1.0);
+    let emissive = Vec3::new(0.5, 1.0, 2.0);
+    let s = Scene {
+        name: "textured".into(),
+        triangles: square(2.0, 0.0, 0).to_vec(),
+        materials: vec![Material {
+            name: "textured".into(),
+            base_color: base.extend(1.0),
+            base_color_texture: Some(0),
+            emissive,
+            emissive_texture: Some(1),
+            ..Material::default()
+        }],
+        textures: vec![texture("base", 4, 2, 0), texture("emissive", 2, 3, 3)],
+        ..Scene::default()
+    };
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let cam = Camera::look_at(
+        "down",
+        Vec3::new(0.0, 3.0, 0.0),
+        Vec3::ZERO,
+        Vec3::NEG_Z,
+        40f32.to_radians(),
+    );
+    let (w, h) = (40u32, 40u32);
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            width: w,
+            height: h,
+            vpls: 0,
+            direct_samples: 1,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    r.render(&cam, &fs).unwrap();
+    let gbuf = r.last_gbuffer().unwrap();
+    let (mut checked, mut wrapped, mut worst) = (0, 0, 0f32);
+    for px in 0..(w * h) as usize {
+        let sp = ShadingPoint::from_gpu(&gbuf[px * 4..px * 4 + 4]);
+        assert!(sp.valid, "pixel {px} misses the floor");
+        let uv = Vec2::new((sp.pos.x + 1.0) / 2.0, (sp.pos.z + 1.0) / 2.0);
+        let albedo = base * bilinear_srgb(&s.textures[0], uv);
+        let emission = emissive * bilinear_srgb(&s.textures[1], uv);
+        assert!(
+            (sp.albedo - albedo).abs().max_element() < 1e-5,
+            "pixel {px} at uv {uv}: albedo {} against {albedo}",
+            sp.albedo
+        );
+        assert!(
+            (sp.emission - emission).abs().max_element() < 1e-5,
+            "pixel {px} at uv {uv}: emission {} against {emission}",
+            sp.emission
+        );
+        worst = worst
+            .max((sp.albedo - albedo).abs().max_element())
+            .max((sp.emission - emission).abs().max_element());
+        checked += 1;
+        wrapped += usize::from(uv.min_element() < 0.0 || uv.max_element() >= 1.0);
+    }
+    println!(
+        "{checked} pixels checked, {wrapped} of them at a wrapped uv, largest error {worst:e}"
+    );
+    assert!(wrapped > 50);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Sponza as shipped (outside the repository)
 
