@@ -744,6 +744,100 @@ fn textures_are_bilinear_repeat_wrapped_and_srgb_decoded() {
     assert!(wrapped > 50);
 }
 
+/// Bilinear, repeat-wrapped alpha of texture `t` at `uv` (alpha is linear, no decode).
+fn bilinear_alpha(t: &Texture, uv: Vec2) -> f32 {
+    let (w, h) = (t.width as i32, t.height as i32);
+    let f = (uv - uv.floor()) * Vec2::new(w as f32, h as f32) - 0.5;
+    let (i, a) = (f.floor(), f - f.floor());
+    let texel = |x: i32, y: i32| {
+        t.rgba8[(y.rem_euclid(h) * w + x.rem_euclid(w)) as usize][3] as f32 / 255.0
+    };
+    let (x, y) = (i.x as i32, i.y as i32);
+    let top = texel(x, y) + (texel(x + 1, y) - texel(x, y)) * a.x;
+    let bottom = texel(x, y + 1) + (texel(x + 1, y + 1) - texel(x, y + 1)) * a.x;
+    top + (bottom - top) * a.y
+}
+
+/// The alpha test reads a non-square alpha texture (4 × 2 texels) bilinearly and repeat-wrapped: an
+/// alpha-tested quad (cutoff 0.5, uv over [-0.5, 1.5]) above an opaque floor, seen from above where
+/// its uv crosses 0. Every pixel whose ray meets the quad where the alpha worked here is above 0.51
+/// stops on the quad, below 0.49 on the floor.
+#[test]
+fn the_alpha_test_reads_its_texture_bilinearly_and_wrapped() {
+    let ctx = common::gpu();
+    const ALPHA: [u8; 8] = [0, 255, 40, 200, 128, 90, 230, 10];
+    let texture = Texture {
+        name: "alpha".into(),
+        width: 4,
+        height: 2,
+        rgba8: ALPHA.iter().map(|&a| [255, 255, 255, a]).collect(),
+    };
+    let mut triangles = square(4.0, 0.0, 0).to_vec();
+    triangles.extend(square(2.0, 1.0, 1));
+    let s = Scene {
+        name: "alpha texture".into(),
+        triangles,
+        materials: vec![
+            Material::default(),
+            Material {
+                name: "cut".into(),
+                base_color_texture: Some(0),
+                alpha_cutoff: Some(0.5),
+                ..Material::default()
+            },
+        ],
+        textures: vec![texture],
+        ..Scene::default()
+    };
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let eye = Vec3::new(-1.0, 3.0, -1.0);
+    let cam = Camera::look_at(
+        "down",
+        eye,
+        Vec3::new(-1.0, 0.0, -1.0),
+        Vec3::NEG_Z,
+        40f32.to_radians(),
+    );
+    let (w, h) = (48u32, 48u32);
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            width: w,
+            height: h,
+            vpls: 0,
+            direct_samples: 1,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    r.render(&cam, &fs).unwrap();
+    let gbuf = r.last_gbuffer().unwrap();
+    let (mut on_quad, mut on_floor) = (0, 0);
+    for px in 0..(w * h) as usize {
+        let sp = ShadingPoint::from_gpu(&gbuf[px * 4..px * 4 + 4]);
+        assert!(sp.valid, "pixel {px}");
+        // Where the pixel's ray crosses the quad's plane (y = 1), from its hit point.
+        let q = eye + (sp.pos - eye) * ((eye.y - 1.0) / (eye.y - sp.pos.y));
+        let a = bilinear_alpha(
+            &s.textures[0],
+            Vec2::new((q.x + 1.0) / 2.0, (q.z + 1.0) / 2.0),
+        );
+        if (a - 0.5).abs() < 0.01 {
+            continue;
+        }
+        let quad = (sp.pos.y - 1.0).abs() < 1e-3;
+        assert_eq!(
+            quad,
+            a > 0.5,
+            "pixel {px}: alpha {a} at {q}, hit at {}",
+            sp.pos
+        );
+        on_quad += usize::from(quad);
+        on_floor += usize::from(!quad);
+    }
+    println!("{on_quad} pixels on the quad, {on_floor} on the floor");
+    assert!(on_quad > 200 && on_floor > 200);
+}
+
 /// Shading normals: on a square of two triangles whose vertex normals differ (one tilted below the
 /// floor), every pixel's G-buffer normal against the barycentric interpolation of its triangle's
 /// vertex normals at the pixel's hit point, normalised and turned to the side the camera sees
