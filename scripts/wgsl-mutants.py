@@ -228,6 +228,14 @@ MUTANTS = [
     ("pattern-table-v-of-next-light", "shade.wgsl", "vs[k] = eq9_weighted_visibility(w, &rw, first);", "vs[k] = eq9_weighted_visibility(w, &rw, (first + 1u) % 32u);", "patterns"),
     ("pattern-pick-inverted", "shade.wgsl", "v = select(v, vs[k], ((masks[k] >> b) & 1u) != 0u);", "v = select(v, vs[k], ((masks[k] >> b) & 1u) == 0u);", "patterns"),
     ("pattern-past-the-table-dropped", "shade.wgsl", "if ((rest >> b) & 1u) != 0u {", "if false {", "patterns"),
+    # Not listed, equivalent by argument (not run): in the pattern table, `var same = 0xffffffffu` ->
+    # `0u` (every mask empty: every light runs Eq. (9)'s loop, the same V bit for bit),
+    # `firstTrailingBit(rest)` -> `firstLeadingBit(rest)` (a pattern's mask and V do not depend on
+    # which of its lights finds it) and dropping `rest &= ~masks[k]` (the table repeats the first
+    # pattern; every other light runs the loop). In kmeans/grid.wgsl the cell size (`1.5 * spacing`,
+    # the area behind it): the search is exact at any cell size, only its speed changes.
+    # Not mutated: common/chunk.wgsl, common/gbuffer.wgsl and kmeans.wgsl are glue (a uniform block
+    # and chunk_item, a struct, the #imports); warmup.wgsl is a busy loop whose result nobody reads.
 ]
 
 # Stage 2: every test binary that uses the GPU (tests/*.rs but NO_GPU), whole, in this order (fast or
