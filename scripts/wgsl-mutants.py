@@ -332,6 +332,7 @@ def main():
         rc, out = run([bins[b]], env, a.timeout)
         if rc != 0:
             what = f"timed out after {a.timeout} s" if rc == "timeout" else "fails: " + failing_tests(out)
+            shutil.rmtree(base)
             sys.exit(f"baseline: tests/{b}.rs {what} on the unmutated shaders; no mutant run")
         limit[b] = min(a.timeout, max(30, 5 * (time.time() - t0)))
     shutil.rmtree(base)
