@@ -194,6 +194,7 @@ MUTANTS = [
     ("cv-face-ray-turn-dropped", "cvrtgi.wgsl", "fract(radical_inverse(k) + turn)", "radical_inverse(k)", "cvrtgi"),
     ("cv-face-origin-corner-not-centre", "cvrtgi.wgsl", "(vec3<f32>(c) + 0.5) * s", "vec3<f32>(c) * s", "cvrtgi"),
     ("cv-visibility-probe-outwards", "cvrtgi.wgsl", "voxel_at_surface(o + d * hit.t, d)", "voxel_at_surface(o + d * hit.t, -d)", "cvrtgi"),
+    ("cv-light-normal-flux-swapped", "cvrtgi.wgsl", "Vpl(cv_lights[i], cv_lights[i + 1u], cv_lights[i + 2u])", "Vpl(cv_lights[i], cv_lights[i + 2u], cv_lights[i + 1u])", "cvrtgi"),
     ("cv-gather-near-far-swapped", "cvrtgi.wgsl", "vec3<f32>(0.0))) < params.near", "vec3<f32>(0.0))) > params.near", "cvrtgi"),
     ("cv-gather-lit-voxel-index", "cvrtgi.wgsl", "3u * (first + j)", "3u * first + j", "cvrtgi"),
     ("cv-irradiance-albedo-not-pi", "cvrtgi.wgsl", "eq5_vpl_radiance(x, n, vec3<f32>(PI), light, params.d_min2)", "eq5_vpl_radiance(x, n, vec3<f32>(1.0), light, params.d_min2)", "cvrtgi"),
