@@ -631,6 +631,358 @@ fn vertex_colours_multiply_the_base_colour_and_their_alpha_is_tested() {
     assert!(coloured > 300 && kept > 100 && cut > 100);
 }
 
+/// The sRGB decode of one 8-bit channel (glTF base colour and emissive textures).
+fn srgb(v: u8) -> f32 {
+    let c = v as f32 / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Bilinear, repeat-wrapped lookup of texture `t` at `uv` with texel centres at half-integers,
+/// every channel sRGB-decoded: worked here, apart from the renderer's CPU twin.
+fn bilinear_srgb(t: &Texture, uv: Vec2) -> Vec3 {
+    let (w, h) = (t.width as i32, t.height as i32);
+    let f = (uv - uv.floor()) * Vec2::new(w as f32, h as f32) - 0.5;
+    let (i, a) = (f.floor(), f - f.floor());
+    let texel = |x: i32, y: i32| {
+        let c = t.rgba8[(y.rem_euclid(h) * w + x.rem_euclid(w)) as usize];
+        Vec3::new(srgb(c[0]), srgb(c[1]), srgb(c[2]))
+    };
+    let (x, y) = (i.x as i32, i.y as i32);
+    let top = texel(x, y).lerp(texel(x + 1, y), a.x);
+    let bottom = texel(x, y + 1).lerp(texel(x + 1, y + 1), a.x);
+    top.lerp(bottom, a.y)
+}
+
+/// A base colour texture (4 × 2 texels) and an emissive texture (2 × 3) on a floor whose uv runs
+/// over [-0.5, 1.5]: every pixel's G-buffer albedo and emission against the bilinear, repeat-wrapped
+/// sRGB decode worked by hand, at the uv of the pixel's own hit point. The texels include values on
+/// both sides of sRGB's linear segment (v <= 10) and the view crosses uv = 0 and 1 (the wrap).
+/// Bound 1e-5 absolute (measured 6.6e-7 on lavapipe, the hit point's rounding); dropping the linear
+/// segment moves a black texel by 8e-4.
+#[test]
+fn textures_are_bilinear_repeat_wrapped_and_srgb_decoded() {
+    let ctx = common::gpu();
+    const LEVELS: [u8; 8] = [0, 7, 10, 11, 60, 128, 200, 255];
+    let texture = |name: &str, width: u32, height: u32, k: usize| Texture {
+        name: name.into(),
+        width,
+        height,
+        rgba8: (0..(width * height) as usize)
+            .map(|i| {
+                let v = |c: usize| LEVELS[(3 * i + 5 * c + k) % LEVELS.len()];
+                [v(0), v(1), v(2), 255]
+            })
+            .collect(),
+    };
+    let base = Vec3::new(0.9, 0.7, 1.0);
+    let emissive = Vec3::new(0.5, 1.0, 2.0);
+    let s = Scene {
+        name: "textured".into(),
+        triangles: square(2.0, 0.0, 0).to_vec(),
+        materials: vec![Material {
+            name: "textured".into(),
+            base_color: base.extend(1.0),
+            base_color_texture: Some(0),
+            emissive,
+            emissive_texture: Some(1),
+            ..Material::default()
+        }],
+        textures: vec![texture("base", 4, 2, 0), texture("emissive", 2, 3, 3)],
+        ..Scene::default()
+    };
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let cam = Camera::look_at(
+        "down",
+        Vec3::new(0.0, 3.0, 0.0),
+        Vec3::ZERO,
+        Vec3::NEG_Z,
+        40f32.to_radians(),
+    );
+    let (w, h) = (40u32, 40u32);
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            width: w,
+            height: h,
+            vpls: 0,
+            direct_samples: 1,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    r.render(&cam, &fs).unwrap();
+    let gbuf = r.last_gbuffer().unwrap();
+    let (mut checked, mut wrapped, mut worst) = (0, 0, 0f32);
+    for px in 0..(w * h) as usize {
+        let sp = ShadingPoint::from_gpu(&gbuf[px * 4..px * 4 + 4]);
+        assert!(sp.valid, "pixel {px} misses the floor");
+        let uv = Vec2::new((sp.pos.x + 1.0) / 2.0, (sp.pos.z + 1.0) / 2.0);
+        let albedo = base * bilinear_srgb(&s.textures[0], uv);
+        let emission = emissive * bilinear_srgb(&s.textures[1], uv);
+        assert!(
+            (sp.albedo - albedo).abs().max_element() < 1e-5,
+            "pixel {px} at uv {uv}: albedo {} against {albedo}",
+            sp.albedo
+        );
+        assert!(
+            (sp.emission - emission).abs().max_element() < 1e-5,
+            "pixel {px} at uv {uv}: emission {} against {emission}",
+            sp.emission
+        );
+        worst = worst
+            .max((sp.albedo - albedo).abs().max_element())
+            .max((sp.emission - emission).abs().max_element());
+        checked += 1;
+        wrapped += usize::from(uv.min_element() < 0.0 || uv.max_element() >= 1.0);
+    }
+    println!(
+        "{checked} pixels checked, {wrapped} of them at a wrapped uv, largest error {worst:e}"
+    );
+    assert!(wrapped > 50);
+}
+
+/// Bilinear, repeat-wrapped alpha of texture `t` at `uv` (alpha is linear, no decode).
+fn bilinear_alpha(t: &Texture, uv: Vec2) -> f32 {
+    let (w, h) = (t.width as i32, t.height as i32);
+    let f = (uv - uv.floor()) * Vec2::new(w as f32, h as f32) - 0.5;
+    let (i, a) = (f.floor(), f - f.floor());
+    let texel = |x: i32, y: i32| {
+        t.rgba8[(y.rem_euclid(h) * w + x.rem_euclid(w)) as usize][3] as f32 / 255.0
+    };
+    let (x, y) = (i.x as i32, i.y as i32);
+    let top = texel(x, y) + (texel(x + 1, y) - texel(x, y)) * a.x;
+    let bottom = texel(x, y + 1) + (texel(x + 1, y + 1) - texel(x, y + 1)) * a.x;
+    top + (bottom - top) * a.y
+}
+
+/// The alpha test reads a non-square alpha texture (4 × 2 texels) bilinearly and repeat-wrapped: an
+/// alpha-tested quad (cutoff 0.5, uv over [-0.5, 1.5]) above an opaque floor, seen from above where
+/// its uv crosses 0. Every pixel whose ray meets the quad where the alpha worked here is above 0.51
+/// stops on the quad, below 0.49 on the floor.
+#[test]
+fn the_alpha_test_reads_its_texture_bilinearly_and_wrapped() {
+    let ctx = common::gpu();
+    const ALPHA: [u8; 8] = [0, 255, 40, 200, 128, 90, 230, 10];
+    let texture = Texture {
+        name: "alpha".into(),
+        width: 4,
+        height: 2,
+        rgba8: ALPHA.iter().map(|&a| [255, 255, 255, a]).collect(),
+    };
+    let mut triangles = square(4.0, 0.0, 0).to_vec();
+    triangles.extend(square(2.0, 1.0, 1));
+    let s = Scene {
+        name: "alpha texture".into(),
+        triangles,
+        materials: vec![
+            Material::default(),
+            Material {
+                name: "cut".into(),
+                base_color_texture: Some(0),
+                alpha_cutoff: Some(0.5),
+                ..Material::default()
+            },
+        ],
+        textures: vec![texture],
+        ..Scene::default()
+    };
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let eye = Vec3::new(-1.0, 3.0, -1.0);
+    let cam = Camera::look_at(
+        "down",
+        eye,
+        Vec3::new(-1.0, 0.0, -1.0),
+        Vec3::NEG_Z,
+        40f32.to_radians(),
+    );
+    let (w, h) = (48u32, 48u32);
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            width: w,
+            height: h,
+            vpls: 0,
+            direct_samples: 1,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    r.render(&cam, &fs).unwrap();
+    let gbuf = r.last_gbuffer().unwrap();
+    let (mut on_quad, mut on_floor) = (0, 0);
+    for px in 0..(w * h) as usize {
+        let sp = ShadingPoint::from_gpu(&gbuf[px * 4..px * 4 + 4]);
+        assert!(sp.valid, "pixel {px}");
+        // Where the pixel's ray crosses the quad's plane (y = 1), from its hit point.
+        let q = eye + (sp.pos - eye) * ((eye.y - 1.0) / (eye.y - sp.pos.y));
+        let a = bilinear_alpha(
+            &s.textures[0],
+            Vec2::new((q.x + 1.0) / 2.0, (q.z + 1.0) / 2.0),
+        );
+        if (a - 0.5).abs() < 0.01 {
+            continue;
+        }
+        let quad = (sp.pos.y - 1.0).abs() < 1e-3;
+        assert_eq!(
+            quad,
+            a > 0.5,
+            "pixel {px}: alpha {a} at {q}, hit at {}",
+            sp.pos
+        );
+        on_quad += usize::from(quad);
+        on_floor += usize::from(!quad);
+    }
+    println!("{on_quad} pixels on the quad, {on_floor} on the floor");
+    assert!(on_quad > 200 && on_floor > 200);
+}
+
+/// Shading normals: on a square of two triangles whose vertex normals differ (one tilted below the
+/// floor), every pixel's G-buffer normal against the barycentric interpolation of its triangle's
+/// vertex normals at the pixel's hit point, normalised and turned to the side the camera sees
+/// (the geometric normal's, +y), worked here. Bound 1e-5 (measured 5.1e-7 on lavapipe).
+#[test]
+fn shading_normals_are_interpolated_normalised_and_faced() {
+    let ctx = common::gpu();
+    let p = |x: f32, z: f32| Vec3::new(x, 0.0, z);
+    let mut t0 = tri(
+        [p(-1.0, -1.0), p(-1.0, 1.0), p(1.0, 1.0)],
+        [Vec2::ZERO; 3],
+        0,
+    );
+    t0.n = [
+        Vec3::new(0.6, 0.8, 0.0),
+        Vec3::new(0.0, 0.6, 0.8),
+        Vec3::new(0.0, -0.8, -0.6),
+    ];
+    let mut t1 = tri(
+        [p(-1.0, -1.0), p(1.0, 1.0), p(1.0, -1.0)],
+        [Vec2::ZERO; 3],
+        0,
+    );
+    t1.n = [
+        Vec3::new(0.6, 0.8, 0.0),
+        Vec3::new(-0.48, 0.6, 0.64),
+        Vec3::Y,
+    ];
+    let s = Scene {
+        name: "normals".into(),
+        triangles: vec![t0, t1],
+        materials: vec![Material::default()],
+        lights: vec![PunctualLight {
+            kind: LightKind::Directional,
+            position: Vec3::ZERO,
+            direction: Vec3::NEG_Y,
+            color: Vec3::ONE,
+            intensity: 1.0,
+        }],
+        ..Scene::default()
+    };
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let cam = Camera::look_at(
+        "down",
+        Vec3::new(0.0, 3.0, 0.0),
+        Vec3::ZERO,
+        Vec3::NEG_Z,
+        40f32.to_radians(),
+    );
+    let (w, h) = (40u32, 40u32);
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            width: w,
+            height: h,
+            vpls: 0,
+            direct_samples: 1,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    r.render(&cam, &fs).unwrap();
+    let gbuf = r.last_gbuffer().unwrap();
+    let c2 = |p: Vec3| Vec2::new(p.x, p.z);
+    let (mut checked, mut flipped, mut worst) = (0, 0, 0f32);
+    for px in 0..(w * h) as usize {
+        let sp = ShadingPoint::from_gpu(&gbuf[px * 4..px * 4 + 4]);
+        let q = c2(sp.pos);
+        if !sp.valid || q.abs().max_element() > 0.98 || (q.x - q.y).abs() < 0.02 {
+            continue; // off the square, its border and the shared diagonal
+        }
+        let t = &s.triangles[usize::from(q.y <= q.x)];
+        let (b1, b2) = bary2(c2(t.p[0]), c2(t.p[1]), c2(t.p[2]), q);
+        let n = (1.0 - b1 - b2) * t.n[0] + b1 * t.n[1] + b2 * t.n[2];
+        if n.length() < 0.1 || n.y.abs() < 0.05 {
+            continue; // near a zero or an edge-on normal
+        }
+        let n = n.normalize();
+        let expect = if n.y < 0.0 { -n } else { n };
+        flipped += usize::from(n.y < 0.0);
+        let err = (sp.normal - expect).abs().max_element();
+        assert!(
+            err < 1e-4,
+            "pixel {px}: normal {} against {expect}",
+            sp.normal
+        );
+        worst = worst.max(err);
+        checked += 1;
+    }
+    println!("{checked} normals checked, {flipped} of them turned up, largest error {worst:e}");
+    assert!(checked > 800 && flipped > 20);
+}
+
+/// A triangle without vertex normals (all zero) takes its geometric normal, by its winding
+/// (counter-clockwise seen from the front): an emissive square wound towards +y emits upwards, seen
+/// from above, every pixel's G-buffer emission is its emissive colour.
+#[test]
+fn a_triangle_without_normals_emits_on_its_winding_side() {
+    let ctx = common::gpu();
+    let mut triangles = square(1.0, 0.0, 0).to_vec();
+    for t in &mut triangles {
+        t.n = [Vec3::ZERO; 3];
+    }
+    let emissive = Vec3::new(1.0, 0.5, 0.25);
+    let s = Scene {
+        name: "no normals".into(),
+        triangles,
+        materials: vec![Material {
+            name: "lamp".into(),
+            emissive,
+            ..Material::default()
+        }],
+        ..Scene::default()
+    };
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let cam = Camera::look_at(
+        "down",
+        Vec3::new(0.0, 3.0, 0.0),
+        Vec3::ZERO,
+        Vec3::NEG_Z,
+        40f32.to_radians(),
+    );
+    let fs = RenderSettings {
+        frame: FrameSettings {
+            width: 16,
+            height: 16,
+            vpls: 0,
+            direct_samples: 1,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    r.render(&cam, &fs).unwrap();
+    let gbuf = r.last_gbuffer().unwrap();
+    let mut lit = 0;
+    for px in 0..16 * 16 {
+        let sp = ShadingPoint::from_gpu(&gbuf[px * 4..px * 4 + 4]);
+        if sp.valid {
+            assert!(sp.normal.y > 0.999, "pixel {px}: normal {}", sp.normal);
+            assert_eq!(sp.emission, emissive, "pixel {px}");
+            lit += 1;
+        }
+    }
+    assert!(lit > 100, "{lit} pixels see the square");
+}
+
 // ---------------------------------------------------------------------------------------------
 // Sponza as shipped (outside the repository)
 

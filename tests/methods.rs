@@ -184,6 +184,46 @@ fn wang_matches_cpu_twin() {
     }
 }
 
+/// wang's clustering on a frame large enough for the iterations' grid of step 2 (a quarter of the
+/// pixels, `grid_step`) and for labels past the texture's first 2,048 texels: every label as the CPU
+/// twin's on a software adapter (99% on a GPU, near-ties), as in `wang_matches_cpu_twin`.
+#[test]
+fn wang_labels_match_cpu_twin_on_a_grid_of_step_2() {
+    let ctx = common::gpu();
+    let s = scene::load("builtin:cornell").unwrap();
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let (w, h) = (64u32, 48u32);
+    assert_eq!(twin::grid_step(w * h, 24), 2);
+    let fs = settings(Method::Wang, w, h);
+    r.render(&s.default_camera(), &fs).unwrap();
+    let sps = shading_points(&r);
+    let c = &r.last_wang.as_ref().unwrap().clustering.clusters;
+    let img = twin::Image {
+        width: w,
+        height: h,
+        sps: &sps,
+    };
+    let alpha = fs.cluster.wang_alpha / s.extent();
+    let cpu = twin::cluster(img, 24, alpha, 3, fs.frame.seed, &mut |run| {
+        Ok(twin::assign_passes(img, run))
+    })
+    .unwrap();
+    let same = cpu
+        .labels
+        .iter()
+        .zip(&c.labels)
+        .filter(|(a, b)| a == b)
+        .count();
+    println!("{same} of {} labels agree", sps.len());
+    let need = if ctx.software { 100 } else { 99 };
+    assert!(
+        same * 100 >= need * sps.len(),
+        "{same} of {} labels agree",
+        sps.len()
+    );
+    assert_eq!(c.passes, cpu.passes);
+}
+
 /// lightcluster: the GPU's shading (every pixel × every VPL with its cluster's disc visibility)
 /// equals the CPU twin given the same clusters, and the clusters are the leader algorithm's.
 #[test]

@@ -313,3 +313,59 @@ fn rays_through_shared_edges_and_vertices_hit() {
         "{total} rays through edges and vertices: all hit; obvhs' Möller–Trumbore misses {obvhs_misses}"
     );
 }
+
+/// Closest hits report the hit point's barycentrics: u weights the triangle's second vertex and v
+/// its third (`tri_point`), rays straight down onto one triangle at chosen points.
+#[test]
+fn closest_hits_report_the_barycentrics_of_the_hit_point() {
+    let ctx = common::gpu();
+    let p = [
+        Vec3::ZERO,
+        Vec3::new(2.0, 0.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+    ];
+    let s = Scene {
+        name: "one triangle".into(),
+        triangles: vec![Triangle {
+            p,
+            n: [Vec3::Z; 3],
+            uv: [Vec2::ZERO; 3],
+            color: [glam::Vec4::ONE; 3],
+            material: 0,
+        }],
+        materials: vec![Material::default()],
+        ..Scene::default()
+    };
+    let bvh = SceneBvh::build(&s).unwrap();
+    let gpu = SceneGpu::upload(&ctx, &s, &bvh);
+    let rc = Raycast::new(&ctx, &gpu);
+    let mut prof = Profiler::new(&ctx);
+    let bary = [
+        (0.1f32, 0.2f32),
+        (0.6, 0.3),
+        (0.25, 0.7),
+        (0.05, 0.05),
+        (0.45, 0.1),
+    ];
+    let rays: Vec<GpuRay> = bary
+        .iter()
+        .map(|&(u, v)| {
+            let q = (1.0 - u - v) * p[0] + u * p[1] + v * p[2];
+            GpuRay {
+                o: [q.x, q.y, 1.0, 0.0],
+                d: [0.0, 0.0, -1.0, f32::INFINITY],
+            }
+        })
+        .collect();
+    let hits = rc.closest(&ctx, &gpu, &mut prof, &rays).unwrap();
+    for (&(u, v), h) in bary.iter().zip(&hits) {
+        assert_eq!(h.slot, 0);
+        assert!((h.t - 1.0).abs() < 1e-6, "t {}", h.t);
+        assert!(
+            (h.u - u).abs() < 1e-6 && (h.v - v).abs() < 1e-6,
+            "({}, {}) against ({u}, {v})",
+            h.u,
+            h.v
+        );
+    }
+}
