@@ -74,7 +74,10 @@ MUTANTS = [
     ("alg2-rep-min-swapped", "kmeans/assign.wgsl", "if bits < atomicLoad(&reps[2u * k]) {", "if bits > atomicLoad(&reps[2u * k]) {", "reps"),
     ("alg2-rep-lowest-index-swapped", "kmeans/reps.wgsl", "atomicMin(&reps[2u * k + 1u], m);", "atomicMax(&reps[2u * k + 1u], m);", "reps"),
     # --- primary rays, visibility
-    ("camera-pixel-centre-dropped", "primary.wgsl", "let x = f32(px % w) + 0.5;", "let x = f32(px % w);", "camera"),
+    ("camera-pixel-centre-dropped", "primary.wgsl", "let x = f32(px % w) + 0.5 + bitcast<f32>(cam.size.z);", "let x = f32(px % w) + bitcast<f32>(cam.size.z);", "camera"),
+    # The sub-pixel jitter of anti-aliasing at rest (render::jittered_primary_rays_match_cpu_twin).
+    ("camera-jitter-y-dropped", "primary.wgsl", "+ 0.5 + bitcast<f32>(cam.size.w);", "+ 0.5;", "camera"),
+    ("camera-jitter-axes-swapped", "primary.wgsl", "+ 0.5 + bitcast<f32>(cam.size.z);", "+ 0.5 + bitcast<f32>(cam.size.w);", "camera"),
     ("camera-y-flipped", "primary.wgsl", "let sy = 1.0 - 2.0 * y / f32(h);", "let sy = 2.0 * y / f32(h) - 1.0;", "camera"),
     ("visibility-light-facing-test-swapped", "visibility.wgsl", "dot(l.nrm.xyz, d) >= 0.0", "dot(l.nrm.xyz, d) <= 0.0", "step 5"),
     ("visibility-bit-off-by-one", "visibility.wgsl", "word |= 1u << (c - c0);", "word |= 1u << ((c - c0 + 1u) % 32u);", "step 5"),
