@@ -50,6 +50,27 @@ pub fn instability(
     s / (3 * x.len().max(1)) as f64
 }
 
+/// The pixels of a `w` × `h` image (row-major) around image point (x, y) (pixel centres at
+/// half-integers) with their bilinear weights: up to four (index, weight) pairs, the ones off the
+/// image or of weight 0 left out (the caller renormalises over those it keeps).
+pub fn bilinear_taps(x: f32, y: f32, w: usize, h: usize) -> impl Iterator<Item = (usize, f32)> {
+    let (fx, fy) = (x - 0.5, y - 0.5);
+    let (x0, y0) = (fx.floor(), fy.floor());
+    let (tx, ty) = (fx - x0, fy - y0);
+    [
+        (0, 0, (1.0 - tx) * (1.0 - ty)),
+        (1, 0, tx * (1.0 - ty)),
+        (0, 1, (1.0 - tx) * ty),
+        (1, 1, tx * ty),
+    ]
+    .into_iter()
+    .filter_map(move |(dx, dy, wt)| {
+        let (xx, yy) = (x0 as i64 + dx, y0 as i64 + dy);
+        let inside = xx >= 0 && yy >= 0 && xx < w as i64 && yy < h as i64;
+        (wt > 0.0 && inside).then(|| (yy as usize * w + xx as usize, wt))
+    })
+}
+
 /// One frame of a camera path as `instability_world` reads it: the image, its reference, and per
 /// pixel the surface point (w > 0 where the primary ray hit) and its normal, row-major.
 pub struct PathFrame<'a> {
@@ -83,7 +104,7 @@ pub fn instability_world(
     use glam::Vec3;
     let c = |v: f32| v.clamp(0.0, 1.0) as f64;
     let err = |f: &PathFrame, i: usize, ch: usize| c(f.x[i][ch]) - c(f.reference[i][ch]);
-    let (w, h) = (prev.width as i64, (prev.x.len() / prev.width.max(1)) as i64);
+    let (w, h) = (prev.width, prev.x.len() / prev.width.max(1));
     let xyz = |p: [f32; 4]| Vec3::new(p[0], p[1], p[2]);
     let (mut sum, mut matched) = (0.0f64, 0usize);
     for i in 0..cur.x.len() {
@@ -95,22 +116,9 @@ pub fn instability_world(
             continue;
         };
         let n = xyz(cur.normals[i]);
-        let (fx, fy) = (px - 0.5, py - 0.5);
-        let (x0, y0) = (fx.floor(), fy.floor());
-        let (tx, ty) = (fx - x0, fy - y0);
         let mut acc = [0.0f64; 3];
         let mut wsum = 0.0f64;
-        for (dx, dy, wt) in [
-            (0, 0, (1.0 - tx) * (1.0 - ty)),
-            (1, 0, tx * (1.0 - ty)),
-            (0, 1, (1.0 - tx) * ty),
-            (1, 1, tx * ty),
-        ] {
-            let (xx, yy) = (x0 as i64 + dx, y0 as i64 + dy);
-            if wt <= 0.0 || xx < 0 || yy < 0 || xx >= w || yy >= h {
-                continue;
-            }
-            let j = (yy * w + xx) as usize;
+        for (j, wt) in bilinear_taps(px, py, w, h) {
             let q = prev.positions[j];
             if q[3].is_nan() || q[3] <= 0.0 || n.dot(xyz(prev.normals[j])) < SAME_SURFACE_COS {
                 continue;

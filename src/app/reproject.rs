@@ -170,22 +170,9 @@ fn gather(old_frame: &Old, to: &CameraParams, splat: (&[f32], &[usize]), out: &m
             }
         };
         let n = normals.get(i).map(|&n| xyz(n));
-        let (fx, fy) = (old.0 - 0.5, old.1 - 0.5);
-        let (x0, y0) = (fx.floor(), fy.floor());
-        let (tx, ty) = (fx - x0, fy - y0);
         let mut acc = [0.0f32; 4];
         let mut wsum = 0.0f32;
-        for (dx, dy, wt) in [
-            (0, 0, (1.0 - tx) * (1.0 - ty)),
-            (1, 0, tx * (1.0 - ty)),
-            (0, 1, (1.0 - tx) * ty),
-            (1, 1, tx * ty),
-        ] {
-            let (xx, yy) = (x0 as i64 + dx, y0 as i64 + dy);
-            if wt <= 0.0 || xx < 0 || yy < 0 || xx >= w as i64 || yy >= h as i64 {
-                continue;
-            }
-            let k = yy as usize * w + xx as usize;
+        for (k, wt) in crate::metrics::bilinear_taps(old.0, old.1, w, h) {
             let same = match point {
                 // The sky gathers the sky.
                 None => sky(positions[k]),
