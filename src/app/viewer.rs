@@ -6,7 +6,7 @@ use super::settings::SceneSettings;
 use super::views::View;
 use super::worker::{FrameJob, Job, Rendered, Reply, SceneInfo, Source, Worker};
 use super::{Script, SliderRanges, ViewOptions, Viewer, gi_size, preview_settings};
-use super::{camera, lights, motion, reproject, screenshot, settings, views};
+use super::{camera, lights, motion, reproject, settings, views};
 use anyhow::Result;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -546,69 +546,6 @@ impl Viewer {
             },
         };
         Some((w, h, img, note))
-    }
-
-    /// The current view's linear radiance (as displayed: direct toggle applied) at the frame's size,
-    /// or why there is none.
-    fn view_radiance(&self) -> std::result::Result<(u32, u32, Vec<[f32; 3]>), String> {
-        let Some(r) = &self.latest else {
-            return Err("no frame yet".into());
-        };
-        let img = match self.view {
-            View::Direct => r.frame.direct.clone(),
-            View::Indirect => r.frame.indirect.clone(),
-            // Without a reference these views show the clustered frame: saving that under a
-            // `_reference_` / `_error_` name would mislabel it.
-            View::Reference | View::Error | View::Flip if self.reference_for(r).is_none() => {
-                return Err(
-                    "no reference for this view yet: nothing saved (press \"compute reference\")"
-                        .into(),
-                );
-            }
-            View::Reference => self.reference_for(r).expect("checked").to_vec(),
-            _ => views::final_image(&r.frame.direct, &r.frame.indirect, self.s.direct_on),
-        };
-        Ok((r.frame.width, r.frame.height, img))
-    }
-
-    /// Writes the current view's linear radiance (as displayed: direct toggle applied) as EXR.
-    pub fn save_exr(&mut self) {
-        let (w, h, img) = match self.view_radiance() {
-            Ok(v) => v,
-            Err(e) => {
-                self.last_shot = e;
-                return;
-            }
-        };
-        let path = screenshot::unique_path(
-            &self.shot_dir,
-            &screenshot::scene_stem(&self.spec),
-            &format!("{}_{}", self.s.short(), self.view.slug()),
-            "exr",
-        );
-        self.last_shot = match crate::export::write_exr(&path, w, h, &img) {
-            Ok(()) => format!("saved {}", path.display()),
-            Err(e) => format!("{e:#}"),
-        };
-    }
-
-    /// `view --screenshot S.exr`: the image as displayed, linear radiance at the image area's
-    /// resolution (the frame resampled bilinearly, as the display magnifies it), no UI.
-    fn write_displayed_exr(&self, path: &std::path::Path) -> Result<()> {
-        let (w, h, img) = self.view_radiance().map_err(anyhow::Error::msg)?;
-        let [aw, ah] = self.area_px;
-        let (aw, ah) = (aw.max(1), ah.max(1));
-        let out = screenshot::resample_bilinear(&img, w, h, aw, ah);
-        crate::export::write_exr(path, aw, ah, &out)
-    }
-
-    pub fn request_png(&mut self) {
-        self.png_request = Some(screenshot::unique_path(
-            &self.shot_dir,
-            &screenshot::scene_stem(&self.spec),
-            &format!("{}_{}", self.s.short(), self.view.slug()),
-            "png",
-        ));
     }
 
     /// The animation's step (`--animate`), at the start of a window frame so the frame shows it.
