@@ -16,6 +16,21 @@ use obvhs::{
 
 use crate::scene::Scene;
 
+/// Width in texels of the BVH data textures on the GPU (`gi::scene_gpu`): texel i is at
+/// (i % W, i / W) (`texel_xy` in bvh.wgsl).
+pub const TEXEL_ROW: u32 = 4096;
+/// The most texels one data texture holds under WebGPU's default 8192-row limit.
+pub const MAX_TEXELS: usize = TEXEL_ROW as usize * 8192;
+
+/// The most triangles the data textures hold: 4 texels a triangle in the shading texture and in the
+/// node texture (2 texels a node, fewer than 2 nodes a triangle).
+pub const MAX_TRIANGLES: usize = MAX_TEXELS / 4;
+
+/// A scene whose GPU data do not fit the device: one line naming the limit (exit 2 in the CLI).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct TooBig(pub String);
+
 /// Deeper trees are refused at build time (the layout is built recursively).
 pub const MAX_GPU_DEPTH: usize = 256;
 
@@ -182,9 +197,9 @@ impl SceneBvh {
     pub fn build(scene: &Scene) -> anyhow::Result<SceneBvh> {
         // Checked before the build (a minute for millions of triangles): the traversal's data textures
         // hold 4 texels a triangle (nodes: 2 texels each, fewer than 2 a triangle).
-        let max = crate::gi::scene_gpu::MAX_TRIANGLES;
+        let max = MAX_TRIANGLES;
         if scene.triangles.len() > max {
-            return Err(crate::gi::scene_gpu::TooBig(format!(
+            return Err(TooBig(format!(
                 "{}: {} triangles, more than the {max} the GPU data textures hold",
                 scene.name,
                 scene.triangles.len()

@@ -14,9 +14,9 @@ use obvhs::{
 use rayon::prelude::*;
 
 use crate::bvh::SceneBvh;
-use crate::cpu::rng::{rng_next, rng_seed};
 use crate::gi::primary::CameraParams;
 use crate::gi::raycast::{GpuRay, Raycast};
+use crate::gi::rng::{rng_next, rng_seed};
 use crate::gi::scene_gpu::SceneGpu;
 use crate::gpu::{GpuContext, profiler::Profiler};
 use crate::scene::{Camera, Scene};

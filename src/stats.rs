@@ -5,8 +5,8 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use crate::exposure::Exposure;
-use crate::gi::pipeline::{Frame, Pass, RenderSettings};
 use crate::metrics;
+use crate::render::pipeline::{Frame, Pass, RenderSettings};
 use crate::scene::Scene;
 use crate::settings::{ClusterSettings, FrameSettings, Gamma, LightSettings};
 
@@ -222,11 +222,11 @@ pub struct Stats {
     pub target: Option<Target>,
 }
 
-/// `--target-ms`: the budget and each frame the controller rendered (`gi::budget`).
+/// `--target-ms`: the budget and each frame the controller rendered (`render::budget`).
 #[derive(Clone, Debug, Serialize)]
 pub struct Target {
     pub target_ms: f64,
-    pub steps: Vec<crate::gi::budget::Step>,
+    pub steps: Vec<crate::render::budget::Step>,
 }
 
 /// Every timing key of the contract (`Pass::TIMED` and `frame`), so readers can index them; passes
@@ -235,7 +235,7 @@ pub fn timing_keys() -> impl Iterator<Item = &'static str> {
     Pass::TIMED
         .iter()
         .map(|p| p.name())
-        .chain([crate::gi::pipeline::FRAME_KEY])
+        .chain([crate::render::pipeline::FRAME_KEY])
 }
 
 /// Mean of the `k` smallest values (all of them if fewer): the paper's "3-best" timing.

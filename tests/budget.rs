@@ -1,4 +1,4 @@
-//! `--target-ms` with a budget that binds: the controller (`gi::budget::fit`) must lower K from its
+//! `--target-ms` with a budget that binds: the controller (`render::budget::fit`) must lower K from its
 //! start to meet a budget below both the default settings' frame and its own first frame, and the
 //! settings it settles on must take the budget within ±25% on lavapipe. (Its model fitting,
 //! `Split::of`, and its steps on a known time model are unit tests in `src/gi/budget.rs`.)
@@ -16,8 +16,8 @@
 
 mod common;
 
-use fuzzy_vpl::gi::budget::{self, Budget};
-use fuzzy_vpl::gi::pipeline::{RenderSettings, Renderer};
+use fuzzy_vpl::render::budget::{self, Budget};
+use fuzzy_vpl::render::pipeline::{RenderSettings, Renderer};
 use fuzzy_vpl::scene;
 use fuzzy_vpl::settings::FrameSettings;
 

@@ -5,9 +5,9 @@ mod common;
 
 use fuzzy_vpl::cpu::kmeans::RepPoint;
 use fuzzy_vpl::cpu::shade;
-use fuzzy_vpl::cpu::shading::ShadingPoint;
-use fuzzy_vpl::gi::pipeline::{Frame, RenderSettings, Renderer};
+use fuzzy_vpl::gi::primary::ShadingPoint;
 use fuzzy_vpl::metrics::{mean_luminance, mse};
+use fuzzy_vpl::render::pipeline::{Frame, RenderSettings, Renderer};
 use fuzzy_vpl::scene::{self, Scene};
 #[allow(unused_imports)]
 use fuzzy_vpl::settings::{ClusterSettings, FrameSettings, Gamma, Weighting};

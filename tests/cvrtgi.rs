@@ -1,4 +1,4 @@
-//! CVRTGI (seed 003; `gi::cvrtgi`, docs/cvrtgi.md): hand-worked oracles of Eq. (1), the heuristic
+//! CVRTGI (seed 003; `method::cvrtgi`, docs/cvrtgi.md): hand-worked oracles of Eq. (1), the heuristic
 //! normal, SLIC (Alg. 1) and the face form factor; the GPU kernels against their CPU twins on a small
 //! Cornell box; the irradiance kept across camera moves (Fig. 5); and the total image's mean
 //! luminance against the reference. `measure` (ignored) prints the figures of docs/cvrtgi.md.
@@ -6,14 +6,14 @@
 mod common;
 
 use fuzzy_vpl::cpu::cvrtgi::{self as twin, Faces, INVALID, Lighting};
-use fuzzy_vpl::cpu::shading::ShadingPoint;
-use fuzzy_vpl::cpu::voxel::{self, Grid, SlicSettings, Voxels, eq1_within_angle};
-use fuzzy_vpl::gi::cvrtgi::{Cvrtgi, CvrtgiInputs, CvrtgiReport};
 use fuzzy_vpl::gi::dispatch::Gpu;
-use fuzzy_vpl::gi::pipeline::{Frame, RenderSettings, Renderer};
+use fuzzy_vpl::gi::primary::ShadingPoint;
 use fuzzy_vpl::gi::vpl_trace::Vpl;
 use fuzzy_vpl::gpu::GpuContext;
+use fuzzy_vpl::method::cvrtgi::voxel::{self, Grid, SlicSettings, Voxels, eq1_within_angle};
+use fuzzy_vpl::method::cvrtgi::{Cvrtgi, CvrtgiInputs, CvrtgiReport};
 use fuzzy_vpl::metrics::mean_luminance;
+use fuzzy_vpl::render::pipeline::{Frame, RenderSettings, Renderer};
 use fuzzy_vpl::scene::{self, Camera};
 use fuzzy_vpl::settings::{CvrtgiSettings, FrameSettings};
 use std::collections::BTreeMap;

@@ -3,11 +3,12 @@
 
 mod common;
 
-use fuzzy_vpl::cpu::shading::ShadingPoint;
 use fuzzy_vpl::cpu::vpl::eq5_vpl_radiance;
 use fuzzy_vpl::cpu::wang as twin;
-use fuzzy_vpl::gi::pipeline::{Pass, RenderSettings, Renderer};
+use fuzzy_vpl::gi::primary::ShadingPoint;
+use fuzzy_vpl::method::wang::WangMethod;
 use fuzzy_vpl::metrics;
+use fuzzy_vpl::render::pipeline::{Pass, RenderSettings, Renderer};
 use fuzzy_vpl::scene;
 use fuzzy_vpl::settings::{ClusterSettings, FrameSettings, Method};
 use glam::Vec3;
@@ -73,7 +74,12 @@ fn wang_matches_cpu_twin() {
         assert!(!f.ran(Pass::SpCluster) && !f.ran(Pass::Shade), "{name}");
         assert!(common::all_finite(&f.radiance), "{name}");
         let sps = shading_points(&r);
-        let wf = r.last_wang.as_ref().unwrap();
+        let wf = r
+            .method_state::<WangMethod>(Method::Wang)
+            .unwrap()
+            .last
+            .as_ref()
+            .unwrap();
         let c = &wf.clustering.clusters;
         let alpha = fs.cluster.wang_alpha / s.extent();
         // The whole clustering on the CPU (seeding and updates are the same code; the assignment
@@ -197,7 +203,14 @@ fn wang_labels_match_cpu_twin_on_a_grid_of_step_2() {
     let fs = settings(Method::Wang, w, h);
     r.render(&s.default_camera(), &fs).unwrap();
     let sps = shading_points(&r);
-    let c = &r.last_wang.as_ref().unwrap().clustering.clusters;
+    let c = &r
+        .method_state::<WangMethod>(Method::Wang)
+        .unwrap()
+        .last
+        .as_ref()
+        .unwrap()
+        .clustering
+        .clusters;
     let img = twin::Image {
         width: w,
         height: h,
@@ -246,7 +259,7 @@ fn lightcluster_matches_cpu_twin() {
         let sps = shading_points(&r);
         let vpls = &r.vpl_set.as_ref().unwrap().set.vpls;
         let eye = cam.transform.w_axis.truncate();
-        let z_far = fuzzy_vpl::gi::lightcluster::z_far(eye, s.bounds());
+        let z_far = fuzzy_vpl::method::lightcluster::z_far(eye, s.bounds());
         let c = lc::cluster(vpls, eye, z_far, 0.5 * s.extent());
         assert_eq!(f.vpl_clusters_used as usize, c.discs.len(), "{name}");
         assert!(c.discs.len() > 1 && c.discs.len() < vpls.len(), "{name}");

@@ -8,10 +8,10 @@ use fuzzy_vpl::bvh::SceneBvh;
 use fuzzy_vpl::cpu::kmeans::{self, Centroid, Point, RepPoint};
 use fuzzy_vpl::gi::dispatch::Gpu;
 use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KmParams, Points, Warm, warm_iterations};
-use fuzzy_vpl::gi::pipeline::{RenderSettings, Renderer};
 use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::gi::scene_gpu::SceneGpu;
 use fuzzy_vpl::gpu::{GpuContext, profiler::Profiler};
+use fuzzy_vpl::render::pipeline::{RenderSettings, Renderer};
 #[allow(unused_imports)]
 use fuzzy_vpl::settings::{ClusterSettings, FrameSettings, Gamma, Weighting};
 use fuzzy_vpl::{metrics, scene};

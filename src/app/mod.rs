@@ -25,7 +25,7 @@ use std::time::Instant;
 use anyhow::Result;
 
 use crate::exposure::Exposure;
-use crate::gi::pipeline::{Control, RenderSettings};
+use crate::render::pipeline::{Control, RenderSettings};
 use crate::scene::Scene;
 use crate::settings::{
     AUTO_GAMMA_MIN, ClusterSettings, DEFAULT_PLANE_GATE_DEG, FrameSettings, Gamma, Weighting,
@@ -380,7 +380,7 @@ pub struct PlotPoint {
 
 /// A time-budget controller of the viewer: the budget and pixel count it was made for, the
 /// controller, and the K_SP and K_VPL it chose last.
-pub type BudgetState = (f64, u32, crate::gi::budget::Budget, (u32, u32));
+pub type BudgetState = (f64, u32, crate::render::budget::Budget, (u32, u32));
 
 /// The latest frame's error against its view's reference.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -463,7 +463,7 @@ impl Viewer {
                         .passes
                         .iter()
                         .map(|p| p.name())
-                        .chain([crate::gi::pipeline::FRAME_KEY])
+                        .chain([crate::render::pipeline::FRAME_KEY])
                         .filter(|p| f.timings_ms.contains_key(*p))
                     {
                         ui.label(p);

@@ -311,7 +311,7 @@ impl Viewer {
 
     /// With a time budget: the K's its controller chose for this kind of frame (preview or at
     /// rest), or its first ones; a controller is made anew when the budget or the size changes.
-    fn apply_budget(&mut self, s: &mut crate::gi::pipeline::RenderSettings, preview: bool) {
+    fn apply_budget(&mut self, s: &mut crate::render::pipeline::RenderSettings, preview: bool) {
         let Some(t) = s.cluster.target_ms else {
             self.budgets = [None, None];
             return;
@@ -324,7 +324,7 @@ impl Viewer {
         {
             // K only: the direct light accumulates at rest, and a reference is kept per direct
             // sample count, which a cut would change.
-            let b = crate::gi::budget::Budget::new(t, s).k_only();
+            let b = crate::render::budget::Budget::new(t, s).k_only();
             let n = b.start(s);
             *slot = Some((
                 t,
@@ -341,7 +341,7 @@ impl Viewer {
     /// A frame rendered under a time budget: its controller's next K's, kept when the frame missed
     /// the budget by more than `budget::SETTLED` (within it, the K's stay and the view is steady).
     fn budget_step(&mut self, r: &Rendered) {
-        use crate::gi::budget::{SETTLED, Split};
+        use crate::render::budget::{SETTLED, Split};
         let Some(t) = r.job.settings.cluster.target_ms else {
             return;
         };

@@ -12,8 +12,8 @@ use std::time::Instant;
 use anyhow::Result;
 use glam::Vec3;
 
-use crate::gi::pipeline::{Cancelled, Control, Frame, Pass, RenderSettings, Renderer};
 use crate::gpu::GpuContext;
+use crate::render::pipeline::{Cancelled, Control, Frame, Pass, RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
 
 /// Loads a scene by its spec, with the command line's added lights.
@@ -193,7 +193,7 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
         emissive_triangles: scene.emissive_triangle_count(),
         adapter: ctx.adapter_name.clone(),
         software: ctx.software,
-        max_pixels: crate::gi::pipeline::max_pixels(&ctx, crate::gi::pipeline::PIXEL_BYTES),
+        max_pixels: crate::render::pipeline::max_pixels(&ctx, crate::render::pipeline::PIXEL_BYTES),
     })));
     let mut cache = PointCache::default();
     let mut reference: Option<FrameJob> = None;
@@ -364,9 +364,9 @@ impl Accumulation {
 /// VPL and light positions, recomputed only when the resident sets change.
 #[derive(Default)]
 struct PointCache {
-    vpl_key: Option<crate::gi::pipeline::VplKey>,
+    vpl_key: Option<crate::render::pipeline::VplKey>,
     vpls: Arc<Vec<Vec3>>,
-    light_key: Option<crate::gi::pipeline::LightKey>,
+    light_key: Option<crate::render::pipeline::LightKey>,
     lights: Arc<Vec<Vec3>>,
 }
 

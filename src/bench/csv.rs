@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::gi::pipeline::{FRAME_KEY, Pass};
+use crate::render::pipeline::{FRAME_KEY, Pass};
 use crate::settings::{Gamma, Method};
 use anyhow::{Context, Result, bail};
 

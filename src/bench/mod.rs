@@ -17,9 +17,9 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::gi::budget;
-use crate::gi::pipeline::{FRAME_KEY, Frame, Pass, RenderSettings, Renderer};
 use crate::gpu::GpuContext;
+use crate::render::budget;
+use crate::render::pipeline::{FRAME_KEY, Frame, Pass, RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
 use crate::settings::{ClusterSettings, FrameSettings, Method};
 use crate::stats::ErrorStats;

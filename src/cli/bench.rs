@@ -9,8 +9,8 @@ use super::bad;
 use super::scene::{SceneArgs, check_size, check_vpls};
 use crate::bench::{self, path::CameraPath, sweep::Sweep};
 use crate::export;
-use crate::gi::pipeline;
 use crate::gpu::GpuContext;
+use crate::render::pipeline;
 use crate::settings::{FrameSettings, TimingSettings, parse_on_off};
 
 pub const BENCH_HELP: &str = "\

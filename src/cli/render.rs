@@ -7,9 +7,9 @@ use clap::Args;
 
 use super::bad;
 use super::scene::{SceneArgs, ShotArgs, check_size, check_vpls};
-use crate::gi::budget;
-use crate::gi::pipeline::{self, RenderSettings, Renderer};
 use crate::gpu::GpuContext;
+use crate::render::budget;
+use crate::render::pipeline::{self, RenderSettings, Renderer};
 use crate::settings::{FrameSettings, TimingSettings};
 use crate::{export, metrics, stats};
 

@@ -104,7 +104,7 @@ pub fn check_vpls(ctx: &GpuContext, vpls: u32) -> Result<()> {
 
 /// The largest image this device renders: each per-pixel buffer is one storage binding.
 pub fn check_size(ctx: &GpuContext, width: u32, height: u32, bytes_per_pixel: u64) -> Result<()> {
-    crate::gi::pipeline::check_frame_size(ctx, width, height, bytes_per_pixel).map_err(|e| {
+    crate::render::pipeline::check_frame_size(ctx, width, height, bytes_per_pixel).map_err(|e| {
         bad(format!(
             "--width/--height {width}x{height}: {} pixels, at most {} on this adapter ({} bytes a pixel in one {}-byte storage binding)",
             width as u64 * height as u64,

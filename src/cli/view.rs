@@ -9,8 +9,8 @@ use super::bad;
 use super::scene::{SceneArgs, ShotArgs, check_vpls};
 use crate::export;
 use crate::exposure::Exposure;
-use crate::gi::pipeline::RenderSettings;
 use crate::gpu::GpuContext;
+use crate::render::pipeline::RenderSettings;
 use crate::settings::Invalid;
 
 #[derive(Args)]

@@ -4,9 +4,7 @@
 pub mod cvrtgi;
 pub mod kmeans;
 pub mod lightcluster;
-pub mod rng;
 pub mod shade;
 pub mod shading;
-pub mod voxel;
 pub mod vpl;
 pub mod wang;

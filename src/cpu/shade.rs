@@ -3,8 +3,9 @@
 use glam::Vec3;
 
 use super::kmeans::RepPoint;
-use super::shading::{CpuScene, ShadingPoint};
+use super::shading::CpuScene;
 use super::vpl::eq5_vpl_radiance;
+use crate::gi::primary::ShadingPoint;
 use crate::gi::vpl_trace::Vpl;
 
 /// The visibility bit matrix: row k (SP cluster with representative point `reps[k]`, or none), bit c

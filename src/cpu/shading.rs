@@ -3,39 +3,14 @@
 
 use glam::{Vec2, Vec3};
 
-use super::rng::{rng_next, rng_seed};
 use crate::bvh::SceneBvh;
-use crate::gi::primary::CameraParams;
+use crate::gi::primary::{CameraParams, ShadingPoint};
+use crate::gi::rng::{rng_next, rng_seed};
 use crate::gi::scene_gpu::{GpuEmitter, SceneInfo};
 use crate::scene::{LightKind, Scene, Texture};
 
 /// Samples per random stream in the direct light (`RNG_BLOCK` in direct.wgsl).
 const RNG_BLOCK: u32 = crate::gi::direct::SAMPLES_PER_DISPATCH;
-
-/// A shading point as `common/gbuffer.wgsl` lays it out (w components: valid flag, material).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ShadingPoint {
-    pub valid: bool,
-    pub pos: Vec3,
-    pub normal: Vec3,
-    pub material: u32,
-    pub albedo: Vec3,
-    pub emission: Vec3,
-}
-
-impl ShadingPoint {
-    /// Decodes one G-buffer record (4 × vec4).
-    pub fn from_gpu(r: &[[f32; 4]]) -> Self {
-        ShadingPoint {
-            valid: r[0][3] > 0.0,
-            pos: Vec3::new(r[0][0], r[0][1], r[0][2]),
-            normal: Vec3::new(r[1][0], r[1][1], r[1][2]),
-            material: r[1][3].to_bits(),
-            albedo: Vec3::new(r[2][0], r[2][1], r[2][2]),
-            emission: Vec3::new(r[3][0], r[3][1], r[3][2]),
-        }
-    }
-}
 
 /// Everything the twins need besides the scene and the BVH.
 pub struct CpuScene<'a> {

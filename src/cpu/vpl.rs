@@ -2,7 +2,8 @@
 
 use glam::Vec3;
 
-use super::shading::{CpuScene, ShadingPoint};
+use super::shading::CpuScene;
+use crate::gi::primary::ShadingPoint;
 use crate::gi::vpl_trace::Vpl;
 
 /// One term of Eq. (5) without visibility: I_j(p) ρ(p) G(p, p_j), 1/d² clamped at d_min².

@@ -4,7 +4,7 @@ use bytemuck::{Pod, Zeroable};
 
 use super::dispatch::Kernel;
 use super::dispatch::{Gpu, Run};
-use super::pipeline::Pass;
+use super::pass::Pass;
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
 

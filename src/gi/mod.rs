@@ -1,22 +1,21 @@
-//! The GI passes, one module per pass, each owning its pipeline and bind-group layout and driving the
-//! WGSL file of the same name. `pipeline` decides which passes run.
+//! The shared GI passes, one module per pass, each owning its pipeline and bind-group layout and
+//! driving the WGSL file of the same name: the scene on the GPU, VPLs (step 1) and their clustering
+//! (step 2), primary rays (step 3), direct light, the unclustered gather (Eq. 5), the k-means and
+//! colom's clustered visibility and shading (steps 4–6). The other methods' passes are in
+//! `method`; `render::pipeline` decides which passes run.
 
-pub mod budget;
-pub mod cvrtgi;
 pub mod direct;
 pub mod dispatch;
-pub mod frame;
 pub mod kmeans;
-pub mod lightcluster;
+pub mod pass;
 pub mod pathtrace;
-pub mod pipeline;
 pub mod primary;
 pub mod raycast;
 pub mod reference;
-pub mod resident;
+pub mod render_settings;
+pub mod rng;
 pub mod scene_gpu;
 pub mod shade;
 pub mod visibility;
 pub mod vpl_cluster;
 pub mod vpl_trace;
-pub mod wang;

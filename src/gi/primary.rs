@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use super::dispatch::Kernel;
 use super::dispatch::{Gpu, Run};
-use super::pipeline::Pass;
+use super::pass::Pass;
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
 use crate::scene::Camera;
@@ -113,5 +113,30 @@ impl Primary {
             seed: 0,
         };
         self.kernel.run(g, run, n, 1 << 17, &mut |_, _| {});
+    }
+}
+
+/// A shading point as `common/gbuffer.wgsl` lays it out (w components: valid flag, material).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingPoint {
+    pub valid: bool,
+    pub pos: Vec3,
+    pub normal: Vec3,
+    pub material: u32,
+    pub albedo: Vec3,
+    pub emission: Vec3,
+}
+
+impl ShadingPoint {
+    /// Decodes one G-buffer record (4 × vec4).
+    pub fn from_gpu(r: &[[f32; 4]]) -> Self {
+        ShadingPoint {
+            valid: r[0][3] > 0.0,
+            pos: Vec3::new(r[0][0], r[0][1], r[0][2]),
+            normal: Vec3::new(r[1][0], r[1][1], r[1][2]),
+            material: r[1][3].to_bits(),
+            albedo: Vec3::new(r[2][0], r[2][1], r[2][2]),
+            emission: Vec3::new(r[3][0], r[3][1], r[3][2]),
+        }
     }
 }

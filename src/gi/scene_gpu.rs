@@ -158,19 +158,7 @@ pub fn storage_layout(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEnt
     e
 }
 
-/// Width in texels of the BVH data textures: texel i is at (i % W, i / W) (`texel_xy` in bvh.wgsl).
-pub const TEXEL_ROW: u32 = 4096;
-/// The most texels one data texture holds under WebGPU's default 8192-row limit.
-pub const MAX_TEXELS: usize = TEXEL_ROW as usize * 8192;
-
-/// The most triangles the data textures hold: 4 texels a triangle in the shading texture and in the
-/// node texture (2 texels a node, fewer than 2 nodes a triangle).
-pub const MAX_TRIANGLES: usize = MAX_TEXELS / 4;
-
-/// A scene whose GPU data do not fit the device: one line naming the limit (exit 2 in the CLI).
-#[derive(Debug, thiserror::Error)]
-#[error("{0}")]
-pub struct TooBig(pub String);
+pub use crate::bvh::{MAX_TEXELS, MAX_TRIANGLES, TEXEL_ROW, TooBig};
 
 fn mib(bytes: u64) -> String {
     format!("{:.1} MiB", bytes as f64 / (1u64 << 20) as f64)

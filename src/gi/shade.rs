@@ -7,7 +7,7 @@ use bytemuck::{Pod, Zeroable};
 
 use super::dispatch::{Gpu, Run};
 use super::dispatch::{Kernel, copy_to_texture, data_texture};
-use super::pipeline::Pass;
+use super::pass::Pass;
 use super::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
 use crate::settings::MAX_F;

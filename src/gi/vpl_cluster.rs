@@ -8,8 +8,8 @@ use glam::Vec3;
 use super::dispatch::Gpu;
 use super::kmeans::Points;
 use super::kmeans::{Clustering, KMeans, KMeansSettings, Warm};
-use super::pipeline::Pass;
-use super::vpl_trace::{Vpl, VplSet};
+use super::pass::Pass;
+use super::vpl_trace::{Vpl, VplKey, VplSet};
 use crate::gpu::GpuContext;
 
 pub struct LightList {
@@ -78,4 +78,24 @@ pub fn cluster(
         lights,
         clustering: Some(c),
     })
+}
+
+/// What a light list was built for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LightKey {
+    /// K_VPL (0: the VPLs themselves).
+    pub k: u32,
+    pub normal_threshold_bits: u32,
+    pub iterations: u32,
+    pub seed: u32,
+    /// The VPL set it clusters.
+    pub vpls: VplKey,
+}
+
+/// The resident light list (VPL clusters, step 2, or the VPLs) with its key and the clustering's GPU
+/// ms.
+pub struct ResidentLights {
+    pub list: LightList,
+    pub key: LightKey,
+    pub ms: f64,
 }

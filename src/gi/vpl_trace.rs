@@ -8,14 +8,12 @@ use bytemuck::{Pod, Zeroable};
 
 use super::dispatch::Kernel;
 use super::dispatch::{Gpu, Run};
-use super::pipeline::Pass;
+use super::pass::Pass;
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
 use crate::scene::{LightKind, Scene};
 
-/// The default for the most VPLs one light path leaves (its bounce count); Russian roulette usually
-/// ends a path earlier.
-pub const MAX_DEPTH: u32 = 8;
+pub use crate::settings::MAX_DEPTH;
 
 /// A VPL as `common/vpl.wgsl` lays it out.
 #[repr(C)]
@@ -176,4 +174,21 @@ impl VplTrace {
             paths,
         })
     }
+}
+
+/// What a VPL set was traced for, and which trace it is (`Renderer`'s count of traces: a light
+/// change re-traces the same count, seed and bounces).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VplKey {
+    pub count: u32,
+    pub seed: u32,
+    pub bounces: u32,
+    pub trace: u32,
+}
+
+/// The resident VPLs (step 1) with what they were traced for and the GPU ms it took.
+pub struct ResidentVpls {
+    pub set: VplSet,
+    pub key: VplKey,
+    pub ms: f64,
 }

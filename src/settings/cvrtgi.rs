@@ -1,4 +1,4 @@
-//! The CVRTGI method's knobs (Cosin Ayerbe & Patow 2022, seed 003; `gi::cvrtgi`, docs/cvrtgi.md):
+//! The CVRTGI method's knobs (Cosin Ayerbe & Patow 2022, seed 003; `method::cvrtgi`, docs/cvrtgi.md):
 //! one `Args` + serde struct with its value parsers, flattened into `ClusterSettings`.
 
 use clap::Args;
@@ -9,10 +9,10 @@ use super::{Invalid, in_range, invalid};
 /// The most voxels along the longest axis of the scene (`--voxel-res`): the paper's largest grid
 /// (256³). The per-face visibility cache holds `--face-rays` cluster ids for every exposed voxel
 /// face (about 12 N² faces for a closed room), 256 × 64 rays is already ~200 MiB, past one storage
-/// binding on lavapipe (128 MiB); `gi::cvrtgi` checks the actual size against the adapter.
+/// binding on lavapipe (128 MiB); `method::cvrtgi` checks the actual size against the adapter.
 pub const MAX_VOXEL_RES: u32 = 256;
 
-/// The knobs of the CVRTGI method (Cosin Ayerbe & Patow 2022, seed 003; `gi::cvrtgi`,
+/// The knobs of the CVRTGI method (Cosin Ayerbe & Patow 2022, seed 003; `method::cvrtgi`,
 /// docs/methods.md), flattened into `ClusterSettings` and so into `render`, `view` and `bench`.
 #[derive(Args, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[command(next_help_heading = "CVRTGI (voxel clusters)")]

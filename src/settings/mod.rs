@@ -1,6 +1,6 @@
 //! The settings model: one type per idea, each declared once with its command-line form (clap
 //! `Args`) and its serialised form (serde), flattened into `render`, `view` and `bench` and used as
-//! they are by the renderer (`gi::pipeline::Settings`), the viewer's state, the stats JSON and the
+//! they are by the renderer (`render::pipeline::Settings`), the viewer's state, the stats JSON and the
 //! bench CSV.
 //!
 //! - `ClusterSettings`: the paper's knobs (K_SP, K_VPL, F, γ, n_t, iterations, weighting, p, the
@@ -40,7 +40,18 @@ fn invalid<T>(msg: impl Into<String>) -> Result<T, Invalid> {
 
 /// How a pixel's F SP clusters combine their visibility.
 #[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, Serialize, Deserialize,
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    Hash,
+    PartialOrd,
+    Ord,
+    clap::ValueEnum,
+    Serialize,
+    Deserialize,
 )]
 #[serde(rename_all = "kebab-case")]
 pub enum Weighting {
@@ -72,9 +83,20 @@ impl Weighting {
 /// Which system computes the indirect light (docs/methods.md). Every method reuses the VPLs, the
 /// BVH, the primary rays, the direct light, the reference and the metrics, and adds only what its
 /// paper adds. A method is a variant here (with its knobs as `ClusterSettings` fields), its passes
-/// in `gi::pipeline::Pass` and `Plan::passes`, and its module in `gi/`.
+/// in `render::pipeline::Pass` and `Plan::passes`, and its module in `gi/`.
 #[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, Serialize, Deserialize,
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    Hash,
+    PartialOrd,
+    Ord,
+    clap::ValueEnum,
+    Serialize,
+    Deserialize,
 )]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
@@ -121,6 +143,10 @@ impl fmt::Display for Method {
         f.write_str(self.name())
     }
 }
+
+/// The default for the most VPLs one light path leaves (its bounce count); Russian roulette usually
+/// ends a path earlier.
+pub const MAX_DEPTH: u32 = 8;
 
 /// α of Wang et al.'s Eq. (2) (seed 001, §3.2): the weight of the position term, positions in units
 /// of the scene diagonal (the paper's "normalised scene scale"); the paper uses 0.1–0.5.
@@ -406,7 +432,7 @@ pub struct FrameSettings {
     pub vpls: u32,
     /// Indirect bounce budget: the most VPLs a light path deposits (the path tracer gets the same),
     /// 1..64.
-    #[arg(long, default_value_t = crate::gi::vpl_trace::MAX_DEPTH, value_parser = parse_bounces)]
+    #[arg(long, default_value_t = MAX_DEPTH, value_parser = parse_bounces)]
     pub bounces: u32,
     /// Area-light samples (shadow rays) per pixel for direct light, 1..=65536.
     #[arg(long, default_value_t = 16, value_parser = parse_direct_samples)]
@@ -429,7 +455,7 @@ impl Default for FrameSettings {
             height: 480,
             seed: 1,
             vpls: 8192,
-            bounces: crate::gi::vpl_trace::MAX_DEPTH,
+            bounces: MAX_DEPTH,
             direct_samples: 16,
             exposure: Exposure::Auto,
             clamp: DEFAULT_CLAMP,

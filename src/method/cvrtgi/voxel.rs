@@ -1,4 +1,4 @@
-//! The CPU steps of CVRTGI (Cosin Ayerbe & Patow 2022, seed 003; `gi::cvrtgi`, docs/cvrtgi.md):
+//! The CPU steps of CVRTGI (Cosin Ayerbe & Patow 2022, seed 003; `method::cvrtgi`, docs/cvrtgi.md):
 //! the scene's voxelisation (§4.1) with each occupied voxel's mean normal and albedo, the paper's
 //! heuristic normal (§4.2, Fig. 7) where the mean normal cancels out, the exposed faces, and the
 //! SLIC-style voxel clustering (§4.2, Eq. (1), Alg. 1). The paper runs these on the GPU once per

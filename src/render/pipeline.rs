@@ -18,137 +18,27 @@
 //!
 //! `Plan::new` lists the passes; `Renderer::render` runs exactly that list, in order.
 
-use std::sync::Arc;
 use std::sync::atomic::Ordering;
 
 use anyhow::Result;
 
 pub use super::frame::{
-    Cancelled, Control, FRAME_KEY, Frame, PATH_TRACE_PIXEL_BYTES, PIXEL_BYTES, TooLarge,
-    check_frame_size, check_visibility_size, max_pixels, visibility_bytes,
+    FRAME_KEY, Frame, PATH_TRACE_PIXEL_BYTES, PIXEL_BYTES, TooLarge, check_frame_size,
+    check_visibility_size, max_pixels, visibility_bytes,
 };
-use super::kmeans::{Clustering, KMeansSettings, Points};
-use super::primary::{CameraParams, SP_BYTES};
 use super::resident::LastVisibility;
-pub use super::resident::{LightKey, Renderer, VplKey};
-use super::shade::{ShadeInputs, ShadeParams};
-use super::visibility::Previous;
+pub use super::resident::Renderer;
+use crate::gi::kmeans::{Clustering, KMeansSettings, Points};
+pub use crate::gi::pass::Pass;
+use crate::gi::primary::{CameraParams, SP_BYTES};
+pub use crate::gi::render_settings::{Cancelled, Control, RenderSettings};
+use crate::gi::shade::{ShadeInputs, ShadeParams};
+use crate::gi::visibility::Previous;
+pub use crate::gi::vpl_cluster::LightKey;
+pub use crate::gi::vpl_trace::VplKey;
+use crate::method::{FrameInputs, MethodCounts};
 use crate::scene::{Camera, Scene};
-use crate::settings::{ClusterSettings, FrameSettings, Method, Weighting};
-
-/// A pass of the frame graph. Its name keys the GPU timings (profiler labels), the stats JSON's
-/// `passes` and `timings_ms`, and the bench CSV's `<stage>_ms` columns.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Pass {
-    /// Step 1: light paths from the emitters deposit VPLs (resident).
-    VplTrace,
-    /// Step 2: k-means of the VPLs into a light list of representatives (resident).
-    VplCluster,
-    /// Step 3: primary rays to shading points.
-    Primary,
-    /// Emission and direct light.
-    Direct,
-    /// Step 4: fuzzy k-means of the shading points (Alg. 1 and 2).
-    SpCluster,
-    /// Step 5: visibility between SP-cluster representatives and lights.
-    Visibility,
-    /// Step 6: Eq. (6) with Eq. (8) or (9).
-    Shade,
-    /// Every pixel × every VPL cluster with its own shadow ray (VPL clustering only).
-    Gather,
-    /// Every pixel × every VPL (Eq. 5): no clustering.
-    Reference,
-    /// The diffuse path tracer (`--path-trace`), instead of every pass above.
-    PathTrace,
-    /// wang (seed 001, §3.2): adaptively seeded k-means of the SPs with Eq. (2), sample points.
-    WangCluster,
-    /// wang: irradiance at the sample points (every light with its own shadow ray) and §3.4's R_j.
-    WangGather,
-    /// wang (§3.4): every pixel interpolates the sample points' irradiance.
-    WangInterp,
-    /// lightcluster (seed 002, §3.1): the VPLs clustered by the minimum-distance algorithm (CPU).
-    LightClusterCluster,
-    /// lightcluster (§3.2): every pixel × every VPL with its cluster's disc visibility.
-    LightClusterShade,
-    /// cvrtgi (seed 003): voxels, clusters and the per-face visibility cache (resident while the
-    /// scene and its knobs stay), the lit clusters' per-face irradiance, filtered (resident while
-    /// the VPLs stay), and every pixel's lookup (`gi::cvrtgi`; GPU times under `cvrtgi.*`, the
-    /// CPU stages under `cvrtgi`).
-    Cvrtgi,
-}
-
-impl Pass {
-    /// The passes whose times the stats report. The first `STAGES`, in this order, are the bench
-    /// CSV's `<stage>_ms` columns (a contract: `bench::csv::stage_passes`); the unclustered
-    /// reference has its own column and the other methods' passes are summed in `indirect_ms`.
-    pub const TIMED: [Pass; 15] = [
-        Pass::VplTrace,
-        Pass::VplCluster,
-        Pass::Primary,
-        Pass::SpCluster,
-        Pass::Visibility,
-        Pass::Shade,
-        Pass::Gather,
-        Pass::Direct,
-        Pass::Reference,
-        Pass::WangCluster,
-        Pass::WangGather,
-        Pass::WangInterp,
-        Pass::LightClusterCluster,
-        Pass::LightClusterShade,
-        Pass::Cvrtgi,
-    ];
-
-    /// How many of `TIMED` are the CSV's stage columns.
-    pub const STAGES: usize = 8;
-
-    pub const fn name(self) -> &'static str {
-        match self {
-            Pass::VplTrace => "vpl_trace",
-            Pass::VplCluster => "vpl_cluster",
-            Pass::Primary => "primary",
-            Pass::Direct => "direct",
-            Pass::SpCluster => "sp_cluster",
-            Pass::Visibility => "visibility",
-            Pass::Shade => "shade",
-            Pass::Gather => "gather",
-            Pass::Reference => "reference",
-            Pass::PathTrace => "pathtrace",
-            Pass::WangCluster => "wang_cluster",
-            Pass::WangGather => "wang_gather",
-            Pass::WangInterp => "wang_interp",
-            Pass::LightClusterCluster => "lightcluster_cluster",
-            Pass::LightClusterShade => "lightcluster_shade",
-            Pass::Cvrtgi => "cvrtgi",
-        }
-    }
-
-    /// Resident passes run only when their inputs change; their times are not in `frame`.
-    pub fn resident(self) -> bool {
-        matches!(self, Pass::VplTrace | Pass::VplCluster)
-    }
-}
-
-impl std::fmt::Display for Pass {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// What a frame is rendered with: the user's settings (`crate::settings`) as they are, and how the
-/// indirect light is computed.
-#[derive(Clone, Debug, Default)]
-pub struct RenderSettings {
-    pub frame: FrameSettings,
-    pub cluster: ClusterSettings,
-    /// No clustering at all (Eq. 5 per pixel and VPL).
-    pub reference: bool,
-    /// Print progress of long passes on stderr.
-    pub progress: bool,
-    /// Shared with another thread (the viewer): progress of the long gather passes and a cancel flag
-    /// checked between their dispatches.
-    pub control: Option<Arc<Control>>,
-}
+use crate::settings::{Method, Weighting};
 
 /// Which passes a frame runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -204,9 +94,7 @@ impl Plan {
                 }
                 Method::Colom if self.vpl_clustering => &[Pass::Gather],
                 Method::Colom => &[Pass::Reference],
-                Method::Wang => &[Pass::WangCluster, Pass::WangGather, Pass::WangInterp],
-                Method::LightCluster => &[Pass::LightClusterCluster, Pass::LightClusterShade],
-                Method::Cvrtgi => &[Pass::Cvrtgi],
+                m => crate::method::room(m).expect("a method's room").passes,
             });
         }
         p
@@ -216,17 +104,17 @@ impl Plan {
 /// The `dispatch::Gpu` of a `Renderer` (a macro, so that the passes stay borrowable beside it).
 macro_rules! gpu {
     ($r:ident) => {
-        super::dispatch::Gpu {
+        crate::gi::dispatch::Gpu {
             ctx: $r.ctx,
             scene: &$r.gpu,
             profiler: &mut $r.profiler,
         }
     };
 }
-pub(super) use gpu;
+pub(crate) use gpu;
 
-/// A frame's buffers and what its passes hand on to the next ones (the other methods' passes,
-/// `gi/wang.rs` and `gi/lightcluster.rs`, read and write it too).
+/// A frame's buffers and what its passes hand on to the next ones (the other methods' passes read
+/// it as `method::FrameInputs`).
 pub(super) struct FrameResources {
     pub pixels: u32,
     pub cam: CameraParams,
@@ -241,19 +129,13 @@ pub(super) struct FrameResources {
     visibility: Option<Previous>,
     /// The previous frame's visibility matrix when its rows may be reused (temporal).
     previous_visibility: Option<LastVisibility>,
-    /// Shadow rays of the indirect passes: in all, and for each valid shading point (the passes
-    /// that trace per pixel; `finish` counts the pixels).
-    pub indirect_rays: u64,
+    /// Shadow rays of the passes that trace per pixel, for each valid shading point (`finish`
+    /// counts the pixels).
     pub rays_per_point: u64,
-    /// Rows copied instead of traced, SP clusters used, VPL clusters of a per-frame clustering.
+    /// Visibility rows copied instead of traced.
     rows_reused: u32,
-    pub sp_used: u32,
-    pub vpl_clusters_used: u32,
-    /// CPU milliseconds of a pass's steps, added to its GPU time (wang's and lightcluster's
-    /// clusterings).
-    pub cpu_ms: Vec<(Pass, f64)>,
-    pub wang: super::wang::WangState,
-    pub light_clusters: Option<crate::cpu::lightcluster::LightClusters>,
+    /// The indirect passes' shadow rays in all, SP clusters and VPL clusters used, CPU steps.
+    pub counts: MethodCounts,
 }
 
 impl Renderer<'_> {
@@ -280,14 +162,9 @@ impl Renderer<'_> {
             clustering: None,
             visibility: None,
             previous_visibility: None,
-            indirect_rays: 0,
             rays_per_point: 0,
             rows_reused: 0,
-            sp_used: 0,
-            vpl_clusters_used: 0,
-            cpu_ms: Vec::new(),
-            wang: Default::default(),
-            light_clusters: None,
+            counts: MethodCounts::default(),
         };
         let previous_clustering = self.sp_clustering.take().filter(|_| s.cluster.temporal);
         for &pass in &passes {
@@ -316,14 +193,8 @@ impl Renderer<'_> {
                 Pass::Visibility => self.visibility(s, &mut r)?,
                 Pass::Shade => self.shade(s, &r),
                 Pass::Gather | Pass::Reference => self.gather(pass, s, &mut r)?,
-                Pass::WangCluster | Pass::WangGather | Pass::WangInterp => {
-                    self.wang_pass(pass, s, &mut r)?
-                }
-                Pass::LightClusterCluster | Pass::LightClusterShade => {
-                    self.lightcluster_pass(pass, s, &mut r)?
-                }
-                Pass::Cvrtgi => self.cvrtgi_pass(s, &mut r)?,
                 Pass::PathTrace => unreachable!("the path tracer is `path_trace`"),
+                _ => self.method_pass(plan.method, pass, s, &mut r)?,
             }
         }
         self.finish(s, &plan, passes, r)
@@ -336,7 +207,7 @@ impl Renderer<'_> {
         r: &mut FrameResources,
         previous: Option<&Clustering>,
     ) -> Result<()> {
-        let warm = previous.map(|c| super::kmeans::Warm {
+        let warm = previous.map(|c| crate::gi::kmeans::Warm {
             centroids: &c.centroids,
             rep_points: &c.rep_points,
             k: c.k(),
@@ -381,7 +252,7 @@ impl Renderer<'_> {
             previous.as_ref().map(|p| &p.matrix),
         );
         let reps: Vec<u32> = ctx.read_buffer(&c.reps, c.k() as usize * 2)?;
-        r.sp_used = reps.chunks(2).filter(|r| r[1] != u32::MAX).count() as u32;
+        r.counts.sp_used = reps.chunks(2).filter(|r| r[1] != u32::MAX).count() as u32;
         if let Some(p) = &previous
             && p.matrix.words == words
         {
@@ -393,7 +264,7 @@ impl Renderer<'_> {
                 .filter(|r| r[0][3] > 0.0 && r[1][3] == 1.0)
                 .count() as u32;
         }
-        r.indirect_rays = (r.sp_used - r.rows_reused) as u64 * num_lights as u64;
+        r.counts.indirect_rays = (r.counts.sp_used - r.rows_reused) as u64 * num_lights as u64;
         debug_assert!(s.cluster.temporal || r.rows_reused == 0);
         r.visibility = Some(Previous {
             bits,
@@ -443,7 +314,7 @@ impl Renderer<'_> {
         let mut last = 0u64;
         self.reference.record(
             &mut gpu!(self),
-            &super::reference::GatherInputs {
+            &crate::gi::reference::GatherInputs {
                 gbuffer: &r.gbuffer,
                 lights: &lights.buffer,
                 num_lights: lights.lights.len() as u32,
@@ -478,6 +349,35 @@ impl Renderer<'_> {
         Ok(())
     }
 
+    /// One of the pass list of `method`'s room (`method::ROOMS`), its state built the first time.
+    fn method_pass(
+        &mut self,
+        method: Method,
+        pass: Pass,
+        s: &RenderSettings,
+        r: &mut FrameResources,
+    ) -> Result<()> {
+        let ctx = self.ctx;
+        let room = crate::method::room(method).expect("a method's room");
+        let state = self
+            .methods
+            .entry(method)
+            .or_insert_with(|| (room.build)(ctx, &self.gpu));
+        let inputs = FrameInputs {
+            scene: &self.scene,
+            settings: s,
+            vpls: self.vpl_set.as_ref().expect("vpl_trace ran"),
+            lights: self.lights.as_ref(),
+            reference: &self.reference,
+            gbuffer: &r.gbuffer,
+            pixels: r.pixels,
+            cam: r.cam,
+            indirect: &r.indirect,
+        };
+        let mut gpu = gpu!(self);
+        state.record(pass, &mut gpu, &inputs, &mut r.counts)
+    }
+
     /// Reads the frame back, keeps what the next frame reuses, and adds the timings.
     fn finish(
         &mut self,
@@ -490,12 +390,12 @@ impl Renderer<'_> {
         let n = r.pixels;
         let mut timings_ms = self.profiler.collect(ctx)?;
         // A pass's CPU steps count as its time (docs/methods.md).
-        for &(pass, ms) in &r.cpu_ms {
+        for &(pass, ms) in &r.counts.cpu_ms {
             *timings_ms.entry(pass.name().into()).or_insert(0.0) += ms;
         }
         // cvrtgi's resident stages are not the frame's (as the VPLs and their clustering).
-        let resident = match plan.method {
-            Method::Cvrtgi if plan.indirect => self.cvrtgi.take_build_times(&mut timings_ms),
+        let resident = match self.methods.get_mut(&plan.method) {
+            Some(m) if plan.indirect => m.take_resident_timings(&mut timings_ms),
             _ => Default::default(),
         };
         let frame_ms: f64 = timings_ms.values().sum();
@@ -522,7 +422,7 @@ impl Renderer<'_> {
         let ind: Vec<[f32; 4]> = ctx.read_buffer(&r.indirect, n as usize)?;
         let sps: Vec<[f32; 4]> = ctx.read_buffer(&r.gbuffer, n as usize * 4)?;
         let valid = sps.chunks(4).filter(|sp| sp[0][3] > 0.0).count() as u32;
-        let indirect_rays = r.indirect_rays + valid as u64 * r.rays_per_point;
+        let indirect_rays = r.counts.indirect_rays + valid as u64 * r.rays_per_point;
         let (mut sp_iterations, mut sp_warm_kept, mut gamma_used) = (0, None, None);
         if let (Some(c), Some(v)) = (r.clustering, r.visibility) {
             sp_iterations = c.iterations_run;
@@ -555,11 +455,11 @@ impl Renderer<'_> {
             shading_points: valid,
             shadow_rays: valid as u64 * (r.direct_samples as u64 + self.gpu.info.num_lights as u64)
                 + indirect_rays,
-            sp_clusters_used: r.sp_used,
+            sp_clusters_used: r.counts.sp_used,
             vpl_clusters_used: if plan.vpl_clustering {
                 num_lights
             } else {
-                r.vpl_clusters_used
+                r.counts.vpl_clusters_used
             },
             gamma_used,
             // In the caller's units (the G-buffer holds the unit frame's, `geometry_scale`).
@@ -592,7 +492,7 @@ impl Renderer<'_> {
         let ctx = self.ctx;
         let f = &s.frame;
         check_frame_size(ctx, f.width, f.height, PATH_TRACE_PIXEL_BYTES)?;
-        let pt = super::pathtrace::PathTrace::new(ctx, &self.gpu);
+        let pt = crate::gi::pathtrace::PathTrace::new(ctx, &self.gpu);
         let cam = CameraParams::new(&self.to_render_units(camera), f.width, f.height);
         let _ = self.profiler.collect(ctx)?;
         // Samples an invocation traces per pass. lavapipe ends all loops of a SIMD batch after
@@ -603,7 +503,7 @@ impl Renderer<'_> {
         } else {
             16
         };
-        let samples = super::pathtrace::PtSamples {
+        let samples = crate::gi::pathtrace::PtSamples {
             spp: spp.max(1),
             per_pass,
         };

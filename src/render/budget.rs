@@ -368,7 +368,7 @@ mod tests {
             .iter()
             .map(|&(p, ms)| (p.name().to_string(), ms))
             .collect();
-        timings_ms.insert(super::super::frame::FRAME_KEY.to_string(), frame_ms);
+        timings_ms.insert(crate::render::frame::FRAME_KEY.to_string(), frame_ms);
         Frame {
             width: 0,
             height: 0,

@@ -2,22 +2,26 @@
 //! by §3.2's adaptively seeded k-means with the Eq. (2) metric, the indirect irradiance gathered only
 //! at each cluster's sample point (every light with its own shadow ray: `reference.wgsl`), §3.4's
 //! R_j traced there, and every pixel interpolating from the sample points around it with §3.4's
-//! weight. Shaders: `shaders-wgsl/wang.wgsl` (`assign`, `radius`, `interp`); the CPU twin and the
-//! CPU steps (seeding, centre updates, sample points) are `cpu::wang`. The passes are
-//! `Pass::WangCluster` → `Pass::WangGather` → `Pass::WangInterp` (`pipeline::Plan`).
+//! weight. Shaders: `shaders-wgsl/wang.wgsl` (`assign`, `radius`, `interp`); its CPU steps
+//! (seeding, centre updates, sample points) are `cluster`, the CPU twin of its kernels `cpu::wang`.
+//! The passes are `Pass::WangCluster` → `Pass::WangGather` → `Pass::WangInterp` (`ROOM`).
+
+pub mod cluster;
 
 use std::time::{Duration, Instant};
 
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
-use super::dispatch::{Gpu, Kernel, Run, copy_to_texture, data_texture};
-use super::pipeline::{FrameResources, Pass, RenderSettings, Renderer, gpu};
-use super::reference::GatherInputs;
-use super::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
-use crate::cpu::shading::ShadingPoint;
-use crate::cpu::wang as twin;
+use self::cluster as twin;
+use super::{FrameInputs, IndirectMethod, MethodCounts, Room};
+use crate::gi::dispatch::{Gpu, Kernel, Run, copy_to_texture, data_texture};
+use crate::gi::pass::Pass;
+use crate::gi::primary::ShadingPoint;
+use crate::gi::reference::GatherInputs;
+use crate::gi::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
+use crate::settings::Method;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, Default)]
@@ -58,7 +62,7 @@ impl WangClustering {
 }
 
 /// A wang frame's clustering and what its gather left at the sample points (the last frame's is
-/// `Renderer::last_wang`, for tests and views).
+/// `WangMethod::last`, for tests and views).
 pub struct WangFrame {
     pub clustering: WangClustering,
     /// vec4 a sample point: its gathered irradiance times 1/π.
@@ -69,7 +73,7 @@ pub struct WangFrame {
 
 /// What wang's passes hand on within a frame.
 #[derive(Default)]
-pub(super) struct WangState {
+struct WangState {
     clustering: Option<WangClustering>,
     frame: Option<WangFrame>,
 }
@@ -332,54 +336,73 @@ fn or_one<T: Pod>(v: &[T]) -> Vec<T> {
     }
 }
 
-impl Renderer<'_> {
-    /// Runs one of wang's passes of the frame `r` (`Pass::WangCluster`, `WangGather`, `WangInterp`).
-    pub(super) fn wang_pass(
+/// wang in the registry.
+pub const ROOM: Room = Room {
+    method: Method::Wang,
+    passes: &[Pass::WangCluster, Pass::WangGather, Pass::WangInterp],
+    build: |ctx, gpu| Box::new(WangMethod::new(ctx, gpu)),
+};
+
+/// wang's state: its pipelines, what its passes hand on within a frame, and the last frame's
+/// clustering, irradiance and R_j sums.
+pub struct WangMethod {
+    wang: Wang,
+    state: WangState,
+    pub last: Option<WangFrame>,
+}
+
+impl WangMethod {
+    pub fn new(ctx: &GpuContext, scene: &SceneGpu) -> Self {
+        WangMethod {
+            wang: Wang::new(ctx, scene),
+            state: WangState::default(),
+            last: None,
+        }
+    }
+}
+
+impl IndirectMethod for WangMethod {
+    fn record(
         &mut self,
         pass: Pass,
-        s: &RenderSettings,
-        r: &mut FrameResources,
+        gpu: &mut Gpu,
+        f: &FrameInputs,
+        counts: &mut MethodCounts,
     ) -> Result<()> {
-        let ctx = self.ctx;
-        let wang = self.wang.get_or_init(|| Wang::new(ctx, &self.gpu));
+        let ctx = gpu.ctx;
+        let s = f.settings;
+        let wang = &self.wang;
         let img = Image {
-            gbuffer: &r.gbuffer,
+            gbuffer: f.gbuffer,
             width: s.frame.width,
             height: s.frame.height,
         };
-        let extent = self.scene.extent();
+        let extent = f.scene.extent();
         match pass {
             // §3.2: the SP clustering and its sample points.
             Pass::WangCluster => {
                 let c = &s.cluster;
                 let alpha = c.wang_alpha / extent;
-                let w = wang.cluster(
-                    &mut gpu!(self),
-                    img,
-                    c.sp_clusters,
-                    alpha,
-                    c.iterations,
-                    s.frame.seed,
-                )?;
+                let w = wang.cluster(gpu, img, c.sp_clusters, alpha, c.iterations, s.frame.seed)?;
                 if std::env::var_os("FVPL_PROFILE_STEPS").is_some() {
                     eprintln!(
                         "wang_cluster: {:.1} ms of CPU steps, {} assignment passes",
                         w.cpu_ms, w.clusters.passes
                     );
                 }
-                r.cpu_ms.push((pass, w.cpu_ms));
-                r.sp_used = w.used;
-                r.wang.clustering = Some(w);
+                counts.cpu_ms.push((pass, w.cpu_ms));
+                counts.sp_used = w.used;
+                self.state.clustering = Some(w);
             }
             // The irradiance at the sample points (every light with its own shadow ray: the gather
             // of `reference.wgsl` on shading points of albedo 1) and §3.4's R_j there.
             Pass::WangGather => {
-                let c = r.wang.clustering.take().expect("wang_cluster ran");
-                let lights = &self.lights.as_ref().unwrap().list;
+                let c = self.state.clustering.take().expect("wang_cluster ran");
+                let lights = &f.lights.expect("wang's lights").list;
                 let num_lights = lights.lights.len() as u32;
                 let irradiance = ctx.storage("wang irradiance", c.k().max(1) as u64 * 16);
-                self.reference.record(
-                    &mut gpu!(self),
+                f.reference.record(
+                    gpu,
                     &GatherInputs {
                         gbuffer: &c.sample_gbuffer,
                         lights: &lights.buffer,
@@ -391,23 +414,27 @@ impl Renderer<'_> {
                     },
                     &mut |_, _| true,
                 );
-                let radius = wang.radius(&mut gpu!(self), &c, s.frame.seed);
-                r.indirect_rays = c.used as u64 * (num_lights + twin::RADIUS_RAYS) as u64;
-                r.wang.frame = Some(WangFrame {
+                let radius = wang.radius(gpu, &c, s.frame.seed);
+                counts.indirect_rays = c.used as u64 * (num_lights + twin::RADIUS_RAYS) as u64;
+                self.state.frame = Some(WangFrame {
                     clustering: c,
                     irradiance,
                     radius,
                 });
             }
             // §3.4: every pixel interpolates the sample points' irradiance; the frame's clustering
-            // stays as `last_wang`.
+            // stays as `last`.
             Pass::WangInterp => {
-                let f = r.wang.frame.take().expect("wang_gather ran");
-                wang.interp(&mut gpu!(self), img, &f, extent, &r.indirect);
-                self.last_wang = Some(f);
+                let w = self.state.frame.take().expect("wang_gather ran");
+                wang.interp(gpu, img, &w, extent, f.indirect);
+                self.last = Some(w);
             }
             _ => unreachable!("{pass} is not wang's"),
         }
         Ok(())
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
     }
 }

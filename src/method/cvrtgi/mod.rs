@@ -6,14 +6,18 @@
 //! Stages and what each is keyed on (the paper's Fig. 5: the costly part is not redone for a camera
 //! move while the lights stay):
 //! 1. geometry (scene + voxel/cluster/ray settings), resident: the voxelisation (§4.1) and the SLIC
-//!    clustering (§4.2, Eq. 1, Alg. 1) on the CPU (`cpu::voxel`), then the per-face cluster visibility
+//!    clustering (§4.2, Eq. 1, Alg. 1) on the CPU (`voxel`), then the per-face cluster visibility
 //!    cache (§4.3) on the GPU (`visibility`, BVH rays);
 //! 2. light (+ the VPL set, near distance, filter, clamp), resident: the VPLs pulled into their voxels
-//!    and clusters on the CPU (`cpu::cvrtgi::inject`), the per-face gathering (§4.4, `gather`) and the
+//!    and clusters on the CPU (`inject`), the per-face gathering (§4.4, `gather`) and the
 //!    Gaussian filter passes (`filter`) on the GPU;
 //! 3. per frame: each pixel reads its face's filtered irradiance (§4.5, `lookup`).
 //!
-//! Shader: `shaders-wgsl/cvrtgi.wgsl`; CPU twin of every kernel: `cpu::cvrtgi`.
+//! Shader: `shaders-wgsl/cvrtgi.wgsl`; CPU twin of every kernel: `cpu::cvrtgi`. The pass is
+//! `Pass::Cvrtgi` (`ROOM`).
+
+pub mod inject;
+pub mod voxel;
 
 use std::cell::OnceCell;
 use std::time::Instant;
@@ -22,16 +26,16 @@ use anyhow::{Result, bail};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use super::dispatch::{Gpu, Kernel, Run};
-use super::pipeline::{FrameResources, Pass, RenderSettings, Renderer, gpu};
-use super::resident::VplKey;
-use super::scene_gpu::{SceneGpu, TooBig, storage_layout, uniform_layout};
-use super::vpl_trace::VplSet;
-use crate::cpu::cvrtgi::{self as twin, Faces, Lighting};
-use crate::cpu::voxel::{self, Cluster, SlicSettings, Voxels};
+use self::inject::{self as twin, Faces, Lighting};
+use self::voxel::{Cluster, SlicSettings, Voxels};
+use super::{FrameInputs, IndirectMethod, MethodCounts, Room};
+use crate::gi::dispatch::{Gpu, Kernel, Run};
+use crate::gi::pass::Pass;
+use crate::gi::scene_gpu::{SceneGpu, TooBig, storage_layout, uniform_layout};
+use crate::gi::vpl_trace::{VplKey, VplSet};
 use crate::gpu::GpuContext;
 use crate::scene::Scene;
-use crate::settings::CvrtgiSettings;
+use crate::settings::{CvrtgiSettings, Method};
 
 /// The profiler labels of the four kernels (what the GPU timings are keyed by).
 pub const LABELS: [&str; 4] = [
@@ -562,26 +566,49 @@ impl Cvrtgi {
     }
 }
 
-impl Renderer<'_> {
+/// cvrtgi in the registry.
+pub const ROOM: Room = Room {
+    method: Method::Cvrtgi,
+    passes: &[Pass::Cvrtgi],
+    build: |_, _| Box::new(Cvrtgi::new()),
+};
+
+impl IndirectMethod for Cvrtgi {
     /// `Pass::Cvrtgi`: the frame's indirect light by CVRTGI, from the resident VPLs (no VPL
     /// clustering: a VPL is injected into the cluster of its voxel). Its CPU stages (voxelisation,
     /// SLIC, injection) count as the pass's time when they run.
-    pub(super) fn cvrtgi_pass(&mut self, s: &RenderSettings, r: &mut FrameResources) -> Result<()> {
-        let vpls = self.vpl_set.as_ref().expect("vpl_trace ran before cvrtgi");
+    fn record(
+        &mut self,
+        pass: Pass,
+        gpu: &mut Gpu,
+        f: &FrameInputs,
+        counts: &mut MethodCounts,
+    ) -> Result<()> {
+        debug_assert_eq!(pass, Pass::Cvrtgi);
         let inputs = CvrtgiInputs {
-            scene: &self.scene,
-            vpls: &vpls.set,
-            vpl_key: vpls.key,
-            gbuffer: &r.gbuffer,
-            pixels: r.pixels,
-            indirect: &r.indirect,
-            d_min: s.frame.clamp * self.scene.extent(),
+            scene: f.scene,
+            vpls: &f.vpls.set,
+            vpl_key: f.vpls.key,
+            gbuffer: f.gbuffer,
+            pixels: f.pixels,
+            indirect: f.indirect,
+            d_min: f.settings.frame.clamp * f.scene.extent(),
         };
-        let report = self
-            .cvrtgi
-            .record(&mut gpu!(self), &inputs, &s.cluster.cvrtgi)?;
-        r.cpu_ms.push((Pass::Cvrtgi, report.cpu_ms));
-        r.vpl_clusters_used = report.lit_clusters;
+        let report = Cvrtgi::record(self, gpu, &inputs, &f.settings.cluster.cvrtgi)?;
+        counts.cpu_ms.push((Pass::Cvrtgi, report.cpu_ms));
+        counts.vpl_clusters_used = report.lit_clusters;
         Ok(())
+    }
+
+    /// The voxel, cluster and visibility-cache stages and the light stage are resident (`Cvrtgi`).
+    fn take_resident_timings(
+        &mut self,
+        timings: &mut std::collections::BTreeMap<String, f64>,
+    ) -> std::collections::BTreeMap<String, f64> {
+        self.take_build_times(timings)
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
     }
 }

@@ -2,45 +2,11 @@
 //! buffers fit the adapter's storage bindings, and the `Control` another thread stops it with.
 
 use std::collections::BTreeMap;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use super::pipeline::{Pass, Plan, RenderSettings};
-use super::primary::SP_BYTES;
+use crate::gi::primary::SP_BYTES;
 use crate::gpu::GpuContext;
 use crate::settings::MAX_F;
-
-/// Progress of a frame's long pass (`reference` / `gather`) and a request to stop it, shared between
-/// the rendering thread and another one. A cancelled frame returns the error `Cancelled`.
-#[derive(Debug, Default)]
-pub struct Control {
-    pub cancel: AtomicBool,
-    /// Dispatches of the long pass done and in all (0 / 0 until it starts).
-    pub done: AtomicU64,
-    pub total: AtomicU64,
-}
-
-impl Control {
-    pub fn cancel(&self) {
-        self.cancel.store(true, Ordering::Relaxed);
-    }
-    pub fn is_cancelled(&self) -> bool {
-        self.cancel.load(Ordering::Relaxed)
-    }
-    /// Fraction of the long pass done, 0..1.
-    pub fn fraction(&self) -> f32 {
-        let all = self.total.load(Ordering::Relaxed);
-        if all == 0 {
-            0.0
-        } else {
-            self.done.load(Ordering::Relaxed) as f32 / all as f32
-        }
-    }
-}
-
-/// The error of a frame stopped through `Control::cancel`.
-#[derive(Debug, thiserror::Error)]
-#[error("frame cancelled")]
-pub struct Cancelled;
 
 /// Bytes a pixel takes in a frame's largest per-pixel storage binding: the G-buffer (`SP_BYTES`);
 /// the k-means' per-pixel assign and weight lists (F ≤ `MAX_F` words) are no larger. One binding

@@ -5,57 +5,24 @@
 
 use anyhow::Result;
 
-use super::direct::Direct;
-use super::kmeans::{Clustering, KMeans, KMeansSettings};
-use super::pipeline::{Plan, RenderSettings, gpu};
-use super::primary::Primary;
-use super::reference::Reference;
-use super::scene_gpu::SceneGpu;
-use super::shade::Shade;
-use super::visibility::{self, Visibility};
-use super::vpl_cluster::{self, LightList};
-use super::vpl_trace::{VplSet, VplTrace};
-use super::wang::Wang;
+use std::collections::BTreeMap;
+
+use super::pipeline::{Plan, gpu};
 use crate::bvh::SceneBvh;
+use crate::gi::direct::Direct;
+use crate::gi::kmeans::{Clustering, KMeans, KMeansSettings};
+use crate::gi::primary::Primary;
+use crate::gi::reference::Reference;
+use crate::gi::render_settings::RenderSettings;
+use crate::gi::scene_gpu::SceneGpu;
+use crate::gi::shade::Shade;
+use crate::gi::visibility::{self, Visibility};
+use crate::gi::vpl_cluster::{self, LightKey, ResidentLights};
+use crate::gi::vpl_trace::{ResidentVpls, VplKey, VplSet, VplTrace};
 use crate::gpu::{GpuContext, profiler::Profiler};
+use crate::method::IndirectMethod;
 use crate::scene::{Camera, PunctualLight, Scene};
-
-/// What a VPL set was traced for, and which trace it is (`Renderer`'s count of traces: a light
-/// change re-traces the same count, seed and bounces).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct VplKey {
-    pub count: u32,
-    pub seed: u32,
-    pub bounces: u32,
-    pub trace: u32,
-}
-
-/// The resident VPLs (step 1) with what they were traced for and the GPU ms it took.
-pub struct ResidentVpls {
-    pub set: VplSet,
-    pub key: VplKey,
-    pub ms: f64,
-}
-
-/// What a light list was built for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct LightKey {
-    /// K_VPL (0: the VPLs themselves).
-    pub k: u32,
-    pub normal_threshold_bits: u32,
-    pub iterations: u32,
-    pub seed: u32,
-    /// The VPL set it clusters.
-    pub vpls: VplKey,
-}
-
-/// The resident light list (VPL clusters, step 2, or the VPLs) with its key and the clustering's GPU
-/// ms.
-pub struct ResidentLights {
-    pub list: LightList,
-    pub key: LightKey,
-    pub ms: f64,
-}
+use crate::settings::Method;
 
 /// The last clustered frame's visibility matrix and the light list it was traced against.
 pub(super) struct LastVisibility {
@@ -86,15 +53,12 @@ pub struct Renderer<'a> {
     pub(super) kmeans: KMeans,
     pub(super) visibility: Visibility,
     pub(super) shade: Shade,
-    /// The other methods' passes, built the first time a frame uses them.
-    pub(super) wang: std::cell::OnceCell<Wang>,
-    pub(super) lightcluster: std::cell::OnceCell<super::lightcluster::LightCluster>,
-    /// cvrtgi's pipelines and resident stages (built on its first frame).
-    pub(super) cvrtgi: super::cvrtgi::Cvrtgi,
+    /// The other methods' state (`method::ROOMS`), each built the first time a frame uses it.
+    pub(super) methods: BTreeMap<Method, Box<dyn IndirectMethod>>,
     /// The last frame's G-buffer and its pixel count (`direct_again`, `last_gbuffer`).
     pub(super) gbuffer: Option<(wgpu::Buffer, u32)>,
     /// The last frame's camera (render units), for `direct_again`'s jittered primary rays.
-    pub(super) last_camera: Option<super::primary::CameraParams>,
+    pub(super) last_camera: Option<crate::gi::primary::CameraParams>,
     pub vpl_set: Option<ResidentVpls>,
     /// VPL traces so far (`VplKey::trace`).
     vpl_traces: u32,
@@ -102,8 +66,6 @@ pub struct Renderer<'a> {
     /// The last frame's SP clustering (for views, tests and temporal reuse).
     pub sp_clustering: Option<Clustering>,
     pub(super) last_visibility: Option<LastVisibility>,
-    /// The last `--method wang` frame's clustering, irradiance and R_j sums.
-    pub last_wang: Option<super::wang::WangFrame>,
 }
 
 impl<'a> Renderer<'a> {
@@ -136,6 +98,12 @@ impl<'a> Renderer<'a> {
         ))
     }
 
+    /// A method's state (`method::ROOMS`) as its room's type `T`, once a frame has used it: e.g.
+    /// `method::wang::WangMethod`, whose `last` is the last wang frame's clustering.
+    pub fn method_state<T: 'static>(&self, method: Method) -> Option<&T> {
+        self.methods.get(&method)?.as_any().downcast_ref()
+    }
+
     /// The shade pass's `PATTERNS` (`gi::shade::patterns`, 0..8): its pipelines are built again.
     /// The image does not depend on it.
     pub fn set_shade_patterns(&mut self, patterns: u32) {
@@ -149,7 +117,7 @@ impl<'a> Renderer<'a> {
     pub fn warm_up(
         &mut self,
         camera: &crate::scene::Camera,
-        s: &super::pipeline::RenderSettings,
+        s: &RenderSettings,
         ms: f64,
     ) -> Result<f64> {
         if ms <= 0.0 {
@@ -165,7 +133,7 @@ impl<'a> Renderer<'a> {
     }
 
     pub fn new(ctx: &'a GpuContext, source: &'a Scene) -> Result<Self> {
-        super::scene_gpu::check_fits(source, ctx.max_binding())?;
+        crate::gi::scene_gpu::check_fits(source, ctx.max_binding())?;
         let mut scene = std::borrow::Cow::Borrowed(source);
         let geometry_scale = scene.geometry_scale();
         if geometry_scale != 1.0 {
@@ -191,9 +159,7 @@ impl<'a> Renderer<'a> {
             kmeans: KMeans::new(),
             visibility: Visibility::new(ctx, &gpu),
             shade: Shade::new(),
-            wang: Default::default(),
-            lightcluster: Default::default(),
-            cvrtgi: Default::default(),
+            methods: BTreeMap::new(),
             profiler: Profiler::new(ctx),
             gbuffer: None,
             last_camera: None,
@@ -202,7 +168,6 @@ impl<'a> Renderer<'a> {
             lights: None,
             sp_clustering: None,
             last_visibility: None,
-            last_wang: None,
             bvh,
             gpu,
         })
@@ -246,9 +211,7 @@ impl<'a> Renderer<'a> {
             self.vpl_trace = VplTrace::new(ctx, &gpu);
             self.reference = Reference::new(ctx, &gpu);
             self.visibility = Visibility::new(ctx, &gpu);
-            self.wang = Default::default();
-            self.lightcluster = Default::default();
-            self.cvrtgi = Default::default();
+            self.methods.clear();
         }
         self.gpu = gpu;
         self.vpl_set = None;
@@ -305,7 +268,7 @@ impl<'a> Renderer<'a> {
             let warm = previous
                 .as_ref()
                 .and_then(|l| l.list.clustering.as_ref())
-                .map(|c| super::kmeans::Warm {
+                .map(|c| crate::gi::kmeans::Warm {
                     centroids: &c.centroids,
                     rep_points: &c.rep_points,
                     k: c.k(),
@@ -362,9 +325,10 @@ impl<'a> Renderer<'a> {
         let (Some((_, n)), Some(cam)) = (&self.gbuffer, self.last_camera) else {
             anyhow::bail!("no frame rendered yet");
         };
-        let buffer = self
-            .ctx
-            .storage("gbuffer (jittered)", *n as u64 * super::primary::SP_BYTES);
+        let buffer = self.ctx.storage(
+            "gbuffer (jittered)",
+            *n as u64 * crate::gi::primary::SP_BYTES,
+        );
         self.primary
             .record(&mut gpu!(self), &cam.with_jitter(jitter), &buffer);
         Ok(buffer)

@@ -1,19 +1,24 @@
 //! The `lightcluster` method (LightCluster, seed 002; docs/methods.md): the VPLs clustered by the
 //! minimum-distance (leader) algorithm on the CPU each frame (§3.1; the paper's §4 runs it on the CPU
-//! too, `cpu::lightcluster::cluster`), then every pixel × every VPL with the visibility of its
-//! cluster's disc from `DISC_SAMPLES` shadow rays (§3.2; `shaders-wgsl/lightcluster.wgsl`). The
-//! passes are `Pass::LightClusterCluster` → `Pass::LightClusterShade` (`pipeline::Plan`).
+//! too, `cluster::cluster`), then every pixel × every VPL with the visibility of its cluster's disc
+//! from `DISC_SAMPLES` shadow rays (§3.2; `shaders-wgsl/lightcluster.wgsl`, CPU twin
+//! `cpu::lightcluster`). The passes are `Pass::LightClusterCluster` → `Pass::LightClusterShade`
+//! (`ROOM`).
+
+pub mod cluster;
 
 use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use super::dispatch::{Gpu, Kernel, Run};
-use super::pipeline::{FrameResources, Pass, RenderSettings, Renderer, gpu};
-use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
-use crate::cpu::lightcluster::{self as twin, LightClusters};
+use self::cluster::{self as twin, LightClusters};
+use super::{FrameInputs, IndirectMethod, MethodCounts, Room};
+use crate::gi::dispatch::{Gpu, Kernel, Run};
+use crate::gi::pass::Pass;
+use crate::gi::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
+use crate::settings::Method;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -116,52 +121,79 @@ pub fn z_far(eye: Vec3, (lo, hi): (Vec3, Vec3)) -> f32 {
         .fold(0.0f32, f32::max)
 }
 
-impl Renderer<'_> {
-    /// Runs one of lightcluster's passes of the frame `r` (`Pass::LightClusterCluster`,
-    /// `LightClusterShade`).
-    pub(super) fn lightcluster_pass(
+/// lightcluster in the registry.
+pub const ROOM: Room = Room {
+    method: Method::LightCluster,
+    passes: &[Pass::LightClusterCluster, Pass::LightClusterShade],
+    build: |ctx, gpu| Box::new(LightClusterMethod::new(ctx, gpu)),
+};
+
+/// lightcluster's state: its kernel and the frame's clusters (from `LightClusterCluster` to
+/// `LightClusterShade`).
+pub struct LightClusterMethod {
+    kernel: LightCluster,
+    clusters: Option<LightClusters>,
+}
+
+impl LightClusterMethod {
+    pub fn new(ctx: &GpuContext, scene: &SceneGpu) -> Self {
+        LightClusterMethod {
+            kernel: LightCluster::new(ctx, scene),
+            clusters: None,
+        }
+    }
+}
+
+impl IndirectMethod for LightClusterMethod {
+    fn record(
         &mut self,
         pass: Pass,
-        s: &RenderSettings,
-        r: &mut FrameResources,
+        gpu: &mut Gpu,
+        f: &FrameInputs,
+        counts: &mut MethodCounts,
     ) -> anyhow::Result<()> {
-        let extent = self.scene.extent();
+        let extent = f.scene.extent();
         match pass {
             // §3.1: the VPLs clustered for this camera on the CPU, as the paper's §4 (its time is
             // the pass's); d_init is in scene diagonals.
             Pass::LightClusterCluster => {
                 let t = Instant::now();
-                let eye = r.cam.eye_point();
-                let vpls = &self.vpl_set.as_ref().unwrap().set.vpls;
-                let far = z_far(eye, self.scene.bounds());
-                let c = twin::cluster(vpls, eye, far, s.cluster.d_init * extent);
-                r.cpu_ms.push((pass, t.elapsed().as_secs_f64() * 1e3));
-                r.vpl_clusters_used = c.discs.len() as u32;
-                r.light_clusters = Some(c);
+                let eye = f.cam.eye_point();
+                let far = z_far(eye, f.scene.bounds());
+                let c = twin::cluster(
+                    &f.vpls.set.vpls,
+                    eye,
+                    far,
+                    f.settings.cluster.d_init * extent,
+                );
+                counts.cpu_ms.push((pass, t.elapsed().as_secs_f64() * 1e3));
+                counts.vpl_clusters_used = c.discs.len() as u32;
+                self.clusters = Some(c);
             }
             // §3.2: every pixel × every VPL with its cluster's disc visibility.
             Pass::LightClusterShade => {
-                let ctx = self.ctx;
-                let lc = self
-                    .lightcluster
-                    .get_or_init(|| LightCluster::new(ctx, &self.gpu));
+                let ctx = gpu.ctx;
                 let inputs = ShadeInputs {
-                    gbuffer: &r.gbuffer,
-                    clusters: r.light_clusters.as_ref().expect("lightcluster_cluster ran"),
-                    indirect: &r.indirect,
-                    pixels: r.pixels,
-                    d_min: s.frame.clamp * extent,
+                    gbuffer: f.gbuffer,
+                    clusters: self.clusters.as_ref().expect("lightcluster_cluster ran"),
+                    indirect: f.indirect,
+                    pixels: f.pixels,
+                    d_min: f.settings.frame.clamp * extent,
                 };
                 // The rays traced: each pixel's discs (a disc where one of its cluster's terms is
                 // positive, once) × DISC_SAMPLES.
-                if let Some(state) = lc.record(&mut gpu!(self), &inputs) {
-                    let st: Vec<[u32; 4]> = ctx.read_buffer(&state, r.pixels as usize)?;
+                if let Some(state) = self.kernel.record(gpu, &inputs) {
+                    let st: Vec<[u32; 4]> = ctx.read_buffer(&state, f.pixels as usize)?;
                     let discs: u64 = st.iter().map(|p| p[2] as u64).sum();
-                    r.indirect_rays += discs * twin::DISC_SAMPLES as u64;
+                    counts.indirect_rays += discs * twin::DISC_SAMPLES as u64;
                 }
             }
             _ => unreachable!("{pass} is not lightcluster's"),
         }
         Ok(())
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
     }
 }

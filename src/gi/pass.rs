@@ -1,0 +1,101 @@
+//! The passes of the frame graph by name: `Pass::name()` keys the GPU timings (profiler labels), the
+//! stats JSON's `passes` and `timings_ms`, and the bench CSV's `<stage>_ms` columns.
+
+/// A pass of the frame graph. Its name keys the GPU timings (profiler labels), the stats JSON's
+/// `passes` and `timings_ms`, and the bench CSV's `<stage>_ms` columns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Pass {
+    /// Step 1: light paths from the emitters deposit VPLs (resident).
+    VplTrace,
+    /// Step 2: k-means of the VPLs into a light list of representatives (resident).
+    VplCluster,
+    /// Step 3: primary rays to shading points.
+    Primary,
+    /// Emission and direct light.
+    Direct,
+    /// Step 4: fuzzy k-means of the shading points (Alg. 1 and 2).
+    SpCluster,
+    /// Step 5: visibility between SP-cluster representatives and lights.
+    Visibility,
+    /// Step 6: Eq. (6) with Eq. (8) or (9).
+    Shade,
+    /// Every pixel × every VPL cluster with its own shadow ray (VPL clustering only).
+    Gather,
+    /// Every pixel × every VPL (Eq. 5): no clustering.
+    Reference,
+    /// The diffuse path tracer (`--path-trace`), instead of every pass above.
+    PathTrace,
+    /// wang (seed 001, §3.2): adaptively seeded k-means of the SPs with Eq. (2), sample points.
+    WangCluster,
+    /// wang: irradiance at the sample points (every light with its own shadow ray) and §3.4's R_j.
+    WangGather,
+    /// wang (§3.4): every pixel interpolates the sample points' irradiance.
+    WangInterp,
+    /// lightcluster (seed 002, §3.1): the VPLs clustered by the minimum-distance algorithm (CPU).
+    LightClusterCluster,
+    /// lightcluster (§3.2): every pixel × every VPL with its cluster's disc visibility.
+    LightClusterShade,
+    /// cvrtgi (seed 003): voxels, clusters and the per-face visibility cache (resident while the
+    /// scene and its knobs stay), the lit clusters' per-face irradiance, filtered (resident while
+    /// the VPLs stay), and every pixel's lookup (`method::cvrtgi`; GPU times under `cvrtgi.*`, the
+    /// CPU stages under `cvrtgi`).
+    Cvrtgi,
+}
+
+impl Pass {
+    /// The passes whose times the stats report. The first `STAGES`, in this order, are the bench
+    /// CSV's `<stage>_ms` columns (a contract: `bench::csv::stage_passes`); the unclustered
+    /// reference has its own column and the other methods' passes are summed in `indirect_ms`.
+    pub const TIMED: [Pass; 15] = [
+        Pass::VplTrace,
+        Pass::VplCluster,
+        Pass::Primary,
+        Pass::SpCluster,
+        Pass::Visibility,
+        Pass::Shade,
+        Pass::Gather,
+        Pass::Direct,
+        Pass::Reference,
+        Pass::WangCluster,
+        Pass::WangGather,
+        Pass::WangInterp,
+        Pass::LightClusterCluster,
+        Pass::LightClusterShade,
+        Pass::Cvrtgi,
+    ];
+
+    /// How many of `TIMED` are the CSV's stage columns.
+    pub const STAGES: usize = 8;
+
+    pub const fn name(self) -> &'static str {
+        match self {
+            Pass::VplTrace => "vpl_trace",
+            Pass::VplCluster => "vpl_cluster",
+            Pass::Primary => "primary",
+            Pass::Direct => "direct",
+            Pass::SpCluster => "sp_cluster",
+            Pass::Visibility => "visibility",
+            Pass::Shade => "shade",
+            Pass::Gather => "gather",
+            Pass::Reference => "reference",
+            Pass::PathTrace => "pathtrace",
+            Pass::WangCluster => "wang_cluster",
+            Pass::WangGather => "wang_gather",
+            Pass::WangInterp => "wang_interp",
+            Pass::LightClusterCluster => "lightcluster_cluster",
+            Pass::LightClusterShade => "lightcluster_shade",
+            Pass::Cvrtgi => "cvrtgi",
+        }
+    }
+
+    /// Resident passes run only when their inputs change; their times are not in `frame`.
+    pub fn resident(self) -> bool {
+        matches!(self, Pass::VplTrace | Pass::VplCluster)
+    }
+}
+
+impl std::fmt::Display for Pass {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
