@@ -2,6 +2,32 @@
 //! VPLs (Colom, Marques, Santos 2022), on wgpu with a software BVH traversal shader.
 //!
 //! Data flows one way: scene → BVH → VPLs → clusters → frame → image.
+//!
+//! # As a library
+//!
+//! Another wgpu program renders fuzzy-vpl's GI into a texture of its own device:
+//!
+//! ```no_run
+//! use fuzzy_vpl::{GpuContext, RenderSettings, Renderer};
+//! # fn host(instance: wgpu::Instance, adapter: wgpu::Adapter, device: wgpu::Device,
+//! #         queue: wgpu::Queue, texture: &wgpu::Texture) -> anyhow::Result<()> {
+//! // The host's device, requested with `gpu::required_limits` and `gpu::wanted_features()`.
+//! let ctx = GpuContext::from_device(instance, adapter, device, queue)?;
+//! let scene = fuzzy_vpl::scene::load("builtin:cornell")?;
+//! let mut renderer = Renderer::new(&ctx, &scene)?;
+//! let settings = RenderSettings::default(); // 640×480, 8192 VPLs, the paper's fuzzy clustering
+//! // `texture`: Rgba32Float, 640×480, COPY_DST.
+//! let frame = renderer.render_to_texture(&scene.default_camera(), &settings, texture)?;
+//! println!("{:.1} ms", frame.frame_ms());
+//! # Ok(()) }
+//! ```
+//!
+//! `examples/embed.rs` does this end to end with its own headless device and writes a PNG.
+//!
+//! The layers, bottom up: `settings`, `scene`, `bvh`, `gpu`; the shared passes (`gi`: VPLs,
+//! primary rays, direct light, the unclustered gather, colom's clustering, visibility and shading);
+//! the other methods (`method`); the frame (`render`); then `bench`, `app` (the viewer) and `cli`.
+//! `cpu` holds the CPU twins the tests check the shaders against.
 
 pub mod app;
 pub mod bench;
@@ -20,3 +46,9 @@ pub mod render;
 pub mod scene;
 pub mod settings;
 pub mod stats;
+
+pub use gpu::GpuContext;
+pub use render::frame::Frame;
+pub use render::pipeline::{RenderSettings, Renderer};
+pub use scene::{Camera, Scene};
+pub use settings::{ClusterSettings, FrameSettings, Method, Weighting};

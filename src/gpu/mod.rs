@@ -43,6 +43,23 @@ pub fn driver_name(info: &wgpu::AdapterInfo) -> String {
     if s.is_empty() { "unknown".into() } else { s }
 }
 
+/// Storage buffers one shader stage binds at most (the k-means pass).
+pub const MIN_STORAGE_BUFFERS: u32 = 14;
+
+fn too_few_storage_buffers(adapter: &wgpu::Adapter, limits: &wgpu::Limits) -> anyhow::Error {
+    anyhow!(
+        "adapter {} allows only {} storage buffers per shader stage; fuzzy-vpl needs {MIN_STORAGE_BUFFERS} (the k-means pass)",
+        adapter.get_info().name,
+        limits.max_storage_buffers_per_shader_stage
+    )
+}
+
+/// The optional features fuzzy-vpl uses when the adapter has them: timestamp queries (the per-pass
+/// GPU timings).
+pub fn wanted_features() -> wgpu::Features {
+    wgpu::Features::TIMESTAMP_QUERY
+}
+
 /// Limits requested explicitly: what our passes need, clamped to what the adapter has. lavapipe allows
 /// 1024 invocations per workgroup, 32 KiB workgroup memory and 128 MiB per storage binding.
 pub fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
@@ -97,28 +114,41 @@ impl GpuContext {
                     "no GPU adapter found ({e}); on a machine without a GPU install Mesa's software Vulkan driver: apt-get install mesa-vulkan-drivers"
                 )
             })?;
-        let info = adapter.get_info();
-        let adapter_name = format!("{} ({:?}, {})", info.name, info.backend, info.driver_info);
-        let adapter_limits = adapter.limits();
-        if adapter_limits.max_storage_buffers_per_shader_stage < 14 {
-            return Err(anyhow!(
-                "adapter {adapter_name} allows only {} storage buffers per shader stage; fuzzy-vpl needs 14 (the k-means pass)",
-                adapter_limits.max_storage_buffers_per_shader_stage
-            ));
+        let limits = adapter.limits();
+        if limits.max_storage_buffers_per_shader_stage < MIN_STORAGE_BUFFERS {
+            return Err(too_few_storage_buffers(&adapter, &limits));
         }
-        let want = wgpu::Features::TIMESTAMP_QUERY;
-        let features = adapter.features() & want;
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("fuzzy-vpl"),
-                required_features: features,
-                required_limits: required_limits(&adapter_limits),
+                required_features: adapter.features() & wanted_features(),
+                required_limits: required_limits(&limits),
                 experimental_features: wgpu::ExperimentalFeatures::disabled(),
                 memory_hints: wgpu::MemoryHints::Performance,
                 trace: wgpu::Trace::Off,
             })
             .await
             .context("requesting a wgpu device")?;
+        Self::from_device(instance, adapter, device, queue)
+    }
+
+    /// A context on a device the caller created (the library use: fuzzy-vpl renders inside another
+    /// wgpu program). The device should have been requested with `required_limits` of its adapter's
+    /// limits and, for GPU timings, `wanted_features()`; without timestamp queries the frame's
+    /// timings are empty. Fails with one line when the device allows fewer storage buffers per
+    /// shader stage than the k-means pass binds.
+    pub fn from_device(
+        instance: wgpu::Instance,
+        adapter: wgpu::Adapter,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+    ) -> Result<Self> {
+        let info = adapter.get_info();
+        let adapter_name = format!("{} ({:?}, {})", info.name, info.backend, info.driver_info);
+        let limits = device.limits();
+        if limits.max_storage_buffers_per_shader_stage < MIN_STORAGE_BUFFERS {
+            return Err(too_few_storage_buffers(&adapter, &limits));
+        }
         let work_scale = std::env::var("FVPL_WORK_SCALE")
             .ok()
             .and_then(|v| v.parse::<u32>().ok())
@@ -130,12 +160,12 @@ impl GpuContext {
                 _ => 16,
             });
         Ok(GpuContext {
+            timestamps: device.features().contains(wgpu::Features::TIMESTAMP_QUERY),
             instance,
             adapter,
             device,
             queue,
             adapter_name,
-            timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
             work_scale,
             software: info.device_type == wgpu::DeviceType::Cpu,
             driver: driver_name(&info),

@@ -200,6 +200,51 @@ impl Renderer<'_> {
         self.finish(s, &plan, passes, r)
     }
 
+    /// `render`, with the frame's final radiance (linear, in the scene's units, alpha 1) also
+    /// written into `texture`, a texture of the caller's device (`GpuContext::from_device`):
+    /// `Rgba32Float`, the frame's size, with `COPY_DST` usage. The frame is returned as `render`
+    /// returns it.
+    pub fn render_to_texture(
+        &mut self,
+        camera: &Camera,
+        s: &RenderSettings,
+        texture: &wgpu::Texture,
+    ) -> Result<Frame> {
+        let (w, h) = (s.frame.width, s.frame.height);
+        let size = texture.size();
+        if texture.format() != wgpu::TextureFormat::Rgba32Float
+            || (size.width, size.height, size.depth_or_array_layers) != (w, h, 1)
+            || !texture.usage().contains(wgpu::TextureUsages::COPY_DST)
+        {
+            anyhow::bail!(
+                "render_to_texture: the texture must be Rgba32Float, {w}×{h}, with COPY_DST usage; it is {:?}, {}×{}×{}, {:?}",
+                texture.format(),
+                size.width,
+                size.height,
+                size.depth_or_array_layers,
+                texture.usage()
+            );
+        }
+        let frame = self.render(camera, s)?;
+        let texels: Vec<[f32; 4]> = frame
+            .radiance
+            .iter()
+            .map(|p| [p[0], p[1], p[2], 1.0])
+            .collect();
+        self.ctx.queue.write_texture(
+            texture.as_image_copy(),
+            bytemuck::cast_slice(&texels),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(w * 16),
+                rows_per_image: Some(h),
+            },
+            size,
+        );
+        self.ctx.queue.submit([]);
+        Ok(frame)
+    }
+
     /// Step 4: the SP clustering, warm-started from the previous frame's with temporal reuse.
     fn sp_cluster(
         &mut self,

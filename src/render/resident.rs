@@ -30,7 +30,14 @@ pub(super) struct LastVisibility {
     pub lights: LightKey,
 }
 
-/// Everything resident for one scene on one device.
+/// fuzzy-vpl's renderer: everything resident for one scene on one device, and the frame.
+///
+/// `Renderer::new` uploads the scene and builds its BVH; `render` (or `render_to_texture`, into a
+/// texture of the caller's device) renders a frame for a camera and `RenderSettings`, keeping what
+/// the next frame may reuse (VPLs and their clustering while their settings stay; with temporal
+/// reuse, the last SP clustering and visibility). `set_lights` moves the lights; `path_trace` renders
+/// the diffuse path-traced check instead. Cameras are in the scene's units; the images are linear
+/// radiance in the scene's units, row-major from the top-left.
 pub struct Renderer<'a> {
     pub ctx: &'a GpuContext,
     /// The scene as rendered: borrowed, or a copy with its geometry scaled by a power of two into a

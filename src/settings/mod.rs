@@ -473,12 +473,22 @@ impl FrameSettings {
 #[derive(Args, Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[command(next_help_heading = "Added lights")]
 pub struct LightSettings {
-    /// Add a directional light: DX,DY,DZ,E[,R,G,B] (direction towards the sun).
-    #[arg(long, value_name = "DX,DY,DZ,E[,R,G,B]", allow_hyphen_values = true)]
+    /// Add a directional light: DX,DY,DZ,E\[,R,G,B\] (direction towards the sun).
+    #[arg(
+        long,
+        value_name = "DX,DY,DZ,E[,R,G,B]",
+        allow_hyphen_values = true,
+        help = "Add a directional light: DX,DY,DZ,E[,R,G,B] (direction towards the sun)"
+    )]
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub sun: Vec<String>,
-    /// Add a point light: X,Y,Z,I[,R,G,B].
-    #[arg(long, value_name = "X,Y,Z,I[,R,G,B]", allow_hyphen_values = true)]
+    /// Add a point light: X,Y,Z,I\[,R,G,B\].
+    #[arg(
+        long,
+        value_name = "X,Y,Z,I[,R,G,B]",
+        allow_hyphen_values = true,
+        help = "Add a point light: X,Y,Z,I[,R,G,B]"
+    )]
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub point: Vec<String>,
     /// Multiply every emitter's power by this factor (>= 0).

@@ -1,0 +1,144 @@
+//! fuzzy-vpl's GI inside another wgpu program: the program owns the device and the texture, and
+//! fuzzy-vpl renders a frame of a scene into that texture.
+//!
+//! ```sh
+//! cargo run --release --example embed -- OUT.png [SCENE]
+//! ```
+//!
+//! SCENE is a built-in scene (`builtin:cornell`, the default) or a glTF file. The example creates
+//! its own headless device with the features and limits fuzzy-vpl asks for, renders the scene's
+//! default camera with the paper's fuzzy clustering (`Method::Colom`, weighted) into an
+//! `Rgba32Float` texture, reads that texture back, and writes it as a PNG (auto exposure, sRGB).
+//! It exits 1 if the image is black.
+
+use std::path::PathBuf;
+
+use anyhow::{Context as _, Result, bail};
+use fuzzy_vpl::{ClusterSettings, FrameSettings, GpuContext, Method, RenderSettings, Renderer};
+
+fn main() -> Result<()> {
+    let mut args = std::env::args().skip(1);
+    let out = PathBuf::from(args.next().context("usage: embed OUT.png [SCENE]")?);
+    let spec = args.next().unwrap_or_else(|| "builtin:cornell".into());
+
+    // The host program's device: any adapter, the features and limits fuzzy-vpl needs.
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let adapter = pollster::block_on(instance.request_adapter(&Default::default()))?;
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("host device"),
+        required_features: adapter.features() & fuzzy_vpl::gpu::wanted_features(),
+        required_limits: fuzzy_vpl::gpu::required_limits(&adapter.limits()),
+        ..Default::default()
+    }))?;
+    let ctx = GpuContext::from_device(instance, adapter, device, queue)?;
+
+    // The scene and the settings: one frame at 320×240 with 2048 VPLs, clustered as in the paper.
+    let scene = fuzzy_vpl::scene::load(&spec)?;
+    let camera = scene.default_camera();
+    let settings = RenderSettings {
+        frame: FrameSettings {
+            width: 320,
+            height: 240,
+            vpls: 2048,
+            ..Default::default()
+        },
+        cluster: ClusterSettings {
+            method: Method::Colom,
+            vpl_clusters: 512,
+            sp_clusters: 256,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+
+    // The host's texture: fuzzy-vpl writes linear radiance into it.
+    let (w, h) = (settings.frame.width, settings.frame.height);
+    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("host texture"),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba32Float,
+        usage: wgpu::TextureUsages::COPY_DST
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    });
+    let mut renderer = Renderer::new(&ctx, &scene)?;
+    let frame = renderer.render_to_texture(&camera, &settings, &texture)?;
+    println!(
+        "{}: {w}×{h}, {} VPLs, passes {:?}, {:.1} ms on {}",
+        scene.name,
+        frame.vpls,
+        frame.passes.iter().map(|p| p.name()).collect::<Vec<_>>(),
+        frame.frame_ms(),
+        ctx.adapter_name
+    );
+
+    // What the host would do with its texture; here: read it back and write a PNG.
+    let pixels = read_texture(&ctx, &texture, w, h)?;
+    let radiance: Vec<[f32; 3]> = pixels.iter().map(|p| [p[0], p[1], p[2]]).collect();
+    let mean =
+        radiance.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / (3 * radiance.len()) as f32;
+    let exposure = fuzzy_vpl::exposure::auto_exposure(&radiance);
+    fuzzy_vpl::export::write_png_rgb8(
+        &out,
+        w,
+        h,
+        fuzzy_vpl::export::to_srgb8(&radiance, exposure),
+    )?;
+    println!("wrote {} (mean radiance {mean:.4})", out.display());
+    if !(mean > 0.0 && mean.is_finite()) {
+        bail!("the image is black or not finite (mean {mean})");
+    }
+    Ok(())
+}
+
+/// Reads an `Rgba32Float` texture back to the CPU (rows padded to wgpu's copy alignment).
+fn read_texture(
+    ctx: &GpuContext,
+    texture: &wgpu::Texture,
+    w: u32,
+    h: u32,
+) -> Result<Vec<[f32; 4]>> {
+    let row =
+        (w * 16).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size: (row * h) as u64,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut enc = ctx.device.create_command_encoder(&Default::default());
+    enc.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(h),
+            },
+        },
+        texture.size(),
+    );
+    ctx.queue.submit([enc.finish()]);
+    buffer.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+    ctx.wait()?;
+    let data = buffer
+        .slice(..)
+        .get_mapped_range()
+        .map_err(|e| anyhow::anyhow!("reading the mapped texture failed: {e}"))?;
+    let mut out = Vec::with_capacity((w * h) as usize);
+    for y in 0..h as usize {
+        let line: &[[f32; 4]] = bytemuck::cast_slice(&data[y * row as usize..][..w as usize * 16]);
+        out.extend_from_slice(line);
+    }
+    Ok(out)
+}
