@@ -14,7 +14,9 @@
 use std::path::PathBuf;
 
 use anyhow::{Context as _, Result, bail};
-use fuzzy_vpl::{ClusterSettings, FrameSettings, GpuContext, Method, RenderSettings, Renderer};
+use fuzzy_vpl::{
+    ClusterSettings, FrameSettings, GpuContext, Method, MethodSettings, RenderSettings, Renderer,
+};
 
 fn main() -> Result<()> {
     let mut args = std::env::args().skip(1);
@@ -44,9 +46,12 @@ fn main() -> Result<()> {
             ..Default::default()
         },
         cluster: ClusterSettings {
-            method: Method::Colom,
             vpl_clusters: 512,
             sp_clusters: 256,
+            ..Default::default()
+        },
+        method: MethodSettings {
+            method: Method::Colom,
             ..Default::default()
         },
         ..Default::default()

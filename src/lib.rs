@@ -48,7 +48,8 @@ pub mod settings;
 pub mod stats;
 
 pub use gpu::GpuContext;
+pub use method::{Method, MethodSettings};
 pub use render::frame::Frame;
 pub use render::pipeline::{RenderSettings, Renderer};
 pub use scene::{Camera, Scene};
-pub use settings::{ClusterSettings, FrameSettings, Method, Weighting};
+pub use settings::{ClusterSettings, FrameSettings, Weighting};

@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use crate::exposure::Exposure;
+use crate::method::MethodSettings;
 use crate::metrics;
 use crate::render::pipeline::{Frame, Pass, RenderSettings};
 use crate::scene::Scene;
@@ -18,6 +19,9 @@ pub struct Settings {
     /// for this size and K (`Gamma::resolve`); the plane gate only when it gated a fuzzy frame.
     #[serde(flatten)]
     pub cluster: ClusterSettings,
+    /// The method and every method's knobs (`method::MethodSettings`).
+    #[serde(flatten)]
+    pub method: MethodSettings,
     /// `vpls` as traced; `exposure` the PNG exposure used (with `exposure_auto` the one
     /// `exposure::auto_exposure` chose for this image); EXR is never scaled.
     #[serde(flatten)]
@@ -60,6 +64,7 @@ impl Settings {
                     .filter(|_| frame.gamma_used.is_some() && c.f() > 1),
                 ..c.clone()
             },
+            method: s.method,
             frame: FrameSettings {
                 vpls: frame.vpls,
                 exposure: Exposure::Fixed(exposure),

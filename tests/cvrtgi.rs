@@ -10,12 +10,13 @@ use fuzzy_vpl::gi::dispatch::Gpu;
 use fuzzy_vpl::gi::primary::ShadingPoint;
 use fuzzy_vpl::gi::vpl_trace::Vpl;
 use fuzzy_vpl::gpu::GpuContext;
+use fuzzy_vpl::method::cvrtgi::settings::CvrtgiSettings;
 use fuzzy_vpl::method::cvrtgi::voxel::{self, Grid, SlicSettings, Voxels, eq1_within_angle};
 use fuzzy_vpl::method::cvrtgi::{Cvrtgi, CvrtgiInputs, CvrtgiReport};
 use fuzzy_vpl::metrics::mean_luminance;
 use fuzzy_vpl::render::pipeline::{Frame, RenderSettings, Renderer};
 use fuzzy_vpl::scene::{self, Camera};
-use fuzzy_vpl::settings::{CvrtgiSettings, FrameSettings};
+use fuzzy_vpl::settings::FrameSettings;
 use std::collections::BTreeMap;
 
 use glam::Vec3;

@@ -7,10 +7,11 @@ use fuzzy_vpl::cpu::vpl::eq5_vpl_radiance;
 use fuzzy_vpl::cpu::wang as twin;
 use fuzzy_vpl::gi::primary::ShadingPoint;
 use fuzzy_vpl::method::wang::WangMethod;
+use fuzzy_vpl::method::{Method, MethodSettings};
 use fuzzy_vpl::metrics;
 use fuzzy_vpl::render::pipeline::{Pass, RenderSettings, Renderer};
 use fuzzy_vpl::scene;
-use fuzzy_vpl::settings::{ClusterSettings, FrameSettings, Method};
+use fuzzy_vpl::settings::{ClusterSettings, FrameSettings};
 use glam::Vec3;
 
 fn settings(method: Method, w: u32, h: u32) -> RenderSettings {
@@ -22,8 +23,11 @@ fn settings(method: Method, w: u32, h: u32) -> RenderSettings {
             direct_samples: 4,
             ..Default::default()
         },
-        cluster: ClusterSettings {
+        method: MethodSettings {
             method,
+            ..Default::default()
+        },
+        cluster: ClusterSettings {
             vpl_clusters: 64,
             sp_clusters: 24,
             iterations: 3,
@@ -81,7 +85,7 @@ fn wang_matches_cpu_twin() {
             .as_ref()
             .unwrap();
         let c = &wf.clustering.clusters;
-        let alpha = fs.cluster.wang_alpha / s.extent();
+        let alpha = fs.method.wang.wang_alpha / s.extent();
         // The whole clustering on the CPU (seeding and updates are the same code; the assignment
         // passes are the twin's).
         let img = twin::Image {
@@ -216,7 +220,7 @@ fn wang_labels_match_cpu_twin_on_a_grid_of_step_2() {
         height: h,
         sps: &sps,
     };
-    let alpha = fs.cluster.wang_alpha / s.extent();
+    let alpha = fs.method.wang.wang_alpha / s.extent();
     let cpu = twin::cluster(img, 24, alpha, 3, fs.frame.seed, &mut |run| {
         Ok(twin::assign_passes(img, run))
     })
@@ -248,7 +252,7 @@ fn lightcluster_matches_cpu_twin() {
         let (w, h) = (24u32, 18u32);
         let mut fs = settings(Method::LightCluster, w, h);
         fs.frame.vpls = 256;
-        fs.cluster.d_init = 0.5;
+        fs.method.lightcluster.d_init = 0.5;
         let cam = s.default_camera();
         let f = r.render(&cam, &fs).unwrap();
         assert!(

@@ -25,6 +25,7 @@ use std::time::Instant;
 use anyhow::Result;
 
 use crate::exposure::Exposure;
+use crate::method::{MethodSettings, Room};
 use crate::render::pipeline::{Control, RenderSettings};
 use crate::scene::Scene;
 use crate::settings::{
@@ -80,6 +81,8 @@ pub struct UiSettings {
     /// The frame (its size is the viewer's GI size, set per frame).
     pub frame: FrameSettings,
     pub cluster: ClusterSettings,
+    /// The method and its knobs (each room draws its own, `method::Room::ui`).
+    pub method: MethodSettings,
     /// γ of the slider, used when `gamma_auto` is off.
     pub gamma: u32,
     /// γ by `Gamma::auto` (the default).
@@ -110,6 +113,7 @@ impl UiSettings {
                 vpl_clusters: c.vpl_clusters.max(1),
                 ..c.clone()
             },
+            method: s.method,
             gamma: match c.gamma {
                 Gamma::Auto => AUTO_GAMMA_MIN,
                 Gamma::Fixed(g) => g,
@@ -161,9 +165,9 @@ impl UiSettings {
                 gamma: self.gamma_setting(),
                 normal_threshold: self.nt_degrees.to_radians().cos(),
                 plane_gate: self.plane_gate(),
-                weights_to_reps: false,
                 ..c.clone()
             },
+            method: self.method,
             ..Default::default()
         }
     }
@@ -171,19 +175,15 @@ impl UiSettings {
     /// The scatter plot's series: how the indirect light is computed.
     pub fn mode_label(&self) -> String {
         let p = self.cluster.weight_exponent;
+        let room = self.method.room();
+        let series = |r: &Room| format!("{} {}", r.method, (r.series)(&self.method));
         match (self.sp_on, self.vpl_on) {
-            _ if self.cluster.method == crate::settings::Method::LightCluster => {
-                format!("lightcluster d_init {}", self.cluster.d_init)
-            }
-            _ if self.cluster.method == crate::settings::Method::Cvrtgi => {
-                let v = &self.cluster.cvrtgi;
-                format!("cvrtgi {}³ step {}", v.voxel_res, v.cluster_step)
-            }
+            _ if room.is_some_and(|r| !r.clusters_sps) => series(room.unwrap()),
             (false, false) => "no clustering".into(),
             (false, true) => "VPL clusters only".into(),
-            (true, _) if self.cluster.method == crate::settings::Method::Wang => {
-                let m = format!("wang α {}", self.cluster.wang_alpha);
-                if self.vpl_on {
+            (true, _) if let Some(r) = room => {
+                let m = series(r);
+                if self.vpl_on || !r.vpl_clusters {
                     m
                 } else {
                     format!("{m}, all VPLs")
@@ -213,16 +213,8 @@ impl UiSettings {
     pub fn short(&self) -> String {
         let c = &self.cluster;
         let mode = match c.weighting {
-            _ if c.method == crate::settings::Method::Wang => format!("wang-a{}", c.wang_alpha),
-            _ if c.method == crate::settings::Method::LightCluster => {
-                format!("lightcluster-d{}", c.d_init)
-            }
-            _ if c.method == crate::settings::Method::Cvrtgi => {
-                let v = &c.cvrtgi;
-                format!(
-                    "cvrtgi-v{}-s{}-r{}",
-                    v.voxel_res, v.cluster_step, v.face_rays
-                )
+            _ if let Some(r) = self.method.room() => {
+                format!("{}-{}", r.method, (r.short)(&self.method))
             }
             Weighting::InverseDistance if c.weight_exponent == 1.0 => "weighted".to_string(),
             Weighting::InverseDistance => format!("weighted-p{}", c.weight_exponent),

@@ -9,7 +9,8 @@ use super::Viewer;
 use super::camera::Mode as CamMode;
 use super::settings::Bookmark;
 use super::views::View;
-use crate::settings::{Method, Weighting};
+use crate::method::Method;
+use crate::settings::Weighting;
 
 pub const PANEL_WIDTH: f32 = 380.0;
 
@@ -248,51 +249,19 @@ impl Viewer {
                 let r = &self.ranges;
                 ui.horizontal(|ui| {
                     ui.label("method");
-                    ui.selectable_value(&mut s.cluster.method, Method::Colom, "colom").on_hover_text(
-                        "Colom et al. 2022: fuzzy k-means of SPs and VPLs, Eq. (6) per pixel \
-                         and VPL cluster (docs/methods.md)",
-                    );
-                    ui.selectable_value(&mut s.cluster.method, Method::Wang, "wang").on_hover_text(
-                        "Wang et al. 2009: irradiance only at the SP clusters' sample points, \
-                         interpolated per pixel (docs/methods.md)",
-                    );
-                    ui.selectable_value(&mut s.cluster.method, Method::LightCluster, "lightcluster")
+                    ui.selectable_value(&mut s.method.method, Method::Colom, "colom")
                         .on_hover_text(
-                            "LightCluster: VPLs in minimum-distance clusters, each a disc light whose \
-                             visibility a few rays estimate; every VPL shaded (docs/methods.md)",
+                            "Colom et al. 2022: fuzzy k-means of SPs and VPLs, Eq. (6) per pixel \
+                             and VPL cluster (docs/methods.md)",
                         );
-                    ui.selectable_value(&mut s.cluster.method, Method::Cvrtgi, "cvrtgi")
-                        .on_hover_text(
-                            "CVRTGI: voxel clusters (SLIC, 35° rule) light every voxel face; pixels \
-                             read their face's filtered irradiance, cached while the lights stay \
-                             (docs/methods.md)",
-                        );
+                    for r in crate::method::ROOMS {
+                        ui.selectable_value(&mut s.method.method, r.method, r.method.name())
+                            .on_hover_text(r.about);
+                    }
                 });
-                let colom = s.cluster.method == Method::Colom;
-                if s.cluster.method == Method::Wang {
-                    ui.add(
-                        Slider::new(&mut s.cluster.wang_alpha, 0.01..=100.0)
-                            .logarithmic(true)
-                            .text("α (Eq. 2: position against normal)"),
-                    );
-                }
-                if s.cluster.method == Method::Cvrtgi {
-                    let v = &mut s.cluster.cvrtgi;
-                    ui.add(Slider::new(&mut v.voxel_res, 8..=128).text("voxels (longest axis)"));
-                    ui.add(Slider::new(&mut v.cluster_step, 1..=32).text("SLIC seed spacing"));
-                    ui.add(
-                        Slider::new(&mut v.face_rays, 8..=512)
-                            .logarithmic(true)
-                            .text("rays per face"),
-                    );
-                    ui.add(Slider::new(&mut v.filter_passes, 0..=8).text("filter passes"));
-                }
-                if s.cluster.method == Method::LightCluster {
-                    ui.add(
-                        Slider::new(&mut s.cluster.d_init, 0.001..=10.0)
-                            .logarithmic(true)
-                            .text("d_init (scene diagonals)"),
-                    );
+                let colom = s.method.method == Method::Colom;
+                if let Some(r) = s.method.room() {
+                    (r.ui)(ui, &mut s.method);
                 }
                 ui.add_enabled_ui(colom, |ui| {
                     ui.horizontal(|ui| {

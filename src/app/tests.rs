@@ -292,14 +292,9 @@ fn command_line_values_beyond_the_sliders_survive_the_panel() {
 /// screenshot files, and reach the frame settings.
 #[test]
 fn the_method_and_its_knob_survive_the_panel() {
-    let fs = RenderSettings {
-        cluster: ClusterSettings {
-            method: crate::settings::Method::Wang,
-            wang_alpha: 0.7,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let mut fs = RenderSettings::default();
+    fs.method.method = crate::method::Method::Wang;
+    fs.method.wang.wang_alpha = 0.7;
     let s = UiSettings::new(&fs);
     let mut v = viewer(s.clone());
     draw(&mut v);
@@ -307,8 +302,8 @@ fn the_method_and_its_knob_survive_the_panel() {
     assert!(s.short().starts_with("wang-a0.7_"), "{}", s.short());
     assert_eq!(s.mode_label(), "wang α 0.7");
     let r = s.frame_settings(64, 48);
-    assert_eq!(r.cluster.method, crate::settings::Method::Wang);
-    assert_eq!(r.cluster.wang_alpha, 0.7);
+    assert_eq!(r.method.method, crate::method::Method::Wang);
+    assert_eq!(r.method.wang.wang_alpha, 0.7);
 }
 
 #[test]

@@ -3,8 +3,9 @@
 
 use std::collections::BTreeMap;
 
+use crate::method::Method;
 use crate::render::pipeline::{FRAME_KEY, Pass};
-use crate::settings::{Gamma, Method};
+use crate::settings::Gamma;
 use anyhow::{Context, Result, bail};
 
 /// The passes with a `<stage>_ms` column, in the order of the CSV columns (`frame` follows them):

@@ -21,11 +21,12 @@ use crate::gpu::GpuContext;
 use crate::render::budget;
 use crate::render::pipeline::{FRAME_KEY, Frame, Pass, RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
-use crate::settings::{ClusterSettings, FrameSettings, Method};
+use crate::settings::FrameSettings;
 use crate::stats::ErrorStats;
 use crate::{export, metrics, stats};
 use csv::Row;
 use summary::{CameraSummary, SummaryInfo};
+use sweep::Config;
 use sweep::Sweep;
 
 /// Everything a bench run needs besides the scene and the device.
@@ -50,10 +51,11 @@ pub struct BenchPlan {
 
 impl BenchPlan {
     /// The render settings of configuration `c`.
-    pub fn settings(&self, c: &ClusterSettings) -> RenderSettings {
+    pub fn settings(&self, c: &Config) -> RenderSettings {
         RenderSettings {
             frame: self.frame,
-            cluster: c.clone(),
+            cluster: c.cluster.clone(),
+            method: c.method,
             ..Default::default()
         }
     }
@@ -162,7 +164,7 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
     std::fs::create_dir_all(&img_dir)
         .with_context(|| format!("{}: cannot create", img_dir.display()))?;
     remove_old_images(&img_dir)?;
-    let configs: Vec<ClusterSettings> = plan.sweep.configs();
+    let configs: Vec<Config> = plan.sweep.configs();
     let budgets = plan.sweep.target_ms.len() as u64 * plan.sweep.modes.len() as u64;
     let frames = plan.cameras.len() as u64
         * (plan.reference_repeat.max(1) as u64
@@ -230,12 +232,17 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
         ));
         let mut cam_rows = Vec::new();
         // The sweep's configurations, then each --target-ms budget for each mode (from the mode's
-        // first configuration; wang is a mode of its own, lightcluster has no K to choose).
-        let mut jobs: Vec<(ClusterSettings, Option<f64>)> =
+        // first configuration; another method is a mode of its own, where it has a K to choose).
+        let mut jobs: Vec<(Config, Option<f64>)> =
             configs.iter().map(|c| (c.clone(), None)).collect();
+        let has_k = |c: &&Config| {
+            c.method
+                .room()
+                .is_none_or(|r| r.clusters_sps || r.vpl_clusters)
+        };
         for &t in &plan.sweep.target_ms {
             let mut seen = Vec::new();
-            for c in configs.iter().filter(|c| c.method != Method::LightCluster) {
+            for c in configs.iter().filter(has_k) {
                 let m = sweep::mode_name(c);
                 if !seen.contains(&m) {
                     seen.push(m);
@@ -255,7 +262,10 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
                 }
                 None => (plan.settings(c), None),
             };
-            let c = &s.cluster;
+            let c = &Config {
+                cluster: s.cluster.clone(),
+                method: s.method,
+            };
             let (frame, t) = timed(
                 &mut renderer,
                 camera,
@@ -266,7 +276,8 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
             )?;
             let mut label = sweep::label_ran(
                 c,
-                frame.ran(Pass::SpCluster) || frame.ran(Pass::WangCluster),
+                frame.ran(Pass::SpCluster)
+                    || (c.method.room()).is_some_and(|r| r.clusters_sps && frame.ran(r.passes[0])),
                 frame.ran(Pass::VplCluster),
                 frame.gamma_used,
             );
@@ -323,7 +334,7 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
                 shadow_rays: frame.shadow_rays,
                 repeat: plan.repeat,
                 label: label.clone(),
-                method: c.method,
+                method: c.method.method,
                 indirect_ms: frame_ms
                     - t.get(Pass::Primary.name()).copied().unwrap_or(0.0)
                     - t.get(Pass::Direct.name()).copied().unwrap_or(0.0),

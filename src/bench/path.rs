@@ -17,7 +17,6 @@ use crate::gi::primary::CameraParams;
 use crate::gpu::GpuContext;
 use crate::render::pipeline::{Frame, Pass, Renderer};
 use crate::scene::{Camera, Scene};
-use crate::settings::ClusterSettings;
 use crate::{export, metrics};
 
 /// An orbit of `degrees` in all, in `frames` frames, about the vertical axis through the point the
@@ -196,10 +195,8 @@ pub fn run(
     let mut rows = Vec::new();
     for c in &configs {
         for &on in temporal {
-            let s = plan.settings(&ClusterSettings {
-                temporal: on,
-                ..c.clone()
-            });
+            let mut s = plan.settings(c);
+            s.cluster.temporal = on;
             // Pipelines built (one untimed frame on a GPU); each run starts with no past.
             renderer.sp_clustering = None;
             renderer.warm_up(&cameras[0], &s, plan.timing.warmup_ms)?;

@@ -12,7 +12,7 @@ use plotters::prelude::*;
 
 use super::csv::Row;
 use crate::export;
-use crate::settings::Method;
+use crate::method::Method;
 
 pub const WIDTH: u32 = 960;
 pub const HEIGHT: u32 = 540;

@@ -3,11 +3,36 @@
 use std::fmt;
 use std::str::FromStr;
 
+use crate::method::{Method, MethodLists, MethodSettings};
 use crate::settings::{
-    ClusterSettings, CvrtgiSettings, Gamma, Invalid, Method, Weighting, parse_cluster_step,
-    parse_d_init, parse_fuzziness, parse_gamma, parse_iterations, parse_normal_threshold,
-    parse_plane_gate, parse_voxel_res, parse_wang_alpha, parse_weight_exponent,
+    ClusterSettings, Gamma, Invalid, Weighting, parse_fuzziness, parse_gamma, parse_iterations,
+    parse_normal_threshold, parse_plane_gate, parse_weight_exponent,
 };
+
+/// One configuration of a sweep: the paper's knobs (`Deref`, so `c.sp_clusters` reads them) and
+/// the method with its knobs.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Config {
+    pub cluster: ClusterSettings,
+    pub method: MethodSettings,
+}
+
+impl std::ops::Deref for Config {
+    type Target = ClusterSettings;
+    fn deref(&self) -> &ClusterSettings {
+        &self.cluster
+    }
+}
+
+impl From<ClusterSettings> for Config {
+    /// colom with `cluster`.
+    fn from(cluster: ClusterSettings) -> Config {
+        Config {
+            cluster,
+            method: MethodSettings::default(),
+        }
+    }
+}
 
 /// What is clustered, and how a pixel combines its SP clusters.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -125,15 +150,6 @@ pub fn parse_gate(item: &str) -> Result<PlaneGate, Invalid> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlaneGate(pub Option<f32>);
 
-pub fn parse_method(item: &str) -> Result<Method, Invalid> {
-    <Method as clap::ValueEnum>::from_str(item.trim(), true).map_err(|_| {
-        Invalid(format!(
-            "unknown method (expected one of: {})",
-            Method::ALL.map(|m| m.name()).join(", ")
-        ))
-    })
-}
-
 pub fn parse_mode(item: &str) -> Result<Mode, Invalid> {
     item.parse().map_err(Invalid)
 }
@@ -143,23 +159,6 @@ pub fn parse_mode(item: &str) -> Result<Mode, Invalid> {
 #[derive(clap::Args, Clone, Debug, Default, PartialEq)]
 #[command(next_help_heading = "Sweep (comma-separated lists)")]
 pub struct Sweep {
-    /// Methods to compare: colom,wang,lightcluster,cvrtgi (default colom; docs/methods.md).
-    /// `--modes` and the fuzzy knobs apply to colom; wang takes the K's, --iterations and
-    /// --wang-alpha, lightcluster --d-init, cvrtgi --voxel-res and --cluster-step.
-    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_method)]
-    pub methods: Vec<Method>,
-    /// wang: α values of Eq. (2) (default 0.3).
-    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_wang_alpha)]
-    pub wang_alpha: Vec<f32>,
-    /// lightcluster: d_init values in scene diagonals (default 1); the K's do not apply.
-    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_d_init)]
-    pub d_init: Vec<f32>,
-    /// cvrtgi: voxel resolutions along the scene's longest axis (default 32); the K's do not apply.
-    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_voxel_res)]
-    pub voxel_res: Vec<u32>,
-    /// cvrtgi: SLIC seed spacings in voxels (default 8), each with every --voxel-res.
-    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_cluster_step)]
-    pub cluster_step: Vec<u32>,
     /// Modes to compare: hard,uniform,weighted,vpl-only,sp-only (default hard,uniform,weighted;
     /// quick: all five).
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_mode)]
@@ -200,6 +199,11 @@ pub struct Sweep {
     /// time (the `front_mse` column).
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::settings::parse_target_ms)]
     pub target_ms: Vec<f64>,
+    /// The methods (`--methods`, default colom) and each one's knob lists (`--wang-alpha`,
+    /// `--d-init`, `--voxel-res`, …; docs/methods.md), after the other lists: their headings
+    /// follow.
+    #[command(flatten)]
+    pub method: MethodLists,
 }
 
 /// `v` without repeats, in order; `default` when empty.
@@ -226,11 +230,10 @@ impl Sweep {
         }
         let c = ClusterSettings::default();
         let s = Sweep {
-            methods: or_default(&self.methods, &[Method::Colom]),
-            wang_alpha: or_default(&self.wang_alpha, &[c.wang_alpha]),
-            d_init: or_default(&self.d_init, &[c.d_init]),
-            voxel_res: or_default(&self.voxel_res, &[c.cvrtgi.voxel_res]),
-            cluster_step: or_default(&self.cluster_step, &[c.cvrtgi.cluster_step]),
+            method: MethodLists {
+                methods: self.method.methods(),
+                ..self.method.clone()
+            },
             modes: or_default(
                 &self.modes,
                 if quick {
@@ -268,9 +271,19 @@ impl Sweep {
                 "--pairs: a K of 0; use --modes vpl-only or sp-only for no clustering".into(),
             );
         }
-        let colom = self.methods.contains(&Method::Colom);
-        if self.methods.contains(&Method::Wang) && sps.contains(&0) {
-            return Err("--sp-clusters 0: wang needs SP clusters (its irradiance samples)".into());
+        let methods = &self.method.methods;
+        let colom = methods.contains(&Method::Colom);
+        let sp_room = methods
+            .iter()
+            .filter_map(|&m| crate::method::room(m))
+            .find(|r| r.clusters_sps);
+        if let Some(r) = sp_room
+            && sps.contains(&0)
+        {
+            return Err(format!(
+                "--sp-clusters 0: {} needs SP clusters (it clusters the shading points)",
+                r.method
+            ));
         }
         let sp_modes = colom && self.modes.iter().any(|m| m.clusters_sps());
         if sp_modes && sps.contains(&0) {
@@ -284,8 +297,9 @@ impl Sweep {
     }
 
     /// Every configuration of a resolved sweep, without repeats: the values a mode ignores are
-    /// dropped (hard has F = 1, vpl-only no SP K, sp-only no VPL K).
-    pub fn configs(&self) -> Vec<ClusterSettings> {
+    /// dropped (hard has F = 1, vpl-only no SP K, sp-only no VPL K); another method takes its own
+    /// knobs' combinations, with the K's (and iterations) when it uses colom's clusterings.
+    pub fn configs(&self) -> Vec<Config> {
         let ks: Vec<(u32, u32)> = if self.pairs.is_empty() {
             self.sp_clusters
                 .iter()
@@ -294,67 +308,41 @@ impl Sweep {
         } else {
             self.pairs.iter().map(|p| (p.0, p.1)).collect()
         };
-        let mut out: Vec<ClusterSettings> = Vec::new();
-        for &method in &self.methods {
-            match method {
-                Method::Colom => self.colom_configs(&ks, &mut out),
-                Method::LightCluster => {
-                    for &d in &self.d_init {
-                        let c = ClusterSettings {
-                            method,
-                            sp_clusters: 0,
-                            vpl_clusters: 0,
-                            fuzziness: 1,
-                            weighting: Weighting::Hard,
-                            d_init: d,
-                            ..Default::default()
-                        };
-                        if !out.contains(&c) {
-                            out.push(c);
-                        }
-                    }
-                }
-                Method::Cvrtgi => {
-                    for &voxel_res in &self.voxel_res {
-                        for &cluster_step in &self.cluster_step {
-                            let c = ClusterSettings {
-                                method,
-                                sp_clusters: 0,
-                                vpl_clusters: 0,
+        let mut out: Vec<Config> = Vec::new();
+        let mut push = |c: Config| {
+            if !out.contains(&c) {
+                out.push(c);
+            }
+        };
+        for method in self.method.methods() {
+            let Some(room) = crate::method::room(method) else {
+                let mut colom = Vec::new();
+                self.colom_configs(&ks, &mut colom);
+                colom.into_iter().map(Config::from).for_each(&mut push);
+                continue;
+            };
+            let own = (room.sweep)(&self.method);
+            let uses_k = room.clusters_sps || room.vpl_clusters;
+            let ks = if uses_k { ks.clone() } else { vec![(0, 0)] };
+            let iterations = if room.clusters_sps {
+                self.iterations.clone()
+            } else {
+                vec![ClusterSettings::default().iterations]
+            };
+            for &(sp, vpl) in &ks {
+                for &iterations in &iterations {
+                    for &m in &own {
+                        push(Config {
+                            cluster: ClusterSettings {
+                                sp_clusters: if room.clusters_sps { sp } else { 0 },
+                                vpl_clusters: if room.vpl_clusters { vpl } else { 0 },
                                 fuzziness: 1,
                                 weighting: Weighting::Hard,
-                                cvrtgi: CvrtgiSettings {
-                                    voxel_res,
-                                    cluster_step,
-                                    ..Default::default()
-                                },
+                                iterations,
                                 ..Default::default()
-                            };
-                            if !out.contains(&c) {
-                                out.push(c);
-                            }
-                        }
-                    }
-                }
-                Method::Wang => {
-                    for &(sp, vpl) in &ks {
-                        for &iterations in &self.iterations {
-                            for &a in &self.wang_alpha {
-                                let c = ClusterSettings {
-                                    method,
-                                    sp_clusters: sp,
-                                    vpl_clusters: vpl,
-                                    fuzziness: 1,
-                                    weighting: Weighting::Hard,
-                                    iterations,
-                                    wang_alpha: a,
-                                    ..Default::default()
-                                };
-                                if !out.contains(&c) {
-                                    out.push(c);
-                                }
-                            }
-                        }
+                            },
+                            method: m,
+                        });
                     }
                 }
             }
@@ -428,8 +416,8 @@ pub fn mode(c: &ClusterSettings) -> Mode {
 
 /// The `mode` column of a configuration: colom's mode, or the method's name for the other methods
 /// (each is its own series in the plots).
-pub fn mode_name(c: &ClusterSettings) -> &'static str {
-    match c.method {
+pub fn mode_name(c: &Config) -> &'static str {
+    match c.method.method {
         Method::Colom => mode(c).name(),
         m => m.name(),
     }
@@ -437,11 +425,11 @@ pub fn mode_name(c: &ClusterSettings) -> &'static str {
 
 /// Short name of a configuration for plots and the summary (`weighted 48/128 F6 gauto`,
 /// `wang 48/128 a0.3`).
-pub fn label(c: &ClusterSettings) -> String {
-    label_in(mode(c), c)
+pub fn label(c: &Config) -> String {
+    label_in(mode(c), c, &c.method)
 }
 
-fn label_in(mode: Mode, c: &ClusterSettings) -> String {
+fn label_in(mode: Mode, c: &ClusterSettings, m: &MethodSettings) -> String {
     let k = |v: u32| {
         if v == 0 {
             "-".to_string()
@@ -449,21 +437,18 @@ fn label_in(mode: Mode, c: &ClusterSettings) -> String {
             v.to_string()
         }
     };
-    if c.method == Method::LightCluster {
-        return format!("lightcluster d{}", c.d_init);
-    }
-    if c.method == Method::Cvrtgi {
-        let v = &c.cvrtgi;
-        return format!("cvrtgi v{} s{}", v.voxel_res, v.cluster_step);
-    }
-    if c.method == Method::Wang {
+    if let Some(room) = m.room() {
+        let own = (room.label)(m);
+        if !(room.clusters_sps || room.vpl_clusters) {
+            return format!("{} {own}", room.method);
+        }
         let mut s = format!(
-            "wang {}/{} a{}",
+            "{} {}/{} {own}",
+            room.method,
             k(c.sp_clusters),
-            k(c.vpl_clusters),
-            c.wang_alpha
+            k(c.vpl_clusters)
         );
-        if c.iterations != ClusterSettings::default().iterations {
+        if room.clusters_sps && c.iterations != ClusterSettings::default().iterations {
             s += &format!(" i{}", c.iterations);
         }
         return s;
@@ -491,19 +476,14 @@ fn label_in(mode: Mode, c: &ClusterSettings) -> String {
 }
 
 /// The label of what ran: clusterings the frame skipped (K ≥ the points) shown as off, γ as used.
-pub fn label_ran(
-    c: &ClusterSettings,
-    sp_ran: bool,
-    vpl_ran: bool,
-    gamma_used: Option<u32>,
-) -> String {
+pub fn label_ran(c: &Config, sp_ran: bool, vpl_ran: bool, gamma_used: Option<u32>) -> String {
     let ran = ClusterSettings {
         sp_clusters: if sp_ran { c.sp_clusters } else { 0 },
         vpl_clusters: if vpl_ran { c.vpl_clusters } else { 0 },
         gamma: gamma_used.map_or(c.gamma, Gamma::Fixed),
-        ..c.clone()
+        ..c.cluster.clone()
     };
-    let mut s = label_in(mode(c), &ran);
+    let mut s = label_in(mode(c), &ran, &c.method);
     let off: Vec<&str> = [
         (c.sp_clusters > 0 && !sp_ran, "K_sp"),
         (c.vpl_clusters > 0 && !vpl_ran, "K_vpl"),
@@ -564,8 +544,11 @@ mod tests {
         let c = s.configs();
         assert_eq!(mode_name(&c[0]), "weighted");
         assert_eq!(mode_name(&c[1]), "wang");
-        assert_eq!(c[2].method, Method::Wang);
-        assert_eq!(parse(&[], true).unwrap().methods, vec![Method::Colom]);
+        assert_eq!(c[2].method.method, Method::Wang);
+        assert_eq!(
+            parse(&[], true).unwrap().method.methods,
+            vec![Method::Colom]
+        );
         let s = parse(&["--methods", "lightcluster", "--d-init", "0.05,0.2"], true).unwrap();
         let labels: Vec<String> = s.configs().iter().map(label).collect();
         assert_eq!(labels, ["lightcluster d0.05", "lightcluster d0.2"]);

@@ -149,6 +149,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let settings = RenderSettings {
         frame: a.shot.frame,
         cluster: a.shot.cluster.clone(),
+        method: a.shot.method,
         reference: a.reference,
         progress: true,
         control: None,

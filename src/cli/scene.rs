@@ -33,6 +33,8 @@ pub struct ShotArgs {
     pub frame: FrameSettings,
     #[command(flatten)]
     pub cluster: ClusterSettings,
+    #[command(flatten)]
+    pub method: crate::method::MethodSettings,
 }
 
 impl SceneArgs {

@@ -169,6 +169,7 @@ pub fn run(a: ViewArgs) -> Result<()> {
     let rs = RenderSettings {
         frame: a.shot.frame,
         cluster: a.shot.cluster,
+        method: a.shot.method,
         ..Default::default()
     };
     let mut settings = crate::app::UiSettings::new(&rs);

@@ -12,7 +12,6 @@ pub mod pathtrace;
 pub mod primary;
 pub mod raycast;
 pub mod reference;
-pub mod render_settings;
 pub mod rng;
 pub mod scene_gpu;
 pub mod shade;

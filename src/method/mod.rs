@@ -11,27 +11,31 @@ pub mod wang;
 
 use std::any::Any;
 use std::collections::BTreeMap;
+use std::fmt;
 
 use anyhow::Result;
+use clap::Args;
+use serde::{Deserialize, Serialize};
 
 use crate::gi::dispatch::Gpu;
 use crate::gi::pass::Pass;
 use crate::gi::primary::CameraParams;
 use crate::gi::reference::Reference;
-use crate::gi::render_settings::RenderSettings;
 use crate::gi::scene_gpu::SceneGpu;
 use crate::gi::vpl_cluster::ResidentLights;
 use crate::gi::vpl_trace::ResidentVpls;
 use crate::gpu::GpuContext;
 use crate::scene::Scene;
-use crate::settings::Method;
+use crate::settings::{ClusterSettings, FrameSettings, Invalid};
 
 /// What a method's passes read from the frame: the scene and settings, the resident VPLs (and the
 /// VPL clustering when the plan asks for one), the shared gather pass, the G-buffer of primary hits
 /// and the buffer the indirect light goes to (vec4 a pixel, linear, render units).
 pub struct FrameInputs<'a> {
     pub scene: &'a Scene,
-    pub settings: &'a RenderSettings,
+    pub frame: &'a FrameSettings,
+    pub cluster: &'a ClusterSettings,
+    pub method: &'a MethodSettings,
     pub vpls: &'a ResidentVpls,
     pub lights: Option<&'a ResidentLights>,
     /// The gather of every light with its own shadow ray (`reference.wgsl`, Eq. 5).
@@ -76,12 +80,28 @@ pub trait IndirectMethod: Any {
     fn as_any(&self) -> &dyn Any;
 }
 
-/// A method in the registry: its name, its passes in order, and how its state is built (the first
-/// time a frame uses it on a scene's GPU data).
+/// A method in the registry: its name, its passes in order, how its state is built (the first time
+/// a frame uses it on a scene's GPU data), what of colom's clustering it uses, and how its knobs are
+/// shown and swept.
 pub struct Room {
     pub method: Method,
     pub passes: &'static [Pass],
     pub build: fn(&GpuContext, &SceneGpu) -> Box<dyn IndirectMethod>,
+    /// It clusters the shading points with `--sp-clusters` as K (and needs 0 < K < pixels).
+    pub clusters_sps: bool,
+    /// Its lights are colom's resident VPL clusters (step 2, `--vpl-clusters`).
+    pub vpl_clusters: bool,
+    /// One line for the viewer's method selector.
+    pub about: &'static str,
+    /// Its knobs in a label: the bench's (`a0.3`), the viewer's series (`α 0.3`), file names
+    /// (`a0.3`).
+    pub label: fn(&MethodSettings) -> String,
+    pub series: fn(&MethodSettings) -> String,
+    pub short: fn(&MethodSettings) -> String,
+    /// Its knobs in the viewer's panel.
+    pub ui: fn(&mut egui::Ui, &mut MethodSettings),
+    /// Its knobs' combinations in a bench sweep (`knobs!`'s `configs`).
+    pub sweep: fn(&MethodLists) -> Vec<MethodSettings>,
 }
 
 /// The registry. colom (the paper) is not here: its passes are the renderer's own, since every
@@ -91,4 +111,165 @@ pub const ROOMS: &[Room] = &[wang::ROOM, lightcluster::ROOM, cvrtgi::ROOM];
 /// `method`'s room, `None` for colom.
 pub fn room(method: Method) -> Option<&'static Room> {
     ROOMS.iter().find(|r| r.method == method)
+}
+
+/// The `--help` group of the method and its knobs.
+pub const METHOD_HEADING: &str = "Method (docs/methods.md)";
+
+/// Which system computes the indirect light (docs/methods.md). Every method reuses the VPLs, the
+/// BVH, the primary rays, the direct light, the reference and the metrics, and adds only what its
+/// paper adds. A method other than colom is a variant here, a field of `MethodSettings` (its
+/// knobs), a line of `ROOMS`, its passes in `gi::pass::Pass`, and its folder.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    Hash,
+    PartialOrd,
+    Ord,
+    clap::ValueEnum,
+    Serialize,
+    Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Colom, Marques, Santos 2022 (seed 000): fuzzy k-means of SPs and VPLs, visibility between
+    /// cluster representatives, Eq. (6) shading per pixel × VPL cluster.
+    #[default]
+    Colom,
+    /// Wang et al. 2009 (seed 001): adaptively seeded k-means of the SPs (§3.2, Eq. 2), irradiance
+    /// gathered only at the cluster centres, interpolated per pixel with the §3.4 weight.
+    Wang,
+    /// LightCluster (seed 002): the VPLs clustered by the minimum-distance (leader) algorithm
+    /// (§3.1, d_min = d_init (1 − |C_pos| / z_far)), each cluster a disc light of radius d_min
+    /// whose visibility a few shadow rays over the disc estimate (§3.2), every VPL shaded with its
+    /// cluster's visibility.
+    #[value(name = "lightcluster")]
+    #[serde(rename = "lightcluster")]
+    LightCluster,
+    /// CVRTGI (Cosin Ayerbe & Patow 2022, seed 003): the scene voxelised, voxels clustered by SLIC
+    /// with the 35° normal rule (Eq. 1, Alg. 1), per-voxel-face irradiance from the lit clusters a
+    /// face's rays find, filtered, read by every pixel; cached while the lights stay.
+    Cvrtgi,
+}
+
+impl Method {
+    pub const ALL: [Method; 4] = [
+        Method::Colom,
+        Method::Wang,
+        Method::LightCluster,
+        Method::Cvrtgi,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Colom => "colom",
+            Method::Wang => "wang",
+            Method::LightCluster => "lightcluster",
+            Method::Cvrtgi => "cvrtgi",
+        }
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// The method and every method's knobs (each declared in its room with `knobs!`), flattened into
+/// `render`, `view` and the stats JSON beside the paper's `ClusterSettings`.
+#[derive(Args, Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct MethodSettings {
+    /// The method that computes the indirect light: colom (the paper this tool rebuilds), wang
+    /// (Wang et al. 2009: irradiance at SP-cluster centres, interpolated), lightcluster
+    /// (LightCluster: VPLs clustered by distance, a disc's visibility per cluster), cvrtgi (clustered
+    /// voxel GI: irradiance per voxel face from voxel clusters). docs/methods.md.
+    #[arg(long, value_enum, default_value_t = Method::Colom, help_heading = METHOD_HEADING)]
+    pub method: Method,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub wang: wang::settings::WangSettings,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub lightcluster: lightcluster::settings::LightClusterSettings,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub cvrtgi: cvrtgi::settings::CvrtgiSettings,
+}
+
+impl MethodSettings {
+    /// The asked method's room (`None`: colom).
+    pub fn room(&self) -> Option<&'static Room> {
+        room(self.method)
+    }
+}
+
+/// `bench`'s lists: the methods to compare and each method's knob lists.
+#[derive(Args, Clone, Debug, Default, PartialEq)]
+pub struct MethodLists {
+    /// Methods to compare: colom,wang,lightcluster,cvrtgi (default colom; docs/methods.md).
+    /// `--modes` and the fuzzy knobs apply to colom; a method that clusters the SPs (wang) also
+    /// takes the K's and --iterations; each method's own knob lists follow.
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_method)]
+    pub methods: Vec<Method>,
+    #[command(flatten)]
+    pub wang: wang::settings::WangLists,
+    #[command(flatten)]
+    pub lightcluster: lightcluster::settings::LightClusterLists,
+    #[command(flatten)]
+    pub cvrtgi: cvrtgi::settings::CvrtgiLists,
+}
+
+impl MethodLists {
+    /// The methods asked, repeats dropped (default: colom).
+    pub fn methods(&self) -> Vec<Method> {
+        let mut out = Vec::new();
+        for &m in &self.methods {
+            if !out.contains(&m) {
+                out.push(m);
+            }
+        }
+        if out.is_empty() {
+            out.push(Method::Colom);
+        }
+        out
+    }
+}
+
+pub fn parse_method(item: &str) -> Result<Method, Invalid> {
+    <Method as clap::ValueEnum>::from_str(item.trim(), true).map_err(|_| {
+        Invalid(format!(
+            "unknown method (expected one of: {})",
+            Method::ALL.map(|m| m.name()).join(", ")
+        ))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn method_names_are_the_command_line_and_json_names() {
+        use clap::ValueEnum;
+        assert_eq!(Method::value_variants(), Method::ALL);
+        for m in Method::ALL {
+            assert_eq!(Method::from_str(m.name(), false), Ok(m));
+            let j = serde_json::to_string(&m).unwrap();
+            assert_eq!(j, format!("\"{}\"", m.name()));
+            assert_eq!(serde_json::from_str::<Method>(&j).unwrap(), m);
+        }
+    }
+
+    #[test]
+    fn every_method_but_colom_has_a_room() {
+        for m in Method::ALL {
+            assert_eq!(room(m).is_some(), m != Method::Colom, "{m}");
+        }
+    }
 }

@@ -6,3 +6,4 @@ pub mod budget;
 pub mod frame;
 pub mod pipeline;
 pub mod resident;
+pub mod settings;

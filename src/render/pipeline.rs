@@ -31,14 +31,15 @@ pub use super::resident::Renderer;
 use crate::gi::kmeans::{Clustering, KMeansSettings, Points};
 pub use crate::gi::pass::Pass;
 use crate::gi::primary::{CameraParams, SP_BYTES};
-pub use crate::gi::render_settings::{Cancelled, Control, RenderSettings};
 use crate::gi::shade::{ShadeInputs, ShadeParams};
 use crate::gi::visibility::Previous;
 pub use crate::gi::vpl_cluster::LightKey;
 pub use crate::gi::vpl_trace::VplKey;
+use crate::method::Method;
 use crate::method::{FrameInputs, MethodCounts};
+pub use crate::render::settings::{Cancelled, Control, RenderSettings};
 use crate::scene::{Camera, Scene};
-use crate::settings::{Method, Weighting};
+use crate::settings::Weighting;
 
 /// Which passes a frame runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,16 +61,17 @@ impl Plan {
         let indirect = f.vpls > 0 && scene.has_light();
         let clustered = indirect && !s.reference;
         let sp = clustered && c.sp_clusters > 0 && c.sp_clusters < f.width * f.height;
-        let method = match c.method {
-            Method::Wang if sp => Method::Wang,
-            Method::LightCluster if clustered => Method::LightCluster,
-            Method::Cvrtgi if clustered => Method::Cvrtgi,
-            _ => Method::Colom,
-        };
+        // A method's room runs where it applies (one clustering SPs needs 0 < K_SP < pixels);
+        // elsewhere colom's unclustered passes do.
+        let room = s
+            .method
+            .room()
+            .filter(|r| clustered && (sp || !r.clusters_sps));
+        let method = room.map_or(Method::Colom, |r| r.method);
         Plan {
             indirect,
             vpl_clustering: clustered
-                && matches!(method, Method::Colom | Method::Wang)
+                && room.is_none_or(|r| r.vpl_clusters)
                 && c.vpl_clusters > 0
                 && c.vpl_clusters < f.vpls,
             sp_clustering: sp && method == Method::Colom,
@@ -410,7 +412,9 @@ impl Renderer<'_> {
             .or_insert_with(|| (room.build)(ctx, &self.gpu));
         let inputs = FrameInputs {
             scene: &self.scene,
-            settings: s,
+            frame: &s.frame,
+            cluster: &s.cluster,
+            method: &s.method,
             vpls: self.vpl_set.as_ref().expect("vpl_trace ran"),
             lights: self.lights.as_ref(),
             reference: &self.reference,

@@ -13,7 +13,6 @@ use crate::gi::direct::Direct;
 use crate::gi::kmeans::{Clustering, KMeans, KMeansSettings};
 use crate::gi::primary::Primary;
 use crate::gi::reference::Reference;
-use crate::gi::render_settings::RenderSettings;
 use crate::gi::scene_gpu::SceneGpu;
 use crate::gi::shade::Shade;
 use crate::gi::visibility::{self, Visibility};
@@ -21,8 +20,9 @@ use crate::gi::vpl_cluster::{self, LightKey, ResidentLights};
 use crate::gi::vpl_trace::{ResidentVpls, VplKey, VplSet, VplTrace};
 use crate::gpu::{GpuContext, profiler::Profiler};
 use crate::method::IndirectMethod;
+use crate::method::Method;
+use crate::render::settings::RenderSettings;
 use crate::scene::{Camera, PunctualLight, Scene};
-use crate::settings::Method;
 
 /// The last clustered frame's visibility matrix and the light list it was traced against.
 pub(super) struct LastVisibility {

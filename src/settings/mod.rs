@@ -1,19 +1,19 @@
 //! The settings model: one type per idea, each declared once with its command-line form (clap
 //! `Args`) and its serialised form (serde), flattened into `render`, `view` and `bench` and used as
-//! they are by the renderer (`render::pipeline::Settings`), the viewer's state, the stats JSON and the
-//! bench CSV.
+//! they are by the renderer (`render::pipeline::RenderSettings`), the viewer's state, the stats JSON
+//! and the bench CSV.
 //!
 //! - `ClusterSettings`: the paper's knobs (K_SP, K_VPL, F, γ, n_t, iterations, weighting, p, the
-//!   plane gate, temporal reuse, the time target) and the `Method` with the other methods' knobs
-//!   (wang's α, lightcluster's d_init, cvrtgi's `CvrtgiSettings` in `cvrtgi.rs`);
+//!   plane gate, temporal reuse, the time target); the other methods' knobs are declared in their
+//!   rooms with `knobs!` and gathered in `method::MethodSettings`;
 //! - `FrameSettings`: what a frame is (size, seed, VPLs, bounces, direct samples, exposure, clamp);
 //! - `LightSettings`: the lights added to or scaled in a scene.
 //!
 //! Ranges are checked by the value parsers below; a value out of range is refused by clap with one
 //! line naming the option and the value, exit 2 (`cli::parse`).
 
-mod cvrtgi;
-pub use cvrtgi::*;
+mod knobs;
+pub(crate) use knobs::knobs;
 use std::fmt;
 use std::str::FromStr;
 
@@ -34,7 +34,7 @@ impl fmt::Display for Invalid {
 
 impl std::error::Error for Invalid {}
 
-fn invalid<T>(msg: impl Into<String>) -> Result<T, Invalid> {
+pub fn invalid<T>(msg: impl Into<String>) -> Result<T, Invalid> {
     Err(Invalid(msg.into()))
 }
 
@@ -80,85 +80,9 @@ impl Weighting {
     }
 }
 
-/// Which system computes the indirect light (docs/methods.md). Every method reuses the VPLs, the
-/// BVH, the primary rays, the direct light, the reference and the metrics, and adds only what its
-/// paper adds. A method is a variant here (with its knobs as `ClusterSettings` fields), its passes
-/// in `render::pipeline::Pass` and `Plan::passes`, and its module in `gi/`.
-#[derive(
-    Clone,
-    Copy,
-    Debug,
-    Default,
-    PartialEq,
-    Eq,
-    Hash,
-    PartialOrd,
-    Ord,
-    clap::ValueEnum,
-    Serialize,
-    Deserialize,
-)]
-#[serde(rename_all = "kebab-case")]
-pub enum Method {
-    /// Colom, Marques, Santos 2022 (seed 000): fuzzy k-means of SPs and VPLs, visibility between
-    /// cluster representatives, Eq. (6) shading per pixel × VPL cluster.
-    #[default]
-    Colom,
-    /// Wang et al. 2009 (seed 001): adaptively seeded k-means of the SPs (§3.2, Eq. 2), irradiance
-    /// gathered only at the cluster centres, interpolated per pixel with the §3.4 weight.
-    Wang,
-    /// LightCluster (seed 002): the VPLs clustered by the minimum-distance (leader) algorithm
-    /// (§3.1, d_min = d_init (1 − |C_pos| / z_far)), each cluster a disc light of radius d_min
-    /// whose visibility a few shadow rays over the disc estimate (§3.2), every VPL shaded with its
-    /// cluster's visibility.
-    #[value(name = "lightcluster")]
-    #[serde(rename = "lightcluster")]
-    LightCluster,
-    /// CVRTGI (Cosin Ayerbe & Patow 2022, seed 003): the scene voxelised, voxels clustered by SLIC
-    /// with the 35° normal rule (Eq. 1, Alg. 1), per-voxel-face irradiance from the lit clusters a
-    /// face's rays find, filtered, read by every pixel; cached while the lights stay.
-    Cvrtgi,
-}
-
-impl Method {
-    pub const ALL: [Method; 4] = [
-        Method::Colom,
-        Method::Wang,
-        Method::LightCluster,
-        Method::Cvrtgi,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Colom => "colom",
-            Method::Wang => "wang",
-            Method::LightCluster => "lightcluster",
-            Method::Cvrtgi => "cvrtgi",
-        }
-    }
-}
-
-impl fmt::Display for Method {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
 /// The default for the most VPLs one light path leaves (its bounce count); Russian roulette usually
 /// ends a path earlier.
 pub const MAX_DEPTH: u32 = 8;
-
-/// α of Wang et al.'s Eq. (2) (seed 001, §3.2): the weight of the position term, positions in units
-/// of the scene diagonal (the paper's "normalised scene scale"); the paper uses 0.1–0.5.
-pub const DEFAULT_WANG_ALPHA: f32 = 0.3;
-
-/// The `--help` group of the method and its knobs (the other methods' knobs sit beside the paper's
-/// in `ClusterSettings`, so that they flow wherever a clustering goes: renderer, stats, CSV, viewer).
-const METHOD_HEADING: &str = "Method (docs/methods.md)";
-
-/// d_init of LightCluster's d_min (seed 002, §3.1.2) in scene diagonals (the paper's scenes used
-/// 0.1–1.6 scene units).
-pub const DEFAULT_D_INIT: f32 = 1.0;
 
 /// γ, the SP downsampling factor of Alg. 1's iterations: `auto` (the default) lets
 /// `Gamma::resolve` choose it from the pixels and K, or a fixed factor of at least 1.
@@ -346,24 +270,6 @@ pub struct ClusterSettings {
     #[arg(long, value_name = "MS", value_parser = parse_target_ms)]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub target_ms: Option<f64>,
-    /// The method that computes the indirect light: colom (the paper this tool rebuilds), wang
-    /// (Wang et al. 2009: irradiance at SP-cluster centres, interpolated), lightcluster
-    /// (LightCluster: VPLs clustered by distance, a disc's visibility per cluster), cvrtgi (clustered
-    /// voxel GI: irradiance per voxel face from voxel clusters). docs/methods.md.
-    #[arg(long, value_enum, default_value_t = Method::Colom, help_heading = METHOD_HEADING)]
-    pub method: Method,
-    /// wang: α of Eq. (2), the position term's weight with positions in scene diagonals, (0, 100]
-    /// (the paper: 0.1–0.5).
-    #[arg(long, default_value_t = DEFAULT_WANG_ALPHA, value_parser = parse_wang_alpha, help_heading = METHOD_HEADING)]
-    pub wang_alpha: f32,
-    /// lightcluster: d_init of d_min = d_init (1 − |C_pos| / z_far), in scene diagonals, (0, 10];
-    /// the cluster count is its outcome.
-    #[arg(long, default_value_t = DEFAULT_D_INIT, value_parser = parse_d_init, help_heading = METHOD_HEADING)]
-    pub d_init: f32,
-    /// cvrtgi's knobs (voxel grid, clusters, rays per face, filter).
-    #[command(flatten)]
-    #[serde(flatten)]
-    pub cvrtgi: CvrtgiSettings,
 }
 
 impl Default for ClusterSettings {
@@ -381,10 +287,6 @@ impl Default for ClusterSettings {
             weights_to_reps: false,
             temporal: false,
             target_ms: None,
-            method: Method::Colom,
-            wang_alpha: DEFAULT_WANG_ALPHA,
-            d_init: DEFAULT_D_INIT,
-            cvrtgi: CvrtgiSettings::default(),
         }
     }
 }
@@ -498,7 +400,7 @@ pub struct LightSettings {
 
 // ---- value parsers: one line each, `cli::parse` prefixes the option and the value ----
 
-fn in_range<T: PartialOrd + Copy + FromStr>(
+pub fn in_range<T: PartialOrd + Copy + FromStr>(
     v: &str,
     ok: impl Fn(T) -> bool,
     what: &str,
@@ -550,22 +452,6 @@ pub fn parse_target_ms(v: &str) -> Result<f64, Invalid> {
         v,
         |x: f64| x.is_finite() && x > 0.0 && x <= 1e7,
         "must be a time in ms, > 0 and at most 1e7",
-    )
-}
-
-pub fn parse_wang_alpha(v: &str) -> Result<f32, Invalid> {
-    in_range(
-        v,
-        |a: f32| a > 0.0 && a <= 100.0,
-        "must be a number in (0, 100]",
-    )
-}
-
-pub fn parse_d_init(v: &str) -> Result<f32, Invalid> {
-    in_range(
-        v,
-        |d: f32| d > 0.0 && d <= 10.0,
-        "must be a distance in (0, 10] scene diagonals",
     )
 }
 
@@ -682,26 +568,8 @@ mod tests {
         assert!(parse_direct_samples("0").is_err() && parse_direct_samples("65537").is_err());
         assert!(parse_side("0").is_err() && parse_side("16385").is_err());
         assert!(parse_light_scale("inf").is_err() && parse_light_scale("-1").is_err());
-        assert!(parse_wang_alpha("0").is_err() && parse_wang_alpha("-1").is_err());
-        assert!(parse_wang_alpha("NaN").is_err() && parse_wang_alpha("101").is_err());
-        assert_eq!(parse_wang_alpha("0.3"), Ok(0.3));
-        assert!(parse_d_init("0").is_err() && parse_d_init("-0.1").is_err());
-        assert!(parse_d_init("inf").is_err() && parse_d_init("11").is_err());
-        assert_eq!(parse_d_init("0.5"), Ok(0.5));
         assert_eq!(parse_on_off("on"), Ok(true));
         assert!(parse_on_off("yes").is_err());
-    }
-
-    #[test]
-    fn method_names_are_the_command_line_and_json_names() {
-        use clap::ValueEnum;
-        assert_eq!(Method::value_variants(), Method::ALL);
-        for m in Method::ALL {
-            assert_eq!(Method::from_str(m.name(), false), Ok(m));
-            let j = serde_json::to_string(&m).unwrap();
-            assert_eq!(j, format!("\"{}\"", m.name()));
-            assert_eq!(serde_json::from_str::<Method>(&j).unwrap(), m);
-        }
     }
 
     #[test]

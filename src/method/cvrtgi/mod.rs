@@ -17,6 +17,7 @@
 //! `Pass::Cvrtgi` (`ROOM`).
 
 pub mod inject;
+pub mod settings;
 pub mod voxel;
 
 use std::cell::OnceCell;
@@ -27,15 +28,16 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use self::inject::{self as twin, Faces, Lighting};
+use self::settings::CvrtgiSettings;
 use self::voxel::{Cluster, SlicSettings, Voxels};
 use super::{FrameInputs, IndirectMethod, MethodCounts, Room};
+use super::{Method, MethodSettings};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::{SceneGpu, TooBig, storage_layout, uniform_layout};
 use crate::gi::vpl_trace::{VplKey, VplSet};
 use crate::gpu::GpuContext;
 use crate::scene::Scene;
-use crate::settings::{CvrtgiSettings, Method};
 
 /// The profiler labels of the four kernels (what the GPU timings are keyed by).
 pub const LABELS: [&str; 4] = [
@@ -571,6 +573,39 @@ pub const ROOM: Room = Room {
     method: Method::Cvrtgi,
     passes: &[Pass::Cvrtgi],
     build: |_, _| Box::new(Cvrtgi::new()),
+    clusters_sps: false,
+    vpl_clusters: false,
+    about: "CVRTGI: voxel clusters (SLIC, 35° rule) light every voxel face; pixels read their \
+            face's filtered irradiance, cached while the lights stay (docs/methods.md)",
+    label: |m| format!("v{} s{}", m.cvrtgi.voxel_res, m.cvrtgi.cluster_step),
+    series: |m| format!("{}³ step {}", m.cvrtgi.voxel_res, m.cvrtgi.cluster_step),
+    short: |m| {
+        let v = &m.cvrtgi;
+        format!("v{}-s{}-r{}", v.voxel_res, v.cluster_step, v.face_rays)
+    },
+    ui: |ui, m| {
+        use egui::Slider;
+        let v = &mut m.cvrtgi;
+        ui.add(Slider::new(&mut v.voxel_res, 8..=128).text("voxels (longest axis)"));
+        ui.add(Slider::new(&mut v.cluster_step, 1..=32).text("SLIC seed spacing"));
+        ui.add(
+            Slider::new(&mut v.face_rays, 8..=512)
+                .logarithmic(true)
+                .text("rays per face"),
+        );
+        ui.add(Slider::new(&mut v.filter_passes, 0..=8).text("filter passes"));
+    },
+    sweep: |l| {
+        l.cvrtgi
+            .configs()
+            .into_iter()
+            .map(|cvrtgi| MethodSettings {
+                method: Method::Cvrtgi,
+                cvrtgi,
+                ..Default::default()
+            })
+            .collect()
+    },
 };
 
 impl IndirectMethod for Cvrtgi {
@@ -592,9 +627,9 @@ impl IndirectMethod for Cvrtgi {
             gbuffer: f.gbuffer,
             pixels: f.pixels,
             indirect: f.indirect,
-            d_min: f.settings.frame.clamp * f.scene.extent(),
+            d_min: f.frame.clamp * f.scene.extent(),
         };
-        let report = Cvrtgi::record(self, gpu, &inputs, &f.settings.cluster.cvrtgi)?;
+        let report = Cvrtgi::record(self, gpu, &inputs, &f.method.cvrtgi)?;
         counts.cpu_ms.push((Pass::Cvrtgi, report.cpu_ms));
         counts.vpl_clusters_used = report.lit_clusters;
         Ok(())

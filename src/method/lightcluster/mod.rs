@@ -6,6 +6,7 @@
 //! (`ROOM`).
 
 pub mod cluster;
+pub mod settings;
 
 use std::time::Instant;
 
@@ -14,11 +15,11 @@ use glam::Vec3;
 
 use self::cluster::{self as twin, LightClusters};
 use super::{FrameInputs, IndirectMethod, MethodCounts, Room};
+use super::{Method, MethodSettings};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
-use crate::settings::Method;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -126,6 +127,31 @@ pub const ROOM: Room = Room {
     method: Method::LightCluster,
     passes: &[Pass::LightClusterCluster, Pass::LightClusterShade],
     build: |ctx, gpu| Box::new(LightClusterMethod::new(ctx, gpu)),
+    clusters_sps: false,
+    vpl_clusters: false,
+    about: "LightCluster: VPLs in minimum-distance clusters, each a disc light whose visibility a \
+            few rays estimate; every VPL shaded (docs/methods.md)",
+    label: |m| format!("d{}", m.lightcluster.d_init),
+    series: |m| format!("d_init {}", m.lightcluster.d_init),
+    short: |m| format!("d{}", m.lightcluster.d_init),
+    ui: |ui, m| {
+        ui.add(
+            egui::Slider::new(&mut m.lightcluster.d_init, 0.001..=10.0)
+                .logarithmic(true)
+                .text("d_init (scene diagonals)"),
+        );
+    },
+    sweep: |l| {
+        l.lightcluster
+            .configs()
+            .into_iter()
+            .map(|lightcluster| MethodSettings {
+                method: Method::LightCluster,
+                lightcluster,
+                ..Default::default()
+            })
+            .collect()
+    },
 };
 
 /// lightcluster's state: its kernel and the frame's clusters (from `LightClusterCluster` to
@@ -164,7 +190,7 @@ impl IndirectMethod for LightClusterMethod {
                     &f.vpls.set.vpls,
                     eye,
                     far,
-                    f.settings.cluster.d_init * extent,
+                    f.method.lightcluster.d_init * extent,
                 );
                 counts.cpu_ms.push((pass, t.elapsed().as_secs_f64() * 1e3));
                 counts.vpl_clusters_used = c.discs.len() as u32;
@@ -178,7 +204,7 @@ impl IndirectMethod for LightClusterMethod {
                     clusters: self.clusters.as_ref().expect("lightcluster_cluster ran"),
                     indirect: f.indirect,
                     pixels: f.pixels,
-                    d_min: f.settings.frame.clamp * extent,
+                    d_min: f.frame.clamp * extent,
                 };
                 // The rays traced: each pixel's discs (a disc where one of its cluster's terms is
                 // positive, once) × DISC_SAMPLES.

@@ -7,6 +7,7 @@
 //! The passes are `Pass::WangCluster` → `Pass::WangGather` → `Pass::WangInterp` (`ROOM`).
 
 pub mod cluster;
+pub mod settings;
 
 use std::time::{Duration, Instant};
 
@@ -15,13 +16,13 @@ use bytemuck::{Pod, Zeroable};
 
 use self::cluster as twin;
 use super::{FrameInputs, IndirectMethod, MethodCounts, Room};
+use super::{Method, MethodSettings};
 use crate::gi::dispatch::{Gpu, Kernel, Run, copy_to_texture, data_texture};
 use crate::gi::pass::Pass;
 use crate::gi::primary::ShadingPoint;
 use crate::gi::reference::GatherInputs;
 use crate::gi::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
-use crate::settings::Method;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, Default)]
@@ -341,6 +342,31 @@ pub const ROOM: Room = Room {
     method: Method::Wang,
     passes: &[Pass::WangCluster, Pass::WangGather, Pass::WangInterp],
     build: |ctx, gpu| Box::new(WangMethod::new(ctx, gpu)),
+    clusters_sps: true,
+    vpl_clusters: true,
+    about: "Wang et al. 2009: irradiance only at the SP clusters' sample points, interpolated per \
+            pixel (docs/methods.md)",
+    label: |m| format!("a{}", m.wang.wang_alpha),
+    series: |m| format!("α {}", m.wang.wang_alpha),
+    short: |m| format!("a{}", m.wang.wang_alpha),
+    ui: |ui, m| {
+        ui.add(
+            egui::Slider::new(&mut m.wang.wang_alpha, 0.01..=100.0)
+                .logarithmic(true)
+                .text("α (Eq. 2: position against normal)"),
+        );
+    },
+    sweep: |l| {
+        l.wang
+            .configs()
+            .into_iter()
+            .map(|wang| MethodSettings {
+                method: Method::Wang,
+                wang,
+                ..Default::default()
+            })
+            .collect()
+    },
 };
 
 /// wang's state: its pipelines, what its passes hand on within a frame, and the last frame's
@@ -370,20 +396,19 @@ impl IndirectMethod for WangMethod {
         counts: &mut MethodCounts,
     ) -> Result<()> {
         let ctx = gpu.ctx;
-        let s = f.settings;
         let wang = &self.wang;
         let img = Image {
             gbuffer: f.gbuffer,
-            width: s.frame.width,
-            height: s.frame.height,
+            width: f.frame.width,
+            height: f.frame.height,
         };
         let extent = f.scene.extent();
         match pass {
             // §3.2: the SP clustering and its sample points.
             Pass::WangCluster => {
-                let c = &s.cluster;
-                let alpha = c.wang_alpha / extent;
-                let w = wang.cluster(gpu, img, c.sp_clusters, alpha, c.iterations, s.frame.seed)?;
+                let c = f.cluster;
+                let alpha = f.method.wang.wang_alpha / extent;
+                let w = wang.cluster(gpu, img, c.sp_clusters, alpha, c.iterations, f.frame.seed)?;
                 if std::env::var_os("FVPL_PROFILE_STEPS").is_some() {
                     eprintln!(
                         "wang_cluster: {:.1} ms of CPU steps, {} assignment passes",
@@ -409,12 +434,12 @@ impl IndirectMethod for WangMethod {
                         num_lights,
                         indirect: &irradiance,
                         pixels: c.k(),
-                        d_min: s.frame.clamp * extent,
+                        d_min: f.frame.clamp * extent,
                         label: pass.name(),
                     },
                     &mut |_, _| true,
                 );
-                let radius = wang.radius(gpu, &c, s.frame.seed);
+                let radius = wang.radius(gpu, &c, f.frame.seed);
                 counts.indirect_rays = c.used as u64 * (num_lights + twin::RADIUS_RAYS) as u64;
                 self.state.frame = Some(WangFrame {
                     clustering: c,

@@ -1,10 +1,7 @@
-//! The CVRTGI method's knobs (Cosin Ayerbe & Patow 2022, seed 003; `method::cvrtgi`, docs/cvrtgi.md):
-//! one `Args` + serde struct with its value parsers, flattened into `ClusterSettings`.
+//! The CVRTGI method's knobs (Cosin Ayerbe & Patow 2022, seed 003; `method::cvrtgi`, docs/cvrtgi.md),
+//! declared once with `knobs!`, and their value parsers.
 
-use clap::Args;
-use serde::{Deserialize, Serialize};
-
-use super::{Invalid, in_range, invalid};
+use crate::settings::{Invalid, in_range, invalid, knobs};
 
 /// The most voxels along the longest axis of the scene (`--voxel-res`): the paper's largest grid
 /// (256³). The per-face visibility cache holds `--face-rays` cluster ids for every exposed voxel
@@ -12,56 +9,32 @@ use super::{Invalid, in_range, invalid};
 /// binding on lavapipe (128 MiB); `method::cvrtgi` checks the actual size against the adapter.
 pub const MAX_VOXEL_RES: u32 = 256;
 
-/// The knobs of the CVRTGI method (Cosin Ayerbe & Patow 2022, seed 003; `method::cvrtgi`,
-/// docs/methods.md), flattened into `ClusterSettings` and so into `render`, `view` and `bench`.
-#[derive(Args, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[command(next_help_heading = "CVRTGI (voxel clusters)")]
-#[serde(default)]
-pub struct CvrtgiSettings {
+knobs! {
+    /// The knobs of the CVRTGI method (Cosin Ayerbe & Patow 2022, seed 003; `method::cvrtgi`,
+    /// docs/methods.md), flattened into `method::MethodSettings` and so into `render`, `view` and
+    /// (as lists) `bench`.
+    pub struct CvrtgiSettings, lists CvrtgiLists, heading "CVRTGI (voxel clusters)";
     /// Voxels along the longest axis of the scene bounds (§4.1), 1..=256.
-    #[arg(long, default_value_t = 32, value_parser = parse_voxel_res)]
-    pub voxel_res: u32,
+    voxel_res: u32 = 32, parse parse_voxel_res;
     /// Spacing in voxels of the SLIC seeds (§4.2, Achanta et al.'s S), 1..=64. Fewer, larger
     /// clusters are found by more of a face's rays (docs/cvrtgi.md measures 4, 6 and 8).
-    #[arg(long, default_value_t = 8, value_parser = parse_cluster_step)]
-    pub cluster_step: u32,
+    cluster_step: u32 = 8, parse parse_cluster_step;
     /// Iterations of Alg. 1's loop (the paper: 10), 0..=100.
-    #[arg(long, default_value_t = 10, value_parser = parse_cluster_iterations)]
-    pub cluster_iterations: u32,
+    cluster_iterations: u32 = 10, parse parse_cluster_iterations;
     /// Eq. (1)'s angle in degrees: a voxel joins a cluster whose normal is within it (the paper:
     /// 35), (0, 180].
-    #[arg(long, default_value_t = 35.0, value_parser = parse_cluster_angle)]
-    pub cluster_angle: f32,
+    cluster_angle: f32 = 35.0, parse parse_cluster_angle;
     /// Rays per exposed voxel face for the cluster visibility cache (§4.3; the paper: 32..128,
     /// 128 by default), 1..=1024.
-    #[arg(long, default_value_t = 128, value_parser = parse_face_rays)]
-    pub face_rays: u32,
+    face_rays: u32 = 128, parse parse_face_rays;
     /// Clusters nearer than this many voxels to a face give their lit voxels one by one instead of
     /// the cluster as one light (§4.4), [0, 64].
-    #[arg(long, default_value_t = 2.0, value_parser = parse_near_voxels)]
-    pub near_voxels: f32,
+    near_voxels: f32 = 2.0, parse parse_near_voxels;
     /// Radius r of the Gaussian filter over same-direction faces of neighbouring voxels (§4.4: a
     /// 5³ kernel is r = 2), 0..=4.
-    #[arg(long, default_value_t = 2, value_parser = parse_filter_radius)]
-    pub filter_radius: u32,
+    filter_radius: u32 = 2, parse parse_filter_radius;
     /// Times the filter is applied (the paper: twice), 0..=8.
-    #[arg(long, default_value_t = 2, value_parser = parse_filter_passes)]
-    pub filter_passes: u32,
-}
-
-impl Default for CvrtgiSettings {
-    fn default() -> Self {
-        CvrtgiSettings {
-            voxel_res: 32,
-            cluster_step: 8,
-            cluster_iterations: 10,
-            cluster_angle: 35.0,
-            face_rays: 128,
-            near_voxels: 2.0,
-            filter_radius: 2,
-            filter_passes: 2,
-        }
-    }
+    filter_passes: u32 = 2, parse parse_filter_passes;
 }
 
 pub fn parse_voxel_res(v: &str) -> Result<u32, Invalid> {

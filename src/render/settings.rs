@@ -4,6 +4,7 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
+use crate::method::MethodSettings;
 use crate::settings::{ClusterSettings, FrameSettings};
 
 /// What a frame is rendered with: the user's settings (`crate::settings`) as they are, and how the
@@ -12,6 +13,8 @@ use crate::settings::{ClusterSettings, FrameSettings};
 pub struct RenderSettings {
     pub frame: FrameSettings,
     pub cluster: ClusterSettings,
+    /// The method and its knobs (colom's are `cluster`).
+    pub method: MethodSettings,
     /// No clustering at all (Eq. 5 per pixel and VPL).
     pub reference: bool,
     /// Print progress of long passes on stderr.

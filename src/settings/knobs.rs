@@ -1,0 +1,148 @@
+//! `knobs!`: a group of settings declared once. From one list of fields (doc, type, default, value
+//! parser) it makes the settings struct (clap `Args` for `render` and `view`, serde for the stats
+//! and the viewer's files, `Default` from the same defaults) and its bench lists (`bench --NAME
+//! a,b,c`: one `Vec` a knob, `configs()` every combination), so a knob is one field, not five.
+
+/// Declares `$Settings` and `$Lists` (see the module). Each field: its doc comment, then
+/// `name: Type = default, parse parser;` with `parser(&str) -> Result<Type, Invalid>`.
+macro_rules! knobs {
+    (
+        $(#[doc = $sdoc:expr])*
+        pub struct $Settings:ident, lists $Lists:ident, heading $heading:expr;
+        $(
+            $(#[doc = $doc:expr])*
+            $field:ident: $ty:ty = $default:expr, parse $parser:path;
+        )+
+    ) => {
+        $(#[doc = $sdoc])*
+        #[derive(clap::Args, Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+        #[command(next_help_heading = $heading)]
+        #[serde(default)]
+        pub struct $Settings {
+            $(
+                $(#[doc = $doc])*
+                #[arg(long, default_value_t = $default, value_parser = $parser)]
+                pub $field: $ty,
+            )+
+        }
+
+        impl Default for $Settings {
+            fn default() -> Self {
+                $Settings {
+                    $($field: $default,)+
+                }
+            }
+        }
+
+        impl $Settings {
+            /// The knobs' names, in order: their CSV columns.
+            pub const NAMES: &'static [&'static str] = &[$(stringify!($field)),+];
+
+            /// The knobs' values as the CSV writes them, in the order of `NAMES`.
+            pub fn values(&self) -> Vec<String> {
+                vec![$(self.$field.to_string()),+]
+            }
+        }
+
+        #[doc = concat!("`bench`'s lists of `", stringify!($Settings), "`'s knobs: a configuration takes one value of each (an empty list: the default).")]
+        #[derive(clap::Args, Clone, Debug, Default, PartialEq)]
+        #[command(next_help_heading = $heading)]
+        pub struct $Lists {
+            $(
+                $(#[doc = $doc])*
+                #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = $parser)]
+                pub $field: Vec<$ty>,
+            )+
+        }
+
+        impl $Lists {
+            /// Every combination of the lists' values (the first knob outermost), repeats
+            /// dropped; an empty list takes the default.
+            pub fn configs(&self) -> Vec<$Settings> {
+                let d = $Settings::default();
+                let mut out = vec![d];
+                $(
+                    let values: &[$ty] = if self.$field.is_empty() {
+                        std::slice::from_ref(&d.$field)
+                    } else {
+                        &self.$field
+                    };
+                    out = out
+                        .iter()
+                        .flat_map(|&c| {
+                            values.iter().map(move |&v| {
+                                let mut n = c;
+                                n.$field = v;
+                                n
+                            })
+                        })
+                        .collect();
+                )+
+                let mut unique: Vec<$Settings> = Vec::with_capacity(out.len());
+                for c in out {
+                    if !unique.contains(&c) {
+                        unique.push(c);
+                    }
+                }
+                unique
+            }
+        }
+    };
+}
+
+pub(crate) use knobs;
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Invalid, in_range};
+
+    fn parse_small(v: &str) -> Result<u32, Invalid> {
+        in_range(v, |n: u32| n < 10, "must be 0..=9")
+    }
+
+    fn parse_half(v: &str) -> Result<f32, Invalid> {
+        in_range(v, |x: f32| (0.0..=1.0).contains(&x), "must be in [0, 1]")
+    }
+
+    knobs! {
+        /// Two knobs.
+        pub struct Pair, lists PairLists, heading "test";
+        /// The first.
+        a: u32 = 3, parse parse_small;
+        /// The second.
+        b: f32 = 0.5, parse parse_half;
+    }
+
+    #[test]
+    fn one_declaration_gives_defaults_parsing_names_values_and_combinations() {
+        use clap::Parser;
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            pair: Pair,
+        }
+        #[derive(clap::Parser)]
+        struct Bench {
+            #[command(flatten)]
+            lists: PairLists,
+        }
+        assert_eq!(Pair::default(), Pair { a: 3, b: 0.5 });
+        assert_eq!(Cli::parse_from(["x"]).pair, Pair::default());
+        assert_eq!(
+            Cli::parse_from(["x", "--a", "7"]).pair,
+            Pair { a: 7, b: 0.5 }
+        );
+        assert!(Cli::try_parse_from(["x", "--a", "12"]).is_err());
+        assert_eq!(Pair::NAMES, &["a", "b"]);
+        assert_eq!(Pair { a: 7, b: 0.25 }.values(), vec!["7", "0.25"]);
+        let l = Bench::parse_from(["x", "--a", "1,2,1", "--b", "0,1"]).lists;
+        let c = l.configs();
+        let want = [(1, 0.0), (1, 1.0), (2, 0.0), (2, 1.0)].map(|(a, b)| Pair { a, b });
+        assert_eq!(c, want);
+        assert_eq!(PairLists::default().configs(), vec![Pair::default()]);
+        assert!(Bench::try_parse_from(["x", "--b", "0,2"]).is_err());
+        // serde: the field names, and a missing field takes its default.
+        let j: Pair = serde_json::from_str(r#"{"a": 5}"#).unwrap();
+        assert_eq!(j, Pair { a: 5, b: 0.5 });
+    }
+}
