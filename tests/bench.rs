@@ -2,8 +2,23 @@
 
 mod common;
 
+use clap::Parser;
 use common::run_cli as run;
 use fuzzy_vpl::bench::csv;
+use fuzzy_vpl::bench::sweep::{Sweep, label, mode_name};
+use fuzzy_vpl::method::Method;
+
+/// The sweep of `bench ARGS` (`quick` defaults or the full ones).
+fn parse(args: &[&str], quick: bool) -> Result<Sweep, String> {
+    #[derive(Parser)]
+    struct Wrap {
+        #[command(flatten)]
+        s: Sweep,
+    }
+    let w = Wrap::try_parse_from(std::iter::once("bench").chain(args.iter().copied()))
+        .map_err(|e| e.to_string())?;
+    w.s.resolve(quick)
+}
 
 #[test]
 fn quick_bench_writes_csv_plots_and_summary() {
@@ -438,4 +453,52 @@ fn gpu_bench_script_runs_and_prints_one_table() {
         .output()
         .unwrap();
     assert_eq!(bad.status.code(), Some(2));
+}
+
+/// `bench --methods`: each method takes its own knob lists (and the K pairs where it clusters the
+/// shading points), labelled with its name; bad lists name the option.
+#[test]
+fn methods_expand_with_their_own_knobs() {
+    let s = parse(
+        &[
+            "--methods",
+            "colom,wang",
+            "--modes",
+            "weighted",
+            "--pairs",
+            "48/128",
+            "--wang-alpha",
+            "0.1,0.5",
+        ],
+        true,
+    )
+    .unwrap();
+    let labels: Vec<String> = s.configs().iter().map(label).collect();
+    assert_eq!(
+        labels,
+        [
+            "weighted 48/128 F6 gauto",
+            "wang 48/128 a0.1",
+            "wang 48/128 a0.5"
+        ]
+    );
+    let c = s.configs();
+    assert_eq!(mode_name(&c[0]), "weighted");
+    assert_eq!(mode_name(&c[1]), "wang");
+    assert_eq!(c[2].method.method, Method::Wang);
+    assert_eq!(
+        parse(&[], true).unwrap().method.methods,
+        vec![Method::Colom]
+    );
+    let s = parse(&["--methods", "lightcluster", "--d-init", "0.05,0.2"], true).unwrap();
+    let labels: Vec<String> = s.configs().iter().map(label).collect();
+    assert_eq!(labels, ["lightcluster d0.05", "lightcluster d0.2"]);
+    assert_eq!(mode_name(&s.configs()[0]), "lightcluster");
+    assert!(parse(&["--d-init", "0"], true).is_err());
+    let e = parse(&["--methods", "colom,foo"], true).unwrap_err();
+    assert!(e.contains("--methods") && e.contains("foo"), "{e}");
+    let e = parse(&["--wang-alpha", "0"], true).unwrap_err();
+    assert!(e.contains("--wang-alpha"), "{e}");
+    let e = parse(&["--methods", "wang", "--sp-clusters", "0"], true).unwrap_err();
+    assert!(e.contains("wang"), "{e}");
 }

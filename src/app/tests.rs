@@ -288,22 +288,32 @@ fn command_line_values_beyond_the_sliders_survive_the_panel() {
     assert_eq!(v.s, s);
 }
 
-/// The method selector: a wang frame's method and α survive the panel, name the series and the
-/// screenshot files, and reach the frame settings.
+/// The method selector: every room's method and knobs survive the panel (which draws the room's
+/// section), name the series and the screenshot files, and reach the frame settings.
 #[test]
-fn the_method_and_its_knob_survive_the_panel() {
-    let mut fs = RenderSettings::default();
-    fs.method.method = crate::method::Method::Wang;
-    fs.method.wang.wang_alpha = 0.7;
-    let s = UiSettings::new(&fs);
-    let mut v = viewer(s.clone());
-    draw(&mut v);
-    assert_eq!(v.s, s);
-    assert!(s.short().starts_with("wang-a0.7_"), "{}", s.short());
-    assert_eq!(s.mode_label(), "wang α 0.7");
-    let r = s.frame_settings(64, 48);
-    assert_eq!(r.method.method, crate::method::Method::Wang);
-    assert_eq!(r.method.wang.wang_alpha, 0.7);
+fn the_method_and_its_knobs_survive_the_panel() {
+    for room in crate::method::ROOMS {
+        let mut fs = RenderSettings::default();
+        fs.method.method = room.method;
+        let s = UiSettings::new(&fs);
+        let mut v = viewer(s.clone());
+        draw(&mut v);
+        assert_eq!(v.s, s, "{}", room.method);
+        let short = format!("{}-{}_", room.method, (room.short)(&s.method));
+        assert!(
+            s.short().starts_with(&short),
+            "{} against {short}",
+            s.short()
+        );
+        assert!(
+            s.mode_label().starts_with(room.method.name()),
+            "{}",
+            s.mode_label()
+        );
+        assert!(s.mode_label().contains(&(room.series)(&s.method)));
+        let r = s.frame_settings(64, 48);
+        assert_eq!(r.method, fs.method);
+    }
 }
 
 #[test]

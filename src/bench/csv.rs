@@ -59,7 +59,7 @@ pub struct Row {
     /// The plane gate of the F lists in degrees (`bench --plane-gate`), empty when off; older files
     /// without it read off.
     pub plane_gate_deg: Option<f32>,
-    /// The method (`settings::Method`: `colom`, `wang`, `lightcluster`; docs/methods.md), after
+    /// The method (`method::Method`, by its command-line name; docs/methods.md), after
     /// `plane_gate_deg`; files without the column read `colom`.
     pub method: Method,
     /// The indirect light's ms: `frame` less `primary` and `direct` (every method's own passes, the

@@ -35,9 +35,11 @@ pub fn mode_colour(mode: &str) -> RGBColor {
         "weighted" => RGBColor(31, 119, 180),
         "vpl-only" => RGBColor(44, 160, 44),
         "sp-only" => RGBColor(148, 103, 189),
-        "wang" | "colom" => RGBColor(140, 86, 75),
-        "lightcluster" => RGBColor(23, 190, 207),
-        _ => RGBColor(90, 90, 90),
+        "colom" => RGBColor(140, 86, 75),
+        m => match crate::method::ROOMS.iter().find(|r| r.method.name() == m) {
+            Some(r) => RGBColor(r.colour[0], r.colour[1], r.colour[2]),
+            None => RGBColor(90, 90, 90),
+        },
     }
 }
 

@@ -199,9 +199,8 @@ pub struct Sweep {
     /// time (the `front_mse` column).
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::settings::parse_target_ms)]
     pub target_ms: Vec<f64>,
-    /// The methods (`--methods`, default colom) and each one's knob lists (`--wang-alpha`,
-    /// `--d-init`, `--voxel-res`, …; docs/methods.md), after the other lists: their headings
-    /// follow.
+    /// The methods (`--methods`, default colom) and each one's knob lists (docs/methods.md),
+    /// after the other lists: their headings follow.
     #[command(flatten)]
     pub method: MethodLists,
 }
@@ -424,7 +423,7 @@ pub fn mode_name(c: &Config) -> &'static str {
 }
 
 /// Short name of a configuration for plots and the summary (`weighted 48/128 F6 gauto`,
-/// `wang 48/128 a0.3`).
+/// another method's name, K's where it uses them, and its knobs).
 pub fn label(c: &Config) -> String {
     label_in(mode(c), c, &c.method)
 }
@@ -514,52 +513,6 @@ mod tests {
         let w = Wrap::try_parse_from(std::iter::once("bench").chain(args.iter().copied()))
             .map_err(|e| e.to_string())?;
         w.s.resolve(quick)
-    }
-
-    #[test]
-    fn methods_expand_with_their_own_knobs() {
-        let s = parse(
-            &[
-                "--methods",
-                "colom,wang",
-                "--modes",
-                "weighted",
-                "--pairs",
-                "48/128",
-                "--wang-alpha",
-                "0.1,0.5",
-            ],
-            true,
-        )
-        .unwrap();
-        let labels: Vec<String> = s.configs().iter().map(label).collect();
-        assert_eq!(
-            labels,
-            [
-                "weighted 48/128 F6 gauto",
-                "wang 48/128 a0.1",
-                "wang 48/128 a0.5"
-            ]
-        );
-        let c = s.configs();
-        assert_eq!(mode_name(&c[0]), "weighted");
-        assert_eq!(mode_name(&c[1]), "wang");
-        assert_eq!(c[2].method.method, Method::Wang);
-        assert_eq!(
-            parse(&[], true).unwrap().method.methods,
-            vec![Method::Colom]
-        );
-        let s = parse(&["--methods", "lightcluster", "--d-init", "0.05,0.2"], true).unwrap();
-        let labels: Vec<String> = s.configs().iter().map(label).collect();
-        assert_eq!(labels, ["lightcluster d0.05", "lightcluster d0.2"]);
-        assert_eq!(mode_name(&s.configs()[0]), "lightcluster");
-        assert!(parse(&["--d-init", "0"], true).is_err());
-        let e = parse(&["--methods", "colom,foo"], true).unwrap_err();
-        assert!(e.contains("--methods") && e.contains("foo"), "{e}");
-        let e = parse(&["--wang-alpha", "0"], true).unwrap_err();
-        assert!(e.contains("--wang-alpha"), "{e}");
-        let e = parse(&["--methods", "wang", "--sp-clusters", "0"], true).unwrap_err();
-        assert!(e.contains("wang"), "{e}");
     }
 
     #[test]

@@ -18,9 +18,9 @@ Lists are comma-separated; the sweep is every combination of modes x SP K x VPL 
 iterations x p x plane gate (values a mode ignores are dropped: hard has F = 1, vpl-only no SP K,
 sp-only no VPL K).
 Modes: hard, uniform, weighted (both clusterings, Eqs. 8 / 9), vpl-only, sp-only.
-Methods (--methods colom,wang,lightcluster; docs/methods.md): the modes and fuzzy knobs are colom's;
-wang takes the K pairs, --iterations and --wang-alpha, lightcluster --d-init (their rows have the
-method's name as mode).
+Methods (--methods, docs/methods.md): the modes and fuzzy knobs are colom's; every other method
+takes its own knob lists (listed under its heading), and the K pairs and --iterations where it
+clusters the shading points (its rows have the method's name as mode).
 Each configuration is rendered --repeat times; its times are the mean of the 3 best (GPU timestamps),
 its error is the last image's MSE against the unclustered reference of the same camera.
 --quick: 96x72, 1024 VPLs, 128 VPL clusters, 48 and 96 SP clusters, every mode, repeat 3

@@ -93,6 +93,8 @@ pub struct Room {
     pub vpl_clusters: bool,
     /// One line for the viewer's method selector.
     pub about: &'static str,
+    /// Its colour in the bench's plots (sRGB).
+    pub colour: [u8; 3],
     /// Its knobs in a label: the bench's (`a0.3`), the viewer's series (`α 0.3`), file names
     /// (`a0.3`).
     pub label: fn(&MethodSettings) -> String,

@@ -9,12 +9,10 @@
 //! - `sp_cluster` (step 4) → `visibility` (step 5) → `shade` (step 6, Eq. 6 with Eq. 8 or 9), the lights
 //!   being VPL clusters ("both") or the VPLs ("SPs only").
 //!
-//! The other methods (`settings::Method`, docs/methods.md) reuse the VPLs, the primary rays, the
+//! The other methods (`method::Method`, docs/methods.md) reuse the VPLs, the primary rays, the
 //! direct light and the reference, and replace the clustered indirect passes with their own:
-//! - wang (Wang et al. 2009): `wang_cluster` (§3.2) → `wang_gather` (irradiance and R_j at the
-//!   sample points) → `wang_interp` (§3.4), `gi/wang.rs`;
-//! - lightcluster (LightCluster): `lightcluster_cluster` (§3.1, the VPLs clustered per frame, no
-//!   `vpl_cluster`) → `lightcluster_shade` (§3.2), `gi/lightcluster.rs`.
+//! each method's room (`method::ROOMS`) lists its passes and records them through
+//! `method::IndirectMethod`.
 //!
 //! `Plan::new` lists the passes; `Renderer::render` runs exactly that list, in order.
 
@@ -45,13 +43,13 @@ use crate::settings::Weighting;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Plan {
     pub indirect: bool,
-    /// Step 2 (the resident VPL clustering, Colom's and wang's lights).
+    /// Step 2 (the resident VPL clustering: colom's lights, and a room's with `vpl_clusters`).
     pub vpl_clustering: bool,
     /// Colom's SP clustering (steps 4–6).
     pub sp_clustering: bool,
     /// The method whose own passes compute the indirect light: the one asked, or `Colom` (whose
     /// unclustered passes `gather` and `reference` then run) for the reference and where the
-    /// method asked does not apply (wang without 0 < K_SP < pixels).
+    /// method asked does not apply (one that clusters SPs without 0 < K_SP < pixels).
     pub method: Method,
 }
 
@@ -442,7 +440,7 @@ impl Renderer<'_> {
         for &(pass, ms) in &r.counts.cpu_ms {
             *timings_ms.entry(pass.name().into()).or_insert(0.0) += ms;
         }
-        // cvrtgi's resident stages are not the frame's (as the VPLs and their clustering).
+        // A method's resident stages are not the frame's (as the VPLs and their clustering).
         let resident = match self.methods.get_mut(&plan.method) {
             Some(m) if plan.indirect => m.take_resident_timings(&mut timings_ms),
             _ => Default::default(),

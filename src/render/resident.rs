@@ -105,8 +105,8 @@ impl<'a> Renderer<'a> {
         ))
     }
 
-    /// A method's state (`method::ROOMS`) as its room's type `T`, once a frame has used it: e.g.
-    /// `method::wang::WangMethod`, whose `last` is the last wang frame's clustering.
+    /// A method's state (`method::ROOMS`) as its room's type `T`, once a frame has used it (tests
+    /// and views read a method's last clustering from it).
     pub fn method_state<T: 'static>(&self, method: Method) -> Option<&T> {
         self.methods.get(&method)?.as_any().downcast_ref()
     }

@@ -575,6 +575,7 @@ pub const ROOM: Room = Room {
     build: |_, _| Box::new(Cvrtgi::new()),
     clusters_sps: false,
     vpl_clusters: false,
+    colour: [188, 189, 34],
     about: "CVRTGI: voxel clusters (SLIC, 35° rule) light every voxel face; pixels read their \
             face's filtered irradiance, cached while the lights stay (docs/methods.md)",
     label: |m| format!("v{} s{}", m.cvrtgi.voxel_res, m.cvrtgi.cluster_step),

@@ -129,6 +129,7 @@ pub const ROOM: Room = Room {
     build: |ctx, gpu| Box::new(LightClusterMethod::new(ctx, gpu)),
     clusters_sps: false,
     vpl_clusters: false,
+    colour: [23, 190, 207],
     about: "LightCluster: VPLs in minimum-distance clusters, each a disc light whose visibility a \
             few rays estimate; every VPL shaded (docs/methods.md)",
     label: |m| format!("d{}", m.lightcluster.d_init),

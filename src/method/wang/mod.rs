@@ -344,6 +344,7 @@ pub const ROOM: Room = Room {
     build: |ctx, gpu| Box::new(WangMethod::new(ctx, gpu)),
     clusters_sps: true,
     vpl_clusters: true,
+    colour: [140, 86, 75],
     about: "Wang et al. 2009: irradiance only at the SP clusters' sample points, interpolated per \
             pixel (docs/methods.md)",
     label: |m| format!("a{}", m.wang.wang_alpha),
