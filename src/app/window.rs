@@ -1,6 +1,7 @@
 //! The window: winit event loop, the window's own wgpu device and surface, egui input and rendering,
 //! and the PNG screenshot (egui rendered a second time into an offscreen texture and read back).
 
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -234,11 +235,7 @@ impl App {
         // Textures are uploaded before the surface is asked for (a lost surface returns early) and
         // freed after the frame; egui asks that the delta be cleared once handled.
         let mut textures = std::mem::take(&mut out.textures_delta);
-        for (id, deltas) in &textures.set {
-            for delta in deltas {
-                g.renderer.update_texture(&g.device, &g.queue, *id, delta);
-            }
-        }
+        g.upload_textures(&textures);
         let freed = std::mem::take(&mut textures.free);
         textures.clear();
         v.tick();
@@ -253,44 +250,98 @@ impl App {
             .map(|o| o.repaint_delay)
             .unwrap_or(Duration::MAX);
         let jobs = g.egui.tessellate(out.shapes, out.pixels_per_point);
-        let frame = match g.surface.get_current_texture() {
+        let Some(frame) = g.surface_texture() else {
+            g.free_textures(&freed);
+            g.window.request_redraw();
+            return Ok(());
+        };
+        let shot = g.present(frame, &jobs, out.pixels_per_point, v.png_request.take());
+        v.presented(Instant::now());
+        v.motion.input_at = None;
+        g.free_textures(&freed);
+        if let Some((path, tex)) = shot {
+            save_screenshot(g, v, &path, &tex);
+        }
+        if let Some(done) = v.exit.take() {
+            if let Err(e) = done {
+                return Err(anyhow!(e));
+            }
+            el.exit();
+            return Ok(());
+        }
+        let delay = redraw_delay(v, repaint);
+        if delay < Duration::from_secs(3600) {
+            self.redraw_at = Some(Instant::now() + delay);
+        }
+        Ok(())
+    }
+}
+
+impl Gfx {
+    /// Uploads the textures egui set this frame.
+    fn upload_textures(&mut self, textures: &egui::TexturesDelta) {
+        for (id, deltas) in &textures.set {
+            for delta in deltas {
+                self.renderer
+                    .update_texture(&self.device, &self.queue, *id, delta);
+            }
+        }
+    }
+
+    fn free_textures<'a>(&mut self, freed: impl IntoIterator<Item = &'a egui::TextureId>) {
+        for id in freed {
+            self.renderer.free_texture(id);
+        }
+    }
+
+    /// The surface's next texture; `None` when there is none this time (an outdated or lost
+    /// surface is configured again).
+    fn surface_texture(&mut self) -> Option<wgpu::SurfaceTexture> {
+        match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
-            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => Some(t),
             other => {
                 if matches!(
                     other,
                     wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost
                 ) {
-                    g.surface.configure(&g.device, &g.config);
+                    self.surface.configure(&self.device, &self.config);
                 }
-                for id in &freed {
-                    g.renderer.free_texture(id);
-                }
-                g.window.request_redraw();
-                return Ok(());
+                None
             }
-        };
+        }
+    }
+
+    /// Draws egui's `jobs` into `frame` and presents it; with a `png` path, also into an offscreen
+    /// texture of the same size and format, returned with the path for `save_screenshot`.
+    fn present(
+        &mut self,
+        frame: wgpu::SurfaceTexture,
+        jobs: &[egui::ClippedPrimitive],
+        pixels_per_point: f32,
+        png: Option<PathBuf>,
+    ) -> Option<(PathBuf, wgpu::Texture)> {
         let sd = egui_wgpu::ScreenDescriptor {
-            size_in_pixels: [g.config.width, g.config.height],
-            pixels_per_point: out.pixels_per_point,
+            size_in_pixels: [self.config.width, self.config.height],
+            pixels_per_point,
         };
-        let mut enc = g.device.create_command_encoder(&Default::default());
-        let cmds = g
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        let cmds = self
             .renderer
-            .update_buffers(&g.device, &g.queue, &mut enc, &jobs, &sd);
+            .update_buffers(&self.device, &self.queue, &mut enc, jobs, &sd);
         let view = frame.texture.create_view(&Default::default());
-        let shot = v.png_request.take().map(|path| {
-            let tex = g.device.create_texture(&wgpu::TextureDescriptor {
+        let shot = png.map(|path| {
+            let tex = self.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("screenshot"),
                 size: wgpu::Extent3d {
-                    width: g.config.width,
-                    height: g.config.height,
+                    width: self.config.width,
+                    height: self.config.height,
                     depth_or_array_layers: 1,
                 },
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
-                format: g.config.format,
+                format: self.config.format,
                 usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
                 view_formats: &[],
             });
@@ -318,59 +369,50 @@ impl App {
                     multiview_mask: None,
                 })
                 .forget_lifetime();
-            g.renderer.render(&mut pass, &jobs, &sd);
+            self.renderer.render(&mut pass, jobs, &sd);
         }
-        g.queue
+        self.queue
             .submit(cmds.into_iter().chain(std::iter::once(enc.finish())));
-        g.window.pre_present_notify();
-        g.queue.present(frame);
-        v.presented(Instant::now());
-        v.motion.input_at = None;
-        for id in &freed {
-            g.renderer.free_texture(id);
-        }
-        if let Some((path, tex)) = shot {
-            let saved = super::screenshot::read_texture_rgb8(&g.device, &g.queue, &tex)
-                .and_then(|(w, h, rgb)| crate::export::write_png_rgb8(&path, w, h, rgb));
-            let scripted = v
-                .script
-                .as_ref()
-                .is_some_and(|sc| sc.left == 0 && sc.screenshot.as_ref() == Some(&path));
-            match saved {
-                Ok(()) => {
-                    v.last_shot = format!("saved {}", path.display());
-                    if scripted {
-                        v.exit = Some(Ok(()));
-                    }
-                }
-                Err(e) => {
-                    v.last_shot = format!("{e:#}");
-                    if scripted {
-                        v.exit = Some(Err(format!("{e:#}")));
-                    }
-                }
+        self.window.pre_present_notify();
+        self.queue.present(frame);
+        shot
+    }
+}
+
+/// Reads the screenshot texture back and writes it to `path` as PNG; the outcome goes to the panel
+/// (`last_shot`), and ends a script whose last step it was (an error as the exit's error).
+fn save_screenshot(g: &Gfx, v: &mut Viewer, path: &Path, tex: &wgpu::Texture) {
+    let saved = super::screenshot::read_texture_rgb8(&g.device, &g.queue, tex)
+        .and_then(|(w, h, rgb)| crate::export::write_png_rgb8(path, w, h, rgb));
+    let scripted = v
+        .script
+        .as_ref()
+        .is_some_and(|sc| sc.left == 0 && sc.screenshot.as_deref() == Some(path));
+    match saved {
+        Ok(()) => {
+            v.last_shot = format!("saved {}", path.display());
+            if scripted {
+                v.exit = Some(Ok(()));
             }
         }
-        if let Some(done) = v.exit.take() {
-            if let Err(e) = done {
-                return Err(anyhow!(e));
+        Err(e) => {
+            v.last_shot = format!("{e:#}");
+            if scripted {
+                v.exit = Some(Err(format!("{e:#}")));
             }
-            el.exit();
-            return Ok(());
         }
-        // Scripted runs, moving cameras and reprojected images draw continuously; otherwise egui
-        // says when.
-        let delay = if v.animate || v.moving() || v.script_started.is_some() || v.image_stale() {
-            Duration::ZERO
-        } else if v.script.is_some() {
-            repaint.min(Duration::from_millis(100))
-        } else {
-            repaint
-        };
-        if delay < Duration::from_secs(3600) {
-            self.redraw_at = Some(Instant::now() + delay);
-        }
-        Ok(())
+    }
+}
+
+/// How long until the next redraw: scripted runs, moving cameras and reprojected images draw
+/// continuously; otherwise egui says when (`repaint`; at most 100 ms apart while a script waits).
+fn redraw_delay(v: &Viewer, repaint: Duration) -> Duration {
+    if v.animate || v.moving() || v.script_started.is_some() || v.image_stale() {
+        Duration::ZERO
+    } else if v.script.is_some() {
+        repaint.min(Duration::from_millis(100))
+    } else {
+        repaint
     }
 }
 

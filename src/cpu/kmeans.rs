@@ -363,56 +363,107 @@ fn kmeans_from(
     points: &[Point],
     p: &KmParams,
     iterations: u32,
-    mut cs: Vec<Centroid>,
+    cs: Vec<Centroid>,
     candidates: Vec<Option<RepPoint>>,
 ) -> CpuClustering {
     let k = p.k as usize;
-    let f = p.f as usize;
-    let s_n = p.num_sampled;
-    let n_t = p.normal_threshold;
-    let lo = Vec3::from_slice(&p.lo[..3]);
-    let ext = Vec3::from_slice(&p.ext[..3]);
-    let mut sample_assign = vec![u32::MAX; s_n as usize];
-    let mut proposals = vec![u32::MAX; k];
-    // The highest-index cluster the last update (here: the initial centroids) left empty; every
-    // orphan also proposes itself to it.
-    let mut last_empty = cs.iter().rposition(|c| !c.valid);
+    let mut alg1 = Alg1 {
+        points,
+        p,
+        sample_assign: vec![u32::MAX; p.num_sampled as usize],
+        proposals: vec![u32::MAX; k],
+        last_empty: cs.iter().rposition(|c| !c.valid),
+        cs,
+    };
     let mut iterations_run = 0;
     for it in 0..iterations {
         iterations_run += 1;
-        let g = Grid::build(p, &cs);
+        let (mut changed, orphans) = alg1.assign_samples(it);
+        changed += alg1.update(it, orphans);
+        // Converged: the next iterations would repeat this one (as the GPU stops).
+        if it >= 1 && changed == 0 {
+            break;
+        }
+    }
+    let Alg1 {
+        cs, sample_assign, ..
+    } = alg1;
+    let (assign, weights) = fuzzy_assign(points, p, &cs);
+    let (reps, rep_d) = representatives(points, p, &cs, &assign);
+    let rep_points = rep_points(points, p, &cs, &reps, &rep_d, &candidates);
+    CpuClustering {
+        iterations_run,
+        rep_points,
+        centroids: cs,
+        sample_assign,
+        assign,
+        weights,
+        reps,
+    }
+}
+
+/// Alg. 1's state between its iterations (twin of the buffers iterate.wgsl works on).
+struct Alg1<'a> {
+    points: &'a [Point],
+    p: &'a KmParams,
+    cs: Vec<Centroid>,
+    /// Per sampled point: its cluster (u32::MAX: none).
+    sample_assign: Vec<u32>,
+    /// Per cluster: the lowest sampled point an orphan proposed for its re-seeding (u32::MAX: none).
+    proposals: Vec<u32>,
+    /// The highest-index cluster the last update (at first: the initial centroids) left empty; every
+    /// orphan also proposes itself to it.
+    last_empty: Option<usize>,
+}
+
+impl Alg1<'_> {
+    /// Alg. 1 line 5 and lines 6-11 of iteration `it`: the grid over the centroids, then each sampled
+    /// point to its nearest centroid by Eq. (7); an orphan proposes itself for re-seeding. Returns how
+    /// many assignments changed and whether there was an orphan.
+    fn assign_samples(&mut self, it: u32) -> (u32, bool) {
+        let p = self.p;
+        let g = Grid::build(p, &self.cs);
         let mut changed = 0u32;
         let mut orphans = false;
-        for s in 0..s_n {
-            let pt = points[sample_index(p, s) as usize];
+        for s in 0..p.num_sampled {
+            let pt = self.points[sample_index(p, s) as usize];
             let k = if pt.valid {
-                nearest(&g, &cs, &pt, n_t, 1, true)
+                nearest(&g, &self.cs, &pt, p.normal_threshold, 1, true)
                     .first()
                     .map_or(u32::MAX, |b| b.0)
             } else {
                 u32::MAX
             };
-            changed += (k != sample_assign[s as usize]) as u32;
-            sample_assign[s as usize] = k;
+            changed += (k != self.sample_assign[s as usize]) as u32;
+            self.sample_assign[s as usize] = k;
             // An orphan (no centroid passing n_t near it) proposes itself for re-seeding; a
             // cluster keeps the lowest index proposed to it.
             if pt.valid && k == u32::MAX {
                 orphans = true;
                 let t = reseed_target(p, s, it + 1) as usize;
-                proposals[t] = proposals[t].min(s);
-                if let Some(e) = last_empty {
-                    proposals[e] = proposals[e].min(s);
+                self.proposals[t] = self.proposals[t].min(s);
+                if let Some(e) = self.last_empty {
+                    self.proposals[e] = self.proposals[e].min(s);
                 }
             }
         }
-        let mut sums = vec![[0u64; 6]; k];
-        let mut counts = vec![0u32; k];
-        for s in 0..s_n {
-            let kk = sample_assign[s as usize];
+        (changed, orphans)
+    }
+
+    /// Alg. 1 lines 12-16: the fixed-point sums of the members' positions (relative to the bounds)
+    /// and normals per cluster, and the member counts.
+    fn sums(&self) -> (Vec<[u64; 6]>, Vec<u32>) {
+        let p = self.p;
+        let lo = Vec3::from_slice(&p.lo[..3]);
+        let ext = Vec3::from_slice(&p.ext[..3]);
+        let mut sums = vec![[0u64; 6]; p.k as usize];
+        let mut counts = vec![0u32; p.k as usize];
+        for s in 0..p.num_sampled {
+            let kk = self.sample_assign[s as usize];
             if kk == u32::MAX {
                 continue;
             }
-            let pt = points[sample_index(p, s) as usize];
+            let pt = self.points[sample_index(p, s) as usize];
             let rel = ((pt.pos - lo) / ext).clamp(Vec3::ZERO, Vec3::ONE);
             let nq = (pt.nrm + 1.0).clamp(Vec3::ZERO, Vec3::splat(2.0)) * NRM_SCALE;
             for a in 0..3 {
@@ -421,35 +472,31 @@ fn kmeans_from(
             }
             counts[kk as usize] += 1;
         }
-        last_empty = None;
-        for kk in 0..k {
+        (sums, counts)
+    }
+
+    /// Alg. 1 lines 12-18 of iteration `it`: the centroids become their members' mean position and
+    /// normalised mean normal; an empty cluster is re-seeded (`reseed_at`) or left out of the grid.
+    /// Returns how many clusters were re-seeded (each counts as a change).
+    fn update(&mut self, it: u32, orphans: bool) -> u32 {
+        let p = self.p;
+        let lo = Vec3::from_slice(&p.lo[..3]);
+        let ext = Vec3::from_slice(&p.ext[..3]);
+        let (sums, counts) = self.sums();
+        let mut changed = 0u32;
+        self.last_empty = None;
+        for kk in 0..p.k as usize {
             let count = counts[kk];
-            let proposal = std::mem::replace(&mut proposals[kk], u32::MAX);
+            let proposal = std::mem::replace(&mut self.proposals[kk], u32::MAX);
             if count == 0 {
-                // Empty: re-seeded at the orphan proposed to it, or (no orphan this iteration) at
-                // a drawn sampled point of a cluster with two or more, else out of the grid.
-                let seed_at = match proposal {
-                    u32::MAX if orphans => None,
-                    u32::MAX => {
-                        // Only a draw that splits a cluster (not an invalid point, not a cluster's
-                        // only member).
-                        let s = reseed_draw(p, kk as u32, it + 1);
-                        match sample_assign[s as usize] {
-                            u32::MAX => None,
-                            owner if counts[owner as usize] <= 1 => None,
-                            _ => Some(points[sample_index(p, s) as usize]),
-                        }
-                    }
-                    s => Some(points[sample_index(p, s) as usize]),
-                };
-                match seed_at {
+                match self.reseed_at(kk, it, proposal, orphans, &counts) {
                     None => {
-                        cs[kk].valid = false;
-                        last_empty = Some(kk);
+                        self.cs[kk].valid = false;
+                        self.last_empty = Some(kk);
                     }
                     Some(pt) => {
                         changed += 1;
-                        cs[kk] = Centroid {
+                        self.cs[kk] = Centroid {
                             pos: pt.pos,
                             valid: true,
                             nrm: pt.nrm,
@@ -463,25 +510,57 @@ fn kmeans_from(
             let sm = sums[kk];
             let rel = Vec3::new(mean(sm[0]), mean(sm[1]), mean(sm[2])) / POS_SCALE;
             let nrm = Vec3::new(mean(sm[3]), mean(sm[4]), mean(sm[5])) / NRM_SCALE - 1.0;
-            cs[kk].pos = lo + rel * ext;
-            cs[kk].valid = true;
+            let c = &mut self.cs[kk];
+            c.pos = lo + rel * ext;
+            c.valid = true;
             let l = nrm.length();
             if l > 1e-6 {
-                cs[kk].nrm = nrm / l;
+                c.nrm = nrm / l;
             }
         }
-        // Converged: the next iterations would repeat this one (as the GPU stops).
-        if it >= 1 && changed == 0 {
-            break;
+        changed
+    }
+
+    /// Where empty cluster `kk` is re-seeded in iteration `it`: at the orphan proposed to it
+    /// (`proposal`), or (no orphan this iteration) at a drawn sampled point of a cluster with two or
+    /// more members (`counts`); `None`: it stays empty, out of the grid.
+    fn reseed_at(
+        &self,
+        kk: usize,
+        it: u32,
+        proposal: u32,
+        orphans: bool,
+        counts: &[u32],
+    ) -> Option<Point> {
+        let p = self.p;
+        match proposal {
+            u32::MAX if orphans => None,
+            u32::MAX => {
+                // Only a draw that splits a cluster (not an invalid point, not a cluster's only
+                // member).
+                let s = reseed_draw(p, kk as u32, it + 1);
+                match self.sample_assign[s as usize] {
+                    u32::MAX => None,
+                    owner if counts[owner as usize] <= 1 => None,
+                    _ => Some(self.points[sample_index(p, s) as usize]),
+                }
+            }
+            s => Some(self.points[sample_index(p, s) as usize]),
         }
     }
-    let g = Grid::build(p, &cs);
+}
+
+/// Alg. 2: every point to its F nearest centroids with the weights of Eq. (10), after the plane
+/// gate. Returns the M × F assignments and weights.
+fn fuzzy_assign(points: &[Point], p: &KmParams, cs: &[Centroid]) -> (Vec<u32>, Vec<f32>) {
+    let f = p.f as usize;
+    let g = Grid::build(p, cs);
     let m = p.num_points as usize;
     let mut assign = vec![u32::MAX; m * f];
     let mut weights = vec![0f32; m * f];
     for (i, pt) in points.iter().enumerate().take(m) {
         let b = if pt.valid {
-            nearest(&g, &cs, pt, n_t, f, false)
+            nearest(&g, cs, pt, p.normal_threshold, f, false)
         } else {
             Vec::new()
         };
@@ -504,7 +583,19 @@ fn kmeans_from(
             weights[i * f + j] = w[j];
         }
     }
-    // Representatives: the member nearest to its centroid, lowest index on ties.
+    (assign, weights)
+}
+
+/// Representatives: the member (in any of its F slots of `assign`) nearest to its centroid, lowest
+/// index on ties (reps.wgsl). Returns them per cluster (u32::MAX: none) and that nearest distance
+/// (its `f32` bits).
+fn representatives(
+    points: &[Point],
+    p: &KmParams,
+    cs: &[Centroid],
+    assign: &[u32],
+) -> (Vec<u32>, Vec<u32>) {
+    let (k, f, m) = (p.k as usize, p.f as usize, p.num_points as usize);
     let member_dist = |i: usize, kk: u32| (points[i].pos - cs[kk as usize].pos).length().to_bits();
     let mut rep_d = vec![u32::MAX; k];
     for i in 0..m {
@@ -522,9 +613,21 @@ fn kmeans_from(
             }
         }
     }
-    // Representatives as points: a kept one while it is still one of its cluster (its normal agrees
-    // with the centroid's, within twice the nearest member distance of it), else the member.
-    let rep_points = (0..k)
+    (reps, rep_d)
+}
+
+/// Representatives as points: a kept one (`candidates`) while it is still one of its cluster (its
+/// normal agrees with the centroid's, within twice the nearest member distance `rep_d` of it), else
+/// the member `reps` names.
+fn rep_points(
+    points: &[Point],
+    p: &KmParams,
+    cs: &[Centroid],
+    reps: &[u32],
+    rep_d: &[u32],
+    candidates: &[Option<RepPoint>],
+) -> Vec<RepPoint> {
+    (0..p.k as usize)
         .map(|kk| {
             if reps[kk] == u32::MAX {
                 return RepPoint::NONE;
@@ -532,7 +635,9 @@ fn kmeans_from(
             let c = &cs[kk];
             if let Some(r) = candidates[kk].filter(|r| r.valid) {
                 let nearest = f32::from_bits(rep_d[kk]);
-                if r.nrm.dot(c.nrm) > n_t && (r.pos - c.pos).length() <= 2.0 * nearest {
+                if r.nrm.dot(c.nrm) > p.normal_threshold
+                    && (r.pos - c.pos).length() <= 2.0 * nearest
+                {
                     return RepPoint {
                         previous: true,
                         ..r
@@ -547,16 +652,7 @@ fn kmeans_from(
                 previous: false,
             }
         })
-        .collect();
-    CpuClustering {
-        iterations_run,
-        rep_points,
-        centroids: cs,
-        sample_assign,
-        assign,
-        weights,
-        reps,
-    }
+        .collect()
 }
 
 /// Twin of `plane_gate_keeps` in kmeans.wgsl: the centroid lies within the gate's angle of the

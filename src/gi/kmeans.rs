@@ -330,17 +330,111 @@ impl KMeans {
         if let Some(w) = warm {
             p = p.with_warm(w.k, w.view.as_ref());
         }
+        let texture_search = self.texture_search(ctx);
+        let b = Buffers::new(ctx, &p, texture_search);
+        let kernel = self.kernel(ctx, p.f, p.f > 1 && p.plane_gate <= 1.0);
+        let bg = b.bind_group(ctx, kernel, data);
+        // After each grid build the search's textures are refreshed (software adapters only).
+        let copy = |enc: &mut wgpu::CommandEncoder| {
+            copy_to_texture(enc, &b.sorted, &b.sorted_tex, p.k as u64 * 32);
+            copy_to_texture(enc, &b.ranges, &b.ranges_tex, MAX_CELLS * 16);
+        };
+        let after = texture_search.then_some(("grid_scatter", &copy as &RecordCopies));
+        let kk = p.k;
+        let grid = self.grid_steps(kk);
+        // Small steps share a submission: one per iteration, then the final assignment and the
+        // representatives (each bounded by the point count).
+        let r = Run {
+            label,
+            group: &bg,
+            seed: settings.seed,
+        };
+        let mut run = |steps: &[(&str, u32)]| kernel.run_entries(gpu, r, steps, after);
+        let (iterations, warm_kept) =
+            init_centroids(ctx, &p, &b, settings.iterations, warm, &mut run)?;
+        let iterations_run = iterate(ctx, &p, &b.bounds, &grid, iterations, &mut run)?;
+        // Alg. 2 on the last grid, then the representatives.
+        let mut steps = grid.to_vec();
+        steps.extend([("rep_clear", kk), ("final_assign", num_points)]);
+        run(&steps);
+        run(&[("rep_pick", num_points), ("rep_store", kk)]);
+        if settings.weights_to_reps && p.f > 1 {
+            run(&[("rep_weights", num_points)]);
+        }
+        if std::env::var_os("FVPL_PROFILE_STEPS").is_some() {
+            print_grid(ctx, label, &p, &b.grid, iterations_run)?;
+        }
+        Ok(Clustering {
+            iterations_run,
+            warm_kept,
+            params: p,
+            centroids: b.centroids,
+            assign: b.assign,
+            weights: b.weights,
+            reps: b.reps,
+            rep_points: b.rep_points,
+            sample_assign: b.sample_assign,
+        })
+    }
+
+    /// Alg. 1 line 5: the grid's steps (the centroids' bounds come from init_centroids and update).
+    /// Every step's count is of invocations of `WORKGROUP` (the scan's workgroups are 256 wide, one
+    /// each).
+    fn grid_steps(&self, kk: u32) -> [(&'static str, u32); 5] {
+        let groups = self
+            .tuning
+            .scan_groups
+            .map_or_else(|| scan_groups(kk), |g| g.clamp(1, SCAN_BLOCKS as u32));
+        let scan = WORKGROUP * groups;
+        [
+            ("grid_setup", 1),
+            ("grid_count", kk),
+            ("grid_scan_blocks", scan),
+            ("grid_scan_ranges", scan),
+            ("grid_scatter", kk),
+        ]
+    }
+}
+
+/// Runs k-means steps in one submission (`Kernel::run_entries` with the clustering's bind group).
+type RunSteps<'a> = dyn FnMut(&[(&str, u32)]) + 'a;
+
+/// The buffers of one clustering (kmeans.wgsl's bindings) and the textures of its search.
+struct Buffers {
+    params: wgpu::Buffer,
+    centroids: wgpu::Buffer,
+    sums: wgpu::Buffer,
+    bounds: wgpu::Buffer,
+    grid: wgpu::Buffer,
+    cells: wgpu::Buffer,
+    sample_assign: wgpu::Buffer,
+    assign: wgpu::Buffer,
+    weights: wgpu::Buffer,
+    reps: wgpu::Buffer,
+    rep_points: wgpu::Buffer,
+    member_dists: wgpu::Buffer,
+    sorted: wgpu::Buffer,
+    ranges: wgpu::Buffer,
+    sorted_tex: wgpu::Texture,
+    ranges_tex: wgpu::Texture,
+    sorted_view: wgpu::TextureView,
+    ranges_view: wgpu::TextureView,
+}
+
+impl Buffers {
+    /// Allocates them for `p` (`texture_search`: `KMeans::texture_search`).
+    fn new(ctx: &GpuContext, p: &KmParams, texture_search: bool) -> Buffers {
         let k = p.k as u64;
-        let m = num_points as u64;
+        let m = p.num_points as u64;
         let f = p.f as u64;
-        let params = ctx.uniform("kmeans params", &p);
+        let params = ctx.uniform("kmeans params", p);
         let centroids = ctx.storage("centroids", k * 32);
         let sums = ctx.storage("centroid sums", k * WORDS * 4);
         let bounds = ctx.storage_init(
             "centroid bounds",
             &[u32::MAX, u32::MAX, u32::MAX, 0, 0, 0, 0, 0, 0, 0, 0, 0],
         );
-        let grid_buf = ctx.storage("grid", 32);
+        let grid = ctx.storage("grid", 32);
         let cells = ctx.storage("grid cells", (2 * MAX_CELLS + SCAN_BLOCKS) * 4);
         let sample_assign = ctx.storage("sample assign", p.num_sampled as u64 * 4);
         let assign = ctx.storage("assign", m * f * 4);
@@ -355,7 +449,6 @@ impl KMeans {
         let sorted = ctx.storage("sorted centroids", k * 32);
         let ranges = ctx.storage("cell ranges", MAX_CELLS * 16);
         // (Without the texture search the textures are bound but never read: one texel each.)
-        let texture_search = self.texture_search(ctx);
         let texels = |n: u64| if texture_search { n } else { 1 };
         let sorted_tex = data_texture(
             ctx,
@@ -371,123 +464,141 @@ impl KMeans {
         );
         let sorted_view = sorted_tex.create_view(&Default::default());
         let ranges_view = ranges_tex.create_view(&Default::default());
-        let kernel = self.kernel(ctx, p.f, p.f > 1 && p.plane_gate <= 1.0);
-        let bg = kernel.bind_group_with_textures(
-            ctx,
-            &[
-                (1, &params),
-                (2, data),
-                (3, &centroids),
-                (4, &sums),
-                (5, &bounds),
-                (6, &grid_buf),
-                (7, &cells),
-                (8, &member_dists),
-                (9, &sample_assign),
-                (10, &assign),
-                (11, &weights),
-                (12, &reps),
-                (13, &sorted),
-                (14, &ranges),
-                (17, &rep_points),
-            ],
-            &[(15, &sorted_view), (16, &ranges_view)],
-        );
-        // After each grid build the search's textures are refreshed (software adapters only).
-        let copy = |enc: &mut wgpu::CommandEncoder| {
-            copy_to_texture(enc, &sorted, &sorted_tex, k * 32);
-            copy_to_texture(enc, &ranges, &ranges_tex, MAX_CELLS * 16);
-        };
-        let after = texture_search.then_some(("grid_scatter", &copy as &RecordCopies));
-        let seed = settings.seed;
-        let kk = p.k;
-        // The grid's steps (the centroids' bounds come from init_centroids and update). Every step's
-        // count is of invocations of `WORKGROUP` (the scan's workgroups are 256 wide, one each).
-        let groups = self
-            .tuning
-            .scan_groups
-            .map_or_else(|| scan_groups(kk), |g| g.clamp(1, SCAN_BLOCKS as u32));
-        let scan = WORKGROUP * groups;
-        let grid = [
-            ("grid_setup", 1),
-            ("grid_count", kk),
-            ("grid_scan_blocks", scan),
-            ("grid_scan_ranges", scan),
-            ("grid_scatter", kk),
-        ];
-        // Small steps share a submission: one per iteration, then the final assignment and the
-        // representatives (each bounded by the point count).
-        let r = Run {
-            label,
-            group: &bg,
-            seed,
-        };
-        let mut run = |steps: &[(&str, u32)]| kernel.run_entries(gpu, r, steps, after);
-        let (mut iterations, mut warm_kept) = (settings.iterations, None);
-        match warm {
-            Some(w) => {
-                let n = p.warm.size[2] as u64 * 32;
-                if n > 0 {
-                    let mut enc = ctx.device.create_command_encoder(&Default::default());
-                    enc.copy_buffer_to_buffer(w.centroids, 0, &centroids, 0, n);
-                    enc.copy_buffer_to_buffer(w.rep_points, 0, &rep_points, 0, n);
-                    ctx.queue.submit([enc.finish()]);
-                }
-                run(&[("warm_centroids", kk), ("init_sampled", p.num_sampled)]);
-                let kept = ctx.read_buffer::<u32>(&bounds, 12)?[11];
-                iterations = warm_iterations(iterations, kept, kk);
-                warm_kept = Some(kept);
-            }
-            None => run(&[("init_centroids", kk), ("init_sampled", p.num_sampled)]),
-        }
-        let mut iterations_run = 0;
-        for i in 0..iterations {
-            let mut steps = grid.to_vec();
-            steps.extend([("assign_sampled", p.num_sampled), ("update", kk)]);
-            run(&steps);
-            iterations_run += 1;
-            // Alg. 1 ends early once an iteration changed no assignment and re-seeded no cluster:
-            // from then on the centroids stay as they are. (Not after the first: its "previous"
-            // assignment was never used.)
-            if i >= 1 {
-                let b: Vec<u32> = ctx.read_buffer(&bounds, 8)?;
-                if b[6] == 0 {
-                    break;
-                }
-            }
-        }
-        let mut steps = grid.to_vec();
-        steps.extend([("rep_clear", kk), ("final_assign", num_points)]);
-        run(&steps);
-        run(&[("rep_pick", num_points), ("rep_store", kk)]);
-        if settings.weights_to_reps && p.f > 1 {
-            run(&[("rep_weights", num_points)]);
-        }
-        if std::env::var_os("FVPL_PROFILE_STEPS").is_some() {
-            // Diagnosis: the last grid (origin xyz, cell, dims xyz, cells) and the centroids per cell.
-            let g: Vec<u32> = ctx.read_buffer(&grid_buf, 8)?;
-            let cell = f32::from_bits(g[3]);
-            let cells = g[7].max(1);
-            eprintln!(
-                "{label}: {iterations_run} iteration(s), K {}, grid {}x{}x{} = {} cells of {cell:.4}, {:.1} centroids a cell",
-                p.k,
-                g[4],
-                g[5],
-                g[6],
-                g[7],
-                p.k as f32 / cells as f32
-            );
-        }
-        Ok(Clustering {
-            iterations_run,
-            warm_kept,
-            params: p,
+        Buffers {
+            params,
             centroids,
+            sums,
+            bounds,
+            grid,
+            cells,
+            sample_assign,
             assign,
             weights,
             reps,
             rep_points,
-            sample_assign,
-        })
+            member_dists,
+            sorted,
+            ranges,
+            sorted_tex,
+            ranges_tex,
+            sorted_view,
+            ranges_view,
+        }
     }
+
+    /// Their bind group for `kernel`, with the points' `data`.
+    fn bind_group(
+        &self,
+        ctx: &GpuContext,
+        kernel: &Kernel,
+        data: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
+        kernel.bind_group_with_textures(
+            ctx,
+            &[
+                (1, &self.params),
+                (2, data),
+                (3, &self.centroids),
+                (4, &self.sums),
+                (5, &self.bounds),
+                (6, &self.grid),
+                (7, &self.cells),
+                (8, &self.member_dists),
+                (9, &self.sample_assign),
+                (10, &self.assign),
+                (11, &self.weights),
+                (12, &self.reps),
+                (13, &self.sorted),
+                (14, &self.ranges),
+                (17, &self.rep_points),
+            ],
+            &[(15, &self.sorted_view), (16, &self.ranges_view)],
+        )
+    }
+}
+
+/// Alg. 1 line 2: the initial centroids, from `warm`'s (copied in with its representatives) where
+/// the view still sees them (`warm_centroids`), else from strata (`init_centroids`); then the sampled
+/// points. Returns the iterations to run (`warm_iterations` after a warm start) and the centroids a
+/// warm start kept.
+fn init_centroids(
+    ctx: &GpuContext,
+    p: &KmParams,
+    b: &Buffers,
+    iterations: u32,
+    warm: Option<&Warm>,
+    run: &mut RunSteps,
+) -> Result<(u32, Option<u32>)> {
+    let kk = p.k;
+    match warm {
+        Some(w) => {
+            let n = p.warm.size[2] as u64 * 32;
+            if n > 0 {
+                let mut enc = ctx.device.create_command_encoder(&Default::default());
+                enc.copy_buffer_to_buffer(w.centroids, 0, &b.centroids, 0, n);
+                enc.copy_buffer_to_buffer(w.rep_points, 0, &b.rep_points, 0, n);
+                ctx.queue.submit([enc.finish()]);
+            }
+            run(&[("warm_centroids", kk), ("init_sampled", p.num_sampled)]);
+            let kept = ctx.read_buffer::<u32>(&b.bounds, 12)?[11];
+            Ok((warm_iterations(iterations, kept, kk), Some(kept)))
+        }
+        None => {
+            run(&[("init_centroids", kk), ("init_sampled", p.num_sampled)]);
+            Ok((iterations, None))
+        }
+    }
+}
+
+/// Alg. 1 lines 5-18, up to `iterations` times: the grid (`grid`), the sampled points' assignment
+/// and the centroids' update, one submission an iteration. Returns the iterations run.
+fn iterate(
+    ctx: &GpuContext,
+    p: &KmParams,
+    bounds: &wgpu::Buffer,
+    grid: &[(&str, u32)],
+    iterations: u32,
+    run: &mut RunSteps,
+) -> Result<u32> {
+    let mut iterations_run = 0;
+    for i in 0..iterations {
+        let mut steps = grid.to_vec();
+        steps.extend([("assign_sampled", p.num_sampled), ("update", p.k)]);
+        run(&steps);
+        iterations_run += 1;
+        // Alg. 1 ends early once an iteration changed no assignment and re-seeded no cluster:
+        // from then on the centroids stay as they are. (Not after the first: its "previous"
+        // assignment was never used.)
+        if i >= 1 {
+            let b: Vec<u32> = ctx.read_buffer(bounds, 8)?;
+            if b[6] == 0 {
+                break;
+            }
+        }
+    }
+    Ok(iterations_run)
+}
+
+/// Diagnosis (`FVPL_PROFILE_STEPS`): the last grid (origin xyz, cell, dims xyz, cells) and the
+/// centroids per cell.
+fn print_grid(
+    ctx: &GpuContext,
+    label: &str,
+    p: &KmParams,
+    grid: &wgpu::Buffer,
+    iterations_run: u32,
+) -> Result<()> {
+    let g: Vec<u32> = ctx.read_buffer(grid, 8)?;
+    let cell = f32::from_bits(g[3]);
+    let cells = g[7].max(1);
+    eprintln!(
+        "{label}: {iterations_run} iteration(s), K {}, grid {}x{}x{} = {} cells of {cell:.4}, {:.1} centroids a cell",
+        p.k,
+        g[4],
+        g[5],
+        g[6],
+        g[7],
+        p.k as f32 / cells as f32
+    );
+    Ok(())
 }

@@ -289,76 +289,13 @@ impl SceneGpu {
     pub fn upload(ctx: &GpuContext, scene: &Scene, bvh: &SceneBvh) -> SceneGpu {
         let nodes = bvh.gpu_nodes();
         let tris = bvh.gpu_triangles();
-        let shade: Vec<GpuTriShade> = bvh
-            .slot_to_triangle
-            .iter()
-            .map(|&i| {
-                let t = &scene.triangles[i as usize];
-                let n = t.n;
-                let uv = t.uv;
-                GpuTriShade {
-                    n0: [n[0].x, n[0].y, n[0].z, uv[0].x],
-                    n1: [n[1].x, n[1].y, n[1].z, uv[0].y],
-                    n2: [n[2].x, n[2].y, n[2].z, uv[1].x],
-                    extra: [uv[1].y, uv[2].x, uv[2].y, f32::from_bits(t.material)],
-                }
-            })
-            .collect();
-        let materials: Vec<GpuMaterial> = scene
-            .materials
-            .iter()
-            .map(|m| GpuMaterial {
-                base_color: m.base_color.into(),
-                emissive: m.emissive.extend(m.alpha_cutoff.unwrap_or(0.0)).into(),
-                tex: [
-                    m.base_color_texture.map_or(-1, |t| t as i32),
-                    m.emissive_texture.map_or(-1, |t| t as i32),
-                    0,
-                    0,
-                ],
-            })
-            .collect();
-        let mut tex_info = Vec::new();
-        let mut texels: Vec<u32> = Vec::new();
-        for t in &scene.textures {
-            tex_info.push(GpuTexInfo {
-                offset: texels.len() as u32,
-                width: t.width,
-                height: t.height,
-                _pad: 0,
-            });
-            texels.extend(t.rgba8.iter().map(|c| u32::from_le_bytes(*c)));
-        }
+        let shade = shading_data(scene, bvh);
+        let materials = gpu_materials(scene);
+        let (tex_info, texels) = gpu_textures(scene);
         let has_vertex_colors = scene.uses_vertex_colors();
-        let colors: Vec<[f32; 4]> = if has_vertex_colors {
-            bvh.slot_to_triangle
-                .iter()
-                .flat_map(|&i| scene.triangles[i as usize].color.map(Into::into))
-                .collect()
-        } else {
-            vec![[1.0; 4]]
-        };
+        let colors = vertex_colors(scene, bvh, has_vertex_colors);
         let (emitters, emit_power) = emitter_table(scene, bvh);
-        let lights: Vec<GpuLight> = scene
-            .lights
-            .iter()
-            .map(|l| {
-                let (kind, co, ci) = match l.kind {
-                    LightKind::Point => (0.0, -1.0, 1.0),
-                    LightKind::Spot {
-                        inner_cone,
-                        outer_cone,
-                    } => (1.0, outer_cone.cos(), inner_cone.cos()),
-                    LightKind::Directional => (2.0, -1.0, 1.0),
-                };
-                let c = l.color * l.intensity;
-                GpuLight {
-                    pos_kind: [l.position.x, l.position.y, l.position.z, kind],
-                    dir_cos_outer: [l.direction.x, l.direction.y, l.direction.z, co],
-                    color_cos_inner: [c.x, c.y, c.z, ci],
-                }
-            })
-            .collect();
+        let lights = gpu_lights(scene);
         let extent = scene.extent();
         let info = SceneInfo {
             num_tris: tris.len() as u32,
@@ -370,21 +307,7 @@ impl SceneGpu {
             extent,
             _pad: 0,
         };
-        let entries: Vec<wgpu::BindGroupLayoutEntry> = [
-            uniform_layout(0),
-            data_texture_layout(1, wgpu::TextureSampleType::Uint),
-            data_texture_layout(3, wgpu::TextureSampleType::Float { filterable: false }),
-            data_texture_layout(9, wgpu::TextureSampleType::Float { filterable: false }),
-        ]
-        .into_iter()
-        .chain((4..=8).chain([10]).map(storage_entry))
-        .collect();
-        let layout = ctx
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("scene"),
-                entries: &entries,
-            });
+        let layout = scene_layout(ctx);
         let buffers = [
             (0, ctx.uniform("scene info", &info)),
             (4, ctx.storage_init("materials", &materials)),
@@ -396,7 +319,7 @@ impl SceneGpu {
         ];
         // Nodes, triangles and their shading data are texels (see shaders-wgsl/common/bvh.wgsl and
         // scene.wgsl): not limited by one storage binding.
-        let texel_views = [
+        let texel_arrays = [
             (
                 1,
                 wgpu::TextureFormat::Rgba32Uint,
@@ -412,27 +335,8 @@ impl SceneGpu {
                 wgpu::TextureFormat::Rgba32Float,
                 bytemuck::cast_slice(&shade),
             ),
-        ]
-        .map(|(binding, format, bytes)| {
-            let tex = texture_init(ctx, "bvh texels", format, bytes);
-            (binding, tex.create_view(&Default::default()))
-        });
-        let bind_entries: Vec<wgpu::BindGroupEntry> = buffers
-            .iter()
-            .map(|(binding, b)| wgpu::BindGroupEntry {
-                binding: *binding,
-                resource: b.as_entire_binding(),
-            })
-            .chain(texel_views.iter().map(|(binding, v)| wgpu::BindGroupEntry {
-                binding: *binding,
-                resource: wgpu::BindingResource::TextureView(v),
-            }))
-            .collect();
-        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("scene"),
-            layout: &layout,
-            entries: &bind_entries,
-        });
+        ];
+        let bind_group = scene_bind_group(ctx, &layout, &buffers, texel_arrays);
         SceneGpu {
             layout,
             bind_group,
@@ -456,6 +360,145 @@ impl SceneGpu {
             ("HAS_VERTEX_COLORS", self.has_vertex_colors as u32 as f64),
         ]
     }
+}
+
+/// Per BVH slot: the triangle's vertex normals, UVs and material (the texels of binding 3).
+fn shading_data(scene: &Scene, bvh: &SceneBvh) -> Vec<GpuTriShade> {
+    bvh.slot_to_triangle
+        .iter()
+        .map(|&i| {
+            let t = &scene.triangles[i as usize];
+            let n = t.n;
+            let uv = t.uv;
+            GpuTriShade {
+                n0: [n[0].x, n[0].y, n[0].z, uv[0].x],
+                n1: [n[1].x, n[1].y, n[1].z, uv[0].y],
+                n2: [n[2].x, n[2].y, n[2].z, uv[1].x],
+                extra: [uv[1].y, uv[2].x, uv[2].y, f32::from_bits(t.material)],
+            }
+        })
+        .collect()
+}
+
+/// The materials (binding 4): base colour, emission with the alpha cutoff, texture indices (-1: none).
+fn gpu_materials(scene: &Scene) -> Vec<GpuMaterial> {
+    scene
+        .materials
+        .iter()
+        .map(|m| GpuMaterial {
+            base_color: m.base_color.into(),
+            emissive: m.emissive.extend(m.alpha_cutoff.unwrap_or(0.0)).into(),
+            tex: [
+                m.base_color_texture.map_or(-1, |t| t as i32),
+                m.emissive_texture.map_or(-1, |t| t as i32),
+                0,
+                0,
+            ],
+        })
+        .collect()
+}
+
+/// The textures: where each starts in the texel array and its size (binding 5), and their RGBA8
+/// texels one after another (binding 6).
+fn gpu_textures(scene: &Scene) -> (Vec<GpuTexInfo>, Vec<u32>) {
+    let mut tex_info = Vec::new();
+    let mut texels: Vec<u32> = Vec::new();
+    for t in &scene.textures {
+        tex_info.push(GpuTexInfo {
+            offset: texels.len() as u32,
+            width: t.width,
+            height: t.height,
+            _pad: 0,
+        });
+        texels.extend(t.rgba8.iter().map(|c| u32::from_le_bytes(*c)));
+    }
+    (tex_info, texels)
+}
+
+/// Per BVH slot the three vertex colours (binding 10); one white entry when the scene uses none
+/// (`has_vertex_colors`).
+fn vertex_colors(scene: &Scene, bvh: &SceneBvh, has_vertex_colors: bool) -> Vec<[f32; 4]> {
+    if has_vertex_colors {
+        bvh.slot_to_triangle
+            .iter()
+            .flat_map(|&i| scene.triangles[i as usize].color.map(Into::into))
+            .collect()
+    } else {
+        vec![[1.0; 4]]
+    }
+}
+
+/// The punctual lights (binding 8): position and kind (0 point, 1 spot, 2 directional), direction
+/// and the cosine of the outer cone, colour × intensity and the cosine of the inner cone.
+fn gpu_lights(scene: &Scene) -> Vec<GpuLight> {
+    scene
+        .lights
+        .iter()
+        .map(|l| {
+            let (kind, co, ci) = match l.kind {
+                LightKind::Point => (0.0, -1.0, 1.0),
+                LightKind::Spot {
+                    inner_cone,
+                    outer_cone,
+                } => (1.0, outer_cone.cos(), inner_cone.cos()),
+                LightKind::Directional => (2.0, -1.0, 1.0),
+            };
+            let c = l.color * l.intensity;
+            GpuLight {
+                pos_kind: [l.position.x, l.position.y, l.position.z, kind],
+                dir_cos_outer: [l.direction.x, l.direction.y, l.direction.z, co],
+                color_cos_inner: [c.x, c.y, c.z, ci],
+            }
+        })
+        .collect()
+}
+
+/// The layout of bind group 0 (`shaders-wgsl/common/scene.wgsl`).
+fn scene_layout(ctx: &GpuContext) -> wgpu::BindGroupLayout {
+    let entries: Vec<wgpu::BindGroupLayoutEntry> = [
+        uniform_layout(0),
+        data_texture_layout(1, wgpu::TextureSampleType::Uint),
+        data_texture_layout(3, wgpu::TextureSampleType::Float { filterable: false }),
+        data_texture_layout(9, wgpu::TextureSampleType::Float { filterable: false }),
+    ]
+    .into_iter()
+    .chain((4..=8).chain([10]).map(storage_entry))
+    .collect();
+    ctx.device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("scene"),
+            entries: &entries,
+        })
+}
+
+/// Bind group 0: the uploaded `buffers` and, uploaded here as data textures, the `texel_arrays`
+/// (binding, format, bytes).
+fn scene_bind_group(
+    ctx: &GpuContext,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[(u32, wgpu::Buffer)],
+    texel_arrays: [(u32, wgpu::TextureFormat, &[u8]); 3],
+) -> wgpu::BindGroup {
+    let texel_views = texel_arrays.map(|(binding, format, bytes)| {
+        let tex = texture_init(ctx, "bvh texels", format, bytes);
+        (binding, tex.create_view(&Default::default()))
+    });
+    let bind_entries: Vec<wgpu::BindGroupEntry> = buffers
+        .iter()
+        .map(|(binding, b)| wgpu::BindGroupEntry {
+            binding: *binding,
+            resource: b.as_entire_binding(),
+        })
+        .chain(texel_views.iter().map(|(binding, v)| wgpu::BindGroupEntry {
+            binding: *binding,
+            resource: wgpu::BindingResource::TextureView(v),
+        }))
+        .collect();
+    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("scene"),
+        layout,
+        entries: &bind_entries,
+    })
 }
 
 #[cfg(test)]

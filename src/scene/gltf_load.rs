@@ -19,10 +19,11 @@ mod nodes;
 pub mod read;
 mod uri;
 
-use super::{LoadOptions, LoadReport, Scene, SceneError};
+use super::{Camera, LoadOptions, LoadReport, PunctualLight, Scene, SceneError, Triangle};
 use crate::panic_guard::one_line;
 use geometry::{FarNode, Primitive};
 use glam::Vec3;
+use materials::MaterialTable;
 use std::collections::HashMap;
 use std::collections::hash_map::Entry;
 use std::path::Path;
@@ -162,20 +163,7 @@ fn load_bytes(
     glb_name: bool,
     opts: &LoadOptions,
 ) -> Result<Scene, String> {
-    let (json, blob) = if bytes.starts_with(b"glTF") {
-        container::parse_glb(bytes)?
-    } else if glb_name {
-        let magic: String = bytes
-            .iter()
-            .take(4)
-            .map(|&b| if b.is_ascii_graphic() { b as char } else { '?' })
-            .collect();
-        return Err(format!(
-            "not a binary glTF file: magic is \"{magic}\", expected \"glTF\""
-        ));
-    } else {
-        (std::borrow::Cow::Borrowed(bytes), None)
-    };
+    let (json, blob) = split_container(bytes, glb_name)?;
     let (doc, (ignored, allowed)) = container::parse_document(&json, opts)?;
     let buffers = container::load_buffers(&doc, base, blob.as_deref())?;
 
@@ -183,6 +171,52 @@ fn load_bytes(
         extensions_used: doc.extensions_used().map(str::to_string).collect(),
         ..LoadReport::default()
     };
+    warn_ignored_extensions(&ignored, &allowed, &mut report);
+    let (mut table, textures) = materials::load_materials(&doc, &buffers, base, &mut report)?;
+    let Instances {
+        mut triangles,
+        lights,
+        cameras,
+        far_nodes,
+    } = instance_nodes(&doc, &buffers, &mut table, &mut report)?;
+    drop_degenerate(&mut triangles, &mut report);
+    fill_normals(&mut triangles, &mut report);
+    check_renderable(&triangles, &far_nodes, &mut report)?;
+
+    Ok(Scene {
+        name: String::new(),
+        path: None,
+        triangles,
+        materials: table.materials,
+        textures,
+        lights,
+        cameras,
+        report,
+    })
+}
+
+/// The JSON and the optional BIN chunk: a GLB's (by its magic), else the whole file as JSON, unless
+/// the file is named `.glb` (`glb_name`): then a wrong magic is an error.
+fn split_container(bytes: &[u8], glb_name: bool) -> Result<container::GlbChunks<'_>, String> {
+    if bytes.starts_with(b"glTF") {
+        container::parse_glb(bytes)
+    } else if glb_name {
+        let magic: String = bytes
+            .iter()
+            .take(4)
+            .map(|&b| if b.is_ascii_graphic() { b as char } else { '?' })
+            .collect();
+        Err(format!(
+            "not a binary glTF file: magic is \"{magic}\", expected \"glTF\""
+        ))
+    } else {
+        Ok((std::borrow::Cow::Borrowed(bytes), None))
+    }
+}
+
+/// Warnings for the required extensions the load ignores: `ignored`, those that change only what a
+/// diffuse renderer does not model, and `allowed`, those `--allow-extension` lets through.
+fn warn_ignored_extensions(ignored: &[String], allowed: &[String], report: &mut LoadReport) {
     if !ignored.is_empty() {
         report.warnings.push(format!(
             "required extension{} {} ignored: {} only what fuzzy-vpl does not model (it renders the base colour as a diffuse surface)",
@@ -199,8 +233,25 @@ fn load_bytes(
             if allowed.len() > 1 { "them" } else { "it" },
         ));
     }
-    let (mut table, textures) = materials::load_materials(&doc, &buffers, base, &mut report)?;
+}
 
+/// What the default scene's nodes place in the world.
+struct Instances {
+    triangles: Vec<Triangle>,
+    lights: Vec<PunctualLight>,
+    cameras: Vec<Camera>,
+    /// Mesh instances too far from the origin for f32 to resolve their shape.
+    far_nodes: Vec<FarNode>,
+}
+
+/// Walks the default scene's nodes in world space: each mesh primitive decoded once and emitted
+/// per instance, the lights and the cameras.
+fn instance_nodes(
+    doc: &gltf::Document,
+    buffers: &[Vec<u8>],
+    table: &mut MaterialTable,
+    report: &mut LoadReport,
+) -> Result<Instances, String> {
     let mut primitives: HashMap<(usize, usize), Primitive> = HashMap::new();
     let mut triangles = Vec::new();
     let mut lights = Vec::new();
@@ -208,7 +259,7 @@ fn load_bytes(
     let mut warned_skin = false;
     let mut far_nodes: Vec<FarNode> = Vec::new();
     let nodes: Vec<gltf::Node> = doc.nodes().collect();
-    for (i, world) in nodes::flatten_nodes(&doc)? {
+    for (i, world) in nodes::flatten_nodes(doc)? {
         let node = &nodes[i];
         if let Some(w) = nodes::zero_rotation_warning(node) {
             report.warnings.push(w);
@@ -225,11 +276,7 @@ fn load_bytes(
                 let decoded = match primitives.entry((mesh.index(), prim.index())) {
                     Entry::Occupied(e) => e.into_mut(),
                     Entry::Vacant(e) => e.insert(geometry::decode_primitive(
-                        &prim,
-                        &mesh,
-                        &buffers,
-                        &mut table,
-                        &mut report,
+                        &prim, &mesh, buffers, table, report,
                     )?),
                 };
                 geometry::emit(decoded, &world, i, &table.uv_transform, &mut triangles)?;
@@ -239,19 +286,27 @@ fn load_bytes(
             }
         }
         if let Some(light) = node.light()
-            && let Some(l) = nodes::light_from_node(&light, &world, &mut report)
+            && let Some(l) = nodes::light_from_node(&light, &world, report)
         {
             lights.push(l);
         }
-        if let Some(c) = nodes::camera_from_node(&doc, node, &world, &mut report) {
+        if let Some(c) = nodes::camera_from_node(doc, node, &world, report) {
             cameras.push(c);
         }
     }
+    Ok(Instances {
+        triangles,
+        lights,
+        cameras,
+        far_nodes,
+    })
+}
 
-    // Drop degenerate triangles (scale-free tolerance), then fill in missing normals.
+/// Drops degenerate triangles (scale-free tolerance: relative to the scene's extent).
+fn drop_degenerate(triangles: &mut Vec<Triangle>, report: &mut LoadReport) {
     let mut lo = Vec3::splat(f32::INFINITY);
     let mut hi = Vec3::splat(f32::NEG_INFINITY);
-    for t in &triangles {
+    for t in triangles.iter() {
         for p in t.p {
             lo = lo.min(p);
             hi = hi.max(p);
@@ -265,7 +320,11 @@ fn load_bytes(
     let before = triangles.len();
     triangles.retain(|t| !geometry::is_degenerate(t, extent_sq));
     report.dropped_degenerate = before - triangles.len();
-    for t in &mut triangles {
+}
+
+/// Fills in missing (zero) vertex normals with the face normal.
+fn fill_normals(triangles: &mut [Triangle], report: &mut LoadReport) {
+    for t in triangles {
         if t.n.contains(&Vec3::ZERO) {
             // In f64: at 1e-20 units the f32 cross product of the edges underflows to zero.
             let p = t.p.map(|v| v.as_dvec3());
@@ -281,7 +340,14 @@ fn load_bytes(
             report.generated_normals += 1;
         }
     }
+}
 
+/// An error when no triangle is left to render; else a warning per instance too far for f32.
+fn check_renderable(
+    triangles: &[Triangle],
+    far_nodes: &[FarNode],
+    report: &mut LoadReport,
+) -> Result<(), String> {
     if triangles.is_empty()
         && let Some(f) = far_nodes.first()
     {
@@ -297,23 +363,13 @@ fn load_bytes(
             report.skipped_primitives, report.dropped_degenerate
         ));
     }
-    for f in &far_nodes {
+    for f in far_nodes {
         report.warnings.push(format!(
             "{}: its shape is quantised to that spacing",
             f.describe()
         ));
     }
-
-    Ok(Scene {
-        name: String::new(),
-        path: None,
-        triangles,
-        materials: table.materials,
-        textures,
-        lights,
-        cameras,
-        report,
-    })
+    Ok(())
 }
 
 #[cfg(test)]

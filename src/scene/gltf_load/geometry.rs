@@ -22,6 +22,8 @@ pub(super) enum Primitive {
     Skipped,
 }
 
+/// Decodes primitive `prim` of `mesh` once: its vertex attributes, its indices as triangles, and its
+/// material (`table`); points and lines are `Skipped`. Warnings go to `report`.
 pub(super) fn decode_primitive(
     prim: &gltf::Primitive,
     mesh: &gltf::Mesh,
@@ -48,6 +50,54 @@ pub(super) fn decode_primitive(
         return Ok(Primitive::Skipped);
     }
 
+    let positions = read_positions(prim, buffers, &label)?;
+    let n = positions.len();
+    let normals = prim.get(&gltf::Semantic::Normals).and_then(|acc| {
+        let v = accessor::read_floats::<3>(&acc, buffers, &format!("{label} NORMAL"));
+        let v = v.map(|v| v.into_iter().map(Vec3::from).collect());
+        per_vertex(v, &NORMAL, &label, n, report)
+    });
+    let uvs = prim.get(&gltf::Semantic::TexCoords(0)).and_then(|acc| {
+        let v = accessor::read_floats::<2>(&acc, buffers, &format!("{label} TEXCOORD_0"));
+        let v = v.map(|v| v.into_iter().map(Vec2::from).collect());
+        per_vertex(v, &TEXCOORD_0, &label, n, report)
+    });
+    let colors = prim.get(&gltf::Semantic::Colors(0)).and_then(|acc| {
+        let v = read_colors(&acc, buffers, &format!("{label} COLOR_0"));
+        let v = per_vertex(v, &COLOR_0, &label, n, report)?;
+        Some(clamp_colors(v, &label, report))
+    });
+
+    let indices: Vec<u32> = match prim.indices() {
+        Some(acc) => {
+            let idx = accessor::read_indices(&acc, buffers, &format!("{label} indices"))?;
+            if let Some(&bad) = idx.iter().find(|&&i| i as usize >= n) {
+                return Err(format!(
+                    "{label}: index {bad} out of range (the primitive has {n} vertices)"
+                ));
+            }
+            idx
+        }
+        None => (0..n as u32).collect(),
+    };
+    let tris = triangles(mode, &indices, &label, report);
+
+    Ok(Primitive::Triangles {
+        positions,
+        normals,
+        uvs,
+        colors,
+        tris,
+        material: table.index_for(prim.material().index()),
+    })
+}
+
+/// POSITION, required: an error when it is missing or has a non-finite value.
+fn read_positions(
+    prim: &gltf::Primitive,
+    buffers: &[Vec<u8>],
+    label: &str,
+) -> Result<Vec<Vec3>, String> {
     let pos_acc = prim
         .get(&gltf::Semantic::Positions)
         .ok_or_else(|| format!("{label} has no POSITION attribute"))?;
@@ -62,92 +112,83 @@ pub(super) fn decode_primitive(
             positions[v]
         ));
     }
-    let n = positions.len();
+    Ok(positions)
+}
 
-    let normals = match prim.get(&gltf::Semantic::Normals) {
-        None => None,
-        Some(acc) => match accessor::read_floats::<3>(&acc, buffers, &format!("{label} NORMAL")) {
-            Ok(v) if v.len() == n => Some(v.into_iter().map(Vec3::from).collect()),
-            Ok(v) => {
-                report.warnings.push(format!(
-                    "{label}: NORMAL has {} entries for {n} vertices, normals generated",
-                    v.len()
-                ));
-                None
-            }
-            Err(e) => {
-                report.warnings.push(format!("{e}; normals generated"));
-                None
-            }
-        },
-    };
-    let uvs = match prim.get(&gltf::Semantic::TexCoords(0)) {
-        None => None,
-        Some(acc) => {
-            match accessor::read_floats::<2>(&acc, buffers, &format!("{label} TEXCOORD_0")) {
-                Ok(v) if v.len() == n => Some(v.into_iter().map(Vec2::from).collect()),
-                Ok(v) => {
-                    report.warnings.push(format!(
-                        "{label}: TEXCOORD_0 has {} entries for {n} vertices, ignored",
-                        v.len()
-                    ));
-                    None
-                }
-                Err(e) => {
-                    report
-                        .warnings
-                        .push(format!("{e}; texture coordinates ignored"));
-                    None
-                }
-            }
+/// An optional vertex attribute: its name and what the load does without it (in the warning after a
+/// wrong entry count, and after an accessor it cannot read).
+struct Optional {
+    name: &'static str,
+    wrong_count: &'static str,
+    unreadable: &'static str,
+}
+
+const NORMAL: Optional = Optional {
+    name: "NORMAL",
+    wrong_count: "normals generated",
+    unreadable: "normals generated",
+};
+const TEXCOORD_0: Optional = Optional {
+    name: "TEXCOORD_0",
+    wrong_count: "ignored",
+    unreadable: "texture coordinates ignored",
+};
+const COLOR_0: Optional = Optional {
+    name: "COLOR_0",
+    wrong_count: "ignored",
+    unreadable: "vertex colours ignored",
+};
+
+/// `read`'s values of optional attribute `attr` when there is one per vertex (`n`), else a warning
+/// and `None`.
+fn per_vertex<T>(
+    read: Result<Vec<T>, String>,
+    attr: &Optional,
+    label: &str,
+    n: usize,
+    report: &mut LoadReport,
+) -> Option<Vec<T>> {
+    match read {
+        Ok(v) if v.len() == n => Some(v),
+        Ok(v) => {
+            report.warnings.push(format!(
+                "{label}: {} has {} entries for {n} vertices, {}",
+                attr.name,
+                v.len(),
+                attr.wrong_count
+            ));
+            None
         }
-    };
-
-    let colors = match prim.get(&gltf::Semantic::Colors(0)) {
-        None => None,
-        Some(acc) => match read_colors(&acc, buffers, &format!("{label} COLOR_0")) {
-            Ok(v) if v.len() == n => {
-                if v.iter().any(|c| {
-                    !c.is_finite() || c.cmplt(Vec4::ZERO).any() || c.cmpgt(Vec4::ONE).any()
-                }) {
-                    report.warnings.push(format!(
-                        "{label}: COLOR_0 has values outside [0, 1], clamped"
-                    ));
-                }
-                Some(
-                    v.into_iter()
-                        .map(|c| finite_or(c, Vec4::ONE).clamp(Vec4::ZERO, Vec4::ONE))
-                        .collect(),
-                )
-            }
-            Ok(v) => {
-                report.warnings.push(format!(
-                    "{label}: COLOR_0 has {} entries for {n} vertices, ignored",
-                    v.len()
-                ));
-                None
-            }
-            Err(e) => {
-                report.warnings.push(format!("{e}; vertex colours ignored"));
-                None
-            }
-        },
-    };
-
-    let indices: Vec<u32> = match prim.indices() {
-        Some(acc) => {
-            let idx = accessor::read_indices(&acc, buffers, &format!("{label} indices"))?;
-            if let Some(&bad) = idx.iter().find(|&&i| i as usize >= n) {
-                return Err(format!(
-                    "{label}: index {bad} out of range (the primitive has {n} vertices)"
-                ));
-            }
-            idx
+        Err(e) => {
+            report.warnings.push(format!("{e}; {}", attr.unreadable));
+            None
         }
-        None => (0..n as u32).collect(),
-    };
+    }
+}
 
-    let tris: Vec<[u32; 3]> = match mode {
+/// COLOR_0 clamped to [0, 1] (a non-finite value becomes 1), with a warning when any was outside.
+fn clamp_colors(v: Vec<Vec4>, label: &str, report: &mut LoadReport) -> Vec<Vec4> {
+    if v.iter()
+        .any(|c| !c.is_finite() || c.cmplt(Vec4::ZERO).any() || c.cmpgt(Vec4::ONE).any())
+    {
+        report.warnings.push(format!(
+            "{label}: COLOR_0 has values outside [0, 1], clamped"
+        ));
+    }
+    v.into_iter()
+        .map(|c| finite_or(c, Vec4::ONE).clamp(Vec4::ZERO, Vec4::ONE))
+        .collect()
+}
+
+/// The vertex index triples of `indices` drawn in `mode` (a triangle mode), in glTF winding order.
+fn triangles(
+    mode: gltf::mesh::Mode,
+    indices: &[u32],
+    label: &str,
+    report: &mut LoadReport,
+) -> Vec<[u32; 3]> {
+    use gltf::mesh::Mode;
+    match mode {
         Mode::Triangles => {
             if !indices.len().is_multiple_of(3) {
                 report.warnings.push(format!(
@@ -172,16 +213,7 @@ pub(super) fn decode_primitive(
         _ => (0..indices.len().saturating_sub(2))
             .map(|i| [indices[i + 1], indices[i + 2], indices[0]])
             .collect(),
-    };
-
-    Ok(Primitive::Triangles {
-        positions,
-        normals,
-        uvs,
-        colors,
-        tris,
-        material: table.index_for(prim.material().index()),
-    })
+    }
 }
 
 /// COLOR_0: VEC3 or VEC4 of float or normalised unsigned byte / short, as linear RGBA.
