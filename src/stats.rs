@@ -7,7 +7,7 @@ use serde::Serialize;
 use crate::exposure::Exposure;
 use crate::method::MethodSettings;
 use crate::metrics;
-use crate::render::pipeline::{Frame, Pass, RenderSettings};
+use crate::render::pipeline::{Frame, RenderSettings};
 use crate::scene::Scene;
 use crate::settings::{ClusterSettings, FrameSettings, Gamma, LightSettings};
 
@@ -232,72 +232,4 @@ pub struct Stats {
 pub struct Target {
     pub target_ms: f64,
     pub steps: Vec<crate::render::budget::Step>,
-}
-
-/// Every timing key of the contract (`Pass::TIMED` and `frame`), so readers can index them; passes
-/// that did not run read 0.
-pub fn timing_keys() -> impl Iterator<Item = &'static str> {
-    Pass::TIMED
-        .iter()
-        .map(|p| p.name())
-        .chain([crate::render::pipeline::FRAME_KEY])
-}
-
-/// Mean of the `k` smallest values (all of them if fewer): the paper's "3-best" timing.
-pub fn mean_of_best(values: &[f64], k: usize) -> f64 {
-    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(|a, b| a.total_cmp(b));
-    let k = k.clamp(1, v.len());
-    v[..k].iter().sum::<f64>() / k as f64
-}
-
-/// Per-key mean of the 3 best over several runs' timings, with every contract key present.
-pub fn best_of_runs(runs: &[BTreeMap<String, f64>]) -> BTreeMap<String, f64> {
-    let mut keys: Vec<String> = timing_keys().map(String::from).collect();
-    for r in runs {
-        for k in r.keys() {
-            if !keys.contains(k) {
-                keys.push(k.clone());
-            }
-        }
-    }
-    keys.into_iter()
-        .map(|k| {
-            let vals: Vec<f64> = runs
-                .iter()
-                .map(|r| r.get(&k).copied().unwrap_or(0.0))
-                .collect();
-            (k, mean_of_best(&vals, 3))
-        })
-        .collect()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn best_three_of_ten() {
-        let v = [9.0, 1.0, 8.0, 2.0, 7.0, 3.0, 6.0, 4.0, 5.0, 10.0];
-        assert_eq!(mean_of_best(&v, 3), 2.0);
-        assert_eq!(mean_of_best(&[5.0], 3), 5.0);
-        assert_eq!(mean_of_best(&[], 3), 0.0);
-    }
-
-    #[test]
-    fn every_contract_key_present() {
-        let mut r = BTreeMap::new();
-        r.insert("primary".to_string(), 2.0);
-        let b = best_of_runs(&[r]);
-        for k in timing_keys() {
-            assert!(b.contains_key(k), "{k}");
-        }
-        // The contract's ten, and the other methods' six (docs/methods.md).
-        assert_eq!(timing_keys().count(), 16);
-        assert_eq!(b["primary"], 2.0);
-        assert_eq!(b["vpl_trace"], 0.0);
-    }
 }

@@ -370,10 +370,6 @@ pub struct PlotPoint {
     pub flip: f64,
 }
 
-/// A time-budget controller of the viewer: the budget and pixel count it was made for, the
-/// controller, and the K_SP and K_VPL it chose last.
-pub type BudgetState = (f64, u32, crate::render::budget::Budget, (u32, u32));
-
 /// The latest frame's error against its view's reference.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LiveError {
@@ -437,7 +433,7 @@ pub struct Viewer {
     /// The time-budget controllers of `--target-ms` (the panel's "time budget"), one for the
     /// previews while moving and one for the frames at rest, with the K's each chose last and the
     /// budget and pixel count they were made for.
-    pub budgets: [Option<BudgetState>; 2],
+    pub budgets: [Option<crate::render::budget::Controller>; 2],
     pub bookmarks: SceneSettings,
     /// The scene's settings file exists but failed to load: never save over it.
     pub bookmarks_unreadable: bool,

@@ -309,52 +309,27 @@ impl Viewer {
         }
     }
 
-    /// With a time budget: the K's its controller chose for this kind of frame (preview or at
-    /// rest), or its first ones; a controller is made anew when the budget or the size changes.
+    /// With a time budget: the K's its controller (`budget::Controller`, one for previews and one
+    /// at rest) chose for this kind of frame, or its first ones; a controller is made anew when the
+    /// budget or the size changes.
     fn apply_budget(&mut self, s: &mut crate::render::pipeline::RenderSettings, preview: bool) {
-        let Some(t) = s.cluster.target_ms else {
+        let slot = &mut self.budgets[preview as usize];
+        if s.cluster.target_ms.is_none() {
             self.budgets = [None, None];
             return;
-        };
-        let pixels = s.frame.width * s.frame.height;
-        let slot = &mut self.budgets[preview as usize];
-        if slot
-            .as_ref()
-            .is_none_or(|(bt, px, _, _)| *bt != t || *px != pixels)
-        {
-            // K only: the direct light accumulates at rest, and a reference is kept per direct
-            // sample count, which a cut would change.
-            let b = crate::render::budget::Budget::new(t, s).k_only();
-            let n = b.start(s);
-            *slot = Some((
-                t,
-                pixels,
-                b,
-                (n.cluster.sp_clusters, n.cluster.vpl_clusters),
-            ));
         }
-        let (_, _, _, (sp, vpl)) = slot.as_ref().expect("set");
-        s.cluster.sp_clusters = *sp;
-        s.cluster.vpl_clusters = *vpl;
+        if slot.as_ref().is_none_or(|c| !c.fits(s)) {
+            *slot = crate::render::budget::Controller::new(s);
+        }
+        if let Some(c) = slot {
+            c.apply(s);
+        }
     }
 
-    /// A frame rendered under a time budget: its controller's next K's, kept when the frame missed
-    /// the budget by more than `budget::SETTLED` (within it, the K's stay and the view is steady).
+    /// A frame rendered under a time budget: its controller's next K's.
     fn budget_step(&mut self, r: &Rendered) {
-        use crate::render::budget::{SETTLED, Split};
-        let Some(t) = r.job.settings.cluster.target_ms else {
-            return;
-        };
-        let pixels = r.frame.width * r.frame.height;
-        let Some((bt, px, b, k)) = self.budgets[r.job.preview as usize].as_mut() else {
-            return;
-        };
-        if *bt != t || *px != pixels {
-            return;
-        }
-        let next = b.step(&r.job.settings, Split::of(&r.frame, b.controlled));
-        if (r.frame.frame_ms() / t - 1.0).abs() > SETTLED {
-            *k = (next.cluster.sp_clusters, next.cluster.vpl_clusters);
+        if let Some(c) = self.budgets[r.job.preview as usize].as_mut() {
+            c.observe(&r.job.settings, &r.frame);
         }
     }
 

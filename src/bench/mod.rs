@@ -1,6 +1,6 @@
 //! `fuzzy-vpl bench`: error against run time over a sweep of clustering settings (the paper's
 //! Figs. 7, 9 and 11). One unclustered reference per camera, then every configuration of the sweep,
-//! each timed `repeat` times (mean of the 3 best, `stats::best_of_runs`); the last run's image is
+//! each timed `repeat` times as `render` times it (`render::timed`: mean of the 3 best); the last run's image is
 //! compared with the reference. Writes `results.csv`, images, plots and `summary.md`.
 
 pub mod csv;
@@ -18,12 +18,12 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::gpu::GpuContext;
-use crate::render::budget;
 use crate::render::pipeline::{FRAME_KEY, Frame, Pass, RenderSettings, Renderer};
+use crate::render::timed::{Timed, Timing, timed};
 use crate::scene::{Camera, Scene};
 use crate::settings::FrameSettings;
 use crate::stats::ErrorStats;
-use crate::{export, metrics, stats};
+use crate::{export, metrics};
 use csv::Row;
 use summary::{CameraSummary, SummaryInfo};
 use sweep::Config;
@@ -86,30 +86,6 @@ fn file_slug(label: &str) -> String {
             _ => '_',
         })
         .collect()
-}
-
-/// Renders `n` frames with `s` after the warm-up (`Renderer::warm_up`: on a GPU one untimed render,
-/// then `warmup_ms` of GPU work, so no configuration is timed at the low clock the CPU work between
-/// configurations leaves a GPU in); returns the last frame and the per-key mean of the 3 best
-/// timings.
-fn timed(
-    renderer: &mut Renderer,
-    camera: &Camera,
-    s: &RenderSettings,
-    n: u32,
-    warmup_ms: f64,
-    pb: &ProgressBar,
-) -> Result<(Frame, BTreeMap<String, f64>)> {
-    renderer.warm_up(camera, s, warmup_ms)?;
-    let mut runs = Vec::new();
-    let mut last = None;
-    for _ in 0..n.max(1) {
-        let f = renderer.render(camera, s)?;
-        runs.push(f.timings_ms.clone());
-        last = Some(f);
-        pb.inc(1);
-    }
-    Ok((last.expect("n >= 1"), stats::best_of_runs(&runs)))
 }
 
 /// The Pareto front of `(time, error)` points read at `t`: the lowest error of a point whose time is
@@ -181,291 +157,24 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
         .expect("valid template")
         .progress_chars("=> "),
     );
-    let say = |line: String| pb.suspend(|| eprintln!("{line}"));
-    let mut renderer = Renderer::new(ctx, scene)?;
-    let base = plan.frame;
-    let multi = plan.cameras.len() > 1;
-    let mut rows: Vec<Row> = Vec::new();
-    let mut files = Vec::new();
+    let mut b = Bench {
+        ctx,
+        plan,
+        renderer: Renderer::new(ctx, scene)?,
+        pb,
+        rows: Vec::new(),
+        files: Vec::new(),
+        csv_path: out.join("results.csv"),
+    };
     let mut cam_summaries = Vec::new();
-    let csv_path = out.join("results.csv");
     for (cam_name, camera) in &plan.cameras {
-        let suffix = if multi {
-            format!("_cam{cam_name}")
-        } else {
-            String::new()
-        };
-        // The reference: every pixel × every VPL.
-        pb.set_message(format!("camera {cam_name}: reference"));
-        let ref_settings = plan.reference_settings();
-        let (reference, ref_t) = timed(
-            &mut renderer,
-            camera,
-            &ref_settings,
-            plan.reference_repeat,
-            plan.timing.warmup_ms,
-            &pb,
-        )?;
-        let reference_ms = ref_t[FRAME_KEY];
-        let exposure = plan.frame.exposure.resolve(&reference.radiance);
-        let ref_exr = format!("reference{suffix}.exr");
-        export::write_exr(
-            &out.join(&ref_exr),
-            reference.width,
-            reference.height,
-            &reference.radiance,
-        )?;
-        let ref_png = out.join(format!("reference{suffix}.png"));
-        export::write_image(
-            &ref_png,
-            reference.width,
-            reference.height,
-            &reference.radiance,
-            exposure,
-        )?;
-        files.extend([out.join(&ref_exr), ref_png]);
-        say(format!(
-            "camera {cam_name}: reference {:.1} ms GPU ({} VPLs, mean luminance {:.3})",
-            reference_ms,
-            reference.vpls,
-            metrics::mean_luminance(&reference.radiance)
-        ));
-        let mut cam_rows = Vec::new();
-        // The sweep's configurations, then each --target-ms budget for each mode (from the mode's
-        // first configuration; another method is a mode of its own, where it has a K to choose).
-        let mut jobs: Vec<(Config, Option<f64>)> =
-            configs.iter().map(|c| (c.clone(), None)).collect();
-        let has_k = |c: &&Config| {
-            c.method
-                .room()
-                .is_none_or(|r| r.clusters_sps || r.vpl_clusters)
-        };
-        for &t in &plan.sweep.target_ms {
-            let mut seen = Vec::new();
-            for c in configs.iter().filter(has_k) {
-                let m = sweep::mode_name(c);
-                if !seen.contains(&m) {
-                    seen.push(m);
-                    jobs.push((c.clone(), Some(t)));
-                }
-            }
-        }
-        for (i, (c, target_ms)) in jobs.iter().enumerate() {
-            pb.set_message(format!("camera {cam_name}: {}", sweep::label(c)));
-            // Under a budget the controller chooses the K's (and the direct light's samples where
-            // the fewest clusters miss it).
-            let (s, steps) = match target_ms {
-                Some(t) => {
-                    renderer.warm_up(camera, &plan.settings(c), plan.timing.warmup_ms)?;
-                    let (chosen, b, _) = budget::fit(&mut renderer, camera, &plan.settings(c), *t)?;
-                    (chosen, Some(b.steps))
-                }
-                None => (plan.settings(c), None),
-            };
-            let c = &Config {
-                cluster: s.cluster.clone(),
-                method: s.method,
-            };
-            let (frame, t) = timed(
-                &mut renderer,
-                camera,
-                &s,
-                plan.repeat,
-                plan.timing.warmup_ms,
-                &pb,
-            )?;
-            let mut label = sweep::label_ran(
-                c,
-                frame.ran(Pass::SpCluster)
-                    || (c.method.room()).is_some_and(|r| r.clusters_sps && frame.ran(r.passes[0])),
-                frame.ran(Pass::VplCluster),
-                frame.gamma_used,
-            );
-            if let Some(tm) = target_ms {
-                label = format!("target {tm} ms {label}");
-            }
-            let stages_ms: BTreeMap<String, f64> = csv::stages()
-                .map(|k| (k.to_string(), t.get(k).copied().unwrap_or(0.0)))
-                .collect();
-            let frame_ms = stages_ms[FRAME_KEY];
-            let labels = renderer.sp_labels(&frame)?;
-            let (error, flip_map) = ErrorStats::measure(
-                &frame.radiance,
-                &reference.radiance,
-                frame.width,
-                frame.height,
-                exposure,
-                labels.as_deref(),
-            );
-            let row = Row {
-                scene: plan.scene_name.clone(),
-                camera: cam_name.clone(),
-                width: frame.width,
-                height: frame.height,
-                vpls: frame.vpls,
-                mode: sweep::mode_name(c).into(),
-                vpl_clusters: c.vpl_clusters,
-                sp_clusters: c.sp_clusters,
-                fuzziness: c.fuzziness,
-                gamma: c.gamma,
-                gamma_used: frame.gamma_used,
-                plane_gate_deg: c.plane_gate,
-                weight_exponent: c.weight_exponent,
-                normal_threshold: c.normal_threshold,
-                iterations: c.iterations,
-                stages_ms,
-                reference_ms,
-                speedup: if frame_ms > 0.0 {
-                    reference_ms / frame_ms
-                } else {
-                    0.0
-                },
-                mse: error.mse,
-                rel_mse: error.rel_mse,
-                flip: Some(error.flip),
-                border: error.border,
-                interior: error.interior,
-                border_ratio: error.border_ratio,
-                flip_border: error.flip_border,
-                target_ms: *target_ms,
-                front_mse: None,
-                sp_clusters_used: frame.sp_clusters_used,
-                vpl_clusters_used: frame.vpl_clusters_used,
-                shadow_rays: frame.shadow_rays,
-                repeat: plan.repeat,
-                label: label.clone(),
-                method: c.method.method,
-                indirect_ms: frame_ms
-                    - t.get(Pass::Primary.name()).copied().unwrap_or(0.0)
-                    - t.get(Pass::Direct.name()).copied().unwrap_or(0.0),
-                adapter: ctx.adapter_name.clone(),
-                driver: ctx.driver.clone(),
-            };
-            let stem = format!("{:02}{suffix}_{}", i + 1, file_slug(&label));
-            let img = format!("images/{stem}.png");
-            let err = format!("images/{stem}_err.png");
-            export::write_image(
-                &out.join(&img),
-                frame.width,
-                frame.height,
-                &frame.radiance,
-                exposure,
-            )?;
-            export::write_png_rgb8(
-                &out.join(&err),
-                frame.width,
-                frame.height,
-                metrics::error_map(&frame.radiance, &reference.radiance),
-            )?;
-            let flip_png = format!("images/{stem}_flip.png");
-            export::write_png_rgb8(
-                &out.join(&flip_png),
-                frame.width,
-                frame.height,
-                metrics::flip_error_map(&flip_map, frame.width, frame.height),
-            )?;
-            files.extend([out.join(&img), out.join(&err), out.join(&flip_png)]);
-            if let Some(steps) = &steps {
-                for (k, st) in steps.iter().enumerate() {
-                    say(format!(
-                        "camera {cam_name}: {label}: frame {}: K_SP {} K_VPL {} -> {:.1} ms",
-                        k + 1,
-                        st.sp_clusters,
-                        st.vpl_clusters,
-                        st.frame_ms
-                    ));
-                }
-            }
-            say(format!(
-                "camera {cam_name}: {label:<28} {:>9.2} ms  {:>6.1}x  {}",
-                frame_ms,
-                row.speedup,
-                error.line()
-            ));
-            rows.push(row.clone());
-            // Rewritten after every configuration, so an interrupted sweep keeps what it measured.
-            write_csv(&csv_path, &rows)?;
-            cam_rows.push((row, img, err));
-        }
-        // Each budget's row against the sweep's Pareto front: the lowest MSE of a fixed setting at
-        // no more frame time.
-        let fixed: Vec<(f64, f64)> = cam_rows
-            .iter()
-            .filter(|r| r.0.target_ms.is_none())
-            .map(|r| (r.0.frame_ms(), r.0.mse))
-            .collect();
-        for r in cam_rows.iter_mut().filter(|r| r.0.target_ms.is_some()) {
-            r.0.front_mse = front_at(&fixed, r.0.frame_ms());
-            if let Some(f) = r.0.front_mse {
-                say(format!(
-                    "camera {cam_name}: {}: MSE {:.4e} at {:.1} ms; the best fixed setting at no more time: {:.4e} ({:+.1}%)",
-                    r.0.label,
-                    r.0.mse,
-                    r.0.frame_ms(),
-                    f,
-                    (r.0.mse / f - 1.0) * 100.0
-                ));
-            }
-        }
-        let n = rows.len() - cam_rows.len();
-        for (k, r) in cam_rows.iter().enumerate() {
-            rows[n + k] = r.0.clone();
-        }
-        write_csv(&csv_path, &rows)?;
-        let just: Vec<Row> = cam_rows.iter().map(|r| r.0.clone()).collect();
-        let title = |what: &str| format!("{} — {what}", plan.scene_name);
-        let mut plots = Vec::new();
-        let stages_png = format!("stages{suffix}.png");
-        plot::stages(
-            &out.join(&stages_png),
-            &title("GPU time per stage and MSE"),
-            &just,
-        )?;
-        plots.push(("Stage times and MSE".to_string(), stages_png));
-        if just.iter().any(|r| r.sp_clusters > 0 && r.vpl_clusters > 0) {
-            let grid_png = format!("grid{suffix}.png");
-            plot::grid(
-                &out.join(&grid_png),
-                &title("time and MSE over K_sp / K_vpl"),
-                &just,
-            )?;
-            plots.push(("SP × VPL clusters: time against MSE".to_string(), grid_png));
-        }
-        let pareto_png = format!("pareto{suffix}.png");
-        plot::pareto(
-            &out.join(&pareto_png),
-            &title("time against MSE by mode, Pareto front"),
-            &just,
-        )?;
-        plots.push((
-            "Modes: Pareto front of time and MSE".to_string(),
-            pareto_png,
-        ));
-        if just.iter().any(|r| r.method != just[0].method) {
-            let methods_png = format!("methods{suffix}.png");
-            plot::methods(
-                &out.join(&methods_png),
-                &title("methods: indirect-light time against MSE, each method's front"),
-                &just,
-            )?;
-            plots.push((
-                "Methods: each one's Pareto front of indirect time and MSE".to_string(),
-                methods_png,
-            ));
-        }
-        files.extend(plots.iter().map(|p| out.join(&p.1)));
-        cam_summaries.push(CameraSummary {
-            camera: cam_name.clone(),
-            reference_ms,
-            reference_image: ref_exr,
-            plots,
-            rows: cam_rows,
-        });
+        cam_summaries.push(b.camera(cam_name, camera, &configs)?);
     }
-    pb.finish_and_clear();
-    write_csv(&csv_path, &rows)?;
-    files.push(csv_path);
+    b.pb.finish_and_clear();
+    write_csv(&b.csv_path, &b.rows)?;
+    b.files.push(b.csv_path.clone());
     let wall_s = t0.elapsed().as_secs_f64();
+    let base = plan.frame;
     let md = summary::markdown(&SummaryInfo {
         scene: &plan.scene_name,
         adapter: &ctx.adapter_name,
@@ -487,12 +196,339 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
         w.write_all(md.as_bytes())?;
         Ok(())
     })?;
-    files.push(md_path);
+    b.files.push(md_path);
     Ok(BenchReport {
-        rows,
-        files,
+        rows: b.rows,
+        files: b.files,
         wall_s,
     })
+}
+
+/// A camera's reference: its frame, its timings' frame ms, the exposure every image of the camera
+/// is shown at, and the EXR's name.
+struct Reference {
+    frame: Frame,
+    ms: f64,
+    exposure: f32,
+    exr: String,
+}
+
+/// A bench run in progress: the rows and files so far.
+struct Bench<'a> {
+    ctx: &'a GpuContext,
+    plan: &'a BenchPlan,
+    renderer: Renderer<'a>,
+    pb: ProgressBar,
+    rows: Vec<Row>,
+    files: Vec<PathBuf>,
+    csv_path: PathBuf,
+}
+
+impl Bench<'_> {
+    fn say(&self, line: String) {
+        self.pb.suspend(|| eprintln!("{line}"));
+    }
+
+    /// The times of `s` as `render` takes them (`render::timed`), the progress bar ticking.
+    fn timed(&mut self, camera: &Camera, s: &RenderSettings, repeat: u32) -> Result<Timed> {
+        let timing = Timing {
+            repeat,
+            warmup_ms: self.plan.timing.warmup_ms,
+        };
+        let pb = self.pb.clone();
+        timed(&mut self.renderer, camera, s, timing, &mut || pb.inc(1))
+    }
+
+    /// One camera: its reference, every configuration of the sweep, then each --target-ms budget
+    /// for each mode (from the mode's first configuration; another method is a mode of its own,
+    /// where it has a K to choose); the budgets' rows against the sweep's front; the plots.
+    fn camera(
+        &mut self,
+        cam_name: &str,
+        camera: &Camera,
+        configs: &[Config],
+    ) -> Result<CameraSummary> {
+        let suffix = if self.plan.cameras.len() > 1 {
+            format!("_cam{cam_name}")
+        } else {
+            String::new()
+        };
+        let reference = self.reference(cam_name, camera, &suffix)?;
+        let mut jobs: Vec<(Config, Option<f64>)> =
+            configs.iter().map(|c| (c.clone(), None)).collect();
+        let has_k = |c: &&Config| {
+            c.method
+                .room()
+                .is_none_or(|r| r.clusters_sps || r.vpl_clusters)
+        };
+        for &t in &self.plan.sweep.target_ms {
+            let mut seen = Vec::new();
+            for c in configs.iter().filter(has_k) {
+                let m = sweep::mode_name(c);
+                if !seen.contains(&m) {
+                    seen.push(m);
+                    jobs.push((c.clone(), Some(t)));
+                }
+            }
+        }
+        let mut cam_rows = Vec::new();
+        for (i, (c, target_ms)) in jobs.iter().enumerate() {
+            let stem_no = format!("{:02}{suffix}", i + 1);
+            let row = self.measure(cam_name, camera, c, *target_ms, &reference, &stem_no)?;
+            cam_rows.push(row);
+        }
+        self.mark_front(cam_name, &mut cam_rows);
+        let n = self.rows.len() - cam_rows.len();
+        for (k, r) in cam_rows.iter().enumerate() {
+            self.rows[n + k] = r.0.clone();
+        }
+        write_csv(&self.csv_path, &self.rows)?;
+        let just: Vec<Row> = cam_rows.iter().map(|r| r.0.clone()).collect();
+        let plots = self.plots(&just, &suffix)?;
+        Ok(CameraSummary {
+            camera: cam_name.to_string(),
+            reference_ms: reference.ms,
+            reference_image: reference.exr,
+            plots,
+            rows: cam_rows,
+        })
+    }
+
+    /// The reference: every pixel × every VPL, timed and written as EXR and PNG.
+    fn reference(&mut self, cam_name: &str, camera: &Camera, suffix: &str) -> Result<Reference> {
+        self.pb.set_message(format!("camera {cam_name}: reference"));
+        let s = self.plan.reference_settings();
+        let t = self.timed(camera, &s, self.plan.reference_repeat)?;
+        let (frame, ms) = (t.frame, t.timings_ms[FRAME_KEY]);
+        let out = &self.plan.out_dir;
+        let exposure = self.plan.frame.exposure.resolve(&frame.radiance);
+        let exr = format!("reference{suffix}.exr");
+        export::write_exr(&out.join(&exr), frame.width, frame.height, &frame.radiance)?;
+        let png = out.join(format!("reference{suffix}.png"));
+        export::write_image(&png, frame.width, frame.height, &frame.radiance, exposure)?;
+        self.files.extend([out.join(&exr), png]);
+        self.say(format!(
+            "camera {cam_name}: reference {:.1} ms GPU ({} VPLs, mean luminance {:.3})",
+            ms,
+            frame.vpls,
+            metrics::mean_luminance(&frame.radiance)
+        ));
+        Ok(Reference {
+            frame,
+            ms,
+            exposure,
+            exr,
+        })
+    }
+
+    /// One configuration (under a budget, the controller chooses its K's, and the direct light's
+    /// samples where the fewest clusters miss it): timed, compared with the reference, its images
+    /// written and its row added (the CSV rewritten, so an interrupted sweep keeps what it
+    /// measured). Returns the row and its image and error image.
+    fn measure(
+        &mut self,
+        cam_name: &str,
+        camera: &Camera,
+        c: &Config,
+        target_ms: Option<f64>,
+        reference: &Reference,
+        stem_no: &str,
+    ) -> Result<(Row, String, String)> {
+        self.pb
+            .set_message(format!("camera {cam_name}: {}", sweep::label(c)));
+        let mut s = self.plan.settings(c);
+        s.cluster.target_ms = target_ms;
+        let t = self.timed(camera, &s, self.plan.repeat)?;
+        let frame = &t.frame;
+        let c = &Config {
+            cluster: t.settings.cluster.clone(),
+            method: t.settings.method,
+        };
+        let mut label = sweep::label_ran(
+            c,
+            frame.ran(Pass::SpCluster)
+                || (c.method.room()).is_some_and(|r| r.clusters_sps && frame.ran(r.passes[0])),
+            frame.ran(Pass::VplCluster),
+            frame.gamma_used,
+        );
+        if let Some(tm) = target_ms {
+            label = format!("target {tm} ms {label}");
+        }
+        let labels = self.renderer.sp_labels(frame)?;
+        let (error, flip_map) = ErrorStats::measure(
+            &frame.radiance,
+            &reference.frame.radiance,
+            frame.width,
+            frame.height,
+            reference.exposure,
+            labels.as_deref(),
+        );
+        let row = Row {
+            target_ms,
+            label: label.clone(),
+            ..self.row(cam_name, c, &t, reference, &error)
+        };
+        let out = &self.plan.out_dir;
+        let stem = format!("{stem_no}_{}", file_slug(&label));
+        let img = format!("images/{stem}.png");
+        let err = format!("images/{stem}_err.png");
+        let (w, h) = (frame.width, frame.height);
+        export::write_image(&out.join(&img), w, h, &frame.radiance, reference.exposure)?;
+        let err_map = metrics::error_map(&frame.radiance, &reference.frame.radiance);
+        export::write_png_rgb8(&out.join(&err), w, h, err_map)?;
+        let flip_png = format!("images/{stem}_flip.png");
+        let flip = metrics::flip_error_map(&flip_map, w, h);
+        export::write_png_rgb8(&out.join(&flip_png), w, h, flip)?;
+        self.files
+            .extend([out.join(&img), out.join(&err), out.join(&flip_png)]);
+        for (k, st) in t.budget.iter().flat_map(|b| &b.steps).enumerate() {
+            self.say(format!(
+                "camera {cam_name}: {label}: frame {}: K_SP {} K_VPL {} -> {:.1} ms",
+                k + 1,
+                st.sp_clusters,
+                st.vpl_clusters,
+                st.frame_ms
+            ));
+        }
+        self.say(format!(
+            "camera {cam_name}: {label:<28} {:>9.2} ms  {:>6.1}x  {}",
+            row.frame_ms(),
+            row.speedup,
+            error.line()
+        ));
+        self.rows.push(row.clone());
+        write_csv(&self.csv_path, &self.rows)?;
+        Ok((row, img, err))
+    }
+
+    /// A configuration's CSV row (no budget, no label).
+    fn row(
+        &self,
+        cam_name: &str,
+        c: &Config,
+        t: &Timed,
+        reference: &Reference,
+        error: &ErrorStats,
+    ) -> Row {
+        let frame = &t.frame;
+        let stages_ms: BTreeMap<String, f64> = csv::stages()
+            .map(|k| (k.to_string(), t.timings_ms.get(k).copied().unwrap_or(0.0)))
+            .collect();
+        let frame_ms = stages_ms[FRAME_KEY];
+        let stage = |p: Pass| t.timings_ms.get(p.name()).copied().unwrap_or(0.0);
+        Row {
+            scene: self.plan.scene_name.clone(),
+            camera: cam_name.to_string(),
+            width: frame.width,
+            height: frame.height,
+            vpls: frame.vpls,
+            mode: sweep::mode_name(c).into(),
+            vpl_clusters: c.vpl_clusters,
+            sp_clusters: c.sp_clusters,
+            fuzziness: c.fuzziness,
+            gamma: c.gamma,
+            gamma_used: frame.gamma_used,
+            plane_gate_deg: c.plane_gate,
+            weight_exponent: c.weight_exponent,
+            normal_threshold: c.normal_threshold,
+            iterations: c.iterations,
+            stages_ms,
+            reference_ms: reference.ms,
+            speedup: if frame_ms > 0.0 {
+                reference.ms / frame_ms
+            } else {
+                0.0
+            },
+            mse: error.mse,
+            rel_mse: error.rel_mse,
+            flip: Some(error.flip),
+            border: error.border,
+            interior: error.interior,
+            border_ratio: error.border_ratio,
+            flip_border: error.flip_border,
+            target_ms: None,
+            front_mse: None,
+            sp_clusters_used: frame.sp_clusters_used,
+            vpl_clusters_used: frame.vpl_clusters_used,
+            shadow_rays: frame.shadow_rays,
+            repeat: self.plan.repeat,
+            label: String::new(),
+            method: c.method.method,
+            indirect_ms: frame_ms - stage(Pass::Primary) - stage(Pass::Direct),
+            adapter: self.ctx.adapter_name.clone(),
+            driver: self.ctx.driver.clone(),
+        }
+    }
+
+    /// Each budget's row against the sweep's Pareto front: the lowest MSE of a fixed setting at no
+    /// more frame time.
+    fn mark_front(&self, cam_name: &str, cam_rows: &mut [(Row, String, String)]) {
+        let fixed: Vec<(f64, f64)> = cam_rows
+            .iter()
+            .filter(|r| r.0.target_ms.is_none())
+            .map(|r| (r.0.frame_ms(), r.0.mse))
+            .collect();
+        for r in cam_rows.iter_mut().filter(|r| r.0.target_ms.is_some()) {
+            r.0.front_mse = front_at(&fixed, r.0.frame_ms());
+            if let Some(f) = r.0.front_mse {
+                self.say(format!(
+                    "camera {cam_name}: {}: MSE {:.4e} at {:.1} ms; the best fixed setting at no more time: {:.4e} ({:+.1}%)",
+                    r.0.label,
+                    r.0.mse,
+                    r.0.frame_ms(),
+                    f,
+                    (r.0.mse / f - 1.0) * 100.0
+                ));
+            }
+        }
+    }
+
+    /// A camera's plots: stage times, the K grid, the modes' front, and the methods' fronts.
+    fn plots(&mut self, just: &[Row], suffix: &str) -> Result<Vec<(String, String)>> {
+        let out = &self.plan.out_dir;
+        let title = |what: &str| format!("{} — {what}", self.plan.scene_name);
+        let mut plots = Vec::new();
+        let stages_png = format!("stages{suffix}.png");
+        plot::stages(
+            &out.join(&stages_png),
+            &title("GPU time per stage and MSE"),
+            just,
+        )?;
+        plots.push(("Stage times and MSE".to_string(), stages_png));
+        if just.iter().any(|r| r.sp_clusters > 0 && r.vpl_clusters > 0) {
+            let grid_png = format!("grid{suffix}.png");
+            plot::grid(
+                &out.join(&grid_png),
+                &title("time and MSE over K_sp / K_vpl"),
+                just,
+            )?;
+            plots.push(("SP × VPL clusters: time against MSE".to_string(), grid_png));
+        }
+        let pareto_png = format!("pareto{suffix}.png");
+        plot::pareto(
+            &out.join(&pareto_png),
+            &title("time against MSE by mode, Pareto front"),
+            just,
+        )?;
+        plots.push((
+            "Modes: Pareto front of time and MSE".to_string(),
+            pareto_png,
+        ));
+        if just.iter().any(|r| r.method != just[0].method) {
+            let methods_png = format!("methods{suffix}.png");
+            plot::methods(
+                &out.join(&methods_png),
+                &title("methods: indirect-light time against MSE, each method's front"),
+                just,
+            )?;
+            plots.push((
+                "Methods: each one's Pareto front of indirect time and MSE".to_string(),
+                methods_png,
+            ));
+        }
+        self.files.extend(plots.iter().map(|p| out.join(&p.1)));
+        Ok(plots)
+    }
 }
 
 #[cfg(test)]

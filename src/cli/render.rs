@@ -8,8 +8,9 @@ use clap::Args;
 use super::bad;
 use super::scene::{SceneArgs, ShotArgs, check_size, check_vpls};
 use crate::gpu::GpuContext;
-use crate::render::budget;
+use crate::render::frame::Frame;
 use crate::render::pipeline::{self, RenderSettings, Renderer};
+use crate::render::timed::{Timed, Timing, best_of_runs, timed};
 use crate::settings::{FrameSettings, TimingSettings};
 use crate::{export, metrics, stats};
 
@@ -104,32 +105,7 @@ fn read_reference(p: &std::path::Path, f: &FrameSettings) -> Result<Vec<[f32; 3]
 }
 
 pub fn run(a: RenderArgs) -> Result<()> {
-    for out in &a.output {
-        if !matches!(extension(out).as_deref(), Some("exr") | Some("png")) {
-            return Err(bad(format!(
-                "{}: output must end in .exr or .png",
-                out.display()
-            )));
-        }
-    }
-    if let Some(p) = &a.error_map
-        && extension(p).as_deref() != Some("png")
-    {
-        return Err(bad(format!(
-            "{}: --error-map must end in .png",
-            p.display()
-        )));
-    }
-    // Every output can be written: checked before the (possibly long) render.
-    for p in a
-        .output
-        .iter()
-        .chain(&a.stats)
-        .chain(&a.error_map)
-        .chain(&a.trace)
-    {
-        export::check_writable(p).map_err(bad)?;
-    }
+    check_outputs(&a)?;
     let reference = a
         .compare
         .as_deref()
@@ -163,101 +139,22 @@ pub fn run(a: RenderArgs) -> Result<()> {
             "--target-ms: chooses the cluster counts; --reference and --path-trace cluster nothing",
         ));
     }
-    let mut runs = Vec::new();
-    let mut frame = None;
-    let mut target = None;
-    let mut settings = settings;
-    // The GPU at its working clock before anything is timed (the path tracer: the busy kernel
-    // alone).
-    let warmup_ms = match a.path_trace {
-        Some(_) => ctx.warm_up(a.timing.warmup_ms)?,
-        None => renderer.warm_up(&camera, &settings, a.timing.warmup_ms)?,
-    };
-    if let Some(t) = settings.cluster.target_ms {
-        let (chosen, budget, f) = budget::fit(&mut renderer, &camera, &settings, t)?;
-        for (i, st) in budget.steps.iter().enumerate() {
-            eprintln!(
-                "--target-ms {t}: frame {}: K_SP {} K_VPL {} direct samples {} -> {:.1} ms",
-                i + 1,
-                st.sp_clusters,
-                st.vpl_clusters,
-                st.direct_samples,
-                st.frame_ms
-            );
-        }
-        settings = chosen;
-        runs.push(f.timings_ms.clone());
-        frame = Some(f);
-        target = Some(stats::Target {
-            target_ms: t,
-            steps: budget.steps,
-        });
-    }
-    for _ in runs.len() as u32..a.repeat {
-        let f = match a.path_trace {
-            Some(spp) => renderer.path_trace(&camera, &settings, spp)?,
-            None => renderer.render(&camera, &settings)?,
-        };
-        runs.push(f.timings_ms.clone());
-        frame = Some(f);
-    }
-    let frame = frame.expect("repeat >= 1");
+    let t = frames(&a, &mut renderer, &camera, &settings)?;
     if let Some(p) = &a.trace {
         renderer.profiler.write_trace(p)?;
     }
-    let non_finite = frame
-        .radiance
-        .iter()
-        .flatten()
-        .filter(|c| !c.is_finite())
-        .count();
-    if non_finite > 0 {
-        eprintln!("warning: {non_finite} non-finite pixel channels in the output");
-    }
-    // Never a silent black image: a lit scene rendering all black says so (no light at all was
-    // warned about when loading).
-    if scene.has_light() && frame.radiance.iter().flatten().all(|&c| c == 0.0) {
-        eprintln!(
-            "warning: {}: the image is black although the scene has light (the camera sees no lit surface)",
-            a.scene.scene
-        );
-    }
+    warn_about(&t.frame, &scene, &a.scene.scene);
     let image = match a.layer {
-        Layer::Final => &frame.radiance,
-        Layer::Direct => &frame.direct,
-        Layer::Indirect => &frame.indirect,
+        Layer::Final => &t.frame.radiance,
+        Layer::Direct => &t.frame.direct,
+        Layer::Indirect => &t.frame.indirect,
     };
     let exposure = a.shot.frame.exposure.resolve(image);
     for out in &a.output {
-        export::write_image(out, frame.width, frame.height, image, exposure)?;
+        export::write_image(out, t.frame.width, t.frame.height, image, exposure)?;
     }
-    // Compared as shown: both images tone-mapped with the reference's exposure.
-    let labels = match &reference {
-        Some(_) => renderer.sp_labels(&frame)?,
-        None => None,
-    };
-    let measured = reference.as_ref().map(|r| {
-        stats::ErrorStats::measure(
-            &frame.radiance,
-            r,
-            frame.width,
-            frame.height,
-            a.shot.frame.exposure.resolve(r),
-            labels.as_deref(),
-        )
-    });
-    if let (Some(p), Some(r), Some((_, flip))) = (&a.error_map, &reference, &measured) {
-        let map = match a.error_metric {
-            ErrorMetric::RelMse => metrics::error_map(&frame.radiance, r),
-            ErrorMetric::Flip => metrics::flip_error_map(flip, frame.width, frame.height),
-        };
-        export::write_png_rgb8(p, frame.width, frame.height, map)?;
-    }
-    let error = measured.map(|m| m.0);
-    if let Some(e) = &error {
-        eprintln!("error against the reference: {}", e.line());
-    }
-    let timings_ms = stats::best_of_runs(&runs);
+    let error = compare(&a, &renderer, &t.frame, reference.as_deref())?;
+    let frame = &t.frame;
     let outputs: Vec<String> = a.output.iter().map(|p| p.display().to_string()).collect();
     let passes: Vec<&str> = frame.passes.iter().map(|p| p.name()).collect();
     eprintln!(
@@ -265,7 +162,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         a.scene.scene,
         frame.width,
         frame.height,
-        timings_ms[pipeline::FRAME_KEY],
+        t.timings_ms[pipeline::FRAME_KEY],
         passes.join(" + "),
         metrics::mean_luminance(&frame.radiance),
         outputs.join(", ")
@@ -277,26 +174,155 @@ pub fn run(a: RenderArgs) -> Result<()> {
             height: frame.height,
             adapter: ctx.adapter_name.clone(),
             settings: stats::Settings::new(
-                &settings,
+                &t.settings,
                 &a.scene.lights,
-                &frame,
+                frame,
                 exposure,
                 a.path_trace,
             ),
-            counts: stats::Counts::new(&scene, &frame, renderer.gpu.emitters.len() as u64),
+            counts: stats::Counts::new(&scene, frame, renderer.gpu.emitters.len() as u64),
             passes: passes.iter().map(|s| s.to_string()).collect(),
-            timings_ms,
+            timings_ms: t.timings_ms.clone(),
             repeat: a.repeat,
-            warmup_ms,
+            warmup_ms: t.warmup_ms,
             driver: ctx.driver.clone(),
             device_type: ctx.kind().into(),
             mean_luminance: metrics::mean_luminance(&frame.radiance),
             mean_luminance_indirect: metrics::mean_luminance(&frame.indirect),
             bvh_build_ms: renderer.bvh.build_ms,
             error,
-            target,
+            target: t.budget.map(|b| stats::Target {
+                target_ms: b.target_ms,
+                steps: b.steps,
+            }),
         };
         export::write_json(p, &s)?;
     }
     Ok(())
+}
+
+/// Every output's extension and that it can be written: checked before the (possibly long) render.
+fn check_outputs(a: &RenderArgs) -> Result<()> {
+    for out in &a.output {
+        if !matches!(extension(out).as_deref(), Some("exr") | Some("png")) {
+            return Err(bad(format!(
+                "{}: output must end in .exr or .png",
+                out.display()
+            )));
+        }
+    }
+    if let Some(p) = &a.error_map
+        && extension(p).as_deref() != Some("png")
+    {
+        return Err(bad(format!(
+            "{}: --error-map must end in .png",
+            p.display()
+        )));
+    }
+    for p in a
+        .output
+        .iter()
+        .chain(&a.stats)
+        .chain(&a.error_map)
+        .chain(&a.trace)
+    {
+        export::check_writable(p).map_err(bad)?;
+    }
+    Ok(())
+}
+
+/// The timed frames: the path tracer's (`--path-trace`, after the busy kernel alone), or the
+/// renderer's as `render::timed` times them (with `--target-ms`, the controller's first).
+fn frames(
+    a: &RenderArgs,
+    renderer: &mut Renderer,
+    camera: &crate::scene::Camera,
+    settings: &RenderSettings,
+) -> Result<Timed> {
+    let timing = Timing {
+        repeat: a.repeat,
+        warmup_ms: a.timing.warmup_ms,
+    };
+    let Some(spp) = a.path_trace else {
+        let t = timed(renderer, camera, settings, timing, &mut || {})?;
+        if let Some(b) = &t.budget {
+            for (i, st) in b.steps.iter().enumerate() {
+                eprintln!(
+                    "--target-ms {}: frame {}: K_SP {} K_VPL {} direct samples {} -> {:.1} ms",
+                    b.target_ms,
+                    i + 1,
+                    st.sp_clusters,
+                    st.vpl_clusters,
+                    st.direct_samples,
+                    st.frame_ms
+                );
+            }
+        }
+        return Ok(t);
+    };
+    let warmup_ms = renderer.ctx.warm_up(timing.warmup_ms)?;
+    let mut runs = Vec::new();
+    let mut frame = None;
+    for _ in 0..timing.repeat.max(1) {
+        let f = renderer.path_trace(camera, settings, spp)?;
+        runs.push(f.timings_ms.clone());
+        frame = Some(f);
+    }
+    Ok(Timed {
+        frame: frame.expect("repeat >= 1"),
+        settings: settings.clone(),
+        timings_ms: best_of_runs(&runs),
+        warmup_ms,
+        budget: None,
+    })
+}
+
+/// Warnings about the image: non-finite channels, and a lit scene rendering all black (no light
+/// at all was warned about when loading).
+fn warn_about(frame: &Frame, scene: &crate::scene::Scene, name: &str) {
+    let non_finite = frame
+        .radiance
+        .iter()
+        .flatten()
+        .filter(|c| !c.is_finite())
+        .count();
+    if non_finite > 0 {
+        eprintln!("warning: {non_finite} non-finite pixel channels in the output");
+    }
+    if scene.has_light() && frame.radiance.iter().flatten().all(|&c| c == 0.0) {
+        eprintln!(
+            "warning: {name}: the image is black although the scene has light (the camera sees no lit surface)"
+        );
+    }
+}
+
+/// `--compare`: the error against the reference (both tone-mapped with the reference's exposure,
+/// compared as shown), printed, and `--error-map` written.
+fn compare(
+    a: &RenderArgs,
+    renderer: &Renderer,
+    frame: &Frame,
+    reference: Option<&[[f32; 3]]>,
+) -> Result<Option<stats::ErrorStats>> {
+    let Some(r) = reference else {
+        return Ok(None);
+    };
+    let labels = renderer.sp_labels(frame)?;
+    let (error, flip) = stats::ErrorStats::measure(
+        &frame.radiance,
+        r,
+        frame.width,
+        frame.height,
+        a.shot.frame.exposure.resolve(r),
+        labels.as_deref(),
+    );
+    if let Some(p) = &a.error_map {
+        let map = match a.error_metric {
+            ErrorMetric::RelMse => metrics::error_map(&frame.radiance, r),
+            ErrorMetric::Flip => metrics::flip_error_map(&flip, frame.width, frame.height),
+        };
+        export::write_png_rgb8(p, frame.width, frame.height, map)?;
+    }
+    eprintln!("error against the reference: {}", error.line());
+    Ok(Some(error))
 }

@@ -291,6 +291,57 @@ pub fn direct_samples_for(used: u32, direct_ms: f64, room_ms: f64) -> u32 {
     }
 }
 
+/// The viewer's controller (`view --target-ms`, the panel's time budget): a `Budget` (K only: the
+/// direct light accumulates at rest, and a reference is kept per direct-sample count, which a cut
+/// would change) for one target and frame size, stepped once per frame shown. Its K's stay while
+/// frames land within `SETTLED` of the target, so a steady view stays steady.
+pub struct Controller {
+    pub target_ms: f64,
+    pub pixels: u32,
+    budget: Budget,
+    /// K_SP and K_VPL of the next frame.
+    ks: (u32, u32),
+}
+
+impl Controller {
+    /// A controller for `s`'s budget and size (`None` without a budget).
+    pub fn new(s: &RenderSettings) -> Option<Controller> {
+        let t = s.cluster.target_ms?;
+        let budget = Budget::new(t, s).k_only();
+        let first = budget.start(s);
+        Some(Controller {
+            target_ms: t,
+            pixels: s.frame.width * s.frame.height,
+            budget,
+            ks: (first.cluster.sp_clusters, first.cluster.vpl_clusters),
+        })
+    }
+
+    /// Whether it was made for `s`'s budget and size.
+    pub fn fits(&self, s: &RenderSettings) -> bool {
+        s.cluster.target_ms == Some(self.target_ms) && s.frame.width * s.frame.height == self.pixels
+    }
+
+    /// `s` with the K's it chose.
+    pub fn apply(&self, s: &mut RenderSettings) {
+        (s.cluster.sp_clusters, s.cluster.vpl_clusters) = self.ks;
+    }
+
+    /// A frame rendered with `s` (its K's): the next K's, kept when the frame missed the budget by
+    /// more than `SETTLED`.
+    pub fn observe(&mut self, s: &RenderSettings, frame: &Frame) {
+        if !self.fits(s) {
+            return;
+        }
+        let next = self
+            .budget
+            .step(s, Split::of(frame, self.budget.controlled));
+        if (frame.frame_ms() / self.target_ms - 1.0).abs() > SETTLED {
+            self.ks = (next.cluster.sp_clusters, next.cluster.vpl_clusters);
+        }
+    }
+}
+
 /// Renders `camera` with `s` until its frame time meets `target_ms` (at most `MAX_FRAMES` frames):
 /// the settings it settled on (`s` with the chosen K's), the controller (its `steps`) and the last
 /// frame, rendered with those settings.

@@ -7,3 +7,4 @@ pub mod frame;
 pub mod pipeline;
 pub mod resident;
 pub mod settings;
+pub mod timed;

@@ -1,0 +1,138 @@
+//! How `render` and `bench` time a frame, one way for both: the GPU warmed up (`--warmup-ms`,
+//! `Renderer::warm_up`), then with `--target-ms` the budget controller's frames (`budget::fit`, its
+//! last frame counting as the first timed one), then renders up to `repeat`; each pass's time is the
+//! mean of its 3 best runs (`best_of_runs`, the paper's method). The viewer times every frame
+//! it shows and drives the same controller step by step (`budget::Controller`).
+
+use std::collections::BTreeMap;
+
+use anyhow::Result;
+
+use super::budget::{self, Budget};
+use super::frame::Frame;
+use super::pipeline::{Pass, RenderSettings, Renderer};
+use crate::scene::Camera;
+
+/// How many frames are timed and how long the GPU is warmed up before them.
+#[derive(Clone, Copy, Debug)]
+pub struct Timing {
+    /// Frames rendered (at least 1; with a time budget its controller's frames count from the last).
+    pub repeat: u32,
+    /// GPU work in ms before the first timed frame (`settings::TimingSettings::warmup_ms`).
+    pub warmup_ms: f64,
+}
+
+/// A timed frame: the last one rendered, the settings it ran with (the controller's choice under a
+/// time budget), its per-pass times, the warm-up done, and the controller's steps.
+pub struct Timed {
+    pub frame: Frame,
+    pub settings: RenderSettings,
+    pub timings_ms: BTreeMap<String, f64>,
+    pub warmup_ms: f64,
+    pub budget: Option<Budget>,
+}
+
+/// Renders `s` at `camera` as the module says; `tick` is called after each rendered frame (a
+/// progress bar).
+pub fn timed(
+    renderer: &mut Renderer,
+    camera: &Camera,
+    s: &RenderSettings,
+    timing: Timing,
+    tick: &mut dyn FnMut(),
+) -> Result<Timed> {
+    let warmup_ms = renderer.warm_up(camera, s, timing.warmup_ms)?;
+    let mut settings = s.clone();
+    let mut runs = Vec::new();
+    let mut last = None;
+    let mut controller = None;
+    if let Some(t) = s.cluster.target_ms {
+        let (chosen, b, f) = budget::fit(renderer, camera, s, t)?;
+        settings = chosen;
+        runs.push(f.timings_ms.clone());
+        last = Some(f);
+        controller = Some(b);
+        tick();
+    }
+    for _ in runs.len() as u32..timing.repeat.max(1) {
+        let f = renderer.render(camera, &settings)?;
+        runs.push(f.timings_ms.clone());
+        last = Some(f);
+        tick();
+    }
+    Ok(Timed {
+        frame: last.expect("at least one frame"),
+        settings,
+        timings_ms: best_of_runs(&runs),
+        warmup_ms,
+        budget: controller,
+    })
+}
+
+/// Every timing key of the contract (`Pass::TIMED` and `frame`), so readers can index them; passes
+/// that did not run read 0.
+pub fn timing_keys() -> impl Iterator<Item = &'static str> {
+    Pass::TIMED
+        .iter()
+        .map(|p| p.name())
+        .chain([super::frame::FRAME_KEY])
+}
+
+/// Mean of the `k` smallest values (all of them if fewer): the paper's "3-best" timing.
+pub fn mean_of_best(values: &[f64], k: usize) -> f64 {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    let k = k.clamp(1, v.len());
+    v[..k].iter().sum::<f64>() / k as f64
+}
+
+/// Per-key mean of the 3 best over several runs' timings, with every contract key present.
+pub fn best_of_runs(runs: &[BTreeMap<String, f64>]) -> BTreeMap<String, f64> {
+    let mut keys: Vec<String> = timing_keys().map(String::from).collect();
+    for r in runs {
+        for k in r.keys() {
+            if !keys.contains(k) {
+                keys.push(k.clone());
+            }
+        }
+    }
+    keys.into_iter()
+        .map(|k| {
+            let vals: Vec<f64> = runs
+                .iter()
+                .map(|r| r.get(&k).copied().unwrap_or(0.0))
+                .collect();
+            (k, mean_of_best(&vals, 3))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn best_three_of_ten() {
+        let v = [9.0, 1.0, 8.0, 2.0, 7.0, 3.0, 6.0, 4.0, 5.0, 10.0];
+        assert_eq!(mean_of_best(&v, 3), 2.0);
+        assert_eq!(mean_of_best(&[5.0], 3), 5.0);
+        assert_eq!(mean_of_best(&[], 3), 0.0);
+    }
+
+    #[test]
+    fn every_contract_key_present() {
+        let mut r = BTreeMap::new();
+        r.insert("primary".to_string(), 2.0);
+        let b = best_of_runs(&[r]);
+        for k in timing_keys() {
+            assert!(b.contains_key(k), "{k}");
+        }
+        // The contract's ten, and the other methods' six (docs/methods.md).
+        assert_eq!(timing_keys().count(), 16);
+        assert_eq!(b["primary"], 2.0);
+        assert_eq!(b["vpl_trace"], 0.0);
+    }
+}
