@@ -434,7 +434,7 @@ fn bench_compares_the_methods() {
     assert_eq!(code, 0, "{err}");
     let text = std::fs::read_to_string(d.join("results.csv")).unwrap();
     let rows = fuzzy_vpl::bench::csv::from_csv(&text).unwrap();
-    let methods: Vec<Method> = rows.iter().map(|r| r.method).collect();
+    let methods: Vec<Method> = rows.iter().map(|r| r.method.method).collect();
     assert_eq!(methods, Method::ALL);
     let modes: Vec<&str> = rows.iter().map(|r| r.mode.as_str()).collect();
     assert_eq!(modes, ["weighted", "wang", "lightcluster", "cvrtgi"]);

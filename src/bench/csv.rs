@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::method::Method;
+use crate::method::{Method, MethodSettings};
 use crate::render::pipeline::{FRAME_KEY, Pass};
 use crate::settings::Gamma;
 use anyhow::{Context, Result, bail};
@@ -60,8 +60,10 @@ pub struct Row {
     /// without it read off.
     pub plane_gate_deg: Option<f32>,
     /// The method (`method::Method`, by its command-line name; docs/methods.md), after
-    /// `plane_gate_deg`; files without the column read `colom`.
-    pub method: Method,
+    /// `plane_gate_deg`; files without the column read `colom`. Its knobs are the last columns
+    /// (`MethodSettings::columns`: the row's own method's filled, the others' empty); files
+    /// without them read the defaults.
+    pub method: MethodSettings,
     /// The indirect light's ms: `frame` less `primary` and `direct` (every method's own passes, the
     /// measure the methods are compared by); files without it read `frame − primary − direct`.
     pub indirect_ms: f64,
@@ -134,6 +136,7 @@ pub fn header() -> Vec<String> {
     h.extend(ERROR_COLUMNS.map(String::from));
     h.extend(METHOD_COLUMNS.map(String::from));
     h.extend(ADAPTER_COLUMNS.map(String::from));
+    h.extend(MethodSettings::columns().into_iter().map(String::from));
     h
 }
 
@@ -141,7 +144,7 @@ pub fn header() -> Vec<String> {
 pub const ADAPTER_COLUMNS: [&str; 2] = ["adapter", "driver"];
 
 /// The method's columns, the last ones (after the error columns): `method` (the
-/// `settings::Method`'s name) and `indirect_ms`. Files written before them have neither.
+/// `method::Method`'s name) and `indirect_ms`. Files written before them have neither.
 pub const METHOD_COLUMNS: [&str; 2] = ["method", "indirect_ms"];
 
 /// The error columns added after `plane_gate_deg`, in order.
@@ -198,8 +201,9 @@ fn record(r: &Row) -> Vec<String> {
         ]
         .map(opt),
     );
-    v.extend([r.method.name().into(), format!("{}", r.indirect_ms)]);
+    v.extend([r.method.method.name().into(), format!("{}", r.indirect_ms)]);
     v.extend([r.adapter.clone(), r.driver.clone()]);
+    v.extend(r.method.column_values());
     v
 }
 
@@ -326,16 +330,25 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
             flip_border: opt_num("flip_border")?,
             target_ms: opt_num("target_ms")?,
             front_mse: opt_num("front_mse")?,
-            method: match head.iter().any(|h| h == "method") {
-                true => <Method as clap::ValueEnum>::from_str(get("method"), false)
-                    .map_err(|e| anyhow::anyhow!("line {}: method: {e}", i + 2))?,
-                false => Method::Colom,
+            method: MethodSettings {
+                method: match head.iter().any(|h| h == "method") {
+                    true => <Method as clap::ValueEnum>::from_str(get("method"), false)
+                        .map_err(|e| anyhow::anyhow!("line {}: method: {e}", i + 2))?,
+                    false => Method::Colom,
+                },
+                ..Default::default()
             },
             indirect_ms: 0.0,
             adapter: get_or_empty("adapter").into(),
             driver: get_or_empty("driver").into(),
         });
         let r = rows.last_mut().unwrap();
+        for name in MethodSettings::columns() {
+            let text = get_or_empty(name);
+            if let Some(Err(e)) = r.method.set_column(name, text).filter(|_| !text.is_empty()) {
+                bail!("line {}: {name} {text:?}: {e}", i + 2);
+            }
+        }
         r.indirect_ms = if head.iter().any(|h| h == "indirect_ms") {
             num("indirect_ms")?
         } else {
@@ -400,7 +413,7 @@ pub(crate) mod tests {
             flip_border: Some(bias * 0.06),
             target_ms: None,
             front_mse: None,
-            method: Method::Colom,
+            method: MethodSettings::default(),
             indirect_ms: 0.0,
             adapter: "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Mesa 22.3.6 (LLVM 15.0.6))".into(),
             driver: "llvmpipe Mesa 22.3.6 (LLVM 15.0.6)".into(),
@@ -426,6 +439,27 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn a_method_row_keeps_its_knobs_in_their_columns() {
+        let mut r = synthetic("lightcluster", 0, 0);
+        r.method.method = Method::LightCluster;
+        assert!(r.method.set_column("d_init", "0.25").unwrap().is_ok());
+        let text = to_csv(std::slice::from_ref(&r));
+        let back = from_csv(&text).unwrap();
+        assert_eq!(back[0].method, r.method);
+        assert_eq!(back[0].method.lightcluster.d_init, 0.25);
+        // Its own knob filled, the other methods' empty.
+        let head = split_line(text.lines().next().unwrap());
+        let line = split_line(text.lines().nth(1).unwrap());
+        let at = |name: &str| line[head.iter().position(|h| h == name).unwrap()].clone();
+        assert_eq!(at("d_init"), "0.25");
+        assert_eq!(at("wang_alpha"), "");
+        // A knob out of its range is refused with its line and column.
+        let bad = text.replace(",0.25", ",-3");
+        let e = from_csv(&bad).unwrap_err().to_string();
+        assert!(e.contains("line 2") && e.contains("d_init"), "{e}");
+    }
+
+    #[test]
     fn older_files_without_the_last_columns_read() {
         let mut r = synthetic("hard", 48, 128);
         r.gamma_used = None;
@@ -437,6 +471,9 @@ pub(crate) mod tests {
                 f[..f.len() - n].to_vec()
             }))
         };
+        // Drop the method knob columns: a file of the version before them.
+        let csv = cut_n(&csv, MethodSettings::columns().len());
+        assert_eq!(from_csv(&csv).unwrap(), vec![r.clone()]);
         // Drop the adapter columns: a file of the version before them.
         let a = ADAPTER_COLUMNS.len();
         let csv = cut_n(&csv, a);
@@ -449,7 +486,10 @@ pub(crate) mod tests {
         // Drop the method columns: a file of the version before them (with the error columns).
         let m = METHOD_COLUMNS.len();
         let back = from_csv(&cut_n(&csv, m)).unwrap();
-        assert_eq!((back[0].method, back[0].flip), (Method::Colom, r.flip));
+        assert_eq!(
+            (back[0].method.method, back[0].flip),
+            (Method::Colom, r.flip)
+        );
         // Drop also the error columns: a file of the version before them.
         let n = ERROR_COLUMNS.len();
         let before = from_csv(&cut_n(&csv, m + n)).unwrap();
@@ -462,7 +502,7 @@ pub(crate) mod tests {
         assert_eq!(back[0].weight_exponent, 1.0);
         assert_eq!(back[0].gamma_used, None);
         assert_eq!(back[0].plane_gate_deg, None);
-        assert_eq!(back[0].method, Method::Colom);
+        assert_eq!(back[0].method.method, Method::Colom);
         let want = r.frame_ms() - r.stage("primary") - r.stage("direct");
         assert!((back[0].indirect_ms - want).abs() < 1e-9);
         assert_eq!(back[0].label, r.label);

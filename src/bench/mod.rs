@@ -453,7 +453,7 @@ impl Bench<'_> {
             shadow_rays: frame.shadow_rays,
             repeat: self.plan.repeat,
             label: String::new(),
-            method: c.method.method,
+            method: c.method,
             indirect_ms: frame_ms - stage(Pass::Primary) - stage(Pass::Direct),
             adapter: self.ctx.adapter_name.clone(),
             driver: self.ctx.driver.clone(),
@@ -514,7 +514,10 @@ impl Bench<'_> {
             "Modes: Pareto front of time and MSE".to_string(),
             pareto_png,
         ));
-        if just.iter().any(|r| r.method != just[0].method) {
+        if just
+            .iter()
+            .any(|r| r.method.method != just[0].method.method)
+        {
             let methods_png = format!("methods{suffix}.png");
             plot::methods(
                 &out.join(&methods_png),

@@ -379,8 +379,8 @@ pub fn methods(path: &Path, title: &str, rows: &[Row]) -> Result<()> {
     let (mlo, mhi) = log_range(rows.iter().map(|r| r.mse));
     let mut names: Vec<Method> = Vec::new();
     for r in rows {
-        if !names.contains(&r.method) {
-            names.push(r.method);
+        if !names.contains(&r.method.method) {
+            names.push(r.method.method);
         }
     }
     render_png(path, |root| {
@@ -397,7 +397,7 @@ pub fn methods(path: &Path, title: &str, rows: &[Row]) -> Result<()> {
             .map_err(plot_err)?;
         for &m in &names {
             let c = method_colour(m);
-            let sel: Vec<&Row> = rows.iter().filter(|r| r.method == m).collect();
+            let sel: Vec<&Row> = rows.iter().filter(|r| r.method.method == m).collect();
             let pts: Vec<(f64, f64)> = sel
                 .iter()
                 .map(|r| (r.indirect_ms.max(1e-3), r.mse.max(1e-12)))

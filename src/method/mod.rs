@@ -209,6 +209,38 @@ impl MethodSettings {
     pub fn room(&self) -> Option<&'static Room> {
         room(self.method)
     }
+
+    /// Every method's knobs as columns of the bench's `results.csv`, in order (its last columns).
+    pub fn columns() -> Vec<&'static str> {
+        [
+            wang::settings::WangSettings::NAMES,
+            lightcluster::settings::LightClusterSettings::NAMES,
+            cvrtgi::settings::CvrtgiSettings::NAMES,
+        ]
+        .concat()
+    }
+
+    /// A row's values of `columns()`: its own method's knobs, empty for the other methods'.
+    pub fn column_values(&self) -> Vec<String> {
+        let own = |m: Method, v: Vec<String>| match self.method == m {
+            true => v,
+            false => vec![String::new(); v.len()],
+        };
+        [
+            own(Method::Wang, self.wang.values()),
+            own(Method::LightCluster, self.lightcluster.values()),
+            own(Method::Cvrtgi, self.cvrtgi.values()),
+        ]
+        .concat()
+    }
+
+    /// Sets the knob of column `name` from its text; `None` when no method has that knob.
+    pub fn set_column(&mut self, name: &str, text: &str) -> Option<Result<(), Invalid>> {
+        self.wang
+            .set(name, text)
+            .or_else(|| self.lightcluster.set(name, text))
+            .or_else(|| self.cvrtgi.set(name, text))
+    }
 }
 
 /// `bench`'s lists: the methods to compare and each method's knob lists.

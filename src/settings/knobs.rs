@@ -42,6 +42,19 @@ macro_rules! knobs {
             pub fn values(&self) -> Vec<String> {
                 vec![$(self.$field.to_string()),+]
             }
+
+            /// Sets knob `name` from its text (as the CSV holds it) with its value parser; `None`
+            /// when `name` is not one of these knobs.
+            pub fn set(
+                &mut self,
+                name: &str,
+                text: &str,
+            ) -> Option<Result<(), $crate::settings::Invalid>> {
+                match name {
+                    $(stringify!($field) => Some($parser(text).map(|v| self.$field = v)),)+
+                    _ => None,
+                }
+            }
         }
 
         #[doc = concat!("`bench`'s lists of `", stringify!($Settings), "`'s knobs: a configuration takes one value of each (an empty list: the default).")]
@@ -135,6 +148,11 @@ mod tests {
         assert!(Cli::try_parse_from(["x", "--a", "12"]).is_err());
         assert_eq!(Pair::NAMES, &["a", "b"]);
         assert_eq!(Pair { a: 7, b: 0.25 }.values(), vec!["7", "0.25"]);
+        let mut p = Pair::default();
+        assert_eq!(p.set("b", "0.25"), Some(Ok(())));
+        assert_eq!(p, Pair { a: 3, b: 0.25 });
+        assert!(matches!(p.set("a", "12"), Some(Err(_))));
+        assert_eq!(p.set("c", "1"), None);
         let l = Bench::parse_from(["x", "--a", "1,2,1", "--b", "0,1"]).lists;
         let c = l.configs();
         let want = [(1, 0.0), (1, 1.0), (2, 0.0), (2, 1.0)].map(|(a, b)| Pair { a, b });

@@ -1,0 +1,83 @@
+#!/usr/bin/env python3
+"""The dependency graph of src/'s top-level modules (`crate::X` and `use crate::{X, ..}` outside
+`#[cfg(test)]` blocks), printed one module a line, and any cycle between them (exit 1 on a cycle).
+Also counts production imports of `cpu::` (the CPU twins) and the files outside each method's folder
+that name it."""
+import collections
+import os
+import re
+import sys
+
+root = os.path.join(os.path.dirname(__file__), "..", "src")
+tops = set()
+for f in os.listdir(root):
+    if f.endswith(".rs") and f not in ("lib.rs", "main.rs"):
+        tops.add(f[:-3])
+    elif os.path.isdir(os.path.join(root, f)):
+        tops.add(f)
+edges = collections.defaultdict(set)
+cpu_imports = []
+for dp, _, fn in os.walk(root):
+    for f in fn:
+        if not f.endswith(".rs"):
+            continue
+        p = os.path.join(dp, f)
+        rel = os.path.relpath(p, root).split(os.sep)
+        top = rel[0][:-3] if rel[0].endswith(".rs") else rel[0]
+        if top in ("lib", "main"):
+            continue
+        src = re.split(r"#\[cfg\(test\)\]", open(p).read())[0]
+        code = "\n".join(l for l in src.split("\n") if not l.strip().startswith("//"))
+        for m in re.findall(r"crate::(\w+)", code):
+            if m in tops and m != top:
+                edges[top].add(m)
+        for group in re.findall(r"use crate::\{([^}]*)\}", code):
+            for n in re.findall(r"(\w+)", group):
+                if n in tops and n != top:
+                    edges[top].add(n)
+        if top != "cpu" and re.search(r"\bcpu::", code):
+            cpu_imports.append(os.path.relpath(p, root))
+for k in sorted(edges):
+    print(f"{k} -> {', '.join(sorted(edges[k]))}")
+index, low, stack, on, sccs, counter = {}, {}, [], set(), [], [0]
+
+
+def visit(v):
+    index[v] = low[v] = counter[0]
+    counter[0] += 1
+    stack.append(v)
+    on.add(v)
+    for w in edges[v]:
+        if w not in index:
+            visit(w)
+            low[v] = min(low[v], low[w])
+        elif w in on:
+            low[v] = min(low[v], index[w])
+    if low[v] == index[v]:
+        scc = []
+        while True:
+            w = stack.pop()
+            on.discard(w)
+            scc.append(w)
+            if w == v:
+                break
+        sccs.append(scc)
+
+
+for v in sorted(tops):
+    if v not in index:
+        visit(v)
+cycles = [s for s in sccs if len(s) > 1]
+print(f"cycles: {len(cycles)} {cycles if cycles else ''}")
+print(f"production imports of cpu::: {len(cpu_imports)} {cpu_imports if cpu_imports else ''}")
+methods = os.path.join(root, "method")
+for m in sorted(d for d in os.listdir(methods) if os.path.isdir(os.path.join(methods, d))):
+    named = []
+    for dp, _, fn in os.walk(root):
+        for f in fn:
+            p = os.path.join(dp, f)
+            if f.endswith(".rs") and not os.path.relpath(p, root).startswith(f"method{os.sep}{m}{os.sep}"):
+                if m in open(p).read().lower():
+                    named.append(os.path.relpath(p, root))
+    print(f"{m}: named in {len(named)} files outside src/method/{m}/: {', '.join(sorted(named))}")
+sys.exit(1 if cycles or cpu_imports else 0)
