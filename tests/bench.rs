@@ -337,6 +337,17 @@ fn header_has_the_contract_columns_in_order() {
         "indirect_ms",
         "adapter",
         "driver",
+        // Every method's knobs (docs/design.md), the last columns.
+        "wang_alpha",
+        "d_init",
+        "voxel_res",
+        "cluster_step",
+        "cluster_iterations",
+        "cluster_angle",
+        "face_rays",
+        "near_voxels",
+        "filter_radius",
+        "filter_passes",
     ];
     assert_eq!(h, want.map(String::from));
     let csv = csv::to_csv(&[]);
