@@ -13,6 +13,12 @@ struct VisParams {
     // Rows of the previous frame's matrix (same lights) whose kept representatives may be copied
     // instead of traced: 0 for none (temporal reuse off, or the lights changed).
     reuse_rows: u32,
+    // 1: skip pairs that do not face each other (`--visibility-facing on`, not in the paper); 0:
+    // V is pure visibility, as the paper's (the default).
+    facing: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 @group(1) @binding(1) var<uniform> params: VisParams;
@@ -52,9 +58,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         let c1 = min(c0 + 32u, params.num_lights);
         for (var c = c0; c < c1; c++) {
             let l = Vpl(light_texel(3u * c), light_texel(3u * c + 1u), vec4<f32>(0.0));
-            // Only pairs that can exchange light need a ray (both cosines positive).
+            // With the facing test, only pairs that can exchange light get a ray (both cosines
+            // positive); the paper's V is pure visibility (Eq. 6 applies the pixel's own cosines).
             let d = l.pos.xyz - p;
-            if dot(n, d) <= 0.0 || dot(l.nrm.xyz, d) >= 0.0 {
+            if params.facing != 0u && (dot(n, d) <= 0.0 || dot(l.nrm.xyz, d) >= 0.0) {
                 continue;
             }
             if vpl_visible(p, n, l.pos.xyz, l.nrm.xyz) {

@@ -56,7 +56,8 @@ fn shading_pairs(
     assert_eq!(on_gpu, reps, "representative points");
     let lights = &r.lights.as_ref().unwrap().list.lights;
     let cpu = common::cpu_scene(r, s);
-    let (bits, words) = shade::visibility_bits(&cpu, &reps, lights);
+    let facing = fs.cluster.visibility_facing;
+    let (bits, words) = shade::visibility_bits(&cpu, &reps, lights, facing);
     let d_min = fs.frame.clamp * s.extent();
     sps.iter()
         .enumerate()
@@ -84,21 +85,25 @@ fn clustered_shading_matches_cpu_twin() {
     let s = scene::load("builtin:conference").unwrap();
     let mut r = Renderer::new(&ctx, &s).unwrap();
     let (w, h) = (40u32, 30u32);
-    for weighting in [
-        Weighting::Hard,
-        Weighting::Uniform,
-        Weighting::InverseDistance,
+    // The three modes with the paper's pure visibility (the default), and the facing test.
+    for (weighting, facing) in [
+        (Weighting::Hard, false),
+        (Weighting::Uniform, false),
+        (Weighting::InverseDistance, false),
+        (Weighting::InverseDistance, true),
     ] {
         let fs = {
             let mut rs = clustered(w, h);
             rs.cluster.weighting = weighting;
+            rs.cluster.visibility_facing = facing;
             rs
         };
         let f = r.render(&s.default_camera(), &fs).unwrap();
         // Every pixel, at the measured maximum × 2 on software (docs/testing.md, "Twin
         // tolerances": 2.6e-8 at most over the three modes).
         let pairs = shading_pairs(&ctx, &r, &s, &f, &fs);
-        common::assert_twins(&ctx, &format!("shading {weighting:?}"), pairs, 5.3e-8);
+        let name = format!("shading {weighting:?} facing {facing}");
+        common::assert_twins(&ctx, &name, pairs, 5.3e-8);
     }
 }
 

@@ -25,7 +25,7 @@ use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::gi::reference::{GatherInputs, Reference};
 use fuzzy_vpl::gi::scene_gpu::SceneGpu;
 use fuzzy_vpl::gi::shade::{Shade, ShadeInputs, ShadeParams};
-use fuzzy_vpl::gi::visibility::{Previous, Visibility};
+use fuzzy_vpl::gi::visibility::{Previous, VisInputs, Visibility};
 use fuzzy_vpl::gi::vpl_cluster;
 use fuzzy_vpl::gi::vpl_trace::{Vpl, VplSet};
 use fuzzy_vpl::gpu::{GpuContext, profiler::Profiler};
@@ -693,6 +693,7 @@ fn run_visibility(
     lights: &wgpu::Buffer,
     num_lights: u32,
     previous: Option<&Previous>,
+    facing: bool,
 ) -> Vec<u32> {
     let vis = Visibility::new(ctx, gpu);
     let rep_points = ctx.storage_init("rep points", reps);
@@ -702,13 +703,83 @@ fn run_visibility(
         scene: gpu,
         profiler: &mut prof,
     };
-    let k = reps.len() as u32;
-    let (bits, words) = vis.record(&mut g, &rep_points, lights, num_lights, k, previous);
-    ctx.read_buffer(&bits, (k * words) as usize).unwrap()
+    let inputs = VisInputs {
+        rep_points: &rep_points,
+        lights,
+        num_lights,
+        k_sp: reps.len() as u32,
+        previous,
+        facing,
+    };
+    let (bits, words) = vis.record(&mut g, &inputs);
+    ctx.read_buffer(&bits, (inputs.k_sp * words) as usize)
+        .unwrap()
 }
 
-/// The visibility pass (step 5) on one occluder quad and the lights of `occluder_lights`, and the
-/// radiance the shading pass lets through its matrix. Rows: P0 (row 0), the same point without a
+/// The paper's V, the default: pure visibility. On the occluder quad of
+/// `gpu_visibility_matrix_and_its_radiance_by_hand`, P0's row has every light nothing blocks,
+/// whether or not the pair faces each other: c0, c5 and c36 as with the facing test, and also c2
+/// (facing away), c3 (under P0's plane) and c4 (grazing), whose shadow rays (along +z below the
+/// quad, along −z and along +x) meet nothing: words (0x3d, 0x10); a row without a representative
+/// stays (0, 0). The radiance through that matrix is the same 0.438625: Eq. (6) gives c2, c3 and c4
+/// nothing through their own cosines. The setting's default is off (a test in `src/settings`).
+#[test]
+fn gpu_visibility_is_pure_visibility_by_default() {
+    let ctx = common::gpu();
+    let sc = occluder_quad();
+    let bvh = SceneBvh::build(&sc).unwrap();
+    let gpu = SceneGpu::upload(&ctx, &sc, &bvh);
+    let lights = occluder_lights();
+    let n = lights.len() as u32;
+    let lights_buf = ctx.storage_init("lights", &lights);
+    let reps = [
+        rep(Vec3::ZERO, UP, true, false),
+        rep(Vec3::ZERO, UP, false, false),
+    ];
+    let facing = fuzzy_vpl::settings::ClusterSettings::default().visibility_facing;
+    assert!(!facing, "the paper's V is pure visibility");
+    let bits = run_visibility(&ctx, &gpu, &reps, &lights_buf, n, None, facing);
+    let want: [u32; 4] = [0x3d, 0x10, 0, 0];
+    assert_eq!(bits, want, "bits {bits:08x?}, by hand {want:08x?}");
+    let sps = vec![sp(Vec3::ZERO, UP, [0.5; 3])];
+    let gbuffer = ctx.storage_init("gbuffer", &sps);
+    let indirect = ctx.storage("indirect", 16);
+    let mut prof = Profiler::new(&ctx);
+    let mut g = Gpu {
+        ctx: &ctx,
+        scene: &gpu,
+        profiler: &mut prof,
+    };
+    Shade::new().record(
+        &mut g,
+        &ShadeInputs {
+            gbuffer: &gbuffer,
+            lights: &lights_buf,
+            bits: &ctx.storage_init("bits", &bits),
+            assign: &ctx.storage_init("assign", &[0u32]),
+            weights: &ctx.storage_init("weights", &[1.0f32]),
+            indirect: &indirect,
+            pixels: 1,
+            params: ShadeParams {
+                num_lights: n,
+                words: 2,
+                f: 1,
+                weighted: 1,
+                d_min2: DMIN2,
+                _pad: [0; 3],
+            },
+        },
+    );
+    let got: Vec<[f32; 4]> = ctx.read_buffer(&indirect, 1).unwrap();
+    for c in 0..3 {
+        let rel = (got[0][c] - 0.438625).abs() / 0.438625;
+        assert!(rel < 2e-6, "radiance {:?}, by hand 0.438625", got[0]);
+    }
+}
+
+/// The visibility pass (step 5) with the facing test (`--visibility-facing on`, not the paper's) on
+/// one occluder quad and the lights of `occluder_lights`, and the radiance the shading pass lets
+/// through its matrix. Rows: P0 (row 0), the same point without a
 /// representative (row 1: the pass writes 0 without tracing), P1 (row 2). By hand (bit c of word
 /// c / 32):
 /// - row 0: c0, c5, c36 → words (0x21, 0x10);
@@ -748,7 +819,7 @@ fn gpu_visibility_matrix_and_its_radiance_by_hand() {
         ]
     };
     let traced: [u32; 6] = [0x21, 0x10, 0, 0, 0xffff_ff82, 0xf];
-    let bits = run_visibility(&ctx, &gpu, &reps([false; 3]), &lights_buf, n, None);
+    let bits = run_visibility(&ctx, &gpu, &reps([false; 3]), &lights_buf, n, None, true);
     assert_eq!(
         bits, traced,
         "bit matrix (rows of 2 words): {bits:08x?}, by hand {traced:08x?}"
@@ -869,7 +940,7 @@ fn gpu_visibility_matrix_and_its_radiance_by_hand() {
     ];
     for (name, kept, rows, words, want) in cases {
         let p = prev(rows, words);
-        let got = run_visibility(&ctx, &gpu, &reps(kept), &lights_buf, n, Some(&p));
+        let got = run_visibility(&ctx, &gpu, &reps(kept), &lights_buf, n, Some(&p), true);
         assert_eq!(got, want, "{name}: {got:08x?}, by hand {want:08x?}");
     }
 }

@@ -9,8 +9,14 @@ use crate::gi::primary::ShadingPoint;
 use crate::gi::vpl_trace::Vpl;
 
 /// The visibility bit matrix: row k (SP cluster with representative point `reps[k]`, or none), bit c
-/// set when light c's representative is visible from it. Returns (bits, words per row).
-pub fn visibility_bits(cpu: &CpuScene, reps: &[RepPoint], lights: &[Vpl]) -> (Vec<u32>, usize) {
+/// set when light c's representative is visible from it (with `facing`, only when they also face
+/// each other). Returns (bits, words per row).
+pub fn visibility_bits(
+    cpu: &CpuScene,
+    reps: &[RepPoint],
+    lights: &[Vpl],
+    facing: bool,
+) -> (Vec<u32>, usize) {
     let words = lights.len().div_ceil(32).max(1);
     let mut bits = vec![0u32; reps.len() * words];
     for (k, rep) in reps.iter().enumerate() {
@@ -20,7 +26,7 @@ pub fn visibility_bits(cpu: &CpuScene, reps: &[RepPoint], lights: &[Vpl]) -> (Ve
         for (c, l) in lights.iter().enumerate() {
             let d = Vec3::new(l.pos[0], l.pos[1], l.pos[2]) - rep.pos;
             let ln = Vec3::new(l.nrm[0], l.nrm[1], l.nrm[2]);
-            if rep.nrm.dot(d) <= 0.0 || ln.dot(d) >= 0.0 {
+            if facing && (rep.nrm.dot(d) <= 0.0 || ln.dot(d) >= 0.0) {
                 continue;
             }
             if cpu.vpl_visible(rep.pos, rep.nrm, l) {

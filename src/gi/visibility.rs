@@ -16,6 +16,8 @@ struct VisParams {
     num_lights: u32,
     words: u32,
     reuse_rows: u32,
+    facing: u32,
+    _pad: [u32; 3],
 }
 
 /// The previous frame's visibility matrix, for rows a warm start may copy (the light list must be
@@ -28,6 +30,20 @@ pub struct Previous {
 
 pub struct Visibility {
     kernel: Kernel,
+}
+
+/// What step 5 reads: the SP-cluster representatives (`kmeans.wgsl` `rep_points`, `k_sp` of them),
+/// the lights (`num_lights` VPLs or VPL-cluster representatives), the previous frame's matrix whose
+/// rows a warm start may copy, and `facing`: skip (bit 0) pairs whose representatives do not face
+/// each other (`ClusterSettings::visibility_facing`); off, V is pure visibility, as in the paper.
+#[derive(Clone, Copy)]
+pub struct VisInputs<'a> {
+    pub rep_points: &'a wgpu::Buffer,
+    pub lights: &'a wgpu::Buffer,
+    pub num_lights: u32,
+    pub k_sp: u32,
+    pub previous: Option<&'a Previous>,
+    pub facing: bool,
 }
 
 impl Visibility {
@@ -45,15 +61,15 @@ impl Visibility {
     }
 
     /// Returns the bit matrix (`k_sp` rows of ceil(num_lights / 32) words) and the words per row.
-    pub fn record(
-        &self,
-        g: &mut Gpu,
-        rep_points: &wgpu::Buffer,
-        lights: &wgpu::Buffer,
-        num_lights: u32,
-        k_sp: u32,
-        previous: Option<&Previous>,
-    ) -> (wgpu::Buffer, u32) {
+    pub fn record(&self, g: &mut Gpu, i: &VisInputs) -> (wgpu::Buffer, u32) {
+        let VisInputs {
+            rep_points,
+            lights,
+            num_lights,
+            k_sp,
+            previous,
+            facing,
+        } = *i;
         let ctx = g.ctx;
         let words = num_lights.div_ceil(32).max(1);
         let params = ctx.uniform(
@@ -65,6 +81,8 @@ impl Visibility {
                 reuse_rows: previous
                     .filter(|p| p.words == words)
                     .map_or(0, |p| p.rows.min(k_sp)),
+                facing: facing as u32,
+                _pad: [0; 3],
             },
         );
         let none = ctx.storage("no previous bits", 4);

@@ -290,11 +290,14 @@ impl Renderer<'_> {
         let previous = r.previous_visibility.take();
         let (bits, words) = self.visibility.record(
             &mut gpu!(self),
-            &c.rep_points,
-            &lights.buffer,
-            num_lights,
-            c.k(),
-            previous.as_ref().map(|p| &p.matrix),
+            &crate::gi::visibility::VisInputs {
+                rep_points: &c.rep_points,
+                lights: &lights.buffer,
+                num_lights,
+                k_sp: c.k(),
+                previous: previous.as_ref().map(|p| &p.matrix),
+                facing: s.cluster.visibility_facing,
+            },
         );
         let reps: Vec<u32> = ctx.read_buffer(&c.reps, c.k() as usize * 2)?;
         r.counts.sp_used = reps.chunks(2).filter(|r| r[1] != u32::MAX).count() as u32;

@@ -263,6 +263,12 @@ pub struct ClusterSettings {
     /// change (docs/temporal.md). A single `render` has no past: only --repeat's later renders reuse.
     #[arg(long, default_value = "off", value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub temporal: bool,
+    /// Not in the paper (off by default): step 5 traces only representative pairs that face each
+    /// other (both cosines positive) and leaves the others' V at 0. The paper's V is pure
+    /// visibility; Eq. (6) applies each pixel's own cosines (docs/clustering.md, "V and the facing
+    /// test").
+    #[arg(long, default_value = "off", value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    pub visibility_facing: bool,
     /// A GPU-time budget for the frame in ms (> 0): K_SP and K_VPL are chosen to meet it (`render`:
     /// a few frames adjusting them, K_SP following K_VPL on a line through the paper's intermediate
     /// setting; `view`: adjusted while
@@ -286,6 +292,7 @@ impl Default for ClusterSettings {
             plane_gate: None,
             weights_to_reps: false,
             temporal: false,
+            visibility_facing: false,
             target_ms: None,
         }
     }
@@ -570,6 +577,24 @@ mod tests {
         assert!(parse_light_scale("inf").is_err() && parse_light_scale("-1").is_err());
         assert_eq!(parse_on_off("on"), Ok(true));
         assert!(parse_on_off("yes").is_err());
+    }
+
+    /// The paper's V is pure visibility: the facing test is an option, off unless asked.
+    #[test]
+    fn visibility_is_pure_by_default() {
+        use clap::Parser;
+        #[derive(Parser)]
+        struct Cli {
+            #[command(flatten)]
+            c: ClusterSettings,
+        }
+        assert!(!ClusterSettings::default().visibility_facing);
+        assert!(!Cli::parse_from(["x"]).c.visibility_facing);
+        assert!(
+            Cli::parse_from(["x", "--visibility-facing", "on"])
+                .c
+                .visibility_facing
+        );
     }
 
     #[test]
