@@ -11,7 +11,8 @@ macro_rules! knobs {
         pub struct $Settings:ident, lists $Lists:ident, heading $heading:expr;
         $(
             $(#[doc = $doc:expr])*
-            $field:ident: $ty:ty = $default:expr, parse $parser:path;
+            $field:ident: $ty:ty = $default:expr, parse $parser:path
+                $(, sweep [$($sweep:expr),+ $(,)?])?;
         )+
     ) => {
         $(#[doc = $sdoc])*
@@ -75,8 +76,11 @@ macro_rules! knobs {
                 let d = $Settings::default();
                 let mut out = vec![d];
                 $(
+                    // An empty list: the knob's sweep list where it has one, else its default.
+                    let default: Vec<$ty> = vec![$($($sweep),+)?];
+                    let default = if default.is_empty() { vec![d.$field] } else { default };
                     let values: &[$ty] = if self.$field.is_empty() {
-                        std::slice::from_ref(&d.$field)
+                        &default
                     } else {
                         &self.$field
                     };
@@ -123,7 +127,7 @@ mod tests {
         /// The first.
         a: u32 = 3, parse parse_small;
         /// The second.
-        b: f32 = 0.5, parse parse_half;
+        b: f32 = 0.5, parse parse_half, sweep [0.25, 0.75];
     }
 
     #[test]
@@ -157,7 +161,9 @@ mod tests {
         let c = l.configs();
         let want = [(1, 0.0), (1, 1.0), (2, 0.0), (2, 1.0)].map(|(a, b)| Pair { a, b });
         assert_eq!(c, want);
-        assert_eq!(PairLists::default().configs(), vec![Pair::default()]);
+        // An empty list: the default, or the knob's sweep list.
+        let swept = [(3, 0.25), (3, 0.75)].map(|(a, b)| Pair { a, b });
+        assert_eq!(PairLists::default().configs(), swept);
         assert!(Bench::try_parse_from(["x", "--b", "0,2"]).is_err());
         // serde: the field names, and a missing field takes its default.
         let j: Pair = serde_json::from_str(r#"{"a": 5}"#).unwrap();
