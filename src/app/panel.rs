@@ -406,7 +406,7 @@ impl Viewer {
                     ui.colored_label(
                         Color32::from_rgb(255, 170, 60),
                         format!(
-                            "render scale lowered to {lower:.2} ({w}x{h}): the GI device holds at most {most} pixels a frame"
+                            "image lowered to {lower:.2} of the area ({w}x{h}): the GI device holds at most {most} pixels a frame"
                         ),
                     );
                 }

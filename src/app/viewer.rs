@@ -251,16 +251,17 @@ impl Viewer {
         self.last_motion.elapsed() < Duration::from_millis(300)
     }
 
-    /// The GI image size at full render scale (lowered to what the worker's device holds).
+    /// The size of a GI frame at rest: the image area's (lowered to what the worker's device
+    /// holds); its indirect light is at the render scale (`FrameSettings::indirect_scale`).
     pub fn full_size(&self) -> (u32, u32) {
         self.gi_size().0
     }
 
-    /// The GI size at full render scale and, when the device cannot hold that many pixels, the
-    /// lower render scale used instead.
+    /// The GI frame's size at rest and, when the device cannot hold the image area's pixels, the
+    /// scale of the area it was lowered to.
     pub fn gi_size(&self) -> ((u32, u32), Option<f32>) {
         let most = self.info.as_ref().map_or(u64::MAX, |i| i.max_pixels);
-        gi_size(self.area_px, self.s.render_scale, most)
+        gi_size(self.area_px, 1.0, most)
     }
 
     /// Sends a frame job when the camera, settings or size changed (progressive: a preview while

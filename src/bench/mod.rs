@@ -273,6 +273,9 @@ pub fn run(ctx: &GpuContext, scene: &Scene, plan: &BenchPlan) -> Result<BenchRep
             if let Some(tm) = target_ms {
                 label = format!("target {tm} ms {label}");
             }
+            if frame.ran(Pass::Upsample) {
+                label = format!("{label} indirect x{}", s.frame.indirect_scale);
+            }
             let stages_ms: BTreeMap<String, f64> = csv::stages()
                 .map(|k| (k.to_string(), t.get(k).copied().unwrap_or(0.0)))
                 .collect();

@@ -7,6 +7,7 @@ pub mod lightcluster;
 pub mod rng;
 pub mod shade;
 pub mod shading;
+pub mod upsample;
 pub mod voxel;
 pub mod vpl;
 pub mod wang;

@@ -16,6 +16,7 @@ pub mod reference;
 pub mod resident;
 pub mod scene_gpu;
 pub mod shade;
+pub mod upsample;
 pub mod visibility;
 pub mod vpl_cluster;
 pub mod vpl_trace;

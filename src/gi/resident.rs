@@ -91,6 +91,8 @@ pub struct Renderer<'a> {
     pub(super) lightcluster: std::cell::OnceCell<super::lightcluster::LightCluster>,
     /// cvrtgi's pipelines and resident stages (built on its first frame).
     pub(super) cvrtgi: super::cvrtgi::Cvrtgi,
+    /// The indirect light at the render scale (`gi::upsample`).
+    pub(super) upsample: super::upsample::Upsampler,
     /// The last frame's G-buffer and its pixel count (`direct_again`, `last_gbuffer`).
     pub(super) gbuffer: Option<(wgpu::Buffer, u32)>,
     /// The last frame's camera (render units), for `direct_again`'s jittered primary rays.
@@ -120,14 +122,18 @@ impl<'a> Renderer<'a> {
             return Ok(None);
         }
         let f = c.f().max(1) as usize;
-        let all: Vec<u32> = self.ctx.read_buffer(&c.assign, n * f)?;
+        // A render-scale clustering labels each image pixel with its low-res pixel's cluster.
+        let image = (frame.width, frame.height);
+        let low = self.upsample.last_low.unwrap_or(image);
+        let all: Vec<u32> = self
+            .ctx
+            .read_buffer(&c.assign, (low.0 * low.1) as usize * f)?;
         Ok(Some(
-            all.iter()
-                .step_by(f)
+            (0..n as u32)
                 .zip(&frame.positions)
-                .map(|(&l, p)| {
+                .map(|(i, p)| {
                     if p[3] > 0.0 {
-                        l
+                        all[super::upsample::low_pixel(i, image, low) as usize * f]
                     } else {
                         crate::metrics::NO_LABEL
                     }
@@ -194,6 +200,7 @@ impl<'a> Renderer<'a> {
             wang: Default::default(),
             lightcluster: Default::default(),
             cvrtgi: Default::default(),
+            upsample: Default::default(),
             profiler: Profiler::new(ctx),
             gbuffer: None,
             last_camera: None,
