@@ -12,6 +12,11 @@ use super::views::View;
 use crate::settings::{Method, Weighting};
 
 pub const PANEL_WIDTH: f32 = 380.0;
+/// The height of the stats strip under the image (Stats | Reference & error, Screenshots). The
+/// default window is the image area plus the panel's width and this height: 1020 × 730 for the
+/// default 640 × 480 area, which fits a 1280 × 800 screen with a taskbar and shows the panel's
+/// Camera, Lights and View & clustering sections without scrolling.
+pub const STATS_HEIGHT: f32 = 250.0;
 
 impl Viewer {
     /// The whole window's UI.
@@ -22,9 +27,34 @@ impl Viewer {
             .size_range(PANEL_WIDTH * 0.8..=PANEL_WIDTH * 3.0)
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| {
-                    // Long lines wrap instead of being cut at the panel's edge.
+                    // Long lines wrap instead of being cut at the panel's edge; rows 2 px apart
+                    // (egui's 3) so that Camera, Lights and View & clustering fit 730 px.
                     ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Wrap);
+                    ui.spacing_mut().item_spacing.y = 2.0;
                     self.panel(ui)
+                });
+            });
+        egui::Panel::bottom("stats")
+            .resizable(true)
+            .default_size(STATS_HEIGHT)
+            .size_range(60.0..=STATS_HEIGHT * 4.0)
+            .show(ui, |ui| {
+                // The strip keeps its height (scroll areas that fill it, not shrink to content).
+                ui.columns(2, |cols| {
+                    let scroll = |id| {
+                        egui::ScrollArea::vertical()
+                            .id_salt(id)
+                            .auto_shrink([false, false])
+                    };
+                    scroll("stats").show(&mut cols[0], |ui| {
+                        ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Wrap);
+                        self.stats_section(ui)
+                    });
+                    scroll("reference").show(&mut cols[1], |ui| {
+                        ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Wrap);
+                        self.reference_section(ui);
+                        self.screenshot_section(ui);
+                    });
                 });
             });
         egui::CentralPanel::no_frame()
@@ -33,19 +63,23 @@ impl Viewer {
     }
 
     fn panel(&mut self, ui: &mut Ui) {
-        ui.heading("fuzzy-vpl");
         match &self.info {
             Some(i) => {
-                ui.label(format!("{} — {} triangles", i.spec, i.triangles));
+                ui.horizontal_wrapped(|ui| {
+                    ui.heading("fuzzy-vpl");
+                    ui.label(format!("{} — {} triangles", i.spec, i.triangles));
+                });
                 ui.label(RichText::new(&i.adapter).small().weak());
             }
             None if !self.worker_gone => {
+                ui.heading("fuzzy-vpl");
                 ui.horizontal(|ui| {
                     ui.spinner();
                     ui.label(format!("loading {}", self.spec));
                 });
             }
             None => {
+                ui.heading("fuzzy-vpl");
                 ui.label(format!("{}: not loaded", self.spec));
             }
         }
@@ -62,9 +96,6 @@ impl Viewer {
         self.camera_section(ui);
         self.lights_section(ui);
         self.settings_section(ui);
-        self.stats_section(ui);
-        self.reference_section(ui);
-        self.screenshot_section(ui);
     }
 
     fn scene_section(&mut self, ui: &mut Ui) {
@@ -129,15 +160,15 @@ impl Viewer {
                     if ui.button("reset").clicked() {
                         self.reset_camera();
                     }
+                    ui.label(
+                        RichText::new(match self.cam_mode {
+                            CamMode::Fly => "right-drag: look\nWASD/QE: move · wheel: speed",
+                            CamMode::Orbit => "drag: orbit · wheel: zoom\nWASD: move",
+                        })
+                        .small()
+                        .weak(),
+                    );
                 });
-                ui.label(
-                    RichText::new(match self.cam_mode {
-                        CamMode::Fly => "right-drag: look · WASD/QE: move · wheel: speed",
-                        CamMode::Orbit => "right/left-drag: orbit · wheel: zoom · WASD: move",
-                    })
-                    .small()
-                    .weak(),
-                );
                 ui.add(
                     Slider::new(&mut self.speed, 1e-4..=1e4)
                         .logarithmic(true)
@@ -214,8 +245,6 @@ impl Viewer {
                     for v in View::ALL {
                         ui.selectable_value(&mut self.view, v, v.name());
                     }
-                });
-                ui.horizontal_wrapped(|ui| {
                     if ui
                         .button("pin as B")
                         .on_hover_text(
