@@ -473,6 +473,8 @@ pub struct Viewer {
     /// The composed view of the latest frame (frame id, display key, RGBA, note): reprojected to
     /// every new camera while the next frame renders.
     composed: Option<(u64, String, Vec<u8>, Option<&'static str>)>,
+    /// `composed` thinned to the render scale for reprojection (frame id, display key, image).
+    thinned: Option<(u64, String, reproject::Thinned)>,
     /// The camera the image area shows.
     pub shown_camera: Option<crate::scene::Camera>,
     /// The lights as the panel edits them (the scene's until changed).

@@ -88,6 +88,7 @@ impl Viewer {
             }),
             motion: motion::Motion::default(),
             composed: None,
+            thinned: None,
             shown_camera: None,
             lights: lights::LightSet {
                 lights: Vec::new(),
@@ -576,8 +577,8 @@ impl Viewer {
         }
         self.image_dirty = false;
         let r = self.latest.as_ref()?;
-        let (w, h) = (r.frame.width, r.frame.height);
-        let (_, _, rgba, note) = self.composed.as_ref()?;
+        let (mut w, mut h) = (r.frame.width, r.frame.height);
+        let (id, dkey, rgba, note) = self.composed.as_ref()?;
         self.note = *note;
         let now = self.cam.to_camera();
         let from = &r.job.camera;
@@ -586,10 +587,23 @@ impl Viewer {
             && *from != now
             && r.frame.positions.len() == (w * h) as usize
         {
+            // A frame at rest has the image area's pixels: reprojected every window frame on the
+            // CPU, it is thinned once to the render scale's (what the previews have at most).
+            let step = (1.0 / self.s.render_scale.clamp(0.05, 1.0)).floor() as usize;
+            let f = &r.frame;
+            let stale = |t: &(u64, String, reproject::Thinned)| {
+                (t.0, &t.1) != (*id, dkey) || t.2.step != step
+            };
+            if self.thinned.as_ref().is_none_or(stale) {
+                let t = reproject::Thinned::new(rgba, &f.positions, &f.normals, (w, h), step);
+                self.thinned = Some((*id, dkey.clone(), t));
+            }
+            let t = &self.thinned.as_ref().expect("set").2;
+            (w, h) = t.size;
             reprojected = reproject::reproject(
-                rgba,
-                &r.frame.positions,
-                &r.frame.normals,
+                &t.rgba,
+                &t.positions,
+                &t.normals,
                 &crate::gi::primary::CameraParams::new(from, w, h),
                 &crate::gi::primary::CameraParams::new(&now, w, h),
             );
