@@ -423,7 +423,8 @@ pub struct FrameSettings {
     /// The indirect light's resolution as a fraction of the image's, (0, 1]: below 1 the
     /// primary rays and the direct light stay at the image's size and the indirect light is
     /// computed on a G-buffer of this scale, then upsampled with depth- and normal-aware weights
-    /// (`gi::upsample`). The unclustered reference ignores it. Written to the stats only when not 1.
+    /// (`gi::upsample`). The unclustered reference ignores it; `view` takes it from --render-scale.
+    /// Written to the stats only when not 1.
     #[arg(long, default_value_t = 1.0, value_parser = parse_indirect_scale)]
     #[serde(skip_serializing_if = "is_one")]
     pub indirect_scale: f32,
