@@ -156,6 +156,8 @@ impl UiSettings {
             frame: FrameSettings {
                 width,
                 height,
+                // The image at its own size, the indirect light at the render scale.
+                indirect_scale: self.render_scale.clamp(0.05, 1.0),
                 ..self.frame
             },
             cluster: ClusterSettings {
@@ -459,6 +461,8 @@ pub struct Viewer {
     /// The composed view of the latest frame (frame id, display key, RGBA, note): reprojected to
     /// every new camera while the next frame renders.
     composed: Option<(u64, String, Vec<u8>, Option<&'static str>)>,
+    /// `composed` thinned to the render scale for reprojection (frame id, display key, image).
+    thinned: Option<(u64, String, reproject::Thinned)>,
     /// The camera the image area shows.
     pub shown_camera: Option<crate::scene::Camera>,
     /// The lights as the panel edits them (the scene's until changed).
@@ -477,10 +481,13 @@ pub struct Viewer {
 /// The preview a moving camera renders: a quarter of the pixels (half scale), one direct-light
 /// sample a pixel (docs/temporal.md measures what it saves).
 pub fn preview_settings(s: RenderSettings) -> RenderSettings {
+    let f = &s.frame;
+    let half = |side: u32| ((side as f32 * f.indirect_scale) as u32 / 2).max(8);
     RenderSettings {
         frame: FrameSettings {
-            width: (s.frame.width / 2).max(8),
-            height: (s.frame.height / 2).max(8),
+            width: half(f.width),
+            height: half(f.height),
+            indirect_scale: 1.0,
             direct_samples: 1,
             ..s.frame
         },

@@ -5,14 +5,19 @@ use std::sync::atomic::Ordering;
 
 use egui::{Color32, Key, PointerButton, RichText, Sense, Slider, Ui};
 
-use super::Viewer;
 use super::camera::Mode as CamMode;
 use super::settings::Bookmark;
 use super::views::View;
+use super::{SliderRanges, UiSettings, Viewer};
 use crate::method::Method;
 use crate::settings::Weighting;
 
 pub const PANEL_WIDTH: f32 = 380.0;
+/// The height of the stats strip under the image (Stats | Reference & error, Screenshots). The
+/// default window is the image area plus the panel's width and this height: 1020 × 730 for the
+/// default 640 × 480 area, which fits a 1280 × 800 screen with a taskbar and shows the panel's
+/// Camera, Lights and View & clustering sections without scrolling.
+pub const STATS_HEIGHT: f32 = 250.0;
 
 impl Viewer {
     /// The whole window's UI.
@@ -23,9 +28,34 @@ impl Viewer {
             .size_range(PANEL_WIDTH * 0.8..=PANEL_WIDTH * 3.0)
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| {
-                    // Long lines wrap instead of being cut at the panel's edge.
+                    // Long lines wrap instead of being cut at the panel's edge; rows 2 px apart
+                    // (egui's 3) so that Camera, Lights and View & clustering fit 730 px.
                     ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Wrap);
+                    ui.spacing_mut().item_spacing.y = 2.0;
                     self.panel(ui)
+                });
+            });
+        egui::Panel::bottom("stats")
+            .resizable(true)
+            .default_size(STATS_HEIGHT)
+            .size_range(60.0..=STATS_HEIGHT * 4.0)
+            .show(ui, |ui| {
+                // The strip keeps its height (scroll areas that fill it, not shrink to content).
+                ui.columns(2, |cols| {
+                    let scroll = |id| {
+                        egui::ScrollArea::vertical()
+                            .id_salt(id)
+                            .auto_shrink([false, false])
+                    };
+                    scroll("stats").show(&mut cols[0], |ui| {
+                        ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Wrap);
+                        self.stats_section(ui)
+                    });
+                    scroll("reference").show(&mut cols[1], |ui| {
+                        ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Wrap);
+                        self.reference_section(ui);
+                        self.screenshot_section(ui);
+                    });
                 });
             });
         egui::CentralPanel::no_frame()
@@ -34,19 +64,23 @@ impl Viewer {
     }
 
     fn panel(&mut self, ui: &mut Ui) {
-        ui.heading("fuzzy-vpl");
         match &self.info {
             Some(i) => {
-                ui.label(format!("{} — {} triangles", i.spec, i.triangles));
+                ui.horizontal_wrapped(|ui| {
+                    ui.heading("fuzzy-vpl");
+                    ui.label(format!("{} — {} triangles", i.spec, i.triangles));
+                });
                 ui.label(RichText::new(&i.adapter).small().weak());
             }
             None if !self.worker_gone => {
+                ui.heading("fuzzy-vpl");
                 ui.horizontal(|ui| {
                     ui.spinner();
                     ui.label(format!("loading {}", self.spec));
                 });
             }
             None => {
+                ui.heading("fuzzy-vpl");
                 ui.label(format!("{}: not loaded", self.spec));
             }
         }
@@ -63,9 +97,6 @@ impl Viewer {
         self.camera_section(ui);
         self.lights_section(ui);
         self.settings_section(ui);
-        self.stats_section(ui);
-        self.reference_section(ui);
-        self.screenshot_section(ui);
     }
 
     fn scene_section(&mut self, ui: &mut Ui) {
@@ -130,15 +161,15 @@ impl Viewer {
                     if ui.button("reset").clicked() {
                         self.reset_camera();
                     }
+                    ui.label(
+                        RichText::new(match self.cam_mode {
+                            CamMode::Fly => "right-drag: look\nWASD/QE: move · wheel: speed",
+                            CamMode::Orbit => "drag: orbit · wheel: zoom\nWASD: move",
+                        })
+                        .small()
+                        .weak(),
+                    );
                 });
-                ui.label(
-                    RichText::new(match self.cam_mode {
-                        CamMode::Fly => "right-drag: look · WASD/QE: move · wheel: speed",
-                        CamMode::Orbit => "right/left-drag: orbit · wheel: zoom · WASD: move",
-                    })
-                    .small()
-                    .weak(),
-                );
                 ui.add(
                     Slider::new(&mut self.speed, 1e-4..=1e4)
                         .logarithmic(true)
@@ -215,8 +246,6 @@ impl Viewer {
                     for v in View::ALL {
                         ui.selectable_value(&mut self.view, v, v.name());
                     }
-                });
-                ui.horizontal_wrapped(|ui| {
                     if ui
                         .button("pin as B")
                         .on_hover_text(
@@ -245,117 +274,10 @@ impl Viewer {
                 let gamma_used = self.latest.as_ref().and_then(|l| l.frame.gamma_used);
                 let auto_e = self.latest.as_ref().filter(|_| self.s.exposure_auto);
                 let auto_e = auto_e.map(|l| crate::exposure::auto_exposure(&l.frame.radiance));
-                let s = &mut self.s;
-                let r = &self.ranges;
-                ui.horizontal(|ui| {
-                    ui.label("method");
-                    ui.selectable_value(&mut s.method.method, Method::Colom, "colom")
-                        .on_hover_text(
-                            "Colom et al. 2022: fuzzy k-means of SPs and VPLs, Eq. (6) per pixel \
-                             and VPL cluster (docs/methods.md)",
-                        );
-                    for r in crate::method::ROOMS {
-                        ui.selectable_value(&mut s.method.method, r.method, r.method.name())
-                            .on_hover_text(r.about);
-                    }
-                });
-                let colom = s.method.method == Method::Colom;
-                if let Some(r) = s.method.room() {
-                    (r.ui)(ui, &mut s.method);
-                }
-                ui.add_enabled_ui(colom, |ui| {
-                    ui.horizontal(|ui| {
-                        ui.selectable_value(&mut s.cluster.weighting, Weighting::Hard, "hard");
-                        ui.selectable_value(&mut s.cluster.weighting, Weighting::Uniform, "fuzzy (uniform)");
-                        ui.selectable_value(&mut s.cluster.weighting, Weighting::InverseDistance, "weighted");
-                    });
-                });
-                ui.horizontal(|ui| {
-                    ui.checkbox(&mut s.sp_on, "SP clustering");
-                    ui.checkbox(&mut s.vpl_on, "VPL clustering");
-                    ui.checkbox(&mut s.direct_on, "direct");
-                });
-                ui.horizontal(|ui| {
-                    let mut on = s.cluster.target_ms.is_some();
-                    ui.checkbox(&mut on, "time budget")
-                        .on_hover_text("K_SP and K_VPL chosen to hold this GPU time a frame");
-                    let mut ms = s.cluster.target_ms.unwrap_or(500.0);
-                    ui.add_enabled(
-                        on,
-                        egui::DragValue::new(&mut ms)
-                            .range(1.0..=100_000.0)
-                            .speed(5.0)
-                            .suffix(" ms"),
-                    );
-                    s.cluster.target_ms = on.then_some(ms);
-                });
-                ui.checkbox(&mut s.cluster.temporal, "temporal reuse").on_hover_text(
-                    "Reproject the last frame while moving, start the clusterings from the last \
-                     frame's, accumulate the direct light at rest (docs/temporal.md)",
-                );
-                ui.add_enabled(
-                    s.sp_on,
-                    Slider::new(&mut s.cluster.sp_clusters, 1..=r.sp_clusters)
-                        .logarithmic(true)
-                        .text("K (SP clusters)"),
-                );
-                ui.add_enabled(
-                    s.vpl_on,
-                    Slider::new(&mut s.cluster.vpl_clusters, 1..=r.vpl_clusters)
-                        .logarithmic(true)
-                        .text("K_VPL"),
-                );
-                ui.add(
-                    Slider::new(&mut s.frame.vpls, 0..=r.vpls)
-                        .logarithmic(true)
-                        .text("VPLs"),
-                );
-                ui.add_enabled(
-                    colom && s.cluster.weighting != Weighting::Hard,
-                    Slider::new(&mut s.cluster.fuzziness, 1..=16).text("F (fuzziness)"),
-                );
-                ui.add_enabled(
-                    colom && s.cluster.weighting == Weighting::InverseDistance,
-                    Slider::new(&mut s.cluster.weight_exponent, 0.0..=r.weight_exponent)
-                        .text("p (weights = dist^-p; Eq. 10: 1)"),
-                );
-                ui.add_enabled_ui(colom && s.cluster.weighting != Weighting::Hard, |ui| {
-                    ui.horizontal(|ui| {
-                        ui.checkbox(&mut s.plane_gate_on, "plane gate")
-                            .on_hover_text(
-                                "Not in the paper: slots 2..F keep only SP clusters whose centroid \
-                                 lies within this angle of the pixel's tangent plane",
-                            );
-                        ui.add_enabled(
-                            s.plane_gate_on,
-                            Slider::new(&mut s.plane_gate_deg, r.plane_gate_min..=90.0).suffix("°"),
-                        );
-                    });
-                });
-                ui.horizontal(|ui| {
-                    let auto = ui.checkbox(&mut s.gamma_auto, "auto γ").on_hover_text(
-                        "γ from the pixels and K: the largest in 4..16 that keeps 40 sampled \
-                         points a cluster and 19,200 in all (docs/clustering.md)",
-                    );
-                    if auto.changed()
-                        && !s.gamma_auto
-                        && let Some(g) = gamma_used
-                    {
-                        s.gamma = g.clamp(1, r.gamma);
-                    }
-                    ui.add_enabled(
-                        !s.gamma_auto,
-                        Slider::new(&mut s.gamma, 1..=r.gamma).text("γ (downsampling)"),
-                    );
-                });
-                let cos = s.nt_degrees.to_radians().cos();
-                ui.add(
-                    Slider::new(&mut s.nt_degrees, 0.0..=180.0)
-                        .suffix("°")
-                        .text(format!("n_t (cos {cos:.3})")),
-                );
-                ui.add(Slider::new(&mut s.cluster.iterations, 0..=r.iterations).text("k-means iterations"));
+                method_controls(ui, &mut self.s);
+                clustering_controls(ui, &mut self.s, &self.ranges, gamma_used);
                 ui.separator();
+                let (s, r) = (&mut self.s, &self.ranges);
                 ui.horizontal(|ui| {
                     ui.checkbox(&mut s.exposure_auto, "auto").on_hover_text(
                         "the frame's log-average luminance shown as middle grey 0.18 \
@@ -375,7 +297,7 @@ impl Viewer {
                     ui.colored_label(
                         Color32::from_rgb(255, 170, 60),
                         format!(
-                            "render scale lowered to {lower:.2} ({w}x{h}): the GI device holds at most {most} pixels a frame"
+                            "image lowered to {lower:.2} of the area ({w}x{h}): the GI device holds at most {most} pixels a frame"
                         ),
                     );
                 }
@@ -758,4 +680,139 @@ impl Viewer {
             ui.ctx().request_repaint();
         }
     }
+}
+
+/// The method selector and the chosen method's own knobs (its room's panel section).
+fn method_controls(ui: &mut Ui, s: &mut UiSettings) {
+    ui.horizontal(|ui| {
+        ui.label("method");
+        ui.selectable_value(&mut s.method.method, Method::Colom, "colom")
+            .on_hover_text(
+                "Colom et al. 2022: fuzzy k-means of SPs and VPLs, Eq. (6) per pixel \
+                     and VPL cluster (docs/methods.md)",
+            );
+        for r in crate::method::ROOMS {
+            ui.selectable_value(&mut s.method.method, r.method, r.method.name())
+                .on_hover_text(r.about);
+        }
+    });
+    if let Some(r) = s.method.room() {
+        (r.ui)(ui, &mut s.method);
+    }
+}
+
+/// colom's clustering: the weighting, which clusterings run, the time budget, temporal reuse and
+/// the paper's knobs (K, K_VPL, VPLs, F, p, the plane gate, γ, n_t, iterations); the knobs only
+/// colom uses are greyed out for the other methods.
+fn clustering_controls(ui: &mut Ui, s: &mut UiSettings, r: &SliderRanges, gamma_used: Option<u32>) {
+    let colom = s.method.method == Method::Colom;
+    ui.add_enabled_ui(colom, |ui| {
+        ui.horizontal(|ui| {
+            ui.selectable_value(&mut s.cluster.weighting, Weighting::Hard, "hard");
+            ui.selectable_value(
+                &mut s.cluster.weighting,
+                Weighting::Uniform,
+                "fuzzy (uniform)",
+            );
+            ui.selectable_value(
+                &mut s.cluster.weighting,
+                Weighting::InverseDistance,
+                "weighted",
+            );
+        });
+    });
+    ui.horizontal(|ui| {
+        ui.checkbox(&mut s.sp_on, "SP clustering");
+        ui.checkbox(&mut s.vpl_on, "VPL clustering");
+        ui.checkbox(&mut s.direct_on, "direct");
+    });
+    ui.horizontal(|ui| {
+        let mut on = s.cluster.target_ms.is_some();
+        ui.checkbox(&mut on, "time budget")
+            .on_hover_text("K_SP and K_VPL chosen to hold this GPU time a frame");
+        let mut ms = s.cluster.target_ms.unwrap_or(500.0);
+        ui.add_enabled(
+            on,
+            egui::DragValue::new(&mut ms)
+                .range(1.0..=100_000.0)
+                .speed(5.0)
+                .suffix(" ms"),
+        );
+        s.cluster.target_ms = on.then_some(ms);
+    });
+    ui.checkbox(&mut s.cluster.temporal, "temporal reuse")
+        .on_hover_text(
+            "Reproject the last frame while moving, start the clusterings from the last \
+             frame's, accumulate the direct light at rest (docs/temporal.md)",
+        );
+    ui.add_enabled(
+        s.sp_on,
+        Slider::new(&mut s.cluster.sp_clusters, 1..=r.sp_clusters)
+            .logarithmic(true)
+            .text("K (SP clusters)"),
+    );
+    ui.add_enabled(
+        s.vpl_on,
+        Slider::new(&mut s.cluster.vpl_clusters, 1..=r.vpl_clusters)
+            .logarithmic(true)
+            .text("K_VPL"),
+    );
+    ui.add(
+        Slider::new(&mut s.frame.vpls, 0..=r.vpls)
+            .logarithmic(true)
+            .text("VPLs"),
+    );
+    ui.add_enabled(
+        colom && s.cluster.weighting != Weighting::Hard,
+        Slider::new(&mut s.cluster.fuzziness, 1..=16).text("F (fuzziness)"),
+    );
+    ui.add_enabled(
+        colom && s.cluster.weighting == Weighting::InverseDistance,
+        Slider::new(&mut s.cluster.weight_exponent, 0.0..=r.weight_exponent)
+            .text("p (weights = dist^-p; Eq. 10: 1)"),
+    );
+    ui.add_enabled(
+        colom && s.cluster.weighting == Weighting::InverseDistance,
+        egui::Checkbox::new(&mut s.cluster.weights_to_reps, "weights to representatives"),
+    )
+    .on_hover_text(
+        "Eq. (10)'s distances to the SP clusters' representatives (the paper's text) instead of \
+         their centroids (Alg. 2); view --weights-to-reps",
+    );
+    ui.add_enabled_ui(colom && s.cluster.weighting != Weighting::Hard, |ui| {
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut s.plane_gate_on, "plane gate")
+                .on_hover_text(
+                    "Not in the paper: slots 2..F keep only SP clusters whose centroid \
+                         lies within this angle of the pixel's tangent plane",
+                );
+            ui.add_enabled(
+                s.plane_gate_on,
+                Slider::new(&mut s.plane_gate_deg, r.plane_gate_min..=90.0).suffix("°"),
+            );
+        });
+    });
+    ui.horizontal(|ui| {
+        let auto = ui.checkbox(&mut s.gamma_auto, "auto γ").on_hover_text(
+            "γ from the pixels and K: the largest in 4..16 that keeps 40 sampled \
+                 points a cluster and 19,200 in all (docs/clustering.md)",
+        );
+        if auto.changed()
+            && !s.gamma_auto
+            && let Some(g) = gamma_used
+        {
+            s.gamma = g.clamp(1, r.gamma);
+        }
+        ui.add_enabled(
+            !s.gamma_auto,
+            Slider::new(&mut s.gamma, 1..=r.gamma).text("γ (downsampling)"),
+        );
+    });
+    let cos = s.nt_degrees.to_radians().cos();
+    ui.add(
+        Slider::new(&mut s.nt_degrees, 0.0..=180.0)
+            .suffix("°")
+            .text(format!("n_t (cos {cos:.3})")),
+    );
+    ui.add(Slider::new(&mut s.cluster.iterations, 0..=r.iterations).text("k-means iterations"));
 }

@@ -22,6 +22,55 @@ const SAME_DEPTH: f32 = 0.03;
 /// ... and its normal within this cosine (about 25°) of the splatted pixel's.
 const SAME_COS: f32 = 0.9;
 
+/// An image with its shading points, keeping every `step`-th pixel in each axis (all of them at step
+/// 1): what a frame larger than the previews is reprojected from while the camera moves.
+pub struct Thinned {
+    pub step: usize,
+    pub size: (u32, u32),
+    pub rgba: Vec<u8>,
+    pub positions: Vec<[f32; 4]>,
+    pub normals: Vec<[f32; 4]>,
+}
+
+impl Thinned {
+    pub fn new(
+        rgba: &[u8],
+        positions: &[[f32; 4]],
+        normals: &[[f32; 4]],
+        (w, h): (u32, u32),
+        step: usize,
+    ) -> Thinned {
+        let step = step.max(1);
+        let (tw, th) = (w as usize / step, h as usize / step);
+        if step == 1 || tw == 0 || th == 0 {
+            return Thinned {
+                step: 1,
+                size: (w, h),
+                rgba: rgba.to_vec(),
+                positions: positions.to_vec(),
+                normals: normals.to_vec(),
+            };
+        }
+        let kept: Vec<usize> = (0..tw * th)
+            .map(|i| (i / tw * step) * w as usize + i % tw * step)
+            .collect();
+        Thinned {
+            step,
+            size: (tw as u32, th as u32),
+            rgba: kept
+                .iter()
+                .flat_map(|&i| rgba[i * 4..i * 4 + 4].to_vec())
+                .collect(),
+            positions: kept.iter().map(|&i| positions[i]).collect(),
+            normals: if normals.is_empty() {
+                Vec::new()
+            } else {
+                kept.iter().map(|&i| normals[i]).collect()
+            },
+        }
+    }
+}
+
 /// `rgba` (sRGB8, `from`'s size) as seen from `to` (the same size): each pixel with a shading point
 /// at `positions[i]` (w > 0, normal `normals[i]`; `normals` may be empty: no normal test) moves with
 /// it; the others (sky) move as directions behind everything.
@@ -290,6 +339,22 @@ mod tests {
             rgba.extend([(i % w as usize) as u8, (i / w as usize) as u8, 0, 255]);
         }
         (p, pos, rgba)
+    }
+
+    /// Thinning keeps every step-th pixel of each row and column, with its point; step 1 keeps all.
+    #[test]
+    fn thinning_keeps_every_step_th_pixel() {
+        let (_, pos, rgba) = plane(Vec3::ZERO, 33, 24);
+        let t = Thinned::new(&rgba, &pos, &[], (33, 24), 2);
+        assert_eq!((t.size, t.step), ((16, 12), 2));
+        for (k, px) in t.rgba.chunks(4).enumerate() {
+            let (x, y) = (k % 16 * 2, k / 16 * 2);
+            assert_eq!(px, &rgba[(y * 33 + x) * 4..(y * 33 + x) * 4 + 4]);
+            assert_eq!(t.positions[k], pos[y * 33 + x]);
+        }
+        assert!(t.normals.is_empty());
+        let all = Thinned::new(&rgba, &pos, &[], (33, 24), 1);
+        assert_eq!((all.size, all.rgba, all.positions), ((33, 24), rgba, pos));
     }
 
     #[test]

@@ -88,6 +88,7 @@ impl Viewer {
             }),
             motion: motion::Motion::default(),
             composed: None,
+            thinned: None,
             shown_camera: None,
             lights: lights::LightSet {
                 lights: Vec::new(),
@@ -251,16 +252,17 @@ impl Viewer {
         self.last_motion.elapsed() < Duration::from_millis(300)
     }
 
-    /// The GI image size at full render scale (lowered to what the worker's device holds).
+    /// The size of a GI frame at rest: the image area's (lowered to what the worker's device
+    /// holds); its indirect light is at the render scale (`FrameSettings::indirect_scale`).
     pub fn full_size(&self) -> (u32, u32) {
         self.gi_size().0
     }
 
-    /// The GI size at full render scale and, when the device cannot hold that many pixels, the
-    /// lower render scale used instead.
+    /// The GI frame's size at rest and, when the device cannot hold the image area's pixels, the
+    /// scale of the area it was lowered to.
     pub fn gi_size(&self) -> ((u32, u32), Option<f32>) {
         let most = self.info.as_ref().map_or(u64::MAX, |i| i.max_pixels);
-        gi_size(self.area_px, self.s.render_scale, most)
+        gi_size(self.area_px, 1.0, most)
     }
 
     /// Sends a frame job when the camera, settings or size changed (progressive: a preview while
@@ -550,8 +552,8 @@ impl Viewer {
         }
         self.image_dirty = false;
         let r = self.latest.as_ref()?;
-        let (w, h) = (r.frame.width, r.frame.height);
-        let (_, _, rgba, note) = self.composed.as_ref()?;
+        let (mut w, mut h) = (r.frame.width, r.frame.height);
+        let (id, dkey, rgba, note) = self.composed.as_ref()?;
         self.note = *note;
         let now = self.cam.to_camera();
         let from = &r.job.camera;
@@ -560,10 +562,23 @@ impl Viewer {
             && *from != now
             && r.frame.positions.len() == (w * h) as usize
         {
+            // A frame at rest has the image area's pixels: reprojected every window frame on the
+            // CPU, it is thinned once to the render scale's (what the previews have at most).
+            let step = (1.0 / self.s.render_scale.clamp(0.05, 1.0)).floor() as usize;
+            let f = &r.frame;
+            let stale = |t: &(u64, String, reproject::Thinned)| {
+                (t.0, &t.1) != (*id, dkey) || t.2.step != step
+            };
+            if self.thinned.as_ref().is_none_or(stale) {
+                let t = reproject::Thinned::new(rgba, &f.positions, &f.normals, (w, h), step);
+                self.thinned = Some((*id, dkey.clone(), t));
+            }
+            let t = &self.thinned.as_ref().expect("set").2;
+            (w, h) = t.size;
             reprojected = reproject::reproject(
-                rgba,
-                &r.frame.positions,
-                &r.frame.normals,
+                &t.rgba,
+                &t.positions,
+                &t.normals,
                 &crate::gi::primary::CameraParams::new(from, w, h),
                 &crate::gi::primary::CameraParams::new(&now, w, h),
             );

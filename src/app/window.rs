@@ -11,7 +11,7 @@ use winit::event::WindowEvent;
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy};
 use winit::window::{Window, WindowId};
 
-use super::panel::PANEL_WIDTH;
+use super::panel::{PANEL_WIDTH, STATS_HEIGHT};
 use super::{Unavailable, ViewOptions, Viewer};
 
 /// The one-line message for a window that cannot open.
@@ -114,7 +114,7 @@ impl App {
             .with_title(format!("fuzzy-vpl — {}", opts.spec))
             .with_inner_size(winit::dpi::LogicalSize::new(
                 opts.width as f64 + PANEL_WIDTH as f64,
-                opts.height as f64,
+                opts.height as f64 + STATS_HEIGHT as f64,
             ));
         let window = Arc::new(
             el.create_window(attrs)
@@ -147,7 +147,7 @@ impl App {
         let size = window.inner_size();
         if size.width > max_side || size.height > max_side {
             return Err(Unavailable(format!(
-                "--width/--height {}x{}: the window would be {}x{} px (with the {PANEL_WIDTH} px panel), more than the {max_side} px a side this adapter can present",
+                "--width/--height {}x{}: the window would be {}x{} px (with the {PANEL_WIDTH} px panel and the {STATS_HEIGHT} px stats strip), more than the {max_side} px a side this adapter can present",
                 opts.width, opts.height, size.width, size.height
             ))
             .into());

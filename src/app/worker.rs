@@ -253,7 +253,7 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
                 send(Reply::ReferenceCancelled);
                 continue;
             }
-            match render_guarded(&ctx, &mut renderer, &mut cache, job) {
+            match render_guarded(&mut renderer, &mut cache, job) {
                 Ok(r) => send(Reply::Reference(Box::new(r))),
                 Err(e) if e.is::<Cancelled>() => send(Reply::ReferenceCancelled),
                 Err(e) => send(Reply::Failed(format!("reference: {e:#}"))),
@@ -261,7 +261,7 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
             continue;
         }
         if let Some(job) = frame.take() {
-            match render_guarded(&ctx, &mut renderer, &mut cache, job) {
+            match render_guarded(&mut renderer, &mut cache, job) {
                 Ok(r) => {
                     if r.job.settings.cluster.temporal && !r.job.preview {
                         accumulation = Some(Accumulation::new(&r));
@@ -374,32 +374,22 @@ struct PointCache {
 /// (nothing printed on stderr), so the UI hears of it instead of waiting for a reply that never
 /// comes.
 fn render_guarded(
-    ctx: &GpuContext,
     renderer: &mut Renderer,
     cache: &mut PointCache,
     job: FrameJob,
 ) -> Result<Rendered> {
     let (w, h) = (job.settings.frame.width, job.settings.frame.height);
-    crate::panic_guard::quietly(|| render(ctx, renderer, cache, job))
+    crate::panic_guard::quietly(|| render(renderer, cache, job))
         .unwrap_or_else(|msg| Err(anyhow::anyhow!("the {w}x{h} GI frame failed: {msg}")))
 }
 
-fn render(
-    ctx: &GpuContext,
-    renderer: &mut Renderer,
-    cache: &mut PointCache,
-    job: FrameJob,
-) -> Result<Rendered> {
+fn render(renderer: &mut Renderer, cache: &mut PointCache, job: FrameJob) -> Result<Rendered> {
     let t = Instant::now();
     let frame = renderer.render(&job.camera, &job.settings)?;
-    let sp_ids = match (&renderer.sp_clustering, job.want_sp_ids) {
-        (Some(c), true) => {
-            let n = (frame.width * frame.height) as usize;
-            let f = c.f().max(1) as usize;
-            let all: Vec<u32> = ctx.read_buffer(&c.assign, n * f)?;
-            Some(all.iter().step_by(f).copied().collect())
-        }
-        _ => None,
+    // At the image's size (a render-scale clustering's labels, each image pixel its low-res one's).
+    let sp_ids = match job.want_sp_ids {
+        true => renderer.sp_labels(&frame)?,
+        false => None,
     };
     // B after the SP ids are read (they are A's clustering's).
     let b_frame = match &job.b_settings {

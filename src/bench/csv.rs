@@ -440,23 +440,42 @@ pub(crate) mod tests {
 
     #[test]
     fn a_method_row_keeps_its_knobs_in_their_columns() {
-        let mut r = synthetic("lightcluster", 0, 0);
-        r.method.method = Method::LightCluster;
-        assert!(r.method.set_column("d_init", "0.25").unwrap().is_ok());
-        let text = to_csv(std::slice::from_ref(&r));
-        let back = from_csv(&text).unwrap();
-        assert_eq!(back[0].method, r.method);
-        assert_eq!(back[0].method.lightcluster.d_init, 0.25);
-        // Its own knob filled, the other methods' empty.
-        let head = split_line(text.lines().next().unwrap());
-        let line = split_line(text.lines().nth(1).unwrap());
-        let at = |name: &str| line[head.iter().position(|h| h == name).unwrap()].clone();
-        assert_eq!(at("d_init"), "0.25");
-        assert_eq!(at("wang_alpha"), "");
-        // A knob out of its range is refused with its line and column.
-        let bad = text.replace(",0.25", ",-3");
-        let e = from_csv(&bad).unwrap_err().to_string();
-        assert!(e.contains("line 2") && e.contains("d_init"), "{e}");
+        for room in crate::method::ROOMS {
+            let mut r = synthetic(room.method.name(), 0, 0);
+            r.method.method = room.method;
+            let text = to_csv(std::slice::from_ref(&r));
+            assert_eq!(from_csv(&text).unwrap()[0].method, r.method);
+            // Its own knobs filled, the other methods' empty.
+            let head = split_line(text.lines().next().unwrap());
+            let line = split_line(text.lines().nth(1).unwrap());
+            let own: Vec<usize> = MethodSettings::columns()
+                .iter()
+                .zip(r.method.column_values())
+                .filter(|(_, v)| !v.is_empty())
+                .map(|(c, _)| head.iter().position(|h| h == c).unwrap())
+                .collect();
+            assert!(!own.is_empty(), "{}", room.method);
+            let knobs = head.len() - MethodSettings::columns().len();
+            for (i, v) in line.iter().enumerate().skip(knobs) {
+                assert_eq!(
+                    v.is_empty(),
+                    !own.contains(&i),
+                    "{} column {}",
+                    room.method,
+                    head[i]
+                );
+            }
+            // A knob set in the file reads back; one out of its range is refused with its line
+            // and column.
+            let mut f = line.clone();
+            let mut set = r.method;
+            let (col, val) = (&head[own[0]], f[own[0]].clone());
+            assert!(set.set_column(col, &val).unwrap().is_ok());
+            f[own[0]] = "-3".into();
+            let bad = write_records([head.clone(), f]);
+            let e = from_csv(&bad).unwrap_err().to_string();
+            assert!(e.contains("line 2") && e.contains(col.as_str()), "{e}");
+        }
     }
 
     #[test]

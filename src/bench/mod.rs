@@ -354,6 +354,9 @@ impl Bench<'_> {
         if let Some(tm) = target_ms {
             label = format!("target {tm} ms {label}");
         }
+        if frame.ran(Pass::Upsample) {
+            label = format!("{label} indirect x{}", t.settings.frame.indirect_scale);
+        }
         let labels = self.renderer.sp_labels(frame)?;
         let (error, flip_map) = ErrorStats::measure(
             &frame.radiance,

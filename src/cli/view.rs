@@ -18,10 +18,12 @@ pub struct ViewArgs {
     #[command(flatten)]
     scene: SceneArgs,
     /// The camera, the frame and the clustering (in `view`, the frame's size is the image area at
-    /// start, logical pixels; the window adds the side panel).
+    /// start, logical pixels; the window adds the side panel and the stats strip; the indirect
+    /// scale is the render scale).
     #[command(flatten)]
     shot: ShotArgs,
-    /// Render scale of the GI image relative to the image area, 0.1..1.
+    /// Render scale of the indirect light relative to the image area, 0.1..1 (the primary rays and
+    /// the direct light are at the image area's size; moving, previews at half this scale).
     #[arg(long, default_value_t = 0.5, value_parser = parse_render_scale)]
     render_scale: f32,
     /// Scripted run: draw N window frames once the first full GI frame is shown (with --animate: N

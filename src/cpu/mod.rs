@@ -6,5 +6,6 @@ pub mod kmeans;
 pub mod lightcluster;
 pub mod shade;
 pub mod shading;
+pub mod upsample;
 pub mod vpl;
 pub mod wang;

@@ -15,6 +15,7 @@ pub mod reference;
 pub mod rng;
 pub mod scene_gpu;
 pub mod shade;
+pub mod upsample;
 pub mod visibility;
 pub mod vpl_cluster;
 pub mod vpl_trace;

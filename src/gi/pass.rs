@@ -40,6 +40,10 @@ pub enum Pass {
     /// the VPLs stay), and every pixel's lookup (`method::cvrtgi`; GPU times under `cvrtgi.*`, the
     /// CPU stages under `cvrtgi`).
     Cvrtgi,
+    /// `--indirect-scale` below 1: the render-scale indirect light brought to the image's pixels
+    /// (`gi::upsample`; the render-scale G-buffer it is computed on is timed under `primary`). Not
+    /// in `TIMED`: its key is in `timings_ms` only when it ran, so frames at scale 1 keep theirs.
+    Upsample,
 }
 
 impl Pass {
@@ -85,6 +89,7 @@ impl Pass {
             Pass::LightClusterCluster => "lightcluster_cluster",
             Pass::LightClusterShade => "lightcluster_shade",
             Pass::Cvrtgi => "cvrtgi",
+            Pass::Upsample => "upsample",
         }
     }
 

@@ -42,6 +42,7 @@ pub const FILES: &[(&str, &str)] = wgsl![
     "lightcluster.wgsl",
     "cvrtgi.wgsl",
     "warmup.wgsl",
+    "upsample.wgsl",
 ];
 
 /// The pass shaders (top-level files; `common/` holds shared code, `kmeans/` the steps of the

@@ -37,7 +37,7 @@ use crate::method::Method;
 use crate::method::{FrameInputs, MethodCounts};
 pub use crate::render::settings::{Cancelled, Control, RenderSettings};
 use crate::scene::{Camera, Scene};
-use crate::settings::Weighting;
+use crate::settings::{FrameSettings, Weighting};
 
 /// Which passes a frame runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -51,6 +51,9 @@ pub struct Plan {
     /// unclustered passes `gather` and `reference` then run) for the reference and where the
     /// method asked does not apply (one that clusters SPs without 0 < K_SP < pixels).
     pub method: Method,
+    /// The render-scale size the indirect light is computed at when it is upsampled to the image
+    /// (`--indirect-scale` below 1, not for the reference); `None`: at the image's size.
+    pub low: Option<(u32, u32)>,
 }
 
 impl Plan {
@@ -58,7 +61,14 @@ impl Plan {
         let (f, c) = (&s.frame, &s.cluster);
         let indirect = f.vpls > 0 && scene.has_light();
         let clustered = indirect && !s.reference;
-        let sp = clustered && c.sp_clusters > 0 && c.sp_clusters < f.width * f.height;
+        let low = Some(crate::gi::upsample::indirect_size(
+            f.width,
+            f.height,
+            f.indirect_scale,
+        ))
+        .filter(|&l| clustered && l != (f.width, f.height));
+        let pixels = low.map_or(f.width * f.height, |(w, h)| w * h);
+        let sp = clustered && c.sp_clusters > 0 && c.sp_clusters < pixels;
         // A method's room runs where it applies (one clustering SPs needs 0 < K_SP < pixels);
         // elsewhere colom's unclustered passes do.
         let room = s
@@ -74,6 +84,7 @@ impl Plan {
                 && c.vpl_clusters < f.vpls,
             sp_clustering: sp && method == Method::Colom,
             method,
+            low,
         }
     }
 
@@ -97,6 +108,9 @@ impl Plan {
                 m => crate::method::room(m).expect("a method's room").passes,
             });
         }
+        if self.low.is_some() {
+            p.push(Pass::Upsample);
+        }
         p
     }
 }
@@ -116,12 +130,16 @@ pub(crate) use gpu;
 /// A frame's buffers and what its passes hand on to the next ones (the other methods' passes read
 /// it as `method::FrameInputs`).
 pub(super) struct FrameResources {
+    /// The size, camera, G-buffer and indirect light the indirect passes work on: the render
+    /// scale's when `image` is set, else the image's.
     pub pixels: u32,
     pub cam: CameraParams,
     pub gbuffer: wgpu::Buffer,
-    /// Emission + direct light.
+    /// Emission + direct light, at the image's size.
     radiance: wgpu::Buffer,
     pub indirect: wgpu::Buffer,
+    /// The image's own G-buffer and upsampled indirect light (`Plan::low`, `gi::upsample`).
+    image: Option<crate::gi::upsample::ImageBuffers>,
     /// Area-light samples a pixel the direct pass took.
     direct_samples: u32,
     /// The SP clustering (step 4) and, from step 5, its visibility matrix.
@@ -152,12 +170,19 @@ impl Renderer<'_> {
         let plan = Plan::new(&self.scene, s);
         check_visibility_size(ctx, &plan, s).map_err(anyhow::Error::msg)?;
         let passes = plan.passes();
+        let camera = self.to_render_units(camera);
+        let (lw, lh) = plan.low.unwrap_or((width, height));
+        let low = lw * lh;
         let mut r = FrameResources {
-            pixels: n,
-            cam: CameraParams::new(&self.to_render_units(camera), width, height),
-            gbuffer: ctx.storage("gbuffer", n as u64 * SP_BYTES),
+            pixels: low,
+            cam: CameraParams::new(&camera, lw, lh),
+            gbuffer: ctx.storage("gbuffer", low as u64 * SP_BYTES),
             radiance: ctx.storage("radiance", n as u64 * 16),
-            indirect: ctx.storage("indirect", n as u64 * 16),
+            indirect: ctx.storage("indirect", low as u64 * 16),
+            image: plan.low.map(|l| {
+                let cam = CameraParams::new(&camera, width, height);
+                crate::gi::upsample::ImageBuffers::new(ctx, cam, l)
+            }),
             direct_samples: 0,
             clustering: None,
             visibility: None,
@@ -167,6 +192,16 @@ impl Renderer<'_> {
             counts: MethodCounts::default(),
         };
         let previous_clustering = self.sp_clustering.take().filter(|_| s.cluster.temporal);
+        // The indirect passes see the render scale's frame.
+        let at_scale = plan.low.map(|(width, height)| RenderSettings {
+            frame: FrameSettings {
+                width,
+                height,
+                ..s.frame
+            },
+            ..s.clone()
+        });
+        let si = at_scale.as_ref().unwrap_or(s);
         for &pass in &passes {
             match pass {
                 Pass::VplTrace => {
@@ -177,24 +212,43 @@ impl Renderer<'_> {
                     }
                 }
                 Pass::VplCluster => self.ensure_lights(s, &plan)?,
-                Pass::Primary => self.primary.record(&mut gpu!(self), &r.cam, &r.gbuffer),
+                Pass::Primary => match &r.image {
+                    Some(i) => {
+                        self.primary.record(&mut gpu!(self), &i.cam, &i.gbuffer);
+                        let k = self.upsample.get(ctx);
+                        k.downsample(&mut gpu!(self), &i.params, &i.gbuffer, &r.gbuffer);
+                    }
+                    None => self.primary.record(&mut gpu!(self), &r.cam, &r.gbuffer),
+                },
                 Pass::Direct => {
                     r.direct_samples = self.direct_samples(s);
                     self.direct.record(
                         &mut gpu!(self),
-                        &r.gbuffer,
+                        r.image.as_ref().map_or(&r.gbuffer, |i| &i.gbuffer),
                         &r.radiance,
                         n,
                         r.direct_samples,
                         s.frame.seed,
                     );
                 }
-                Pass::SpCluster => self.sp_cluster(s, &mut r, previous_clustering.as_ref())?,
-                Pass::Visibility => self.visibility(s, &mut r)?,
-                Pass::Shade => self.shade(s, &r),
-                Pass::Gather | Pass::Reference => self.gather(pass, s, &mut r)?,
+                Pass::SpCluster => self.sp_cluster(si, &mut r, previous_clustering.as_ref())?,
+                Pass::Visibility => self.visibility(si, &mut r)?,
+                Pass::Shade => self.shade(si, &r),
+                Pass::Gather | Pass::Reference => self.gather(pass, si, &mut r)?,
+                Pass::Upsample => {
+                    let i = r.image.as_ref().expect("planned");
+                    let k = self.upsample.get(ctx);
+                    let gbuffers = (&i.gbuffer, &r.gbuffer);
+                    k.upsample(
+                        &mut gpu!(self),
+                        &i.params,
+                        gbuffers,
+                        &r.indirect,
+                        &i.indirect,
+                    );
+                }
                 Pass::PathTrace => unreachable!("the path tracer is `path_trace`"),
-                _ => self.method_pass(plan.method, pass, s, &mut r)?,
+                _ => self.method_pass(plan.method, pass, si, &mut r)?,
             }
         }
         self.finish(s, &plan, passes, r)
@@ -434,9 +488,19 @@ impl Renderer<'_> {
         s: &RenderSettings,
         plan: &Plan,
         passes: Vec<Pass>,
-        r: FrameResources,
+        mut r: FrameResources,
     ) -> Result<Frame> {
         let ctx = self.ctx;
+        // From here on the image's buffers; the indirect passes traced from the render scale's
+        // shading points.
+        let mut traced_points = None;
+        self.upsample.last_low = plan.low;
+        if let Some(i) = r.image.take() {
+            let low: Vec<[f32; 4]> = ctx.read_buffer(&r.gbuffer, r.pixels as usize * 4)?;
+            traced_points = Some(low.chunks(4).filter(|sp| sp[0][3] > 0.0).count() as u64);
+            (r.pixels, r.cam) = (i.cam.size[0] * i.cam.size[1], i.cam);
+            (r.gbuffer, r.indirect) = (i.gbuffer, i.indirect);
+        }
         let n = r.pixels;
         let mut timings_ms = self.profiler.collect(ctx)?;
         // A pass's CPU steps count as its time (docs/methods.md).
@@ -472,7 +536,8 @@ impl Renderer<'_> {
         let ind: Vec<[f32; 4]> = ctx.read_buffer(&r.indirect, n as usize)?;
         let sps: Vec<[f32; 4]> = ctx.read_buffer(&r.gbuffer, n as usize * 4)?;
         let valid = sps.chunks(4).filter(|sp| sp[0][3] > 0.0).count() as u32;
-        let indirect_rays = r.counts.indirect_rays + valid as u64 * r.rays_per_point;
+        let indirect_rays =
+            r.counts.indirect_rays + traced_points.unwrap_or(valid as u64) * r.rays_per_point;
         let (mut sp_iterations, mut sp_warm_kept, mut gamma_used) = (0, None, None);
         if let (Some(c), Some(v)) = (r.clustering, r.visibility) {
             sp_iterations = c.iterations_run;

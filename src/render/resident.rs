@@ -62,6 +62,8 @@ pub struct Renderer<'a> {
     pub(super) shade: Shade,
     /// The other methods' state (`method::ROOMS`), each built the first time a frame uses it.
     pub(super) methods: BTreeMap<Method, Box<dyn IndirectMethod>>,
+    /// The indirect light at the render scale (`gi::upsample`).
+    pub(super) upsample: crate::gi::upsample::Upsampler,
     /// The last frame's G-buffer and its pixel count (`direct_again`, `last_gbuffer`).
     pub(super) gbuffer: Option<(wgpu::Buffer, u32)>,
     /// The last frame's camera (render units), for `direct_again`'s jittered primary rays.
@@ -89,14 +91,18 @@ impl<'a> Renderer<'a> {
             return Ok(None);
         }
         let f = c.f().max(1) as usize;
-        let all: Vec<u32> = self.ctx.read_buffer(&c.assign, n * f)?;
+        // A render-scale clustering labels each image pixel with its low-res pixel's cluster.
+        let image = (frame.width, frame.height);
+        let low = self.upsample.last_low.unwrap_or(image);
+        let all: Vec<u32> = self
+            .ctx
+            .read_buffer(&c.assign, (low.0 * low.1) as usize * f)?;
         Ok(Some(
-            all.iter()
-                .step_by(f)
+            (0..n as u32)
                 .zip(&frame.positions)
-                .map(|(&l, p)| {
+                .map(|(i, p)| {
                     if p[3] > 0.0 {
-                        l
+                        all[crate::gi::upsample::low_pixel(i, image, low) as usize * f]
                     } else {
                         crate::metrics::NO_LABEL
                     }
@@ -167,6 +173,7 @@ impl<'a> Renderer<'a> {
             visibility: Visibility::new(ctx, &gpu),
             shade: Shade::new(),
             methods: BTreeMap::new(),
+            upsample: Default::default(),
             profiler: Profiler::new(ctx),
             gbuffer: None,
             last_camera: None,
@@ -380,3 +387,36 @@ impl<'a> Renderer<'a> {
         }
     }
 }
+
+impl Renderer<'_> {
+    /// Both kernels on given data (tests: the GPU against `cpu::upsample`): the render-scale
+    /// G-buffer `downsample` makes of `image_gbuffer` (4 vec4s a pixel), and the image's indirect
+    /// light upsampled from `low_indirect` (a vec4 a low-res pixel) on that G-buffer.
+    pub fn upsample_buffers(
+        &mut self,
+        p: &crate::gi::upsample::UpsampleParams,
+        image_gbuffer: &[[f32; 4]],
+        low_indirect: &[[f32; 4]],
+    ) -> anyhow::Result<(Vec<Vec4>, Vec<Vec4>)> {
+        let ctx = self.ctx;
+        let image = ctx.storage_init("gbuffer (image)", image_gbuffer);
+        let low = ctx.storage(
+            "gbuffer",
+            p.low_pixels() as u64 * crate::gi::primary::SP_BYTES,
+        );
+        let low_ind = ctx.storage_init("indirect", low_indirect);
+        let out = ctx.storage("indirect (image)", p.image_pixels() as u64 * 16);
+        let k = self.upsample.get(ctx);
+        let mut g = gpu!(self);
+        k.downsample(&mut g, p, &image, &low);
+        k.upsample(&mut g, p, (&image, &low), &low_ind, &out);
+        let _ = self.profiler.collect(ctx)?;
+        Ok((
+            ctx.read_buffer(&low, p.low_pixels() as usize * 4)?,
+            ctx.read_buffer(&out, p.image_pixels() as usize)?,
+        ))
+    }
+}
+
+/// One vec4 of a read-back buffer.
+type Vec4 = [f32; 4];

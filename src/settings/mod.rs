@@ -355,6 +355,18 @@ pub struct FrameSettings {
     /// [0, 1).
     #[arg(long, default_value_t = DEFAULT_CLAMP, value_parser = parse_clamp)]
     pub clamp: f32,
+    /// The indirect light's resolution as a fraction of the image's, (0, 1]: below 1 the
+    /// primary rays and the direct light stay at the image's size and the indirect light is
+    /// computed on a G-buffer of this scale, then upsampled with depth- and normal-aware weights
+    /// (`gi::upsample`). The unclustered reference ignores it; `view` takes it from --render-scale.
+    /// Written to the stats only when not 1.
+    #[arg(long, default_value_t = 1.0, value_parser = parse_indirect_scale)]
+    #[serde(skip_serializing_if = "is_one")]
+    pub indirect_scale: f32,
+}
+
+fn is_one(x: &f32) -> bool {
+    *x == 1.0
 }
 
 impl Default for FrameSettings {
@@ -368,6 +380,7 @@ impl Default for FrameSettings {
             direct_samples: 16,
             exposure: Exposure::Auto,
             clamp: DEFAULT_CLAMP,
+            indirect_scale: 1.0,
         }
     }
 }
@@ -494,6 +507,14 @@ pub fn parse_clamp(v: &str) -> Result<f32, Invalid> {
     in_range(v, |c: f32| (0.0..1.0).contains(&c), "must be in [0, 1)")
 }
 
+pub fn parse_indirect_scale(v: &str) -> Result<f32, Invalid> {
+    in_range(
+        v,
+        |x: f32| x > 0.0 && x <= 1.0,
+        "must be a fraction of the image's size in (0, 1]",
+    )
+}
+
 pub fn parse_light_scale(v: &str) -> Result<f32, Invalid> {
     in_range(
         v,
@@ -575,6 +596,11 @@ mod tests {
         assert!(parse_direct_samples("0").is_err() && parse_direct_samples("65537").is_err());
         assert!(parse_side("0").is_err() && parse_side("16385").is_err());
         assert!(parse_light_scale("inf").is_err() && parse_light_scale("-1").is_err());
+        for bad in ["0", "-0.5", "1.01", "NaN", "inf", "x"] {
+            assert!(parse_indirect_scale(bad).is_err(), "{bad}");
+        }
+        assert_eq!(parse_indirect_scale("0.5"), Ok(0.5));
+        assert_eq!(parse_indirect_scale("1"), Ok(1.0));
         assert_eq!(parse_on_off("on"), Ok(true));
         assert!(parse_on_off("yes").is_err());
     }
@@ -611,6 +637,15 @@ mod tests {
         let f = FrameSettings::default();
         let j = serde_json::to_string(&f).unwrap();
         assert_eq!(serde_json::from_str::<FrameSettings>(&j).unwrap(), f);
+        // At 1 (the default) the stats stay as they were; below 1 the scale is written.
+        assert!(!j.contains("indirect_scale"), "{j}");
+        let half = FrameSettings {
+            indirect_scale: 0.5,
+            ..f
+        };
+        let j = serde_json::to_string(&half).unwrap();
+        assert!(j.contains("\"indirect_scale\":0.5"), "{j}");
+        assert_eq!(serde_json::from_str::<FrameSettings>(&j).unwrap(), half);
     }
 }
 
