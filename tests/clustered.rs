@@ -45,7 +45,7 @@ fn shading_pairs(
 ) -> Vec<(Vec3, Vec3)> {
     let gbuf = r.last_gbuffer().unwrap();
     let sps: Vec<ShadingPoint> = gbuf.chunks(4).map(ShadingPoint::from_gpu).collect();
-    let c = r.sp_clustering.as_ref().unwrap();
+    let c = r.sp_clustering().unwrap();
     let (k, nf) = (c.k() as usize, c.f() as usize);
     let assign: Vec<u32> = ctx.read_buffer(&c.assign, sps.len() * nf).unwrap();
     let weights: Vec<f32> = ctx.read_buffer(&c.weights, sps.len() * nf).unwrap();

@@ -241,14 +241,11 @@ fn warm_sp_clustering_matches_its_twin_on_a_moving_view() {
     let cams = orbit(&sc, &r, 2, 1.0);
     let a = r.render(&cams[0], &s).unwrap();
     assert_eq!(a.sp_warm_kept, None, "the first frame has no past");
-    let prev_k = r.sp_clustering.as_ref().unwrap().k();
-    let previous = read_centroids(&ctx, &r.sp_clustering.as_ref().unwrap().centroids, prev_k);
+    let prev_k = r.sp_clustering().unwrap().k();
+    let previous = read_centroids(&ctx, &r.sp_clustering().unwrap().centroids, prev_k);
     let previous_reps = RepPoint::from_vec4s(
-        &ctx.read_buffer(
-            &r.sp_clustering.as_ref().unwrap().rep_points,
-            prev_k as usize * 2,
-        )
-        .unwrap(),
+        &ctx.read_buffer(&r.sp_clustering().unwrap().rep_points, prev_k as usize * 2)
+            .unwrap(),
     );
     let b = r.render(&cams[1], &s).unwrap();
     assert!(common::all_finite(&b.radiance));
@@ -265,7 +262,7 @@ fn warm_sp_clustering_matches_its_twin_on_a_moving_view() {
         b.sp_iterations,
         a.sp_iterations
     );
-    let c = r.sp_clustering.as_ref().unwrap();
+    let c = r.sp_clustering().unwrap();
     let gb = r.last_gbuffer().unwrap();
     let points: Vec<Point> = (0..64 * 48).map(|m| Point::from_vec4s(&gb, m, 4)).collect();
     let (twin, twin_kept) = kmeans::kmeans_warm(
@@ -351,7 +348,7 @@ fn temporal_reuse_steadies_the_error_along_an_orbit() {
             },
             ..base.clone()
         };
-        r.sp_clustering = None;
+        r.forget_past();
         let frames: Vec<_> = cams.iter().map(|c| r.render(c, &s).unwrap()).collect();
         let inst: f64 = (1..frames.len())
             .map(|i| {
@@ -559,7 +556,7 @@ fn the_warm_up_leaves_no_past() {
     let spent = r.warm_up(&cam, &rs, 5.0).unwrap();
     assert!(spent >= 5.0);
     assert!(
-        r.sp_clustering.is_none(),
+        r.sp_clustering().is_none(),
         "the untimed frame left its clustering"
     );
     let after = r.render(&cam, &rs).unwrap();
@@ -571,7 +568,7 @@ fn the_warm_up_leaves_no_past() {
     );
     // With a past, the warm-up puts it back: the next frame is warm-started from it.
     r.warm_up(&cam, &rs, 5.0).unwrap();
-    assert!(r.sp_clustering.is_some());
+    assert!(r.sp_clustering().is_some());
     let next = r.render(&cam, &rs).unwrap();
     assert!(next.sp_warm_kept.is_some());
 }

@@ -198,7 +198,7 @@ pub fn run(
             let mut s = plan.settings(c);
             s.cluster.temporal = on;
             // Pipelines built (one untimed frame on a GPU); each run starts with no past.
-            renderer.sp_clustering = None;
+            renderer.forget_past();
             renderer.warm_up(&cameras[0], &s, plan.timing.warmup_ms)?;
             let mut prev: Option<Frame> = None;
             for (i, cam) in cameras.iter().enumerate() {

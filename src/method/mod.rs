@@ -1,10 +1,12 @@
-//! The methods that compute a frame's indirect light besides colom's own passes (docs/methods.md).
-//! Each lives in its own folder: its passes (a Rust module driving the WGSL file of its name), its
-//! resident and per-frame state, and its production CPU stages. All reuse the shared passes of `gi`
-//! (VPLs, primary rays, direct light, the gather of Eq. 5) and reach the frame through one trait,
-//! `IndirectMethod`; `ROOMS` is the registry `render::pipeline` picks a method's passes and its
-//! state from. A new method is a folder and a line in `ROOMS`.
+//! The methods that compute a frame's indirect light (docs/methods.md), each in its own folder: its
+//! passes (a Rust module driving the WGSL file of its name, or the shared passes of `gi` it drives),
+//! its resident and per-frame state, its production CPU stages and its knobs. All reuse the shared
+//! passes of `gi` (VPLs, primary rays, direct light, the gather of Eq. 5) and reach the frame
+//! through one trait, `IndirectMethod`. colom (the paper) is the default and every method's
+//! reference; `ROOMS` is the registry of the others, from which `render::pipeline` picks a
+//! method's passes and state.
 
+pub mod colom;
 pub mod cvrtgi;
 pub mod lightcluster;
 pub mod wang;
@@ -54,6 +56,12 @@ pub struct MethodCounts {
     pub sp_used: u32,
     pub vpl_clusters_used: u32,
     pub cpu_ms: Vec<(Pass, f64)>,
+    /// colom's SP k-means: iterations run, centroids the warm start kept, γ used; visibility rows
+    /// copied instead of traced (`Frame`'s fields of the same names).
+    pub sp_iterations: u32,
+    pub sp_warm_kept: Option<u32>,
+    pub gamma_used: Option<u32>,
+    pub rows_reused: u32,
 }
 
 /// A method's resident state and the recording of its passes.
@@ -75,6 +83,19 @@ pub trait IndirectMethod: Any {
     ) -> BTreeMap<String, f64> {
         BTreeMap::new()
     }
+
+    /// Called after every frame, whether or not this method ran in it: a frame's state becomes
+    /// the last frame's (what temporal reuse starts from); none by default.
+    fn end_frame(&mut self) {}
+
+    /// Takes the state the next frame would start from (`Renderer::warm_up` renders an untimed
+    /// frame in between and puts it back); nothing by default.
+    fn take_past(&mut self) -> Box<dyn Any> {
+        Box::new(())
+    }
+
+    /// Puts back what `take_past` took.
+    fn put_past(&mut self, _past: Box<dyn Any>) {}
 
     /// The state itself, for tests and views (`Renderer::method_state`).
     fn as_any(&self) -> &dyn Any;
@@ -113,6 +134,11 @@ pub const ROOMS: &[Room] = &[wang::ROOM, lightcluster::ROOM, cvrtgi::ROOM];
 /// `method`'s room, `None` for colom.
 pub fn room(method: Method) -> Option<&'static Room> {
     ROOMS.iter().find(|r| r.method == method)
+}
+
+/// How `method`'s state is built: its room's `build`, or colom's.
+pub fn build(method: Method) -> fn(&GpuContext, &SceneGpu) -> Box<dyn IndirectMethod> {
+    room(method).map_or(colom::build, |r| r.build)
 }
 
 /// The `--help` group of the method and its knobs.

@@ -24,20 +24,16 @@ pub use super::frame::{
     FRAME_KEY, Frame, PATH_TRACE_PIXEL_BYTES, PIXEL_BYTES, TooLarge, check_frame_size,
     check_visibility_size, max_pixels, visibility_bytes,
 };
-use super::resident::LastVisibility;
 pub use super::resident::Renderer;
-use crate::gi::kmeans::{Clustering, KMeansSettings, Points};
 pub use crate::gi::pass::Pass;
 use crate::gi::primary::{CameraParams, SP_BYTES};
-use crate::gi::shade::{ShadeInputs, ShadeParams};
-use crate::gi::visibility::Previous;
 pub use crate::gi::vpl_cluster::LightKey;
 pub use crate::gi::vpl_trace::VplKey;
 use crate::method::Method;
 use crate::method::{FrameInputs, MethodCounts};
 pub use crate::render::settings::{Cancelled, Control, RenderSettings};
 use crate::scene::{Camera, Scene};
-use crate::settings::{FrameSettings, Weighting};
+use crate::settings::FrameSettings;
 
 /// Which passes a frame runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -142,16 +138,9 @@ pub(super) struct FrameResources {
     image: Option<crate::gi::upsample::ImageBuffers>,
     /// Area-light samples a pixel the direct pass took.
     direct_samples: u32,
-    /// The SP clustering (step 4) and, from step 5, its visibility matrix.
-    clustering: Option<Clustering>,
-    visibility: Option<Previous>,
-    /// The previous frame's visibility matrix when its rows may be reused (temporal).
-    previous_visibility: Option<LastVisibility>,
     /// Shadow rays of the passes that trace per pixel, for each valid shading point (`finish`
     /// counts the pixels).
     pub rays_per_point: u64,
-    /// Visibility rows copied instead of traced.
-    rows_reused: u32,
     /// The indirect passes' shadow rays in all, SP clusters and VPL clusters used, CPU steps.
     pub counts: MethodCounts,
 }
@@ -184,14 +173,9 @@ impl Renderer<'_> {
                 crate::gi::upsample::ImageBuffers::new(ctx, cam, l)
             }),
             direct_samples: 0,
-            clustering: None,
-            visibility: None,
-            previous_visibility: None,
             rays_per_point: 0,
-            rows_reused: 0,
             counts: MethodCounts::default(),
         };
-        let previous_clustering = self.sp_clustering.take().filter(|_| s.cluster.temporal);
         // The indirect passes see the render scale's frame.
         let at_scale = plan.low.map(|(width, height)| RenderSettings {
             frame: FrameSettings {
@@ -231,9 +215,9 @@ impl Renderer<'_> {
                         s.frame.seed,
                     );
                 }
-                Pass::SpCluster => self.sp_cluster(si, &mut r, previous_clustering.as_ref())?,
-                Pass::Visibility => self.visibility(si, &mut r)?,
-                Pass::Shade => self.shade(si, &r),
+                Pass::SpCluster | Pass::Visibility | Pass::Shade => {
+                    self.method_pass(Method::Colom, pass, si, &mut r)?
+                }
                 Pass::Gather | Pass::Reference => self.gather(pass, si, &mut r)?,
                 Pass::Upsample => {
                     let i = r.image.as_ref().expect("planned");
@@ -299,111 +283,6 @@ impl Renderer<'_> {
         Ok(frame)
     }
 
-    /// Step 4: the SP clustering, warm-started from the previous frame's with temporal reuse.
-    fn sp_cluster(
-        &mut self,
-        s: &RenderSettings,
-        r: &mut FrameResources,
-        previous: Option<&Clustering>,
-    ) -> Result<()> {
-        let warm = previous.map(|c| crate::gi::kmeans::Warm {
-            centroids: &c.centroids,
-            rep_points: &c.rep_points,
-            k: c.k(),
-            view: Some(r.cam),
-        });
-        let points = Points {
-            data: &r.gbuffer,
-            count: r.pixels,
-            stride: 4,
-        };
-        let c = self.kmeans.run(
-            &mut gpu!(self),
-            Pass::SpCluster.name(),
-            &points,
-            &KMeansSettings::shading_points(&s.cluster, s.frame.seed),
-            self.scene.bounds(),
-            warm.as_ref(),
-        )?;
-        let light_key = self.lights.as_ref().unwrap().key;
-        r.previous_visibility = self
-            .last_visibility
-            .take()
-            .filter(|v| s.cluster.temporal && c.warm_kept.is_some() && v.lights == light_key);
-        r.clustering = Some(c);
-        Ok(())
-    }
-
-    /// Step 5: the visibility bit matrix between SP-cluster representatives and lights; rows of
-    /// representatives kept from the previous frame are copied when the lights are the same.
-    fn visibility(&mut self, s: &RenderSettings, r: &mut FrameResources) -> Result<()> {
-        let ctx = self.ctx;
-        let lights = &self.lights.as_ref().unwrap().list;
-        let num_lights = lights.lights.len() as u32;
-        let c = r.clustering.as_ref().unwrap();
-        let previous = r.previous_visibility.take();
-        let (bits, words) = self.visibility.record(
-            &mut gpu!(self),
-            &crate::gi::visibility::VisInputs {
-                rep_points: &c.rep_points,
-                lights: &lights.buffer,
-                num_lights,
-                k_sp: c.k(),
-                previous: previous.as_ref().map(|p| &p.matrix),
-                facing: s.cluster.visibility_facing,
-            },
-        );
-        let reps: Vec<u32> = ctx.read_buffer(&c.reps, c.k() as usize * 2)?;
-        r.counts.sp_used = reps.chunks(2).filter(|r| r[1] != u32::MAX).count() as u32;
-        if let Some(p) = &previous
-            && p.matrix.words == words
-        {
-            // Rows copied, not traced: kept representatives below the previous row count.
-            let points: Vec<[f32; 4]> = ctx.read_buffer(&c.rep_points, c.k() as usize * 2)?;
-            r.rows_reused = points
-                .chunks(2)
-                .take(p.matrix.rows as usize)
-                .filter(|r| r[0][3] > 0.0 && r[1][3] == 1.0)
-                .count() as u32;
-        }
-        r.counts.indirect_rays = (r.counts.sp_used - r.rows_reused) as u64 * num_lights as u64;
-        debug_assert!(s.cluster.temporal || r.rows_reused == 0);
-        r.visibility = Some(Previous {
-            bits,
-            rows: c.k(),
-            words,
-        });
-        Ok(())
-    }
-
-    /// Step 6: Eq. (6) per pixel with the visibility of Eq. (8) or (9).
-    fn shade(&mut self, s: &RenderSettings, r: &FrameResources) {
-        let lights = &self.lights.as_ref().unwrap().list;
-        let c = r.clustering.as_ref().unwrap();
-        let v = r.visibility.as_ref().unwrap();
-        let d_min = s.frame.clamp * self.scene.extent();
-        self.shade.record(
-            &mut gpu!(self),
-            &ShadeInputs {
-                gbuffer: &r.gbuffer,
-                lights: &lights.buffer,
-                bits: &v.bits,
-                assign: &c.assign,
-                weights: &c.weights,
-                indirect: &r.indirect,
-                pixels: r.pixels,
-                params: ShadeParams {
-                    num_lights: lights.lights.len() as u32,
-                    words: v.words,
-                    f: c.f(),
-                    weighted: (s.cluster.weighting == Weighting::InverseDistance) as u32,
-                    d_min2: d_min * d_min,
-                    _pad: [0; 3],
-                },
-            },
-        );
-    }
-
     /// Every pixel × every light with its own shadow ray: the VPL clusters (`gather`) or the VPLs
     /// (`reference`, Eq. 5), reporting progress and stopping on `Control::cancel`.
     fn gather(&mut self, pass: Pass, s: &RenderSettings, r: &mut FrameResources) -> Result<()> {
@@ -460,11 +339,10 @@ impl Renderer<'_> {
         r: &mut FrameResources,
     ) -> Result<()> {
         let ctx = self.ctx;
-        let room = crate::method::room(method).expect("a method's room");
         let state = self
             .methods
             .entry(method)
-            .or_insert_with(|| (room.build)(ctx, &self.gpu));
+            .or_insert_with(|| crate::method::build(method)(ctx, &self.gpu));
         let inputs = FrameInputs {
             scene: &self.scene,
             frame: &s.frame,
@@ -538,17 +416,13 @@ impl Renderer<'_> {
         let valid = sps.chunks(4).filter(|sp| sp[0][3] > 0.0).count() as u32;
         let indirect_rays =
             r.counts.indirect_rays + traced_points.unwrap_or(valid as u64) * r.rays_per_point;
-        let (mut sp_iterations, mut sp_warm_kept, mut gamma_used) = (0, None, None);
-        if let (Some(c), Some(v)) = (r.clustering, r.visibility) {
-            sp_iterations = c.iterations_run;
-            sp_warm_kept = c.warm_kept;
-            gamma_used = Some(c.params.gamma);
-            self.last_visibility = Some(LastVisibility {
-                matrix: v,
-                lights: self.lights.as_ref().unwrap().key,
-            });
-            self.sp_clustering = Some(c);
+        // Every method's state: this frame's becomes the last one (or, where it did not run, none).
+        for m in self.methods.values_mut() {
+            m.end_frame();
         }
+        let c = &r.counts;
+        let (sp_iterations, sp_warm_kept, gamma_used) =
+            (c.sp_iterations, c.sp_warm_kept, c.gamma_used);
         self.gbuffer = Some((r.gbuffer, n));
         self.last_camera = Some(r.cam);
         let direct: Vec<[f32; 3]> = px.iter().map(|p| self.to_scene_units(p)).collect();
@@ -596,7 +470,7 @@ impl Renderer<'_> {
                 .collect(),
             sp_iterations,
             sp_warm_kept,
-            visibility_rows_reused: r.rows_reused,
+            visibility_rows_reused: r.counts.rows_reused,
         })
     }
 

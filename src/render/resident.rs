@@ -14,21 +14,14 @@ use crate::gi::kmeans::{Clustering, KMeans, KMeansSettings};
 use crate::gi::primary::Primary;
 use crate::gi::reference::Reference;
 use crate::gi::scene_gpu::SceneGpu;
-use crate::gi::shade::Shade;
-use crate::gi::visibility::{self, Visibility};
 use crate::gi::vpl_cluster::{self, LightKey, ResidentLights};
 use crate::gi::vpl_trace::{ResidentVpls, VplKey, VplSet, VplTrace};
 use crate::gpu::{GpuContext, profiler::Profiler};
 use crate::method::IndirectMethod;
 use crate::method::Method;
+use crate::method::colom::Colom;
 use crate::render::settings::RenderSettings;
 use crate::scene::{Camera, PunctualLight, Scene};
-
-/// The last clustered frame's visibility matrix and the light list it was traced against.
-pub(super) struct LastVisibility {
-    pub matrix: visibility::Previous,
-    pub lights: LightKey,
-}
 
 /// fuzzy-vpl's renderer: everything resident for one scene on one device, and the frame.
 ///
@@ -58,8 +51,6 @@ pub struct Renderer<'a> {
     vpl_trace: VplTrace,
     pub(super) reference: Reference,
     pub(super) kmeans: KMeans,
-    pub(super) visibility: Visibility,
-    pub(super) shade: Shade,
     /// The other methods' state (`method::ROOMS`), each built the first time a frame uses it.
     pub(super) methods: BTreeMap<Method, Box<dyn IndirectMethod>>,
     /// The indirect light at the render scale (`gi::upsample`).
@@ -72,9 +63,6 @@ pub struct Renderer<'a> {
     /// VPL traces so far (`VplKey::trace`).
     vpl_traces: u32,
     pub lights: Option<ResidentLights>,
-    /// The last frame's SP clustering (for views, tests and temporal reuse).
-    pub sp_clustering: Option<Clustering>,
-    pub(super) last_visibility: Option<LastVisibility>,
 }
 
 impl<'a> Renderer<'a> {
@@ -83,7 +71,7 @@ impl<'a> Renderer<'a> {
     /// measure (`metrics::border_error`) and the viewer's SP-cluster view. `None` when that frame
     /// clustered no shading points.
     pub fn sp_labels(&self, frame: &super::frame::Frame) -> Result<Option<Vec<u32>>> {
-        let Some(c) = &self.sp_clustering else {
+        let Some(c) = self.sp_clustering() else {
             return Ok(None);
         };
         let n = (frame.width * frame.height) as usize;
@@ -117,10 +105,34 @@ impl<'a> Renderer<'a> {
         self.methods.get(&method)?.as_any().downcast_ref()
     }
 
+    /// The last frame's SP clustering (colom's steps 4–6): `None` after a frame that clustered
+    /// no shading points.
+    pub fn sp_clustering(&self) -> Option<&Clustering> {
+        self.method_state::<Colom>(Method::Colom)?
+            .clustering
+            .as_ref()
+    }
+
+    /// Forgets the last frame's SP clustering: the next frame starts cold (a camera path run).
+    pub fn forget_past(&mut self) {
+        self.colom().clustering = None;
+    }
+
+    /// colom's state, built if no frame has used it yet.
+    fn colom(&mut self) -> &mut Colom {
+        let (ctx, gpu) = (self.ctx, &self.gpu);
+        let state = self
+            .methods
+            .entry(Method::Colom)
+            .or_insert_with(|| crate::method::colom::build(ctx, gpu));
+        let any: &mut dyn std::any::Any = state.as_mut();
+        any.downcast_mut().expect("colom's state")
+    }
+
     /// The shade pass's `PATTERNS` (`gi::shade::patterns`, 0..8): its pipelines are built again.
     /// The image does not depend on it.
     pub fn set_shade_patterns(&mut self, patterns: u32) {
-        self.shade = Shade::with_patterns(patterns);
+        self.colom().set_shade_patterns(patterns);
     }
 
     /// Before timing `s` at `camera`: on a hardware adapter one untimed render (its pipelines built,
@@ -138,9 +150,15 @@ impl<'a> Renderer<'a> {
         }
         if !self.ctx.software {
             // The untimed frame leaves no past: the timed ones start as they would without it.
-            let (clustering, visibility) = (self.sp_clustering.take(), self.last_visibility.take());
+            let pasts: Vec<_> = (self.methods.iter_mut())
+                .map(|(&m, state)| (m, state.take_past()))
+                .collect();
             self.render(camera, s)?;
-            (self.sp_clustering, self.last_visibility) = (clustering, visibility);
+            for (m, past) in pasts {
+                if let Some(state) = self.methods.get_mut(&m) {
+                    state.put_past(past);
+                }
+            }
         }
         self.ctx.warm_up(ms)
     }
@@ -170,8 +188,6 @@ impl<'a> Renderer<'a> {
             vpl_trace: VplTrace::new(ctx, &gpu),
             reference: Reference::new(ctx, &gpu),
             kmeans: KMeans::new(),
-            visibility: Visibility::new(ctx, &gpu),
-            shade: Shade::new(),
             methods: BTreeMap::new(),
             upsample: Default::default(),
             profiler: Profiler::new(ctx),
@@ -180,8 +196,6 @@ impl<'a> Renderer<'a> {
             vpl_set: None,
             vpl_traces: 0,
             lights: None,
-            sp_clustering: None,
-            last_visibility: None,
             bvh,
             gpu,
         })
@@ -224,8 +238,15 @@ impl<'a> Renderer<'a> {
             self.direct = Direct::new(ctx, &gpu);
             self.vpl_trace = VplTrace::new(ctx, &gpu);
             self.reference = Reference::new(ctx, &gpu);
-            self.visibility = Visibility::new(ctx, &gpu);
+            // The methods' pipelines are built again; colom's past (the last SP clustering and
+            // visibility) carries over.
+            let past = self.methods.get_mut(&Method::Colom).map(|m| m.take_past());
             self.methods.clear();
+            if let Some(p) = past {
+                let mut colom = crate::method::colom::build(ctx, &gpu);
+                colom.put_past(p);
+                self.methods.insert(Method::Colom, colom);
+            }
         }
         self.gpu = gpu;
         self.vpl_set = None;
@@ -374,9 +395,11 @@ impl<'a> Renderer<'a> {
 
     /// The last clustered frame's visibility bit matrix and its words per row (for tests).
     pub fn last_visibility(&self) -> Option<(&wgpu::Buffer, u32)> {
-        self.last_visibility
-            .as_ref()
-            .map(|v| (&v.matrix.bits, v.matrix.words))
+        let v = self
+            .method_state::<Colom>(Method::Colom)?
+            .last_visibility
+            .as_ref()?;
+        Some((&v.matrix.bits, v.matrix.words))
     }
 
     /// The last frame's shading points, 4 × vec4 each (`common/gbuffer.wgsl`), for tests and views.

@@ -1,0 +1,251 @@
+//! The `colom` method (Colom, Marques, Santos 2022, seed 000; the paper this tool rebuilds): the
+//! shading points clustered by fuzzy k-means (step 4, Alg. 1 and 2, `gi::kmeans`), one shadow ray
+//! per SP-cluster representative and light (step 5, `gi::visibility`), and Eq. (6) per pixel with
+//! Eq. (8) or (9) (step 6, `gi::shade`). Its lights are the resident VPL clusters (step 2) or the
+//! VPLs. The passes are `Pass::SpCluster` → `Pass::Visibility` → `Pass::Shade` (`render::Plan`);
+//! without SP clustering colom's frame is the renderer's gather (VPL clusters) or reference.
+//!
+//! Its state is what temporal reuse starts from: the last frame's SP clustering (its centroids warm
+//! the next k-means) and visibility matrix (rows of representatives the warm start kept are copied
+//! while the lights are the same).
+
+use std::any::Any;
+
+use anyhow::Result;
+
+use super::{FrameInputs, IndirectMethod, MethodCounts};
+use crate::gi::dispatch::Gpu;
+use crate::gi::kmeans::{Clustering, KMeans, KMeansSettings, Points, Warm};
+use crate::gi::pass::Pass;
+use crate::gi::scene_gpu::SceneGpu;
+use crate::gi::shade::{Shade, ShadeInputs, ShadeParams};
+use crate::gi::visibility::{Previous, VisInputs, Visibility};
+use crate::gi::vpl_cluster::LightKey;
+use crate::gpu::GpuContext;
+use crate::settings::Weighting;
+
+/// A clustered frame's visibility matrix and the light list it was traced against.
+pub struct LastVisibility {
+    pub matrix: Previous,
+    pub lights: LightKey,
+}
+
+/// What colom's passes hand on within a frame.
+#[derive(Default)]
+struct ColomFrame {
+    clustering: Option<Clustering>,
+    visibility: Option<Previous>,
+    /// The previous frame's matrix when its rows may be reused (temporal).
+    previous_visibility: Option<LastVisibility>,
+    lights: Option<LightKey>,
+}
+
+/// colom's state: its passes' pipelines, the last frame's SP clustering and visibility, and what
+/// its passes hand on within a frame.
+pub struct Colom {
+    kmeans: KMeans,
+    visibility: Visibility,
+    shade: Shade,
+    /// The last frame's SP clustering (views, tests, and the next frame's warm start); `None` after
+    /// a frame that clustered no shading points.
+    pub clustering: Option<Clustering>,
+    /// The last clustered frame's visibility matrix.
+    pub last_visibility: Option<LastVisibility>,
+    frame: ColomFrame,
+}
+
+/// colom's state for a scene's GPU data.
+pub fn build(ctx: &GpuContext, scene: &SceneGpu) -> Box<dyn IndirectMethod> {
+    Box::new(Colom::new(ctx, scene))
+}
+
+impl Colom {
+    pub fn new(ctx: &GpuContext, scene: &SceneGpu) -> Self {
+        Colom {
+            kmeans: KMeans::new(),
+            visibility: Visibility::new(ctx, scene),
+            shade: Shade::new(),
+            clustering: None,
+            last_visibility: None,
+            frame: ColomFrame::default(),
+        }
+    }
+
+    /// The shade pass's `PATTERNS` (`gi::shade::patterns`, 0..8): its pipelines are built again.
+    /// The image does not depend on it.
+    pub fn set_shade_patterns(&mut self, patterns: u32) {
+        self.shade = Shade::with_patterns(patterns);
+    }
+
+    /// Step 4: the SP clustering, warm-started from the previous frame's with temporal reuse.
+    fn sp_cluster(
+        &mut self,
+        g: &mut Gpu,
+        f: &FrameInputs,
+        counts: &mut MethodCounts,
+    ) -> Result<()> {
+        let previous = self.clustering.take().filter(|_| f.cluster.temporal);
+        let warm = previous.as_ref().map(|c| Warm {
+            centroids: &c.centroids,
+            rep_points: &c.rep_points,
+            k: c.k(),
+            view: Some(f.cam),
+        });
+        let points = Points {
+            data: f.gbuffer,
+            count: f.pixels,
+            stride: 4,
+        };
+        let c = self.kmeans.run(
+            g,
+            Pass::SpCluster.name(),
+            &points,
+            &KMeansSettings::shading_points(f.cluster, f.frame.seed),
+            f.scene.bounds(),
+            warm.as_ref(),
+        )?;
+        let light_key = f.lights.expect("colom's lights").key;
+        self.frame.previous_visibility = self
+            .last_visibility
+            .take()
+            .filter(|v| f.cluster.temporal && c.warm_kept.is_some() && v.lights == light_key);
+        self.frame.lights = Some(light_key);
+        counts.sp_iterations = c.iterations_run;
+        counts.sp_warm_kept = c.warm_kept;
+        counts.gamma_used = Some(c.params.gamma);
+        self.frame.clustering = Some(c);
+        Ok(())
+    }
+
+    /// Step 5: the visibility bit matrix between SP-cluster representatives and lights; rows of
+    /// representatives kept from the previous frame are copied when the lights are the same.
+    fn visibility(
+        &mut self,
+        g: &mut Gpu,
+        f: &FrameInputs,
+        counts: &mut MethodCounts,
+    ) -> Result<()> {
+        let ctx = g.ctx;
+        let lights = &f.lights.expect("colom's lights").list;
+        let num_lights = lights.lights.len() as u32;
+        let c = self.frame.clustering.as_ref().expect("sp_cluster ran");
+        let previous = self.frame.previous_visibility.take();
+        let (bits, words) = self.visibility.record(
+            g,
+            &VisInputs {
+                rep_points: &c.rep_points,
+                lights: &lights.buffer,
+                num_lights,
+                k_sp: c.k(),
+                previous: previous.as_ref().map(|p| &p.matrix),
+                facing: f.cluster.visibility_facing,
+            },
+        );
+        let reps: Vec<u32> = ctx.read_buffer(&c.reps, c.k() as usize * 2)?;
+        counts.sp_used = reps.chunks(2).filter(|r| r[1] != u32::MAX).count() as u32;
+        if let Some(p) = &previous
+            && p.matrix.words == words
+        {
+            // Rows copied, not traced: kept representatives below the previous row count.
+            let points: Vec<[f32; 4]> = ctx.read_buffer(&c.rep_points, c.k() as usize * 2)?;
+            counts.rows_reused = points
+                .chunks(2)
+                .take(p.matrix.rows as usize)
+                .filter(|r| r[0][3] > 0.0 && r[1][3] == 1.0)
+                .count() as u32;
+        }
+        counts.indirect_rays = (counts.sp_used - counts.rows_reused) as u64 * num_lights as u64;
+        debug_assert!(f.cluster.temporal || counts.rows_reused == 0);
+        self.frame.visibility = Some(Previous {
+            bits,
+            rows: c.k(),
+            words,
+        });
+        Ok(())
+    }
+
+    /// Step 6: Eq. (6) per pixel with the visibility of Eq. (8) or (9).
+    fn shade(&mut self, g: &mut Gpu, f: &FrameInputs) {
+        let lights = &f.lights.expect("colom's lights").list;
+        let c = self.frame.clustering.as_ref().expect("sp_cluster ran");
+        let v = self.frame.visibility.as_ref().expect("visibility ran");
+        let d_min = f.frame.clamp * f.scene.extent();
+        self.shade.record(
+            g,
+            &ShadeInputs {
+                gbuffer: f.gbuffer,
+                lights: &lights.buffer,
+                bits: &v.bits,
+                assign: &c.assign,
+                weights: &c.weights,
+                indirect: f.indirect,
+                pixels: f.pixels,
+                params: ShadeParams {
+                    num_lights: lights.lights.len() as u32,
+                    words: v.words,
+                    f: c.f(),
+                    weighted: (f.cluster.weighting == Weighting::InverseDistance) as u32,
+                    d_min2: d_min * d_min,
+                    _pad: [0; 3],
+                },
+            },
+        );
+    }
+}
+
+/// The state temporal reuse starts from (`IndirectMethod::take_past`).
+struct Past {
+    clustering: Option<Clustering>,
+    last_visibility: Option<LastVisibility>,
+}
+
+impl IndirectMethod for Colom {
+    fn record(
+        &mut self,
+        pass: Pass,
+        gpu: &mut Gpu,
+        f: &FrameInputs,
+        counts: &mut MethodCounts,
+    ) -> Result<()> {
+        match pass {
+            Pass::SpCluster => self.sp_cluster(gpu, f, counts),
+            Pass::Visibility => self.visibility(gpu, f, counts),
+            Pass::Shade => {
+                self.shade(gpu, f);
+                Ok(())
+            }
+            _ => unreachable!("{pass} is not colom's"),
+        }
+    }
+
+    /// The frame's clustering and matrix become the last ones; a frame that clustered no shading
+    /// points leaves no clustering to warm-start from (the matrix stays: it is reused only after a
+    /// warm start).
+    fn end_frame(&mut self) {
+        let frame = std::mem::take(&mut self.frame);
+        match (frame.clustering, frame.visibility, frame.lights) {
+            (Some(c), Some(matrix), Some(lights)) => {
+                self.last_visibility = Some(LastVisibility { matrix, lights });
+                self.clustering = Some(c);
+            }
+            _ => self.clustering = None,
+        }
+    }
+
+    fn take_past(&mut self) -> Box<dyn Any> {
+        Box::new(Past {
+            clustering: self.clustering.take(),
+            last_visibility: self.last_visibility.take(),
+        })
+    }
+
+    fn put_past(&mut self, past: Box<dyn Any>) {
+        if let Ok(p) = past.downcast::<Past>() {
+            (self.clustering, self.last_visibility) = (p.clustering, p.last_visibility);
+        }
+    }
+
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+}
