@@ -154,9 +154,12 @@ impl<'a> Renderer<'a> {
                 .map(|(&m, state)| (m, state.take_past()))
                 .collect();
             self.render(camera, s)?;
-            for (m, past) in pasts {
-                if let Some(state) = self.methods.get_mut(&m) {
-                    state.put_past(past);
+            let mut pasts: BTreeMap<Method, _> = pasts.into_iter().collect();
+            for (m, state) in self.methods.iter_mut() {
+                match pasts.remove(m) {
+                    Some(past) => state.put_past(past),
+                    // Built by the untimed frame: it leaves nothing either.
+                    None => drop(state.take_past()),
                 }
             }
         }
