@@ -51,7 +51,7 @@ pub struct FrameInputs<'a> {
 /// What a frame's indirect passes report for the stats (`Frame`): the shadow rays they traced, the
 /// SP and VPL clusters they used, and the CPU milliseconds of a pass's steps (added to its GPU time).
 #[derive(Clone, Debug, Default)]
-pub struct MethodCounts {
+pub struct Counts {
     pub indirect_rays: u64,
     pub sp_used: u32,
     pub vpl_clusters_used: u32,
@@ -67,13 +67,8 @@ pub struct MethodCounts {
 /// A method's resident state and the recording of its passes.
 pub trait IndirectMethod: Any {
     /// Records `pass` (one of its room's `passes`, in their order within a frame).
-    fn record(
-        &mut self,
-        pass: Pass,
-        gpu: &mut Gpu,
-        frame: &FrameInputs,
-        counts: &mut MethodCounts,
-    ) -> Result<()>;
+    /// `g`: the device, the scene's bind group and the profiler; `n`: what the frame counts.
+    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) -> Result<()>;
 
     /// The timings of resident stages (re)built during this frame, taken out of the frame's
     /// `timings` (they are not the frame's, as the VPLs' are not); none by default.
@@ -96,9 +91,6 @@ pub trait IndirectMethod: Any {
 
     /// Puts back what `take_past` took.
     fn put_past(&mut self, _past: Box<dyn Any>) {}
-
-    /// The state itself, for tests and views (`Renderer::method_state`).
-    fn as_any(&self) -> &dyn Any;
 }
 
 /// A method in the registry: its name, its passes in order, how its state is built (the first time
@@ -148,19 +140,19 @@ pub const METHOD_HEADING: &str = "Method (docs/methods.md)";
 /// BVH, the primary rays, the direct light, the reference and the metrics, and adds only what its
 /// paper adds. A method other than colom is a variant here, a field of `MethodSettings` (its
 /// knobs), a line of `ROOMS`, its passes in `gi::pass::Pass`, and its folder.
+/// (`Ord`: the renderer keeps the methods' state in a map by method.)
 #[derive(
-    Clone,
-    Copy,
-    Debug,
-    Default,
-    PartialEq,
-    Eq,
-    Hash,
-    PartialOrd,
-    Ord,
     clap::ValueEnum,
     Serialize,
     Deserialize,
+    Default,
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    PartialOrd,
+    Ord,
 )]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
@@ -299,6 +291,36 @@ impl MethodLists {
         }
         out
     }
+}
+
+/// A room's knob combinations (`knobs!`'s `configs`) as `MethodSettings` of `method`, each set into
+/// its field by `set` (`Room::sweep`).
+pub fn sweep_of<T>(
+    method: Method,
+    configs: Vec<T>,
+    set: fn(&mut MethodSettings, T),
+) -> Vec<MethodSettings> {
+    configs
+        .into_iter()
+        .map(|k| {
+            let mut m = MethodSettings {
+                method,
+                ..Default::default()
+            };
+            set(&mut m, k);
+            m
+        })
+        .collect()
+}
+
+/// A knob's logarithmic slider in a room's panel section.
+pub fn log_slider(
+    ui: &mut egui::Ui,
+    v: &mut f32,
+    range: std::ops::RangeInclusive<f32>,
+    text: &str,
+) {
+    ui.add(egui::Slider::new(v, range).logarithmic(true).text(text));
 }
 
 pub fn parse_method(item: &str) -> Result<Method, Invalid> {

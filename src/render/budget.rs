@@ -421,24 +421,9 @@ mod tests {
             .collect();
         timings_ms.insert(crate::render::frame::FRAME_KEY.to_string(), frame_ms);
         Frame {
-            width: 0,
-            height: 0,
-            radiance: Vec::new(),
-            direct: Vec::new(),
-            indirect: Vec::new(),
-            vpls: 0,
             passes: passes.iter().map(|&(p, _)| p).collect(),
             timings_ms,
-            shading_points: 0,
-            shadow_rays: 0,
-            sp_clusters_used: 0,
-            vpl_clusters_used: 0,
-            gamma_used: None,
-            positions: Vec::new(),
-            normals: Vec::new(),
-            sp_iterations: 0,
-            sp_warm_kept: None,
-            visibility_rows_reused: 0,
+            ..Default::default()
         }
     }
 
@@ -447,64 +432,67 @@ mod tests {
     /// 1.5 on the line, shading and gather 1) over the rest, within [0.2, 3].
     #[test]
     fn split_of_a_frame_by_hand() {
+        use Controlled::*;
         use Pass::*;
         // Primary 10, direct 20, SP clustering 10, visibility 30, shading 40: frame 110, fixed 30,
         // rest 80.
-        let f = timed(
-            110.0,
-            &[
-                (Primary, 10.0),
-                (Direct, 20.0),
-                (SpCluster, 10.0),
-                (Visibility, 30.0),
-                (Shade, 40.0),
-            ],
-        );
-        let both = Split::of(&f, Controlled::Both);
-        assert_eq!(
-            (both.frame_ms, both.fixed_ms, both.direct_ms),
-            (110.0, 30.0, 20.0)
-        );
-        // Both: (1.5 · 30 + 40) / 80 = 85 / 80 = 1.0625.
-        assert_eq!(both.exponent, 1.0625);
-        // SP clustering alone: visibility only, 30 / 80 = 0.375.
-        assert_eq!(Split::of(&f, Controlled::SpOnly).exponent, 0.375);
-        // VPL clustering alone: gather + shading, here 40 / 80 = 0.5.
-        assert_eq!(Split::of(&f, Controlled::VplOnly).exponent, 0.5);
+        let f: &[(Pass, f64)] = &[
+            (Primary, 10.0),
+            (Direct, 20.0),
+            (SpCluster, 10.0),
+            (Visibility, 30.0),
+            (Shade, 40.0),
+        ];
         // VPL clustering alone with the gather (K_SP off): primary 5, direct 15, gather 12,
-        // shading 36, frame 80: fixed 20, rest 60, (12 + 36) / 60 = 0.8; Both weighs shading only:
-        // 36 / 60 = 0.6.
-        let g = timed(
-            80.0,
-            &[
-                (Primary, 5.0),
-                (Direct, 15.0),
-                (Gather, 12.0),
-                (Shade, 36.0),
-            ],
-        );
-        let vpl = Split::of(&g, Controlled::VplOnly);
-        assert_eq!(
-            (vpl.fixed_ms, vpl.direct_ms, vpl.exponent),
-            (20.0, 15.0, 0.8)
-        );
-        assert_eq!(Split::of(&g, Controlled::Both).exponent, 0.6);
-        // Clamped: visibility 100 of a rest of 40 (the passes overlap the frame's own timestamps)
-        // gives 1.5 · 100 / 40 = 3.75 → 3; visibility 1 of 40 alone gives 0.025 → 0.2.
-        let h = timed(50.0, &[(Primary, 10.0), (Visibility, 100.0)]);
-        assert_eq!(Split::of(&h, Controlled::Both).exponent, 3.0);
-        let l = timed(50.0, &[(Primary, 10.0), (Visibility, 1.0)]);
-        assert_eq!(Split::of(&l, Controlled::SpOnly).exponent, 0.2);
+        // shading 36, frame 80: fixed 20, rest 60.
+        let g: &[(Pass, f64)] = &[
+            (Primary, 5.0),
+            (Direct, 15.0),
+            (Gather, 12.0),
+            (Shade, 36.0),
+        ];
         // Nothing but the fixed part (rest 0), or a frame shorter than its fixed passes (rest
-        // negative, read as 0): exponent 1, the fixed part as measured.
-        let z = timed(30.0, &[(Primary, 10.0), (Direct, 20.0), (Shade, 5.0)]);
-        assert_eq!(Split::of(&z, Controlled::Both).exponent, 1.0);
-        let n = timed(25.0, &[(Primary, 10.0), (Direct, 20.0), (Shade, 5.0)]);
-        let s = Split::of(&n, Controlled::Both);
-        assert_eq!((s.fixed_ms, s.exponent), (30.0, 1.0));
+        // negative, read as 0).
+        let z: &[(Pass, f64)] = &[(Primary, 10.0), (Direct, 20.0), (Shade, 5.0)];
+        // (frame ms, passes, the K moved) → (fixed ms, direct ms, exponent).
+        type Passes<'a> = &'a [(Pass, f64)];
+        let cases: [(f64, Passes, Controlled, [f64; 3]); 9] = [
+            // Both: (1.5 · 30 + 40) / 80 = 85 / 80 = 1.0625.
+            (110.0, f, Both, [30.0, 20.0, 1.0625]),
+            // SP clustering alone: visibility only, 30 / 80 = 0.375.
+            (110.0, f, SpOnly, [30.0, 20.0, 0.375]),
+            // VPL clustering alone: gather + shading, here 40 / 80 = 0.5.
+            (110.0, f, VplOnly, [30.0, 20.0, 0.5]),
+            // (12 + 36) / 60 = 0.8; Both weighs shading only: 36 / 60 = 0.6.
+            (80.0, g, VplOnly, [20.0, 15.0, 0.8]),
+            (80.0, g, Both, [20.0, 15.0, 0.6]),
+            // Clamped: visibility 100 of a rest of 40 (the passes overlap the frame's own
+            // timestamps) gives 1.5 · 100 / 40 = 3.75 → 3; visibility 1 of 40 alone 0.025 → 0.2.
+            (
+                50.0,
+                &[(Primary, 10.0), (Visibility, 100.0)],
+                Both,
+                [10.0, 0.0, 3.0],
+            ),
+            (
+                50.0,
+                &[(Primary, 10.0), (Visibility, 1.0)],
+                SpOnly,
+                [10.0, 0.0, 0.2],
+            ),
+            // No rest: exponent 1, the fixed part as measured.
+            (30.0, z, Both, [30.0, 20.0, 1.0]),
+            (25.0, z, Both, [30.0, 20.0, 1.0]),
+        ];
+        for (frame, passes, c, want) in cases {
+            let s = Split::of(&timed(frame, passes), c);
+            let got = [s.fixed_ms, s.direct_ms, s.exponent];
+            assert_eq!(got, want, "{passes:?} in {frame} ms, {c:?}");
+        }
+        assert_eq!(Split::of(&timed(110.0, f), Both).frame_ms, 110.0);
         // A frame with no direct light (no emitter, no punctual light): direct 0.
         let d = timed(60.0, &[(Primary, 12.0), (Shade, 48.0)]);
-        let s = Split::of(&d, Controlled::Both);
+        let s = Split::of(&d, Both);
         assert_eq!((s.fixed_ms, s.direct_ms, s.exponent), (12.0, 0.0, 1.0));
     }
 

@@ -104,7 +104,7 @@ pub fn check_visibility_size(
 }
 
 /// A rendered frame: linear radiance per pixel, row-major from the top-left.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Frame {
     pub width: u32,
     pub height: u32,

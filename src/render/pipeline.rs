@@ -30,7 +30,7 @@ use crate::gi::primary::{CameraParams, SP_BYTES};
 pub use crate::gi::vpl_cluster::LightKey;
 pub use crate::gi::vpl_trace::VplKey;
 use crate::method::Method;
-use crate::method::{FrameInputs, MethodCounts};
+use crate::method::{Counts, FrameInputs};
 pub use crate::render::settings::{Cancelled, Control, RenderSettings};
 use crate::scene::{Camera, Scene};
 use crate::settings::FrameSettings;
@@ -142,7 +142,7 @@ pub(super) struct FrameResources {
     /// counts the pixels).
     pub rays_per_point: u64,
     /// The indirect passes' shadow rays in all, SP clusters and VPL clusters used, CPU steps.
-    pub counts: MethodCounts,
+    pub counts: Counts,
 }
 
 impl Renderer<'_> {
@@ -174,7 +174,7 @@ impl Renderer<'_> {
             }),
             direct_samples: 0,
             rays_per_point: 0,
-            counts: MethodCounts::default(),
+            counts: Counts::default(),
         };
         // The indirect passes see the render scale's frame.
         let at_scale = plan.low.map(|(width, height)| RenderSettings {
@@ -512,19 +512,9 @@ impl Renderer<'_> {
             direct: radiance.clone(),
             indirect: vec![[0.0; 3]; n],
             radiance,
-            vpls: 0,
             passes: vec![Pass::PathTrace],
             timings_ms,
-            shading_points: 0,
-            shadow_rays: 0,
-            sp_clusters_used: 0,
-            vpl_clusters_used: 0,
-            gamma_used: None,
-            positions: Vec::new(),
-            normals: Vec::new(),
-            sp_iterations: 0,
-            sp_warm_kept: None,
-            visibility_rows_reused: 0,
+            ..Default::default()
         })
     }
 }

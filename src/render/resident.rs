@@ -102,7 +102,8 @@ impl<'a> Renderer<'a> {
     /// A method's state (`method::ROOMS`) as its room's type `T`, once a frame has used it (tests
     /// and views read a method's last clustering from it).
     pub fn method_state<T: 'static>(&self, method: Method) -> Option<&T> {
-        self.methods.get(&method)?.as_any().downcast_ref()
+        let state: &dyn std::any::Any = self.methods.get(&method)?.as_ref();
+        state.downcast_ref()
     }
 
     /// The last frame's SP clustering (colom's steps 4–6): `None` after a frame that clustered

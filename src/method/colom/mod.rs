@@ -13,7 +13,7 @@ use std::any::Any;
 
 use anyhow::Result;
 
-use super::{FrameInputs, IndirectMethod, MethodCounts};
+use super::{Counts, FrameInputs, IndirectMethod};
 use crate::gi::dispatch::Gpu;
 use crate::gi::kmeans::{Clustering, KMeans, KMeansSettings, Points, Warm};
 use crate::gi::pass::Pass;
@@ -78,12 +78,7 @@ impl Colom {
     }
 
     /// Step 4: the SP clustering, warm-started from the previous frame's with temporal reuse.
-    fn sp_cluster(
-        &mut self,
-        g: &mut Gpu,
-        f: &FrameInputs,
-        counts: &mut MethodCounts,
-    ) -> Result<()> {
+    fn sp_cluster(&mut self, g: &mut Gpu, f: &FrameInputs, counts: &mut Counts) -> Result<()> {
         let previous = self.clustering.take().filter(|_| f.cluster.temporal);
         let warm = previous.as_ref().map(|c| Warm {
             centroids: &c.centroids,
@@ -119,12 +114,7 @@ impl Colom {
 
     /// Step 5: the visibility bit matrix between SP-cluster representatives and lights; rows of
     /// representatives kept from the previous frame are copied when the lights are the same.
-    fn visibility(
-        &mut self,
-        g: &mut Gpu,
-        f: &FrameInputs,
-        counts: &mut MethodCounts,
-    ) -> Result<()> {
+    fn visibility(&mut self, g: &mut Gpu, f: &FrameInputs, counts: &mut Counts) -> Result<()> {
         let ctx = g.ctx;
         let lights = &f.lights.expect("colom's lights").list;
         let num_lights = lights.lights.len() as u32;
@@ -200,18 +190,12 @@ struct Past {
 }
 
 impl IndirectMethod for Colom {
-    fn record(
-        &mut self,
-        pass: Pass,
-        gpu: &mut Gpu,
-        f: &FrameInputs,
-        counts: &mut MethodCounts,
-    ) -> Result<()> {
+    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) -> Result<()> {
         match pass {
-            Pass::SpCluster => self.sp_cluster(gpu, f, counts),
-            Pass::Visibility => self.visibility(gpu, f, counts),
+            Pass::SpCluster => self.sp_cluster(g, f, n),
+            Pass::Visibility => self.visibility(g, f, n),
             Pass::Shade => {
-                self.shade(gpu, f);
+                self.shade(g, f);
                 Ok(())
             }
             _ => unreachable!("{pass} is not colom's"),
@@ -243,9 +227,5 @@ impl IndirectMethod for Colom {
         if let Ok(p) = past.downcast::<Past>() {
             (self.clustering, self.last_visibility) = (p.clustering, p.last_visibility);
         }
-    }
-
-    fn as_any(&self) -> &dyn Any {
-        self
     }
 }

@@ -30,8 +30,8 @@ use glam::Vec3;
 use self::inject::{self as twin, Faces, Lighting};
 use self::settings::CvrtgiSettings;
 use self::voxel::{Cluster, SlicSettings, Voxels};
-use super::{FrameInputs, IndirectMethod, MethodCounts, Room};
-use super::{Method, MethodSettings};
+use super::Method;
+use super::{Counts, FrameInputs, IndirectMethod, Room};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::{SceneGpu, TooBig, storage_layout, uniform_layout};
@@ -596,30 +596,14 @@ pub const ROOM: Room = Room {
         );
         ui.add(Slider::new(&mut v.filter_passes, 0..=8).text("filter passes"));
     },
-    sweep: |l| {
-        l.cvrtgi
-            .configs()
-            .into_iter()
-            .map(|cvrtgi| MethodSettings {
-                method: Method::Cvrtgi,
-                cvrtgi,
-                ..Default::default()
-            })
-            .collect()
-    },
+    sweep: |l| super::sweep_of(Method::Cvrtgi, l.cvrtgi.configs(), |m, k| m.cvrtgi = k),
 };
 
 impl IndirectMethod for Cvrtgi {
     /// `Pass::Cvrtgi`: the frame's indirect light by CVRTGI, from the resident VPLs (no VPL
     /// clustering: a VPL is injected into the cluster of its voxel). Its CPU stages (voxelisation,
     /// SLIC, injection) count as the pass's time when they run.
-    fn record(
-        &mut self,
-        pass: Pass,
-        gpu: &mut Gpu,
-        f: &FrameInputs,
-        counts: &mut MethodCounts,
-    ) -> Result<()> {
+    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) -> Result<()> {
         debug_assert_eq!(pass, Pass::Cvrtgi);
         let inputs = CvrtgiInputs {
             scene: f.scene,
@@ -630,9 +614,9 @@ impl IndirectMethod for Cvrtgi {
             indirect: f.indirect,
             d_min: f.frame.clamp * f.scene.extent(),
         };
-        let report = Cvrtgi::record(self, gpu, &inputs, &f.method.cvrtgi)?;
-        counts.cpu_ms.push((Pass::Cvrtgi, report.cpu_ms));
-        counts.vpl_clusters_used = report.lit_clusters;
+        let report = Cvrtgi::record(self, g, &inputs, &f.method.cvrtgi)?;
+        n.cpu_ms.push((Pass::Cvrtgi, report.cpu_ms));
+        n.vpl_clusters_used = report.lit_clusters;
         Ok(())
     }
 
@@ -642,9 +626,5 @@ impl IndirectMethod for Cvrtgi {
         timings: &mut std::collections::BTreeMap<String, f64>,
     ) -> std::collections::BTreeMap<String, f64> {
         self.take_build_times(timings)
-    }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
     }
 }

@@ -14,8 +14,8 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use self::cluster::{self as twin, LightClusters};
-use super::{FrameInputs, IndirectMethod, MethodCounts, Room};
-use super::{Method, MethodSettings};
+use super::Method;
+use super::{Counts, FrameInputs, IndirectMethod, Room};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
@@ -136,22 +136,13 @@ pub const ROOM: Room = Room {
     series: |m| format!("d_init {}", m.lightcluster.d_init),
     short: |m| format!("d{}", m.lightcluster.d_init),
     ui: |ui, m| {
-        ui.add(
-            egui::Slider::new(&mut m.lightcluster.d_init, 0.001..=10.0)
-                .logarithmic(true)
-                .text("d_init (scene diagonals)"),
-        );
+        let text = "d_init (scene diagonals)";
+        super::log_slider(ui, &mut m.lightcluster.d_init, 0.001..=10.0, text)
     },
     sweep: |l| {
-        l.lightcluster
-            .configs()
-            .into_iter()
-            .map(|lightcluster| MethodSettings {
-                method: Method::LightCluster,
-                lightcluster,
-                ..Default::default()
-            })
-            .collect()
+        super::sweep_of(Method::LightCluster, l.lightcluster.configs(), |m, k| {
+            m.lightcluster = k
+        })
     },
 };
 
@@ -175,9 +166,9 @@ impl IndirectMethod for LightClusterMethod {
     fn record(
         &mut self,
         pass: Pass,
-        gpu: &mut Gpu,
+        g: &mut Gpu,
         f: &FrameInputs,
-        counts: &mut MethodCounts,
+        n: &mut Counts,
     ) -> anyhow::Result<()> {
         let extent = f.scene.extent();
         match pass {
@@ -193,13 +184,13 @@ impl IndirectMethod for LightClusterMethod {
                     far,
                     f.method.lightcluster.d_init * extent,
                 );
-                counts.cpu_ms.push((pass, t.elapsed().as_secs_f64() * 1e3));
-                counts.vpl_clusters_used = c.discs.len() as u32;
+                n.cpu_ms.push((pass, t.elapsed().as_secs_f64() * 1e3));
+                n.vpl_clusters_used = c.discs.len() as u32;
                 self.clusters = Some(c);
             }
             // §3.2: every pixel × every VPL with its cluster's disc visibility.
             Pass::LightClusterShade => {
-                let ctx = gpu.ctx;
+                let ctx = g.ctx;
                 let inputs = ShadeInputs {
                     gbuffer: f.gbuffer,
                     clusters: self.clusters.as_ref().expect("lightcluster_cluster ran"),
@@ -209,18 +200,14 @@ impl IndirectMethod for LightClusterMethod {
                 };
                 // The rays traced: each pixel's discs (a disc where one of its cluster's terms is
                 // positive, once) × DISC_SAMPLES.
-                if let Some(state) = self.kernel.record(gpu, &inputs) {
+                if let Some(state) = self.kernel.record(g, &inputs) {
                     let st: Vec<[u32; 4]> = ctx.read_buffer(&state, f.pixels as usize)?;
                     let discs: u64 = st.iter().map(|p| p[2] as u64).sum();
-                    counts.indirect_rays += discs * twin::DISC_SAMPLES as u64;
+                    n.indirect_rays += discs * twin::DISC_SAMPLES as u64;
                 }
             }
             _ => unreachable!("{pass} is not lightcluster's"),
         }
         Ok(())
-    }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
     }
 }

@@ -15,8 +15,8 @@ use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
 use self::cluster as twin;
-use super::{FrameInputs, IndirectMethod, MethodCounts, Room};
-use super::{Method, MethodSettings};
+use super::Method;
+use super::{Counts, FrameInputs, IndirectMethod, Room};
 use crate::gi::dispatch::{Gpu, Kernel, Run, copy_to_texture, data_texture};
 use crate::gi::pass::Pass;
 use crate::gi::primary::ShadingPoint;
@@ -351,23 +351,10 @@ pub const ROOM: Room = Room {
     series: |m| format!("α {}", m.wang.wang_alpha),
     short: |m| format!("a{}", m.wang.wang_alpha),
     ui: |ui, m| {
-        ui.add(
-            egui::Slider::new(&mut m.wang.wang_alpha, 0.01..=100.0)
-                .logarithmic(true)
-                .text("α (Eq. 2: position against normal)"),
-        );
+        let text = "α (Eq. 2: position against normal)";
+        super::log_slider(ui, &mut m.wang.wang_alpha, 0.01..=100.0, text)
     },
-    sweep: |l| {
-        l.wang
-            .configs()
-            .into_iter()
-            .map(|wang| MethodSettings {
-                method: Method::Wang,
-                wang,
-                ..Default::default()
-            })
-            .collect()
-    },
+    sweep: |l| super::sweep_of(Method::Wang, l.wang.configs(), |m, k| m.wang = k),
 };
 
 /// wang's state: its pipelines, what its passes hand on within a frame, and the last frame's
@@ -389,14 +376,8 @@ impl WangMethod {
 }
 
 impl IndirectMethod for WangMethod {
-    fn record(
-        &mut self,
-        pass: Pass,
-        gpu: &mut Gpu,
-        f: &FrameInputs,
-        counts: &mut MethodCounts,
-    ) -> Result<()> {
-        let ctx = gpu.ctx;
+    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) -> Result<()> {
+        let ctx = g.ctx;
         let wang = &self.wang;
         let img = Image {
             gbuffer: f.gbuffer,
@@ -409,15 +390,15 @@ impl IndirectMethod for WangMethod {
             Pass::WangCluster => {
                 let c = f.cluster;
                 let alpha = f.method.wang.wang_alpha / extent;
-                let w = wang.cluster(gpu, img, c.sp_clusters, alpha, c.iterations, f.frame.seed)?;
+                let w = wang.cluster(g, img, c.sp_clusters, alpha, c.iterations, f.frame.seed)?;
                 if std::env::var_os("FVPL_PROFILE_STEPS").is_some() {
                     eprintln!(
                         "wang_cluster: {:.1} ms of CPU steps, {} assignment passes",
                         w.cpu_ms, w.clusters.passes
                     );
                 }
-                counts.cpu_ms.push((pass, w.cpu_ms));
-                counts.sp_used = w.used;
+                n.cpu_ms.push((pass, w.cpu_ms));
+                n.sp_used = w.used;
                 self.state.clustering = Some(w);
             }
             // The irradiance at the sample points (every light with its own shadow ray: the gather
@@ -428,7 +409,7 @@ impl IndirectMethod for WangMethod {
                 let num_lights = lights.lights.len() as u32;
                 let irradiance = ctx.storage("wang irradiance", c.k().max(1) as u64 * 16);
                 f.reference.record(
-                    gpu,
+                    g,
                     &GatherInputs {
                         gbuffer: &c.sample_gbuffer,
                         lights: &lights.buffer,
@@ -440,8 +421,8 @@ impl IndirectMethod for WangMethod {
                     },
                     &mut |_, _| true,
                 );
-                let radius = wang.radius(gpu, &c, f.frame.seed);
-                counts.indirect_rays = c.used as u64 * (num_lights + twin::RADIUS_RAYS) as u64;
+                let radius = wang.radius(g, &c, f.frame.seed);
+                n.indirect_rays = c.used as u64 * (num_lights + twin::RADIUS_RAYS) as u64;
                 self.state.frame = Some(WangFrame {
                     clustering: c,
                     irradiance,
@@ -452,15 +433,11 @@ impl IndirectMethod for WangMethod {
             // stays as `last`.
             Pass::WangInterp => {
                 let w = self.state.frame.take().expect("wang_gather ran");
-                wang.interp(gpu, img, &w, extent, f.indirect);
+                wang.interp(g, img, &w, extent, f.indirect);
                 self.last = Some(w);
             }
             _ => unreachable!("{pass} is not wang's"),
         }
         Ok(())
-    }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
     }
 }
