@@ -80,6 +80,16 @@ impl Weighting {
     }
 }
 
+/// The defaults of a group of options as clap gives them: a settings type's `Default` is its
+/// options' `default_value_t` / `default_value`, so each default is declared once.
+pub fn clap_defaults<T: clap::Args + clap::FromArgMatches>() -> T {
+    let cmd = T::augment_args(clap::Command::new("defaults"));
+    let m = cmd
+        .try_get_matches_from(["defaults"])
+        .expect("every option of a settings group has a default or is optional");
+    T::from_arg_matches(&m).expect("the defaults are valid values")
+}
+
 /// The default for the most VPLs one light path leaves (its bounce count); Russian roulette usually
 /// ends a path earlier.
 pub const MAX_DEPTH: u32 = 8;
@@ -279,22 +289,9 @@ pub struct ClusterSettings {
 }
 
 impl Default for ClusterSettings {
+    /// The options' defaults (`default_value_t`), declared once.
     fn default() -> Self {
-        ClusterSettings {
-            sp_clusters: 3072,
-            vpl_clusters: 1024,
-            fuzziness: 6,
-            gamma: Gamma::Auto,
-            normal_threshold: 0.866,
-            iterations: 10,
-            weighting: Weighting::InverseDistance,
-            weight_exponent: 1.0,
-            plane_gate: None,
-            weights_to_reps: false,
-            temporal: false,
-            visibility_facing: false,
-            target_ms: None,
-        }
+        clap_defaults()
     }
 }
 
@@ -370,18 +367,9 @@ fn is_one(x: &f32) -> bool {
 }
 
 impl Default for FrameSettings {
+    /// The options' defaults (`default_value_t`), declared once.
     fn default() -> Self {
-        FrameSettings {
-            width: 640,
-            height: 480,
-            seed: 1,
-            vpls: 8192,
-            bounces: MAX_DEPTH,
-            direct_samples: 16,
-            exposure: Exposure::Auto,
-            clamp: DEFAULT_CLAMP,
-            indirect_scale: 1.0,
-        }
+        clap_defaults()
     }
 }
 
@@ -605,6 +593,43 @@ mod tests {
         assert!(parse_on_off("yes").is_err());
     }
 
+    /// `Default` is the options' defaults (docs/design.md's CLI table), declared once.
+    #[test]
+    fn defaults_are_the_options_defaults() {
+        let c = ClusterSettings::default();
+        let want = (
+            3072,
+            1024,
+            6,
+            Gamma::Auto,
+            10,
+            Weighting::InverseDistance,
+            None,
+        );
+        let got = (
+            c.sp_clusters,
+            c.vpl_clusters,
+            c.fuzziness,
+            c.gamma,
+            c.iterations,
+        );
+        assert_eq!(
+            (got.0, got.1, got.2, got.3, got.4, c.weighting, c.target_ms),
+            want
+        );
+        assert_eq!((c.normal_threshold, c.weight_exponent), (0.866, 1.0));
+        let f = FrameSettings::default();
+        assert_eq!(
+            (f.width, f.height, f.seed, f.vpls, f.bounces),
+            (640, 480, 1, 8192, MAX_DEPTH)
+        );
+        assert_eq!(
+            (f.direct_samples, f.exposure, f.clamp),
+            (16, Exposure::Auto, DEFAULT_CLAMP)
+        );
+        assert_eq!(TimingSettings::default().warmup_ms, WARMUP_MS);
+    }
+
     /// The paper's V is pure visibility: the facing test is an option, off unless asked.
     #[test]
     fn visibility_is_pure_by_default() {
@@ -664,10 +689,9 @@ pub struct TimingSettings {
 }
 
 impl Default for TimingSettings {
+    /// The options' defaults (`default_value_t`), declared once.
     fn default() -> Self {
-        TimingSettings {
-            warmup_ms: WARMUP_MS,
-        }
+        clap_defaults()
     }
 }
 
