@@ -143,6 +143,22 @@ mod tests {
         assert!(interpolation_weight(s, n, s, n, 1.0).is_infinite());
     }
 
+    /// ε_q by hand: α = 0.5, points at x = 1, 2, 6 facing +z and x = 3 facing +x. The mean is x = 3
+    /// with normal (1, 0, 3)/√10, so ε_q = 0.5 (2 + 1 + 3 + 0) + 3 √(2 − 6/√10) + √(2 − 2/√10) =
+    /// 3 + 3 · 0.320364 + 1.169421 = 5.130514 (cargo-mutants: the mean as the sum % count survived).
+    #[test]
+    fn node_variation_by_hand() {
+        let sps = [
+            sp(Vec3::X, Vec3::Z),
+            sp(2.0 * Vec3::X, Vec3::Z),
+            sp(6.0 * Vec3::X, Vec3::Z),
+            sp(3.0 * Vec3::X, Vec3::X),
+        ];
+        let e = node_variation(0.5, &[0, 1, 2, 3], &sps);
+        assert!((e - 5.130_514).abs() < 1e-5, "{e}");
+        assert_eq!(node_variation(0.5, &[], &sps), 0.0);
+    }
+
     #[test]
     fn apportion_by_hand() {
         assert_eq!(apportion(4, [1.0, 1.0, 2.0, 0.0], [10; 4]), [1, 1, 2, 0]);

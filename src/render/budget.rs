@@ -621,6 +621,25 @@ mod tests {
         assert_eq!(direct_samples_for(4, 10.0, 40.0), 16);
     }
 
+    /// The first frame is the paper's intermediate setting: 2000 of 8192 VPLs as VPL clusters (the
+    /// same share of 4096: 1000) with 1% of the pixels as SP clusters, the user's direct samples
+    /// (cargo-mutants: the share as 2000 % 8192, clamped to K_VPL = VPLs / 2, survived).
+    #[test]
+    fn the_first_frame_is_the_intermediate_setting() {
+        let c = ClusterSettings::default();
+        for (vpls, k_vpl) in [(8192, 2000), (4096, 1000)] {
+            let s = settings(&c, (640, 480), vpls);
+            let first = Budget::new(100.0, &s).start(&s);
+            assert_eq!(first.cluster.vpl_clusters, k_vpl);
+            assert_eq!(
+                first.cluster.sp_clusters,
+                k_sp_on_line(k_vpl, 640 * 480, vpls)
+            );
+            assert_eq!(first.frame.direct_samples, 16);
+        }
+        assert_eq!(k_sp_on_line(2000, 640 * 480, 8192), 3072);
+    }
+
     #[test]
     fn a_single_clustering_moves_only_its_own_k() {
         let c = ClusterSettings {

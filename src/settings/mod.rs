@@ -593,6 +593,45 @@ mod tests {
         assert!(parse_on_off("yes").is_err());
     }
 
+    /// Every parser at the edges of its range: the last value in and the first out on each side
+    /// (cargo-mutants: `<=` turned `<` in a range check survived the tests of the out side only).
+    #[test]
+    fn parsers_accept_their_edges() {
+        assert_eq!(parse_fuzziness("1"), Ok(1));
+        assert_eq!(parse_normal_threshold("1"), Ok(1.0));
+        assert!(parse_normal_threshold("-1.01").is_err());
+        assert_eq!(parse_iterations("0"), Ok(0));
+        assert_eq!(parse_iterations("1000"), Ok(1000));
+        assert!(parse_iterations("1001").is_err());
+        assert_eq!(parse_weight_exponent("0"), Ok(0.0));
+        assert_eq!(parse_weight_exponent("64"), Ok(64.0));
+        assert!(parse_weight_exponent("-0.01").is_err());
+        assert_eq!(parse_plane_gate("90"), Ok(90.0));
+        assert_eq!(parse_plane_gate("0.01"), Ok(0.01));
+        assert_eq!(parse_target_ms("1e7"), Ok(1e7));
+        assert_eq!(parse_target_ms("0.001"), Ok(0.001));
+        assert!(parse_target_ms("0").is_err() && parse_target_ms("1.0001e7").is_err());
+        assert!(parse_target_ms("inf").is_err() && parse_target_ms("NaN").is_err());
+        assert_eq!(parse_on_off(" off "), Ok(false));
+        assert_eq!(parse_side("1"), Ok(1));
+        assert_eq!(parse_side("16384"), Ok(16384));
+        assert_eq!(parse_bounces("1"), Ok(1));
+        assert_eq!(parse_bounces("64"), Ok(64));
+        assert!(parse_bounces("0").is_err() && parse_bounces("65").is_err());
+        assert_eq!(parse_direct_samples("1"), Ok(1));
+        assert_eq!(parse_direct_samples("65536"), Ok(65536));
+        assert_eq!(parse_clamp("0"), Ok(0.0));
+        assert_eq!(parse_clamp("0.99"), Ok(0.99));
+        assert_eq!(parse_light_scale("0"), Ok(0.0));
+        assert_eq!(parse_light_scale("1e30"), Ok(1e30));
+        assert_eq!(parse_exposure("0"), Ok(Exposure::Fixed(0.0)));
+        assert_eq!(parse_gamma("1"), Ok(Gamma::Fixed(1)));
+        assert!(parse_gamma("0").is_err() && parse_gamma("-1").is_err());
+        assert_eq!(parse_warmup_ms("0"), Ok(0.0));
+        assert_eq!(parse_warmup_ms("60000"), Ok(60000.0));
+        assert!(parse_warmup_ms("-1").is_err() && parse_warmup_ms("60001").is_err());
+    }
+
     /// `Default` is the options' defaults (docs/design.md's CLI table), declared once.
     #[test]
     fn defaults_are_the_options_defaults() {

@@ -102,6 +102,25 @@ mod tests {
         assert!(parse_face_rays("0").is_err() && parse_face_rays("1025").is_err());
         assert!(parse_near_voxels("-1").is_err());
         assert!(parse_filter_radius("5").is_err() && parse_filter_passes("9").is_err());
+        // The edges: the last value in on each side (cargo-mutants: a `<=` turned `<` survived).
+        assert_eq!(parse_voxel_res("1"), Ok(1));
+        assert_eq!(parse_cluster_step("1"), Ok(1));
+        assert_eq!(parse_cluster_step("64"), Ok(64));
+        assert_eq!(parse_cluster_iterations("0"), Ok(0));
+        assert_eq!(parse_cluster_iterations("100"), Ok(100));
+        assert!(parse_cluster_iterations("101").is_err());
+        assert_eq!(parse_cluster_angle("180"), Ok(180.0));
+        assert_eq!(parse_cluster_angle("0.01"), Ok(0.01));
+        assert!(parse_cluster_angle("180.1").is_err());
+        assert_eq!(parse_face_rays("1"), Ok(1));
+        assert_eq!(parse_face_rays("1024"), Ok(1024));
+        assert_eq!(parse_near_voxels("0"), Ok(0.0));
+        assert_eq!(parse_near_voxels("64"), Ok(64.0));
+        assert!(parse_near_voxels("64.1").is_err());
+        assert_eq!(parse_filter_radius("0"), Ok(0));
+        assert_eq!(parse_filter_radius("4"), Ok(4));
+        assert_eq!(parse_filter_passes("0"), Ok(0));
+        assert_eq!(parse_filter_passes("8"), Ok(8));
         let c = CvrtgiSettings::default();
         let j = serde_json::to_string(&c).unwrap();
         assert_eq!(serde_json::from_str::<CvrtgiSettings>(&j).unwrap(), c);

@@ -457,3 +457,62 @@ pub fn slic(v: &mut Voxels, s: &SlicSettings) -> Vec<Cluster> {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A point on a voxel's face, on the empty side, is found half a voxel into the surface, both
+    /// ways along `d` (cargo-mutants: the step back as `p - d / h` survived; on the unit grids of the
+    /// other tests it is two voxels).
+    #[test]
+    fn at_surface_steps_half_a_voxel_into_the_surface() {
+        let grid = Grid {
+            origin: Vec3::ZERO,
+            size: 0.25,
+            dims: [4; 3],
+        };
+        // One voxel, (1, 1, 1): [0.25, 0.5]³.
+        let frag = (Vec3::splat(0.375), Vec3::Y, Vec3::splat(0.5), 1.0);
+        let v = Voxels::from_fragments(grid, &[frag]);
+        assert_eq!(v.voxels.len(), 1);
+        // On its top face (y = 0.5 lies in the empty voxel above), looking down into it.
+        let top = Vec3::new(0.4, 0.5, 0.3);
+        assert_eq!(v.find(grid.coord(top)), None);
+        assert_eq!(v.at_surface(top, -Vec3::Y), Some(0));
+        // The other way round too: `d` pointing away, the step back finds it.
+        assert_eq!(v.at_surface(top, Vec3::Y), Some(0));
+        // A point a voxel away from it finds nothing.
+        assert_eq!(v.at_surface(Vec3::new(0.4, 0.8, 0.3), -Vec3::Y), None);
+    }
+
+    /// Alg. 1's seeds are the occupied voxels nearest their cells' centres: a row of 8 voxels, S = 4
+    /// (cells x 0..3 and 4..7, centres x = 2 and 6), occupied at x = 0, 3, 4, 7, all facing +y.
+    /// The seeds are x = 3 and 7; one pass (iterations 1) gives x = 4 to the first (1 from it, 3
+    /// from the second): clusters {0, 3, 4} and {7} (cargo-mutants: the centre as the cell's corner,
+    /// seeds x = 0 and 4 and clusters {0} and {3, 4, 7}, survived).
+    #[test]
+    fn slic_seeds_at_the_voxels_nearest_the_cell_centres() {
+        let grid = Grid {
+            origin: Vec3::ZERO,
+            size: 1.0,
+            dims: [8, 1, 1],
+        };
+        let frags: Vec<Fragment> = [0.0, 3.0, 4.0, 7.0]
+            .map(|x| (Vec3::new(x + 0.5, 0.5, 0.5), Vec3::Y, Vec3::ONE, 1.0))
+            .to_vec();
+        let mut v = Voxels::from_fragments(grid, &frags);
+        let s = SlicSettings {
+            step: 4,
+            iterations: 1,
+            angle: 35.0,
+        };
+        let clusters = slic(&mut v, &s);
+        let of: Vec<u32> = v.voxels.iter().map(|x| x.cluster).collect();
+        assert_eq!(of, [0, 0, 0, 1]);
+        assert_eq!(
+            clusters.iter().map(|c| c.voxels).collect::<Vec<_>>(),
+            [3, 1]
+        );
+    }
+}

@@ -30,5 +30,8 @@ mod tests {
         assert!(parse_d_init("0").is_err() && parse_d_init("-0.1").is_err());
         assert!(parse_d_init("inf").is_err() && parse_d_init("11").is_err());
         assert_eq!(parse_d_init("0.5"), Ok(0.5));
+        // The edges (cargo-mutants: a `<=` turned `<` survived the out-of-range tests alone).
+        assert_eq!(parse_d_init("10"), Ok(10.0));
+        assert_eq!(parse_d_init("0.001"), Ok(0.001));
     }
 }

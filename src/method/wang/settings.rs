@@ -28,6 +28,9 @@ mod tests {
         assert!(parse_wang_alpha("0").is_err() && parse_wang_alpha("-1").is_err());
         assert!(parse_wang_alpha("NaN").is_err() && parse_wang_alpha("101").is_err());
         assert_eq!(parse_wang_alpha("0.3"), Ok(0.3));
+        // The edges (cargo-mutants: a `<=` turned `<` survived the out-of-range tests alone).
+        assert_eq!(parse_wang_alpha("100"), Ok(100.0));
+        assert_eq!(parse_wang_alpha("0.001"), Ok(0.001));
         assert_eq!(WangSettings::default().wang_alpha, 0.3);
     }
 }
