@@ -366,6 +366,23 @@ fn index_out_of_range() {
     let path = d.write_gltf(&dir, "oob");
     assert_err(gltf_load::load_path(&path), "oob.gltf", "out of range");
 
+    // Normals of two components: skipped (normals generated) with a warning naming the type.
+    let mut d = Doc::new();
+    let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    let n = d.floats(&[[0.0, 1.0]; 3], "VEC2", false);
+    let m = d.mesh(json!({"attributes": {"POSITION": p, "NORMAL": n}}));
+    d.node(json!({"mesh": m}), true);
+    let s = load_ok(&d.write_gltf(&dir, "vec2"));
+    assert_eq!(s.report.generated_normals, 1);
+    assert!(
+        s.report
+            .warnings
+            .iter()
+            .any(|w| w.contains("has type VEC2, expected 3 components; normals generated")),
+        "{:?}",
+        s.report.warnings
+    );
+
     // An accessor index that does not exist (the gltf crate's validation).
     let mut d = Doc::new();
     let m = d.mesh(json!({"attributes": {"POSITION": 42}}));

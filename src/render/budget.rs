@@ -640,6 +640,28 @@ mod tests {
         assert_eq!(k_sp_on_line(2000, 640 * 480, 8192), 3072);
     }
 
+    /// Where the model has no answer, K falls toward the fewest clusters, at most 8× a step: a frame
+    /// whose time is all primary rays and direct light (V = 0), and one whose fixed part alone is
+    /// over the budget (cargo-mutants: the two conditions joined by `&&` survived; K then rose 8×
+    /// in the first case and fell to the fewest at once, a NaN power, in the second).
+    #[test]
+    fn k_falls_where_the_model_has_no_answer() {
+        let s = settings(&ClusterSettings::default(), (640, 480), 8192);
+        let first = Budget::new(100.0, &s).start(&s);
+        assert_eq!(first.cluster.vpl_clusters, 2000);
+        for (frame_ms, fixed_ms) in [(50.0, 50.0), (150.0, 120.0)] {
+            let split = Split {
+                frame_ms,
+                fixed_ms,
+                direct_ms: 20.0,
+                exponent: 1.5,
+            };
+            let next = Budget::new(100.0, &s).step(&first, split);
+            assert_eq!(next.cluster.vpl_clusters, 2000 / 8, "{split:?}");
+            assert_eq!(next.frame.direct_samples, 16);
+        }
+    }
+
     #[test]
     fn a_single_clustering_moves_only_its_own_k() {
         let c = ClusterSettings {
