@@ -159,6 +159,29 @@ mod tests {
         assert_eq!(node_variation(0.5, &[], &sps), 0.0);
     }
 
+    /// A cluster's sample point is its valid member nearest its centre by Eq. (2); a pixel without
+    /// a surface or without a label is never one, and an empty cluster has none (cargo-mutants: the
+    /// skip as `l == INVALID && !sp.valid` survived).
+    #[test]
+    fn sample_points_skip_pixels_without_a_surface_or_a_label() {
+        let centre = |count| Center {
+            pos: Vec3::ZERO,
+            nrm: Vec3::Z,
+            count,
+        };
+        let mut sky = sp(Vec3::ZERO, Vec3::Z);
+        sky.valid = false;
+        let sps = [
+            sp(Vec3::X, Vec3::Z),
+            sky,
+            sp(0.5 * Vec3::X, Vec3::Z),
+            sp(Vec3::ZERO, Vec3::Z),
+        ];
+        let labels = [0, 0, 0, INVALID];
+        let s = sample_points(&sps, &labels, &[centre(3), centre(0)], 1.0);
+        assert_eq!(s, [2, INVALID]);
+    }
+
     #[test]
     fn apportion_by_hand() {
         assert_eq!(apportion(4, [1.0, 1.0, 2.0, 0.0], [10; 4]), [1, 1, 2, 0]);

@@ -487,10 +487,11 @@ mod tests {
     }
 
     /// Alg. 1's seeds are the occupied voxels nearest their cells' centres: a row of 8 voxels, S = 4
-    /// (cells x 0..3 and 4..7, centres x = 2 and 6), occupied at x = 0, 3, 4, 7, all facing +y.
-    /// The seeds are x = 3 and 7; one pass (iterations 1) gives x = 4 to the first (1 from it, 3
-    /// from the second): clusters {0, 3, 4} and {7} (cargo-mutants: the centre as the cell's corner,
-    /// seeds x = 0 and 4 and clusters {0} and {3, 4, 7}, survived).
+    /// (cells x 0..3 and 4..7, centres x = 2 and 6), occupied at x = 0, 3, 5, 6, 7, all facing +y.
+    /// The seeds are x = 3 and 6; one pass (iterations 1) gives each voxel the nearer: clusters
+    /// {0, 3} and {5, 6, 7} (cargo-mutants: the centre as `step % 2`, seeds x = 0 and 5, clusters
+    /// {0} and {3, 5, 6, 7}, and as `step * 2`, seeds x = 3 and 7, x = 5 at 2 from both and so to
+    /// the lower index, clusters {0, 3, 5} and {6, 7}, survived).
     #[test]
     fn slic_seeds_at_the_voxels_nearest_the_cell_centres() {
         let grid = Grid {
@@ -498,7 +499,7 @@ mod tests {
             size: 1.0,
             dims: [8, 1, 1],
         };
-        let frags: Vec<Fragment> = [0.0, 3.0, 4.0, 7.0]
+        let frags: Vec<Fragment> = [0.0, 3.0, 5.0, 6.0, 7.0]
             .map(|x| (Vec3::new(x + 0.5, 0.5, 0.5), Vec3::Y, Vec3::ONE, 1.0))
             .to_vec();
         let mut v = Voxels::from_fragments(grid, &frags);
@@ -509,10 +510,10 @@ mod tests {
         };
         let clusters = slic(&mut v, &s);
         let of: Vec<u32> = v.voxels.iter().map(|x| x.cluster).collect();
-        assert_eq!(of, [0, 0, 0, 1]);
+        assert_eq!(of, [0, 0, 1, 1, 1]);
         assert_eq!(
             clusters.iter().map(|c| c.voxels).collect::<Vec<_>>(),
-            [3, 1]
+            [2, 3]
         );
     }
 }
