@@ -87,8 +87,14 @@ fn main() -> Result<()> {
     );
 
     // What the host would do with its texture; here: read it back and write a PNG.
-    let pixels = read_texture(&ctx, &texture, w, h)?;
-    let radiance: Vec<[f32; 3]> = pixels.iter().map(|p| [p[0], p[1], p[2]]).collect();
+    let bytes = fuzzy_vpl::gpu::read_texture(&ctx.device, &ctx.queue, &texture)?;
+    let radiance: Vec<[f32; 3]> = bytes
+        .chunks_exact(16)
+        .map(|t| {
+            let p: [f32; 4] = bytemuck::pod_read_unaligned(t);
+            [p[0], p[1], p[2]]
+        })
+        .collect();
     let mean =
         radiance.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / (3 * radiance.len()) as f32;
     let exposure = fuzzy_vpl::exposure::auto_exposure(&radiance);
@@ -103,47 +109,4 @@ fn main() -> Result<()> {
         bail!("the image is black or not finite (mean {mean})");
     }
     Ok(())
-}
-
-/// Reads an `Rgba32Float` texture back to the CPU (rows padded to wgpu's copy alignment).
-fn read_texture(
-    ctx: &GpuContext,
-    texture: &wgpu::Texture,
-    w: u32,
-    h: u32,
-) -> Result<Vec<[f32; 4]>> {
-    let row =
-        (w * 16).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("readback"),
-        size: (row * h) as u64,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
-    let mut enc = ctx.device.create_command_encoder(&Default::default());
-    enc.copy_texture_to_buffer(
-        texture.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(row),
-                rows_per_image: Some(h),
-            },
-        },
-        texture.size(),
-    );
-    ctx.queue.submit([enc.finish()]);
-    buffer.slice(..).map_async(wgpu::MapMode::Read, |_| {});
-    ctx.wait()?;
-    let data = buffer
-        .slice(..)
-        .get_mapped_range()
-        .map_err(|e| anyhow::anyhow!("reading the mapped texture failed: {e}"))?;
-    let mut out = Vec::with_capacity((w * h) as usize);
-    for y in 0..h as usize {
-        let line: &[[f32; 4]] = bytemuck::cast_slice(&data[y * row as usize..][..w as usize * 16]);
-        out.extend_from_slice(line);
-    }
-    Ok(out)
 }

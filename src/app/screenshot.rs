@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, anyhow};
+use anyhow::Result;
 
 use super::Viewer;
 use super::views::{self, View};
@@ -83,62 +83,15 @@ pub fn read_texture_rgb8(
         texture.format(),
         wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
     );
-    let row =
-        (w * 4).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("screenshot readback"),
-        size: row as u64 * h as u64,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut enc = device.create_command_encoder(&Default::default());
-    enc.copy_texture_to_buffer(
-        texture.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(row),
-                rows_per_image: Some(h),
-            },
-        },
-        wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-    );
-    queue.submit([enc.finish()]);
-    let slice = buffer.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    device
-        .poll(wgpu::PollType::Wait {
-            submission_index: None,
-            timeout: None,
-        })
-        .map_err(|e| anyhow!("GPU wait failed: {e}"))?;
-    rx.recv()
-        .context("readback callback dropped")?
-        .map_err(|e| anyhow!("mapping the screenshot failed: {e}"))?;
-    let view = slice
-        .get_mapped_range()
-        .map_err(|e| anyhow!("reading the screenshot failed: {e}"))?;
+    let texels = crate::gpu::read_texture(device, queue, texture)?;
     let mut rgb = Vec::with_capacity((w * h * 3) as usize);
-    for y in 0..h as usize {
-        let r = &view[y * row as usize..][..w as usize * 4];
-        for p in r.chunks(4) {
-            if bgra {
-                rgb.extend_from_slice(&[p[2], p[1], p[0]]);
-            } else {
-                rgb.extend_from_slice(&p[..3]);
-            }
+    for p in texels.chunks(4) {
+        if bgra {
+            rgb.extend_from_slice(&[p[2], p[1], p[0]]);
+        } else {
+            rgb.extend_from_slice(&p[..3]);
         }
     }
-    drop(view);
-    buffer.unmap();
     Ok((w, h, rgb))
 }
 

@@ -276,6 +276,71 @@ impl GpuContext {
     }
 }
 
+/// Copies a whole 2D texture (`COPY_SRC` usage, a format with a fixed texel size) back to the CPU:
+/// its texels row by row from the top, without the copy's row padding.
+pub fn read_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+) -> Result<Vec<u8>> {
+    let (w, h) = (texture.width(), texture.height());
+    let texel = texture
+        .format()
+        .block_copy_size(None)
+        .ok_or_else(|| anyhow!("texture format {:?} has no texel size", texture.format()))?;
+    let tight = w * texel;
+    let row =
+        tight.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("texture readback"),
+        size: row as u64 * h as u64,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = device.create_command_encoder(&Default::default());
+    enc.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(h),
+            },
+        },
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+    );
+    queue.submit([enc.finish()]);
+    let slice = buffer.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    device
+        .poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        })
+        .map_err(|e| anyhow!("GPU wait failed: {e}"))?;
+    rx.recv()
+        .map_err(|_| anyhow!("readback callback dropped"))?
+        .map_err(|e| anyhow!("mapping the texture readback failed: {e}"))?;
+    let view = slice
+        .get_mapped_range()
+        .map_err(|e| anyhow!("reading the texture readback failed: {e}"))?;
+    let mut out = Vec::with_capacity((tight * h) as usize);
+    for y in 0..h as usize {
+        out.extend_from_slice(&view[y * row as usize..][..tight as usize]);
+    }
+    drop(view);
+    buffer.unmap();
+    Ok(out)
+}
+
 /// Number of workgroups of `size` covering `n` items.
 pub fn groups(n: u32, size: u32) -> u32 {
     n.div_ceil(size)
