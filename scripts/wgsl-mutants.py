@@ -232,6 +232,20 @@ MUTANTS = [
     ("pattern-table-v-of-next-light", "shade.wgsl", "vs[k] = eq9_weighted_visibility(w, &rw, first);", "vs[k] = eq9_weighted_visibility(w, &rw, (first + 1u) % 32u);", "patterns"),
     ("pattern-pick-inverted", "shade.wgsl", "v = select(v, vs[k], ((masks[k] >> b) & 1u) != 0u);", "v = select(v, vs[k], ((masks[k] >> b) & 1u) == 0u);", "patterns"),
     ("pattern-past-the-table-dropped", "shade.wgsl", "if ((rest >> b) & 1u) != 0u {", "if false {", "patterns"),
+    # --- temporal accumulation: accumulate.wgsl
+    ("accumulate-bilinear-weights-swapped", "accumulate.wgsl", "let bx = select(1.0 - tx, tx, dx == 1);", "let bx = select(tx, 1.0 - tx, dx == 1);", "temporal"),
+    ("accumulate-depth-test-loose", "accumulate.wgsl", "abs(pq.z - z) <= params.blend.y * z", "abs(pq.z - z) <= 10.0 * z", "temporal"),
+    ("accumulate-normal-test-dropped", "accumulate.wgsl", "if q.pos.w <= 0.0 || dot(n, q.nrm.xyz) < params.blend.z {", "if q.pos.w <= 0.0 {", "temporal"),
+    ("accumulate-count-uncapped", "accumulate.wgsl", "min(history.w + 1.0, 1.0 / params.blend.x)", "history.w + 1.0", "temporal"),
+    ("accumulate-mean-schedule-dropped", "accumulate.wgsl", "return max(1.0 / (frames + 1.0), alpha);", "return alpha;", "temporal"),
+    ("accumulate-mix-reversed", "accumulate.wgsl", "mix(history.xyz, cur, alpha)", "mix(cur, history.xyz, alpha)", "temporal"),
+    ("accumulate-same-view-ignored", "accumulate.wgsl", "if params.size.w == 1u {", "if false {", "temporal"),
+    # --- indirect scale: upsample.wgsl
+    ("upsample-normal-power-dropped", "upsample.wgsl", "pow(facing, NORMAL_POWER)", "facing", "indirect scale"),
+    ("upsample-plane-distance-ignored", "upsample.wgsl", "return exp(-plane * plane) * pow", "return pow", "indirect scale"),
+    ("upsample-bilinear-swapped", "upsample.wgsl", "let bx = select(1.0 - fx, fx, dx == 1);", "let bx = select(fx, 1.0 - fx, dx == 1);", "indirect scale"),
+    ("upsample-fallback-farthest", "upsample.wgsl", "sq.pos.w != 0.0 && gap < best_gap", "sq.pos.w != 0.0 && gap > best_gap", "indirect scale"),
+    ("upsample-representative-corner", "upsample.wgsl", "(f32(lx) + 0.5) * f32(params.size.x)", "f32(lx) * f32(params.size.x)", "indirect scale"),
     # Not listed, equivalent by argument (not run): in the pattern table, `var same = 0xffffffffu` ->
     # `0u` (every mask empty: every light runs Eq. (9)'s loop, the same V bit for bit),
     # `firstTrailingBit(rest)` -> `firstLeadingBit(rest)` (a pattern's mask and V do not depend on
@@ -245,7 +259,7 @@ MUTANTS = [
 # Stage 2: every test binary that uses the GPU (tests/*.rs but NO_GPU), whole, in this order (fast or
 # most likely to kill first; a binary not named here runs after these), stopping at the first that
 # fails. A mutant's file may name binaries to try first (HINTS): only the order changes.
-STAGE2 = ["closed_form", "traversal", "cvrtgi", "gltf_features", "methods", "budget", "viewer",
+STAGE2 = ["closed_form", "accumulate", "upsample", "traversal", "cvrtgi", "gltf_features", "methods", "budget", "viewer",
           "temporal", "reference", "clustered", "kmeans", "cli", "render", "bench"]
 NO_GPU = {"scene_load"}
 HINTS = {
@@ -258,6 +272,8 @@ HINTS = {
     "kmeans/grid.wgsl": ["kmeans"],
     "kmeans/init.wgsl": ["kmeans", "temporal"],
     "shade.wgsl": ["clustered"],
+    "accumulate.wgsl": ["accumulate"],
+    "upsample.wgsl": ["upsample"],
 }
 
 COMPILE_MARKERS = ("Shader validation error", "shader parse", "naga", "WGSL", "Validation Error")

@@ -256,6 +256,12 @@ fn camera_path_writes_path_csv_and_plot() {
             !on || frame == 0,
             "{r:?}"
         );
+        // The accumulation's α (the default) with temporal reuse only; the scale of the world
+        // measure (an image without indirect light) from frame 1 on.
+        assert_eq!(col(r, "temporal_alpha"), if on { "0.7" } else { "" });
+        assert_eq!(col(r, "label").ends_with(" α0.7"), on, "{r:?}");
+        let floor = col(r, "instability_world_direct_only");
+        assert_eq!(floor.is_empty(), frame == 0, "{r:?}");
     }
     let img = image::open(d.join("path.png")).unwrap().into_rgb8();
     assert_eq!(img.dimensions(), (960, 540));

@@ -746,6 +746,14 @@ fn clustering_controls(ui: &mut Ui, s: &mut UiSettings, r: &SliderRanges, gamma_
              frame's, accumulate the direct light at rest (docs/temporal.md)",
         );
     ui.add_enabled(
+        s.cluster.temporal,
+        Slider::new(&mut s.cluster.temporal_alpha, 0.05..=1.0).text("α (indirect history)"),
+    )
+    .on_hover_text(
+        "The new frame's weight in the indirect light accumulated at each surface point while \
+         moving (--temporal-alpha; 1: none)",
+    );
+    ui.add_enabled(
         s.sp_on,
         Slider::new(&mut s.cluster.sp_clusters, 1..=r.sp_clusters)
             .logarithmic(true)

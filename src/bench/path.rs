@@ -116,6 +116,12 @@ pub struct PathRow {
     /// Flicker at the same surface point: frame t's error against frame t−1's where the same
     /// surface was (`metrics::instability_world`); empty at frame 0 or when no pixel matched.
     pub instability_world: Option<f64>,
+    /// `temporal_alpha` of the accumulation (`--temporal-alpha`); empty with temporal off.
+    pub temporal_alpha: Option<f32>,
+    /// `instability_world` of the frame's direct light alone against the same references: what
+    /// an image without indirect light would score, i.e. how much the references' own indirect
+    /// light changes when read between the previous frame's pixels (docs/temporal.md).
+    pub instability_world_direct_only: Option<f64>,
 }
 
 pub fn to_csv(rows: &[PathRow]) -> String {
@@ -153,10 +159,15 @@ pub fn means(rows: &[PathRow], label: &str, temporal: bool) -> Option<[f64; 5]> 
     ])
 }
 
-/// A frame and its reference as `metrics::instability_world` reads them.
-fn path_frame<'a>(f: &'a Frame, reference: &'a [[f32; 3]]) -> metrics::PathFrame<'a> {
+/// A frame's image `x` (its radiance, or a layer of it) and its reference as
+/// `metrics::instability_world` reads them.
+fn path_frame<'a>(
+    f: &'a Frame,
+    x: &'a [[f32; 3]],
+    reference: &'a [[f32; 3]],
+) -> metrics::PathFrame<'a> {
     metrics::PathFrame {
-        x: &f.radiance,
+        x,
         reference,
         positions: &f.positions,
         normals: &f.normals,
@@ -164,7 +175,8 @@ fn path_frame<'a>(f: &'a Frame, reference: &'a [[f32; 3]]) -> metrics::PathFrame
     }
 }
 
-/// Renders every configuration of `plan` along `path` with each of `temporal`, against one reference
+/// Renders every configuration of `plan` along `path` with each of `temporal` (on: with each of
+/// `alphas`, `ClusterSettings::temporal_alpha`), against one reference
 /// per frame (rendered once, shared by all). Writes `path.csv` and `path.png` into the plan's folder.
 pub fn run(
     ctx: &GpuContext,
@@ -172,6 +184,7 @@ pub fn run(
     plan: &BenchPlan,
     path: &CameraPath,
     temporal: &[bool],
+    alphas: &[f32],
 ) -> Result<Vec<PathRow>> {
     let mut renderer = Renderer::new(ctx, scene)?;
     let start = &plan.cameras.first().ok_or_else(|| anyhow!("no camera"))?.1;
@@ -194,9 +207,19 @@ pub fn run(
     }
     let mut rows = Vec::new();
     for c in &configs {
-        for &on in temporal {
+        let runs = temporal.iter().flat_map(|&on| {
+            let a: Vec<Option<f32>> = match on {
+                true => alphas.iter().map(|&a| Some(a)).collect(),
+                false => vec![None],
+            };
+            a.into_iter().map(move |a| (on, a))
+        });
+        for (on, alpha) in runs {
             let mut s = plan.settings(c);
             s.cluster.temporal = on;
+            if let Some(a) = alpha {
+                s.cluster.temporal_alpha = a;
+            }
             // Pipelines built (one untimed frame on a GPU); each run starts with no past.
             renderer.forget_past();
             renderer.warm_up(&cameras[0], &s, plan.timing.warmup_ms)?;
@@ -207,25 +230,32 @@ pub fn run(
                 // (its error measures) left the GPU in.
                 ctx.warm_up(plan.timing.warmup_ms)?;
                 let f = renderer.render(cam, &s)?;
-                let label = sweep::label_ran(
+                let mut label = sweep::label_ran(
                     c,
                     f.gamma_used.is_some(),
                     f.vpl_clusters_used > 0,
                     f.gamma_used,
                 );
+                if f.ran(Pass::Accumulate) {
+                    label = format!("{label} α{}", s.cluster.temporal_alpha);
+                }
                 let (reference, reference_ms) = &references[i];
                 let instability = prev.as_ref().map(|p| {
                     metrics::instability(&f.radiance, reference, &p.radiance, &references[i - 1].0)
                 });
-                let instability_world = prev.as_ref().and_then(|p| {
-                    let cam = CameraParams::new(&cameras[i - 1], p.width, p.height);
-                    let eye = cam.eye_point();
-                    metrics::instability_world(
-                        &path_frame(&f, reference),
-                        &path_frame(p, &references[i - 1].0),
-                        |q| cam.project(q - eye, 1e-6),
-                    )
-                });
+                let world = |x: &dyn Fn(&Frame) -> &[[f32; 3]]| {
+                    prev.as_ref().and_then(|p| {
+                        let cam = CameraParams::new(&cameras[i - 1], p.width, p.height);
+                        let eye = cam.eye_point();
+                        metrics::instability_world(
+                            &path_frame(&f, x(&f), reference),
+                            &path_frame(p, x(p), &references[i - 1].0),
+                            |q| cam.project(q - eye, 1e-6),
+                        )
+                    })
+                };
+                let instability_world = world(&|f| &f.radiance);
+                let instability_world_direct_only = world(&|f| &f.direct);
                 let row = PathRow {
                     label,
                     temporal: on,
@@ -248,6 +278,8 @@ pub fn run(
                     height: f.height,
                     vpls: f.vpls,
                     instability_world,
+                    temporal_alpha: alpha,
+                    instability_world_direct_only,
                 };
                 eprintln!(
                     "path: {} temporal {} frame {i}: {:.1} ms (SP clustering {:.1} ms, {} iteration(s), kept {}), MSE {:.3e}, instability {} (world {})",
@@ -445,6 +477,8 @@ mod tests {
             height: 120,
             vpls: 4096,
             instability_world: inst.map(|v| v / 2.0),
+            temporal_alpha: on.then_some(0.7),
+            instability_world_direct_only: inst.map(|v| v * 3.0),
         };
         let rows = vec![
             row(0, false, 100.0, 9.0, None),

@@ -267,6 +267,8 @@ mod tests {
             height: 720,
             vpls: 8192,
             instability_world: None,
+            temporal_alpha: on.then_some(0.7),
+            instability_world_direct_only: None,
         };
         vec![
             row(0, false, 99.0),

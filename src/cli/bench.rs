@@ -53,6 +53,10 @@ pub struct BenchArgs {
     /// Temporal reuse along --camera-path: on, off or both (off,on; default off).
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_on_off, requires = "camera_path")]
     temporal: Vec<bool>,
+    /// With --temporal on: the accumulation's α values (`render --temporal-alpha`; default the
+    /// settings' default, 1 = no accumulation), e.g. 1,0.7.
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::settings::parse_temporal_alpha, requires = "camera_path")]
+    temporal_alpha: Vec<f32>,
     /// Renders per configuration; times are the mean of the 3 best (default 10; quick 3).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     repeat: Option<u32>,
@@ -135,7 +139,7 @@ pub fn run(a: BenchArgs, given: &[&str]) -> Result<()> {
         pipeline::check_visibility_size(&ctx, &p, &s).map_err(bad)?;
     }
     match &a.camera_path {
-        Some(path) => along_path(&ctx, &scene, &plan, path, &a.temporal),
+        Some(path) => along_path(&ctx, &scene, &plan, path, &a.temporal, &a.temporal_alpha),
         None => sweep_table(&ctx, &scene, &plan),
     }
 }
@@ -146,6 +150,7 @@ fn along_path(
     plan: &bench::BenchPlan,
     path: &CameraPath,
     temporal: &[bool],
+    alphas: &[f32],
 ) -> Result<()> {
     if plan.cameras.len() > 1 {
         return Err(bad(format!(
@@ -170,7 +175,13 @@ fn along_path(
         f.vpls,
         ctx.adapter_name
     );
-    let rows = bench::path::run(ctx, scene, plan, path, temporal)?;
+    let default_alpha = [crate::settings::ClusterSettings::default().temporal_alpha];
+    let alphas = if alphas.is_empty() {
+        &default_alpha
+    } else {
+        alphas
+    };
+    let rows = bench::path::run(ctx, scene, plan, path, temporal, alphas)?;
     println!(
         "{:<32} {:>8} {:>10} {:>12} {:>11} {:>12} {:>12}",
         "configuration",

@@ -1,6 +1,7 @@
 //! CPU twins of the GPU kernels' math, used by tests to check the shaders. Ray queries use obvhs' own
 //! CPU traversal (`bvh::SceneBvh::closest` / `occluded`), which is also the traversal twin.
 
+pub mod accumulate;
 pub mod cvrtgi;
 pub mod kmeans;
 pub mod lightcluster;

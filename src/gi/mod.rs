@@ -4,6 +4,7 @@
 //! colom's clustered visibility and shading (steps 4–6). The other methods' passes are in
 //! `method`; `render::pipeline` decides which passes run.
 
+pub mod accumulate;
 pub mod direct;
 pub mod dispatch;
 pub mod kmeans;

@@ -44,6 +44,9 @@ pub enum Pass {
     /// (`gi::upsample`; the render-scale G-buffer it is computed on is timed under `primary`). Not
     /// in `TIMED`: its key is in `timings_ms` only when it ran, so frames at scale 1 keep theirs.
     Upsample,
+    /// `--temporal on`: the indirect light blended with the previous frames' at the same surface
+    /// points (`gi::accumulate`). Not in `TIMED`, like `Upsample`.
+    Accumulate,
 }
 
 impl Pass {
@@ -90,6 +93,7 @@ impl Pass {
             Pass::LightClusterShade => "lightcluster_shade",
             Pass::Cvrtgi => "cvrtgi",
             Pass::Upsample => "upsample",
+            Pass::Accumulate => "accumulate",
         }
     }
 

@@ -43,6 +43,7 @@ pub const FILES: &[(&str, &str)] = wgsl![
     "cvrtgi.wgsl",
     "warmup.wgsl",
     "upsample.wgsl",
+    "accumulate.wgsl",
 ];
 
 /// The pass shaders (top-level files; `common/` holds shared code, `kmeans/` the steps of the

@@ -25,12 +25,14 @@ pub use super::frame::{
     check_visibility_size, max_pixels, visibility_bytes,
 };
 pub use super::resident::Renderer;
+use crate::gi::accumulate::Accumulate;
 pub use crate::gi::pass::Pass;
 use crate::gi::primary::{CameraParams, SP_BYTES};
 pub use crate::gi::vpl_cluster::LightKey;
 pub use crate::gi::vpl_trace::VplKey;
 use crate::method::Method;
 use crate::method::{Counts, FrameInputs};
+use crate::render::history::{History, HistoryKey};
 pub use crate::render::settings::{Cancelled, Control, RenderSettings};
 use crate::scene::{Camera, Scene};
 use crate::settings::FrameSettings;
@@ -50,6 +52,9 @@ pub struct Plan {
     /// The render-scale size the indirect light is computed at when it is upsampled to the image
     /// (`--indirect-scale` below 1, not for the reference); `None`: at the image's size.
     pub low: Option<(u32, u32)>,
+    /// Temporal accumulation of the indirect light (`--temporal on` with α below 1, clustered
+    /// frames: `gi::accumulate`).
+    pub accumulate: bool,
 }
 
 impl Plan {
@@ -81,6 +86,7 @@ impl Plan {
             sp_clustering: sp && method == Method::Colom,
             method,
             low,
+            accumulate: clustered && c.temporal && c.temporal_alpha < 1.0,
         }
     }
 
@@ -106,6 +112,9 @@ impl Plan {
         }
         if self.low.is_some() {
             p.push(Pass::Upsample);
+        }
+        if self.accumulate {
+            p.push(Pass::Accumulate);
         }
         p
     }
@@ -231,6 +240,7 @@ impl Renderer<'_> {
                         &i.indirect,
                     );
                 }
+                Pass::Accumulate => self.accumulate(s, &r),
                 Pass::PathTrace => unreachable!("the path tracer is `path_trace`"),
                 _ => self.method_pass(plan.method, pass, si, &mut r)?,
             }
@@ -281,6 +291,19 @@ impl Renderer<'_> {
         );
         self.ctx.queue.submit([]);
         Ok(frame)
+    }
+
+    /// Blends the frame's indirect light (at the image's size) with the last frame's history where
+    /// it was rendered with the same settings (`gi::accumulate`).
+    fn accumulate(&mut self, s: &RenderSettings, r: &FrameResources) {
+        let (gbuffer, indirect, cam) = match &r.image {
+            Some(i) => (&i.gbuffer, &i.indirect, &i.cam),
+            None => (&r.gbuffer, &r.indirect, &r.cam),
+        };
+        let (p, history) = History::params(self.history.as_ref(), s, cam);
+        let kernel = self.accumulator.get_or_init(|| Accumulate::new(self.ctx));
+        let prev = history.map(|h| (&h.gbuffer, &h.indirect));
+        kernel.record(&mut gpu!(self), &p, gbuffer, prev, indirect);
     }
 
     /// Every pixel × every light with its own shadow ray: the VPL clusters (`gather`) or the VPLs
@@ -423,6 +446,12 @@ impl Renderer<'_> {
         let c = &r.counts;
         let (sp_iterations, sp_warm_kept, gamma_used) =
             (c.sp_iterations, c.sp_warm_kept, c.gamma_used);
+        self.history = plan.accumulate.then(|| History {
+            indirect: r.indirect.clone(),
+            gbuffer: r.gbuffer.clone(),
+            cam: r.cam,
+            key: HistoryKey::of(s),
+        });
         self.gbuffer = Some((r.gbuffer, n));
         self.last_camera = Some(r.cam);
         let direct: Vec<[f32; 3]> = px.iter().map(|p| self.to_scene_units(p)).collect();

@@ -55,6 +55,10 @@ pub struct Renderer<'a> {
     pub(super) methods: BTreeMap<Method, Box<dyn IndirectMethod>>,
     /// The indirect light at the render scale (`gi::upsample`).
     pub(super) upsample: crate::gi::upsample::Upsampler,
+    /// Temporal accumulation (`gi::accumulate`): its kernel, built on first use, and the last
+    /// frame's history (`None` after a frame without accumulation).
+    pub(super) accumulator: std::cell::OnceCell<crate::gi::accumulate::Accumulate>,
+    pub(super) history: Option<super::history::History>,
     /// The last frame's G-buffer and its pixel count (`direct_again`, `last_gbuffer`).
     pub(super) gbuffer: Option<(wgpu::Buffer, u32)>,
     /// The last frame's camera (render units), for `direct_again`'s jittered primary rays.
@@ -114,9 +118,11 @@ impl<'a> Renderer<'a> {
             .as_ref()
     }
 
-    /// Forgets the last frame's SP clustering: the next frame starts cold (a camera path run).
+    /// Forgets the last frame's SP clustering and accumulated indirect light: the next frame starts
+    /// cold (a camera path run).
     pub fn forget_past(&mut self) {
         self.colom().clustering = None;
+        self.history = None;
     }
 
     /// colom's state, built if no frame has used it yet.
@@ -154,7 +160,9 @@ impl<'a> Renderer<'a> {
             let pasts: Vec<_> = (self.methods.iter_mut())
                 .map(|(&m, state)| (m, state.take_past()))
                 .collect();
+            let history = self.history.take();
             self.render(camera, s)?;
+            self.history = history;
             let mut pasts: BTreeMap<Method, _> = pasts.into_iter().collect();
             for (m, state) in self.methods.iter_mut() {
                 match pasts.remove(m) {
@@ -194,6 +202,8 @@ impl<'a> Renderer<'a> {
             kmeans: KMeans::new(),
             methods: BTreeMap::new(),
             upsample: Default::default(),
+            accumulator: Default::default(),
+            history: None,
             profiler: Profiler::new(ctx),
             gbuffer: None,
             last_camera: None,
@@ -254,6 +264,8 @@ impl<'a> Renderer<'a> {
         }
         self.gpu = gpu;
         self.vpl_set = None;
+        // The indirect light of the old lights is no history for the new ones.
+        self.history = None;
     }
 
     /// Step 1: traces the VPLs unless the resident ones match (count, seed, bounces).
@@ -442,6 +454,36 @@ impl Renderer<'_> {
             ctx.read_buffer(&low, p.low_pixels() as usize * 4)?,
             ctx.read_buffer(&out, p.image_pixels() as usize)?,
         ))
+    }
+}
+
+impl Renderer<'_> {
+    /// The accumulation kernel on given data (tests: the GPU against `cpu::accumulate`): this
+    /// frame's G-buffer (4 vec4s a pixel) and indirect light, the previous frame's G-buffer and
+    /// accumulated light (`None`: no history). Returns the accumulated light.
+    pub fn accumulate_buffers(
+        &mut self,
+        p: &crate::gi::accumulate::AccumulateParams,
+        gbuffer: &[Vec4],
+        indirect: &[Vec4],
+        history: Option<(&[Vec4], &[Vec4])>,
+    ) -> anyhow::Result<Vec<Vec4>> {
+        let ctx = self.ctx;
+        let g = ctx.storage_init("gbuffer", gbuffer);
+        let ind = ctx.storage_init("indirect", indirect);
+        let prev = history.map(|(g, h)| {
+            (
+                ctx.storage_init("gbuffer (previous)", g),
+                ctx.storage_init("indirect (previous)", h),
+            )
+        });
+        let kernel = self
+            .accumulator
+            .get_or_init(|| crate::gi::accumulate::Accumulate::new(ctx));
+        let prev = prev.as_ref().map(|(g, h)| (g, h));
+        kernel.record(&mut gpu!(self), p, &g, prev, &ind);
+        let _ = self.profiler.collect(ctx)?;
+        ctx.read_buffer(&ind, p.pixels() as usize)
     }
 }
 

@@ -273,6 +273,13 @@ pub struct ClusterSettings {
     /// change (docs/temporal.md). A single `render` has no past: only --repeat's later renders reuse.
     #[arg(long, default_value = "off", value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub temporal: bool,
+    /// With temporal reuse on: the weight of a new frame's indirect light once a surface point's
+    /// history is long (it is the plain mean over the point's first frames). Each pixel's surface
+    /// point is found in the previous frame and the indirect light blended there, an exponential
+    /// moving average over about 1/α frames (docs/temporal.md, "Accumulation"). 1: no
+    /// accumulation. (0, 1].
+    #[arg(long, default_value_t = 0.7, value_name = "ALPHA", value_parser = parse_temporal_alpha)]
+    pub temporal_alpha: f32,
     /// Not in the paper (off by default): step 5 traces only representative pairs that face each
     /// other (both cosines positive) and leaves the others' V at 0. The paper's V is pure
     /// visibility; Eq. (6) applies each pixel's own cosines (docs/clustering.md, "V and the facing
@@ -444,6 +451,14 @@ pub fn parse_weight_exponent(v: &str) -> Result<f32, Invalid> {
         v,
         |p: f32| (0.0..=64.0).contains(&p),
         "must be a number in [0, 64]",
+    )
+}
+
+pub fn parse_temporal_alpha(v: &str) -> Result<f32, Invalid> {
+    in_range(
+        v,
+        |a: f32| a > 0.0 && a <= 1.0,
+        "must be a number in (0, 1]",
     )
 }
 
