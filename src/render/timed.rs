@@ -69,11 +69,11 @@ pub fn timed(
     })
 }
 
-/// Every timing key of the contract (`Pass::TIMED` and `frame`), so readers can index them; passes
-/// that did not run read 0.
+/// Every timing key of the contract (the shared passes of `Pass::TIMED`, every room's passes and
+/// `frame`), so readers can index them; passes that did not run read 0.
 pub fn timing_keys() -> impl Iterator<Item = &'static str> {
-    Pass::TIMED
-        .iter()
+    let rooms = crate::method::ROOMS.iter().flat_map(|r| r.passes);
+    (Pass::TIMED.iter().chain(rooms))
         .map(|p| p.name())
         .chain([super::frame::FRAME_KEY])
 }
@@ -130,8 +130,17 @@ mod tests {
         for k in timing_keys() {
             assert!(b.contains_key(k), "{k}");
         }
-        // The contract's ten, and the other methods' six (docs/methods.md).
-        assert_eq!(timing_keys().count(), 16);
+        // The contract's ten (the shared passes and `frame`), and every room's passes.
+        let rooms: usize = crate::method::ROOMS.iter().map(|r| r.passes.len()).sum();
+        assert_eq!(timing_keys().count(), 10 + rooms);
+        for r in crate::method::ROOMS {
+            assert!(
+                r.passes.iter().all(|p| b.contains_key(p.name())),
+                "{}",
+                r.method
+            );
+        }
+        assert!(b.contains_key("wang_interp") && b.contains_key("cvrtgi"));
         assert_eq!(b["primary"], 2.0);
         assert_eq!(b["vpl_trace"], 0.0);
     }
