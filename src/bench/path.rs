@@ -2,19 +2,22 @@
 //! each frame against its own unclustered reference (same VPLs, direct-light samples and seed), so
 //! that what temporal reuse buys (SP clustering time) and costs (error) is measured frame by frame,
 //! with `instability` (`metrics::instability`): how much the clustering error changes between
-//! consecutive frames. Writes `path.csv` and `path.png`.
+//! consecutive frames. Writes `path.csv` (a `PathRow` a frame, with the method's knobs as its last
+//! columns, as `results.csv`) and `path.png`.
 
 use std::path::Path;
 
 use anyhow::{Result, anyhow};
 use glam::{Mat4, Vec3, Vec3A};
 use plotters::prelude::*;
+use serde::{Deserialize, Serialize};
 
 use super::BenchPlan;
 use super::sweep;
 use crate::bvh::SceneBvh;
 use crate::gi::primary::CameraParams;
 use crate::gpu::GpuContext;
+use crate::method::MethodSettings;
 use crate::render::pipeline::{Frame, Pass, Renderer};
 use crate::scene::{Camera, Scene};
 use crate::{export, metrics};
@@ -83,11 +86,13 @@ pub fn orbit_target(scene: &Scene, bvh: &SceneBvh, cam: &Camera) -> Vec3 {
     }
 }
 
-/// One frame of a path.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+/// One frame of a path: a row of `path.csv`, a field a column, then every method's knobs
+/// (`MethodSettings::columns`). The columns after `reference_ms` were added over time: a file may
+/// stop after any of them, and the missing ones read their defaults.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct PathRow {
     pub label: String,
-    #[serde(serialize_with = "on_off")]
+    #[serde(serialize_with = "on_off", deserialize_with = "on_off_cell")]
     pub temporal: bool,
     pub frame: u32,
     /// GPU ms of the frame (resident VPL work excluded) and of its SP clustering.
@@ -101,35 +106,68 @@ pub struct PathRow {
     pub sp_iterations: u32,
     pub sp_warm_kept: Option<u32>,
     pub sp_clusters_used: u32,
-    /// GPU ms of this frame's reference.
+    /// GPU ms of this frame's reference. The last column every file has.
     pub reference_ms: f64,
     /// GPU ms of the visibility pass, and its rows copied from the previous frame.
+    #[serde(default)]
     pub visibility_ms: f64,
+    #[serde(default)]
     pub visibility_rows_reused: u32,
-    /// The adapter and its driver, the scene and the frame (the last columns).
+    /// The adapter and its driver, the scene and the frame.
+    #[serde(default)]
     pub adapter: String,
+    #[serde(default)]
     pub driver: String,
+    #[serde(default)]
     pub scene: String,
+    #[serde(default)]
     pub width: u32,
+    #[serde(default)]
     pub height: u32,
+    #[serde(default)]
     pub vpls: u32,
     /// Flicker at the same surface point: frame t's error against frame t−1's where the same
     /// surface was (`metrics::instability_world`); empty at frame 0 or when no pixel matched.
+    #[serde(default)]
     pub instability_world: Option<f64>,
+    /// The method (its name; files without the column read `colom`); its knobs are the last
+    /// columns, as in `results.csv`.
+    #[serde(
+        default,
+        serialize_with = "super::csv::method_cell",
+        deserialize_with = "super::csv::method_of_cell"
+    )]
+    pub method: MethodSettings,
+    /// The indirect light's ms: `frame` less `primary` and `direct` (every method's own passes);
+    /// files without it read empty.
+    #[serde(default)]
+    pub indirect_ms: Option<f64>,
+}
+
+/// `path.csv`'s header: `PathRow`'s fields, then every method's knobs.
+pub fn header() -> Vec<String> {
+    super::csv::header_of::<PathRow>()
 }
 
 pub fn to_csv(rows: &[PathRow]) -> String {
-    let mut w = ::csv::WriterBuilder::new()
-        .terminator(::csv::Terminator::Any(b'\n'))
-        .from_writer(Vec::new());
-    for r in rows {
-        w.serialize(r).expect("writing to memory");
+    super::csv::write_rows(&header(), rows.iter().map(|r| (r, &r.method)))
+}
+
+/// Reads a file written by `to_csv` back, or by an older version (`bench-table`, tests).
+pub fn from_csv(text: &str) -> Result<Vec<PathRow>> {
+    fn knobs(r: &mut PathRow) -> &mut MethodSettings {
+        &mut r.method
     }
-    String::from_utf8(w.into_inner().expect("writing to memory")).expect("UTF-8 fields")
+    super::csv::read_rows(text, &header(), "reference_ms", knobs, |_, _| {})
 }
 
 fn on_off<S: serde::Serializer>(on: &bool, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_str(if *on { "on" } else { "off" })
+}
+
+fn on_off_cell<'de, D: serde::Deserializer<'de>>(d: D) -> Result<bool, D::Error> {
+    let text = String::deserialize(d)?;
+    crate::settings::parse_on_off(&text).map_err(serde::de::Error::custom)
 }
 
 /// Means over frames 1.. (the frames that can reuse) of one label and temporal setting: (frame ms,
@@ -248,6 +286,8 @@ pub fn run(
                     height: f.height,
                     vpls: f.vpls,
                     instability_world,
+                    method: c.method,
+                    indirect_ms: Some(f.frame_ms() - f.ms(Pass::Primary) - f.ms(Pass::Direct)),
                 };
                 eprintln!(
                     "path: {} temporal {} frame {i}: {:.1} ms (SP clustering {:.1} ms, {} iteration(s), kept {}), MSE {:.3e}, instability {} (world {})",
@@ -445,6 +485,7 @@ mod tests {
             height: 120,
             vpls: 4096,
             instability_world: inst.map(|v| v / 2.0),
+            ..Default::default()
         };
         let rows = vec![
             row(0, false, 100.0, 9.0, None),
@@ -476,5 +517,62 @@ mod tests {
         let f4: Vec<&str> = lines[5].split(',').collect();
         assert_eq!((f4[1], f4[9]), ("on", "180"));
         assert_eq!(f4[7].parse::<f64>().unwrap(), 1.0);
+        assert_eq!(from_csv(&csv).unwrap(), rows);
+    }
+
+    /// `path.csv` round-trips, a method's knobs in their columns; a file of the first version
+    /// (through `reference_ms`) reads with the later columns' defaults, and one whose header is
+    /// not a prefix of the current one is refused.
+    #[test]
+    fn path_csv_reads_back_and_old_files_read() {
+        let mut r = PathRow {
+            label: "wang 48/128 a0.5".into(),
+            temporal: true,
+            frame: 2,
+            frame_ms: 12.5,
+            mse: 1e-4,
+            instability: Some(2e-5),
+            sp_warm_kept: Some(40),
+            adapter: "a, \"quoted\" adapter".into(),
+            instability_world: Some(1e-6),
+            indirect_ms: Some(7.25),
+            ..Default::default()
+        };
+        r.method.method = crate::method::Method::Wang;
+        r.method.wang.wang_alpha = 0.5;
+        let text = to_csv(std::slice::from_ref(&r));
+        let head = super::super::csv::split_line(text.lines().next().unwrap());
+        assert_eq!(head, header());
+        assert_eq!(head[21..23], ["method", "indirect_ms"]);
+        assert_eq!(head[23..], MethodSettings::columns());
+        assert_eq!(from_csv(&text).unwrap(), vec![r]);
+        let old = "\
+label,temporal,frame,frame_ms,sp_cluster_ms,mse,rel_mse,instability,sp_iterations,sp_warm_kept,\
+sp_clusters_used,reference_ms
+weighted 192/512 F6 g4,on,1,10.5,2.5,0.0001,0.002,0.00003,1,180,192,400
+";
+        let rows = from_csv(old).unwrap();
+        assert_eq!(
+            (
+                rows[0].temporal,
+                rows[0].frame,
+                rows[0].sp_warm_kept,
+                rows[0].reference_ms
+            ),
+            (true, 1, Some(180), 400.0)
+        );
+        assert_eq!(
+            (rows[0].visibility_ms, rows[0].scene.as_str(), rows[0].vpls),
+            (0.0, "", 0)
+        );
+        assert_eq!(
+            (rows[0].instability_world, rows[0].indirect_ms),
+            (None, None)
+        );
+        assert_eq!(rows[0].method, MethodSettings::default());
+        assert!(from_csv(&old.replacen("label,temporal", "temporal,label", 1)).is_err());
+        assert!(from_csv(&old.replacen(",on,", ",maybe,", 1)).is_err());
+        let short = "label,temporal,frame\nx,on,0\n";
+        assert!(from_csv(short).is_err());
     }
 }
