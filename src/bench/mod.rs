@@ -18,7 +18,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::gpu::GpuContext;
 use crate::render::pipeline::{FRAME_KEY, Frame, Pass, RenderSettings, Renderer};
-use crate::render::timed::{Timed, Timing, timed};
+use crate::render::timed::{FrameKind, Timed, Timing, timed};
 use crate::scene::{Camera, Scene};
 use crate::settings::FrameSettings;
 use crate::stats::ErrorStats;
@@ -233,6 +233,7 @@ impl Bench<'_> {
         let timing = Timing {
             repeat,
             warmup_ms: self.plan.timing.warmup_ms,
+            kind: FrameKind::Vpl,
         };
         let pb = self.pb.clone();
         timed(&mut self.renderer, camera, s, timing, &mut || pb.inc(1))

@@ -13,12 +13,13 @@ use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::BenchPlan;
-use super::sweep;
+use super::sweep::{self, Config};
 use crate::bvh::SceneBvh;
 use crate::gi::primary::CameraParams;
 use crate::gpu::GpuContext;
 use crate::method::MethodSettings;
-use crate::render::pipeline::{Frame, Pass, Renderer};
+use crate::render::pipeline::{FRAME_KEY, Frame, Pass, Renderer};
+use crate::render::timed::{FrameKind, FrameLoop, Timing, timed};
 use crate::scene::{Camera, Scene};
 use crate::{export, metrics};
 
@@ -215,93 +216,45 @@ pub fn run(
     let start = &plan.cameras.first().ok_or_else(|| anyhow!("no camera"))?.1;
     let target = orbit_target(&renderer.scene, &renderer.bvh, start);
     let cameras = path.cameras(start, target);
-    let configs = plan.sweep.configs();
     let reference_settings = plan.reference_settings();
+    let timing = Timing {
+        repeat: 1,
+        warmup_ms: plan.timing.warmup_ms,
+        kind: FrameKind::Vpl,
+    };
     let mut references: Vec<(Vec<[f32; 3]>, f64)> = Vec::new();
     for (i, cam) in cameras.iter().enumerate() {
-        renderer.warm_up(cam, &reference_settings, plan.timing.warmup_ms)?;
-        let f = renderer.render(cam, &reference_settings)?;
+        let t = timed(&mut renderer, cam, &reference_settings, timing, &mut || {})?;
+        let ms = t.timings_ms[FRAME_KEY];
         eprintln!(
-            "path: reference {}/{} in {:.0} ms GPU",
+            "path: reference {}/{} in {ms:.0} ms GPU",
             i + 1,
-            cameras.len(),
-            f.frame_ms()
+            cameras.len()
         );
-        let ms = f.frame_ms();
-        references.push((f.radiance, ms));
+        references.push((t.frame.radiance, ms));
     }
     let mut rows = Vec::new();
-    for c in &configs {
+    for c in &plan.sweep.configs() {
         for &on in temporal {
             let mut s = plan.settings(c);
             s.cluster.temporal = on;
             // Pipelines built (one untimed frame on a GPU); each run starts with no past.
             renderer.forget_past();
             renderer.warm_up(&cameras[0], &s, plan.timing.warmup_ms)?;
+            // A frame is timed once (its past is its predecessor's), right after GPU work that
+            // touches no renderer state: not at the clock the CPU work since the last frame (its
+            // error measures) left the GPU in.
+            let mut frames = FrameLoop::new(FrameKind::Vpl, plan.timing.warmup_ms);
             let mut prev: Option<Frame> = None;
             for (i, cam) in cameras.iter().enumerate() {
-                // A frame is timed once (its past is its predecessor's), right after GPU work that
-                // touches no renderer state: not at the clock the CPU work since the last frame
-                // (its error measures) left the GPU in.
-                ctx.warm_up(plan.timing.warmup_ms)?;
-                let f = renderer.render(cam, &s)?;
-                let label = sweep::label_ran(
-                    c,
-                    f.gamma_used.is_some(),
-                    f.vpl_clusters_used > 0,
-                    f.gamma_used,
-                );
-                let (reference, reference_ms) = &references[i];
-                let instability = prev.as_ref().map(|p| {
-                    metrics::instability(&f.radiance, reference, &p.radiance, &references[i - 1].0)
-                });
-                let instability_world = prev.as_ref().and_then(|p| {
-                    let cam = CameraParams::new(&cameras[i - 1], p.width, p.height);
-                    let eye = cam.eye_point();
-                    metrics::instability_world(
-                        &path_frame(&f, reference),
-                        &path_frame(p, &references[i - 1].0),
-                        |q| cam.project(q - eye, 1e-6),
-                    )
-                });
-                let row = PathRow {
-                    label,
-                    temporal: on,
-                    frame: i as u32,
-                    frame_ms: f.frame_ms(),
-                    sp_cluster_ms: f.ms(Pass::SpCluster),
-                    mse: metrics::mse(&f.radiance, reference),
-                    rel_mse: metrics::rel_mse(&f.radiance, reference),
-                    instability,
-                    sp_iterations: f.sp_iterations,
-                    sp_warm_kept: f.sp_warm_kept,
-                    sp_clusters_used: f.sp_clusters_used,
-                    reference_ms: *reference_ms,
-                    visibility_ms: f.ms(Pass::Visibility),
-                    visibility_rows_reused: f.visibility_rows_reused,
-                    adapter: ctx.adapter_name.clone(),
-                    driver: ctx.driver.clone(),
-                    scene: plan.scene_name.clone(),
-                    width: f.width,
-                    height: f.height,
-                    vpls: f.vpls,
-                    instability_world,
-                    method: c.method,
-                    indirect_ms: Some(f.frame_ms() - f.ms(Pass::Primary) - f.ms(Pass::Direct)),
+                let (f, _) = frames.next(&mut renderer, cam, &s)?;
+                let at = Along {
+                    cameras: &cameras,
+                    references: &references,
+                    i,
                 };
-                eprintln!(
-                    "path: {} temporal {} frame {i}: {:.1} ms (SP clustering {:.1} ms, {} iteration(s), kept {}), MSE {:.3e}, instability {} (world {})",
-                    row.label,
-                    if on { "on" } else { "off" },
-                    row.frame_ms,
-                    row.sp_cluster_ms,
-                    row.sp_iterations,
-                    row.sp_warm_kept.map_or("-".into(), |k| k.to_string()),
-                    row.mse,
-                    row.instability.map_or("-".into(), |v| format!("{v:.3e}")),
-                    row.instability_world
-                        .map_or("-".into(), |v| format!("{v:.3e}"))
-                );
+                let row = path_row(ctx, plan, c, on, &at, &f, prev.as_ref());
+                say(&row);
                 rows.push(row);
                 prev = Some(f);
             }
@@ -322,6 +275,88 @@ pub fn run(
         &rows,
     )?;
     Ok(rows)
+}
+
+/// Frame `i` of a path: the path's cameras and each frame's reference (image, GPU ms).
+struct Along<'a> {
+    cameras: &'a [Camera],
+    references: &'a [(Vec<[f32; 3]>, f64)],
+    i: usize,
+}
+
+/// The row of frame `f` (its predecessor `prev`) of configuration `c` with temporal reuse `on`.
+fn path_row(
+    ctx: &GpuContext,
+    plan: &BenchPlan,
+    c: &Config,
+    on: bool,
+    at: &Along,
+    f: &Frame,
+    prev: Option<&Frame>,
+) -> PathRow {
+    let i = at.i;
+    let (reference, reference_ms) = &at.references[i];
+    let label = sweep::label_ran(
+        c,
+        f.gamma_used.is_some(),
+        f.vpl_clusters_used > 0,
+        f.gamma_used,
+    );
+    let instability = prev.map(|p| {
+        metrics::instability(&f.radiance, reference, &p.radiance, &at.references[i - 1].0)
+    });
+    let instability_world = prev.and_then(|p| {
+        let cam = CameraParams::new(&at.cameras[i - 1], p.width, p.height);
+        let eye = cam.eye_point();
+        metrics::instability_world(
+            &path_frame(f, reference),
+            &path_frame(p, &at.references[i - 1].0),
+            |q| cam.project(q - eye, 1e-6),
+        )
+    });
+    PathRow {
+        label,
+        temporal: on,
+        frame: i as u32,
+        frame_ms: f.frame_ms(),
+        sp_cluster_ms: f.ms(Pass::SpCluster),
+        mse: metrics::mse(&f.radiance, reference),
+        rel_mse: metrics::rel_mse(&f.radiance, reference),
+        instability,
+        sp_iterations: f.sp_iterations,
+        sp_warm_kept: f.sp_warm_kept,
+        sp_clusters_used: f.sp_clusters_used,
+        reference_ms: *reference_ms,
+        visibility_ms: f.ms(Pass::Visibility),
+        visibility_rows_reused: f.visibility_rows_reused,
+        adapter: ctx.adapter_name.clone(),
+        driver: ctx.driver.clone(),
+        scene: plan.scene_name.clone(),
+        width: f.width,
+        height: f.height,
+        vpls: f.vpls,
+        instability_world,
+        method: c.method,
+        indirect_ms: Some(f.frame_ms() - f.ms(Pass::Primary) - f.ms(Pass::Direct)),
+    }
+}
+
+/// A frame's line on stderr.
+fn say(row: &PathRow) {
+    let opt = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.3e}"));
+    eprintln!(
+        "path: {} temporal {} frame {}: {:.1} ms (SP clustering {:.1} ms, {} iteration(s), kept {}), MSE {:.3e}, instability {} (world {})",
+        row.label,
+        if row.temporal { "on" } else { "off" },
+        row.frame,
+        row.frame_ms,
+        row.sp_cluster_ms,
+        row.sp_iterations,
+        row.sp_warm_kept.map_or("-".into(), |k| k.to_string()),
+        row.mse,
+        opt(row.instability),
+        opt(row.instability_world)
+    );
 }
 
 /// A measure of a row (`None`: not measured for it).
