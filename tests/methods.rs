@@ -433,7 +433,12 @@ fn bench_compares_the_methods() {
     let text = std::fs::read_to_string(d.join("results.csv")).unwrap();
     let rows = fuzzy_vpl::bench::csv::from_csv(&text).unwrap();
     let methods: Vec<Method> = rows.iter().map(|r| r.method.method).collect();
-    let asked = [Method::Colom, Method::Wang, Method::LightCluster, Method::Cvrtgi];
+    let asked = [
+        Method::Colom,
+        Method::Wang,
+        Method::LightCluster,
+        Method::Cvrtgi,
+    ];
     assert_eq!(methods, asked);
     let modes: Vec<&str> = rows.iter().map(|r| r.mode.as_str()).collect();
     assert_eq!(modes, ["weighted", "wang", "lightcluster", "cvrtgi"]);

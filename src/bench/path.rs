@@ -131,7 +131,7 @@ pub struct PathRow {
     /// surface was (`metrics::instability_world`); empty at frame 0 or when no pixel matched.
     #[serde(default)]
     pub instability_world: Option<f64>,
-    /// The method (its name; files without the column read `colom`); its knobs are the last
+    /// The method (its name; files without the column read the default one); its knobs are the last
     /// columns, as in `results.csv`.
     #[serde(
         default,
@@ -561,7 +561,7 @@ mod tests {
     #[test]
     fn path_csv_reads_back_and_old_files_read() {
         let mut r = PathRow {
-            label: "wang 48/128 a0.5".into(),
+            label: "a method 48/128".into(),
             temporal: true,
             frame: 2,
             frame_ms: 12.5,
@@ -573,8 +573,7 @@ mod tests {
             indirect_ms: Some(7.25),
             ..Default::default()
         };
-        r.method.method = crate::method::Method::Wang;
-        r.method.wang.wang_alpha = 0.5;
+        r.method.method = crate::method::ROOMS[0].method;
         let text = to_csv(std::slice::from_ref(&r));
         let head = super::super::csv::split_line(text.lines().next().unwrap());
         assert_eq!(head, header());

@@ -26,7 +26,7 @@ pub enum Pass {
     /// The diffuse path tracer (`--path-trace`), instead of every pass above.
     PathTrace,
     /// A pass of one of the other methods (`src/method/<name>/`), by the name its room gives it
-    /// (`wang_cluster`, `lightcluster_shade`, `cvrtgi`, ...): a method adds its passes in its own
+    /// (its room's `passes`, consts of its module): a method adds its passes in its own
     /// folder, not here. Its name keys its timings as any pass's does.
     Room(&'static str),
     /// `--indirect-scale` below 1: the render-scale indirect light brought to the image's pixels

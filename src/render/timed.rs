@@ -233,7 +233,6 @@ mod tests {
                 r.method
             );
         }
-        assert!(b.contains_key("wang_interp") && b.contains_key("cvrtgi"));
         assert_eq!(b["primary"], 2.0);
         assert_eq!(b["vpl_trace"], 0.0);
     }
