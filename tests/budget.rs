@@ -94,3 +94,44 @@ fn a_budget_that_binds_moves_k_and_lands_within_25_percent() {
         b.steps
     );
 }
+
+/// The viewer's frames under a time budget (`render::timed::FrameLoop::stepping_budget`): the first
+/// frame runs at the controller's start, each next frame at the K's the last one chose, and a
+/// budget far below any frame's time moves them down; a loop that does not step the budget (`render`,
+/// `bench`) renders the settings as given. Cornell 64×48, 1024 VPLs (frames of tens of ms against a
+/// 1 ms budget).
+#[test]
+fn the_frame_loop_steps_the_viewers_budget() {
+    use fuzzy_vpl::render::timed::FrameLoop;
+    let ctx = common::gpu();
+    let s = scene::load("builtin:cornell").unwrap();
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let cam = s.default_camera();
+    let mut rs = RenderSettings {
+        frame: FrameSettings {
+            width: 64,
+            height: 48,
+            vpls: 1024,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    rs.cluster.target_ms = Some(1.0);
+    let ks = |s: &RenderSettings| (s.cluster.sp_clusters, s.cluster.vpl_clusters);
+    let start = budget::Controller::new(&rs).unwrap().ks();
+    let mut frames = FrameLoop::stepping_budget();
+    let (f, ran) = frames.next(&mut r, &cam, &rs).unwrap();
+    assert!(f.radiance.iter().flatten().all(|c| c.is_finite()));
+    assert_eq!(ks(&ran), start);
+    let next = frames.next_ks().unwrap();
+    assert!(next.1 < start.1, "{start:?} -> {next:?}");
+    let (_, ran) = frames.next(&mut r, &cam, &rs).unwrap();
+    assert_eq!(ks(&ran), next);
+    // Without a budget, or in a loop that does not step one, the settings are as given.
+    let mut plain = FrameLoop::default();
+    let (_, ran) = plain.next(&mut r, &cam, &rs).unwrap();
+    assert_eq!((ks(&ran), plain.next_ks()), (ks(&rs), None));
+    rs.cluster.target_ms = None;
+    let (_, ran) = frames.next(&mut r, &cam, &rs).unwrap();
+    assert_eq!((ks(&ran), frames.next_ks()), (ks(&rs), None));
+}

@@ -432,10 +432,6 @@ pub struct Viewer {
     pub plot_zoom: bool,
     /// Points the plot last fitted to (it re-fits when this changes).
     pub plot_fitted: usize,
-    /// The time-budget controllers of `--target-ms` (the panel's "time budget"), one for the
-    /// previews while moving and one for the frames at rest, with the K's each chose last and the
-    /// budget and pixel count they were made for.
-    pub budgets: [Option<crate::render::budget::Controller>; 2],
     pub bookmarks: SceneSettings,
     /// The scene's settings file exists but failed to load: never save over it.
     pub bookmarks_unreadable: bool,

@@ -64,7 +64,6 @@ impl Viewer {
             plot_flip: false,
             plot_zoom: false,
             plot_fitted: 0,
-            budgets: [None, None],
             bookmarks: SceneSettings::default(),
             bookmarks_unreadable: false,
             bookmark_name: String::new(),
@@ -278,7 +277,6 @@ impl Viewer {
         } else {
             self.s.frame_settings(w, h)
         };
-        self.apply_budget(&mut settings, preview);
         // The split and difference views render B for the same camera, both without temporal reuse
         // (one renderer's warm starts would alternate between A's and B's clusterings).
         let b_settings = match (&self.b, self.view) {
@@ -311,27 +309,15 @@ impl Viewer {
         }
     }
 
-    /// With a time budget: the K's its controller (`budget::Controller`, one for previews and one
-    /// at rest) chose for this kind of frame, or its first ones; a controller is made anew when the
-    /// budget or the size changes.
-    fn apply_budget(&mut self, s: &mut crate::render::pipeline::RenderSettings, preview: bool) {
-        let slot = &mut self.budgets[preview as usize];
-        if s.cluster.target_ms.is_none() {
-            self.budgets = [None, None];
-            return;
-        }
-        if slot.as_ref().is_none_or(|c| !c.fits(s)) {
-            *slot = crate::render::budget::Controller::new(s);
-        }
-        if let Some(c) = slot {
-            c.apply(s);
-        }
-    }
-
-    /// A frame rendered under a time budget: its controller's next K's.
+    /// A frame rendered under a time budget: where its controller (`budget::Controller`, in the
+    /// worker's frame loop for this kind of frame) moved the K's, the same job is sent again so
+    /// that the view settles on them.
     fn budget_step(&mut self, r: &Rendered) {
-        if let Some(c) = self.budgets[r.job.preview as usize].as_mut() {
-            c.observe(&r.job.settings, &r.frame);
+        let c = &r.job.settings.cluster;
+        if r.budget_next
+            .is_some_and(|k| k != (c.sp_clusters, c.vpl_clusters))
+        {
+            self.last_sent = None;
         }
     }
 

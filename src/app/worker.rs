@@ -14,6 +14,7 @@ use glam::Vec3;
 
 use crate::gpu::GpuContext;
 use crate::render::pipeline::{Cancelled, Control, Frame, Pass, RenderSettings, Renderer};
+use crate::render::timed::FrameLoop;
 use crate::scene::{Camera, Scene};
 
 /// Loads a scene by its spec, with the command line's added lights.
@@ -80,6 +81,9 @@ pub struct Rendered {
     pub relit: Option<(f64, f64)>,
     /// The B settings' frame of the same camera (split view), when the job had them.
     pub b_frame: Option<Frame>,
+    /// Under a time budget: the K_SP and K_VPL its controller chose for the next frame of this
+    /// kind (`job.settings` holds the ones this frame ran with).
+    pub budget_next: Option<(u32, u32)>,
 }
 
 pub enum Reply {
@@ -196,6 +200,8 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
         max_pixels: crate::render::pipeline::max_pixels(&ctx, crate::render::pipeline::PIXEL_BYTES),
     })));
     let mut cache = PointCache::default();
+    // The frame loops of previews and of frames at rest, each stepping its own time budget.
+    let mut loops = [FrameLoop::stepping_budget(), FrameLoop::stepping_budget()];
     let mut reference: Option<FrameJob> = None;
     let mut frame: Option<FrameJob> = None;
     let mut accumulation: Option<Accumulation> = None;
@@ -253,7 +259,8 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
                 send(Reply::ReferenceCancelled);
                 continue;
             }
-            match render_guarded(&mut renderer, &mut cache, job) {
+            let mut once = FrameLoop::default();
+            match render_guarded(&mut renderer, &mut cache, &mut once, job) {
                 Ok(r) => send(Reply::Reference(Box::new(r))),
                 Err(e) if e.is::<Cancelled>() => send(Reply::ReferenceCancelled),
                 Err(e) => send(Reply::Failed(format!("reference: {e:#}"))),
@@ -261,7 +268,12 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
             continue;
         }
         if let Some(job) = frame.take() {
-            match render_guarded(&mut renderer, &mut cache, job) {
+            if job.settings.cluster.target_ms.is_none() {
+                // No budget: both controllers start anew when one is set again.
+                loops = [FrameLoop::stepping_budget(), FrameLoop::stepping_budget()];
+            }
+            let frames = &mut loops[job.preview as usize];
+            match render_guarded(&mut renderer, &mut cache, frames, job) {
                 Ok(r) => {
                     if r.job.settings.cluster.temporal && !r.job.preview {
                         accumulation = Some(Accumulation::new(&r));
@@ -376,16 +388,25 @@ struct PointCache {
 fn render_guarded(
     renderer: &mut Renderer,
     cache: &mut PointCache,
+    frames: &mut FrameLoop,
     job: FrameJob,
 ) -> Result<Rendered> {
     let (w, h) = (job.settings.frame.width, job.settings.frame.height);
-    crate::panic_guard::quietly(|| render(renderer, cache, job))
+    crate::panic_guard::quietly(|| render(renderer, cache, frames, job))
         .unwrap_or_else(|msg| Err(anyhow::anyhow!("the {w}x{h} GI frame failed: {msg}")))
 }
 
-fn render(renderer: &mut Renderer, cache: &mut PointCache, job: FrameJob) -> Result<Rendered> {
+/// A job's frame through `frames` (under a time budget, with its controller's K's: the job's
+/// settings come back with them), its SP ids, its B frame, and the points the views draw.
+fn render(
+    renderer: &mut Renderer,
+    cache: &mut PointCache,
+    frames: &mut FrameLoop,
+    mut job: FrameJob,
+) -> Result<Rendered> {
     let t = Instant::now();
-    let frame = renderer.render(&job.camera, &job.settings)?;
+    let (frame, ran) = frames.next(renderer, &job.camera, &job.settings)?;
+    job.settings = ran;
     // At the image's size (a render-scale clustering's labels, each image pixel its low-res one's).
     let sp_ids = match job.want_sp_ids {
         true => renderer.sp_labels(&frame)?,
@@ -440,6 +461,7 @@ fn render(renderer: &mut Renderer, cache: &mut PointCache, job: FrameJob) -> Res
         refined: None,
         relit,
         b_frame,
+        budget_next: frames.next_ks(),
     })
 }
 

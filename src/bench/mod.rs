@@ -10,7 +10,6 @@ pub mod summary;
 pub mod sweep;
 pub mod table;
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -19,7 +18,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::gpu::GpuContext;
 use crate::render::pipeline::{FRAME_KEY, Frame, Pass, RenderSettings, Renderer};
-use crate::render::timed::{Timed, Timing, timed};
+use crate::render::timed::{FrameKind, Timed, Timing, timed};
 use crate::scene::{Camera, Scene};
 use crate::settings::FrameSettings;
 use crate::stats::ErrorStats;
@@ -234,6 +233,7 @@ impl Bench<'_> {
         let timing = Timing {
             repeat,
             warmup_ms: self.plan.timing.warmup_ms,
+            kind: FrameKind::Vpl,
         };
         let pb = self.pb.clone();
         timed(&mut self.renderer, camera, s, timing, &mut || pb.inc(1))
@@ -414,12 +414,10 @@ impl Bench<'_> {
         error: &ErrorStats,
     ) -> Row {
         let frame = &t.frame;
-        let stages_ms: BTreeMap<String, f64> = csv::stages()
-            .map(|k| (k.to_string(), t.timings_ms.get(k).copied().unwrap_or(0.0)))
-            .collect();
-        let frame_ms = stages_ms[FRAME_KEY];
-        let stage = |p: Pass| t.timings_ms.get(p.name()).copied().unwrap_or(0.0);
-        Row {
+        let ms = |k: &str| t.timings_ms.get(k).copied().unwrap_or(0.0);
+        let stage = |p: Pass| ms(p.name());
+        let frame_ms = ms(FRAME_KEY);
+        let mut row = Row {
             scene: self.plan.scene_name.clone(),
             camera: cam_name.to_string(),
             width: frame.width,
@@ -435,7 +433,6 @@ impl Bench<'_> {
             weight_exponent: c.weight_exponent,
             normal_threshold: c.normal_threshold,
             iterations: c.iterations,
-            stages_ms,
             reference_ms: reference.ms,
             speedup: if frame_ms > 0.0 {
                 reference.ms / frame_ms
@@ -460,7 +457,12 @@ impl Bench<'_> {
             indirect_ms: frame_ms - stage(Pass::Primary) - stage(Pass::Direct),
             adapter: self.ctx.adapter_name.clone(),
             driver: self.ctx.driver.clone(),
+            ..Default::default()
+        };
+        for (name, v) in row.stages_mut() {
+            *v = ms(name);
         }
+        row
     }
 
     /// Each budget's row against the sweep's Pareto front: the lowest MSE of a fixed setting at no

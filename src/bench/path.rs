@@ -2,20 +2,24 @@
 //! each frame against its own unclustered reference (same VPLs, direct-light samples and seed), so
 //! that what temporal reuse buys (SP clustering time) and costs (error) is measured frame by frame,
 //! with `instability` (`metrics::instability`): how much the clustering error changes between
-//! consecutive frames. Writes `path.csv` and `path.png`.
+//! consecutive frames. Writes `path.csv` (a `PathRow` a frame, with the method's knobs as its last
+//! columns, as `results.csv`) and `path.png`.
 
 use std::path::Path;
 
 use anyhow::{Result, anyhow};
 use glam::{Mat4, Vec3, Vec3A};
 use plotters::prelude::*;
+use serde::{Deserialize, Serialize};
 
 use super::BenchPlan;
-use super::sweep;
+use super::sweep::{self, Config};
 use crate::bvh::SceneBvh;
 use crate::gi::primary::CameraParams;
 use crate::gpu::GpuContext;
-use crate::render::pipeline::{Frame, Pass, Renderer};
+use crate::method::MethodSettings;
+use crate::render::pipeline::{FRAME_KEY, Frame, Pass, Renderer};
+use crate::render::timed::{FrameKind, FrameLoop, Timing, timed};
 use crate::scene::{Camera, Scene};
 use crate::{export, metrics};
 
@@ -83,11 +87,13 @@ pub fn orbit_target(scene: &Scene, bvh: &SceneBvh, cam: &Camera) -> Vec3 {
     }
 }
 
-/// One frame of a path.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+/// One frame of a path: a row of `path.csv`, a field a column, then every method's knobs
+/// (`MethodSettings::columns`). The columns after `reference_ms` were added over time: a file may
+/// stop after any of them, and the missing ones read their defaults.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct PathRow {
     pub label: String,
-    #[serde(serialize_with = "on_off")]
+    #[serde(serialize_with = "on_off", deserialize_with = "on_off_cell")]
     pub temporal: bool,
     pub frame: u32,
     /// GPU ms of the frame (resident VPL work excluded) and of its SP clustering.
@@ -101,41 +107,76 @@ pub struct PathRow {
     pub sp_iterations: u32,
     pub sp_warm_kept: Option<u32>,
     pub sp_clusters_used: u32,
-    /// GPU ms of this frame's reference.
+    /// GPU ms of this frame's reference. The last column every file has.
     pub reference_ms: f64,
     /// GPU ms of the visibility pass, and its rows copied from the previous frame.
+    #[serde(default)]
     pub visibility_ms: f64,
+    #[serde(default)]
     pub visibility_rows_reused: u32,
-    /// The adapter and its driver, the scene and the frame (the last columns).
+    /// The adapter and its driver, the scene and the frame.
+    #[serde(default)]
     pub adapter: String,
+    #[serde(default)]
     pub driver: String,
+    #[serde(default)]
     pub scene: String,
+    #[serde(default)]
     pub width: u32,
+    #[serde(default)]
     pub height: u32,
+    #[serde(default)]
     pub vpls: u32,
     /// Flicker at the same surface point: frame t's error against frame t−1's where the same
     /// surface was (`metrics::instability_world`); empty at frame 0 or when no pixel matched.
+    #[serde(default)]
     pub instability_world: Option<f64>,
+    /// The method (its name; files without the column read the default one); its knobs are the last
+    /// columns, as in `results.csv`.
+    #[serde(
+        default,
+        serialize_with = "super::csv::method_cell",
+        deserialize_with = "super::csv::method_of_cell"
+    )]
+    pub method: MethodSettings,
+    /// The indirect light's ms: `frame` less `primary` and `direct` (every method's own passes);
+    /// files without it read empty.
+    #[serde(default)]
+    pub indirect_ms: Option<f64>,
     /// `temporal_alpha` of the accumulation (`--temporal-alpha`); empty with temporal off.
+    #[serde(default)]
     pub temporal_alpha: Option<f32>,
     /// `instability_world` of the frame's direct light alone against the same references: what
     /// an image without indirect light would score, i.e. how much the references' own indirect
     /// light changes when read between the previous frame's pixels (docs/temporal.md).
+    #[serde(default)]
     pub instability_world_direct_only: Option<f64>,
 }
 
+/// `path.csv`'s header: `PathRow`'s fields, then every method's knobs.
+pub fn header() -> Vec<String> {
+    super::csv::header_of::<PathRow>()
+}
+
 pub fn to_csv(rows: &[PathRow]) -> String {
-    let mut w = ::csv::WriterBuilder::new()
-        .terminator(::csv::Terminator::Any(b'\n'))
-        .from_writer(Vec::new());
-    for r in rows {
-        w.serialize(r).expect("writing to memory");
+    super::csv::write_rows(&header(), rows.iter().map(|r| (r, &r.method)))
+}
+
+/// Reads a file written by `to_csv` back, or by an older version (`bench-table`, tests).
+pub fn from_csv(text: &str) -> Result<Vec<PathRow>> {
+    fn knobs(r: &mut PathRow) -> &mut MethodSettings {
+        &mut r.method
     }
-    String::from_utf8(w.into_inner().expect("writing to memory")).expect("UTF-8 fields")
+    super::csv::read_rows(text, &header(), "reference_ms", knobs, |_, _| {})
 }
 
 fn on_off<S: serde::Serializer>(on: &bool, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_str(if *on { "on" } else { "off" })
+}
+
+fn on_off_cell<'de, D: serde::Deserializer<'de>>(d: D) -> Result<bool, D::Error> {
+    let text = String::deserialize(d)?;
+    crate::settings::parse_on_off(&text).map_err(serde::de::Error::custom)
 }
 
 /// Means over frames 1.. (the frames that can reuse) of one label and temporal setting: (frame ms,
@@ -190,23 +231,25 @@ pub fn run(
     let start = &plan.cameras.first().ok_or_else(|| anyhow!("no camera"))?.1;
     let target = orbit_target(&renderer.scene, &renderer.bvh, start);
     let cameras = path.cameras(start, target);
-    let configs = plan.sweep.configs();
     let reference_settings = plan.reference_settings();
+    let timing = Timing {
+        repeat: 1,
+        warmup_ms: plan.timing.warmup_ms,
+        kind: FrameKind::Vpl,
+    };
     let mut references: Vec<(Vec<[f32; 3]>, f64)> = Vec::new();
     for (i, cam) in cameras.iter().enumerate() {
-        renderer.warm_up(cam, &reference_settings, plan.timing.warmup_ms)?;
-        let f = renderer.render(cam, &reference_settings)?;
+        let t = timed(&mut renderer, cam, &reference_settings, timing, &mut || {})?;
+        let ms = t.timings_ms[FRAME_KEY];
         eprintln!(
-            "path: reference {}/{} in {:.0} ms GPU",
+            "path: reference {}/{} in {ms:.0} ms GPU",
             i + 1,
-            cameras.len(),
-            f.frame_ms()
+            cameras.len()
         );
-        let ms = f.frame_ms();
-        references.push((f.radiance, ms));
+        references.push((t.frame.radiance, ms));
     }
     let mut rows = Vec::new();
-    for c in &configs {
+    for c in &plan.sweep.configs() {
         let runs = temporal.iter().flat_map(|&on| {
             let a: Vec<Option<f32>> = match on {
                 true => alphas.iter().map(|&a| Some(a)).collect(),
@@ -223,77 +266,20 @@ pub fn run(
             // Pipelines built (one untimed frame on a GPU); each run starts with no past.
             renderer.forget_past();
             renderer.warm_up(&cameras[0], &s, plan.timing.warmup_ms)?;
+            // A frame is timed once (its past is its predecessor's), right after GPU work that
+            // touches no renderer state: not at the clock the CPU work since the last frame (its
+            // error measures) left the GPU in.
+            let mut frames = FrameLoop::new(FrameKind::Vpl, plan.timing.warmup_ms);
             let mut prev: Option<Frame> = None;
             for (i, cam) in cameras.iter().enumerate() {
-                // A frame is timed once (its past is its predecessor's), right after GPU work that
-                // touches no renderer state: not at the clock the CPU work since the last frame
-                // (its error measures) left the GPU in.
-                ctx.warm_up(plan.timing.warmup_ms)?;
-                let f = renderer.render(cam, &s)?;
-                let mut label = sweep::label_ran(
-                    c,
-                    f.gamma_used.is_some(),
-                    f.vpl_clusters_used > 0,
-                    f.gamma_used,
-                );
-                if f.ran(Pass::Accumulate) {
-                    label = format!("{label} α{}", s.cluster.temporal_alpha);
-                }
-                let (reference, reference_ms) = &references[i];
-                let instability = prev.as_ref().map(|p| {
-                    metrics::instability(&f.radiance, reference, &p.radiance, &references[i - 1].0)
-                });
-                let world = |x: &dyn Fn(&Frame) -> &[[f32; 3]]| {
-                    prev.as_ref().and_then(|p| {
-                        let cam = CameraParams::new(&cameras[i - 1], p.width, p.height);
-                        let eye = cam.eye_point();
-                        metrics::instability_world(
-                            &path_frame(&f, x(&f), reference),
-                            &path_frame(p, x(p), &references[i - 1].0),
-                            |q| cam.project(q - eye, 1e-6),
-                        )
-                    })
+                let (f, _) = frames.next(&mut renderer, cam, &s)?;
+                let at = Along {
+                    cameras: &cameras,
+                    references: &references,
+                    i,
                 };
-                let instability_world = world(&|f| &f.radiance);
-                let instability_world_direct_only = world(&|f| &f.direct);
-                let row = PathRow {
-                    label,
-                    temporal: on,
-                    frame: i as u32,
-                    frame_ms: f.frame_ms(),
-                    sp_cluster_ms: f.ms(Pass::SpCluster),
-                    mse: metrics::mse(&f.radiance, reference),
-                    rel_mse: metrics::rel_mse(&f.radiance, reference),
-                    instability,
-                    sp_iterations: f.sp_iterations,
-                    sp_warm_kept: f.sp_warm_kept,
-                    sp_clusters_used: f.sp_clusters_used,
-                    reference_ms: *reference_ms,
-                    visibility_ms: f.ms(Pass::Visibility),
-                    visibility_rows_reused: f.visibility_rows_reused,
-                    adapter: ctx.adapter_name.clone(),
-                    driver: ctx.driver.clone(),
-                    scene: plan.scene_name.clone(),
-                    width: f.width,
-                    height: f.height,
-                    vpls: f.vpls,
-                    instability_world,
-                    temporal_alpha: alpha,
-                    instability_world_direct_only,
-                };
-                eprintln!(
-                    "path: {} temporal {} frame {i}: {:.1} ms (SP clustering {:.1} ms, {} iteration(s), kept {}), MSE {:.3e}, instability {} (world {})",
-                    row.label,
-                    if on { "on" } else { "off" },
-                    row.frame_ms,
-                    row.sp_cluster_ms,
-                    row.sp_iterations,
-                    row.sp_warm_kept.map_or("-".into(), |k| k.to_string()),
-                    row.mse,
-                    row.instability.map_or("-".into(), |v| format!("{v:.3e}")),
-                    row.instability_world
-                        .map_or("-".into(), |v| format!("{v:.3e}"))
-                );
+                let row = path_row(ctx, plan, (c, on, alpha), &at, &f, prev.as_ref());
+                say(&row);
                 rows.push(row);
                 prev = Some(f);
             }
@@ -314,6 +300,97 @@ pub fn run(
         &rows,
     )?;
     Ok(rows)
+}
+
+/// Frame `i` of a path: the path's cameras and each frame's reference (image, GPU ms).
+struct Along<'a> {
+    cameras: &'a [Camera],
+    references: &'a [(Vec<[f32; 3]>, f64)],
+    i: usize,
+}
+
+/// The row of frame `f` (its predecessor `prev`) of configuration `c` with temporal reuse `on` and
+/// accumulation's `alpha`.
+fn path_row(
+    ctx: &GpuContext,
+    plan: &BenchPlan,
+    (c, on, alpha): (&Config, bool, Option<f32>),
+    at: &Along,
+    f: &Frame,
+    prev: Option<&Frame>,
+) -> PathRow {
+    let i = at.i;
+    let (reference, reference_ms) = &at.references[i];
+    let mut label = sweep::label_ran(
+        c,
+        f.gamma_used.is_some(),
+        f.vpl_clusters_used > 0,
+        f.gamma_used,
+    );
+    if let Some(a) = alpha.filter(|_| f.ran(Pass::Accumulate)) {
+        label = format!("{label} α{a}");
+    }
+    let instability = prev.map(|p| {
+        metrics::instability(&f.radiance, reference, &p.radiance, &at.references[i - 1].0)
+    });
+    let world = |x: &dyn Fn(&Frame) -> &[[f32; 3]]| {
+        prev.and_then(|p| {
+            let cam = CameraParams::new(&at.cameras[i - 1], p.width, p.height);
+            let eye = cam.eye_point();
+            metrics::instability_world(
+                &path_frame(f, x(f), reference),
+                &path_frame(p, x(p), &at.references[i - 1].0),
+                |q| cam.project(q - eye, 1e-6),
+            )
+        })
+    };
+    let instability_world = world(&|f| &f.radiance);
+    let instability_world_direct_only = world(&|f| &f.direct);
+    PathRow {
+        label,
+        temporal: on,
+        frame: i as u32,
+        frame_ms: f.frame_ms(),
+        sp_cluster_ms: f.ms(Pass::SpCluster),
+        mse: metrics::mse(&f.radiance, reference),
+        rel_mse: metrics::rel_mse(&f.radiance, reference),
+        instability,
+        sp_iterations: f.sp_iterations,
+        sp_warm_kept: f.sp_warm_kept,
+        sp_clusters_used: f.sp_clusters_used,
+        reference_ms: *reference_ms,
+        visibility_ms: f.ms(Pass::Visibility),
+        visibility_rows_reused: f.visibility_rows_reused,
+        adapter: ctx.adapter_name.clone(),
+        driver: ctx.driver.clone(),
+        scene: plan.scene_name.clone(),
+        width: f.width,
+        height: f.height,
+        vpls: f.vpls,
+        instability_world,
+        method: c.method,
+        indirect_ms: Some(f.frame_ms() - f.ms(Pass::Primary) - f.ms(Pass::Direct)),
+        temporal_alpha: alpha,
+        instability_world_direct_only,
+    }
+}
+
+/// A frame's line on stderr.
+fn say(row: &PathRow) {
+    let opt = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.3e}"));
+    eprintln!(
+        "path: {} temporal {} frame {}: {:.1} ms (SP clustering {:.1} ms, {} iteration(s), kept {}), MSE {:.3e}, instability {} (world {})",
+        row.label,
+        if row.temporal { "on" } else { "off" },
+        row.frame,
+        row.frame_ms,
+        row.sp_cluster_ms,
+        row.sp_iterations,
+        row.sp_warm_kept.map_or("-".into(), |k| k.to_string()),
+        row.mse,
+        opt(row.instability),
+        opt(row.instability_world)
+    );
 }
 
 /// A measure of a row (`None`: not measured for it).
@@ -477,8 +554,7 @@ mod tests {
             height: 120,
             vpls: 4096,
             instability_world: inst.map(|v| v / 2.0),
-            temporal_alpha: on.then_some(0.7),
-            instability_world_direct_only: inst.map(|v| v * 3.0),
+            ..Default::default()
         };
         let rows = vec![
             row(0, false, 100.0, 9.0, None),
@@ -510,5 +586,71 @@ mod tests {
         let f4: Vec<&str> = lines[5].split(',').collect();
         assert_eq!((f4[1], f4[9]), ("on", "180"));
         assert_eq!(f4[7].parse::<f64>().unwrap(), 1.0);
+        assert_eq!(from_csv(&csv).unwrap(), rows);
+    }
+
+    /// `path.csv` round-trips, a method's knobs in their columns; a file of the first version
+    /// (through `reference_ms`) reads with the later columns' defaults, and one whose header is
+    /// not a prefix of the current one is refused.
+    #[test]
+    fn path_csv_reads_back_and_old_files_read() {
+        let mut r = PathRow {
+            label: "a method 48/128".into(),
+            temporal: true,
+            frame: 2,
+            frame_ms: 12.5,
+            mse: 1e-4,
+            instability: Some(2e-5),
+            sp_warm_kept: Some(40),
+            adapter: "a, \"quoted\" adapter".into(),
+            instability_world: Some(1e-6),
+            indirect_ms: Some(7.25),
+            temporal_alpha: Some(0.7),
+            instability_world_direct_only: Some(5e-6),
+            ..Default::default()
+        };
+        r.method.method = crate::method::ROOMS[0].method;
+        let text = to_csv(std::slice::from_ref(&r));
+        let head = super::super::csv::split_line(text.lines().next().unwrap());
+        assert_eq!(head, header());
+        assert_eq!(
+            head[21..25],
+            [
+                "method",
+                "indirect_ms",
+                "temporal_alpha",
+                "instability_world_direct_only"
+            ]
+        );
+        assert_eq!(head[25..], MethodSettings::columns());
+        assert_eq!(from_csv(&text).unwrap(), vec![r]);
+        let old = "\
+label,temporal,frame,frame_ms,sp_cluster_ms,mse,rel_mse,instability,sp_iterations,sp_warm_kept,\
+sp_clusters_used,reference_ms
+weighted 192/512 F6 g4,on,1,10.5,2.5,0.0001,0.002,0.00003,1,180,192,400
+";
+        let rows = from_csv(old).unwrap();
+        assert_eq!(
+            (
+                rows[0].temporal,
+                rows[0].frame,
+                rows[0].sp_warm_kept,
+                rows[0].reference_ms
+            ),
+            (true, 1, Some(180), 400.0)
+        );
+        assert_eq!(
+            (rows[0].visibility_ms, rows[0].scene.as_str(), rows[0].vpls),
+            (0.0, "", 0)
+        );
+        assert_eq!(
+            (rows[0].instability_world, rows[0].indirect_ms),
+            (None, None)
+        );
+        assert_eq!(rows[0].method, MethodSettings::default());
+        assert!(from_csv(&old.replacen("label,temporal", "temporal,label", 1)).is_err());
+        assert!(from_csv(&old.replacen(",on,", ",maybe,", 1)).is_err());
+        let short = "label,temporal,frame\nx,on,0\n";
+        assert!(from_csv(short).is_err());
     }
 }

@@ -519,7 +519,7 @@ mod tests {
         std::fs::create_dir_all(&d).unwrap();
         let mut r = synthetic("weighted", 48, 128);
         r.mse = 0.0;
-        r.stages_ms.values_mut().for_each(|v| *v = 0.0);
+        r.stages_mut().into_iter().for_each(|(_, v)| *v = 0.0);
         for rows in [vec![], vec![r]] {
             stages(&d.join("s.png"), "t", &rows).unwrap();
             grid(&d.join("g.png"), "t", &rows).unwrap();

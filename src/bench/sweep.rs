@@ -4,10 +4,7 @@ use std::fmt;
 use std::str::FromStr;
 
 use crate::method::{Method, MethodLists, MethodSettings};
-use crate::settings::{
-    ClusterSettings, Gamma, Invalid, Weighting, parse_fuzziness, parse_gamma, parse_iterations,
-    parse_normal_threshold, parse_plane_gate, parse_weight_exponent,
-};
+use crate::settings::{ClusterLists, ClusterSettings, Gamma, Invalid, Weighting};
 
 /// One configuration of a sweep: the paper's knobs (`Deref`, so `c.sp_clusters` reads them) and
 /// the method with its knobs.
@@ -95,6 +92,41 @@ impl Mode {
     pub fn uses_fuzziness(self) -> bool {
         matches!(self, Mode::Uniform | Mode::Weighted | Mode::SpOnly)
     }
+
+    /// `c` in this mode: its weighting, and what the mode ignores at its neutral value (no SP K
+    /// and γ auto without SP clustering, no VPL K without VPL clustering, F = 1 and no plane gate
+    /// without fuzzy weights, p = 1 without inverse-distance weights, no reuse).
+    pub fn applied(self, c: ClusterSettings) -> ClusterSettings {
+        let fuzzy = self.uses_fuzziness();
+        ClusterSettings {
+            sp_clusters: if self.clusters_sps() {
+                c.sp_clusters
+            } else {
+                0
+            },
+            vpl_clusters: if self.clusters_vpls() {
+                c.vpl_clusters
+            } else {
+                0
+            },
+            fuzziness: if fuzzy { c.fuzziness } else { 1 },
+            gamma: if self.clusters_sps() {
+                c.gamma
+            } else {
+                Gamma::Auto
+            },
+            weighting: self.weighting(),
+            weight_exponent: if self.uses_weights() {
+                c.weight_exponent
+            } else {
+                1.0
+            },
+            plane_gate: if fuzzy { c.plane_gate } else { None },
+            weights_to_reps: false,
+            temporal: false,
+            ..c
+        }
+    }
 }
 
 impl fmt::Display for Mode {
@@ -136,26 +168,14 @@ pub fn parse_pair(item: &str) -> Result<Pair, Invalid> {
     Ok(Pair(n(a)?, n(b)?))
 }
 
-/// A `--plane-gate` item: `off` (the paper) or an angle in (0, 90] degrees.
-pub fn parse_gate(item: &str) -> Result<PlaneGate, Invalid> {
-    if item.trim().eq_ignore_ascii_case("off") {
-        return Ok(PlaneGate(None));
-    }
-    parse_plane_gate(item)
-        .map(|d| PlaneGate(Some(d)))
-        .map_err(|_| Invalid("must be off or an angle in (0, 90] degrees".into()))
-}
-
-/// One item of `--plane-gate`: `None` is off.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PlaneGate(pub Option<f32>);
-
 pub fn parse_mode(item: &str) -> Result<Mode, Invalid> {
     item.parse().map_err(Invalid)
 }
 
-/// The lists a sweep multiplies out: every `ClusterSettings` knob as a comma-separated list (an
-/// empty list takes the default; `--quick` has its own defaults for the modes and the K's).
+/// The lists a sweep multiplies out: the modes, every swept `ClusterSettings` field as a
+/// comma-separated list (`ClusterLists`, declared with the field: an empty list takes the
+/// default; `--quick` has its own defaults for the K's, and for the modes), the K pairs, the time
+/// budgets and the methods with their knobs' lists.
 #[derive(clap::Args, Clone, Debug, Default, PartialEq)]
 #[command(next_help_heading = "Sweep (comma-separated lists)")]
 pub struct Sweep {
@@ -163,33 +183,9 @@ pub struct Sweep {
     /// quick: all five).
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_mode)]
     pub modes: Vec<Mode>,
-    /// SP cluster counts (default 768,1536,3072; quick 48,96).
-    #[arg(long, value_name = "LIST", value_delimiter = ',')]
-    pub sp_clusters: Vec<u32>,
-    /// VPL cluster counts (default 1024; quick 128).
-    #[arg(long, value_name = "LIST", value_delimiter = ',')]
-    pub vpl_clusters: Vec<u32>,
-    /// F values, 1..16 (default 6).
-    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_fuzziness)]
-    pub fuzziness: Vec<u32>,
-    /// γ values: `auto` (the default: the largest γ in 4..16 that keeps 40 sampled points a cluster
-    /// and 19,200 in all) or factors of at least 1, e.g. auto,4,16.
-    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_gamma)]
-    pub gamma: Vec<Gamma>,
-    /// n_t values of Eq. (7), cosines in [-1, 1] (default 0.866).
-    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_normal_threshold, allow_hyphen_values = true)]
-    pub normal_threshold: Vec<f32>,
-    /// k-means iterations (default 10).
-    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_iterations)]
-    pub iterations: Vec<u32>,
-    /// p values of the inverse-distance weights w'_f = dist^-p, for weighted and sp-only (default 1,
-    /// Eq. 10).
-    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_weight_exponent)]
-    pub weight_exponent: Vec<f32>,
-    /// Plane gates of the fuzzy modes' F lists: `off` (the paper, default) or angles in degrees,
-    /// e.g. off,20 (see render --plane-gate).
-    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_gate)]
-    pub plane_gate: Vec<PlaneGate>,
+    /// The swept fields of `ClusterSettings`, each a list.
+    #[command(flatten)]
+    pub cluster: ClusterLists,
     /// K_SP/K_VPL pairs to measure instead of every --sp-clusters × --vpl-clusters, e.g. the paper's
     /// light, intermediate and high settings at 640x480: 461/750,3072/2000,12288/4000.
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_pair)]
@@ -221,13 +217,12 @@ impl Sweep {
     /// The lists with every empty one at its default (`quick`: the small sweep's), repeats dropped,
     /// checked.
     pub fn resolve(&self, quick: bool) -> Result<Sweep, String> {
-        if !self.pairs.is_empty() && (!self.sp_clusters.is_empty() || !self.vpl_clusters.is_empty())
-        {
+        let c = &self.cluster;
+        if !self.pairs.is_empty() && (!c.sp_clusters.is_empty() || !c.vpl_clusters.is_empty()) {
             return Err(
                 "--pairs replaces --sp-clusters and --vpl-clusters: give one or the other".into(),
             );
         }
-        let c = ClusterSettings::default();
         let s = Sweep {
             method: MethodLists {
                 methods: self.method.methods(),
@@ -241,17 +236,7 @@ impl Sweep {
                     &[Mode::Hard, Mode::Uniform, Mode::Weighted]
                 },
             ),
-            sp_clusters: or_default(
-                &self.sp_clusters,
-                if quick { &[48, 96] } else { &[768, 1536, 3072] },
-            ),
-            vpl_clusters: or_default(&self.vpl_clusters, if quick { &[128] } else { &[1024] }),
-            fuzziness: or_default(&self.fuzziness, &[c.fuzziness]),
-            gamma: or_default(&self.gamma, &[c.gamma]),
-            normal_threshold: or_default(&self.normal_threshold, &[c.normal_threshold]),
-            iterations: or_default(&self.iterations, &[c.iterations]),
-            weight_exponent: or_default(&self.weight_exponent, &[c.weight_exponent]),
-            plane_gate: or_default(&self.plane_gate, &[PlaneGate(None)]),
+            cluster: c.resolve(quick),
             pairs: or_default(&self.pairs, &[]),
             target_ms: or_default(&self.target_ms, &[]),
         };
@@ -259,12 +244,21 @@ impl Sweep {
         Ok(s)
     }
 
-    fn validate(&self) -> Result<(), String> {
-        let (sps, vpls): (Vec<u32>, Vec<u32>) = if self.pairs.is_empty() {
-            (self.sp_clusters.clone(), self.vpl_clusters.clone())
+    /// The (K_SP, K_VPL) pairs: `--pairs`, or every `--sp-clusters` × `--vpl-clusters`.
+    fn ks(&self) -> Vec<(u32, u32)> {
+        let c = &self.cluster;
+        if self.pairs.is_empty() {
+            c.sp_clusters
+                .iter()
+                .flat_map(|&sp| c.vpl_clusters.iter().map(move |&vpl| (sp, vpl)))
+                .collect()
         } else {
-            self.pairs.iter().map(|p| (p.0, p.1)).unzip()
-        };
+            self.pairs.iter().map(|p| (p.0, p.1)).collect()
+        }
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        let (sps, vpls): (Vec<u32>, Vec<u32>) = self.ks().into_iter().unzip();
         if !self.pairs.is_empty() && (sps.contains(&0) || vpls.contains(&0)) {
             return Err(
                 "--pairs: a K of 0; use --modes vpl-only or sp-only for no clustering".into(),
@@ -299,14 +293,7 @@ impl Sweep {
     /// dropped (hard has F = 1, vpl-only no SP K, sp-only no VPL K); another method takes its own
     /// knobs' combinations, with the K's (and iterations) when it uses colom's clusterings.
     pub fn configs(&self) -> Vec<Config> {
-        let ks: Vec<(u32, u32)> = if self.pairs.is_empty() {
-            self.sp_clusters
-                .iter()
-                .flat_map(|&sp| self.vpl_clusters.iter().map(move |&vpl| (sp, vpl)))
-                .collect()
-        } else {
-            self.pairs.iter().map(|p| (p.0, p.1)).collect()
-        };
+        let ks = self.ks();
         let mut out: Vec<Config> = Vec::new();
         let mut push = |c: Config| {
             if !out.contains(&c) {
@@ -315,16 +302,14 @@ impl Sweep {
         };
         for method in self.method.methods() {
             let Some(room) = crate::method::room(method) else {
-                let mut colom = Vec::new();
-                self.colom_configs(&ks, &mut colom);
-                colom.into_iter().map(Config::from).for_each(&mut push);
+                self.colom_configs(&ks).into_iter().for_each(&mut push);
                 continue;
             };
-            let own = (room.sweep)(&self.method);
+            let own = self.method.configs_of(method);
             let uses_k = room.clusters_sps || room.vpl_clusters;
             let ks = if uses_k { ks.clone() } else { vec![(0, 0)] };
             let iterations = if room.clusters_sps {
-                self.iterations.clone()
+                self.cluster.iterations.clone()
             } else {
                 vec![ClusterSettings::default().iterations]
             };
@@ -349,56 +334,29 @@ impl Sweep {
         out
     }
 
-    fn colom_configs(&self, ks: &[(u32, u32)], out: &mut Vec<ClusterSettings>) {
+    /// colom's configurations: each mode × K pair × every combination of the other lists
+    /// (`ClusterLists::configs`, in the order of their fields), with what the mode ignores set to
+    /// its neutral value.
+    fn colom_configs(&self, ks: &[(u32, u32)]) -> Vec<Config> {
+        // The K's come from the pairs, one (K_SP, K_VPL) at a time.
+        let lists = ClusterLists {
+            sp_clusters: Vec::new(),
+            vpl_clusters: Vec::new(),
+            ..self.cluster.clone()
+        };
+        let mut out = Vec::new();
         for &mode in &self.modes {
             for &(sp, vpl) in ks {
-                for &f in &self.fuzziness {
-                    for &g in &self.gamma {
-                        for &n_t in &self.normal_threshold {
-                            for &iterations in &self.iterations {
-                                for &p in &self.weight_exponent {
-                                    for &gate in &self.plane_gate {
-                                        let c = ClusterSettings {
-                                            sp_clusters: if mode.clusters_sps() { sp } else { 0 },
-                                            vpl_clusters: if mode.clusters_vpls() {
-                                                vpl
-                                            } else {
-                                                0
-                                            },
-                                            fuzziness: if mode.uses_fuzziness() { f } else { 1 },
-                                            gamma: if mode.clusters_sps() {
-                                                g
-                                            } else {
-                                                Gamma::Auto
-                                            },
-                                            normal_threshold: n_t,
-                                            iterations,
-                                            weighting: mode.weighting(),
-                                            weight_exponent: if mode.uses_weights() {
-                                                p
-                                            } else {
-                                                1.0
-                                            },
-                                            plane_gate: if mode.uses_fuzziness() {
-                                                gate.0
-                                            } else {
-                                                None
-                                            },
-                                            weights_to_reps: false,
-                                            temporal: false,
-                                            ..Default::default()
-                                        };
-                                        if !out.contains(&c) {
-                                            out.push(c);
-                                        }
-                                    }
-                                }
-                            }
-                        }
-                    }
-                }
+                let base = ClusterSettings {
+                    sp_clusters: sp,
+                    vpl_clusters: vpl,
+                    weighting: mode.weighting(),
+                    ..Default::default()
+                };
+                out.extend(lists.configs(&base).into_iter().map(|c| mode.applied(c)));
             }
         }
+        out.into_iter().map(Config::from).collect()
     }
 }
 
@@ -518,10 +476,38 @@ mod tests {
     #[test]
     fn lists_parse_trim_and_dedup() {
         let s = parse(&["--sp-clusters", "192,768,192", "--gamma", "4"], true).unwrap();
-        assert_eq!(s.sp_clusters, vec![192, 768]);
-        assert_eq!(s.gamma, vec![Gamma::Fixed(4)]);
+        assert_eq!(s.cluster.sp_clusters, vec![192, 768]);
+        assert_eq!(s.cluster.gamma, vec![Gamma::Fixed(4)]);
         let s = parse(&["--weight-exponent", "0.5,1"], true).unwrap();
-        assert_eq!(s.weight_exponent, vec![0.5f32, 1.0]);
+        assert_eq!(s.cluster.weight_exponent, vec![0.5f32, 1.0]);
+    }
+
+    /// The lists are `ClusterSettings`' own (`listed!`): empty, each is its field's default, but
+    /// for the K's' sweep lists (the full sweep's and `--quick`'s); a list item is checked by its
+    /// field's parser.
+    #[test]
+    fn empty_lists_take_the_settings_defaults() {
+        let d = ClusterSettings::default();
+        for quick in [false, true] {
+            let c = parse(&[], quick).unwrap().cluster;
+            let (sp, vpl): (&[u32], &[u32]) = match quick {
+                false => (&[768, 1536, 3072], &[d.vpl_clusters]),
+                true => (&[48, 96], &[128]),
+            };
+            assert_eq!(
+                (c.sp_clusters.as_slice(), c.vpl_clusters.as_slice()),
+                (sp, vpl)
+            );
+            assert_eq!(c.fuzziness, [d.fuzziness]);
+            assert_eq!(c.gamma, [d.gamma]);
+            assert_eq!(c.normal_threshold, [d.normal_threshold]);
+            assert_eq!(c.iterations, [d.iterations]);
+            assert_eq!(c.weight_exponent, [d.weight_exponent]);
+            assert_eq!(c.plane_gate, [d.plane_gate]);
+        }
+        let e = parse(&["--iterations", "5,1001"], true).unwrap_err();
+        let want = crate::settings::parse_iterations("1001").unwrap_err().0;
+        assert!(e.contains("--iterations") && e.contains(&want), "{e}");
     }
 
     #[test]
@@ -549,7 +535,7 @@ mod tests {
             true,
         )
         .unwrap();
-        assert_eq!(s.plane_gate, vec![PlaneGate(None), PlaneGate(Some(20.0))]);
+        assert_eq!(s.cluster.plane_gate, vec![None, Some(20.0)]);
         let labels: Vec<String> = s.configs().iter().map(label).collect();
         assert_eq!(
             labels,
@@ -590,8 +576,8 @@ mod tests {
         assert!(parse(&["--gamma", "0"], true).is_err());
         // γ: auto (the default) and factors, auto reaching the frame settings as it is.
         let sw = parse(&["--gamma", "auto,8"], true).unwrap();
-        assert_eq!(sw.gamma, vec![Gamma::Auto, Gamma::Fixed(8)]);
-        assert_eq!(parse(&[], true).unwrap().gamma, vec![Gamma::Auto]);
+        assert_eq!(sw.cluster.gamma, vec![Gamma::Auto, Gamma::Fixed(8)]);
+        assert_eq!(parse(&[], true).unwrap().cluster.gamma, vec![Gamma::Auto]);
         let c = sw.configs();
         let weighted: Vec<_> = c.iter().filter(|c| mode(c) == Mode::Weighted).collect();
         assert_eq!(label(weighted[0]), "weighted 48/128 F6 gauto");
@@ -616,11 +602,14 @@ mod tests {
     fn configs_multiply_out_and_drop_what_a_mode_ignores() {
         let s = Sweep {
             modes: Mode::ALL.to_vec(),
-            sp_clusters: vec![48, 96],
-            vpl_clusters: vec![128, 256],
-            fuzziness: vec![4, 6],
-            gamma: vec![Gamma::Fixed(4)],
-            weight_exponent: vec![1.0, 2.0],
+            cluster: ClusterLists {
+                sp_clusters: vec![48, 96],
+                vpl_clusters: vec![128, 256],
+                fuzziness: vec![4, 6],
+                gamma: vec![Gamma::Fixed(4)],
+                weight_exponent: vec![1.0, 2.0],
+                ..Default::default()
+            },
             ..Default::default()
         }
         .resolve(true)

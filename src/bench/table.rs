@@ -63,6 +63,7 @@ struct PathGroup {
     sums: BTreeMap<&'static str, f64>,
 }
 
+/// The means of a path group, in the order `read_path` sums them.
 const PATH_MEANS: [&str; 5] = [
     "frame_ms",
     "sp_cluster_ms",
@@ -75,49 +76,41 @@ const PATH_MEANS: [&str; 5] = [
 type Device = (String, String);
 
 fn read_path(text: &str) -> Result<(Vec<PathGroup>, Option<Device>)> {
-    let mut rd = ::csv::ReaderBuilder::new().from_reader(text.as_bytes());
-    let head: Vec<String> = rd.headers()?.iter().map(String::from).collect();
-    let col = |name: &str| {
-        head.iter()
-            .position(|h| h == name)
-            .with_context(|| format!("no {name} column"))
-    };
-    let (label, temporal, frame) = (col("label")?, col("temporal")?, col("frame")?);
-    let means: Vec<usize> = PATH_MEANS.iter().map(|m| col(m)).collect::<Result<_>>()?;
-    let device = match (col("adapter"), col("driver")) {
-        (Ok(a), Ok(d)) => Some((a, d)),
-        _ => None,
-    };
-    let frame_cols = ["scene", "width", "height", "vpls"].map(|c| col(c).ok());
+    let rows = super::path::from_csv(text)?;
     let mut groups: Vec<PathGroup> = Vec::new();
     let mut seen_device = None;
-    for (i, rec) in rd.records().enumerate() {
-        let rec = rec?;
-        let get = |c: usize| rec.get(c).unwrap_or("");
-        if let Some((a, d)) = device {
-            seen_device = Some((get(a).to_string(), get(d).to_string()));
+    for r in &rows {
+        if !r.adapter.is_empty() || !r.driver.is_empty() {
+            seen_device = Some((r.adapter.clone(), r.driver.clone()));
         }
-        if get(frame)
-            .parse::<u32>()
-            .with_context(|| format!("line {}: frame", i + 2))?
-            == 0
-        {
+        if r.frame == 0 {
             continue;
         }
-        let key = (get(label).to_string(), get(temporal).to_string());
+        let temporal = if r.temporal { "on" } else { "off" };
         let at = match groups
             .iter()
-            .position(|g| (&g.label, &g.temporal) == (&key.0, &key.1))
+            .position(|g| g.label == r.label && g.temporal == temporal)
         {
             Some(at) => at,
             None => {
-                let [scene, w, h, vpls] = frame_cols.map(|c| c.map_or("–", get).to_string());
+                // Files without the frame's columns show "–".
+                let or_dash = |v: String| {
+                    if v.is_empty() || v == "0" {
+                        "–".into()
+                    } else {
+                        v
+                    }
+                };
                 groups.push(PathGroup {
-                    scene: format!("`{scene}`"),
-                    size: format!("{w}×{h}"),
-                    vpls,
-                    label: key.0,
-                    temporal: key.1,
+                    scene: format!("`{}`", or_dash(r.scene.clone())),
+                    size: format!(
+                        "{}×{}",
+                        or_dash(r.width.to_string()),
+                        or_dash(r.height.to_string())
+                    ),
+                    vpls: or_dash(r.vpls.to_string()),
+                    label: r.label.clone(),
+                    temporal: temporal.into(),
                     frames: 0,
                     sums: BTreeMap::new(),
                 });
@@ -126,10 +119,14 @@ fn read_path(text: &str) -> Result<(Vec<PathGroup>, Option<Device>)> {
         };
         let g = &mut groups[at];
         g.frames += 1;
-        for (m, &c) in PATH_MEANS.iter().zip(&means) {
-            let v: f64 = get(c)
-                .parse()
-                .with_context(|| format!("line {}: {m} {:?}", i + 2, get(c)))?;
+        let values = [
+            r.frame_ms,
+            r.sp_cluster_ms,
+            r.visibility_ms,
+            r.reference_ms,
+            r.mse,
+        ];
+        for (m, v) in PATH_MEANS.iter().zip(values) {
             *g.sums.entry(m).or_default() += v;
         }
     }
@@ -268,7 +265,7 @@ mod tests {
             vpls: 8192,
             instability_world: None,
             temporal_alpha: on.then_some(0.7),
-            instability_world_direct_only: None,
+            ..Default::default()
         };
         vec![
             row(0, false, 99.0),

@@ -10,7 +10,7 @@ use super::scene::{SceneArgs, ShotArgs, check_size, check_vpls};
 use crate::gpu::GpuContext;
 use crate::render::frame::Frame;
 use crate::render::pipeline::{self, RenderSettings, Renderer};
-use crate::render::timed::{Timed, Timing, best_of_runs, timed};
+use crate::render::timed::{FrameKind, Timed, Timing, timed};
 use crate::settings::{FrameSettings, TimingSettings};
 use crate::{export, metrics, stats};
 
@@ -231,8 +231,8 @@ fn check_outputs(a: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
-/// The timed frames: the path tracer's (`--path-trace`, after the busy kernel alone), or the
-/// renderer's as `render::timed` times them (with `--target-ms`, the controller's first).
+/// The timed frames (`render::timed`): the path tracer's (`--path-trace`) or the VPL frame's (with
+/// `--target-ms`, the controller's first); the controller's steps printed.
 fn frames(
     a: &RenderArgs,
     renderer: &mut Renderer,
@@ -242,39 +242,23 @@ fn frames(
     let timing = Timing {
         repeat: a.repeat,
         warmup_ms: a.timing.warmup_ms,
+        kind: a.path_trace.map_or(FrameKind::Vpl, FrameKind::PathTrace),
     };
-    let Some(spp) = a.path_trace else {
-        let t = timed(renderer, camera, settings, timing, &mut || {})?;
-        if let Some(b) = &t.budget {
-            for (i, st) in b.steps.iter().enumerate() {
-                eprintln!(
-                    "--target-ms {}: frame {}: K_SP {} K_VPL {} direct samples {} -> {:.1} ms",
-                    b.target_ms,
-                    i + 1,
-                    st.sp_clusters,
-                    st.vpl_clusters,
-                    st.direct_samples,
-                    st.frame_ms
-                );
-            }
+    let t = timed(renderer, camera, settings, timing, &mut || {})?;
+    if let Some(b) = &t.budget {
+        for (i, st) in b.steps.iter().enumerate() {
+            eprintln!(
+                "--target-ms {}: frame {}: K_SP {} K_VPL {} direct samples {} -> {:.1} ms",
+                b.target_ms,
+                i + 1,
+                st.sp_clusters,
+                st.vpl_clusters,
+                st.direct_samples,
+                st.frame_ms
+            );
         }
-        return Ok(t);
-    };
-    let warmup_ms = renderer.ctx.warm_up(timing.warmup_ms)?;
-    let mut runs = Vec::new();
-    let mut frame = None;
-    for _ in 0..timing.repeat.max(1) {
-        let f = renderer.path_trace(camera, settings, spp)?;
-        runs.push(f.timings_ms.clone());
-        frame = Some(f);
     }
-    Ok(Timed {
-        frame: frame.expect("repeat >= 1"),
-        settings: settings.clone(),
-        timings_ms: best_of_runs(&runs),
-        warmup_ms,
-        budget: None,
-    })
+    Ok(t)
 }
 
 /// Warnings about the image: non-finite channels, and a lit scene rendering all black (no light

@@ -25,21 +25,10 @@ pub enum Pass {
     Reference,
     /// The diffuse path tracer (`--path-trace`), instead of every pass above.
     PathTrace,
-    /// wang (seed 001, §3.2): adaptively seeded k-means of the SPs with Eq. (2), sample points.
-    WangCluster,
-    /// wang: irradiance at the sample points (every light with its own shadow ray) and §3.4's R_j.
-    WangGather,
-    /// wang (§3.4): every pixel interpolates the sample points' irradiance.
-    WangInterp,
-    /// lightcluster (seed 002, §3.1): the VPLs clustered by the minimum-distance algorithm (CPU).
-    LightClusterCluster,
-    /// lightcluster (§3.2): every pixel × every VPL with its cluster's disc visibility.
-    LightClusterShade,
-    /// cvrtgi (seed 003): voxels, clusters and the per-face visibility cache (resident while the
-    /// scene and its knobs stay), the lit clusters' per-face irradiance, filtered (resident while
-    /// the VPLs stay), and every pixel's lookup (`method::cvrtgi`; GPU times under `cvrtgi.*`, the
-    /// CPU stages under `cvrtgi`).
-    Cvrtgi,
+    /// A pass of one of the other methods (`src/method/<name>/`), by the name its room gives it
+    /// (its room's `passes`, consts of its module): a method adds its passes in its own
+    /// folder, not here. Its name keys its timings as any pass's does.
+    Room(&'static str),
     /// `--indirect-scale` below 1: the render-scale indirect light brought to the image's pixels
     /// (`gi::upsample`; the render-scale G-buffer it is computed on is timed under `primary`). Not
     /// in `TIMED`: its key is in `timings_ms` only when it ran, so frames at scale 1 keep theirs.
@@ -50,10 +39,11 @@ pub enum Pass {
 }
 
 impl Pass {
-    /// The passes whose times the stats report. The first `STAGES`, in this order, are the bench
-    /// CSV's `<stage>_ms` columns (a contract: `bench::csv::stage_passes`); the unclustered
+    /// The shared passes whose times the stats report (the other methods' passes follow from
+    /// their rooms: `render::timed::timing_keys`). The first `STAGES`, in this order, are the
+    /// bench CSV's `<stage>_ms` columns (a contract: `bench::csv::stage_passes`); the unclustered
     /// reference has its own column and the other methods' passes are summed in `indirect_ms`.
-    pub const TIMED: [Pass; 15] = [
+    pub const TIMED: [Pass; 9] = [
         Pass::VplTrace,
         Pass::VplCluster,
         Pass::Primary,
@@ -63,12 +53,6 @@ impl Pass {
         Pass::Gather,
         Pass::Direct,
         Pass::Reference,
-        Pass::WangCluster,
-        Pass::WangGather,
-        Pass::WangInterp,
-        Pass::LightClusterCluster,
-        Pass::LightClusterShade,
-        Pass::Cvrtgi,
     ];
 
     /// How many of `TIMED` are the CSV's stage columns.
@@ -86,12 +70,7 @@ impl Pass {
             Pass::Gather => "gather",
             Pass::Reference => "reference",
             Pass::PathTrace => "pathtrace",
-            Pass::WangCluster => "wang_cluster",
-            Pass::WangGather => "wang_gather",
-            Pass::WangInterp => "wang_interp",
-            Pass::LightClusterCluster => "lightcluster_cluster",
-            Pass::LightClusterShade => "lightcluster_shade",
-            Pass::Cvrtgi => "cvrtgi",
+            Pass::Room(name) => name,
             Pass::Upsample => "upsample",
             Pass::Accumulate => "accumulate",
         }

@@ -4,47 +4,9 @@
 
 use std::collections::HashSet;
 
-macro_rules! wgsl {
-    ($($path:literal),* $(,)?) => {
-        &[$(($path, include_str!(concat!("../../shaders-wgsl/", $path)))),*]
-    };
-}
-
-/// Every WGSL file of the project, by path relative to `shaders-wgsl/`.
-pub const FILES: &[(&str, &str)] = wgsl![
-    "common/scene.wgsl",
-    "common/bvh.wgsl",
-    "common/rng.wgsl",
-    "common/sampling.wgsl",
-    "common/surface.wgsl",
-    "common/lights.wgsl",
-    "common/chunk.wgsl",
-    "common/gbuffer.wgsl",
-    "common/vpl.wgsl",
-    "common/alpha.wgsl",
-    "common/kmeans.wgsl",
-    "common/nearest.wgsl",
-    "kmeans/init.wgsl",
-    "kmeans/grid.wgsl",
-    "kmeans/iterate.wgsl",
-    "kmeans/assign.wgsl",
-    "kmeans/reps.wgsl",
-    "raycast.wgsl",
-    "primary.wgsl",
-    "direct.wgsl",
-    "vpl_trace.wgsl",
-    "reference.wgsl",
-    "pathtrace.wgsl",
-    "kmeans.wgsl",
-    "visibility.wgsl",
-    "shade.wgsl",
-    "wang.wgsl",
-    "lightcluster.wgsl",
-    "cvrtgi.wgsl",
-    "warmup.wgsl",
-    "upsample.wgsl",
-    "accumulate.wgsl",
-];
+/// Every WGSL file of the project, by path relative to `shaders-wgsl/`, in path order: listed by
+/// `build.rs` from the folder, so a new pass (a method's included) adds its file and nothing else.
+pub const FILES: &[(&str, &str)] = include!(concat!(env!("OUT_DIR"), "/wgsl_files.rs"));
 
 /// The pass shaders (top-level files; `common/` holds shared code, `kmeans/` the steps of the
 /// k-means pass), each composed and validated on its own.
@@ -82,7 +44,7 @@ fn inline(path: &str, seen: &mut HashSet<String>, out: &mut String) {
         return;
     }
     let src = source(path)
-        .unwrap_or_else(|| panic!("unknown WGSL file {path} (add it to gpu::shader::FILES)"));
+        .unwrap_or_else(|| panic!("unknown WGSL file {path} (not under shaders-wgsl/)"));
     for line in src.lines() {
         if let Some(dep) = line.trim().strip_prefix("#import ") {
             inline(dep.trim(), seen, out);
@@ -175,7 +137,7 @@ mod tests {
         for f in &on_disk {
             assert!(
                 file(f).is_some(),
-                "{f} exists but is not in gpu::shader::FILES"
+                "{f} exists but is not in gpu::shader::FILES (build.rs)"
             );
         }
     }

@@ -3,13 +3,11 @@
 //! its resident and per-frame state, its production CPU stages and its knobs. All reuse the shared
 //! passes of `gi` (VPLs, primary rays, direct light, the gather of Eq. 5) and reach the frame
 //! through one trait, `IndirectMethod`. colom (the paper) is the default and every method's
-//! reference; `ROOMS` is the registry of the others, from which `render::pipeline` picks a
-//! method's passes and state.
+//! reference; `rooms!` below is the registry of the others (`ROOMS`, `Method`, `MethodSettings`,
+//! `MethodLists`), from which `render::pipeline` picks a method's passes and state. A new method
+//! is its folder and one line of the registry (docs/architecture.md, "Adding a method").
 
 pub mod colom;
-pub mod cvrtgi;
-pub mod lightcluster;
-pub mod wang;
 
 use std::any::Any;
 use std::collections::BTreeMap;
@@ -17,6 +15,7 @@ use std::fmt;
 
 use anyhow::Result;
 use clap::Args;
+use clap::builder::PossibleValue;
 use serde::{Deserialize, Serialize};
 
 use crate::gi::dispatch::Gpu;
@@ -98,6 +97,8 @@ pub trait IndirectMethod: Any {
 /// shown and swept.
 pub struct Room {
     pub method: Method,
+    /// What `--method`'s help says of it (its possible value's line).
+    pub doc: &'static str,
     pub passes: &'static [Pass],
     pub build: fn(&GpuContext, &SceneGpu) -> Box<dyn IndirectMethod>,
     /// It clusters the shading points with `--sp-clusters` as K (and needs 0 < K < pixels).
@@ -115,13 +116,140 @@ pub struct Room {
     pub short: fn(&MethodSettings) -> String,
     /// Its knobs in the viewer's panel.
     pub ui: fn(&mut egui::Ui, &mut MethodSettings),
-    /// Its knobs' combinations in a bench sweep (`knobs!`'s `configs`).
-    pub sweep: fn(&MethodLists) -> Vec<MethodSettings>,
 }
 
-/// The registry. colom (the paper) is not here: its passes are the renderer's own, since every
-/// method's reference is colom's unclustered gather.
-pub const ROOMS: &[Room] = &[wang::ROOM, lightcluster::ROOM, cvrtgi::ROOM];
+/// Declares the registry from one line a method (`module: Variant`): the method's folder
+/// (`pub mod module;`, which holds its `ROOM`, its knobs as `Knobs` and their bench lists as
+/// `KnobLists`, both made by `knobs!`), its `Method` variant (named `module` on the command line,
+/// in JSON and in the CSV), its line of `ROOMS`, its field `module` of `MethodSettings` (its knobs,
+/// flattened into the CLI, the stats JSON and the CSV's last columns) and of `MethodLists`.
+macro_rules! rooms {
+    ($($module:ident: $Variant:ident),+ $(,)?) => {
+        $(pub mod $module;)+
+
+        /// The registry. colom (the paper) is not here: its passes are the renderer's own, since
+        /// every method's reference is colom's unclustered gather.
+        pub const ROOMS: &[Room] = &[$($module::ROOM),+];
+
+        /// Which system computes the indirect light (docs/methods.md). Every method reuses the
+        /// VPLs, the BVH, the primary rays, the direct light, the reference and the metrics, and
+        /// adds only what its paper adds. colom is the default; the others are the registry's
+        /// (`rooms!`). (`Ord`: the renderer keeps the methods' state in a map by method.)
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
+        pub enum Method {
+            /// Colom, Marques, Santos 2022 (seed 000), the paper this tool rebuilds (`COLOM_DOC`).
+            #[default]
+            Colom,
+            $(
+                #[doc = concat!("`", stringify!($module), "` (its room's `doc`).")]
+                $Variant,
+            )+
+        }
+
+        impl Method {
+            pub const ALL: [Method; 1 + [$(stringify!($module)),+].len()] =
+                [Method::Colom, $(Method::$Variant),+];
+
+            /// Its name on the command line, in JSON and in the CSV.
+            pub fn name(self) -> &'static str {
+                match self {
+                    Method::Colom => "colom",
+                    $(Method::$Variant => stringify!($module),)+
+                }
+            }
+        }
+
+        /// The method and every method's knobs (each declared in its room with `knobs!`),
+        /// flattened into `render`, `view` and the stats JSON beside the paper's
+        /// `ClusterSettings`.
+        #[derive(Args, Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+        #[serde(default)]
+        pub struct MethodSettings {
+            /// The method that computes the indirect light: colom (the paper this tool
+            /// rebuilds), wang (Wang et al. 2009: irradiance at SP-cluster centres,
+            /// interpolated), lightcluster (LightCluster: VPLs clustered by distance, a disc's
+            /// visibility per cluster), cvrtgi (clustered voxel GI: irradiance per voxel face
+            /// from voxel clusters). docs/methods.md.
+            #[arg(long, value_enum, default_value_t = Method::Colom, help_heading = METHOD_HEADING)]
+            pub method: Method,
+            $(
+                #[command(flatten)]
+                #[serde(flatten)]
+                pub $module: $module::Knobs,
+            )+
+        }
+
+        impl MethodSettings {
+            /// Every method's knobs as columns of the bench's `results.csv` and `path.csv`, in
+            /// order (their last columns).
+            pub fn columns() -> Vec<&'static str> {
+                [$($module::Knobs::NAMES),+].concat()
+            }
+
+            /// A row's values of `columns()`: its own method's knobs, empty for the other
+            /// methods'.
+            pub fn column_values(&self) -> Vec<String> {
+                let own = |m: Method, v: Vec<String>| match self.method == m {
+                    true => v,
+                    false => vec![String::new(); v.len()],
+                };
+                [$(own(Method::$Variant, self.$module.values())),+].concat()
+            }
+
+            /// Sets the knob of column `name` from its text; `None` when no method has that
+            /// knob.
+            pub fn set_column(&mut self, name: &str, text: &str) -> Option<Result<(), Invalid>> {
+                None$(.or_else(|| self.$module.set(name, text)))+
+            }
+        }
+
+        /// `bench`'s lists: the methods to compare and each method's knob lists.
+        #[derive(Args, Clone, Debug, Default, PartialEq)]
+        pub struct MethodLists {
+            /// Methods to compare: colom,wang,lightcluster,cvrtgi (default colom;
+            /// docs/methods.md). `--modes` and the fuzzy knobs apply to colom; a method that
+            /// clusters the SPs (wang) also takes the K's and --iterations; each method's own
+            /// knob lists follow.
+            #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_method)]
+            pub methods: Vec<Method>,
+            $(
+                #[command(flatten)]
+                pub $module: $module::KnobLists,
+            )+
+        }
+
+        impl MethodLists {
+            /// `method`'s knob combinations (`knobs!`'s `configs`) as `MethodSettings`; colom has
+            /// none of its own (its lists are `bench::sweep::Sweep`'s): its defaults.
+            pub fn configs_of(&self, method: Method) -> Vec<MethodSettings> {
+                let with = |set: &dyn Fn(&mut MethodSettings)| {
+                    let mut m = MethodSettings {
+                        method,
+                        ..Default::default()
+                    };
+                    set(&mut m);
+                    m
+                };
+                match method {
+                    Method::Colom => vec![with(&|_| {})],
+                    $(Method::$Variant => self
+                        .$module
+                        .configs()
+                        .into_iter()
+                        .map(|k| with(&|m| m.$module = k))
+                        .collect(),)+
+                }
+            }
+        }
+    };
+}
+
+// The registry: a method other than colom is its folder and its line here.
+rooms! {
+    wang: Wang,
+    lightcluster: LightCluster,
+    cvrtgi: Cvrtgi,
+}
 
 /// `method`'s room, `None` for colom.
 pub fn room(method: Method) -> Option<&'static Room> {
@@ -136,61 +264,43 @@ pub fn build(method: Method) -> fn(&GpuContext, &SceneGpu) -> Box<dyn IndirectMe
 /// The `--help` group of the method and its knobs.
 pub const METHOD_HEADING: &str = "Method (docs/methods.md)";
 
-/// Which system computes the indirect light (docs/methods.md). Every method reuses the VPLs, the
-/// BVH, the primary rays, the direct light, the reference and the metrics, and adds only what its
-/// paper adds. A method other than colom is a variant here, a field of `MethodSettings` (its
-/// knobs), a line of `ROOMS`, its passes in `gi::pass::Pass`, and its folder.
-/// (`Ord`: the renderer keeps the methods' state in a map by method.)
-#[derive(
-    clap::ValueEnum,
-    Serialize,
-    Deserialize,
-    Default,
-    Clone,
-    Copy,
-    Debug,
-    PartialEq,
-    Eq,
-    PartialOrd,
-    Ord,
-)]
-#[serde(rename_all = "kebab-case")]
-pub enum Method {
-    /// Colom, Marques, Santos 2022 (seed 000): fuzzy k-means of SPs and VPLs, visibility between
-    /// cluster representatives, Eq. (6) shading per pixel × VPL cluster.
-    #[default]
-    Colom,
-    /// Wang et al. 2009 (seed 001): adaptively seeded k-means of the SPs (§3.2, Eq. 2), irradiance
-    /// gathered only at the cluster centres, interpolated per pixel with the §3.4 weight.
-    Wang,
-    /// LightCluster (seed 002): the VPLs clustered by the minimum-distance (leader) algorithm
-    /// (§3.1, d_min = d_init (1 − |C_pos| / z_far)), each cluster a disc light of radius d_min
-    /// whose visibility a few shadow rays over the disc estimate (§3.2), every VPL shaded with its
-    /// cluster's visibility.
-    #[value(name = "lightcluster")]
-    #[serde(rename = "lightcluster")]
-    LightCluster,
-    /// CVRTGI (Cosin Ayerbe & Patow 2022, seed 003): the scene voxelised, voxels clustered by SLIC
-    /// with the 35° normal rule (Eq. 1, Alg. 1), per-voxel-face irradiance from the lit clusters a
-    /// face's rays find, filtered, read by every pixel; cached while the lights stay.
-    Cvrtgi,
-}
+/// colom's line in `--method`'s help (the others' are their rooms' `doc`).
+pub const COLOM_DOC: &str = "Colom, Marques, Santos 2022 (seed 000): fuzzy k-means of SPs and \
+                             VPLs, visibility between cluster representatives, Eq. (6) shading \
+                             per pixel × VPL cluster";
 
 impl Method {
-    pub const ALL: [Method; 4] = [
-        Method::Colom,
-        Method::Wang,
-        Method::LightCluster,
-        Method::Cvrtgi,
-    ];
+    /// Its line in `--method`'s help.
+    pub fn doc(self) -> &'static str {
+        room(self).map_or(COLOM_DOC, |r| r.doc)
+    }
+}
 
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Colom => "colom",
-            Method::Wang => "wang",
-            Method::LightCluster => "lightcluster",
-            Method::Cvrtgi => "cvrtgi",
-        }
+/// The command line's names (`rooms!`), each with its room's `doc` in `--help`.
+impl clap::ValueEnum for Method {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Method::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        Some(PossibleValue::new(self.name()).help(self.doc()))
+    }
+}
+
+/// Serialised by its name (`"lightcluster"`).
+impl Serialize for Method {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl<'de> Deserialize<'de> for Method {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Method, D::Error> {
+        let name = String::deserialize(d)?;
+        Method::ALL
+            .into_iter()
+            .find(|m| m.name() == name)
+            .ok_or_else(|| serde::de::Error::custom(parse_method(&name).unwrap_err()))
     }
 }
 
@@ -200,81 +310,11 @@ impl fmt::Display for Method {
     }
 }
 
-/// The method and every method's knobs (each declared in its room with `knobs!`), flattened into
-/// `render`, `view` and the stats JSON beside the paper's `ClusterSettings`.
-#[derive(Args, Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct MethodSettings {
-    /// The method that computes the indirect light: colom (the paper this tool rebuilds), wang
-    /// (Wang et al. 2009: irradiance at SP-cluster centres, interpolated), lightcluster
-    /// (LightCluster: VPLs clustered by distance, a disc's visibility per cluster), cvrtgi (clustered
-    /// voxel GI: irradiance per voxel face from voxel clusters). docs/methods.md.
-    #[arg(long, value_enum, default_value_t = Method::Colom, help_heading = METHOD_HEADING)]
-    pub method: Method,
-    #[command(flatten)]
-    #[serde(flatten)]
-    pub wang: wang::settings::WangSettings,
-    #[command(flatten)]
-    #[serde(flatten)]
-    pub lightcluster: lightcluster::settings::LightClusterSettings,
-    #[command(flatten)]
-    #[serde(flatten)]
-    pub cvrtgi: cvrtgi::settings::CvrtgiSettings,
-}
-
 impl MethodSettings {
     /// The asked method's room (`None`: colom).
     pub fn room(&self) -> Option<&'static Room> {
         room(self.method)
     }
-
-    /// Every method's knobs as columns of the bench's `results.csv`, in order (its last columns).
-    pub fn columns() -> Vec<&'static str> {
-        [
-            wang::settings::WangSettings::NAMES,
-            lightcluster::settings::LightClusterSettings::NAMES,
-            cvrtgi::settings::CvrtgiSettings::NAMES,
-        ]
-        .concat()
-    }
-
-    /// A row's values of `columns()`: its own method's knobs, empty for the other methods'.
-    pub fn column_values(&self) -> Vec<String> {
-        let own = |m: Method, v: Vec<String>| match self.method == m {
-            true => v,
-            false => vec![String::new(); v.len()],
-        };
-        [
-            own(Method::Wang, self.wang.values()),
-            own(Method::LightCluster, self.lightcluster.values()),
-            own(Method::Cvrtgi, self.cvrtgi.values()),
-        ]
-        .concat()
-    }
-
-    /// Sets the knob of column `name` from its text; `None` when no method has that knob.
-    pub fn set_column(&mut self, name: &str, text: &str) -> Option<Result<(), Invalid>> {
-        self.wang
-            .set(name, text)
-            .or_else(|| self.lightcluster.set(name, text))
-            .or_else(|| self.cvrtgi.set(name, text))
-    }
-}
-
-/// `bench`'s lists: the methods to compare and each method's knob lists.
-#[derive(Args, Clone, Debug, Default, PartialEq)]
-pub struct MethodLists {
-    /// Methods to compare: colom,wang,lightcluster,cvrtgi (default colom; docs/methods.md).
-    /// `--modes` and the fuzzy knobs apply to colom; a method that clusters the SPs (wang) also
-    /// takes the K's and --iterations; each method's own knob lists follow.
-    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_method)]
-    pub methods: Vec<Method>,
-    #[command(flatten)]
-    pub wang: wang::settings::WangLists,
-    #[command(flatten)]
-    pub lightcluster: lightcluster::settings::LightClusterLists,
-    #[command(flatten)]
-    pub cvrtgi: cvrtgi::settings::CvrtgiLists,
 }
 
 impl MethodLists {
@@ -291,26 +331,6 @@ impl MethodLists {
         }
         out
     }
-}
-
-/// A room's knob combinations (`knobs!`'s `configs`) as `MethodSettings` of `method`, each set into
-/// its field by `set` (`Room::sweep`).
-pub fn sweep_of<T>(
-    method: Method,
-    configs: Vec<T>,
-    set: fn(&mut MethodSettings, T),
-) -> Vec<MethodSettings> {
-    configs
-        .into_iter()
-        .map(|k| {
-            let mut m = MethodSettings {
-                method,
-                ..Default::default()
-            };
-            set(&mut m, k);
-            m
-        })
-        .collect()
 }
 
 /// A knob's logarithmic slider in a room's panel section.
@@ -352,6 +372,69 @@ mod tests {
     fn every_method_but_colom_has_a_room() {
         for m in Method::ALL {
             assert_eq!(room(m).is_some(), m != Method::Colom, "{m}");
+            assert_eq!(room(m).map(|r| r.method), (m != Method::Colom).then_some(m));
         }
+        assert_eq!(ROOMS.len() + 1, Method::ALL.len());
+    }
+
+    /// `--method`'s possible values carry each method's line (colom's, its room's `doc`), and an
+    /// unknown name in JSON is refused with the names it may be.
+    #[test]
+    fn the_help_lines_are_the_rooms_docs() {
+        use clap::ValueEnum;
+        for m in Method::ALL {
+            let v = m.to_possible_value().unwrap();
+            assert_eq!(v.get_name(), m.name());
+            assert_eq!(v.get_help().unwrap().to_string(), m.doc());
+        }
+        assert_eq!(Method::Colom.doc(), COLOM_DOC);
+        assert!(Method::Wang.doc().starts_with("Wang et al. 2009"));
+        let e = serde_json::from_str::<Method>("\"fuzzy\"")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("unknown method") && e.contains("cvrtgi"), "{e}");
+    }
+
+    /// A room's passes are named once: no two passes (the shared ones, every room's) share a
+    /// name, which keys their timings, the stats and the CSV.
+    #[test]
+    fn pass_names_are_unique() {
+        let mut names: Vec<&str> = Pass::TIMED.iter().map(|p| p.name()).collect();
+        names.extend([Pass::PathTrace, Pass::Upsample].map(|p| p.name()));
+        for r in ROOMS {
+            assert!(!r.passes.is_empty(), "{}", r.method);
+            names.extend(r.passes.iter().map(|p| p.name()));
+        }
+        let mut sorted = names.clone();
+        sorted.sort_unstable();
+        sorted.dedup();
+        assert_eq!(sorted.len(), names.len(), "{names:?}");
+    }
+
+    /// The knobs' columns follow the registry's order, a room's own filled and the others' empty.
+    #[test]
+    fn knob_columns_follow_the_registry() {
+        let want: Vec<&str> = ROOMS
+            .iter()
+            .flat_map(|r| {
+                let m = MethodSettings {
+                    method: r.method,
+                    ..Default::default()
+                };
+                MethodSettings::columns()
+                    .into_iter()
+                    .zip(m.column_values())
+                    .filter(|(_, v)| !v.is_empty())
+                    .map(|(c, _)| c)
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        assert_eq!(want, MethodSettings::columns());
+        assert!(
+            MethodSettings::default()
+                .column_values()
+                .iter()
+                .all(String::is_empty)
+        );
     }
 }

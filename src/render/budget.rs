@@ -327,6 +327,11 @@ impl Controller {
         (s.cluster.sp_clusters, s.cluster.vpl_clusters) = self.ks;
     }
 
+    /// K_SP and K_VPL of the next frame.
+    pub fn ks(&self) -> (u32, u32) {
+        self.ks
+    }
+
     /// A frame rendered with `s` (its K's): the next K's, kept when the frame missed the budget by
     /// more than `SETTLED`.
     pub fn observe(&mut self, s: &RenderSettings, frame: &Frame) {

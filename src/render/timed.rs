@@ -1,25 +1,113 @@
-//! How `render` and `bench` time a frame, one way for both: the GPU warmed up (`--warmup-ms`,
-//! `Renderer::warm_up`), then with `--target-ms` the budget controller's frames (`budget::fit`, its
-//! last frame counting as the first timed one), then renders up to `repeat`; each pass's time is the
-//! mean of its 3 best runs (`best_of_runs`, the paper's method). The viewer times every frame
-//! it shows and drives the same controller step by step (`budget::Controller`).
+//! The one frame loop and the one way frames are timed.
+//!
+//! `FrameLoop` renders frames one after another on one renderer (each frame's past the previous
+//! one's): the VPL frame or the path tracer's, after `warmup_ms` of busy GPU work when asked, and,
+//! where it steps a time budget (the viewer), with `budget::Controller` choosing the K's frame by
+//! frame. `bench --camera-path` renders its path with it, the viewer's worker its frames, and
+//! `timed` its repeats.
+//!
+//! `timed` is how `render` and `bench` time a frame: the GPU warmed up (`--warmup-ms`,
+//! `Renderer::warm_up`; the path tracer: the busy kernel alone), then with `--target-ms` the
+//! budget controller's frames (`budget::fit`, its last frame counting as the first timed one),
+//! then renders up to `repeat`; each pass's time is the mean of its 3 best runs (`best_of_runs`,
+//! the paper's method).
 
 use std::collections::BTreeMap;
 
 use anyhow::Result;
 
-use super::budget::{self, Budget};
+use super::budget::{self, Budget, Controller};
 use super::frame::Frame;
 use super::pipeline::{Pass, RenderSettings, Renderer};
 use crate::scene::Camera;
 
-/// How many frames are timed and how long the GPU is warmed up before them.
+/// What a frame is: the VPL frame (`Renderer::render`) or the diffuse path tracer's with SPP
+/// samples a pixel (`Renderer::path_trace`, `render --path-trace`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FrameKind {
+    #[default]
+    Vpl,
+    PathTrace(u32),
+}
+
+/// Frames one after another on one renderer (see the module).
+#[derive(Default)]
+pub struct FrameLoop {
+    pub kind: FrameKind,
+    /// GPU work in ms before each frame (`bench --camera-path`: a frame is timed once, right after
+    /// GPU work that touches no renderer state); 0: none.
+    pub warmup_ms: f64,
+    /// Whether a frame with a time budget (`--target-ms`) takes its K's from the controller.
+    pub steps_budget: bool,
+    controller: Option<Controller>,
+}
+
+impl FrameLoop {
+    /// A loop of `kind` frames, each after `warmup_ms` of busy GPU work.
+    pub fn new(kind: FrameKind, warmup_ms: f64) -> FrameLoop {
+        FrameLoop {
+            kind,
+            warmup_ms,
+            ..Default::default()
+        }
+    }
+
+    /// A loop of VPL frames whose time budget `budget::Controller` steps once a frame (made anew
+    /// when the budget or the frame's size changes; the viewer's).
+    pub fn stepping_budget() -> FrameLoop {
+        FrameLoop {
+            steps_budget: true,
+            ..Default::default()
+        }
+    }
+
+    /// The next frame of `s` at `camera`, and the settings it ran with (under a stepped budget,
+    /// `s` with the controller's K's).
+    pub fn next(
+        &mut self,
+        renderer: &mut Renderer,
+        camera: &Camera,
+        s: &RenderSettings,
+    ) -> Result<(Frame, RenderSettings)> {
+        if self.warmup_ms > 0.0 {
+            renderer.ctx.warm_up(self.warmup_ms)?;
+        }
+        let mut s = s.clone();
+        match s.cluster.target_ms {
+            Some(_) if self.steps_budget => {
+                let c = match self.controller.take() {
+                    Some(c) if c.fits(&s) => c,
+                    _ => Controller::new(&s).expect("a budget"),
+                };
+                c.apply(&mut s);
+                self.controller = Some(c);
+            }
+            _ => self.controller = None,
+        }
+        let frame = match self.kind {
+            FrameKind::Vpl => renderer.render(camera, &s)?,
+            FrameKind::PathTrace(spp) => renderer.path_trace(camera, &s, spp)?,
+        };
+        if let Some(c) = &mut self.controller {
+            c.observe(&s, &frame);
+        }
+        Ok((frame, s))
+    }
+
+    /// The K_SP and K_VPL the next frame under the stepped budget will take (`None`: no budget).
+    pub fn next_ks(&self) -> Option<(u32, u32)> {
+        self.controller.as_ref().map(Controller::ks)
+    }
+}
+
+/// How many frames are timed, what they are and how long the GPU is warmed up before them.
 #[derive(Clone, Copy, Debug)]
 pub struct Timing {
     /// Frames rendered (at least 1; with a time budget its controller's frames count from the last).
     pub repeat: u32,
     /// GPU work in ms before the first timed frame (`settings::TimingSettings::warmup_ms`).
     pub warmup_ms: f64,
+    pub kind: FrameKind,
 }
 
 /// A timed frame: the last one rendered, the settings it ran with (the controller's choice under a
@@ -41,12 +129,16 @@ pub fn timed(
     timing: Timing,
     tick: &mut dyn FnMut(),
 ) -> Result<Timed> {
-    let warmup_ms = renderer.warm_up(camera, s, timing.warmup_ms)?;
+    let warmup_ms = match timing.kind {
+        FrameKind::Vpl => renderer.warm_up(camera, s, timing.warmup_ms)?,
+        // The path tracer builds its pipeline each frame and keeps nothing: the busy kernel alone.
+        FrameKind::PathTrace(_) => renderer.ctx.warm_up(timing.warmup_ms)?,
+    };
     let mut settings = s.clone();
     let mut runs = Vec::new();
     let mut last = None;
     let mut controller = None;
-    if let Some(t) = s.cluster.target_ms {
+    if let (FrameKind::Vpl, Some(t)) = (timing.kind, s.cluster.target_ms) {
         let (chosen, b, f) = budget::fit(renderer, camera, s, t)?;
         settings = chosen;
         runs.push(f.timings_ms.clone());
@@ -54,8 +146,9 @@ pub fn timed(
         controller = Some(b);
         tick();
     }
+    let mut frames = FrameLoop::new(timing.kind, 0.0);
     for _ in runs.len() as u32..timing.repeat.max(1) {
-        let f = renderer.render(camera, &settings)?;
+        let (f, _) = frames.next(renderer, camera, &settings)?;
         runs.push(f.timings_ms.clone());
         last = Some(f);
         tick();
@@ -69,11 +162,11 @@ pub fn timed(
     })
 }
 
-/// Every timing key of the contract (`Pass::TIMED` and `frame`), so readers can index them; passes
-/// that did not run read 0.
+/// Every timing key of the contract (the shared passes of `Pass::TIMED`, every room's passes and
+/// `frame`), so readers can index them; passes that did not run read 0.
 pub fn timing_keys() -> impl Iterator<Item = &'static str> {
-    Pass::TIMED
-        .iter()
+    let rooms = crate::method::ROOMS.iter().flat_map(|r| r.passes);
+    (Pass::TIMED.iter().chain(rooms))
         .map(|p| p.name())
         .chain([super::frame::FRAME_KEY])
 }
@@ -130,8 +223,16 @@ mod tests {
         for k in timing_keys() {
             assert!(b.contains_key(k), "{k}");
         }
-        // The contract's ten, and the other methods' six (docs/methods.md).
-        assert_eq!(timing_keys().count(), 16);
+        // The contract's ten (the shared passes and `frame`), and every room's passes.
+        let rooms: usize = crate::method::ROOMS.iter().map(|r| r.passes.len()).sum();
+        assert_eq!(timing_keys().count(), 10 + rooms);
+        for r in crate::method::ROOMS {
+            assert!(
+                r.passes.iter().all(|p| b.contains_key(p.name())),
+                "{}",
+                r.method
+            );
+        }
         assert_eq!(b["primary"], 2.0);
         assert_eq!(b["vpl_trace"], 0.0);
     }

@@ -2,6 +2,12 @@
 //! parser) it makes the settings struct (clap `Args` for `render` and `view`, serde for the stats
 //! and the viewer's files, `Default` from the same defaults) and its bench lists (`bench --NAME
 //! a,b,c`: one `Vec` a knob, `configs()` every combination), so a knob is one field, not five.
+//!
+//! `listed!` does the same for a settings type whose fields need their own clap and serde
+//! attributes (`ClusterSettings`): the struct is written as it is, and a field marked `=> list
+//! "help"` also gets its bench list (same type, same value parser unless the list names its own,
+//! its default list and `--quick`'s), its resolution (`resolve`) and its combinations
+//! (`configs`).
 
 /// Declares `$Settings` and `$Lists` (see the module). Each field: its doc comment, then
 /// `name: Type = default, parse parser;` with `parser(&str) -> Result<Type, Invalid>`.
@@ -108,6 +114,104 @@ macro_rules! knobs {
 }
 
 pub(crate) use knobs;
+
+/// Declares `$Settings` as written and `$Lists`, its bench lists (see the module). A listed field:
+/// `pub name: Type => list "help" (clap arguments of the list) [default [a, b]] [quick [c]],`;
+/// an unlisted field: `pub name: Type,`. The list's value parser is its own clap arguments' (none:
+/// clap's for the type).
+macro_rules! listed {
+    (
+        $(#[$smeta:meta])*
+        pub struct $Settings:ident {
+            $(
+                $(#[$fmeta:meta])*
+                pub $field:ident: $ty:ty
+                $(=> list $help:literal ($($larg:tt)*)
+                    $(default [$($default:expr),+])?
+                    $(quick [$($quick:expr),+])?)?,
+            )+
+        }
+        $(#[$lmeta:meta])*
+        pub struct $Lists:ident, heading $heading:expr;
+    ) => {
+        $(#[$smeta])*
+        pub struct $Settings {
+            $(
+                $(#[$fmeta])*
+                pub $field: $ty,
+            )+
+        }
+
+        $(#[$lmeta])*
+        #[derive(clap::Args, Clone, Debug, Default, PartialEq)]
+        #[command(next_help_heading = $heading)]
+        pub struct $Lists {
+            $($(
+                #[doc = $help]
+                #[arg(long, value_name = "LIST", value_delimiter = ',', $($larg)*)]
+                pub $field: Vec<$ty>,
+            )?)+
+        }
+
+        impl $Lists {
+            /// Every list with its values: an empty one at its `default` list (with `quick`, its
+            /// `quick` list where it has one), or else the settings' default; repeats dropped.
+            pub fn resolve(&self, quick: bool) -> $Lists {
+                let d = <$Settings>::default();
+                $Lists {
+                    $($(
+                        $field: {
+                            let _ = $help;
+                            let full: Vec<$ty> = vec![$($($default),+)?];
+                            let fast: Vec<$ty> = vec![$($($quick),+)?];
+                            let given = &self.$field;
+                            let pick = if !given.is_empty() {
+                                given.clone()
+                            } else if quick && !fast.is_empty() {
+                                fast
+                            } else if !full.is_empty() {
+                                full
+                            } else {
+                                vec![d.$field.clone()]
+                            };
+                            let mut unique: Vec<$ty> = Vec::with_capacity(pick.len());
+                            for v in pick {
+                                if !unique.contains(&v) {
+                                    unique.push(v);
+                                }
+                            }
+                            unique
+                        },
+                    )?)+
+                }
+            }
+
+            /// Every combination of the lists' values on `base` (the first field outermost; an
+            /// empty list keeps `base`'s value).
+            pub fn configs(&self, base: &$Settings) -> Vec<$Settings> {
+                let mut out = vec![base.clone()];
+                $($(
+                    let _ = $help;
+                    if !self.$field.is_empty() {
+                        out = out
+                            .iter()
+                            .flat_map(|c| {
+                                self.$field.iter().map(move |v| {
+                                    let mut n = c.clone();
+                                    n.$field = v.clone();
+                                    n
+                                })
+                            })
+                            .collect();
+                    }
+                )?)+
+                out
+            }
+        }
+    };
+}
+
+pub(crate) use listed;
 
 #[cfg(test)]
 mod tests {

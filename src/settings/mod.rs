@@ -14,6 +14,7 @@
 
 mod knobs;
 pub(crate) use knobs::knobs;
+use knobs::listed;
 use std::fmt;
 use std::str::FromStr;
 
@@ -222,32 +223,38 @@ pub const MAX_BOUNCES: u32 = 64;
 /// The largest image side.
 pub const MAX_SIDE: u32 = 16384;
 
-/// The clustering of shading points and VPLs: the paper's knobs.
+listed! {
+/// The clustering of shading points and VPLs: the paper's knobs. The fields `bench` sweeps have
+/// their lists in `ClusterLists` (`listed!`).
 #[derive(Args, Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[command(next_help_heading = "Clustering (the paper's knobs)")]
 #[serde(default)]
 pub struct ClusterSettings {
     /// K of the shading-point clustering (0 = no SP clustering; off when ≥ the pixel count).
     #[arg(long, default_value_t = 3072)]
-    pub sp_clusters: u32,
+    pub sp_clusters: u32 => list "SP cluster counts (default 768,1536,3072; quick 48,96)." ()
+        default [768, 1536, 3072] quick [48, 96],
     /// K of the VPL clustering (0 = no VPL clustering; off when ≥ --vpls).
     #[arg(long, default_value_t = 1024)]
-    pub vpl_clusters: u32,
+    pub vpl_clusters: u32 => list "VPL cluster counts (default 1024; quick 128)." () quick [128],
     /// F: SP clusters per pixel (fuzziness), 1..16 (hard weighting uses 1).
     #[arg(long, default_value_t = 6, value_parser = parse_fuzziness)]
-    pub fuzziness: u32,
+    pub fuzziness: u32 => list "F values, 1..16 (default 6)." (value_parser = parse_fuzziness),
     /// γ: SP downsampling factor for the k-means iterations, or `auto`: the largest γ in 4..16 that
     /// keeps 40 sampled points a cluster and 19,200 in all. Either way at most pixels / K, so that at
     /// least K points are sampled.
     #[arg(long, default_value = "auto", value_parser = parse_gamma)]
-    pub gamma: Gamma,
+    pub gamma: Gamma => list "γ values: `auto` (the default: the largest γ in 4..16 that keeps 40 \
+        sampled points a cluster and 19,200 in all) or factors of at least 1, e.g. auto,4,16."
+        (value_parser = parse_gamma),
     /// n_t of Eq. (7): cosine of the largest normal angle within a cluster, in [-1, 1] (Eq. 7's test
     /// is strict, so 1 is read as 1 - 2^-20: the same normal only).
     #[arg(long, default_value_t = 0.866, value_parser = parse_normal_threshold)]
-    pub normal_threshold: f32,
+    pub normal_threshold: f32 => list "n_t values of Eq. (7), cosines in [-1, 1] (default 0.866)."
+        (value_parser = parse_normal_threshold, allow_hyphen_values = true),
     /// k-means iterations (Alg. 1), 0..=1000.
     #[arg(long, default_value_t = 10, value_parser = parse_iterations)]
-    pub iterations: u32,
+    pub iterations: u32 => list "k-means iterations (default 10)." (value_parser = parse_iterations),
     /// How a pixel's F clusters combine visibility: hard (F = 1), uniform (Eq. 8), inverse-distance
     /// (Eq. 9).
     #[arg(long, value_enum, default_value_t = Weighting::InverseDistance)]
@@ -256,14 +263,17 @@ pub struct ClusterSettings {
     /// (the paper's §6 suggestion), 0 is Eq. (8)'s plain mean (but a point on a centroid still takes
     /// it alone), 64 is nearly hard clustering. [0, 64].
     #[arg(long, default_value_t = 1.0, value_parser = parse_weight_exponent)]
-    pub weight_exponent: f32,
+    pub weight_exponent: f32 => list "p values of the inverse-distance weights w'_f = dist^-p, for \
+        weighted and sp-only (default 1, Eq. 10)." (value_parser = parse_weight_exponent),
     /// Not in the paper (off by default): the fuzzy modes' slots 2..F keep only SP clusters whose
     /// centroid lies within DEG degrees of the pixel's tangent plane, seen from the pixel. Eq. (7)
     /// gates on normals alone, so without it a floor pixel's F clusters include a chair seat above
     /// it (docs/clustering.md, "The plane gate"). (0, 90].
     #[arg(long = "plane-gate", value_name = "DEG", value_parser = parse_plane_gate)]
     #[serde(rename = "plane_gate_deg", skip_serializing_if = "Option::is_none")]
-    pub plane_gate: Option<f32>,
+    pub plane_gate: Option<f32> => list "Plane gates of the fuzzy modes' F lists: `off` (the paper, \
+        default) or angles in degrees, e.g. off,20 (see render --plane-gate)."
+        (value_parser = parse_plane_gate_or_off),
     /// Eq. (10) weights from the distances to the SP clusters' representatives (the paper's text)
     /// instead of their centroids (Alg. 2).
     #[arg(long)]
@@ -293,6 +303,10 @@ pub struct ClusterSettings {
     #[arg(long, value_name = "MS", value_parser = parse_target_ms)]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub target_ms: Option<f64>,
+}
+/// `bench`'s lists of the `ClusterSettings` it sweeps: a configuration takes one value of each
+/// (`resolve` fills the empty ones, `configs` multiplies them out).
+pub struct ClusterLists, heading "Sweep (comma-separated lists)";
 }
 
 impl Default for ClusterSettings {
@@ -468,6 +482,16 @@ pub fn parse_plane_gate(v: &str) -> Result<f32, Invalid> {
         |d: f32| d > 0.0 && d <= 90.0,
         "must be an angle in (0, 90] degrees",
     )
+}
+
+/// A `bench --plane-gate` item: `off` (the paper: `None`) or an angle in (0, 90] degrees.
+pub fn parse_plane_gate_or_off(v: &str) -> Result<Option<f32>, Invalid> {
+    if v.trim().eq_ignore_ascii_case("off") {
+        return Ok(None);
+    }
+    parse_plane_gate(v)
+        .map(Some)
+        .map_err(|_| Invalid("must be off or an angle in (0, 90] degrees".into()))
 }
 
 pub fn parse_target_ms(v: &str) -> Result<f64, Invalid> {

@@ -14,7 +14,7 @@
 //! 3. per frame: each pixel reads its face's filtered irradiance (§4.5, `lookup`).
 //!
 //! Shader: `shaders-wgsl/cvrtgi.wgsl`; CPU twin of every kernel: `cpu::cvrtgi`. The pass is
-//! `Pass::Cvrtgi` (`ROOM`).
+//! `PASS` (`ROOM`).
 
 pub mod inject;
 pub mod settings;
@@ -36,6 +36,13 @@ use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::{SceneGpu, TooBig, storage_layout, uniform_layout};
 use crate::gi::vpl_trace::{VplKey, VplSet};
+
+pub use settings::{CvrtgiLists as KnobLists, CvrtgiSettings as Knobs};
+
+/// cvrtgi's one pass: voxels, clusters and the per-face visibility cache (resident while the scene
+/// and its knobs stay), the lit clusters' per-face irradiance, filtered (resident while the VPLs
+/// stay), and every pixel's lookup (GPU times under `cvrtgi.*`, the CPU stages under `cvrtgi`).
+pub const PASS: Pass = Pass::Room("cvrtgi");
 use crate::gpu::GpuContext;
 use crate::scene::Scene;
 
@@ -158,7 +165,7 @@ pub struct Cvrtgi {
     last_build: std::collections::BTreeMap<String, f64>,
 }
 
-/// The timing keys of cvrtgi's resident stages: its CPU stages (`Pass::Cvrtgi`'s key:
+/// The timing keys of cvrtgi's resident stages: its CPU stages (`PASS`'s key:
 /// voxelisation, SLIC, injection) and the kernels that run only when their stage is rebuilt. Like
 /// `vpl_trace` and `vpl_cluster` they are not in `frame` (a frame with the same scene and VPLs runs
 /// only `cvrtgi.lookup`); the stats report their last build's times.
@@ -571,7 +578,10 @@ impl Cvrtgi {
 /// cvrtgi in the registry.
 pub const ROOM: Room = Room {
     method: Method::Cvrtgi,
-    passes: &[Pass::Cvrtgi],
+    doc: "CVRTGI (Cosin Ayerbe & Patow 2022, seed 003): the scene voxelised, voxels clustered by \
+          SLIC with the 35° normal rule (Eq. 1, Alg. 1), per-voxel-face irradiance from the lit \
+          clusters a face's rays find, filtered, read by every pixel; cached while the lights stay",
+    passes: &[PASS],
     build: |_, _| Box::new(Cvrtgi::new()),
     clusters_sps: false,
     vpl_clusters: false,
@@ -596,15 +606,14 @@ pub const ROOM: Room = Room {
         );
         ui.add(Slider::new(&mut v.filter_passes, 0..=8).text("filter passes"));
     },
-    sweep: |l| super::sweep_of(Method::Cvrtgi, l.cvrtgi.configs(), |m, k| m.cvrtgi = k),
 };
 
 impl IndirectMethod for Cvrtgi {
-    /// `Pass::Cvrtgi`: the frame's indirect light by CVRTGI, from the resident VPLs (no VPL
+    /// `PASS`: the frame's indirect light by CVRTGI, from the resident VPLs (no VPL
     /// clustering: a VPL is injected into the cluster of its voxel). Its CPU stages (voxelisation,
     /// SLIC, injection) count as the pass's time when they run.
     fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) -> Result<()> {
-        debug_assert_eq!(pass, Pass::Cvrtgi);
+        debug_assert_eq!(pass, PASS);
         let inputs = CvrtgiInputs {
             scene: f.scene,
             vpls: &f.vpls.set,
@@ -615,7 +624,7 @@ impl IndirectMethod for Cvrtgi {
             d_min: f.frame.clamp * f.scene.extent(),
         };
         let report = Cvrtgi::record(self, g, &inputs, &f.method.cvrtgi)?;
-        n.cpu_ms.push((Pass::Cvrtgi, report.cpu_ms));
+        n.cpu_ms.push((PASS, report.cpu_ms));
         n.vpl_clusters_used = report.lit_clusters;
         Ok(())
     }

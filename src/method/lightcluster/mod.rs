@@ -2,8 +2,7 @@
 //! minimum-distance (leader) algorithm on the CPU each frame (§3.1; the paper's §4 runs it on the CPU
 //! too, `cluster::cluster`), then every pixel × every VPL with the visibility of its cluster's disc
 //! from `DISC_SAMPLES` shadow rays (§3.2; `shaders-wgsl/lightcluster.wgsl`, CPU twin
-//! `cpu::lightcluster`). The passes are `Pass::LightClusterCluster` → `Pass::LightClusterShade`
-//! (`ROOM`).
+//! `cpu::lightcluster`). The passes are `CLUSTER` → `SHADE` (`ROOM`).
 
 pub mod cluster;
 pub mod settings;
@@ -20,6 +19,13 @@ use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
+
+pub use settings::{LightClusterLists as KnobLists, LightClusterSettings as Knobs};
+
+/// §3.1: the VPLs clustered by the minimum-distance algorithm (CPU).
+pub const CLUSTER: Pass = Pass::Room("lightcluster_cluster");
+/// §3.2: every pixel × every VPL with its cluster's disc visibility.
+pub const SHADE: Pass = Pass::Room("lightcluster_shade");
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -97,7 +103,7 @@ impl LightCluster {
         ];
         let bg = self.kernel.bind_group(ctx, &buffers);
         let run = Run {
-            label: Pass::LightClusterShade.name(),
+            label: SHADE.name(),
             group: &bg,
             seed: 0,
         };
@@ -125,7 +131,11 @@ pub fn z_far(eye: Vec3, (lo, hi): (Vec3, Vec3)) -> f32 {
 /// lightcluster in the registry.
 pub const ROOM: Room = Room {
     method: Method::LightCluster,
-    passes: &[Pass::LightClusterCluster, Pass::LightClusterShade],
+    doc: "LightCluster (seed 002): the VPLs clustered by the minimum-distance (leader) algorithm \
+          (§3.1, d_min = d_init (1 − |C_pos| / z_far)), each cluster a disc light of radius d_min \
+          whose visibility a few shadow rays over the disc estimate (§3.2), every VPL shaded with \
+          its cluster's visibility",
+    passes: &[CLUSTER, SHADE],
     build: |ctx, gpu| Box::new(LightClusterMethod::new(ctx, gpu)),
     clusters_sps: false,
     vpl_clusters: false,
@@ -139,15 +149,9 @@ pub const ROOM: Room = Room {
         let text = "d_init (scene diagonals)";
         super::log_slider(ui, &mut m.lightcluster.d_init, 0.001..=10.0, text)
     },
-    sweep: |l| {
-        super::sweep_of(Method::LightCluster, l.lightcluster.configs(), |m, k| {
-            m.lightcluster = k
-        })
-    },
 };
 
-/// lightcluster's state: its kernel and the frame's clusters (from `LightClusterCluster` to
-/// `LightClusterShade`).
+/// lightcluster's state: its kernel and the frame's clusters (from `CLUSTER` to `SHADE`).
 pub struct LightClusterMethod {
     kernel: LightCluster,
     clusters: Option<LightClusters>,
@@ -174,7 +178,7 @@ impl IndirectMethod for LightClusterMethod {
         match pass {
             // §3.1: the VPLs clustered for this camera on the CPU, as the paper's §4 (its time is
             // the pass's); d_init is in scene diagonals.
-            Pass::LightClusterCluster => {
+            CLUSTER => {
                 let t = Instant::now();
                 let eye = f.cam.eye_point();
                 let far = z_far(eye, f.scene.bounds());
@@ -189,7 +193,7 @@ impl IndirectMethod for LightClusterMethod {
                 self.clusters = Some(c);
             }
             // §3.2: every pixel × every VPL with its cluster's disc visibility.
-            Pass::LightClusterShade => {
+            SHADE => {
                 let ctx = g.ctx;
                 let inputs = ShadeInputs {
                     gbuffer: f.gbuffer,

@@ -4,7 +4,7 @@
 //! R_j traced there, and every pixel interpolating from the sample points around it with §3.4's
 //! weight. Shaders: `shaders-wgsl/wang.wgsl` (`assign`, `radius`, `interp`); its CPU steps
 //! (seeding, centre updates, sample points) are `cluster`, the CPU twin of its kernels `cpu::wang`.
-//! The passes are `Pass::WangCluster` → `Pass::WangGather` → `Pass::WangInterp` (`ROOM`).
+//! The passes are `CLUSTER` → `GATHER` → `INTERP` (`ROOM`).
 
 pub mod cluster;
 pub mod settings;
@@ -23,6 +23,15 @@ use crate::gi::primary::ShadingPoint;
 use crate::gi::reference::GatherInputs;
 use crate::gi::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
+
+pub use settings::{WangLists as KnobLists, WangSettings as Knobs};
+
+/// §3.2: the adaptively seeded k-means of the SPs with Eq. (2), and the sample points.
+pub const CLUSTER: Pass = Pass::Room("wang_cluster");
+/// The irradiance at the sample points (every light with its own shadow ray) and §3.4's R_j.
+pub const GATHER: Pass = Pass::Room("wang_gather");
+/// §3.4: every pixel interpolates the sample points' irradiance.
+pub const INTERP: Pass = Pass::Room("wang_interp");
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, Default)]
@@ -189,7 +198,7 @@ impl Wang {
                 },
             );
             let run = Run {
-                label: Pass::WangCluster.name(),
+                label: CLUSTER.name(),
                 group: &bg,
                 seed: 0,
             };
@@ -272,7 +281,7 @@ impl Wang {
             },
         );
         let run = Run {
-            label: Pass::WangGather.name(),
+            label: GATHER.name(),
             group: &bg,
             seed: 0,
         };
@@ -320,7 +329,7 @@ impl Wang {
             },
         );
         let run = Run {
-            label: Pass::WangInterp.name(),
+            label: INTERP.name(),
             group: &bg,
             seed: 0,
         };
@@ -340,7 +349,10 @@ fn or_one<T: Pod>(v: &[T]) -> Vec<T> {
 /// wang in the registry.
 pub const ROOM: Room = Room {
     method: Method::Wang,
-    passes: &[Pass::WangCluster, Pass::WangGather, Pass::WangInterp],
+    doc: "Wang et al. 2009 (seed 001): adaptively seeded k-means of the SPs (§3.2, Eq. 2), \
+          irradiance gathered only at the cluster centres, interpolated per pixel with the §3.4 \
+          weight",
+    passes: &[CLUSTER, GATHER, INTERP],
     build: |ctx, gpu| Box::new(WangMethod::new(ctx, gpu)),
     clusters_sps: true,
     vpl_clusters: true,
@@ -354,7 +366,6 @@ pub const ROOM: Room = Room {
         let text = "α (Eq. 2: position against normal)";
         super::log_slider(ui, &mut m.wang.wang_alpha, 0.01..=100.0, text)
     },
-    sweep: |l| super::sweep_of(Method::Wang, l.wang.configs(), |m, k| m.wang = k),
 };
 
 /// wang's state: its pipelines, what its passes hand on within a frame, and the last frame's
@@ -387,7 +398,7 @@ impl IndirectMethod for WangMethod {
         let extent = f.scene.extent();
         match pass {
             // §3.2: the SP clustering and its sample points.
-            Pass::WangCluster => {
+            CLUSTER => {
                 let c = f.cluster;
                 let alpha = f.method.wang.wang_alpha / extent;
                 let w = wang.cluster(g, img, c.sp_clusters, alpha, c.iterations, f.frame.seed)?;
@@ -403,7 +414,7 @@ impl IndirectMethod for WangMethod {
             }
             // The irradiance at the sample points (every light with its own shadow ray: the gather
             // of `reference.wgsl` on shading points of albedo 1) and §3.4's R_j there.
-            Pass::WangGather => {
+            GATHER => {
                 let c = self.state.clustering.take().expect("wang_cluster ran");
                 let lights = &f.lights.expect("wang's lights").list;
                 let num_lights = lights.lights.len() as u32;
@@ -431,7 +442,7 @@ impl IndirectMethod for WangMethod {
             }
             // §3.4: every pixel interpolates the sample points' irradiance; the frame's clustering
             // stays as `last`.
-            Pass::WangInterp => {
+            INTERP => {
                 let w = self.state.frame.take().expect("wang_gather ran");
                 wang.interp(g, img, &w, extent, f.indirect);
                 self.last = Some(w);
