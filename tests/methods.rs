@@ -246,78 +246,101 @@ fn wang_labels_match_cpu_twin_on_a_grid_of_step_2() {
 #[test]
 fn lightcluster_matches_cpu_twin() {
     use fuzzy_vpl::cpu::lightcluster as lc;
+    use fuzzy_vpl::method::lightcluster::settings::LcVisibility;
     let ctx = common::gpu();
     for (name, s) in rooms() {
         let mut r = Renderer::new(&ctx, &s).unwrap();
         let (w, h) = (24u32, 18u32);
-        let mut fs = settings(Method::LightCluster, w, h);
-        fs.frame.vpls = 256;
-        fs.method.lightcluster.d_init = 0.5;
-        let cam = s.default_camera();
-        let f = r.render(&cam, &fs).unwrap();
-        assert!(
-            f.ran(Pass::LightClusterShade) && !f.ran(Pass::VplCluster),
-            "{name}"
-        );
-        assert!(common::all_finite(&f.radiance), "{name}");
-        let sps = shading_points(&r);
-        let vpls = &r.vpl_set.as_ref().unwrap().set.vpls;
-        let eye = cam.transform.w_axis.truncate();
-        let z_far = fuzzy_vpl::method::lightcluster::z_far(eye, s.bounds());
-        let c = lc::cluster(vpls, eye, z_far, 0.5 * s.extent());
-        assert_eq!(f.vpl_clusters_used as usize, c.discs.len(), "{name}");
-        assert!(c.discs.len() > 1 && c.discs.len() < vpls.len(), "{name}");
-        let cs = common::cpu_scene(&r, &s);
-        let d_min = fs.frame.clamp * s.extent();
-        let pairs = sps.iter().enumerate().map(|(m, sp)| {
-            (
-                lc::shade(&cs, sp, &c, d_min * d_min),
-                Vec3::from(f.indirect[m]),
-            )
-        });
-        common::assert_twins(
-            &ctx,
-            &format!("{name} lightcluster"),
-            pairs,
-            TOL_LIGHTCLUSTER,
-        );
-        // Each cluster's disc is traced once per pixel where one of its terms is positive, however
-        // many 32-VPL ranges the cluster spans (clusters straddle the ranges' borders),
-        // and shadow_rays counts the rays so traced: DISC_SAMPLES a disc, besides the direct light's.
-        let spans = (0..c.discs.len() as u32)
-            .filter(|&k| {
-                let at = |i: Option<usize>| i.map(|i| i / 32);
-                let first = c.cluster_of.iter().position(|&o| o == k);
-                let last = c.cluster_of.iter().rposition(|&o| o == k);
-                at(first) != at(last)
-            })
-            .count();
-        assert!(spans > 0, "{name}: no cluster spans two ranges");
-        let discs: u64 = sps
-            .iter()
-            .filter(|sp| sp.valid)
-            .map(|sp| {
-                let mut seen: Vec<u32> = c
-                    .sorted
+        for mode in [LcVisibility::Members, LcVisibility::Disc] {
+            let mut fs = settings(Method::LightCluster, w, h);
+            fs.frame.vpls = 256;
+            fs.method.lightcluster.d_init = 0.5;
+            fs.method.lightcluster.lightcluster_visibility = mode;
+            let cam = s.default_camera();
+            let f = r.render(&cam, &fs).unwrap();
+            assert!(
+                f.ran(Pass::LightClusterShade) && !f.ran(Pass::VplCluster),
+                "{name}"
+            );
+            assert!(common::all_finite(&f.radiance), "{name} {mode}");
+            let sps = shading_points(&r);
+            let vpls = &r.vpl_set.as_ref().unwrap().set.vpls;
+            let eye = cam.transform.w_axis.truncate();
+            let z_far = fuzzy_vpl::method::lightcluster::z_far(eye, s.bounds());
+            let c = lc::cluster(vpls, eye, z_far, 0.5 * s.extent());
+            assert_eq!(f.vpl_clusters_used as usize, c.discs.len(), "{name}");
+            assert!(c.discs.len() > 1 && c.discs.len() < vpls.len(), "{name}");
+            // Clusters of more than MEMBER_TARGETS VPLs, split into that many groups.
+            assert!(
+                c.group_of
                     .iter()
-                    .zip(&c.cluster_of)
-                    .filter(|(v, _)| {
-                        let t = eq5_vpl_radiance(sp.pos, sp.normal, sp.albedo, v, d_min * d_min);
-                        t.max_element() > 0.0
-                    })
-                    .map(|(_, &k)| k)
-                    .collect();
-                seen.dedup();
-                seen.len() as u64
-            })
-            .sum();
-        let valid = sps.iter().filter(|sp| sp.valid).count() as u64;
-        let direct = valid * (fs.frame.direct_samples as u64 + s.lights.len() as u64);
-        assert_eq!(
-            f.shadow_rays - direct,
-            discs * lc::DISC_SAMPLES as u64,
-            "{name}: disc rays"
-        );
+                    .any(|&g| g as usize == lc::MEMBER_TARGETS - 1),
+                "{name}: no cluster with a full set of groups"
+            );
+            let cs = common::cpu_scene(&r, &s);
+            let d_min = fs.frame.clamp * s.extent();
+            let twin: Vec<(Vec3, u32)> = sps
+                .iter()
+                .enumerate()
+                .map(|(m, sp)| lc::shade_counted(&cs, (m as u32, sp), &c, d_min * d_min, mode))
+                .collect();
+            let pairs = twin
+                .iter()
+                .enumerate()
+                .map(|(m, t)| (t.0, Vec3::from(f.indirect[m])));
+            common::assert_twins(
+                &ctx,
+                &format!("{name} lightcluster {mode}"),
+                pairs,
+                TOL_LIGHTCLUSTER,
+            );
+            // A cluster is traced once per pixel where one of its terms is positive (a member group
+            // once where one of its group's terms is), however many 32-VPL ranges it spans
+            // (clusters straddle the ranges' borders), and shadow_rays counts the rays so traced.
+            let spans = (0..c.discs.len() as u32)
+                .filter(|&k| {
+                    let at = |i: Option<usize>| i.map(|i| i / 32);
+                    let first = c.cluster_of.iter().position(|&o| o == k);
+                    let last = c.cluster_of.iter().rposition(|&o| o == k);
+                    at(first) != at(last)
+                })
+                .count();
+            assert!(spans > 0, "{name}: no cluster spans two ranges");
+            let packed = c.packed_groups();
+            let key = |k: u32, j: usize| match mode {
+                LcVisibility::Disc => k,
+                LcVisibility::Members => packed[j],
+            };
+            let traced: u64 = sps
+                .iter()
+                .filter(|sp| sp.valid)
+                .map(|sp| {
+                    let mut seen: Vec<u32> = c
+                        .sorted
+                        .iter()
+                        .zip(&c.cluster_of)
+                        .enumerate()
+                        .filter(|(_, (v, _))| {
+                            let t =
+                                eq5_vpl_radiance(sp.pos, sp.normal, sp.albedo, v, d_min * d_min);
+                            t.max_element() > 0.0
+                        })
+                        .map(|(j, (_, &k))| key(k, j))
+                        .collect();
+                    seen.dedup();
+                    seen.len() as u64
+                })
+                .sum();
+            let per = match mode {
+                LcVisibility::Disc => lc::DISC_SAMPLES as u64,
+                LcVisibility::Members => 1,
+            };
+            let valid = sps.iter().filter(|sp| sp.valid).count() as u64;
+            let direct = valid * (fs.frame.direct_samples as u64 + s.lights.len() as u64);
+            assert_eq!(f.shadow_rays - direct, traced * per, "{name} {mode}: rays");
+            let twin_rays: u64 = twin.iter().map(|t| t.1 as u64).sum();
+            assert_eq!(twin_rays, traced * per, "{name} {mode}: the twin's rays");
+        }
     }
 }
 

@@ -1,6 +1,7 @@
 //! CPU twin of `shaders-wgsl/lightcluster.wgsl` (seed 002, docs/methods.md "lightcluster"): §3.2's
-//! disc-shadowed shading (`disc_points`, `disc_visibility`, `shade`). The clustering (§3.1) is
-//! production code, `method::lightcluster::cluster`, re-exported here.
+//! cluster-shadowed shading, with the paper's disc (`disc_points`, `disc_visibility`) or member
+//! targets (`target_visible`; not in the paper), `shade`. The clustering (§3.1) and the member
+//! groups are production code, `method::lightcluster::cluster`, re-exported here.
 
 use glam::Vec3;
 
@@ -9,7 +10,9 @@ pub use crate::method::lightcluster::cluster::*;
 use super::shading::{CpuScene, onb};
 use super::vpl::eq5_vpl_radiance;
 use crate::gi::primary::ShadingPoint;
+use crate::gi::rng::pcg_hash;
 use crate::gi::vpl_trace::Vpl;
+use crate::method::lightcluster::settings::LcVisibility;
 
 /// The `DISC_SAMPLES` points of a disc the visibility rays aim at: a Vogel (golden-angle) spiral,
 /// r = R √((i + ½) / N), θ = 2.39996 i, in the disc's plane (Duff et al.'s basis of its normal).
@@ -41,24 +44,100 @@ pub fn disc_visibility(cpu: &CpuScene, p: Vec3, n: Vec3, d: &Disc) -> f32 {
     seen as f32 / DISC_SAMPLES as f32
 }
 
-/// §3.2.1 at one shading point: Σ over the sorted VPLs of its Eq. (5) term times its cluster's disc
-/// visibility (computed once a cluster, only where a term is positive).
-pub fn shade(cpu: &CpuScene, sp: &ShadingPoint, c: &LightClusters, d_min2: f32) -> Vec3 {
-    if !sp.valid {
-        return Vec3::ZERO;
+/// The uniform number of pixel `i` and sorted VPL `j` in [0, 1) that decides the draw. Twin of
+/// `member_u`.
+pub fn member_u(i: u32, j: u32) -> f32 {
+    (pcg_hash(pcg_hash(i) ^ j) >> 8) as f32 * (1.0 / 16777216.0)
+}
+
+/// A weighted reservoir of one: after `w` joined a total that is now `total`, whether the member
+/// drawn becomes the new one (probability w / total). Not in the paper. Twin of `member_draw`.
+pub fn member_draw(u: f32, w: f32, total: f32) -> bool {
+    u * total < w
+}
+
+/// A group's light at (p, n): its summed `terms` when the member drawn is visible (Eq. (5)'s shadow
+/// ray, `CpuScene::vpl_visible`), else nothing. Not in the paper. Twin of `members_flush`.
+pub fn members_flush(cpu: &CpuScene, p: Vec3, n: Vec3, drawn: &Vpl, terms: Vec3) -> Vec3 {
+    if cpu.vpl_visible(p, n, drawn) {
+        terms
+    } else {
+        Vec3::ZERO
     }
+}
+
+/// §3.2.1 at pixel `pixel`, with the shadow rays traced: Σ over the sorted VPLs of its Eq. (5) term
+/// times its cluster's visibility. `LcVisibility::Disc`: the disc's, computed once a cluster
+/// (`DISC_SAMPLES` rays) where a term of it is positive. `Members` (not in the paper): per member
+/// group, in the sorted order, the terms summed and one member drawn in proportion to its term
+/// (`member_draw`), the sum counting when that member is visible (`members_flush`, one ray a group
+/// with a positive term).
+pub fn shade_counted(
+    cpu: &CpuScene,
+    (pixel, sp): (u32, &ShadingPoint),
+    c: &LightClusters,
+    d_min2: f32,
+    mode: LcVisibility,
+) -> (Vec3, u32) {
+    if !sp.valid {
+        return (Vec3::ZERO, 0);
+    }
+    let (p, n) = (sp.pos, sp.normal);
     let mut vis: Vec<Option<f32>> = vec![None; c.discs.len()];
     let mut sum = Vec3::ZERO;
-    for (v, &k) in c.sorted.iter().zip(&c.cluster_of) {
-        let t = eq5_vpl_radiance(sp.pos, sp.normal, sp.albedo, v, d_min2);
-        if t.max_element() > 0.0 {
-            let f = *vis[k as usize].get_or_insert_with(|| {
-                disc_visibility(cpu, sp.pos, sp.normal, &c.discs[k as usize])
-            });
-            sum += t * f;
+    let mut rays = 0;
+    // Members: the current group (cluster × 8 + group), its total weight, terms and drawn member.
+    let mut cur: Option<u32> = None;
+    let (mut total, mut terms, mut drawn) = (0.0f32, Vec3::ZERO, 0usize);
+    let packed = c.packed_groups();
+    for (j, (v, &k)) in c.sorted.iter().zip(&c.cluster_of).enumerate() {
+        let t = eq5_vpl_radiance(p, n, sp.albedo, v, d_min2);
+        if t.max_element() <= 0.0 {
+            continue;
+        }
+        match mode {
+            LcVisibility::Disc => {
+                let f = *vis[k as usize].get_or_insert_with(|| {
+                    rays += DISC_SAMPLES;
+                    disc_visibility(cpu, p, n, &c.discs[k as usize])
+                });
+                sum += t * f;
+            }
+            LcVisibility::Members => {
+                if cur != Some(packed[j]) {
+                    if cur.is_some() {
+                        sum += members_flush(cpu, p, n, &c.sorted[drawn], terms);
+                        rays += 1;
+                    }
+                    cur = Some(packed[j]);
+                    total = 0.0;
+                    terms = Vec3::ZERO;
+                }
+                let w = t.x + t.y + t.z;
+                total += w;
+                terms += t;
+                if member_draw(member_u(pixel, j as u32), w, total) {
+                    drawn = j;
+                }
+            }
         }
     }
-    sum
+    if cur.is_some() {
+        sum += members_flush(cpu, p, n, &c.sorted[drawn], terms);
+        rays += 1;
+    }
+    (sum, rays)
+}
+
+/// `shade_counted`'s light alone.
+pub fn shade(
+    cpu: &CpuScene,
+    pixel: (u32, &ShadingPoint),
+    c: &LightClusters,
+    d_min2: f32,
+    mode: LcVisibility,
+) -> Vec3 {
+    shade_counted(cpu, pixel, c, d_min2, mode).0
 }
 
 #[cfg(test)]
