@@ -193,6 +193,85 @@ mod tests {
     }
 
     #[test]
+    fn member_draw_by_hand_and_in_proportion() {
+        // u = 0.5 over the weights 1, 1: the first is drawn (0.5 · 1 < 1), the second not
+        // (0.5 · 2 = 1, not < 1); over 1, 3: the second (0.5 · 4 < 3).
+        assert!(member_draw(0.5, 1.0, 1.0) && !member_draw(0.5, 1.0, 2.0));
+        assert!(member_draw(0.5, 3.0, 4.0));
+        // The first positive weight is always drawn (u < 1).
+        assert!(member_draw(0.999_999, 1e-30, 1e-30));
+        // Over many pixels a reservoir of weights 1, 2, 3, 4 ends on each in proportion w / 10
+        // (the closed form of a weighted reservoir of one), within 4 standard deviations.
+        let w = [1.0f32, 2.0, 3.0, 4.0];
+        let n = 40_000u32;
+        let mut count = [0u32; 4];
+        for pixel in 0..n {
+            let (mut total, mut drawn) = (0.0f32, 0);
+            for (j, &wj) in w.iter().enumerate() {
+                total += wj;
+                if member_draw(member_u(pixel, j as u32), wj, total) {
+                    drawn = j;
+                }
+            }
+            count[drawn] += 1;
+        }
+        for (j, &c) in count.iter().enumerate() {
+            let p = w[j] as f64 / 10.0;
+            let sd = (n as f64 * p * (1.0 - p)).sqrt();
+            assert!(
+                (c as f64 - n as f64 * p).abs() < 4.0 * sd,
+                "{j}: {c} of {n}"
+            );
+        }
+    }
+
+    #[test]
+    fn member_groups_by_hand() {
+        // At most MEMBER_TARGETS members: each its own group.
+        let v: Vec<Vpl> = (0..5).map(|i| vpl(i as f32, 0.0, 1.0)).collect();
+        assert_eq!(split_members(&v, &[3, 0, 1, 2, 4]), vec![0, 1, 2, 3, 4]);
+        // Eight tight pairs along x (x = 10 g and 10 g + 0.1): every pair one group, none shared,
+        // the centre's pair group 0.
+        let mut v = Vec::new();
+        for g in 0..8 {
+            v.push(vpl(10.0 * g as f32, 0.0, 1.0));
+            v.push(vpl(10.0 * g as f32 + 0.1, 0.0, 1.0));
+        }
+        let members: Vec<u32> = (0..16).collect();
+        let groups = split_members(&v, &members);
+        for g in 0..8 {
+            assert_eq!(groups[2 * g], groups[2 * g + 1], "pair {g}");
+        }
+        let mut seen = groups.clone();
+        seen.sort();
+        seen.dedup();
+        assert_eq!(seen.len(), 8);
+        assert_eq!(groups[0], 0);
+        // Facing apart parts VPLs at one place: 8 VPLs facing +z and 8 at the same points facing
+        // -z (two sides of a thin wall) never share a group.
+        let mut v = Vec::new();
+        for i in 0..8 {
+            v.push(vpl(0.01 * i as f32, 0.0, 1.0));
+        }
+        for i in 0..8 {
+            let mut back = vpl(0.01 * i as f32, 0.0, 1.0);
+            back.nrm = [0.0, 0.0, -1.0, 0.0];
+            v.push(back);
+        }
+        let groups = split_members(&v, &members);
+        for a in 0..8 {
+            for b in 8..16 {
+                assert_ne!(groups[a], groups[b], "{a} and {b} face apart");
+            }
+        }
+        // The clustering sorts by cluster, then group, and packs them as the shader reads them.
+        let c = cluster(&v, Vec3::new(0.0, 0.0, 100.0), 1000.0, 100.0);
+        assert_eq!(c.discs.len(), 1);
+        assert!(c.group_of.windows(2).all(|w| w[0] <= w[1]));
+        assert_eq!(c.packed_groups(), c.group_of);
+    }
+
+    #[test]
     fn disc_points_lie_on_the_disc() {
         let d = Disc {
             center: Vec3::new(1.0, 2.0, 3.0),
