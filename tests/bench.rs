@@ -340,6 +340,7 @@ fn header_has_the_contract_columns_in_order() {
         // Every method's knobs (docs/design.md), the last columns.
         "wang_alpha",
         "d_init",
+        "lightcluster_visibility",
         "voxel_res",
         "cluster_step",
         "cluster_iterations",
@@ -348,6 +349,8 @@ fn header_has_the_contract_columns_in_order() {
         "near_voxels",
         "filter_radius",
         "filter_passes",
+        "cluster_gather",
+        "escape_rays",
     ];
     assert_eq!(h, want.map(String::from));
     let csv = csv::to_csv(&[]);

@@ -717,7 +717,17 @@ pub const ROOM: Room = Room {
     colour: [188, 189, 34],
     about: "CVRTGI: voxel clusters (SLIC, 35° rule) light every voxel face; pixels read their \
             face's filtered irradiance, cached while the lights stay (docs/methods.md)",
-    label: |m| format!("v{} s{}", m.cvrtgi.voxel_res, m.cvrtgi.cluster_step),
+    label: |m| {
+        let v = &m.cvrtgi;
+        let mut l = format!("v{} s{}", v.voxel_res, v.cluster_step);
+        if v.cluster_gather == ClusterGather::AnyHit {
+            l += " any-hit";
+        }
+        if v.escape_rays != settings::CvrtgiSettings::default().escape_rays {
+            l += &format!(" e{}", v.escape_rays);
+        }
+        l
+    },
     series: |m| format!("{}³ step {}", m.cvrtgi.voxel_res, m.cvrtgi.cluster_step),
     short: |m| {
         let v = &m.cvrtgi;

@@ -145,7 +145,13 @@ pub const ROOM: Room = Room {
     colour: [23, 190, 207],
     about: "LightCluster: VPLs in minimum-distance clusters whose visibility a few rays estimate \
             (to member VPLs, or to the paper's disc); every VPL shaded (docs/methods.md)",
-    label: |m| format!("d{}", m.lightcluster.d_init),
+    label: |m| {
+        let l = &m.lightcluster;
+        match l.lightcluster_visibility {
+            LcVisibility::Members => format!("d{}", l.d_init),
+            LcVisibility::Disc => format!("d{} disc", l.d_init),
+        }
+    },
     series: |m| format!("d_init {}", m.lightcluster.d_init),
     short: |m| format!("d{}", m.lightcluster.d_init),
     ui: |ui, m| {
