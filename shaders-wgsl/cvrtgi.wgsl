@@ -1,7 +1,10 @@
 // CVRTGI (Cosin Ayerbe & Patow 2022, seed 003; docs/cvrtgi.md): clustered voxels with VPLs as the lit
 // surface. Entry points, each over a range of items (src/gi/cvrtgi.rs bounds the dispatches):
 // - visibility (§4.3): per exposed voxel face, the clusters its rays see (BVH rays);
-// - gather (§4.4): per face, the irradiance from the lit clusters it sees;
+// - escape: per VPL, the fractions of its light stopped at its surface and sent into the scene
+//   (not in the paper);
+// - gather (§4.4): per face, the irradiance from the lit clusters it sees (times each cluster's
+//   conservation scale, not in the paper);
 // - filter_faces (§4.4): one pass of the Gaussian filter over same-direction faces;
 // - lookup (§4.5): per pixel, ρ/π times its voxel face's filtered irradiance.
 // CPU twin: src/cpu/cvrtgi.rs (same names).
@@ -9,6 +12,7 @@
 #import common/chunk.wgsl
 #import common/gbuffer.wgsl
 #import common/rng.wgsl
+#import common/sampling.wgsl
 #import common/vpl.wgsl
 
 struct CvParams {
@@ -26,6 +30,13 @@ struct CvParams {
     near: f32,
     inv_two_sigma2: f32,
     _pad: u32,
+    // 0: the paper's gather; 1: each cluster's light times its conservation scale (flux.w), and
+    // each slot's `slot_flux` before the scale to `vis_w`.
+    gather_mode: u32,
+    // Rays per VPL of `escape`, and how far one must get to escape.
+    escape_rays: u32,
+    escape_reach: f32,
+    num_vpls: u32,
 }
 
 @group(1) @binding(1) var<uniform> params: CvParams;
@@ -34,8 +45,9 @@ struct CvParams {
 @group(1) @binding(2) var<storage, read> voxels: array<vec4<f32>>;
 // [0, 6V): face index of (voxel, dir) or INVALID; [6V, 6V + faces): 6 voxel + dir of each face.
 @group(1) @binding(3) var<storage, read> faces: array<u32>;
-// Cluster lights (5 vec4: pos | first lit, nrm | lit count, flux, box min, box max), then the lit
-// voxels' lights (3 vec4, a Vpl) from 5 × num_clusters on.
+// Cluster lights (5 vec4: pos | first lit, nrm | lit count, flux | conservation scale, box min, box
+// max), then the lit voxels' lights (3 vec4, a Vpl) from 5 × num_clusters on. `escape`: the VPLs
+// (3 vec4 each).
 @group(1) @binding(4) var<storage, read> cv_lights: array<vec4<f32>>;
 // Per face `rays` cluster ids, the seen ones first, INVALID after.
 @group(1) @binding(5) var<storage, read_write> vis: array<u32>;
@@ -43,6 +55,9 @@ struct CvParams {
 // gather / filter: per face irradiance; lookup: per pixel indirect light.
 @group(1) @binding(7) var<storage, read_write> out: array<vec4<f32>>;
 @group(1) @binding(8) var<storage, read> gbuffer: array<ShadingPoint>;
+// gather (gather_mode 1): per face `rays` slots beside `vis`, the flux each cluster of its list
+// sends to the face before its conservation scale (`slot_flux`).
+@group(1) @binding(9) var<storage, read_write> vis_w: array<f32>;
 
 fn face_axis(dir: u32) -> vec3<f32> {
     var v = vec3<f32>(0.0);
@@ -184,6 +199,43 @@ fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     }
 }
 
+// Twin of cpu::cvrtgi::escape_ray: ray k of n about the VPL's normal, cosine-distributed
+// (Hammersley), turned by a per-VPL angle.
+fn escape_ray(i: u32, n: vec3<f32>, k: u32, rays: u32) -> vec3<f32> {
+    let turn = f32(pcg_hash(i ^ 0x9e3779b9u) >> 8u) * (1.0 / 16777216.0);
+    return cosine_hemisphere(n, (f32(k) + 0.5) / f32(rays), fract(radical_inverse(k) + turn));
+}
+
+// Where VPL i's light goes, from `escape_rays` cosine-distributed rays: x the fraction that gets
+// farther than `escape_reach` (a tenth of a voxel) or meets nothing, y the fraction that meets a
+// surface beyond it (the light the VPL sends into the scene; the rest leaves it). Light stopped
+// closer (a VPL in a gap far thinner than a voxel, between an emitter and the ceiling it nearly
+// touches) lights nothing the voxels can tell from the VPL's own surface, yet its voxel may be seen
+// from the room. Not in the paper (docs/cvrtgi.md). Twin: escape_fractions.
+@compute @workgroup_size(64)
+fn escape(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = chunk_item(gid, nwg);
+    if i == INVALID || i >= params.num_vpls {
+        return;
+    }
+    let p = cv_lights[3u * i].xyz;
+    let n = cv_lights[3u * i + 1u].xyz;
+    let o = offset_origin(p, n);
+    var kept = 0u;
+    var sent = 0u;
+    for (var k = 0u; k < params.escape_rays; k++) {
+        let hit = trace_closest(Ray(o, escape_ray(i, n, k, params.escape_rays), 0.0, INF));
+        if hit.slot == INVALID {
+            kept += 1u;
+        } else if hit.t >= params.escape_reach {
+            kept += 1u;
+            sent += 1u;
+        }
+    }
+    let r = f32(max(params.escape_rays, 1u));
+    out[i] = vec4<f32>(f32(kept) / r, f32(sent) / r, 0.0, 0.0);
+}
+
 // §4.4's differential-area form factor: irradiance at x (normal n) from `light`, Eq. (5)'s term of
 // seed 000 without ρ/π (albedo π), so ρ/π E is Eq. (5)'s radiance. Twin: face_irradiance.
 fn face_irradiance(x: vec3<f32>, n: vec3<f32>, light: Vpl) -> vec3<f32> {
@@ -194,7 +246,18 @@ fn load_light(i: u32) -> Vpl {
     return Vpl(cv_lights[i], cv_lights[i + 1u], cv_lights[i + 2u]);
 }
 
-// §4.4: face f gathers the lit clusters of its cached list. Twin: gather_face.
+// The flux (luminance r + g + b) a face of axis n in a voxel of normal nv takes at irradiance e:
+// e times the face's area projected on the voxel's surface, s² |n · nv| (the faces of a staircase
+// of voxels along a slanted surface add up to the surface's area, not more). Not in the paper.
+// Twin: slot_flux.
+fn slot_flux(nv: vec3<f32>, n: vec3<f32>, e: vec3<f32>) -> f32 {
+    let s = params.origin.w;
+    return s * s * abs(dot(nv, n)) * (e.x + e.y + e.z);
+}
+
+// §4.4: face f gathers the lit clusters of its cached list; with gather_mode 1 (not in the paper)
+// each times its conservation scale, the flux each sends to the face kept in `vis_w`. Twin:
+// gather_face (with cluster_irradiance and slot_flux).
 @compute @workgroup_size(64)
 fn gather(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let f = chunk_item(gid, nwg);
@@ -216,14 +279,20 @@ fn gather(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
         }
         let lo = cv_lights[5u * c + 3u].xyz;
         let hi = cv_lights[5u * c + 4u].xyz;
+        var ec = vec3<f32>(0.0);
         if length(max(max(lo - x, x - hi), vec3<f32>(0.0))) < params.near {
             let first = bitcast<u32>(cv_lights[5u * c].w);
             for (var j = 0u; j < count; j++) {
-                e += face_irradiance(x, n, load_light(5u * params.num_clusters + 3u * (first + j)));
+                ec += face_irradiance(x, n, load_light(5u * params.num_clusters + 3u * (first + j)));
             }
         } else {
-            e += face_irradiance(x, n, load_light(5u * c));
+            ec = face_irradiance(x, n, load_light(5u * c));
         }
+        if params.gather_mode == 1u {
+            vis_w[f * params.rays + k] = slot_flux(voxels[2u * (vd / 6u) + 1u].xyz, n, ec);
+            ec *= cv_lights[5u * c + 2u].w;
+        }
+        e += ec;
     }
     out[f] = vec4<f32>(e, 0.0);
 }

@@ -346,6 +346,7 @@ fn header_has_the_contract_columns_in_order() {
         // Every method's knobs (docs/design.md), the last columns.
         "wang_alpha",
         "d_init",
+        "lightcluster_visibility",
         "voxel_res",
         "cluster_step",
         "cluster_iterations",
@@ -354,6 +355,8 @@ fn header_has_the_contract_columns_in_order() {
         "near_voxels",
         "filter_radius",
         "filter_passes",
+        "cluster_gather",
+        "escape_rays",
     ];
     // A method added later appends its knobs: the columns above stay a prefix, and the knobs are
     // the last columns, in the registry's order.

@@ -10,6 +10,7 @@ use crate::bvh::SceneBvh;
 use crate::gi::primary::ShadingPoint;
 use crate::gi::rng::pcg_hash;
 use crate::gi::vpl_trace::Vpl;
+use crate::method::cvrtgi::settings::ClusterGather;
 use crate::method::cvrtgi::voxel::{Voxels, face_axis};
 
 /// Van der Corput radical inverse in base 2.
@@ -72,6 +73,53 @@ pub fn visible_clusters(
     seen
 }
 
+/// Ray `k` of `rays` from VPL `i` with normal `n`: cosine-distributed about n (the Hammersley
+/// point ((k + ½)/R, radical inverse of k) through `cosine_hemisphere`), turned by a per-VPL angle.
+/// Twin of `escape_ray`.
+pub fn escape_ray(i: u32, n: Vec3, k: u32, rays: u32) -> Vec3 {
+    let turn = (pcg_hash(i ^ 0x9e37_79b9) >> 8) as f32 * (1.0 / 16777216.0);
+    let u1 = (k as f32 + 0.5) / rays as f32;
+    let u2 = (radical_inverse(k) + turn).fract();
+    let (t, b) = super::shading::onb(n);
+    let r = u1.sqrt();
+    let phi = 2.0 * std::f32::consts::PI * u2;
+    let local = Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u1).max(0.0).sqrt());
+    (t * local.x + b * local.y + n * local.z).normalize()
+}
+
+/// Where VPL `i`'s light goes (not in the paper): of `rays` cosine-distributed rays (`escape_ray`)
+/// from the VPL (its origin offset as `offset_origin`), [the fraction that gets past `reach` or
+/// meets nothing, the fraction that meets a surface beyond `reach`]. The first weighs the VPL's flux
+/// at injection (light stopped closer, in a gap far thinner than a voxel, lights nothing the voxels
+/// can tell from the VPL's own surface), the second is the share it sends into the scene
+/// (`Lighting::sent`). Twin of `escape`.
+pub fn escape_fractions(
+    bvh: &SceneBvh,
+    vpl: &Vpl,
+    i: u32,
+    rays: u32,
+    reach: f32,
+    eps: f32,
+) -> [f32; 2] {
+    let p = Vec3::from_slice(&vpl.pos[..3]);
+    let n = Vec3::from_slice(&vpl.nrm[..3]);
+    let o = p + n * (eps + 4e-6 * p.abs().max_element());
+    let (mut kept, mut sent) = (0u32, 0u32);
+    for k in 0..rays {
+        let d = escape_ray(i, n, k, rays);
+        match bvh.closest(o.into(), d.into(), 0.0, f32::MAX) {
+            None => kept += 1,
+            Some(h) if h.t >= reach => {
+                kept += 1;
+                sent += 1;
+            }
+            Some(_) => {}
+        }
+    }
+    let r = rays.max(1) as f32;
+    [kept as f32 / r, sent as f32 / r]
+}
+
 /// §4.4's differential-area form factor from a light to a receiving face: the irradiance at `x`
 /// (face axis `n`) from `light` (flux Φ at a point with normal n_l), E = Φ/π cos θ cos θ_l / max(d²,
 /// d_min²): seed 000's Eq. (5) term with ρ/π left out, so that ρ/π · E is Eq. (5)'s radiance and the
@@ -90,44 +138,79 @@ fn box_distance(x: Vec3, c: &[[f32; 4]; 5]) -> f32 {
     (lo - x).max(x - hi).max(Vec3::ZERO).length()
 }
 
-/// §4.4's gathering at face `f`: every lit cluster it sees (`visible`, its cached list) adds its
-/// light, or, when nearer than `near` (its box), each of its lit voxels' lights. The receiving point
-/// is the voxel's mean surface position, the normal the face's axis. Twin of `gather`.
-pub fn gather_face(
+/// The irradiance at face `f` from cluster `c` of its list, as the paper's gather takes it: the
+/// cluster's light as a point or, when nearer than `near` (its box), each of its lit voxels' lights.
+/// The receiving point is the voxel's mean surface position, the normal the face's axis. Zero for a
+/// cluster without lit voxels.
+pub fn cluster_irradiance(
     v: &Voxels,
     faces: &Faces,
     l: &Lighting,
-    f: u32,
-    visible: &[u32],
+    (f, c): (u32, u32),
     near: f32,
     d_min2: f32,
 ) -> Vec3 {
     let vd = faces.voxel_dir[f as usize];
     let x = v.voxels[(vd / 6) as usize].pos;
     let n = face_axis(vd % 6);
+    let cl = &l.clusters[c as usize];
+    let count = bits(cl[1][3]);
+    if count == 0 {
+        return Vec3::ZERO;
+    }
+    if box_distance(x, cl) < near {
+        let first = bits(cl[0][3]);
+        let mut e = Vec3::ZERO;
+        for light in &l.lit[first as usize..(first + count) as usize] {
+            e += face_irradiance(x, n, light, d_min2);
+        }
+        e
+    } else {
+        let light = Vpl {
+            pos: cl[0],
+            nrm: cl[1],
+            flux: cl[2],
+        };
+        face_irradiance(x, n, &light, d_min2)
+    }
+}
+
+/// The flux (luminance r + g + b) face `f` takes at irradiance `e`: e times the face's area
+/// projected on its voxel's surface, s² |axis · n_voxel| (the faces of a staircase of voxels along a
+/// slanted surface add up to the surface's area, not more). Not in the paper. Twin of `slot_flux`.
+pub fn slot_flux(v: &Voxels, faces: &Faces, f: u32, e: Vec3) -> f32 {
+    let vd = faces.voxel_dir[f as usize];
+    let s = v.grid.size;
+    s * s
+        * v.voxels[(vd / 6) as usize]
+            .normal
+            .dot(face_axis(vd % 6))
+            .abs()
+        * (e.x + e.y + e.z)
+}
+
+/// §4.4's gathering at face `f`: every lit cluster it sees (`visible`, its cached list) adds its
+/// `cluster_irradiance`, with `ClusterGather::Conserved` (not in the paper) times the cluster's
+/// conservation scale (`flux.w`, `conservation_scales`). Twin of `gather`.
+pub fn gather_face(
+    v: &Voxels,
+    faces: &Faces,
+    l: &Lighting,
+    (f, visible): (u32, &[u32]),
+    mode: ClusterGather,
+    near: f32,
+    d_min2: f32,
+) -> Vec3 {
     let mut e = Vec3::ZERO;
     for &c in visible {
         if c == INVALID {
             break;
         }
-        let cl = &l.clusters[c as usize];
-        let count = bits(cl[1][3]);
-        if count == 0 {
-            continue;
-        }
-        if box_distance(x, cl) < near {
-            let first = bits(cl[0][3]);
-            for light in &l.lit[first as usize..(first + count) as usize] {
-                e += face_irradiance(x, n, light, d_min2);
-            }
-        } else {
-            let light = Vpl {
-                pos: cl[0],
-                nrm: cl[1],
-                flux: cl[2],
-            };
-            e += face_irradiance(x, n, &light, d_min2);
-        }
+        let ec = cluster_irradiance(v, faces, l, (f, c), near, d_min2);
+        e += match mode {
+            ClusterGather::AnyHit => ec,
+            ClusterGather::Conserved => ec * l.clusters[c as usize][2][3],
+        };
     }
     e
 }

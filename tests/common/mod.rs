@@ -145,3 +145,86 @@ pub fn assert_twins(
     }
     worst
 }
+
+/// The failure mode of cornell_wgpu (docs/methods.md, "Indirect light, per method") in a
+/// built-in room: builtin:cornell with its ceiling light replaced by a closed emitting slab of the
+/// same footprint and emission, 1.7e-3 scene diagonals thick, its top 5.9e-5 diagonals under the
+/// ceiling (cornell_wgpu's 0.0058 and 0.0002 in its 3.4 diagonal). Half its light goes up into the
+/// gap, where the VPLs it makes on the ceiling are hidden from the room.
+pub fn slab_under_ceiling() -> Scene {
+    use glam::{Vec2, Vec3, Vec4};
+    let mut s = fuzzy_vpl::scene::load("builtin:cornell").unwrap();
+    let emitting: Vec<bool> = s
+        .materials
+        .iter()
+        .map(|m| m.emissive != Vec3::ZERO)
+        .collect();
+    let emits = |t: &fuzzy_vpl::scene::Triangle| emitting[t.material as usize];
+    let lamp: Vec<_> = s.triangles.iter().filter(|t| emits(t)).copied().collect();
+    assert!(!lamp.is_empty());
+    let material = lamp[0].material;
+    s.triangles.retain(|t| !emits(t));
+    let (lo, hi) = lamp.iter().flat_map(|t| t.p).fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), p| (lo.min(p), hi.max(p)),
+    );
+    let (blo, bhi) = s.bounds();
+    let diag = (bhi - blo).length();
+    let top = bhi.y - 5.9e-5 * diag;
+    let bottom = top - 1.7e-3 * diag;
+    let (x0, x1, z0, z1) = (lo.x, hi.x, lo.z, hi.z);
+    let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    // The six faces, each as a quad (a, b, c, d) wound outwards.
+    let quads = [
+        [
+            c(x0, top, z0),
+            c(x0, top, z1),
+            c(x1, top, z1),
+            c(x1, top, z0),
+        ],
+        [
+            c(x0, bottom, z0),
+            c(x1, bottom, z0),
+            c(x1, bottom, z1),
+            c(x0, bottom, z1),
+        ],
+        [
+            c(x0, bottom, z0),
+            c(x0, bottom, z1),
+            c(x0, top, z1),
+            c(x0, top, z0),
+        ],
+        [
+            c(x1, bottom, z0),
+            c(x1, top, z0),
+            c(x1, top, z1),
+            c(x1, bottom, z1),
+        ],
+        [
+            c(x0, bottom, z0),
+            c(x0, top, z0),
+            c(x1, top, z0),
+            c(x1, bottom, z0),
+        ],
+        [
+            c(x0, bottom, z1),
+            c(x1, bottom, z1),
+            c(x1, top, z1),
+            c(x0, top, z1),
+        ],
+    ];
+    for q in quads {
+        for [a, b, d] in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
+            let n = (b - a).cross(d - a).normalize();
+            s.triangles.push(fuzzy_vpl::scene::Triangle {
+                p: [a, b, d],
+                n: [n; 3],
+                uv: [Vec2::ZERO; 3],
+                color: [Vec4::ONE; 3],
+                material,
+            });
+        }
+    }
+    s.name = "slab-under-ceiling".into();
+    s
+}

@@ -9,6 +9,10 @@ use crate::gi::vpl_trace::Vpl;
 
 pub const INVALID: u32 = u32::MAX;
 
+/// A cluster light as the gather reads it: pos | first lit, nrm | lit count, flux | lit area, box
+/// min, box max.
+pub type ClusterLight = [[f32; 4]; 5];
+
 /// The exposed faces: `of_voxel[6 v + dir]` is face `dir`'s index or `INVALID`, `voxel_dir[f]` is
 /// 6 v + dir of face f. Only exposed faces (the neighbour across is empty) get irradiance.
 #[derive(Clone, Debug, PartialEq)]
@@ -36,15 +40,19 @@ pub fn faces(v: &Voxels) -> Faces {
 
 /// The lights the faces gather from: per cluster one light (the flux of the VPLs in its voxels at
 /// their flux-weighted mean position and normal; `pos.w` its first lit voxel in `lit`, `nrm.w` their
-/// count, as f32 bits) with its box (two vec4), and per lit voxel one light (the same over its own
-/// VPLs), sorted by cluster.
+/// count, as f32 bits; `flux.w` its conservation scale, 1 until `set_scales`) with its box (two
+/// vec4), and per lit voxel one light (the same over its own VPLs), sorted by cluster.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Lighting {
-    pub clusters: Vec<[[f32; 4]; 5]>,
+    pub clusters: Vec<ClusterLight>,
     pub lit: Vec<Vpl>,
     /// VPLs that fell in no voxel or in a voxel of no cluster (their light is lost, §4.2).
     pub dropped: u32,
     pub lit_clusters: u32,
+    /// Per cluster, the luminance (r + g + b) of the flux its VPLs send into the scene: each VPL's
+    /// flux times the fraction of its escape rays that met a surface beyond the reach (`escape`;
+    /// the whole flux without escape rays). `conservation_scales` reads it.
+    pub sent: Vec<f32>,
 }
 
 fn lum(c: [f32; 4]) -> f32 {
@@ -72,13 +80,41 @@ fn merge(vpls: &[&Vpl]) -> Vpl {
 
 /// §4.4's injection with VPLs as the lit surface: each VPL lies on a surface its light path reached
 /// (the path's rays were the emitter visibility test the paper does with a distance shadow map),
-/// so its voxel is lit and its flux is pulled into the voxel's cluster.
-pub fn inject(v: &Voxels, num_clusters: usize, vpls: &[Vpl]) -> Lighting {
+/// so its voxel is lit and its flux is pulled into the voxel's cluster. `escape` (empty: [1, 1]
+/// each; not in the paper) gives per VPL the fraction of its light that leaves its surface, which
+/// weighs its flux (a VPL of weight 0 is left out), and the fraction it sends into the scene, which
+/// `Lighting::sent` sums.
+pub fn inject(v: &Voxels, num_clusters: usize, vpls: &[Vpl], escape: &[[f32; 2]]) -> Lighting {
+    let mut sent = vec![0.0f32; num_clusters];
+    let weighted: Vec<Vpl> = vpls
+        .iter()
+        .enumerate()
+        .map(|(i, vpl)| {
+            let [w, into_scene] = escape.get(i).copied().unwrap_or([1.0, 1.0]);
+            let p = Vec3::from_slice(&vpl.pos[..3]);
+            let n = Vec3::from_slice(&vpl.nrm[..3]);
+            if let Some(c) = v
+                .at_surface(p, -n)
+                .map(|i| v.voxels[i as usize].cluster)
+                .filter(|&c| c != INVALID)
+            {
+                sent[c as usize] += lum(vpl.flux) * into_scene;
+            }
+            let mut out = *vpl;
+            for c in &mut out.flux[..3] {
+                *c *= w;
+            }
+            out
+        })
+        .collect();
     let mut per_cluster: Vec<Vec<(u32, &Vpl)>> = vec![Vec::new(); num_clusters];
     let mut dropped = 0;
-    for vpl in vpls {
+    for vpl in &weighted {
         let p = Vec3::from_slice(&vpl.pos[..3]);
         let n = Vec3::from_slice(&vpl.nrm[..3]);
+        if lum(vpl.flux) <= 0.0 {
+            continue;
+        }
         match v.at_surface(p, -n) {
             Some(i) if v.voxels[i as usize].cluster != INVALID => {
                 per_cluster[v.voxels[i as usize].cluster as usize].push((i, vpl));
@@ -88,6 +124,7 @@ pub fn inject(v: &Voxels, num_clusters: usize, vpls: &[Vpl]) -> Lighting {
     }
     let mut out = Lighting {
         dropped,
+        sent,
         ..Default::default()
     };
     for list in per_cluster.iter_mut() {
@@ -113,10 +150,51 @@ pub fn inject(v: &Voxels, num_clusters: usize, vpls: &[Vpl]) -> Lighting {
         light.pos[3] = f32::from_bits(first);
         light.nrm[3] = f32::from_bits(count);
         out.lit_clusters += (count > 0) as u32;
+        light.flux[3] = 1.0;
         out.clusters
             .push([light.pos, light.nrm, light.flux, [0.0; 4], [0.0; 4]]);
     }
     out
+}
+
+/// Each cluster's conservation scale (not in the paper): the flux its VPLs send into the scene
+/// (`Lighting::sent`) over the flux the paper's gather hands to the faces whose rays met it, so
+/// that those faces receive, in all, what the cluster sends, however many of them found it and
+/// however much of it each saw. `ids` and `flux` are the faces' cached lists and, beside them, the
+/// flux each listed cluster sends to the face before the scale (`gather`'s `vis_w`: s² × the
+/// luminance of its irradiance); `rays` slots a face, a list ending at `INVALID`. A cluster that
+/// sends something no face takes keeps scale 1 (nothing to scale).
+pub fn conservation_scales(l: &Lighting, ids: &[u32], flux: &[f32], rays: usize) -> Vec<f32> {
+    let mut taken = vec![0.0f64; l.clusters.len()];
+    for (face, fl) in ids.chunks(rays.max(1)).zip(flux.chunks(rays.max(1))) {
+        for (&c, &x) in face.iter().zip(fl) {
+            if c == INVALID {
+                break;
+            }
+            let cl = &l.clusters[c as usize];
+            if cl[1][3].to_bits() > 0 {
+                taken[c as usize] += x as f64;
+            }
+        }
+    }
+    l.sent
+        .iter()
+        .zip(taken)
+        .map(|(&sent, taken)| {
+            if taken > 0.0 {
+                (sent as f64 / taken) as f32
+            } else {
+                1.0
+            }
+        })
+        .collect()
+}
+
+/// Writes `scales` into the cluster lights' `flux.w` (what `gather` multiplies by).
+pub fn set_scales(l: &mut Lighting, scales: &[f32]) {
+    for (c, &k) in l.clusters.iter_mut().zip(scales) {
+        c[2][3] = k;
+    }
 }
 
 /// Sets the boxes of `l`'s clusters (vec4 3 and 4) from the voxel clustering.

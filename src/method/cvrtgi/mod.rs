@@ -8,9 +8,12 @@
 //! 1. geometry (scene + voxel/cluster/ray settings), resident: the voxelisation (§4.1) and the SLIC
 //!    clustering (§4.2, Eq. 1, Alg. 1) on the CPU (`voxel`), then the per-face cluster visibility
 //!    cache (§4.3) on the GPU (`visibility`, BVH rays);
-//! 2. light (+ the VPL set, near distance, filter, clamp), resident: the VPLs pulled into their voxels
-//!    and clusters on the CPU (`inject`), the per-face gathering (§4.4, `gather`) and the
-//!    Gaussian filter passes (`filter`) on the GPU;
+//! 2. light (+ the VPL set, near distance, filter, clamp, gather mode, escape rays), resident:
+//!    where each VPL's light goes (`escape`, GPU, not in the paper), the VPLs pulled into their
+//!    voxels and clusters on the CPU (`inject`), the per-face gathering (§4.4, `gather`; with
+//!    `--cluster-gather conserved`, not in the paper, run twice: the second time with each
+//!    cluster's conservation scale, `inject::conservation_scales`) and the Gaussian filter passes
+//!    (`filter`) on the GPU;
 //! 3. per frame: each pixel reads its face's filtered irradiance (§4.5, `lookup`).
 //!
 //! Shader: `shaders-wgsl/cvrtgi.wgsl`; CPU twin of every kernel: `cpu::cvrtgi`. The pass is
@@ -28,7 +31,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use self::inject::{self as twin, Faces, Lighting};
-use self::settings::CvrtgiSettings;
+use self::settings::{ClusterGather, CvrtgiSettings};
 use self::voxel::{Cluster, SlicSettings, Voxels};
 use super::Method;
 use super::{Counts, FrameInputs, IndirectMethod, Room};
@@ -46,12 +49,17 @@ pub const PASS: Pass = Pass::Room("cvrtgi");
 use crate::gpu::GpuContext;
 use crate::scene::Scene;
 
-/// The profiler labels of the four kernels (what the GPU timings are keyed by).
-pub const LABELS: [&str; 4] = [
+/// How far (in voxels) a VPL's ray must get for its light to count as leaving its surface
+/// (`escape`).
+pub const ESCAPE_REACH: f32 = 0.1;
+
+/// The profiler labels of the kernels (what the GPU timings are keyed by).
+pub const LABELS: [&str; 5] = [
     "cvrtgi.visibility",
     "cvrtgi.gather",
     "cvrtgi.filter",
     "cvrtgi.lookup",
+    "cvrtgi.escape",
 ];
 
 #[repr(C)]
@@ -67,6 +75,10 @@ struct CvParams {
     near: f32,
     inv_two_sigma2: f32,
     _pad: u32,
+    gather_mode: u32,
+    escape_rays: u32,
+    escape_reach: f32,
+    num_vpls: u32,
 }
 
 /// What one frame's CVRTGI pass reads and writes. The caller (the frame graph) provides the scene as
@@ -97,6 +109,8 @@ pub struct CvrtgiReport {
     pub dropped_vpls: u32,
     /// Rays traced for the visibility cache this call (0 when it was resident).
     pub visibility_rays: u64,
+    /// Rays traced for the VPLs' escape weights this call (0 when the light stage was resident).
+    pub escape_rays: u64,
     pub geometry_built: bool,
     pub light_built: bool,
     /// CPU milliseconds of the stages rebuilt this call (voxelisation, clustering, injection).
@@ -122,6 +136,8 @@ struct LightKey {
     radius: u32,
     passes: u32,
     d_min: u32,
+    gather: ClusterGather,
+    escape_rays: u32,
 }
 
 /// The resident geometry stage: voxels, clusters, faces and the visibility cache.
@@ -139,6 +155,12 @@ pub struct CvrtgiGeometry {
 /// The resident light stage: the lights and the per-face irradiance before and after filtering.
 pub struct CvrtgiLight {
     pub lighting: Lighting,
+    /// Per VPL the fractions of its light that leave its surface and that it sends into the scene
+    /// (`escape`; empty when `--escape-rays` is 0).
+    pub escape: Vec<[f32; 2]>,
+    /// Beside the visibility cache, the flux each listed cluster sends to the face before its
+    /// conservation scale (`gather` with `--cluster-gather conserved`; 4 bytes otherwise).
+    pub slot_flux: wgpu::Buffer,
     lights_buf: wgpu::Buffer,
     /// vec4 a face: `gather`'s output.
     pub gathered: wgpu::Buffer,
@@ -152,6 +174,7 @@ struct Kernels {
     gather: Kernel,
     filter: Kernel,
     lookup: Kernel,
+    escape: Kernel,
     overrides: Vec<(&'static str, f64)>,
 }
 
@@ -169,7 +192,7 @@ pub struct Cvrtgi {
 /// voxelisation, SLIC, injection) and the kernels that run only when their stage is rebuilt. Like
 /// `vpl_trace` and `vpl_cluster` they are not in `frame` (a frame with the same scene and VPLs runs
 /// only `cvrtgi.lookup`); the stats report their last build's times.
-pub const RESIDENT_KEYS: [&str; 4] = ["cvrtgi", LABELS[0], LABELS[1], LABELS[2]];
+pub const RESIDENT_KEYS: [&str; 5] = ["cvrtgi", LABELS[0], LABELS[1], LABELS[2], LABELS[4]];
 
 fn entries() -> Vec<wgpu::BindGroupLayoutEntry> {
     vec![
@@ -181,6 +204,7 @@ fn entries() -> Vec<wgpu::BindGroupLayoutEntry> {
         storage_layout(6, true),
         storage_layout(7, false),
         storage_layout(8, true),
+        storage_layout(9, false),
     ]
 }
 
@@ -195,12 +219,20 @@ struct Bindings<'a> {
     irr_in: Option<&'a wgpu::Buffer>,
     out: Option<&'a wgpu::Buffer>,
     gbuffer: Option<&'a wgpu::Buffer>,
+    vis_w: Option<&'a wgpu::Buffer>,
 }
 
 impl Bindings<'_> {
     fn group(&self, ctx: &GpuContext, k: &Kernel) -> wgpu::BindGroup {
-        let dummy: Vec<wgpu::Buffer> = (0..5).map(|_| ctx.storage("cvrtgi unused", 16)).collect();
-        let opt = [self.lights, self.vis, self.irr_in, self.out, self.gbuffer];
+        let dummy: Vec<wgpu::Buffer> = (0..6).map(|_| ctx.storage("cvrtgi unused", 16)).collect();
+        let opt = [
+            self.lights,
+            self.vis,
+            self.irr_in,
+            self.out,
+            self.gbuffer,
+            self.vis_w,
+        ];
         let mut list: Vec<(u32, &wgpu::Buffer)> =
             vec![(1, self.params), (2, self.voxels), (3, self.faces)];
         for (i, b) in opt.iter().enumerate() {
@@ -249,6 +281,7 @@ impl Cvrtgi {
                 gather: k("gather"),
                 filter: k("filter_faces"),
                 lookup: k("lookup"),
+                escape: k("escape"),
                 overrides: scene.overrides(),
             }
         })
@@ -284,6 +317,13 @@ impl Cvrtgi {
             near: s.near_voxels * g.size,
             inv_two_sigma2: 1.0 / (2.0 * sigma * sigma),
             _pad: 0,
+            gather_mode: match s.cluster_gather {
+                ClusterGather::AnyHit => 0,
+                ClusterGather::Conserved => 1,
+            },
+            escape_rays: s.escape_rays,
+            escape_reach: ESCAPE_REACH * g.size,
+            num_vpls: 0,
         }
     }
 
@@ -372,14 +412,19 @@ impl Cvrtgi {
             radius: s.filter_radius,
             passes: s.filter_passes,
             d_min: i.d_min.to_bits(),
+            gather: s.cluster_gather,
+            escape_rays: s.escape_rays,
         };
         if self.light.as_ref().map(|x| x.0) != Some(lkey) {
+            let escape = self.run_escape(g, s, i.d_min, &i.vpls.vpls)?;
+            report.escape_rays = i.vpls.vpls.len() as u64 * s.escape_rays as u64;
             let t = Instant::now();
             let geo = &self.geometry.as_ref().unwrap().1;
-            let mut lighting = twin::inject(&geo.voxels, geo.clusters.len(), &i.vpls.vpls);
+            let mut lighting = twin::inject(&geo.voxels, geo.clusters.len(), &i.vpls.vpls, &escape);
             twin::set_boxes(&mut lighting, &geo.clusters);
             report.cpu_ms += t.elapsed().as_secs_f64() * 1e3;
-            let light = self.run_light(g, s, i.d_min, lighting);
+            let (light, ms) = self.run_light(g, s, i.d_min, lighting, escape)?;
+            report.cpu_ms += ms;
             self.light = Some((lkey, light));
             report.light_built = true;
         }
@@ -416,6 +461,7 @@ impl Cvrtgi {
             irr_in: None,
             out: None,
             gbuffer: None,
+            vis_w: None,
         }
         .group(ctx, k);
         let faces = geo.faces.voxel_dir.len() as u32;
@@ -432,28 +478,87 @@ impl Cvrtgi {
         faces as u64 * geo.rays as u64
     }
 
+    /// Where the VPLs' light goes, on the GPU (`escape`): per VPL, of `--escape-rays`
+    /// cosine-distributed rays, the fraction that gets past `ESCAPE_REACH` voxels and the fraction
+    /// that meets a surface beyond it; empty when the knob is 0.
+    fn run_escape(
+        &self,
+        g: &mut Gpu,
+        s: &CvrtgiSettings,
+        d_min: f32,
+        vpls: &[crate::gi::vpl_trace::Vpl],
+    ) -> Result<Vec<[f32; 2]>> {
+        if s.escape_rays == 0 || vpls.is_empty() {
+            return Ok(Vec::new());
+        }
+        let ctx = g.ctx;
+        let geo = &self.geometry.as_ref().unwrap().1;
+        let k = &self.kernels.get().unwrap().escape;
+        let n = vpls.len() as u32;
+        let params = CvParams {
+            num_vpls: n,
+            ..self.params(s, d_min)
+        };
+        let params = ctx.uniform("cvrtgi params", &params);
+        let input = ctx.storage_init("cvrtgi escape vpls", vpls);
+        let out = ctx.storage("cvrtgi escape", n as u64 * 16);
+        let bg = Bindings {
+            params: &params,
+            voxels: &geo.voxel_buf,
+            faces: &geo.faces_buf,
+            lights: Some(&input),
+            vis: None,
+            irr_in: None,
+            out: Some(&out),
+            gbuffer: None,
+            vis_w: None,
+        }
+        .group(ctx, k);
+        let run = Run {
+            label: LABELS[4],
+            group: &bg,
+            seed: 0,
+        };
+        // About 2^18 rays a submission.
+        let per = ((1u32 << 18) / s.escape_rays).max(64);
+        k.run(g, run, n, per, &mut |_, _| {});
+        let raw: Vec<[f32; 4]> = ctx.read_buffer(&out, n as usize)?;
+        Ok(raw.iter().map(|w| [w[0], w[1]]).collect())
+    }
+
     /// §4.4 on the GPU: the gathering, then the filter passes (ping-pong).
     fn run_light(
         &self,
         g: &mut Gpu,
         s: &CvrtgiSettings,
         d_min: f32,
-        lighting: Lighting,
-    ) -> CvrtgiLight {
+        mut lighting: Lighting,
+        escape: Vec<[f32; 2]>,
+    ) -> Result<(CvrtgiLight, f64)> {
         let ctx = g.ctx;
         let geo = &self.geometry.as_ref().unwrap().1;
         let ks = self.kernels.get().unwrap();
         let params = ctx.uniform("cvrtgi params", &self.params(s, d_min));
-        let mut words: Vec<[f32; 4]> = lighting.clusters.iter().flatten().copied().collect();
-        for l in &lighting.lit {
-            words.extend([l.pos, l.nrm, l.flux]);
-        }
-        if words.is_empty() {
-            words.push([0.0; 4]);
-        }
-        let lights_buf = ctx.storage_init("cvrtgi lights", &words);
+        let words = |l: &Lighting| {
+            let mut words: Vec<[f32; 4]> = l.clusters.iter().flatten().copied().collect();
+            for v in &l.lit {
+                words.extend([v.pos, v.nrm, v.flux]);
+            }
+            if words.is_empty() {
+                words.push([0.0; 4]);
+            }
+            words
+        };
+        let lights_buf = ctx.storage_init("cvrtgi lights", &words(&lighting));
         let faces = geo.faces.voxel_dir.len() as u32;
         let bytes = faces.max(1) as u64 * 16;
+        let conserved = s.cluster_gather == ClusterGather::Conserved;
+        let slot_bytes = if conserved {
+            faces.max(1) as u64 * geo.rays as u64 * 4
+        } else {
+            4
+        };
+        let slot_flux = ctx.storage("cvrtgi slot flux", slot_bytes);
         let gathered = ctx.storage("cvrtgi gathered", bytes);
         let base = Bindings {
             params: &params,
@@ -464,20 +569,39 @@ impl Cvrtgi {
             irr_in: None,
             out: Some(&gathered),
             gbuffer: None,
+            vis_w: Some(&slot_flux),
         };
         let bg = base.group(ctx, &ks.gather);
-        if faces > 0 {
-            ks.gather.run(
-                g,
-                Run {
-                    label: LABELS[1],
-                    group: &bg,
-                    seed: 0,
-                },
-                faces,
-                1 << 14,
-                &mut |_, _| {},
-            );
+        let gather = |g: &mut Gpu| {
+            if faces > 0 {
+                ks.gather.run(
+                    g,
+                    Run {
+                        label: LABELS[1],
+                        group: &bg,
+                        seed: 0,
+                    },
+                    faces,
+                    1 << 14,
+                    &mut |_, _| {},
+                );
+            }
+        };
+        gather(g);
+        let mut cpu_ms = 0.0;
+        if conserved && faces > 0 {
+            // The flux each cluster hands the faces at scale 1, then again with each cluster's
+            // conservation scale.
+            let n = faces as usize * geo.rays as usize;
+            let ids: Vec<u32> = ctx.read_buffer(&geo.vis, n)?;
+            let flux: Vec<f32> = ctx.read_buffer(&slot_flux, n)?;
+            let t = Instant::now();
+            let scales = twin::conservation_scales(&lighting, &ids, &flux, geo.rays as usize);
+            twin::set_scales(&mut lighting, &scales);
+            cpu_ms += t.elapsed().as_secs_f64() * 1e3;
+            ctx.queue
+                .write_buffer(&lights_buf, 0, bytemuck::cast_slice(&words(&lighting)));
+            gather(g);
         }
         let ping = [
             ctx.storage("cvrtgi filtered a", bytes),
@@ -491,6 +615,7 @@ impl Cvrtgi {
                 vis: None,
                 irr_in: Some(src),
                 out: Some(dst),
+                vis_w: None,
                 ..base
             }
             .group(ctx, &ks.filter);
@@ -519,12 +644,15 @@ impl Cvrtgi {
             let [a, b] = ping;
             if s.filter_passes % 2 == 1 { a } else { b }
         };
-        CvrtgiLight {
+        let light = CvrtgiLight {
             lighting,
+            escape,
+            slot_flux,
             lights_buf,
             gathered,
             filtered,
-        }
+        };
+        Ok((light, cpu_ms))
     }
 
     /// §4.5 on the GPU: every pixel's indirect light from its face's filtered irradiance.
@@ -543,6 +671,7 @@ impl Cvrtgi {
             irr_in: Some(&light.filtered),
             out: Some(i.indirect),
             gbuffer: Some(i.gbuffer),
+            vis_w: None,
         }
         .group(ctx, k);
         let run = Run {
@@ -573,6 +702,16 @@ impl Cvrtgi {
         let n = (geo.faces.voxel_dir.len() * geo.rays as usize).max(1);
         ctx.read_buffer(&geo.vis, n)
     }
+
+    /// Reads the light stage's per-slot flux back (beside the visibility cache; `--cluster-gather
+    /// conserved` only).
+    pub fn read_slot_flux(&self, ctx: &GpuContext) -> Result<Vec<f32>> {
+        let (Some(geo), Some(light)) = (self.geometry(), self.light()) else {
+            bail!("cvrtgi: no light stage yet");
+        };
+        let n = (geo.faces.voxel_dir.len() * geo.rays as usize).max(1);
+        ctx.read_buffer(&light.slot_flux, n)
+    }
 }
 
 /// cvrtgi in the registry.
@@ -588,7 +727,17 @@ pub const ROOM: Room = Room {
     colour: [188, 189, 34],
     about: "CVRTGI: voxel clusters (SLIC, 35° rule) light every voxel face; pixels read their \
             face's filtered irradiance, cached while the lights stay (docs/methods.md)",
-    label: |m| format!("v{} s{}", m.cvrtgi.voxel_res, m.cvrtgi.cluster_step),
+    label: |m| {
+        let v = &m.cvrtgi;
+        let mut l = format!("v{} s{}", v.voxel_res, v.cluster_step);
+        if v.cluster_gather == ClusterGather::AnyHit {
+            l += " any-hit";
+        }
+        if v.escape_rays != settings::CvrtgiSettings::default().escape_rays {
+            l += &format!(" e{}", v.escape_rays);
+        }
+        l
+    },
     series: |m| format!("{}³ step {}", m.cvrtgi.voxel_res, m.cvrtgi.cluster_step),
     short: |m| {
         let v = &m.cvrtgi;
@@ -605,6 +754,16 @@ pub const ROOM: Room = Room {
                 .text("rays per face"),
         );
         ui.add(Slider::new(&mut v.filter_passes, 0..=8).text("filter passes"));
+        ui.add(Slider::new(&mut v.escape_rays, 0..=64).text("escape rays per VPL"));
+        ui.horizontal(|ui| {
+            ui.label("cluster light");
+            ui.radio_value(&mut v.cluster_gather, ClusterGather::Conserved, "conserved");
+            ui.radio_value(
+                &mut v.cluster_gather,
+                ClusterGather::AnyHit,
+                "any hit (paper)",
+            );
+        });
     },
 };
 

@@ -1,7 +1,39 @@
 //! The CVRTGI method's knobs (Cosin Ayerbe & Patow 2022, seed 003; `method::cvrtgi`, docs/cvrtgi.md),
 //! declared once with `knobs!`, and their value parsers.
 
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+
 use crate::settings::{Invalid, in_range, invalid, knobs};
+
+/// How a face takes the light of a cluster its rays found (`--cluster-gather`; docs/cvrtgi.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ClusterGather {
+    /// Not in the paper: as `AnyHit`, each cluster's light scaled so that the faces whose rays
+    /// met it receive, in all, the flux its VPLs send into the scene (`escape`).
+    #[default]
+    Conserved,
+    /// The paper's §4.4: a cluster any of the face's rays met gives its whole light, as a point
+    /// at its light's position (and its lit voxels one by one when near).
+    AnyHit,
+}
+
+impl ClusterGather {
+    pub fn name(self) -> &'static str {
+        match self {
+            ClusterGather::Conserved => "conserved",
+            ClusterGather::AnyHit => "any-hit",
+        }
+    }
+}
+
+impl fmt::Display for ClusterGather {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
 
 /// The most voxels along the longest axis of the scene (`--voxel-res`): the paper's largest grid
 /// (256³). The per-face visibility cache holds `--face-rays` cluster ids for every exposed voxel
@@ -35,6 +67,27 @@ knobs! {
     filter_radius: u32 = 2, parse parse_filter_radius;
     /// Times the filter is applied (the paper: twice), 0..=8.
     filter_passes: u32 = 2, parse parse_filter_passes;
+    /// How a face takes a cluster its rays met: `any-hit` (§4.4: the whole cluster as a point
+    /// light) or `conserved` (not in the paper, the default: the same, scaled per cluster so that
+    /// the faces whose rays met it receive, in all, the flux it sends) (docs/cvrtgi.md).
+    cluster_gather: ClusterGather = ClusterGather::Conserved, parse parse_cluster_gather;
+    /// Rays per VPL that find where its light goes (not in the paper): its flux is weighed by the
+    /// fraction that leaves its surface (past a tenth of a voxel), and `conserved` takes the
+    /// fraction that meets a surface as what it sends; 0: every VPL counts whole, as the paper's
+    /// lit voxels. 0..=256.
+    escape_rays: u32 = 16, parse parse_escape_rays;
+}
+
+pub fn parse_cluster_gather(v: &str) -> Result<ClusterGather, Invalid> {
+    match v.trim() {
+        "conserved" => Ok(ClusterGather::Conserved),
+        "any-hit" => Ok(ClusterGather::AnyHit),
+        _ => invalid("must be conserved or any-hit"),
+    }
+}
+
+pub fn parse_escape_rays(v: &str) -> Result<u32, Invalid> {
+    in_range(v, |n: u32| n <= 256, "must be 0..=256")
 }
 
 pub fn parse_voxel_res(v: &str) -> Result<u32, Invalid> {
@@ -121,6 +174,15 @@ mod tests {
         assert_eq!(parse_filter_radius("4"), Ok(4));
         assert_eq!(parse_filter_passes("0"), Ok(0));
         assert_eq!(parse_filter_passes("8"), Ok(8));
+        assert_eq!(parse_cluster_gather("any-hit"), Ok(ClusterGather::AnyHit));
+        assert_eq!(
+            parse_cluster_gather("conserved"),
+            Ok(ClusterGather::Conserved)
+        );
+        assert!(parse_cluster_gather("any").is_err());
+        assert_eq!(parse_escape_rays("0"), Ok(0));
+        assert_eq!(parse_escape_rays("256"), Ok(256));
+        assert!(parse_escape_rays("257").is_err());
         let c = CvrtgiSettings::default();
         let j = serde_json::to_string(&c).unwrap();
         assert_eq!(serde_json::from_str::<CvrtgiSettings>(&j).unwrap(), c);

@@ -11,7 +11,14 @@
 //! - §3.2.1: L(p) ≈ Σ_i L_d(p, l_i) · (1/A_c) ∫_{A_c} V(p, l) dl: each light's own unshadowed term
 //!   times the visibility of its cluster's disc (§3.2.2: a disc of radius d_min at the centre),
 //!   estimated with `DISC_SAMPLES` shadow rays to fixed points of the disc (the paper filters a
-//!   cube shadow map with PCSS) (`disc_points`, `shade`).
+//!   cube shadow map with PCSS) (`disc_points`, `shade`); `--lightcluster-visibility disc`.
+//! - Not in the paper, the default (`--lightcluster-visibility members`): the rays aim at member
+//!   VPLs instead of free points of the disc. Each cluster's members are split into at most
+//!   `MEMBER_TARGETS` groups of nearby VPLs facing alike (`split_members`); per pixel, each group
+//!   with a positive term traces one ray, to a member drawn in proportion to its term, and the
+//!   group's summed terms count when that member is visible: still at most `MEMBER_TARGETS` rays
+//!   a cluster and pixel, no ray ending inside a wall or past an occluder where no member is, and
+//!   the group's light unbiased (docs/methods.md, "lightcluster").
 
 use glam::Vec3;
 
@@ -19,6 +26,10 @@ use crate::gi::vpl_trace::Vpl;
 
 /// Shadow rays over a cluster's disc (the paper's Poisson disk has eight samples).
 pub const DISC_SAMPLES: u32 = 8;
+
+/// The most member groups (and so rays) a cluster has with `members` visibility: as many as the
+/// disc's samples, so a cluster costs a pixel at most the rays the paper's disc does.
+pub const MEMBER_TARGETS: usize = 8;
 
 /// §3.1.2: d_min = d_init (1 − |C_pos| / z_far), |C_pos| the centre's distance from the camera,
 /// z_far the largest view distance; at least 0.
@@ -97,21 +108,142 @@ impl Disc {
     }
 }
 
-/// The clustering of a frame: the discs, and the VPLs reordered by cluster with each one's cluster.
+/// The clustering of a frame: the discs, and the VPLs reordered by cluster with each one's cluster
+/// and member group.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightClusters {
     pub discs: Vec<Disc>,
-    /// The VPLs sorted by cluster (stable: in their own order within one).
+    /// The VPLs sorted by cluster, then member group (stable: in their own order within one).
     pub sorted: Vec<Vpl>,
     /// The cluster of each sorted VPL.
     pub cluster_of: Vec<u32>,
+    /// The member group of each sorted VPL (0..`MEMBER_TARGETS`, `split_members`).
+    pub group_of: Vec<u32>,
+}
+
+impl LightClusters {
+    /// Per sorted VPL, its cluster and group as the shader reads them: cluster × 8 + group.
+    pub fn packed_groups(&self) -> Vec<u32> {
+        self.cluster_of
+            .iter()
+            .zip(&self.group_of)
+            .map(|(&c, &g)| c * MEMBER_TARGETS as u32 + g)
+            .collect()
+    }
+}
+
+/// The distance `split_members` groups by: between positions, plus `scale` (1 − n_a · n_b), so that
+/// VPLs facing apart (two sides of a thin wall, a floor and a wall) part before near ones do.
+fn member_distance(a: &Vpl, b: &Vpl, scale: f32) -> f32 {
+    let n = |v: &Vpl| Vec3::new(v.nrm[0], v.nrm[1], v.nrm[2]);
+    pos(a).distance(pos(b)) + scale * (1.0 - n(a).dot(n(b)))
+}
+
+/// Not in the paper: splits a cluster's `members` (VPL indices, the first its centre) into at most
+/// `MEMBER_TARGETS` groups of nearby VPLs facing alike (`--lightcluster-visibility members`). With
+/// at most `MEMBER_TARGETS` members each is its own group (the shading is then exact). Otherwise
+/// farthest-point seeds from the centre (`member_distance`, scaled by the cluster's radius, ties to
+/// the earlier member), then two rounds of: every member to its nearest seed, each seed moved to
+/// the member nearest its group's flux-weighted mean position. Returns each member's group.
+pub fn split_members(vpls: &[Vpl], members: &[u32]) -> Vec<u32> {
+    let k = MEMBER_TARGETS;
+    if members.len() <= k {
+        return (0..members.len() as u32).collect();
+    }
+    let v = |i: u32| &vpls[i as usize];
+    let c0 = pos(v(members[0]));
+    let scale = members
+        .iter()
+        .map(|&i| pos(v(i)).distance(c0))
+        .fold(0.0f32, f32::max);
+    let mut seeds = vec![members[0]];
+    let mut near: Vec<f32> = members
+        .iter()
+        .map(|&i| member_distance(v(i), v(members[0]), scale))
+        .collect();
+    while seeds.len() < k {
+        let (best, _) = near
+            .iter()
+            .enumerate()
+            .fold((0, -1.0f32), |b, (j, &d)| if d > b.1 { (j, d) } else { b });
+        let s = members[best];
+        seeds.push(s);
+        for (d, &i) in near.iter_mut().zip(members) {
+            *d = d.min(member_distance(v(i), v(s), scale));
+        }
+    }
+    let nearest = |seeds: &[u32]| -> Vec<u32> {
+        members
+            .iter()
+            .map(|&i| {
+                let mut best = (f32::INFINITY, 0u32);
+                for (g, &s) in seeds.iter().enumerate() {
+                    let d = member_distance(v(i), v(s), scale);
+                    if d < best.0 {
+                        best = (d, g as u32);
+                    }
+                }
+                best.1
+            })
+            .collect()
+    };
+    let mut group = nearest(&seeds);
+    for _ in 0..2 {
+        for (g, seed) in seeds.iter_mut().enumerate() {
+            let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
+            for (&i, &gi) in members.iter().zip(&group) {
+                if gi == g as u32 {
+                    let p = power(v(i)).max(1e-30);
+                    sum += pos(v(i)) * p;
+                    w += p;
+                }
+            }
+            if w > 0.0 {
+                let mean = sum / w;
+                let mut best = (f32::INFINITY, *seed);
+                for (&i, &gi) in members.iter().zip(&group) {
+                    let d = pos(v(i)).distance_squared(mean);
+                    if gi == g as u32 && d < best.0 {
+                        best = (d, i);
+                    }
+                }
+                *seed = best.1;
+            }
+        }
+        group = nearest(&seeds);
+    }
+    group
 }
 
 /// The whole §3.1 clustering: centres, assignment, discs (radius d_min of each centre), the VPLs
-/// sorted by cluster.
+/// sorted by cluster, and each cluster's member groups (`split_members`).
 pub fn cluster(vpls: &[Vpl], eye: Vec3, z_far: f32, d_init: f32) -> LightClusters {
     let centers = leader_centers(vpls, eye, z_far, d_init);
     let assign = assign_nearest(vpls, &centers);
+    // Each cluster's members, its centre first (a centre at another's very position belongs to
+    // the first).
+    let mut members: Vec<Vec<u32>> = centers
+        .iter()
+        .enumerate()
+        .map(|(k, &c)| {
+            if assign[c as usize] == k as u32 {
+                vec![c]
+            } else {
+                vec![]
+            }
+        })
+        .collect();
+    for (i, &c) in assign.iter().enumerate() {
+        if i as u32 != centers[c as usize] {
+            members[c as usize].push(i as u32);
+        }
+    }
+    let mut group = vec![0u32; vpls.len()];
+    for m in &members {
+        for (&i, g) in m.iter().zip(split_members(vpls, m)) {
+            group[i as usize] = g;
+        }
+    }
     let discs = centers
         .iter()
         .map(|&c| {
@@ -124,10 +256,11 @@ pub fn cluster(vpls: &[Vpl], eye: Vec3, z_far: f32, d_init: f32) -> LightCluster
         })
         .collect();
     let mut order: Vec<u32> = (0..vpls.len() as u32).collect();
-    order.sort_by_key(|&i| assign[i as usize]);
+    order.sort_by_key(|&i| (assign[i as usize], group[i as usize]));
     LightClusters {
         discs,
         sorted: order.iter().map(|&i| vpls[i as usize]).collect(),
         cluster_of: order.iter().map(|&i| assign[i as usize]).collect(),
+        group_of: order.iter().map(|&i| group[i as usize]).collect(),
     }
 }

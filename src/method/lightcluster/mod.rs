@@ -1,7 +1,10 @@
 //! The `lightcluster` method (LightCluster, seed 002; docs/methods.md): the VPLs clustered by the
 //! minimum-distance (leader) algorithm on the CPU each frame (§3.1; the paper's §4 runs it on the CPU
-//! too, `cluster::cluster`), then every pixel × every VPL with the visibility of its cluster's disc
-//! from `DISC_SAMPLES` shadow rays (§3.2; `shaders-wgsl/lightcluster.wgsl`, CPU twin
+//! too, `cluster::cluster`), then every pixel × every VPL with the visibility of its cluster: by
+//! default (not in the paper) each member group's terms count when a member drawn in proportion to
+//! its term is visible, one ray a group, at most `MEMBER_TARGETS` a cluster; with
+//! `--lightcluster-visibility disc` every VPL takes its cluster's disc's visibility from
+//! `DISC_SAMPLES` shadow rays (§3.2) (`shaders-wgsl/lightcluster.wgsl`, CPU twin
 //! `cpu::lightcluster`). The passes are `CLUSTER` → `SHADE` (`ROOM`).
 
 pub mod cluster;
@@ -13,6 +16,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use self::cluster::{self as twin, LightClusters};
+use self::settings::LcVisibility;
 use super::Method;
 use super::{Counts, FrameInputs, IndirectMethod, Room};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
@@ -32,7 +36,9 @@ pub const SHADE: Pass = Pass::Room("lightcluster_shade");
 struct LcParams {
     d_min2: f32,
     num_vpls: u32,
-    _pad: [u32; 2],
+    /// 0: `members`, 1: `disc` (`LcVisibility`).
+    mode: u32,
+    _pad: u32,
 }
 
 /// The most sorted VPLs one invocation walks per dispatch: at most this many clusters'
@@ -53,6 +59,8 @@ pub struct ShadeInputs<'a> {
     pub pixels: u32,
     /// The G-term clamp distance in the rendered scene's units.
     pub d_min: f32,
+    /// What the shadow rays aim at.
+    pub visibility: LcVisibility,
 }
 
 impl LightCluster {
@@ -71,9 +79,10 @@ impl LightCluster {
         }
     }
 
-    /// §3.2: adds every pixel's light from every VPL, shadowed by its cluster's disc, to
-    /// `indirect`. Returns the per-pixel state buffer (`lightcluster.wgsl`: 4 u32 a pixel, the third
-    /// the discs it traced; `None` when nothing ran).
+    /// §3.2: adds every pixel's light from every VPL, shadowed as its cluster's visibility says
+    /// (its member group's drawn member or its cluster's disc), to `indirect`. Returns the per-pixel state
+    /// buffer (`lightcluster.wgsl`: 8 u32 a pixel, the third the shadow rays it traced; `None` when
+    /// nothing ran).
     pub fn record(&self, g: &mut Gpu, i: &ShadeInputs) -> Option<wgpu::Buffer> {
         let c = i.clusters;
         let n = c.sorted.len() as u32;
@@ -84,14 +93,18 @@ impl LightCluster {
         let params = LcParams {
             d_min2: i.d_min * i.d_min,
             num_vpls: n,
-            _pad: [0; 2],
+            mode: match i.visibility {
+                LcVisibility::Members => 0,
+                LcVisibility::Disc => 1,
+            },
+            _pad: 0,
         };
         let params = ctx.uniform("lightcluster params", &params);
         let vpls = ctx.storage_init("lightcluster vpls", &c.sorted);
-        let cluster_of = ctx.storage_init("lightcluster cluster_of", &c.cluster_of);
+        let cluster_of = ctx.storage_init("lightcluster cluster_of", &c.packed_groups());
         let discs: Vec<[[f32; 4]; 2]> = c.discs.iter().map(|d| d.to_gpu()).collect();
         let discs = ctx.storage_init("lightcluster discs", &discs);
-        let state = ctx.storage("lightcluster state", i.pixels as u64 * 16);
+        let state = ctx.storage("lightcluster state", i.pixels as u64 * 32);
         let buffers = [
             (1, &params),
             (2, i.gbuffer),
@@ -140,14 +153,26 @@ pub const ROOM: Room = Room {
     clusters_sps: false,
     vpl_clusters: false,
     colour: [23, 190, 207],
-    about: "LightCluster: VPLs in minimum-distance clusters, each a disc light whose visibility a \
-            few rays estimate; every VPL shaded (docs/methods.md)",
-    label: |m| format!("d{}", m.lightcluster.d_init),
+    about: "LightCluster: VPLs in minimum-distance clusters whose visibility a few rays estimate \
+            (to member VPLs, or to the paper's disc); every VPL shaded (docs/methods.md)",
+    label: |m| {
+        let l = &m.lightcluster;
+        match l.lightcluster_visibility {
+            LcVisibility::Members => format!("d{}", l.d_init),
+            LcVisibility::Disc => format!("d{} disc", l.d_init),
+        }
+    },
     series: |m| format!("d_init {}", m.lightcluster.d_init),
     short: |m| format!("d{}", m.lightcluster.d_init),
     ui: |ui, m| {
         let text = "d_init (scene diagonals)";
-        super::log_slider(ui, &mut m.lightcluster.d_init, 0.001..=10.0, text)
+        super::log_slider(ui, &mut m.lightcluster.d_init, 0.001..=10.0, text);
+        let v = &mut m.lightcluster.lightcluster_visibility;
+        ui.horizontal(|ui| {
+            ui.label("rays to");
+            ui.radio_value(v, LcVisibility::Members, "member VPLs");
+            ui.radio_value(v, LcVisibility::Disc, "the disc (paper)");
+        });
     },
 };
 
@@ -201,13 +226,14 @@ impl IndirectMethod for LightClusterMethod {
                     indirect: f.indirect,
                     pixels: f.pixels,
                     d_min: f.frame.clamp * extent,
+                    visibility: f.method.lightcluster.lightcluster_visibility,
                 };
-                // The rays traced: each pixel's discs (a disc where one of its cluster's terms is
-                // positive, once) × DISC_SAMPLES.
+                // The rays traced, as each pixel counted them: a disc's DISC_SAMPLES where one of
+                // its cluster's terms is positive, once; one a member group where one of its
+                // group's terms is positive.
                 if let Some(state) = self.kernel.record(g, &inputs) {
-                    let st: Vec<[u32; 4]> = ctx.read_buffer(&state, f.pixels as usize)?;
-                    let discs: u64 = st.iter().map(|p| p[2] as u64).sum();
-                    n.indirect_rays += discs * twin::DISC_SAMPLES as u64;
+                    let st: Vec<[u32; 8]> = ctx.read_buffer(&state, f.pixels as usize)?;
+                    n.indirect_rays += st.iter().map(|p| p[2] as u64).sum::<u64>();
                 }
             }
             _ => unreachable!("{pass} is not lightcluster's"),

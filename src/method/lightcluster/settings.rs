@@ -1,7 +1,39 @@
 //! lightcluster's knobs (LightCluster, seed 002; docs/methods.md): d_init of §3.1.2's d_min. The
 //! cluster count is its outcome.
 
-use crate::settings::{Invalid, in_range, knobs};
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+
+use crate::settings::{Invalid, in_range, invalid, knobs};
+
+/// What a cluster's shadow rays aim at (`--lightcluster-visibility`; docs/methods.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LcVisibility {
+    /// Not in the paper: one ray to a target member of each of the cluster's member groups, each
+    /// VPL taking its group's visibility (`cluster::split_members`).
+    #[default]
+    Members,
+    /// The paper's §3.2.2: `DISC_SAMPLES` rays to points of a disc of radius d_min at the centre,
+    /// every member taking the fraction seen.
+    Disc,
+}
+
+impl LcVisibility {
+    pub fn name(self) -> &'static str {
+        match self {
+            LcVisibility::Members => "members",
+            LcVisibility::Disc => "disc",
+        }
+    }
+}
+
+impl fmt::Display for LcVisibility {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
 
 knobs! {
     /// lightcluster's knobs, flattened into `method::MethodSettings`.
@@ -11,6 +43,19 @@ knobs! {
     /// clusters). bench sweeps 1, 1.2, 1.8, 2 and 2.2 by default: 28 and 7 clusters on the
     /// conference room, 28, 12 and 8 on the Cornell box (docs/methods.md).
     d_init: f32 = 1.0, parse parse_d_init, sweep [1.0, 1.2, 1.8, 2.0, 2.2];
+    /// lightcluster: what a cluster's shadow rays aim at: `members` (not in the paper, the
+    /// default: a target member of each of up to 8 member groups, every VPL taking its group's
+    /// visibility) or `disc` (§3.2.2: 8 points of a disc of radius d_min, every VPL taking the
+    /// fraction seen) (docs/methods.md).
+    lightcluster_visibility: LcVisibility = LcVisibility::Members, parse parse_lc_visibility;
+}
+
+pub fn parse_lc_visibility(v: &str) -> Result<LcVisibility, Invalid> {
+    match v.trim() {
+        "members" => Ok(LcVisibility::Members),
+        "disc" => Ok(LcVisibility::Disc),
+        _ => invalid("must be members or disc"),
+    }
 }
 
 pub fn parse_d_init(v: &str) -> Result<f32, Invalid> {
@@ -33,5 +78,9 @@ mod tests {
         // The edges (cargo-mutants: a `<=` turned `<` survived the out-of-range tests alone).
         assert_eq!(parse_d_init("10"), Ok(10.0));
         assert_eq!(parse_d_init("0.001"), Ok(0.001));
+        assert_eq!(parse_lc_visibility("disc"), Ok(LcVisibility::Disc));
+        assert_eq!(parse_lc_visibility("members"), Ok(LcVisibility::Members));
+        assert!(parse_lc_visibility("points").is_err());
+        assert_eq!(LcVisibility::default(), LcVisibility::Members);
     }
 }
