@@ -39,6 +39,7 @@ pub const FILES: &[(&str, &str)] = wgsl![
     "visibility.wgsl",
     "shade.wgsl",
     "wang.wgsl",
+    "wang_cluster.wgsl",
     "lightcluster.wgsl",
     "cvrtgi.wgsl",
     "warmup.wgsl",
