@@ -77,8 +77,8 @@ struct Params {
 @group(1) @binding(11) var<storage, read_write> samples: array<vec4<f32>>;
 // Four vec4 a cluster: the sample point as a shading point of albedo 1 (what reference.wgsl gathers).
 @group(1) @binding(12) var<storage, read_write> sample_gbuffer: array<vec4<f32>>;
-// Each cell's first slot in `sorted` (num_cells + 1 of them, the last the total).
-@group(1) @binding(13) var<storage, read_write> offsets: array<u32>;
+// Each cell's slots in `sorted`: [first, end).
+@group(1) @binding(13) var<storage, read_write> offsets: array<vec2<u32>>;
 // Where the search reads the grid (the result is the same). true (software adapters): the textures
 // below, copied from `sorted` and `offsets` after each grid build (lavapipe fetches a texel per lane
 // with vector code but reads storage per lane in a scalar loop); false (GPUs): the storage buffers.
@@ -99,9 +99,9 @@ fn sorted_at(i: u32) -> vec4<f32> {
     return sorted[i];
 }
 
-fn cell_start(c: u32) -> u32 {
+fn cell_slots(c: u32) -> vec2<u32> {
     if TEXTURE_SEARCH {
-        return textureLoad(offsets_tex, texel_xy(c), 0).x;
+        return textureLoad(offsets_tex, texel_xy(c), 0).xy;
     }
     return offsets[c];
 }
@@ -770,8 +770,8 @@ fn grid_scan_blocks(
     }
 }
 
-// Each cell's first slot: its offset within its block plus the totals of the blocks before (every
-// workgroup sums those itself, at most 256); the slot past the last cell holds the total.
+// Each cell's slots: from its offset within its block plus the totals of the blocks before (every
+// workgroup sums those itself, at most 256), as many as it counts.
 @compute @workgroup_size(256)
 fn grid_scan_ranges(
     @builtin(local_invocation_index) t: u32,
@@ -797,12 +797,10 @@ fn grid_scan_ranges(
                 if block > 0u {
                     before = partial[block - 1u];
                 }
-                offsets[c] = atomicLoad(&cells[LOCAL + c]) + before;
+                let first = atomicLoad(&cells[LOCAL + c]) + before;
+                offsets[c] = vec2<u32>(first, first + atomicLoad(&cells[COUNTS + c]));
             }
         }
-    }
-    if wid.x == 0u && t == 0u {
-        offsets[n] = partial[255];
     }
 }
 
@@ -820,7 +818,7 @@ fn grid_scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     }
     let g = load_grid();
     let cell = cell_index(g, cell_coord(g, c.xyz));
-    let slot = offsets[cell] + atomicSub(&cells[COUNTS + cell], 1u) - 1u;
+    let slot = offsets[cell].x + atomicSub(&cells[COUNTS + cell], 1u) - 1u;
     sorted[2u * slot] = vec4<f32>(c.xyz, bitcast<f32>(j));
     sorted[2u * slot + 1u] = centres[2u * j + 1u];
 }
@@ -864,8 +862,8 @@ fn scan_row(best: ptr<function, Best>, g: Grid, p: vec3<f32>, n: vec3<f32>, x0: 
     if params.alpha * (length(d) - 1e-4 * g.cell) > (*best).e {
         return;
     }
-    let a = cell_start(cell_index(g, vec3<i32>(x0, y, z)));
-    let b = cell_start(cell_index(g, vec3<i32>(x1, y, z)) + 1u);
+    let a = cell_slots(cell_index(g, vec3<i32>(x0, y, z))).x;
+    let b = cell_slots(cell_index(g, vec3<i32>(x1, y, z))).y;
     scan_slots(best, p, n, a, b);
 }
 
@@ -1006,22 +1004,17 @@ fn assign_grid(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     assign_pixel(m, labels[m]);
 }
 
-// With a grid step above 1, after assign_grid: the pixels off the grid image, each hinted with the
-// cluster of the grid pixel at or before it (relabelled by then).
+// With a grid step above 1, after assign_grid: the pixels off the grid image (without a cluster yet).
 @compute @workgroup_size(64)
 fn assign_rest(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let m = chunk_item(gid, nwg);
     if m >= params.pixels {
         return;
     }
-    let x = m % params.width;
-    let y = m / params.width;
-    let gx = x - x % params.step;
-    let gy = y - y % params.step;
-    if gx == x && gy == y {
+    if (m % params.width) % params.step == 0u && (m / params.width) % params.step == 0u {
         return;
     }
-    assign_pixel(m, labels[gy * params.width + gx]);
+    assign_pixel(m, INVALID);
 }
 
 // --- The sample points (§3.2: "in each cluster, we pick the shading point with the smallest error"):

@@ -368,6 +368,41 @@ fn surface(pos: Vec3, nrm: Vec3) -> [[f32; 4]; 4] {
     ]
 }
 
+/// wang's GPU clustering against the twin on random G-buffers with holes (a fifth of the pixels
+/// without a surface), odd sizes (quadtree nodes at the padded edges with one point) and positions
+/// scattered through a box: 9×7 with K 40 (nodes that take their only point as a seed), 64×48 with
+/// K 24 (a grid step of 2) and with K 1536 (a grid of more than one block of its prefix sum, centres
+/// up to its last cell); seeds, labels and sample points equal on a software adapter.
+#[test]
+fn wang_clustering_matches_cpu_twin_on_random_surfels_with_holes() {
+    let ctx = common::gpu();
+    for (w, h, k) in [(9u32, 7u32, 40u32), (64, 48, 24), (64, 48, 1536)] {
+        let mut rng = common::Rand(0x5eed_0000 + w as u64);
+        let gbuffer: Vec<[f32; 4]> = (0..w * h)
+            .flat_map(|m| {
+                let hole = rng.f32() < 0.2;
+                let pos = Vec3::new(
+                    (m % w) as f32 / w as f32,
+                    (m / w) as f32 / h as f32,
+                    0.3 * rng.f32(),
+                );
+                let n = Vec3::new(rng.f32() - 0.5, rng.f32() - 0.5, 0.6).normalize();
+                let mut r = surface(pos, n);
+                if hole {
+                    r[0][3] = 0.0;
+                }
+                r
+            })
+            .collect();
+        let bounds = (Vec3::splat(-1.0), Vec3::splat(2.0));
+        let c = wang_gpu_cluster(&ctx, &gbuffer, (w, h), (k, 1.0, 3, 3), bounds);
+        let sps: Vec<ShadingPoint> = gbuffer.chunks(4).map(ShadingPoint::from_gpu).collect();
+        let name = format!("{w}x{h} K {k}");
+        assert_eq!(c.params.step, if k == 24 { 2 } else { 1 }, "{name}");
+        wang_clustering_matches_twin(&ctx, &name, &sps, &c, 3, 3f32.sqrt() * 3.0);
+    }
+}
+
 /// Hand-worked oracle of `wang_cluster.wgsl`: two 4×4 patches side by side in an 8×4 image, the left
 /// on the plane z = 0 facing +z at (0.1 x, 0.1 y, 0), the right on the plane x = 2 facing +x at
 /// (2, 0.1 y, 0.1 (x − 4)), K = 2. The quadtree's root sends one seed to each patch (equal ε_q; the
@@ -421,6 +456,38 @@ fn wang_cluster_of_two_patches_by_hand() {
     let sg: Vec<[f32; 4]> = ctx.read_buffer(&c.sample_gbuffer, 8).unwrap();
     assert_eq!(sg[0], gbuffer[4 * samples[0] as usize]);
     assert_eq!(sg[2], [1.0, 1.0, 1.0, 0.0], "albedo 1");
+}
+
+/// Hand-worked oracle of the seeding's edge cases: a 4×2 image whose left 2×2 quadrant is four
+/// copies of one point facing +z and whose right quadrant has one point (pixel 2) and three holes,
+/// K 2. Every ε_q is 0 (each node's points are its mean), so the root splits its two seeds equally
+/// between its two quadrants with points: the left draws one of its four pixels (0, 1, 4, 5), the
+/// right takes its only point as seed 1; each point is its own quadrant's cluster.
+#[test]
+fn wang_cluster_seeds_a_node_of_one_point() {
+    let ctx = common::gpu();
+    let (w, h) = (4u32, 2u32);
+    let gbuffer: Vec<[f32; 4]> = (0..w * h)
+        .flat_map(|m| {
+            let mut r = surface(Vec3::ZERO, Vec3::Z);
+            if m % w >= 2 {
+                r = surface(Vec3::X, Vec3::Z);
+                r[0][3] = (m == 2) as u32 as f32;
+            }
+            r
+        })
+        .collect();
+    let bounds = (Vec3::splat(-1.0), Vec3::splat(2.0));
+    let c = wang_gpu_cluster(&ctx, &gbuffer, (w, h), (2, 0.3, 5, 3), bounds);
+    assert_eq!((c.params.step, c.params.levels), (1, 2));
+    let seeds = c.read_seeds(&ctx).unwrap();
+    assert!(
+        [0, 1, 4, 5].contains(&seeds[0]) && seeds[1] == 2,
+        "{seeds:?}"
+    );
+    let i = twin::INVALID;
+    assert_eq!(c.read_labels(&ctx).unwrap(), [0, 0, 1, i, 0, 0, i, i]);
+    assert_eq!(c.read_sample_pixels(&ctx).unwrap(), [0, 2]);
 }
 
 /// Independent oracle of the assignment's reach: a 97×1 strip of a flat floor at x = m / 64 (exact

@@ -547,8 +547,7 @@ fn assign(
 /// same `p`): the quadtree seeds over the grid image, the first assignment of its pixels (hinted
 /// with `seed_hint`), then `iterations` rounds of centre update and assignment (each pixel hinted
 /// with its cluster); with a step above 1 a centre update, the assignment of the grid pixels and
-/// then of the others (each hinted with the cluster of the grid pixel at or before it); a last
-/// centre update and the sample points.
+/// then of the others (without a hint); a last centre update and the sample points.
 pub fn cluster(p: &ClusterParams, sps: &[ShadingPoint], iterations: u32) -> WangClusters {
     let img = GridImage { p, sps };
     let mut tree = Quadtree::build(img, p.alpha);
@@ -585,11 +584,7 @@ pub fn cluster(p: &ClusterParams, sps: &[ShadingPoint], iterations: u32) -> Wang
         let rest: Vec<u32> = (0..p.pixels)
             .filter(|m| m % w % g != 0 || m / w % g != 0)
             .collect();
-        let grid_hint = |m: u32, l: &[u32]| {
-            let (x, y) = (m % w, m / w);
-            l[((y - y % g) * w + x - x % g) as usize]
-        };
-        assign(p, sps, &centers, &rest, &mut labels, grid_hint);
+        assign(p, sps, &centers, &rest, &mut labels, |_, _| INVALID);
         passes += 1;
     }
     centers = update_centers(p, sps, &labels, &centers);

@@ -18,8 +18,8 @@
 //!    pixel with it).
 //!
 //! The iterations run on the grid image of `grid_step` (every other pixel along x and y when that
-//! leaves enough points a cluster); with a step above 1 a last assignment labels the other pixels,
-//! each starting from the cluster of the grid pixel at or before it. One submission seeds and
+//! leaves enough points a cluster); with a step above 1 a last assignment labels the other pixels.
+//! One submission seeds and
 //! assigns, one per iteration, one labels every pixel, one picks the sample points; the number of
 //! clusters with a sample point (4 bytes) is the only read-back.
 
@@ -263,7 +263,7 @@ impl WangCluster {
         let centres = ctx.storage("wang centres", k * 32);
         let samples = ctx.storage("wang samples", k * 32);
         let sample_gbuffer = ctx.storage("wang sample gbuffer", k * 64);
-        let offsets = ctx.storage("wang cell offsets", (MAX_CELLS + 1) * 4);
+        let offsets = ctx.storage("wang cell slots", MAX_CELLS * 8);
         // (Without the texture search the textures are bound but never read: one texel each.)
         let texels = |n: u64| if self.texture_search { n } else { 1 };
         let sorted_tex = data_texture(
@@ -274,9 +274,9 @@ impl WangCluster {
         );
         let offsets_tex = data_texture(
             ctx,
-            "wang cell offsets",
-            wgpu::TextureFormat::R32Uint,
-            texels(MAX_CELLS + 1),
+            "wang cell slots",
+            wgpu::TextureFormat::Rg32Uint,
+            texels(MAX_CELLS),
         );
         let sorted_view = sorted_tex.create_view(&Default::default());
         let offsets_view = offsets_tex.create_view(&Default::default());
@@ -302,7 +302,7 @@ impl WangCluster {
         // After each grid build the search's textures are refreshed (software adapters only).
         let copy = |enc: &mut wgpu::CommandEncoder| {
             copy_to_texture(enc, &sorted, &sorted_tex, k * 32);
-            copy_to_texture(enc, &offsets, &offsets_tex, (MAX_CELLS + 1) * 4);
+            copy_to_texture(enc, &offsets, &offsets_tex, MAX_CELLS * 8);
         };
         let after = self
             .texture_search
