@@ -334,6 +334,17 @@ fn wang_clustering_matches_cpu_twin_with_thousands_of_clusters() {
 fn wang_gpu_cluster(
     ctx: &fuzzy_vpl::gpu::GpuContext,
     gbuffer: &[[f32; 4]],
+    size: (u32, u32),
+    knobs: (u32, f32, u32, u32),
+    bounds: (Vec3, Vec3),
+) -> WangClustering {
+    wang_gpu_cluster_with(ctx, &WangCluster::new(ctx), gbuffer, size, knobs, bounds)
+}
+
+fn wang_gpu_cluster_with(
+    ctx: &fuzzy_vpl::gpu::GpuContext,
+    wc: &WangCluster,
+    gbuffer: &[[f32; 4]],
     (w, h): (u32, u32),
     (k, alpha, seed, iterations): (u32, f32, u32, u32),
     bounds: (Vec3, Vec3),
@@ -372,11 +383,17 @@ fn surface(pos: Vec3, nrm: Vec3) -> [[f32; 4]; 4] {
 /// without a surface), odd sizes (quadtree nodes at the padded edges with one point) and positions
 /// scattered through a box: 9×7 with K 40 (nodes that take their only point as a seed), 64×48 with
 /// K 24 (a grid step of 2) and with K 1536 (a grid of more than one block of its prefix sum, centres
-/// up to its last cell); seeds, labels and sample points equal on a software adapter.
+/// up to its last cell); seeds, labels and sample points equal on a software adapter, with the
+/// search reading the grid through textures (a software adapter's default) and through storage
+/// buffers (a GPU's).
 #[test]
 fn wang_clustering_matches_cpu_twin_on_random_surfels_with_holes() {
     let ctx = common::gpu();
-    for (w, h, k) in [(9u32, 7u32, 40u32), (64, 48, 24), (64, 48, 1536)] {
+    let searches = [true, false].map(|t| (t, WangCluster::with_texture_search(&ctx, t)));
+    for ((w, h, k), (texture, wc)) in [(9u32, 7u32, 40u32), (64, 48, 24), (64, 48, 1536)]
+        .into_iter()
+        .flat_map(|c| searches.iter().map(move |s| (c, s)))
+    {
         let mut rng = common::Rand(0x5eed_0000 + w as u64);
         let gbuffer: Vec<[f32; 4]> = (0..w * h)
             .flat_map(|m| {
@@ -395,9 +412,9 @@ fn wang_clustering_matches_cpu_twin_on_random_surfels_with_holes() {
             })
             .collect();
         let bounds = (Vec3::splat(-1.0), Vec3::splat(2.0));
-        let c = wang_gpu_cluster(&ctx, &gbuffer, (w, h), (k, 1.0, 3, 3), bounds);
+        let c = wang_gpu_cluster_with(&ctx, wc, &gbuffer, (w, h), (k, 1.0, 3, 3), bounds);
         let sps: Vec<ShadingPoint> = gbuffer.chunks(4).map(ShadingPoint::from_gpu).collect();
-        let name = format!("{w}x{h} K {k}");
+        let name = format!("{w}x{h} K {k}, texture search {texture}");
         assert_eq!(c.params.step, if k == 24 { 2 } else { 1 }, "{name}");
         wang_clustering_matches_twin(&ctx, &name, &sps, &c, 3, 3f32.sqrt() * 3.0);
     }

@@ -225,13 +225,19 @@ pub struct WangCluster {
 }
 
 impl WangCluster {
+    /// Its pipelines, the search reading the grid through textures on a software adapter.
     pub fn new(ctx: &GpuContext) -> Self {
+        Self::with_texture_search(ctx, ctx.software)
+    }
+
+    /// Its pipelines with the search reading the grid through textures or not (the clusters do not
+    /// depend on it; tested).
+    pub fn with_texture_search(ctx: &GpuContext, texture_search: bool) -> Self {
         let mut entries = vec![uniform_layout(1), storage_layout(2, true)];
         entries.extend((3..=13).map(|b| storage_layout(b, false)));
         let float = wgpu::TextureSampleType::Float { filterable: false };
         entries.push(data_texture_layout(14, float));
         entries.push(data_texture_layout(15, wgpu::TextureSampleType::Uint));
-        let texture_search = ctx.software;
         let constants = [("TEXTURE_SEARCH", texture_search as u32 as f64)];
         WangCluster {
             kernel: Kernel::with_entries(ctx, None, "wang_cluster", ENTRIES, &entries, &constants),
