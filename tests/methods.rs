@@ -365,9 +365,7 @@ fn wang_gpu_cluster_with(
         width: w,
         height: h,
     };
-    WangCluster::new(ctx)
-        .run(&mut g, img, &p, iterations)
-        .unwrap()
+    wc.run(&mut g, img, &p, iterations).unwrap()
 }
 
 fn surface(pos: Vec3, nrm: Vec3) -> [[f32; 4]; 4] {
