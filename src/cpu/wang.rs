@@ -357,7 +357,7 @@ impl CentreGrid {
             lo = lo.min(c.pos);
             hi = hi.max(c.pos);
         }
-        if !(lo.x <= hi.x) {
+        if lo.x > hi.x {
             lo = Vec3::from_slice(&p.lo[..3]);
             hi = lo + Vec3::from_slice(&p.ext[..3]);
         }

@@ -136,20 +136,15 @@ impl Wang {
         kernel.bind_group_with_textures(ctx, &list, &[(3, &lt), (5, &pt)])
     }
 
-    /// §3.2: the clustering of the frame's shading points into `k` clusters, on the GPU
-    /// (`cluster::WangCluster`); `alpha` is α per unit of length, `bounds` the scene's.
+    /// §3.2: the clustering of the frame's shading points (`p`), on the GPU (`cluster::WangCluster`).
     pub fn cluster(
         &self,
         g: &mut Gpu,
         img: Image,
-        k: u32,
-        alpha: f32,
+        p: &ClusterParams,
         iterations: u32,
-        seed: u32,
-        bounds: (glam::Vec3, glam::Vec3),
     ) -> Result<WangClustering> {
-        let p = ClusterParams::new(img.width, img.height, k, alpha, seed, bounds);
-        self.cluster.run(g, img, &p, iterations)
+        self.cluster.run(g, img, p, iterations)
     }
 
     /// §3.4's R_j at every sample point: `RADIUS_RAYS` rays each, `RADIUS_RAYS_PER_DISPATCH` an
@@ -281,15 +276,10 @@ impl IndirectMethod for WangMethod {
             Pass::WangCluster => {
                 let c = f.cluster;
                 let alpha = f.method.wang.wang_alpha / extent;
-                let w = wang.cluster(
-                    g,
-                    img,
-                    c.sp_clusters,
-                    alpha,
-                    c.iterations,
-                    f.frame.seed,
-                    f.scene.bounds(),
-                )?;
+                let (w, h) = (img.width, img.height);
+                let bounds = f.scene.bounds();
+                let p = ClusterParams::new(w, h, c.sp_clusters, alpha, f.frame.seed, bounds);
+                let w = wang.cluster(g, img, &p, c.iterations)?;
                 n.sp_used = w.used;
                 self.state.clustering = Some(w);
             }
