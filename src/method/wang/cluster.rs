@@ -9,8 +9,8 @@
 //!    a node with one seed draws it among its points (jittered sampling).
 //! 2. **k-means with Eq. (2)**: every point to the centre of least error among its own cluster's
 //!    (in the first assignment: the seed of its quadtree node) and those of the 27 cells of a
-//!    uniform grid over the centres around it (the paper's kd-tree "constrain[s] the search within
-//!    a small Euclidean distance"; the grid is built on the GPU every iteration as colom's is), so
+//!    uniform grid over the centres around it (the paper uses a kd-tree of the centres "to constrain
+//!    the search within a small Euclidean distance"; the grid is built on the GPU every iteration as colom's is), so
 //!    a border moves as far as the centres ask, up to a cell (1.5 cluster spacings) an iteration,
 //!    whatever the pixels; centres the mean position and normal of their members, from 64-bit
 //!    fixed-point sums that a point changing cluster updates with atomics.
