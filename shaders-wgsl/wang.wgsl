@@ -1,7 +1,6 @@
 // Wang et al. 2009 (seed 001) adapted to VPL lighting (docs/methods.md, "wang"); CPU twin:
-// src/cpu/wang.rs. Three entry points, each its own pipeline (src/gi/wang.rs):
-// - assign: one k-means assignment pass of §3.2 with Eq. (2) over the labels of a pixel's screen
-//   neighbourhood at offsets {-s, 0, s}^2;
+// src/cpu/wang.rs. Two entry points, each its own pipeline (src/method/wang/mod.rs); the clustering
+// of §3.2 is wang_cluster.wgsl:
 // - radius: §3.4's R_j, the harmonic mean distance to the surfaces seen from sample point j (summed
 //   inverse hit distances of cosine-distributed rays);
 // - interp: §3.4's interpolation of the sample points' irradiance with
@@ -19,31 +18,27 @@ struct WangParams {
     height: u32,
     // Clusters (sample points).
     k: u32,
-    // s of the neighbourhood {-s, 0, s}^2.
+    // s of interp's neighbourhood {-s, 0, s}^2.
     stride: u32,
-    // alpha of Eq. (2) per unit of length (alpha / scene diagonal).
-    alpha: f32,
+    _p: u32,
     seed: u32,
     // R_j's clamp [r_min, r_max] (src/cpu/wang.rs, radius_from_sum).
     r_min: f32,
     r_max: f32,
     // Rays of R_j in all.
     rays: u32,
-    // assign: the grid step g (pixels with x and y multiples of g; the others keep their labels).
-    step: u32,
+    _a: u32,
     _b: u32,
     _c: u32,
 }
 
 @group(1) @binding(1) var<uniform> params: WangParams;
 @group(1) @binding(2) var<storage, read> gbuffer: array<ShadingPoint>;
-// The labels a pass reads, as a texture (DATA_ROW = 4096 texels a row): on lavapipe a texel fetch
+// The labels interp reads, as a texture (DATA_ROW = 4096 texels a row): on lavapipe a texel fetch
 // gathers for a whole SIMD batch, a storage read with a per-lane address is a scalar loop per lane
 // (shade.wgsl).
 @group(1) @binding(3) var labels_tex: texture_2d<u32>;
-@group(1) @binding(4) var<storage, read_write> labels_out: array<u32>;
-// Two vec4 a cluster: position (w = 1: has members / a sample point), normal. `assign` reads the
-// centres, `radius` and `interp` the sample points.
+// Two vec4 a cluster: its sample point (w = 1: it has one), normal.
 @group(1) @binding(5) var points_tex: texture_2d<f32>;
 // Per sample point its gathered irradiance times 1/pi (reference.wgsl with albedo 1).
 @group(1) @binding(6) var<storage, read> irradiance: array<vec4<f32>>;
@@ -59,11 +54,6 @@ fn point(i: u32) -> vec4<f32> {
     return textureLoad(points_tex, vec2<u32>(i & 4095u, i >> 12u), 0);
 }
 
-// Eq. (2) of §3.2.
-fn eq2_error(xi: vec3<f32>, ni: vec3<f32>, xk: vec3<f32>, nk: vec3<f32>) -> f32 {
-    return params.alpha * length(xi - xk) + sqrt(max(0.0, 2.0 - 2.0 * dot(ni, nk)));
-}
-
 // The label of the pixel at (x, y) + d * stride, or INVALID outside the image.
 fn neighbour(x: i32, y: i32, dx: i32, dy: i32, s: i32) -> u32 {
     let qx = x + dx * s;
@@ -72,50 +62,6 @@ fn neighbour(x: i32, y: i32, dx: i32, dy: i32, s: i32) -> u32 {
         return INVALID;
     }
     return u32(qy) * params.width + u32(qx);
-}
-
-@compute @workgroup_size(64)
-fn assign(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    // Item i is grid point i of the grid of step g, ceil(width / g) points a row.
-    let i = chunk_item(gid, nwg);
-    if i == INVALID {
-        return;
-    }
-    let g = max(params.step, 1u);
-    let wg = (params.width + g - 1u) / g;
-    let m = (i / wg) * g * params.width + (i % wg) * g;
-    let sp = gbuffer[m];
-    if sp.pos.w <= 0.0 {
-        labels_out[m] = INVALID;
-        return;
-    }
-    let x = i32(m % params.width);
-    let y = i32(m / params.width);
-    let s = i32(params.stride);
-    var best = INVALID;
-    var best_d = INF;
-    for (var dy = -1; dy <= 1; dy++) {
-        for (var dx = -1; dx <= 1; dx++) {
-            let q = neighbour(x, y, dx, dy, s);
-            if q == INVALID {
-                continue;
-            }
-            let l = label_at(q);
-            if l == INVALID {
-                continue;
-            }
-            let c = point(2u * l);
-            if c.w <= 0.0 {
-                continue;
-            }
-            let d = eq2_error(sp.pos.xyz, sp.nrm.xyz, c.xyz, point(2u * l + 1u).xyz);
-            if d < best_d {
-                best_d = d;
-                best = l;
-            }
-        }
-    }
-    labels_out[m] = best;
 }
 
 @compute @workgroup_size(64)

@@ -2,24 +2,21 @@
 //! by §3.2's adaptively seeded k-means with the Eq. (2) metric, the indirect irradiance gathered only
 //! at each cluster's sample point (every light with its own shadow ray: `reference.wgsl`), §3.4's
 //! R_j traced there, and every pixel interpolating from the sample points around it with §3.4's
-//! weight. Shaders: `shaders-wgsl/wang.wgsl` (`assign`, `radius`, `interp`); its CPU steps
-//! (seeding, centre updates, sample points) are `cluster`, the CPU twin of its kernels `cpu::wang`.
+//! weight. Shaders: `shaders-wgsl/wang_cluster.wgsl` (the clustering, `cluster`) and
+//! `shaders-wgsl/wang.wgsl` (`radius`, `interp`); CPU twins `cpu::wang`.
 //! The passes are `CLUSTER` → `GATHER` → `INTERP` (`ROOM`).
 
 pub mod cluster;
 pub mod settings;
 
-use std::time::{Duration, Instant};
-
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
-use self::cluster as twin;
+use self::cluster::{ClusterParams, WangCluster, WangClustering};
 use super::Method;
 use super::{Counts, FrameInputs, IndirectMethod, Room};
 use crate::gi::dispatch::{Gpu, Kernel, Run, copy_to_texture, data_texture};
 use crate::gi::pass::Pass;
-use crate::gi::primary::ShadingPoint;
 use crate::gi::reference::GatherInputs;
 use crate::gi::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
@@ -33,6 +30,19 @@ pub const GATHER: Pass = Pass::Room("wang_gather");
 /// §3.4: every pixel interpolates the sample points' irradiance.
 pub const INTERP: Pass = Pass::Room("wang_interp");
 
+/// Rays a sample point traces for its harmonic mean distance R_j (§3.4), two dispatches of 16.
+pub const RADIUS_RAYS: u32 = 32;
+/// Rays one invocation traces per dispatch (lavapipe's loop budget, docs/architecture.md).
+pub const RADIUS_RAYS_PER_DISPATCH: u32 = 16;
+/// R_j is at least this fraction of the scene diagonal (a sample in a corner whose rays all hit at
+/// once would otherwise weigh nothing but itself) and at most the diagonal (every ray missed).
+pub const RADIUS_MIN: f32 = 1e-3;
+
+/// The stride of the interpolation's neighbourhood: about the spacing of K clusters over the pixels.
+pub fn interp_stride(pixels: u32, k: u32) -> u32 {
+    ((pixels as f32 / k.max(1) as f32).sqrt().round() as u32).max(1)
+}
+
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, Default)]
 pub struct WangParams {
@@ -40,35 +50,12 @@ pub struct WangParams {
     pub height: u32,
     pub k: u32,
     pub stride: u32,
-    pub alpha: f32,
+    pub _p: u32,
     pub seed: u32,
     pub r_min: f32,
     pub r_max: f32,
     pub rays: u32,
-    pub step: u32,
-    pub _pad: [u32; 2],
-}
-
-/// A frame's clustering: the labels on the GPU, the sample points, and what the CPU steps took.
-pub struct WangClustering {
-    pub clusters: twin::WangClusters,
-    /// Per pixel its cluster (u32, `INVALID` for none).
-    pub labels: wgpu::Buffer,
-    /// Per cluster two vec4: the sample point (position, w = 1 when the cluster has one; normal).
-    pub samples: wgpu::Buffer,
-    /// The sample points as shading points of albedo 1 (what the gather reads).
-    pub sample_gbuffer: wgpu::Buffer,
-    /// Clusters with a sample point.
-    pub used: u32,
-    /// Milliseconds of the CPU steps (G-buffer read-back, seeding, centre updates, sample points),
-    /// added to the pass's GPU time.
-    pub cpu_ms: f64,
-}
-
-impl WangClustering {
-    pub fn k(&self) -> u32 {
-        self.clusters.centers.len() as u32
-    }
+    pub _pad: [u32; 3],
 }
 
 /// A wang frame's clustering and what its gather left at the sample points (the last frame's is
@@ -96,20 +83,20 @@ pub struct Image<'a> {
     pub height: u32,
 }
 
-/// Group 1 of a wang kernel: the parameters, the storage bindings 2, 4, 6, 7, 8 (`None`: a small
+/// Group 1 of a wang kernel: the parameters, the storage bindings 2, 6, 7, 8 (`None`: a small
 /// buffer of its own, as one buffer may not be bound both read-only and writable in one dispatch)
 /// and the sources of the two data textures as (buffer, texels): the labels (binding 3, u32) and
 /// the points (binding 5, two vec4 a cluster), copied into textures first.
 struct Bindings<'a> {
     params: WangParams,
-    buffers: [Option<&'a wgpu::Buffer>; 5],
+    buffers: [Option<&'a wgpu::Buffer>; 4],
     labels: Option<(&'a wgpu::Buffer, u32)>,
     points: Option<(&'a wgpu::Buffer, u32)>,
 }
 
-/// The kernels of `wang.wgsl`, built the first time a frame uses them.
+/// The kernels of `wang_cluster.wgsl` and `wang.wgsl`, built the first time a frame uses them.
 pub struct Wang {
-    assign: Kernel,
+    cluster: WangCluster,
     radius: Kernel,
     interp: Kernel,
 }
@@ -120,7 +107,6 @@ impl Wang {
             uniform_layout(1),
             storage_layout(2, true),
             data_texture_layout(3, wgpu::TextureSampleType::Uint),
-            storage_layout(4, false),
             data_texture_layout(5, wgpu::TextureSampleType::Float { filterable: false }),
             storage_layout(6, true),
             storage_layout(7, false),
@@ -128,7 +114,7 @@ impl Wang {
         ];
         let k = |entry| Kernel::with_entries(ctx, Some(scene), "wang", &[entry], &entries, &[]);
         Wang {
-            assign: k("assign"),
+            cluster: WangCluster::new(ctx),
             radius: k("radius"),
             interp: k("interp"),
         }
@@ -136,10 +122,10 @@ impl Wang {
 
     fn bind(&self, kernel: &Kernel, ctx: &GpuContext, b: &Bindings) -> wgpu::BindGroup {
         let p = ctx.uniform("wang params", &b.params);
-        let dummies: Vec<wgpu::Buffer> = (0..5).map(|_| ctx.storage("wang unused", 16)).collect();
+        let dummies: Vec<wgpu::Buffer> = (0..4).map(|_| ctx.storage("wang unused", 16)).collect();
         let mut list: Vec<(u32, &wgpu::Buffer)> = vec![(1, &p)];
         for (i, buf) in b.buffers.iter().enumerate() {
-            list.push(([2, 4, 6, 7, 8][i], buf.unwrap_or(&dummies[i])));
+            list.push(([2, 6, 7, 8][i], buf.unwrap_or(&dummies[i])));
         }
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         let mut texture =
@@ -159,105 +145,15 @@ impl Wang {
         kernel.bind_group_with_textures(ctx, &list, &[(3, &lt), (5, &pt)])
     }
 
-    /// Assignment passes (`assign`) on the GPU, one per stride of `run` in order, with its centres:
-    /// its labels in, the labels after the last pass out (read back once). The passes ping-pong
-    /// between two label buffers.
-    pub fn assign_passes(
-        &self,
-        g: &mut Gpu,
-        img: Image,
-        run: &twin::AssignRun,
-    ) -> Result<Vec<u32>> {
-        let ctx = g.ctx;
-        let (width, height) = (img.width, img.height);
-        let n = width * height;
-        // Both start as the run's labels: a pass writes the grid's pixels only, the others keep theirs.
-        let mut a = ctx.storage_init("wang labels a", run.labels);
-        let mut b = ctx.storage_init("wang labels b", run.labels);
-        let step = run.step.max(1);
-        let items = width.div_ceil(step) * height.div_ceil(step);
-        let pts: Vec<[[f32; 4]; 2]> = run.centers.iter().map(|c| c.to_gpu()).collect();
-        let pts = ctx.storage_init("wang centres", &or_one(&pts));
-        for &stride in run.strides {
-            let bg = self.bind(
-                &self.assign,
-                ctx,
-                &Bindings {
-                    params: WangParams {
-                        width,
-                        height,
-                        k: run.centers.len() as u32,
-                        stride,
-                        alpha: run.alpha,
-                        step,
-                        ..Default::default()
-                    },
-                    buffers: [Some(img.gbuffer), Some(&b), None, None, None],
-                    labels: Some((&a, n)),
-                    points: Some((&pts, 2 * run.centers.len() as u32)),
-                },
-            );
-            let run = Run {
-                label: CLUSTER.name(),
-                group: &bg,
-                seed: 0,
-            };
-            self.assign.run(g, run, items, 1 << 18, &mut |_, _| {});
-            std::mem::swap(&mut a, &mut b);
-        }
-        ctx.read_buffer(&a, n as usize)
-    }
-
-    /// §3.2: the clustering of the frame's shading points into `k` clusters, the GPU doing the
-    /// assignment passes and the CPU the rest (`cpu::wang::cluster`); `alpha` is α per unit of length.
+    /// §3.2: the clustering of the frame's shading points (`p`), on the GPU (`cluster::WangCluster`).
     pub fn cluster(
         &self,
         g: &mut Gpu,
         img: Image,
-        k: u32,
-        alpha: f32,
+        p: &ClusterParams,
         iterations: u32,
-        seed: u32,
     ) -> Result<WangClustering> {
-        let ctx = g.ctx;
-        let n = img.width * img.height;
-        let mut cpu = Duration::ZERO;
-        let t = Instant::now();
-        let raw: Vec<[f32; 4]> = ctx.read_buffer(img.gbuffer, n as usize * 4)?;
-        let sps: Vec<ShadingPoint> = raw.chunks(4).map(ShadingPoint::from_gpu).collect();
-        cpu += t.elapsed();
-        let mut clock = Instant::now();
-        let cpu_img = twin::Image {
-            width: img.width,
-            height: img.height,
-            sps: &sps,
-        };
-        let clusters = twin::cluster(cpu_img, k, alpha, iterations, seed, &mut |run| {
-            cpu += clock.elapsed();
-            let out = self.assign_passes(g, img, run);
-            clock = Instant::now();
-            out
-        })?;
-        let t = Instant::now();
-        let samples = twin::sample_to_gpu(&sps, &clusters.samples);
-        let sample_gbuffer = twin::sample_gbuffer(&sps, &clusters.samples);
-        let used = clusters
-            .samples
-            .iter()
-            .filter(|&&s| s != twin::INVALID)
-            .count() as u32;
-        let labels = ctx.storage_init("wang labels", &or_one(&clusters.labels));
-        let samples = ctx.storage_init("wang samples", &or_one(&samples));
-        let sample_gbuffer = ctx.storage_init("wang sample gbuffer", &or_one(&sample_gbuffer));
-        cpu += clock.elapsed() + t.elapsed();
-        Ok(WangClustering {
-            clusters,
-            labels,
-            samples,
-            sample_gbuffer,
-            used,
-            cpu_ms: cpu.as_secs_f64() * 1e3,
-        })
+        self.cluster.run(g, img, p, iterations)
     }
 
     /// §3.4's R_j at every sample point: `RADIUS_RAYS` rays each, `RADIUS_RAYS_PER_DISPATCH` an
@@ -275,7 +171,7 @@ impl Wang {
                     seed,
                     ..Default::default()
                 },
-                buffers: [None, None, None, None, Some(&sums)],
+                buffers: [None, None, None, Some(&sums)],
                 labels: None,
                 points: Some((&c.samples, 2 * c.k())),
             },
@@ -285,7 +181,7 @@ impl Wang {
             group: &bg,
             seed: 0,
         };
-        let rays = (twin::RADIUS_RAYS, twin::RADIUS_RAYS_PER_DISPATCH);
+        let rays = (RADIUS_RAYS, RADIUS_RAYS_PER_DISPATCH);
         self.radius
             .run_2d(g, run, (k, 1 << 14), rays, &mut |_, _| true);
         sums
@@ -311,15 +207,14 @@ impl Wang {
                     width: img.width,
                     height: img.height,
                     k: c.k(),
-                    stride: twin::interp_stride(n, c.k()),
-                    r_min: twin::RADIUS_MIN * diagonal,
+                    stride: interp_stride(n, c.k()),
+                    r_min: RADIUS_MIN * diagonal,
                     r_max: diagonal,
-                    rays: twin::RADIUS_RAYS,
+                    rays: RADIUS_RAYS,
                     ..Default::default()
                 },
                 buffers: [
                     Some(img.gbuffer),
-                    None,
                     Some(&f.irradiance),
                     Some(indirect),
                     Some(&f.radius),
@@ -334,15 +229,6 @@ impl Wang {
             seed: 0,
         };
         self.interp.run(g, run, n, 1 << 18, &mut |_, _| {});
-    }
-}
-
-/// A storage buffer may not be empty: `v`, or one zeroed element.
-fn or_one<T: Pod>(v: &[T]) -> Vec<T> {
-    if v.is_empty() {
-        vec![T::zeroed()]
-    } else {
-        v.to_vec()
     }
 }
 
@@ -401,14 +287,10 @@ impl IndirectMethod for WangMethod {
             CLUSTER => {
                 let c = f.cluster;
                 let alpha = f.method.wang.wang_alpha / extent;
-                let w = wang.cluster(g, img, c.sp_clusters, alpha, c.iterations, f.frame.seed)?;
-                if std::env::var_os("FVPL_PROFILE_STEPS").is_some() {
-                    eprintln!(
-                        "wang_cluster: {:.1} ms of CPU steps, {} assignment passes",
-                        w.cpu_ms, w.clusters.passes
-                    );
-                }
-                n.cpu_ms.push((pass, w.cpu_ms));
+                let (w, h) = (img.width, img.height);
+                let bounds = f.scene.bounds();
+                let p = ClusterParams::new(w, h, c.sp_clusters, alpha, f.frame.seed, bounds);
+                let w = wang.cluster(g, img, &p, c.iterations)?;
                 n.sp_used = w.used;
                 self.state.clustering = Some(w);
             }
@@ -433,7 +315,7 @@ impl IndirectMethod for WangMethod {
                     &mut |_, _| true,
                 );
                 let radius = wang.radius(g, &c, f.frame.seed);
-                n.indirect_rays = c.used as u64 * (num_lights + twin::RADIUS_RAYS) as u64;
+                n.indirect_rays = c.used as u64 * (num_lights + RADIUS_RAYS) as u64;
                 self.state.frame = Some(WangFrame {
                     clustering: c,
                     irradiance,
