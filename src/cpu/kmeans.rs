@@ -106,22 +106,10 @@ pub fn grid_cells(p: &KmParams, cs: &[Centroid]) -> u32 {
 
 impl Grid {
     fn build(p: &KmParams, cs: &[Centroid]) -> Grid {
-        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        for c in cs.iter().filter(|c| c.valid) {
-            lo = lo.min(c.pos);
-            hi = hi.max(c.pos);
-        }
-        if lo.x > hi.x {
-            lo = Vec3::from_slice(&p.lo[..3]);
-            hi = lo + Vec3::from_slice(&p.ext[..3]);
-        }
-        let e = (hi - lo).max(Vec3::ZERO);
+        let (lo, e) = centre_bounds(cs.iter().filter(|c| c.valid).map(|c| c.pos), p.lo, p.ext);
         let area = 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x);
         let spacing = (area / p.k.max(1) as f32).sqrt();
-        let emax = e.max_element();
-        let floor_cell = (emax / MAX_DIM as f32).max(1e-7 * p.ext[3].max(1e-30));
-        let cell = (1.5 * spacing).max(floor_cell);
-        let dims = [e.x, e.y, e.z].map(|x| ((x / cell).ceil() as u32).clamp(1, MAX_DIM));
+        let (cell, dims) = cell_side_and_dims(e, spacing, p.ext[3], MAX_DIM);
         let mut g = Grid {
             origin: lo,
             cell,
@@ -171,36 +159,27 @@ fn nearest(
     let mut best: Vec<(u32, f32)> = Vec::new();
     let c = g.coord(pt.pos);
     let scan = |best: &mut Vec<(u32, f32)>, ring: i32, f: usize, normals: bool| {
-        let lo = [0, 1, 2].map(|a| (c[a] - ring).max(0));
-        let hi = [0, 1, 2].map(|a| (c[a] + ring).min(g.dims[a] as i32 - 1));
-        for z in lo[2]..=hi[2] {
-            for y in lo[1]..=hi[1] {
-                for x in lo[0]..=hi[0] {
-                    let cheb = (x - c[0]).abs().max((y - c[1]).abs()).max((z - c[2]).abs());
-                    if ring > 1 && cheb != ring {
-                        continue;
-                    }
-                    for &k in &g.cells[g.index([x, y, z])] {
-                        let r = if normals {
-                            eq7_dist(pt, &cs[k as usize], n_t)
-                        } else {
-                            (pt.pos - cs[k as usize].pos).length()
-                        };
-                        if r < f32::MAX {
-                            if best.len() == f {
-                                let (lk, lr) = best[f - 1];
-                                if !before(r, k, lr, lk) {
-                                    continue;
-                                }
-                                best.pop();
-                            }
-                            let at = best
-                                .iter()
-                                .position(|&(bk, br)| before(r, k, br, bk))
-                                .unwrap_or(best.len());
-                            best.insert(at, (k, r));
+        let dims = g.dims.map(|d| d as i32);
+        for cell in ring_cells(c, ring, dims) {
+            for &k in &g.cells[g.index(cell)] {
+                let r = if normals {
+                    eq7_dist(pt, &cs[k as usize], n_t)
+                } else {
+                    (pt.pos - cs[k as usize].pos).length()
+                };
+                if r < f32::MAX {
+                    if best.len() == f {
+                        let (lk, lr) = best[f - 1];
+                        if !before(r, k, lr, lk) {
+                            continue;
                         }
+                        best.pop();
                     }
+                    let at = best
+                        .iter()
+                        .position(|&(bk, br)| before(r, k, br, bk))
+                        .unwrap_or(best.len());
+                    best.insert(at, (k, r));
                 }
             }
         }
@@ -748,4 +727,49 @@ pub fn rep_weights(points: &[Point], f: usize, assign: &[u32], reps: &[u32], p: 
         out[m * f..m * f + f].copy_from_slice(&w);
     }
     out
+}
+
+/// The bounds a search grid spans: the centres' (lowest corner, extent), or the frame `lo`, `ext`
+/// given to the kernels when there is no centre.
+pub fn centre_bounds(
+    centres: impl Iterator<Item = Vec3>,
+    lo: [f32; 4],
+    ext: [f32; 4],
+) -> (Vec3, Vec3) {
+    let (mut a, mut b) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for c in centres {
+        a = a.min(c);
+        b = b.max(c);
+    }
+    if a.x > b.x {
+        a = Vec3::from_slice(&lo[..3]);
+        b = a + Vec3::from_slice(&ext[..3]);
+    }
+    (a, (b - a).max(Vec3::ZERO))
+}
+
+/// The cells of a search grid of `dims` cells at Chebyshev distance `ring` from cell `c` (ring 1:
+/// the 27 around it, `c` included), clipped to the grid, z then y then x ascending (the kernels'
+/// order).
+pub fn ring_cells(c: [i32; 3], ring: i32, dims: [i32; 3]) -> impl Iterator<Item = [i32; 3]> {
+    let lo = [0, 1, 2].map(|a| (c[a] - ring).max(0));
+    let hi = [0, 1, 2].map(|a| (c[a] + ring).min(dims[a] - 1));
+    (lo[2]..=hi[2])
+        .flat_map(move |z| {
+            (lo[1]..=hi[1]).flat_map(move |y| (lo[0]..=hi[0]).map(move |x| [x, y, z]))
+        })
+        .filter(move |&[x, y, z]| {
+            let cheb = (x - c[0]).abs().max((y - c[1]).abs()).max((z - c[2]).abs());
+            ring <= 1 || cheb == ring
+        })
+}
+
+/// A search grid's cell side and size over extent `e`: 1.5 centre spacings, but no finer than
+/// `max_dim` cells along the longest side nor than 1e-7 of the scene diagonal `diag` (the
+/// kernels' `grid_setup`; shared by the k-means twin and wang's).
+pub fn cell_side_and_dims(e: Vec3, spacing: f32, diag: f32, max_dim: u32) -> (f32, [u32; 3]) {
+    let floor_cell = (e.max_element() / max_dim as f32).max(1e-7 * diag.max(1e-30));
+    let cell = (1.5 * spacing).max(floor_cell);
+    let dims = [e.x, e.y, e.z].map(|x| ((x / cell).ceil() as u32).clamp(1, max_dim));
+    (cell, dims)
 }

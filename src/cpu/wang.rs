@@ -352,24 +352,14 @@ pub struct CentreGrid {
 
 impl CentreGrid {
     pub fn build(p: &ClusterParams, cs: &[Center]) -> CentreGrid {
-        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        for c in cs.iter().filter(|c| c.count > 0) {
-            lo = lo.min(c.pos);
-            hi = hi.max(c.pos);
-        }
-        if lo.x > hi.x {
-            lo = Vec3::from_slice(&p.lo[..3]);
-            hi = lo + Vec3::from_slice(&p.ext[..3]);
-        }
-        let e = (hi - lo).max(Vec3::ZERO);
+        let centres = cs.iter().filter(|c| c.count > 0).map(|c| c.pos);
+        let (lo, e) = super::kmeans::centre_bounds(centres, p.lo, p.ext);
         let area = 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x);
         let emax = e.x.max(e.y.max(e.z));
         let spacing = (area / p.k.max(1) as f32)
             .sqrt()
             .max(emax / p.k.max(1) as f32);
-        let floor_cell = (emax / MAX_DIM as f32).max(1e-7 * p.ext[3].max(1e-30));
-        let cell = (1.5 * spacing).max(floor_cell);
-        let dims = [e.x, e.y, e.z].map(|x| ((x / cell).ceil() as u32).clamp(1, MAX_DIM));
+        let (cell, dims) = super::kmeans::cell_side_and_dims(e, spacing, p.ext[3], MAX_DIM);
         let mut g = CentreGrid {
             origin: lo,
             cell,
@@ -411,22 +401,12 @@ impl CentreGrid {
             _ => (f32::MAX, INVALID),
         };
         for ring in 1..=maxr {
-            let lo = [0, 1, 2].map(|a| (c[a] - ring).max(0));
-            let hi = [0, 1, 2].map(|a| (c[a] + ring).min(d[a] - 1));
-            for z in lo[2]..=hi[2] {
-                for y in lo[1]..=hi[1] {
-                    for x in lo[0]..=hi[0] {
-                        let cheb = (x - c[0]).abs().max((y - c[1]).abs()).max((z - c[2]).abs());
-                        if ring > 1 && cheb != ring {
-                            continue;
-                        }
-                        for &k in &self.cells[self.index([x, y, z])] {
-                            let ck = &cs[k as usize];
-                            let e = eq2_error(alpha, pos, nrm, ck.pos, ck.nrm);
-                            if e < best_e || (e == best_e && k < best) {
-                                (best_e, best) = (e, k);
-                            }
-                        }
+            for cell in super::kmeans::ring_cells(c, ring, d) {
+                for &k in &self.cells[self.index(cell)] {
+                    let ck = &cs[k as usize];
+                    let e = eq2_error(alpha, pos, nrm, ck.pos, ck.nrm);
+                    if e < best_e || (e == best_e && k < best) {
+                        (best_e, best) = (e, k);
                     }
                 }
             }

@@ -145,16 +145,6 @@ impl Wang {
         kernel.bind_group_with_textures(ctx, &list, &[(3, &lt), (5, &pt)])
     }
 
-    /// §3.2: the clustering of the frame's shading points (`p`), on the GPU (`cluster::WangCluster`).
-    pub fn cluster(
-        &self,
-        g: &mut Gpu,
-        img: Image,
-        p: &ClusterParams,
-        iterations: u32,
-    ) -> Result<WangClustering> {
-        self.cluster.run(g, img, p, iterations)
-    }
 
     /// §3.4's R_j at every sample point: `RADIUS_RAYS` rays each, `RADIUS_RAYS_PER_DISPATCH` an
     /// invocation per dispatch. Returns the summed inverse distances (vec4 a sample, x).
@@ -290,7 +280,7 @@ impl IndirectMethod for WangMethod {
                 let (w, h) = (img.width, img.height);
                 let bounds = f.scene.bounds();
                 let p = ClusterParams::new(w, h, c.sp_clusters, alpha, f.frame.seed, bounds);
-                let w = wang.cluster(g, img, &p, c.iterations)?;
+                let w = wang.cluster.run(g, img, &p, c.iterations)?;
                 n.sp_used = w.used;
                 self.state.clustering = Some(w);
             }
