@@ -766,7 +766,7 @@ pub fn ring_cells(c: [i32; 3], ring: i32, dims: [i32; 3]) -> impl Iterator<Item 
 
 /// A search grid's cell side and size over extent `e`: 1.5 centre spacings, but no finer than
 /// `max_dim` cells along the longest side nor than 1e-7 of the scene diagonal `diag` (the
-/// kernels' `grid_setup`; shared by the k-means twin and wang's).
+/// kernels' `grid_setup`; shared by the twins that search a grid of centres).
 pub fn cell_side_and_dims(e: Vec3, spacing: f32, diag: f32, max_dim: u32) -> (f32, [u32; 3]) {
     let floor_cell = (e.max_element() / max_dim as f32).max(1e-7 * diag.max(1e-30));
     let cell = (1.5 * spacing).max(floor_cell);

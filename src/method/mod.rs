@@ -118,14 +118,13 @@ pub struct Room {
     pub ui: fn(&mut egui::Ui, &mut MethodSettings),
 }
 
-/// Declares the registry from one line a method (`module: Variant`): the method's folder
-/// (`pub mod module;`, which holds its `ROOM`, its knobs as `Knobs` and their bench lists as
-/// `KnobLists`, both made by `knobs!`), its `Method` variant (named `module` on the command line,
+/// Declares the registry from one line a method (`module: Variant`), the method's folder (declared
+/// beside it, `pub mod module;`, and holding its `ROOM`, its knobs as `Knobs` and their bench lists
+/// as `KnobLists`, both made by `knobs!`): its `Method` variant (named `module` on the command line,
 /// in JSON and in the CSV), its line of `ROOMS`, its field `module` of `MethodSettings` (its knobs,
 /// flattened into the CLI, the stats JSON and the CSV's last columns) and of `MethodLists`.
 macro_rules! rooms {
     ($($module:ident: $Variant:ident),+ $(,)?) => {
-        $(pub mod $module;)+
 
         /// The registry. colom (the paper) is not here: its passes are the renderer's own, since
         /// every method's reference is colom's unclustered gather.
@@ -244,7 +243,13 @@ macro_rules! rooms {
     };
 }
 
-// The registry: a method other than colom is its folder and its line here.
+// The registry: a method other than colom is its folder, its `mod` line and its line in `rooms!`.
+// The folders are declared outside the macro so that tools that walk `mod` declarations
+// (cargo-mutants: docs/testing.md) see them.
+pub mod cvrtgi;
+pub mod lightcluster;
+pub mod wang;
+
 rooms! {
     wang: Wang,
     lightcluster: LightCluster,
