@@ -145,7 +145,6 @@ impl Wang {
         kernel.bind_group_with_textures(ctx, &list, &[(3, &lt), (5, &pt)])
     }
 
-
     /// §3.4's R_j at every sample point: `RADIUS_RAYS` rays each, `RADIUS_RAYS_PER_DISPATCH` an
     /// invocation per dispatch. Returns the summed inverse distances (vec4 a sample, x).
     pub fn radius(&self, g: &mut Gpu, c: &WangClustering, seed: u32) -> wgpu::Buffer {
