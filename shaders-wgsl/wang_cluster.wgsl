@@ -9,6 +9,7 @@
 #import common/chunk.wgsl
 #import common/gbuffer.wgsl
 #import common/rng.wgsl
+#import common/scan.wgsl
 
 const INVALID: u32 = 0xffffffffu;
 const BIG: f32 = 3.4028235e38;
@@ -711,10 +712,8 @@ fn grid_count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
 
 // The prefix sum of the counts over blocks of SCAN_BLOCK cells (256 invocations x 4 cells), a
 // workgroup taking blocks wid, wid + groups, ...: any number of workgroups gives the same sums
-// (src/method/wang/cluster.rs dispatches about one a block, `gi::kmeans::scan_groups`).
-const SCAN_BLOCK: u32 = 1024u;
-
-var<workgroup> partial: array<u32, 256>;
+// (src/method/wang/cluster.rs dispatches about one a block, `gi::kmeans::scan_groups`); the
+// workgroup scan is common/scan.wgsl's, shared with kmeans/grid.wgsl.
 var<workgroup> wg_cells: u32;
 
 fn workgroup_cells(t: u32) -> u32 {
@@ -722,20 +721,6 @@ fn workgroup_cells(t: u32) -> u32 {
         wg_cells = atomicLoad(&state[GRID + 7u]);
     }
     return workgroupUniformLoad(&wg_cells);
-}
-
-// Inclusive prefix sum of partial[0..256) in place (Hillis-Steele).
-fn scan_partial(t: u32) {
-    workgroupBarrier();
-    for (var d = 1u; d < 256u; d <<= 1u) {
-        var v = 0u;
-        if t >= d {
-            v = partial[t - d];
-        }
-        workgroupBarrier();
-        partial[t] += v;
-        workgroupBarrier();
-    }
 }
 
 // Each cell's offset within its block, each block's total.

@@ -1,5 +1,6 @@
 // Alg. 1 line 5: the uniform grid over the centroids that the nearest-centroid search reads.
 #import common/kmeans.wgsl
+#import common/scan.wgsl
 
 // --- Alg. 1 line 5: the grid over the centroids. Step 1: bounds of the valid centroids, gathered
 // where the centroids are written (init_centroids, update) so the grid needs no pass of its own.
@@ -80,12 +81,10 @@ fn grid_count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
 // number of workgroups gives the same sums. Only the GPU knows the cell count: the host dispatches
 // about one workgroup a block from an estimate (src/gi/kmeans.rs, scan_groups). A single workgroup
 // walking all cells cost 0.6 ms a grid build at 94k cells on an H100; a fixed 256 workgroups, mostly
-// idle, cost lavapipe 4 ms a grid build at 720 cells.
-const SCAN_BLOCK: u32 = 1024u;
+// idle, cost lavapipe 4 ms a grid build at 720 cells. The workgroup scan is common/scan.wgsl's.
 // Where the blocks' totals go in `cells` (after the counts and the offsets within blocks).
 const BLOCK_SUMS: u32 = 2u * MAX_CELLS;
 
-var<workgroup> partial: array<u32, 256>;
 var<workgroup> wg_cells: u32;
 
 // The grid's cell count as a workgroup-uniform value (a storage value is not one under WGSL's rules for
@@ -95,21 +94,6 @@ fn workgroup_cells(t: u32) -> u32 {
         wg_cells = grid.num_cells;
     }
     return workgroupUniformLoad(&wg_cells);
-}
-
-// Inclusive prefix sum of partial[0..256) in place (Hillis-Steele); every invocation of the
-// workgroup calls it.
-fn scan_partial(t: u32) {
-    workgroupBarrier();
-    for (var d = 1u; d < 256u; d <<= 1u) {
-        var v = 0u;
-        if t >= d {
-            v = partial[t - d];
-        }
-        workgroupBarrier();
-        partial[t] += v;
-        workgroupBarrier();
-    }
 }
 
 // Step 4a: each cell's offset within its block (at MAX_CELLS + c) and each block's total (at
