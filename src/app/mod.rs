@@ -474,16 +474,16 @@ pub struct Viewer {
     pub loading: Option<(String, Worker)>,
 }
 
-/// The preview a moving camera renders: a quarter of the pixels (half scale), one direct-light
-/// sample a pixel (docs/temporal.md measures what it saves).
+/// The preview a moving camera renders: the image at its full size for the primary rays and the
+/// direct light, so edges stay as sharp as at rest, with one direct-light sample a pixel; its indirect
+/// light at half the render scale (a quarter of the pixels, at least 8 a side), upsampled as at rest
+/// (docs/temporal.md measures what it saves).
 pub fn preview_settings(s: RenderSettings) -> RenderSettings {
     let f = &s.frame;
-    let half = |side: u32| ((side as f32 * f.indirect_scale) as u32 / 2).max(8);
+    let fewest = 8.0 / f.width.min(f.height).max(1) as f32;
     RenderSettings {
         frame: FrameSettings {
-            width: half(f.width),
-            height: half(f.height),
-            indirect_scale: 1.0,
+            indirect_scale: (f.indirect_scale / 2.0).max(fewest).min(1.0),
             direct_samples: 1,
             ..s.frame
         },

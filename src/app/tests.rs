@@ -452,3 +452,29 @@ fn references_are_kept_per_view_and_per_reference_setting() {
     assert!(v.kept_reference(&key).is_none());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_preview_keeps_the_image_size_and_lowers_only_the_indirect_light() {
+    let mut ui = UiSettings::new(&RenderSettings::default());
+    ui.render_scale = 0.5;
+    let rest = ui.frame_settings(640, 480);
+    let p = preview_settings(rest.clone());
+    // Primary rays and direct light at the image's size: the edges of a moving view stay sharp.
+    assert_eq!((p.frame.width, p.frame.height), (640, 480));
+    assert_eq!(p.frame.direct_samples, 1);
+    assert_eq!(p.frame.indirect_scale, rest.frame.indirect_scale / 2.0);
+    let low = |s: &RenderSettings| {
+        crate::gi::upsample::indirect_size(s.frame.width, s.frame.height, s.frame.indirect_scale)
+    };
+    let (lw, lh) = low(&rest);
+    assert_eq!(low(&p), (lw / 2, lh / 2));
+    // Everything else (the clustering, the method) as at rest.
+    assert_eq!(p.cluster, rest.cluster);
+    // A tiny window keeps at least 8 indirect pixels a side; a large scale stays within (0, 1].
+    let tiny = preview_settings(ui.frame_settings(20, 12));
+    let (tw, th) = low(&tiny);
+    assert!(tw >= 8 && th >= 8, "{tw}x{th}");
+    let mut whole = rest;
+    whole.frame.indirect_scale = 1.0;
+    assert_eq!(preview_settings(whole).frame.indirect_scale, 0.5);
+}
