@@ -516,4 +516,53 @@ mod tests {
             [2, 3]
         );
     }
+
+    /// A voxel's albedo, position and normal are its fragments' area-weighted means: two fragments of
+    /// areas 0.25 and 0.75 in one voxel, albedos 0.2 and 0.6, give 0.5 (cargo-mutants: the albedo
+    /// sum as `a / w` survived; every fragment of the other tests has area 1).
+    #[test]
+    fn voxel_means_are_weighted_by_fragment_area() {
+        let grid = Grid {
+            origin: Vec3::ZERO,
+            size: 1.0,
+            dims: [1; 3],
+        };
+        let frags = [
+            (Vec3::splat(0.2), Vec3::Y, Vec3::splat(0.2), 0.25),
+            (Vec3::splat(0.6), Vec3::Y, Vec3::splat(0.6), 0.75),
+        ];
+        let v = Voxels::from_fragments(grid, &frags);
+        assert_eq!(v.voxels.len(), 1);
+        let x = v.voxels[0];
+        assert!(
+            (x.albedo - Vec3::splat(0.5)).abs().max_element() < 1e-6,
+            "{:?}",
+            x.albedo
+        );
+        assert!(
+            (x.pos - Vec3::splat(0.5)).abs().max_element() < 1e-6,
+            "{:?}",
+            x.pos
+        );
+        assert!((x.area - 1.0).abs() < 1e-6);
+    }
+
+    /// Eq. (1) compares directions: normals of any length (a voxel's mean normal is shorter than 1
+    /// where its fragments disagree) at 30° pass a 35° test and at 40° fail it (cargo-mutants: the
+    /// cosine's division by the lengths as a product survived; unit normals hide it).
+    #[test]
+    fn eq1_compares_directions_whatever_the_lengths() {
+        let at = |deg: f32, len: f32| {
+            let r = deg.to_radians();
+            Vec3::new(r.cos(), r.sin(), 0.0) * len
+        };
+        for len in [0.5, 1.0, 3.0] {
+            assert!(eq1_within_angle(at(0.0, len), at(30.0, len), 35.0), "{len}");
+            assert!(
+                !eq1_within_angle(at(0.0, len), at(40.0, len), 35.0),
+                "{len}"
+            );
+            assert!(eq1_within_angle(at(0.0, 1.0), at(30.0, len), 35.0), "{len}");
+        }
+    }
 }
