@@ -993,12 +993,23 @@ fn light_list_flux_sums_to_the_vpls_flux() {
             "channel {ch}: VPLs {a}, lights {b}"
         );
     }
+    // Each light is a member VPL's position and normal; the other members' share of its flux and
+    // their mean squared distance (`Spread`) are finite and within [0, 1) and [0, 32) (the frame is 4
+    // wide).
     for l in &list.lights {
         assert!(
-            vpls.iter().any(|v| v.pos == l.pos && v.nrm == l.nrm),
+            vpls.iter()
+                .any(|v| v.pos == l.pos && v.nrm[..3] == l.nrm[..3]),
             "{l:?}"
         );
+        assert!((0.0..1.0).contains(&l.flux[3]), "{l:?}");
+        assert!((0.0..32.0).contains(&l.nrm[3]), "{l:?}");
     }
+    assert!(
+        list.lights
+            .iter()
+            .any(|l| l.flux[3] > 0.0 && l.nrm[3] > 0.0)
+    );
     let back: Vec<Vpl> = ctx.read_buffer(&list.buffer, list.lights.len()).unwrap();
     assert_eq!(
         bytemuck::cast_slice::<Vpl, u8>(&back),
