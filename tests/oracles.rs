@@ -1062,12 +1062,23 @@ fn a_cluster_light_spread_over_its_members_has_no_near_field_spike() {
             .sum()
     };
     let near = Vec3::new(1.0, 0.1, 0.0);
-    let (want, got) = (members(near), eq5_cluster_radiance(near, n, albedo, &l, d_min2).x);
+    let (want, got) = (
+        members(near),
+        eq5_cluster_radiance(near, n, albedo, &l, d_min2).x,
+    );
     // I ρ G with I = flux/π, ρ = 1: the hand values over π.
     assert!((want * PI - 100.01).abs() < 0.01, "members {}", want * PI);
-    assert!((got * PI - 100.4).abs() < 0.01, "cluster light {}", got * PI);
+    assert!(
+        (got * PI - 100.4).abs() < 0.01,
+        "cluster light {}",
+        got * PI
+    );
     let point = eq5_vpl_radiance(near, n, albedo, &l, d_min2).x;
-    assert!((point * PI - 300.0).abs() < 0.01, "as a point {}", point * PI);
+    assert!(
+        (point * PI - 300.0).abs() < 0.01,
+        "as a point {}",
+        point * PI
+    );
     let far = Vec3::new(1.0, 3.0, 0.0);
     let (a, b) = (
         eq5_cluster_radiance(far, n, albedo, &l, d_min2).x,
