@@ -31,7 +31,7 @@ pub fn eq5_vpl_radiance(p: Vec3, n: Vec3, albedo: Vec3, v: &Vpl, d_min2: f32) ->
 pub fn eq5_cluster_radiance(p: Vec3, n: Vec3, albedo: Vec3, v: &Vpl, d_min2: f32) -> Vec3 {
     let own = eq5_vpl_radiance(p, n, albedo, v, d_min2);
     let share = v.flux[3];
-    if !(share > 0.0) || own.max_element() <= 0.0 {
+    if share.is_nan() || share <= 0.0 || own.max_element() <= 0.0 {
         return own;
     }
     let d = Vec3::new(v.pos[0], v.pos[1], v.pos[2]) - p;
