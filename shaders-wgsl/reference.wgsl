@@ -1,4 +1,5 @@
-// The unclustered reference (Eq. 5): every shading point gathers every VPL with its own shadow ray.
+// The unclustered reference (Eq. 5): every shading point gathers every VPL with its own shadow ray
+// (or, as wang's and colom's gather, every VPL-cluster light: eq5_cluster_radiance).
 // Runs as bounded dispatches over pixel ranges x VPL ranges, accumulating into `indirect`.
 #import common/bvh.wgsl
 #import common/chunk.wgsl
@@ -32,7 +33,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     var sum = vec3<f32>(0.0);
     for (var j = chunk.sub_offset; j < chunk.sub_offset + chunk.sub_count; j++) {
         let v = vpls[j];
-        let c = eq5_vpl_radiance(p, n, sp.albedo.xyz, v, params.d_min2);
+        let c = eq5_cluster_radiance(p, n, sp.albedo.xyz, v, params.d_min2);
         if any(c > vec3<f32>(0.0)) && vpl_visible(p, n, v.pos.xyz, v.nrm.xyz) {
             sum += c;
         }

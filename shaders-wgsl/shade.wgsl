@@ -124,7 +124,7 @@ fn eq6_indirect(sp: ShadingPoint, rows: ptr<function, array<u32, MAX_F>>, w: ptr
         while todo != 0u {
             let b = firstTrailingBit(todo);
             todo &= todo - 1u;
-            let t = eq5_vpl_radiance(sp.pos.xyz, sp.nrm.xyz, sp.albedo.xyz, load_light(wd * 32u + b), params.d_min2);
+            let t = eq5_cluster_radiance(sp.pos.xyz, sp.nrm.xyz, sp.albedo.xyz, load_light(wd * 32u + b), params.d_min2);
             if any(t > vec3<f32>(0.0)) {
                 var v = 0.0;
                 // PATTERNS is a pipeline constant: a driver keeps one branch.

@@ -17,7 +17,7 @@ use std::f32::consts::PI;
 
 use fuzzy_vpl::bvh::SceneBvh;
 use fuzzy_vpl::cpu::kmeans::{Centroid, Point, eq7_dist, eq10_weights};
-use fuzzy_vpl::cpu::vpl::eq5_vpl_radiance;
+use fuzzy_vpl::cpu::vpl::{eq5_cluster_radiance, eq5_vpl_radiance};
 use fuzzy_vpl::export;
 use fuzzy_vpl::gi::dispatch::Gpu;
 use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, Points};
@@ -993,17 +993,98 @@ fn light_list_flux_sums_to_the_vpls_flux() {
             "channel {ch}: VPLs {a}, lights {b}"
         );
     }
+    // Each light is a member VPL's position and normal; the other members' share of its flux and
+    // their mean squared distance (`Spread`) are finite and within [0, 1) and [0, 32) (the frame is 4
+    // wide).
     for l in &list.lights {
         assert!(
-            vpls.iter().any(|v| v.pos == l.pos && v.nrm == l.nrm),
+            vpls.iter()
+                .any(|v| v.pos == l.pos && v.nrm[..3] == l.nrm[..3]),
             "{l:?}"
         );
+        assert!((0.0..1.0).contains(&l.flux[3]), "{l:?}");
+        assert!((0.0..32.0).contains(&l.nrm[3]), "{l:?}");
     }
+    assert!(
+        list.lights
+            .iter()
+            .any(|l| l.flux[3] > 0.0 && l.nrm[3] > 0.0)
+    );
     let back: Vec<Vpl> = ctx.read_buffer(&list.buffer, list.lights.len()).unwrap();
     assert_eq!(
         bytemuck::cast_slice::<Vpl, u8>(&back),
         bytemuck::cast_slice::<Vpl, u8>(&list.lights)
     );
+}
+
+/// The near-field spike of a VPL-cluster light (Sponza's, docs/methods.md "Indirect light, per
+/// method"), by hand: VPLs A (0,0,0), C (1,0,0), B (4,0,0), normals +y, flux 1 each, as one cluster
+/// (K = 1): the representative is C, nearest the centroid (5/3, 0, 0); the other members' share is
+/// 2/3 and their mean squared distance from C (1 + 9) / 2 = 5. At p = (1, 0.1, 0) facing down the
+/// members give I ρ G = 1/0.01 (C) + 0.0098 (A) + 0.0001 (B) ≈ 100.01 (times 1/π · ρ); C carrying
+/// the summed flux 3 as a point gives 300, three times too much; with the spread 300/3 + 300 · 2/3
+/// · 0.01/5 = 100.4. Beyond r = √5 the light is the point's (up to rounding).
+#[test]
+fn a_cluster_light_spread_over_its_members_has_no_near_field_spike() {
+    let ctx = common::gpu();
+    let (_sc, gpu) = cornell_gpu(&ctx);
+    let up = [0.0, 1.0, 0.0];
+    let vpls: Vec<Vpl> = [0.0, 1.0, 4.0]
+        .iter()
+        .map(|&x| light(Vec3::new(x, 0.0, 0.0), up, [1.0; 3]))
+        .collect();
+    let set = VplSet {
+        buffer: ctx.storage_init("vpls", &vpls),
+        vpls: vpls.clone(),
+        paths: 3,
+    };
+    let s = KMeansSettings {
+        k: 1,
+        ..oracle_settings(1, 1.0, false)
+    };
+    let mut prof = Profiler::new(&ctx);
+    let mut g = Gpu {
+        ctx: &ctx,
+        scene: &gpu,
+        profiler: &mut prof,
+    };
+    let frame = (Vec3::splat(-1.0), Vec3::splat(5.0));
+    let list = vpl_cluster::cluster(&mut g, &KMeans::new(), &set, &s, frame, None).unwrap();
+    assert_eq!(list.lights.len(), 1);
+    let l = list.lights[0];
+    assert_eq!(l.pos, vpls[1].pos, "the representative is C");
+    assert_eq!(l.flux, [3.0, 3.0, 3.0, 2.0 / 3.0]);
+    assert_eq!(l.nrm, [0.0, 1.0, 0.0, 5.0]);
+    let (n, albedo, d_min2) = (Vec3::NEG_Y, Vec3::splat(PI), 1e-4);
+    let members = |p: Vec3| -> f32 {
+        vpls.iter()
+            .map(|v| eq5_vpl_radiance(p, n, albedo, v, d_min2).x)
+            .sum()
+    };
+    let near = Vec3::new(1.0, 0.1, 0.0);
+    let (want, got) = (
+        members(near),
+        eq5_cluster_radiance(near, n, albedo, &l, d_min2).x,
+    );
+    // I ρ G with I = flux/π, ρ = 1: the hand values over π.
+    assert!((want * PI - 100.01).abs() < 0.01, "members {}", want * PI);
+    assert!(
+        (got * PI - 100.4).abs() < 0.01,
+        "cluster light {}",
+        got * PI
+    );
+    let point = eq5_vpl_radiance(near, n, albedo, &l, d_min2).x;
+    assert!(
+        (point * PI - 300.0).abs() < 0.01,
+        "as a point {}",
+        point * PI
+    );
+    let far = Vec3::new(1.0, 3.0, 0.0);
+    let (a, b) = (
+        eq5_cluster_radiance(far, n, albedo, &l, d_min2).x,
+        eq5_vpl_radiance(far, n, albedo, &l, d_min2).x,
+    );
+    assert!((a - b).abs() <= 1e-6 * b, "beyond r: {a} against {b}");
 }
 
 /// The camera's frustum: the rays through the corner pixels' centres make the angles the vertical

@@ -385,8 +385,10 @@ fn temporal_reuse_steadies_the_error_along_an_orbit() {
     }
     let (off, reuse, on) = (result[0], result[1], result[2]);
     // Measured on lavapipe (instability / instability_world / MSE / iterations over frames 1-3):
-    // off 2.537e-5 / 1.180e-5 / 1.274e-4 / 30; on at α 1 2.134e-5 / 8.334e-6 / 1.267e-4 / 3; on at
-    // α 0.7 2.055e-5 / 7.099e-6 / 1.248e-4 / 3 (0.85× of α 1's world instability). Without the
+    // off 1.951e-5 / 1.011e-5 / 1.018e-4 / 30; on at α 1 1.592e-5 / 7.191e-6 / 1.027e-4 / 3; on at
+    // α 0.7 1.570e-5 / 6.604e-6 / 1.014e-4 / 3 (0.92× of α 1's world instability; 0.85× when the
+    // VPL-cluster lights were points without their spread, whose near-field spikes moved with the
+    // SP clusters: 7.099e-6 against 8.334e-6). Without the
     // warm start the runs are the same frames, and without the accumulation the last two are:
     // every bound below then fails.
     assert!(
@@ -408,7 +410,7 @@ fn temporal_reuse_steadies_the_error_along_an_orbit() {
         off.2
     );
     assert!(
-        on.3 < 0.9 * reuse.3,
+        on.3 < 0.95 * reuse.3,
         "instability_world accumulated {} vs not {}",
         on.3,
         reuse.3

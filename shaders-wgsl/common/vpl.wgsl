@@ -2,7 +2,10 @@
 #import common/scene.wgsl
 
 // A VPL: position, normal (the side it lights), flux reflected at its hit (RGB). As a Lambertian
-// reflector it has radiant intensity I = flux / pi * cos(theta) about its normal.
+// reflector it has radiant intensity I = flux / pi * cos(theta) about its normal. As a VPL-cluster
+// light (gi::vpl_cluster): the representative VPL with the members' summed flux, flux.w the share
+// of that flux from the other members and nrm.w their flux-weighted mean squared distance from the
+// representative (both 0 for a VPL; eq5_cluster_radiance).
 struct Vpl {
     pos: vec4<f32>,
     nrm: vec4<f32>,
@@ -26,4 +29,22 @@ fn eq5_vpl_radiance(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, v: Vpl, d_min
     }
     let g = cos_p * cos_v / max(d2, d_min2);
     return (v.flux.xyz / PI) * (albedo / PI) * g;
+}
+
+// Not in the paper (docs/clustering.md, "VPL clusters as lights"): Eq. (5)'s term of a VPL-cluster
+// light. The representative's own share of the flux (1 - flux.w) is its VPL's term; the other
+// members' share (flux.w), which lies around it at a root-mean-square distance r (r^2 = nrm.w), is
+// evaluated with the G-term's d clamped at max(d_min, r): a cluster spread over r is no point closer
+// than r. The same cosines for both. A VPL (flux.w = 0) gives eq5_vpl_radiance's value bit for bit.
+// CPU twin: cpu::vpl::eq5_cluster_radiance.
+fn eq5_cluster_radiance(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, v: Vpl, d_min2: f32) -> vec3<f32> {
+    let own = eq5_vpl_radiance(p, n, albedo, v, d_min2);
+    if !(v.flux.w > 0.0) || !any(own > vec3<f32>(0.0)) {
+        return own;
+    }
+    let d = v.pos.xyz - p;
+    let d2 = dot(d, d);
+    // The spread share's term is the own term scaled by its smaller 1/d^2.
+    let spread = own * (max(d2, d_min2) / max(d2, max(d_min2, v.nrm.w)));
+    return own * (1.0 - v.flux.w) + spread * v.flux.w;
 }

@@ -4,7 +4,7 @@ use glam::Vec3;
 
 use super::kmeans::RepPoint;
 use super::shading::CpuScene;
-use super::vpl::eq5_vpl_radiance;
+use super::vpl::eq5_cluster_radiance;
 use crate::gi::primary::ShadingPoint;
 use crate::gi::vpl_trace::Vpl;
 
@@ -109,7 +109,7 @@ pub fn eq6_indirect(
     };
     let mut sum = Vec3::ZERO;
     for (c, l) in lights.iter().enumerate() {
-        let t = eq5_vpl_radiance(sp.pos, sp.normal, sp.albedo, l, d_min2);
+        let t = eq5_cluster_radiance(sp.pos, sp.normal, sp.albedo, l, d_min2);
         if t.max_element() <= 0.0 {
             continue;
         }
