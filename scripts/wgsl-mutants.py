@@ -42,6 +42,9 @@ MUTANTS = [
     # a positive term.
     ("eq5-cosine-tests-dropped", "common/vpl.wgsl", "if cos_p <= 0.0 || cos_v <= 0.0 {", "if false {", "Eq. 5"),
     ("eq5-direction-not-normalised", "common/vpl.wgsl", "let wi = d * inverseSqrt(d2);", "let wi = d / d2;", "Eq. 5"),
+    # A VPL-cluster light's spread (eq5_cluster_radiance, not in the paper: docs/clustering.md).
+    ("eq5-cluster-spread-shares-swapped", "common/vpl.wgsl", "return own * (1.0 - v.flux.w) + spread * v.flux.w;", "return own * v.flux.w + spread * (1.0 - v.flux.w);", "Eq. 5"),
+    ("eq5-cluster-spread-radius-ignored", "common/vpl.wgsl", "max(d2, max(d_min2, v.nrm.w))", "max(d2, d_min2)", "Eq. 5"),
     ("eq5-visibility-inverted", "reference.wgsl", "&& vpl_visible(p, n, v.pos.xyz, v.nrm.xyz)", "&& !vpl_visible(p, n, v.pos.xyz, v.nrm.xyz)", "Eq. 5"),
     ("eq5-shadow-ray-overshoots", "common/bvh.wgsl", "dist * (1.0 - 1e-4)", "dist * 1.5", "Eq. 5"),
     # --- Eq. (6), (8), (9): shade.wgsl
