@@ -116,3 +116,21 @@ pub fn check_size(ctx: &GpuContext, width: u32, height: u32, bytes_per_pixel: u6
         ))
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `--vpls` may fill the VPL buffer's binding exactly, not one VPL more (cargo-mutants: `>` as `>=`
+    /// survived; the tests asked only for far too many).
+    #[test]
+    fn vpls_may_fill_the_binding_exactly() {
+        let ctx = GpuContext::new_headless().unwrap();
+        let most = ctx.max_binding() / crate::gi::vpl_trace::VPL_BYTES;
+        let most = u32::try_from(most).unwrap_or(u32::MAX);
+        assert!(check_vpls(&ctx, most).is_ok());
+        if most < u32::MAX {
+            assert!(check_vpls(&ctx, most + 1).is_err());
+        }
+    }
+}

@@ -375,3 +375,32 @@ const DEGENERATE_AREA_REL: f64 = 1e-12;
 /// …or when twice its area is at most this fraction of its longest edge squared (numerically
 /// collinear vertices: its height is below f32 precision relative to its length).
 const DEGENERATE_SLIVER_REL: f64 = 1e-7;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A mesh is too far for f32 when its distance from the origin times f32's epsilon passes a tenth
+    /// of its size: a 10-unit mesh at 5·10⁶ (0.60 against 1.0) is not, at 2·10⁷ (2.4) it is
+    /// (cargo-mutants: `0.1 * size` as `0.1 / size` survived; the loader's test mesh is 1 unit wide,
+    /// where the two agree).
+    #[test]
+    fn too_far_for_f32_compares_with_a_tenth_of_the_size() {
+        let at = |x: f32| Primitive::Triangles {
+            positions: vec![
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x + 10.0, 0.0, 0.0),
+                Vec3::new(x, 0.0, 0.0),
+            ],
+            normals: None,
+            uvs: None,
+            colors: None,
+            tris: vec![[0, 1, 2]],
+            material: 0,
+        };
+        assert!(too_far_for_f32(&at(5e6), &Mat4::IDENTITY, 0).is_none());
+        let far = too_far_for_f32(&at(2e7), &Mat4::IDENTITY, 3).unwrap();
+        assert_eq!(far.node, 3);
+        assert!((far.size - 10.0).abs() < 1e-6 && (far.far - 2e7 - 10.0).abs() < 1.0);
+    }
+}
