@@ -264,3 +264,27 @@ pub fn cluster(vpls: &[Vpl], eye: Vec3, z_far: f32, d_init: f32) -> LightCluster
         group_of: order.iter().map(|&i| group[i as usize]).collect(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `member_distance` by hand: positions 3-4-5 apart, normals equal (no term), opposite (2 × scale)
+    /// and perpendicular (1 × scale) (cargo-mutants: `scale * (1 − n·n)` as `scale + …` survived).
+    #[test]
+    fn member_distance_by_hand() {
+        let v = |p: [f32; 3], n: [f32; 3]| Vpl {
+            pos: [p[0], p[1], p[2], 1.0],
+            nrm: [n[0], n[1], n[2], 0.0],
+            flux: [1.0; 4],
+        };
+        let a = v([0.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+        let near = |b: &Vpl, s: f32, want: f32| {
+            let d = member_distance(&a, b, s);
+            assert!((d - want).abs() < 1e-6, "{d} against {want}");
+        };
+        near(&v([3.0, 4.0, 0.0], [0.0, 1.0, 0.0]), 10.0, 5.0);
+        near(&v([3.0, 4.0, 0.0], [0.0, -1.0, 0.0]), 10.0, 25.0);
+        near(&v([3.0, 4.0, 0.0], [1.0, 0.0, 0.0]), 0.5, 5.5);
+    }
+}
