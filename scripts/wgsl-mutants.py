@@ -157,7 +157,10 @@ MUTANTS = [
     ("pt-nee-albedo-not-over-pi", "pathtrace.wgsl", "return albedo / PI * sum;", "return albedo * sum;", "path tr."),
     ("pt-emission-at-every-vertex", "pathtrace.wgsl", "                if v == 0u {\n                    total += surf.emission;", "                if true {\n                    total += surf.emission;", "path tr."),
     ("pt-throughput-albedo-dropped", "pathtrace.wgsl", "throughput *= surf.albedo;", "throughput *= 1.0;", "path tr."),
-    ("pt-shadow-ray-scale-dropped", "pathtrace.wgsl", "dist * tmax_scale", "dist", "path tr."),
+    # Not `dist * tmax_scale` -> `dist` (tried 2026-11-26, every binary passes): the shadow ray ends
+    # at the light point moved scene.eps off the emitter towards the receiver (cl > 0), so it stops
+    # short of the emitter's plane without the 1 - 1e-4 as well.
+    ("pt-shadow-direction-not-normalised", "pathtrace.wgsl", "Ray(o, d / dist, 0.0, dist * tmax_scale)", "Ray(o, d, 0.0, dist * tmax_scale)", "path tr."),
     ("vpl-spot-power-whole-sphere", "vpl_trace.wgsl", "flux = intensity * (t * t) * 2.0 * PI * (1.0 - co) / p_src;", "flux = intensity * (t * t) * 4.0 * PI / p_src;", "VPLs"),
     ("vpl-spot-falloff-linear", "vpl_trace.wgsl", "flux = intensity * (t * t) * 2.0 * PI * (1.0 - co) / p_src;", "flux = intensity * t * 2.0 * PI * (1.0 - co) / p_src;", "VPLs"),
     ("vpl-spot-cone-not-uniform", "vpl_trace.wgsl", "let cz = 1.0 - rng_next(&rng) * (1.0 - co);", "let cz = 1.0 - rng_next(&rng) * rng_next(&rng) * (1.0 - co);", "VPLs"),
