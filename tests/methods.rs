@@ -432,10 +432,11 @@ fn wang_clustering_matches_cpu_twin_on_random_surfels_with_holes() {
 /// with α 100 / √3 a unit of length (α = 100 over the bounds' diagonal) and K 192 (a grid step of
 /// 1). Every node's mean is near the cube's centre with the normals cancelling, so each point's
 /// Eq. (2) error is about 100 · ½ + √2 ≈ 51.4, 3.4e6 in ε's fixed point: the quadtree's two level-1
-/// nodes with points (64×64 and 32×64 pixels; the padded side is 128) sum about 1.4e10 and 6.9e9,
-/// past 2^32 (asserted on the twin's 64-bit sums), and the root splits K between them 2:1. With the
-/// high words dropped the split would follow the low words' 9e8 : 2.6e9. The seeds, labels and
-/// sample points equal the twin's; no other test's ε reaches 2^32.
+/// nodes with points (64×64 and 32×64 pixels; the padded side is 128) sum about 1.37e10 and
+/// 6.84e9 (computed in f64; asserted above 2^33 and 2^32 on the twin's 64-bit sums), and the root
+/// splits K between them 2:1. With the high words dropped the split would follow the low words'
+/// 8.4e8 : 2.5e9. The seeds, labels and sample points equal the twin's. Without this test every
+/// binary passed with the carry or the high word dropped (docs/testing.md, WGSL mutants).
 #[test]
 fn wang_cluster_eps_sums_carry_past_32_bits() {
     let ctx = common::gpu();
