@@ -10,6 +10,7 @@ binary exceeds its limit (counted as killed: the suite noticed).
 Usage (from the repository root, after `cargo test --release --no-run`):
     python3 scripts/wgsl-mutants.py            # every mutant, stage 1 then stage 2
     python3 scripts/wgsl-mutants.py -k clamp   # mutants whose name contains "clamp"
+    python3 scripts/wgsl-mutants.py -k bvh- km-   # ... "bvh-" or "km-"
     python3 scripts/wgsl-mutants.py --list
 First both stages run on the unmutated shaders: a failing binary stops the script with one line that
 names it and its failed tests. Stage 1 is the oracle binary (tests/oracles.rs, about a second); a
@@ -47,6 +48,17 @@ MUTANTS = [
     ("eq5-cluster-spread-radius-ignored", "common/vpl.wgsl", "max(d2, max(d_min2, v.nrm.w))", "max(d2, d_min2)", "Eq. 5"),
     ("eq5-visibility-inverted", "reference.wgsl", "&& vpl_visible(p, n, v.pos.xyz, v.nrm.xyz)", "&& !vpl_visible(p, n, v.pos.xyz, v.nrm.xyz)", "Eq. 5"),
     ("eq5-shadow-ray-overshoots", "common/bvh.wgsl", "dist * (1.0 - 1e-4)", "dist * 1.5", "Eq. 5"),
+    # --- common/bvh.wgsl (traversal; CPU twin src/bvh.rs, tests/traversal.rs)
+    ("bvh-safe-inverse-tiny-not-huge", "common/bvh.wgsl", "return select(-1.0, 1.0, x >= 0.0) / eps;", "return select(-1.0, 1.0, x >= 0.0) * eps;", "BVH"),
+    ("bvh-box-slab-sign", "common/bvh.wgsl", "let t1 = (bmin - origin) * inv_dir;", "let t1 = (origin - bmin) * inv_dir;", "BVH"),
+    ("bvh-node-second-texel-off-by-one", "common/bvh.wgsl", "texel_xy(2u * i + 1u)", "texel_xy(2u * i + 2u)", "BVH"),
+    ("bvh-shear-z-scale-unsigned", "common/bvh.wgsl", "1.0 / dz)", "1.0 / abs(dz))", "BVH"),
+    ("bvh-shear-x-sign", "common/bvh.wgsl", "a[sh.k.x] - sh.s.x * z", "a[sh.k.x] + sh.s.x * z", "BVH"),
+    ("bvh-edge-swap-sign-dropped", "common/bvh.wgsl", "return select(e, -e, swap);", "return e;", "BVH"),
+    ("bvh-tri-barycentrics-not-over-det", "common/bvh.wgsl", "return vec3<f32>(t, v / det, w / det);", "return vec3<f32>(t, v, w / det);", "BVH"),
+    ("bvh-walk-missed-leaf-skips-next", "common/bvh.wgsl", "            *i += 1u;\n        } else {", "            *i += 2u;\n        } else {", "BVH"),
+    ("bvh-closest-tmax-not-lowered", "common/bvh.wgsl", "if r.x < ray.tmax {\n                    ray.tmax = r.x;\n", "if r.x < ray.tmax {\n", "BVH"),
+    ("bvh-any-leaf-skips-last-triangle", "common/bvh.wgsl", "k < node.index + count; k++) {\n                if intersect_tri", "k + 1u < node.index + count; k++) {\n                if intersect_tri", "BVH"),
     # --- Eq. (6), (8), (9): shade.wgsl
     ("eq8-uniform-over-F-not-used-slots", "shade.wgsl", "1.0 / f32(nf)", "1.0 / f32(F)", "Eq. 8"),
     ("eq8-eq9-switch-inverted", "shade.wgsl", "if params.weighted == 0u {", "if params.weighted != 0u {", "Eq. 8/9"),
@@ -56,6 +68,8 @@ MUTANTS = [
     ("eq9-weight-ignored", "shade.wgsl", "v += select(0.0, (*w)[j],", "v += select(0.0, 1.0,", "Eq. 9"),
     ("eq6-visibility-ignored", "shade.wgsl", "sum += t * v;", "sum += t;", "Eq. 6"),
     ("eq6-light-index-off-by-one", "shade.wgsl", "load_light(wd * 32u + b)", "load_light(wd * 32u + b + 1u)", "Eq. 6"),
+    ("shade-light-texel-row-2048", "shade.wgsl", "vec2<u32>(i & 4095u, i >> 12u)", "vec2<u32>(i & 2047u, i >> 11u)", "Eq. 6"),
+    ("shade-light-normal-flux-swapped", "shade.wgsl", "light_texel(3u * c + 1u), light_texel(3u * c + 2u)", "light_texel(3u * c + 2u), light_texel(3u * c + 1u)", "Eq. 6"),
     # --- Eq. (7), Alg. 1: kmeans.wgsl
     ("eq7-normal-test-swapped", "common/kmeans.wgsl", "return dot(n, nc) > params.normal_threshold;", "return dot(n, nc) < params.normal_threshold;", "Eq. 7"),
     ("eq7-normal-test-dropped", "common/kmeans.wgsl", "return dot(n, nc) > params.normal_threshold;", "return true;", "Eq. 7"),
@@ -66,6 +80,32 @@ MUTANTS = [
     ("alg1-mean-normal-not-normalised", "kmeans/iterate.wgsl", "c.nrm = vec4<f32>(nrm / l, 0.0);", "c.nrm = vec4<f32>(nrm, 0.0);", "Alg. 1"),
     ("alg1-member-removal-swapped", "kmeans/iterate.wgsl", "        if remove {\n            sub64", "        if !remove {\n            sub64", "Alg. 1"),
     ("alg1-change-flag-dropped", "kmeans/iterate.wgsl", "        set_flag(6u);\n        if old != INVALID {", "        if old != INVALID {", "Alg. 1"),
+    # --- common/kmeans.wgsl: point access, Eq. (7), the grid's cells
+    ("km-texel-row-2048", "common/kmeans.wgsl", "vec2<u32>(i & 4095u, i >> 12u)", "vec2<u32>(i & 2047u, i >> 11u)", "Alg. 1"),
+    ("km-point-stride-ignored", "common/kmeans.wgsl", "return data[m * params.stride];", "return data[m];", "Alg. 1"),
+    ("km-normal-reads-next-vec4", "common/kmeans.wgsl", "data[m * params.stride + 1u].xyz", "data[m * params.stride + 2u].xyz", "Alg. 1"),
+    ("km-sample-stratum-size-dropped", "common/kmeans.wgsl", "min(s * g + (h >> 8u) % g,", "min(s + (h >> 8u) % g,", "Alg. 1"),
+    ("eq7-distance-squared", "common/kmeans.wgsl", "return length(p - c);", "return dot(p - c, p - c);", "Eq. 7"),
+    ("km-float-key-positive-not-offset", "common/kmeans.wgsl", "return select(b | 0x80000000u, ~b,", "return select(b, ~b,", "grid"),
+    ("km-key-float-negative-not-inverted", "common/kmeans.wgsl", "select(~k, k & 0x7fffffffu,", "select(k, k & 0x7fffffffu,", "grid"),
+    ("km-cell-coord-upper-clamp-dropped", "common/kmeans.wgsl", "return vec3<i32>(clamp(c, vec3<f32>(0.0), hi));", "return vec3<i32>(max(c, vec3<f32>(0.0)));", "grid"),
+    ("km-cell-index-strides-swapped", "common/kmeans.wgsl", "(u32(c.z) * d.y + u32(c.y)) * d.x", "(u32(c.z) * d.x + u32(c.y)) * d.y", "grid"),
+    # --- common/nearest.wgsl: the search
+    ("nearest-last-slot-one-early", "common/nearest.wgsl", "        if j < f {\n            last", "        if j + 1u < f {\n            last", "Alg. 2"),
+    ("nearest-second-run-not-rebased", "common/nearest.wgsl", "select(b.x + (t - len_a), a.x + t, t < len_a)", "select(b.x + t, a.x + t, t < len_a)", "Alg. 2"),
+    ("nearest-ring1-left-cut-uses-right-face", "common/nearest.wgsl", "gyz + g_lo.x * g_lo.x <= cut2", "gyz + g_hi.x * g_hi.x <= cut2", "Alg. 2"),
+    ("nearest-ring-face-row-last-cell-dropped", "common/nearest.wgsl", "cell_texel(row + u32(hi.x)).z", "cell_texel(row + u32(hi.x)).y", "Alg. 2"),
+    ("nearest-final-rings-off-by-one", "common/nearest.wgsl", "ring <= min(FINAL_RINGS, maxr)", "ring < min(FINAL_RINGS, maxr)", "Alg. 2"),
+    ("nearest-iter-rings-off-by-one", "common/nearest.wgsl", "ring <= ITER_RINGS", "ring < ITER_RINGS", "Alg. 1"),
+    # --- kmeans/iterate.wgsl: the sums and the re-seeding
+    ("alg1-sum-carry-dropped", "kmeans/iterate.wgsl", "atomicAdd(&sums[i + 1u], 1u);", "atomicAdd(&sums[i + 1u], 0u);", "Alg. 1"),
+    ("alg1-sub-high-word-dropped", "kmeans/iterate.wgsl", "        atomicAdd(&sums[i + 1u], 0xffffffffu);\n", "", "Alg. 1"),
+    ("reseed-mix-shift-off-by-one", "kmeans/iterate.wgsl", "((h >> 28u) + 4u)", "((h >> 28u) + 3u)", "reseed"),
+    ("reseed-target-index-unmixed", "kmeans/iterate.wgsl", "reseed_mix(s * 747796405u)", "reseed_mix(s)", "reseed"),
+    ("reseed-draw-modulo-k", "kmeans/iterate.wgsl", "% params.num_sampled;", "% params.k;", "reseed"),
+    ("reseed-proposal-highest-index", "kmeans/iterate.wgsl", "let key = ~s;", "let key = s;", "reseed"),
+    ("reseed-last-empty-own-parity", "kmeans/iterate.wgsl", "((atomicLoad(&bounds[7]) + 1u) & 1u)", "(atomicLoad(&bounds[7]) & 1u)", "reseed"),
+    ("reseed-name-empty-other-parity", "kmeans/iterate.wgsl", "let i = 9u + (iteration & 1u);", "let i = 9u + ((iteration + 1u) & 1u);", "reseed"),
     # --- Eq. (10), Alg. 2: kmeans.wgsl
     ("eq10-zero-distance-dropped-in-final-assign", "kmeans/assign.wgsl", "if j < b.count && b.dist[j] <= ZERO_DIST && zero == INVALID {", "if false {", "Eq. 10"),
     ("eq10-zero-distance-dropped-in-rep-weights", "kmeans/reps.wgsl", "if d[j] <= ZERO_DIST && zero == INVALID {", "if false {", "Eq. 10"),
@@ -74,14 +114,18 @@ MUTANTS = [
     ("eq10-not-normalised", "kmeans/assign.wgsl", "(*w)[j] /= wsum;", "(*w)[j] /= 1.0;", "Eq. 10"),
     ("eq10-p1-shortcut-wrong", "kmeans/assign.wgsl", "    if p == 1.0 {\n        return x;", "    if p == 1.0 {\n        return x * x;", "Eq. 10"),
     ("eq10-weights-slot-off-by-one", "kmeans/assign.wgsl", "assign[m * f + j] = k;\n        weights[m * f + j] = w[j];", "assign[m * f + j] = k;\n        weights[m * f + j] = w[0];", "Eq. 10"),
+    ("plane-gate-sign-kept", "kmeans/assign.wgsl", "return abs(dot(n, d)) <= params.plane_gate * length(d);", "return dot(n, d) <= params.plane_gate * length(d);", "gate"),
     ("alg2-rep-min-swapped", "kmeans/assign.wgsl", "if bits < atomicLoad(&reps[2u * k]) {", "if bits > atomicLoad(&reps[2u * k]) {", "reps"),
     ("alg2-rep-lowest-index-swapped", "kmeans/reps.wgsl", "atomicMin(&reps[2u * k + 1u], m);", "atomicMax(&reps[2u * k + 1u], m);", "reps"),
+    ("reps-distance-cleared-to-zero", "kmeans/reps.wgsl", "atomicStore(&reps[2u * k], 0xffffffffu);", "atomicStore(&reps[2u * k], 0u);", "reps"),
+    ("reps-kept-test-inverted", "kmeans/reps.wgsl", "c.nrm.xyz) <= 2.0 * nearest", "c.nrm.xyz) > 2.0 * nearest", "reps"),
     # --- primary rays, visibility
     ("camera-pixel-centre-dropped", "primary.wgsl", "let x = f32(px % w) + 0.5 + bitcast<f32>(cam.size.z);", "let x = f32(px % w) + bitcast<f32>(cam.size.z);", "camera"),
     # The sub-pixel jitter of anti-aliasing at rest (render::jittered_primary_rays_match_cpu_twin).
     ("camera-jitter-y-dropped", "primary.wgsl", "+ 0.5 + bitcast<f32>(cam.size.w);", "+ 0.5;", "camera"),
     ("camera-jitter-axes-swapped", "primary.wgsl", "+ 0.5 + bitcast<f32>(cam.size.z);", "+ 0.5 + bitcast<f32>(cam.size.w);", "camera"),
     ("camera-y-flipped", "primary.wgsl", "let sy = 1.0 - 2.0 * y / f32(h);", "let sy = 2.0 * y / f32(h) - 1.0;", "camera"),
+    ("primary-hit-point-behind-eye", "primary.wgsl", "ray.origin + hit.t * ray.dir", "ray.origin - hit.t * ray.dir", "camera"),
     ("visibility-light-facing-test-swapped", "visibility.wgsl", "dot(l.nrm.xyz, d) >= 0.0", "dot(l.nrm.xyz, d) <= 0.0", "step 5"),
     ("visibility-bit-off-by-one", "visibility.wgsl", "word |= 1u << (c - c0);", "word |= 1u << ((c - c0 + 1u) % 32u);", "step 5"),
     ("visibility-facing-away-test-dropped", "visibility.wgsl", "dot(n, d) <= 0.0 || dot(l.nrm.xyz, d) >= 0.0", "dot(n, d) <= 0.0", "step 5"),
@@ -91,6 +135,8 @@ MUTANTS = [
     ("visibility-reuse-kept-flag-dropped", "visibility.wgsl", " && rep_points[2u * k + 1u].w == 1.0", "", "step 5"),
     ("visibility-reuse-rows-ignored", "visibility.wgsl", "k < params.reuse_rows &&", "params.reuse_rows > 0u &&", "step 5"),
     ("visibility-reuse-without-rep", "visibility.wgsl", "k < params.reuse_rows && rep.w > 0.0 &&", "k < params.reuse_rows &&", "step 5"),
+    # The light texture's rows (4096 texels, 3 a light: rows past the first from light 1366 on).
+    ("visibility-light-texel-row-2048", "visibility.wgsl", "vec2<u32>(i & 4095u, i >> 12u)", "vec2<u32>(i & 2047u, i >> 11u)", "step 5"),
     # --- direct light against closed forms (tests/closed_form.rs, stage 2)
     ("triangle-sampling-not-uniform", "common/sampling.wgsl", "let s = sqrt(u1);", "let s = u1;", "direct"),
     ("emitter-pdf-area-dropped", "common/lights.wgsl", "s.pdf_area = (e.power / scene.emit_power) / e.area;", "s.pdf_area = e.power / scene.emit_power;", "direct"),
@@ -100,6 +146,10 @@ MUTANTS = [
     ("direct-emitter-cosine-dropped", "direct.wgsl", "area_sum += ls.le * cos_p * cos_l / (d2 * ls.pdf_area);", "area_sum += ls.le * cos_p / (d2 * ls.pdf_area);", "direct"),
     ("direct-punctual-cosine-dropped", "direct.wgsl", "sum += ps.e * cos_p;", "sum += ps.e;", "direct"),
     ("direct-albedo-not-over-pi", "direct.wgsl", "return sp.albedo.xyz / PI * sum;", "return sp.albedo.xyz * sum;", "direct"),
+    ("direct-shadow-ray-overshoots", "direct.wgsl", "dist * (1.0 - 1e-4) - scene.eps", "dist * 1.5", "direct"),
+    # The later sub ranges of the samples add to the pixel (render::direct_light_in_sub_ranges...).
+    ("direct-sub-range-overwrites", "direct.wgsl", "radiance[i] += vec4<f32>(c, 0.0);", "radiance[i] = vec4<f32>(c, 1.0);", "direct"),
+    ("emitter-search-comparison-inverted", "common/lights.wgsl", "if emitters[mid].cdf <= u {", "if emitters[mid].cdf >= u {", "direct"),
     ("cosine-sampling-not-sqrt", "common/sampling.wgsl", "let r = sqrt(u1);", "let r = u1;", "sampling"),
     ("cosine-sampling-uniform", "common/sampling.wgsl", "let local = vec3<f32>(r * cos(phi), r * sin(phi), sqrt(max(0.0, 1.0 - u1)));", "let local = vec3<f32>(sqrt(max(0.0, u1 * (2.0 - u1))) * cos(phi), sqrt(max(0.0, u1 * (2.0 - u1))) * sin(phi), 1.0 - u1);", "sampling"),
     ("cosine-sampling-half-azimuth", "common/sampling.wgsl", "let phi = 2.0 * PI * u2;", "let phi = PI * u2;", "sampling"),
@@ -110,6 +160,10 @@ MUTANTS = [
     ("pt-nee-albedo-not-over-pi", "pathtrace.wgsl", "return albedo / PI * sum;", "return albedo * sum;", "path tr."),
     ("pt-emission-at-every-vertex", "pathtrace.wgsl", "                if v == 0u {\n                    total += surf.emission;", "                if true {\n                    total += surf.emission;", "path tr."),
     ("pt-throughput-albedo-dropped", "pathtrace.wgsl", "throughput *= surf.albedo;", "throughput *= 1.0;", "path tr."),
+    # Not `dist * tmax_scale` -> `dist` (tried 2026-11-26, every binary passes): the shadow ray ends
+    # at the light point moved scene.eps off the emitter towards the receiver (cl > 0), so it stops
+    # short of the emitter's plane without the 1 - 1e-4 as well.
+    ("pt-shadow-direction-not-normalised", "pathtrace.wgsl", "Ray(o, d / dist, 0.0, dist * tmax_scale)", "Ray(o, d, 0.0, dist * tmax_scale)", "path tr."),
     ("vpl-spot-power-whole-sphere", "vpl_trace.wgsl", "flux = intensity * (t * t) * 2.0 * PI * (1.0 - co) / p_src;", "flux = intensity * (t * t) * 4.0 * PI / p_src;", "VPLs"),
     ("vpl-spot-falloff-linear", "vpl_trace.wgsl", "flux = intensity * (t * t) * 2.0 * PI * (1.0 - co) / p_src;", "flux = intensity * t * 2.0 * PI * (1.0 - co) / p_src;", "VPLs"),
     ("vpl-spot-cone-not-uniform", "vpl_trace.wgsl", "let cz = 1.0 - rng_next(&rng) * (1.0 - co);", "let cz = 1.0 - rng_next(&rng) * rng_next(&rng) * (1.0 - co);", "VPLs"),
@@ -139,6 +193,8 @@ MUTANTS = [
     ("scene-shade-n2-reads-n1", "common/scene.wgsl", "texel_xy(4u * slot + 2u)", "texel_xy(4u * slot + 1u)", "scene"),
     ("scene-offset-scale-min-axis", "common/scene.wgsl", "max(a.x, max(a.y, a.z))", "min(a.x, min(a.y, a.z))", "scene"),
     ("scene-offset-dropped", "common/scene.wgsl", "return p + n * (scene.eps + 4e-6 * max_abs3(p));", "return p;", "scene"),
+    # --- common/chunk.wgsl: every pass's work item
+    ("chunk-offset-dropped", "common/chunk.wgsl", "return chunk.offset + i;", "return i;", "chunk"),
     # --- common/surface.wgsl
     ("surface-srgb-linear-segment-dropped", "common/surface.wgsl", "return c / 12.92;", "return pow((c + 0.055) / 1.055, 2.4);", "surface"),
     ("surface-srgb-gamma-2.2", "common/surface.wgsl", "pow((c + 0.055) / 1.055, 2.4);\n}", "pow((c + 0.055) / 1.055, 2.2);\n}", "surface"),
@@ -209,6 +265,39 @@ MUTANTS = [
     ("wang-cluster-rest-skips-grid-test-x", "wang_cluster.wgsl", "    if (m % params.width) % params.step == 0u && (m / params.width) % params.step == 0u {", "    if (m / params.width) % params.step == 0u {", "wang"),
     ("wang-cluster-first-hint-ignored", "wang_cluster.wgsl", "    assign_pixel(m, labels[params.pixels + m]);", "    assign_pixel(m, INVALID);", "wang"),
     ("wang-cluster-seed-pixels-all-nodes-skip", "wang_cluster.wgsl", "            if r < kn && (kn >= count || kn > 1u) {", "            if r < kn && (kn > count || kn > 1u) {", "wang"),
+    ("wang-cluster-texel-row-2048", "wang_cluster.wgsl", "vec2<u32>(i & 4095u, i >> 12u)", "vec2<u32>(i & 2047u, i >> 11u)", "wang"),
+    ("wang-cluster-eq2-chord-not-doubled", "wang_cluster.wgsl", "return params.alpha * length(xi - xk) + sqrt(max(0.0, 2.0 - 2.0 * dot(ni, nk)));", "return params.alpha * length(xi - xk) + sqrt(max(0.0, 1.0 - dot(ni, nk)));", "wang"),
+    ("wang-cluster-level-base-binary-tree", "wang_cluster.wgsl", "return ((1u << (2u * l)) - 1u) / 3u;", "return (1u << l) - 1u;", "wang"),
+    ("wang-cluster-node-row-stride-half", "wang_cluster.wgsl", "level_base(l) + (y << l) + x", "level_base(l) + (y << (l - 1u)) + x", "wang"),
+    ("wang-cluster-grid-pixel-x-without-step", "wang_cluster.wgsl", "y * params.step * params.width + x * params.step", "y * params.step * params.width + x", "wang"),
+    ("wang-cluster-node-count-reads-normal", "wang_cluster.wgsl", "return u32(nodes[2u * n].w);", "return u32(nodes[2u * n + 1u].w);", "wang"),
+    ("wang-cluster-node-mean-not-divided", "wang_cluster.wgsl", "return Mean(s.xyz / s.w, nrm);", "return Mean(s.xyz, nrm);", "wang"),
+    ("wang-cluster-leaf-sum-overwritten", "wang_cluster.wgsl", "ps += gbuffer[m].pos.xyz;", "ps = gbuffer[m].pos.xyz;", "wang"),
+    ("wang-cluster-node-normal-slot-gets-position", "wang_cluster.wgsl", "nodes[2u * n + 1u] = vec4<f32>(ns, 0.0);", "nodes[2u * n + 1u] = vec4<f32>(ps, 0.0);", "wang"),
+    ("wang-cluster-up-counts-children", "wang_cluster.wgsl", "c += s.w;", "c += 1.0;", "wang"),
+    ("wang-cluster-eps-carry-dropped", "wang_cluster.wgsl", "atomicAdd(&tree[i + 1u], 1u);", "atomicAdd(&tree[i + 1u], 0u);", "wang"),
+    ("wang-cluster-sum-carry-dropped", "wang_cluster.wgsl", "atomicAdd(&sums[i + 1u], 1u);", "atomicAdd(&sums[i + 1u], 0u);", "wang"),
+    ("wang-cluster-eps-weight-high-word-dropped", "wang_cluster.wgsl", "return f32(atomicLoad(&tree[4u * n + 1u])) * 4294967296.0 + f32(atomicLoad(&tree[4u * n]));", "return f32(atomicLoad(&tree[4u * n]));", "wang"),
+    ("wang-cluster-nth-point-off-by-one", "wang_cluster.wgsl", "if r < c {", "if r <= c {", "wang"),
+    ("wang-cluster-float-key-positive-not-offset", "wang_cluster.wgsl", "return select(b | 0x80000000u, ~b,", "return select(b, ~b,", "wang"),
+    ("wang-cluster-key-float-negative-not-inverted", "wang_cluster.wgsl", "select(~k, k & 0x7fffffffu,", "select(k, k & 0x7fffffffu,", "wang"),
+    ("wang-cluster-bounds-skip-z", "wang_cluster.wgsl", "    for (var a = 0u; a < 3u; a++) {\n        let key = float_key(c[a]);", "    for (var a = 0u; a < 2u; a++) {\n        let key = float_key(c[a]);", "wang"),
+    ("wang-cluster-init-labels-last-pixel", "wang_cluster.wgsl", "if m < params.pixels {\n        labels[m] = INVALID;", "if m + 1u < params.pixels {\n        labels[m] = INVALID;", "wang"),
+    ("wang-cluster-last-seed-dropped", "wang_cluster.wgsl", "if j < seed_count() {", "if j + 1u < seed_count() {", "wang"),
+    ("wang-cluster-mean-high-word-dropped", "wang_cluster.wgsl", "return (f32(hi) * 4294967296.0 + f32(lo)) / f32(count);", "return f32(lo) / f32(count);", "wang"),
+    ("wang-cluster-grid-dims-read-one-early", "wang_cluster.wgsl", "g.dims[a] = atomicLoad(&state[GRID + 4u + a]);", "g.dims[a] = atomicLoad(&state[GRID + 3u + a]);", "wang"),
+    ("wang-cluster-cell-clamp-off-by-one", "wang_cluster.wgsl", "let hi = vec3<f32>(g.dims) - 1.0;", "let hi = vec3<f32>(g.dims);", "wang"),
+    ("wang-cluster-cell-index-strides-swapped", "wang_cluster.wgsl", "(u32(c.z) * g.dims.y + u32(c.y)) * g.dims.x", "(u32(c.z) * g.dims.x + u32(c.y)) * g.dims.y", "wang"),
+    ("wang-cluster-grid-count-doubled", "wang_cluster.wgsl", "cell_coord(g, c.xyz))], 1u);", "cell_coord(g, c.xyz))], 2u);", "wang"),
+    ("wang-cluster-scan-cells-reads-dims-z", "wang_cluster.wgsl", "wg_cells = atomicLoad(&state[GRID + 7u]);", "wg_cells = atomicLoad(&state[GRID + 6u]);", "wang"),
+    ("wang-cluster-scan-inclusive-not-exclusive", "wang_cluster.wgsl", "var run = partial[t] - s;", "var run = partial[t];", "wang"),
+    ("wang-cluster-scatter-slot-off-by-one", "wang_cluster.wgsl", "atomicSub(&cells[COUNTS + cell], 1u) - 1u;", "atomicSub(&cells[COUNTS + cell], 1u);", "wang"),
+    ("wang-cluster-ring-face-rows-need-both", "wang_cluster.wgsl", "if abs(y - c.y) == ring || abs(z - c.z) == ring {", "if abs(y - c.y) == ring && abs(z - c.z) == ring {", "wang"),
+    ("wang-cluster-sub-high-word-dropped", "wang_cluster.wgsl", "        atomicAdd(&sums[i + 1u], 0xffffffffu);\n", "", "wang"),
+    ("wang-cluster-assign-grid-rows-of-gh", "wang_cluster.wgsl", "grid_pixel(i % params.gw, i / params.gw);\n    assign_pixel(m, labels[m]);", "grid_pixel(i % params.gh, i / params.gh);\n    assign_pixel(m, labels[m]);", "wang"),
+    ("wang-cluster-sample-error-starts-at-zero", "wang_cluster.wgsl", "atomicStore(&sums[WORDS * j + 13u], 0xffffffffu);", "atomicStore(&sums[WORDS * j + 13u], 0u);", "wang"),
+    ("wang-cluster-sample-min-swapped", "wang_cluster.wgsl", "if bits < atomicLoad(&sums[WORDS * l + 13u]) {", "if bits > atomicLoad(&sums[WORDS * l + 13u]) {", "wang"),
+    ("wang-cluster-sample-albedo-slot-off-by-one", "wang_cluster.wgsl", "sample_gbuffer[4u * j + 2u] = albedo;", "sample_gbuffer[4u * j + 3u] = albedo;", "wang"),
     # --- cvrtgi.wgsl (CPU twin src/cpu/cvrtgi.rs)
     ("cv-face-axis-sign-swapped", "cvrtgi.wgsl", "select(-1.0, 1.0, dir % 2u == 0u)", "select(1.0, -1.0, dir % 2u == 0u)", "cvrtgi"),
     ("cv-dominant-face-sign-swapped", "cvrtgi.wgsl", "select(0u, 1u, n[axis] < 0.0)", "select(1u, 0u, n[axis] < 0.0)", "cvrtgi"),
@@ -273,6 +362,7 @@ MUTANTS = [
     ("accumulate-mean-schedule-dropped", "accumulate.wgsl", "return max(1.0 / (frames + 1.0), alpha);", "return alpha;", "temporal"),
     ("accumulate-mix-reversed", "accumulate.wgsl", "mix(history.xyz, cur, alpha)", "mix(cur, history.xyz, alpha)", "temporal"),
     ("accumulate-same-view-ignored", "accumulate.wgsl", "if params.size.w == 1u {", "if false {", "temporal"),
+    ("accumulate-reprojection-y-flipped", "accumulate.wgsl", "(1.0 - sy) * 0.5 * f32(params.size.y)", "(sy + 1.0) * 0.5 * f32(params.size.y)", "temporal"),
     # --- indirect scale: upsample.wgsl
     ("upsample-normal-power-dropped", "upsample.wgsl", "pow(facing, NORMAL_POWER)", "facing", "indirect scale"),
     ("upsample-plane-distance-ignored", "upsample.wgsl", "return exp(-plane * plane) * pow", "return pow", "indirect scale"),
@@ -285,8 +375,19 @@ MUTANTS = [
     # which of its lights finds it) and dropping `rest &= ~masks[k]` (the table repeats the first
     # pattern; every other light runs the loop). In kmeans/grid.wgsl the cell size (`1.5 * spacing`,
     # the area behind it): the search is exact at any cell size, only its speed changes.
-    # Not mutated: common/chunk.wgsl, common/gbuffer.wgsl and kmeans.wgsl are glue (a uniform block
-    # and chunk_item, a struct, the #imports); warmup.wgsl is a busy loop whose result nobody reads.
+    # Not listed, equivalent by argument (not run): in wang_cluster.wgsl `level_base`'s `- 1u` dropped
+    # (4^l is 1 modulo 3, so 4^l / 3 and (4^l - 1) / 3 are the same integer) and `node_index`'s x and
+    # y swapped (a bijection within the level that every reader and writer shares); in
+    # common/bvh.wgsl `ray_shear`'s swap of kx and ky for a ray towards -z dropped (it negates the
+    # three edge functions and det together, exactly where no multiply-add is fused: the test is
+    # two-sided, t and the barycentrics are the same); in common/nearest.wgsl the fallback's `ring <= maxr` as `ring < maxr` (no cell is maxr
+    # rings from another: the grid is at most maxr cells an axis).
+    # Not mutated, every function with arithmetic having a mutant above: common/gbuffer.wgsl and
+    # kmeans.wgsl are glue (a struct, the #imports); warmup.wgsl is a busy loop whose result nobody
+    # reads; `empty_nearest` (common/nearest.wgsl) only fills the list with (BIG, INVALID), and
+    # `downsample` (upsample.wgsl) only copies the G-buffer at `representative(i)` (which has its
+    # mutant); the loads (`sorted_at`, `cell_slots`, `cell_texel`, `seed_count`) and the
+    # flag setters (`set_flag`, `seed_next`) hold no arithmetic of their own.
 ]
 
 # Stage 2: every test binary that uses the GPU (tests/*.rs but NO_GPU), whole, in this order (fast or
@@ -304,6 +405,12 @@ HINTS = {
     "common/alpha.wgsl": ["gltf_features"],
     "common/surface.wgsl": ["gltf_features"],
     "kmeans/grid.wgsl": ["kmeans"],
+    "kmeans/iterate.wgsl": ["kmeans"],
+    "kmeans/assign.wgsl": ["kmeans"],
+    "kmeans/reps.wgsl": ["kmeans"],
+    "common/kmeans.wgsl": ["kmeans"],
+    "common/nearest.wgsl": ["kmeans"],
+    "common/bvh.wgsl": ["traversal"],
     "common/scan.wgsl": ["kmeans"],
     "kmeans/init.wgsl": ["kmeans", "temporal"],
     "shade.wgsl": ["clustered"],
@@ -354,12 +461,13 @@ def verdict(rc, out):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("-k", default="", help="only mutants whose name contains this")
+    ap.add_argument("-k", nargs="+", default=[""], metavar="NAME",
+                    help="only mutants whose name contains one of these")
     ap.add_argument("--list", action="store_true")
     ap.add_argument("--full", action="store_true", help="run stage 2 even when stage 1 kills")
     ap.add_argument("--timeout", type=int, default=300, help="seconds per test binary")
     a = ap.parse_args()
-    todo = [m for m in MUTANTS if a.k in m[0]]
+    todo = [m for m in MUTANTS if any(k in m[0] for k in a.k)]
     if a.list:
         for m in todo:
             print(f"{m[0]:48} {m[4]:9} {m[1]}")

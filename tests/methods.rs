@@ -426,6 +426,53 @@ fn wang_clustering_matches_cpu_twin_on_random_surfels_with_holes() {
     }
 }
 
+/// ε_q past 32 bits (the GPU sums it in two 32-bit words, `tree_add64`, and `eps_weight` reads
+/// both): a 96×64 image whose pixels alternate, as a checkerboard, between two clumps at opposite
+/// corners of the unit cube, (0.01 x / 96, 0.01 y / 64, 0) facing +z and one minus that facing −z,
+/// with α 100 / √3 a unit of length (α = 100 over the bounds' diagonal) and K 192 (a grid step of
+/// 1). Every node's mean is near the cube's centre with the normals cancelling, so each point's
+/// Eq. (2) error is about 100 · ½ + √2 ≈ 51.4, 3.4e6 in ε's fixed point: the quadtree's two level-1
+/// nodes with points (64×64 and 32×64 pixels; the padded side is 128) sum about 1.37e10 and
+/// 6.84e9 (computed in f64; asserted above 2^33 and 2^32 on the twin's 64-bit sums), and the root
+/// splits K between them 2:1. With the high words dropped the split would follow the low words'
+/// 8.4e8 : 2.5e9. The seeds, labels and sample points equal the twin's. Without this test every
+/// binary passed with the carry or the high word dropped (docs/testing.md, WGSL mutants).
+#[test]
+fn wang_cluster_eps_sums_carry_past_32_bits() {
+    let ctx = common::gpu();
+    let (w, h, k) = (96u32, 64u32, 192u32);
+    let gbuffer: Vec<[f32; 4]> = (0..w * h)
+        .flat_map(|m| {
+            let (x, y) = (m % w, m / w);
+            let j = Vec3::new(0.01 * x as f32 / w as f32, 0.01 * y as f32 / h as f32, 0.0);
+            if (x + y) % 2 == 0 {
+                surface(j, Vec3::Z)
+            } else {
+                surface(Vec3::ONE - j, -Vec3::Z)
+            }
+        })
+        .collect();
+    let bounds = (Vec3::ZERO, Vec3::ONE);
+    let alpha = 100.0 / 3f32.sqrt();
+    let c = wang_gpu_cluster(&ctx, &gbuffer, (w, h), (k, alpha, 11, 3), bounds);
+    assert_eq!((c.params.step, c.params.levels), (1, 7));
+    let sps: Vec<ShadingPoint> = gbuffer.chunks(4).map(ShadingPoint::from_gpu).collect();
+    let tree = twin::Quadtree::build(
+        twin::GridImage {
+            p: &c.params,
+            sps: &sps,
+        },
+        alpha,
+    );
+    // Level 1 starts at node 1, row-major: (0, 0) and (1, 0) hold the points.
+    assert!(
+        tree.eps[1] > 1 << 33 && tree.eps[2] > 1 << 32,
+        "ε of the level-1 nodes {:?}",
+        &tree.eps[1..5]
+    );
+    wang_clustering_matches_twin(&ctx, "ε past 32 bits", &sps, &c, 3, 3f32.sqrt());
+}
+
 /// Hand-worked oracle of `wang_cluster.wgsl`: two 4×4 patches side by side in an 8×4 image, the left
 /// on the plane z = 0 facing +z at (0.1 x, 0.1 y, 0), the right on the plane x = 2 facing +x at
 /// (2, 0.1 y, 0.1 (x − 4)), K = 2. The quadtree's root sends one seed to each patch (equal ε_q; the
