@@ -366,6 +366,41 @@ fn index_out_of_range() {
     let path = d.write_gltf(&dir, "oob");
     assert_err(gltf_load::load_path(&path), "oob.gltf", "out of range");
 
+    // Indices that are scalars of floats, or unsigned shorts two to an element, are refused: each is
+    // wrong in one of the two respects only (cargo-mutants: the test's `||` as `&&` survived).
+    for (name, ty, comp, count, bytes) in [
+        (
+            "float_indices",
+            "SCALAR",
+            5126,
+            3,
+            [0.0f32, 1.0, 2.0].map(f32::to_le_bytes).concat(),
+        ),
+        (
+            "vec2_indices",
+            "VEC2",
+            5123,
+            3,
+            [0u16, 1, 2, 0, 1, 2].map(u16::to_le_bytes).concat(),
+        ),
+    ] {
+        let mut d = Doc::new();
+        let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+        let view = d.view(&bytes, None);
+        let i = d.push(
+            "accessors",
+            json!({"bufferView": view, "componentType": comp, "count": count, "type": ty}),
+        );
+        let m = d.mesh(json!({"attributes": {"POSITION": p}, "indices": i}));
+        d.node(json!({"mesh": m}), true);
+        let path = d.write_gltf(&dir, name);
+        assert_err(
+            gltf_load::load_path(&path),
+            &format!("{name}.gltf"),
+            "must be a SCALAR of unsigned byte, short or int",
+        );
+    }
+
     // Normals of two components: skipped (normals generated) with a warning naming the type.
     let mut d = Doc::new();
     let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
