@@ -25,11 +25,13 @@ fn main() {
     let mut files = Vec::new();
     walk(&root, "", &mut files);
     let mut code = String::from("&[\n");
+    // Each path is resolved where the crate compiles (`CARGO_MANIFEST_DIR` at compile time), not
+    // where this script last ran: a target directory copied into another checkout (a worktree)
+    // then reads that checkout's shaders, not the original's.
     for f in &files {
-        let abs = root.join(f);
         code += &format!(
-            "    ({f:?}, include_str!({:?})),\n",
-            abs.display().to_string()
+            "    ({f:?}, include_str!(concat!(env!(\"CARGO_MANIFEST_DIR\"), {:?}))),\n",
+            format!("/shaders-wgsl/{f}")
         );
     }
     code += "]\n";
