@@ -12,7 +12,7 @@ use fuzzy_vpl::gi::scene_gpu::SceneGpu;
 use fuzzy_vpl::gpu::profiler::Profiler;
 use fuzzy_vpl::method::lightcluster;
 use fuzzy_vpl::method::wang::cluster::{ClusterParams, WangCluster, WangClustering};
-use fuzzy_vpl::method::wang::{self, WangMethod};
+use fuzzy_vpl::method::wang::{self, WangFrame, WangMethod};
 use fuzzy_vpl::method::{Method, MethodSettings};
 use fuzzy_vpl::metrics;
 use fuzzy_vpl::render::pipeline::{Pass, RenderSettings, Renderer};
@@ -48,6 +48,15 @@ fn rooms() -> impl Iterator<Item = (&'static str, scene::Scene)> {
     ["builtin:cornell", "builtin:conference"]
         .into_iter()
         .map(|n| (n, scene::load(n).unwrap()))
+}
+
+/// wang's last frame on `r` (its clustering, its images), after a render with `Method::Wang`.
+fn wang_frame<'r>(r: &'r Renderer) -> &'r WangFrame {
+    r.method_state::<WangMethod>(Method::Wang)
+        .unwrap()
+        .last
+        .as_ref()
+        .unwrap()
 }
 
 /// The last frame's shading points.
@@ -165,13 +174,7 @@ fn wang_matches_cpu_twin() {
         assert!(f.ran(wang::CLUSTER) && f.ran(wang::INTERP), "{name}");
         assert!(!f.ran(Pass::SpCluster) && !f.ran(Pass::Shade), "{name}");
         assert!(common::all_finite(&f.radiance), "{name}");
-        let c = &r
-            .method_state::<WangMethod>(Method::Wang)
-            .unwrap()
-            .last
-            .as_ref()
-            .unwrap()
-            .clustering;
+        let c = &wang_frame(&r).clustering;
         assert_eq!((c.k(), c.params.step), (24, 1), "{name}");
         assert_eq!(
             c.params.alpha,
@@ -196,12 +199,7 @@ fn wang_frame_matches_twin(
 ) {
     let (w, h) = (fs.frame.width, fs.frame.height);
     let sps = shading_points(r);
-    let wf = r
-        .method_state::<WangMethod>(Method::Wang)
-        .unwrap()
-        .last
-        .as_ref()
-        .unwrap();
+    let wf = wang_frame(r);
     let c = &wf.clustering;
     let k = c.k() as usize;
     let (labels, sample_pixels) =
@@ -291,13 +289,7 @@ fn wang_clustering_matches_cpu_twin_on_a_grid_of_step_2() {
         let fs = settings(Method::Wang, w, h);
         r.render(&s.default_camera(), &fs).unwrap();
         let sps = shading_points(&r);
-        let c = &r
-            .method_state::<WangMethod>(Method::Wang)
-            .unwrap()
-            .last
-            .as_ref()
-            .unwrap()
-            .clustering;
+        let c = &wang_frame(&r).clustering;
         assert_eq!((c.params.step, c.params.levels), (2, 5));
         wang_clustering_matches_twin(&ctx, name, &sps, c, 3, s.extent());
     }
@@ -317,13 +309,7 @@ fn wang_clustering_matches_cpu_twin_with_thousands_of_clusters() {
     fs.cluster.iterations = 10;
     let f = r.render(&s.default_camera(), &fs).unwrap();
     assert!(common::all_finite(&f.radiance));
-    let c = &r
-        .method_state::<WangMethod>(Method::Wang)
-        .unwrap()
-        .last
-        .as_ref()
-        .unwrap()
-        .clustering;
+    let c = &wang_frame(&r).clustering;
     assert_eq!((c.params.step, c.params.levels, c.k()), (1, 7, 3072));
     let centres: Vec<twin::Center> = c
         .read_centres(&ctx)
