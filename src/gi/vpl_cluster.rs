@@ -74,11 +74,11 @@ pub fn cluster(
 
 /// A VPL cluster's sums for its light, in f64 over its members in index order (the same seed gives
 /// the same image): the summed flux, and the flux (r + g + b) of the members other than the
-/// representative with its moments of their squared distance from it.
+/// representative with its moments of their squared distance from it (the representative's own is
+/// the rest of the sum).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Spread {
     flux: [f64; 3],
-    own: f64,
     other: f64,
     other_d2: f64,
 }
@@ -89,10 +89,8 @@ impl Spread {
         for (sum, &x) in self.flux.iter_mut().zip(&v.flux) {
             *sum += x as f64;
         }
-        let w = v.flux[..3].iter().map(|&x| x as f64).sum::<f64>();
-        if is_rep {
-            self.own += w;
-        } else {
+        if !is_rep {
+            let w = v.flux[..3].iter().map(|&x| x as f64).sum::<f64>();
             let d2: f64 = (0..3)
                 .map(|c| (v.pos[c] as f64 - rep.pos[c] as f64).powi(2))
                 .sum();
@@ -107,7 +105,7 @@ impl Spread {
     /// distance from `rep`, which `eq5_cluster_radiance` clamps their term's d at (both 0 for a
     /// cluster of one VPL).
     pub fn light(&self, rep: &Vpl) -> Vpl {
-        let total = self.own + self.other;
+        let total: f64 = self.flux.iter().sum();
         let (share, r2) = if self.other > 0.0 && total > 0.0 {
             (self.other / total, self.other_d2 / self.other)
         } else {
