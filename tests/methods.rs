@@ -596,6 +596,71 @@ fn wang_cluster_border_moves_as_far_as_the_data_asks() {
     assert_eq!(labels, want);
 }
 
+/// Hand-worked oracle of the assignment's grid search beyond the first ring and at the grid's far
+/// faces (`wang_cluster.wgsl`'s `scan_ring` and `cell_coord`): a 32×16 image (K 8: a grid step of 2,
+/// so the pixels off the grid image are labelled afterwards with no hint) of eight 8×8 blocks, each
+/// block one clump of equal points on the line x = z = 0. The quadtree root's two quadrants with
+/// points (blocks 0, 1, 4, 5 and 2, 3, 6, 7) hold the same clumps shifted by 0.1 along y (t = 0,
+/// 0.05, 0.78, 0.9 and 0.1, 0.15, 0.88, 1), the third of each facing −z and the others +z: equal
+/// ε_q, so each draws 4 seeds, and each block (ε_q 0) one. So each block is one cluster, its centre
+/// the clump. The centres span a line of length 1: cell 1.5 · 1/8 = 0.1875, a grid of 1 × 6 × 1
+/// cells; rows 0 (t ≤ 0.15), 4 (0.78, 0.88, 0.9) and 5 (1) hold centres, rows 1–3 none. Two
+/// off-grid pixels are moved:
+/// - P at t = 0.5 (row 2, facing +z): no centre in rows 1–3, so the search goes to ring 2, whose
+///   rows 0 and 4 are whole rows of it (|Δy| = 2). Its nearest by Eq. (2) (α 1) is block 3's
+///   centre (t 0.15), 0.35 away; block 5's (t 0.9) is 0.4. Scanning only a ring's ends in x there
+///   finds no cluster in any ring.
+/// - Q at t = 1.25 (facing −z), past the centres' far bound: row 6.67, clamped to the last row 5,
+///   whose first ring (rows 4 and 5) holds block 6 (t 0.88, −z), 0.37 + 0 away, against block 7's
+///   0.25 + 2. Clamped one row too far (row 6), the first ring holds row 5 only: block 7.
+///
+/// Every other pixel takes its block's cluster, eight distinct ones.
+#[test]
+fn wang_cluster_search_reaches_whole_ring_rows_and_the_last_row() {
+    let ctx = common::gpu();
+    let (w, h, k) = (32u32, 16u32, 8u32);
+    // Blocks row-major, 4 across: (t, facing −z).
+    let clumps = [
+        (0.0f32, false),
+        (0.05, false),
+        (0.1, false),
+        (0.15, false),
+        (0.78, true),
+        (0.9, false),
+        (0.88, true),
+        (1.0, false),
+    ];
+    let block = |m: u32| (m / w / 8) * 4 + (m % w) / 8;
+    let (p, q) = (w + 1, w + 3); // pixels (1, 1) and (3, 1): off the grid image (odd x)
+    let gbuffer: Vec<[f32; 4]> = (0..w * h)
+        .flat_map(|m| {
+            let (t, down) = match m {
+                _ if m == p => (0.5, false),
+                _ if m == q => (1.25, true),
+                _ => clumps[block(m) as usize],
+            };
+            surface(
+                Vec3::new(0.0, t, 0.0),
+                if down { -Vec3::Z } else { Vec3::Z },
+            )
+        })
+        .collect();
+    let bounds = (Vec3::splat(-1.0), Vec3::splat(2.0));
+    let c = wang_gpu_cluster(&ctx, &gbuffer, (w, h), (k, 1.0, 9, 3), bounds);
+    assert_eq!(c.params.step, 2);
+    let labels = c.read_labels(&ctx).unwrap();
+    let of_block = |b: u32| labels[((b / 4) * 8 * w + (b % 4) * 8) as usize];
+    let mut distinct: Vec<u32> = (0..8).map(of_block).collect();
+    distinct.sort_unstable();
+    distinct.dedup();
+    assert_eq!(distinct.len(), 8, "one cluster a block: {labels:?}");
+    for m in (0..w * h).filter(|&m| m != p && m != q) {
+        assert_eq!(labels[m as usize], of_block(block(m)), "pixel {m}");
+    }
+    assert_eq!(labels[p as usize], of_block(3), "P: block 3's cluster");
+    assert_eq!(labels[q as usize], of_block(6), "Q: block 6's cluster");
+}
+
 /// lightcluster: the GPU's shading (every pixel × every VPL with its cluster's disc visibility)
 /// equals the CPU twin given the same clusters, and the clusters are the leader algorithm's.
 #[test]
