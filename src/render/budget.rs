@@ -617,6 +617,30 @@ mod tests {
         assert_eq!((s.cluster.vpl_clusters, s.frame.direct_samples), (4096, 16));
     }
 
+    /// One knob a step: under the budget at the fewest clusters with 4 of 16 direct samples
+    /// (10 + 2.5 + 5.3 ms of 40), the step gives the direct light its samples back (4 · 24.5 / 2.5
+    /// → 39, clamped to 16) and leaves K; the next step, with every sample and still under the
+    /// budget (25.3 ms), grows K and keeps the samples (cargo-mutants: the direct light's early
+    /// return taken when the samples did not change survived).
+    #[test]
+    fn a_step_moves_the_direct_light_or_k_not_both() {
+        let st = settings(&ClusterSettings::default(), (320, 240), 8192);
+        let mut b = Budget::new(40.0, &st);
+        let mut s = b.start(&st);
+        s.cluster = b.apply(&s.cluster, MIN_VPL_CLUSTERS);
+        s.frame.direct_samples = 4;
+        let next = b.step(&s, frame(&s));
+        assert_eq!(next.frame.direct_samples, 16);
+        assert_eq!(next.cluster, s.cluster);
+        let after = b.step(&next, frame(&next));
+        assert_eq!(after.frame.direct_samples, 16);
+        assert!(
+            after.cluster.vpl_clusters > MIN_VPL_CLUSTERS,
+            "{:?}",
+            b.steps
+        );
+    }
+
     #[test]
     fn direct_samples_are_linear_in_the_room_left() {
         // 16 samples took 40 ms: 10 ms of room is 4 samples, 2 ms rounds down to 0 and is 1.
