@@ -515,6 +515,16 @@ mod tests {
             clusters.iter().map(|c| c.voxels).collect::<Vec<_>>(),
             [2, 3]
         );
+        // Each cluster's box spans its voxels' whole cells: x 0..4 and 5..8, y and z 0..1
+        // (cargo-mutants: the far corner as `c * size`, without the + 1, survived).
+        let boxes: Vec<(Vec3, Vec3)> = clusters.iter().map(|c| (c.min, c.max)).collect();
+        assert_eq!(
+            boxes,
+            [
+                (Vec3::ZERO, Vec3::new(4.0, 1.0, 1.0)),
+                (Vec3::new(5.0, 0.0, 0.0), Vec3::new(8.0, 1.0, 1.0)),
+            ]
+        );
     }
 
     /// A voxel's albedo, position and normal are its fragments' area-weighted means: two fragments of
