@@ -23,8 +23,13 @@ const SAME_DEPTH: f32 = 0.03;
 /// ... and its normal within this cosine (about 25°) of the splatted pixel's.
 const SAME_COS: f32 = 0.9;
 
-/// An image with its shading points, keeping every `step`-th pixel in each axis (all of them at step
-/// 1): what a frame larger than the previews is reprojected from while the camera moves.
+/// An image with its shading points, thinned to one pixel a `step` × `step` block (all of them at
+/// step 1): what a frame larger than the previews is reprojected from while the camera moves. A
+/// block keeps its pixel of least depth (a thin foreground part, a chair's leg one pixel wide, stays
+/// whole rather than kept or dropped by where it falls), with the mean colour of the block's pixels
+/// that show the same surface as it (an anti-aliased edge, not one sample of it; the test is the
+/// gather's: on its tangent plane within `SAME_DEPTH` of its depth and normal within `SAME_COS`, or
+/// without normals at its depth).
 pub struct Thinned {
     pub step: usize,
     pub size: (u32, u32),
@@ -34,12 +39,15 @@ pub struct Thinned {
 }
 
 impl Thinned {
+    /// `rgba`, `positions` and `normals` (may be empty) of a `w` × `h` frame seen from `cam` (its
+    /// eye and view direction).
     pub fn new(
         rgba: &[u8],
         positions: &[[f32; 4]],
         normals: &[[f32; 4]],
         (w, h): (u32, u32),
         step: usize,
+        cam: &CameraParams,
     ) -> Thinned {
         let step = step.max(1);
         let (tw, th) = (w as usize / step, h as usize / step);
@@ -52,24 +60,66 @@ impl Thinned {
                 normals: normals.to_vec(),
             };
         }
-        let kept: Vec<usize> = (0..tw * th)
-            .map(|i| (i / tw * step) * w as usize + i % tw * step)
-            .collect();
-        Thinned {
+        let w = w as usize;
+        let (eye, fwd) = (cam.eye_point(), xyz(cam.forward));
+        let depth = |i: usize| {
+            if sky(positions[i]) {
+                f32::INFINITY
+            } else {
+                (xyz(positions[i]) - eye).dot(fwd)
+            }
+        };
+        let mut out = Thinned {
             step,
             size: (tw as u32, th as u32),
-            rgba: kept
-                .iter()
-                .flat_map(|&i| rgba[i * 4..i * 4 + 4].to_vec())
-                .collect(),
-            positions: kept.iter().map(|&i| positions[i]).collect(),
-            normals: if normals.is_empty() {
-                Vec::new()
-            } else {
-                kept.iter().map(|&i| normals[i]).collect()
-            },
+            rgba: Vec::with_capacity(tw * th * 4),
+            positions: Vec::with_capacity(tw * th),
+            normals: Vec::with_capacity(if normals.is_empty() { 0 } else { tw * th }),
+        };
+        for k in 0..tw * th {
+            let (x0, y0) = (k % tw * step, k / tw * step);
+            let block =
+                || (y0..y0 + step).flat_map(move |y| (x0..x0 + step).map(move |x| y * w + x));
+            let near = block()
+                .min_by(|&a, &b| depth(a).total_cmp(&depth(b)))
+                .expect("a block has pixels");
+            let d = depth(near);
+            let same = |i: usize| {
+                if !d.is_finite() || sky(positions[i]) {
+                    return !d.is_finite() && sky(positions[i]);
+                }
+                match normals.get(near).map(|&n| xyz(n)) {
+                    Some(n) => {
+                        n.dot(xyz(positions[i]) - xyz(positions[near])).abs() <= SAME_DEPTH * d
+                            && n.dot(xyz(normals[i])) >= SAME_COS
+                    }
+                    None => (depth(i) - d).abs() <= SAME_DEPTH * d,
+                }
+            };
+            let (mut sum, mut n) = ([0u32; 4], 0u32);
+            for i in block().filter(|&i| same(i)) {
+                for c in 0..4 {
+                    sum[c] += rgba[i * 4 + c] as u32;
+                }
+                n += 1;
+            }
+            out.rgba.extend(sum.map(|c| ((c + n / 2) / n) as u8));
+            out.positions.push(positions[near]);
+            if !normals.is_empty() {
+                out.normals.push(normals[near]);
+            }
         }
+        out
     }
+}
+
+/// A pixel that saw no surface (its point's w is 0, or NaN).
+fn sky(p: [f32; 4]) -> bool {
+    p[3].is_nan() || p[3] <= 0.0
+}
+
+fn xyz(p: [f32; 4]) -> Vec3 {
+    Vec3::new(p[0], p[1], p[2])
 }
 
 /// `rgba` (sRGB8, `from`'s size) as seen from `to` (the same size): each pixel with a shading point
@@ -100,7 +150,7 @@ pub fn reproject(
         .enumerate()
         .map(|(i, p)| {
             let (x, y) = ((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
-            if p[3].is_nan() || p[3] <= 0.0 {
+            if sky(*p) {
                 // Sky: a direction, behind everything.
                 let (tx, ty, _) = to.project(from.ray(x, y), NEAR)?;
                 return Some((tx, ty, f32::INFINITY, 1));
@@ -191,8 +241,6 @@ fn gather(old_frame: &Old, to: &CameraParams, splat: (&[f32], &[usize]), out: &m
     let (depth, source) = splat;
     let (w, h) = (from.size[0] as usize, from.size[1] as usize);
     let (from_eye, to_eye) = (from.eye_point(), to.eye_point());
-    let sky = |p: [f32; 4]| p[3].is_nan() || p[3] <= 0.0;
-    let xyz = |p: [f32; 4]| Vec3::new(p[0], p[1], p[2]);
     let fwd = to.ray(0.5 * w as f32, 0.5 * h as f32).normalize();
     for j in 0..w * h {
         let i = source[j];
@@ -365,20 +413,57 @@ mod tests {
         (p, pos, rgba)
     }
 
-    /// Thinning keeps every step-th pixel of each row and column, with its point; step 1 keeps all.
+    /// Thinning a plane facing the eye (one depth) keeps one pixel of each 2×2 block with its
+    /// point, and the block's mean colour (every pixel shows the same surface); step 1 keeps all.
     #[test]
-    fn thinning_keeps_every_step_th_pixel() {
-        let (_, pos, rgba) = plane(Vec3::ZERO, 33, 24);
-        let t = Thinned::new(&rgba, &pos, &[], (33, 24), 2);
+    fn thinning_keeps_each_blocks_nearest_pixel_with_the_blocks_mean_colour() {
+        let (p, pos, rgba) = plane(Vec3::ZERO, 33, 24);
+        let t = Thinned::new(&rgba, &pos, &[], (33, 24), 2, &p);
         assert_eq!((t.size, t.step), ((16, 12), 2));
         for (k, px) in t.rgba.chunks(4).enumerate() {
             let (x, y) = (k % 16 * 2, k / 16 * 2);
-            assert_eq!(px, &rgba[(y * 33 + x) * 4..(y * 33 + x) * 4 + 4]);
-            assert_eq!(t.positions[k], pos[y * 33 + x]);
+            // The plane's colour is (x, y, 0, 255): the block's mean rounds to x + 1, y + 1.
+            assert_eq!(px, [x as u8 + 1, y as u8 + 1, 0, 255], "block {k}");
+            let block = [0, 1, 33, 34].map(|o| pos[y * 33 + x + o]);
+            assert!(block.contains(&t.positions[k]), "block {k}");
         }
         assert!(t.normals.is_empty());
-        let all = Thinned::new(&rgba, &pos, &[], (33, 24), 1);
+        let all = Thinned::new(&rgba, &pos, &[], (33, 24), 1, &p);
         assert_eq!((all.size, all.rgba, all.positions), ((33, 24), rgba, pos));
+    }
+
+    /// A thin foreground part survives thinning: a line one pixel wide, 1 unit in front of a wall
+    /// 5 away, diagonal (pixels (x, x)) and along an odd column (x = 9), thinned by 2. Every block it
+    /// crosses keeps its point and colour, alone in the block's mean (the wall behind is another
+    /// surface); every other block keeps the wall's. Thinned by keeping every second pixel, the
+    /// odd column vanishes and the diagonal keeps one block in two.
+    #[test]
+    fn thinning_keeps_a_line_one_pixel_wide_whole() {
+        let (w, h) = (24u32, 16u32);
+        let (p, mut pos, _) = plane(Vec3::ZERO, w, h);
+        let mut rgba = vec![100u8; (w * h * 4) as usize];
+        let on_line = |x: usize, y: usize| x == y || x == 9;
+        for i in 0..(w * h) as usize {
+            let (x, y) = (i % w as usize, i / w as usize);
+            if on_line(x, y) {
+                let p = Vec4::from(pos[i]).truncate() * 0.8;
+                pos[i] = p.extend(1.0).into();
+                rgba[i * 4..i * 4 + 4].copy_from_slice(&[250, 0, 0, 255]);
+            }
+        }
+        let t = Thinned::new(&rgba, &pos, &[], (w, h), 2, &p);
+        for k in 0..(12 * 8) as usize {
+            let (x0, y0) = (k % 12 * 2, k / 12 * 2);
+            let crossed = (y0..y0 + 2).any(|y| (x0..x0 + 2).any(|x| on_line(x, y)));
+            let want: &[u8] = if crossed {
+                &[250, 0, 0, 255]
+            } else {
+                &[100; 4]
+            };
+            assert_eq!(&t.rgba[k * 4..k * 4 + 4], want, "block {k} at ({x0}, {y0})");
+            let z = t.positions[k][2];
+            assert_eq!(z > -4.5, crossed, "block {k}: depth {z}");
+        }
     }
 
     #[test]

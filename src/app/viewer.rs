@@ -556,7 +556,8 @@ impl Viewer {
                 (t.0, &t.1) != (*id, dkey) || t.2.step != step
             };
             if self.thinned.as_ref().is_none_or(stale) {
-                let t = reproject::Thinned::new(rgba, &f.positions, &f.normals, (w, h), step);
+                let cam = crate::gi::primary::CameraParams::new(from, w, h);
+                let t = reproject::Thinned::new(rgba, &f.positions, &f.normals, (w, h), step, &cam);
                 self.thinned = Some((*id, dkey.clone(), t));
             }
             let t = &self.thinned.as_ref().expect("set").2;
