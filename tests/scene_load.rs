@@ -499,6 +499,39 @@ fn nothing_to_render() {
     );
     assert!(e.contains("1 degenerate"), "{e}");
 
+    // Accessors of count 0 (glTF requires at least 1), as positions and as indices: nothing to
+    // render, never a panic. (cargo-mutants: `check`'s `Ok(count > 0)` as `>=` passes this too;
+    // the `gltf` crate's iterator reads a count-0 accessor with a view as empty, and one without
+    // a view fails its validation.)
+    for (name, empty_positions) in [("zero_positions", true), ("zero_indices", false)] {
+        let mut d = Doc::new();
+        let view = d.view(&[0u8; 12], None);
+        let empty = d.push(
+            "accessors",
+            json!({"bufferView": view, "componentType": 5126, "count": 0, "type": "VEC3",
+                   "min": [0, 0, 0], "max": [0, 0, 0]}),
+        );
+        let prim = if empty_positions {
+            json!({"attributes": {"POSITION": empty}})
+        } else {
+            let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+            let view = d.view(&[0u8; 4], None);
+            let i = d.push(
+                "accessors",
+                json!({"bufferView": view, "componentType": 5123, "count": 0, "type": "SCALAR"}),
+            );
+            json!({"attributes": {"POSITION": p}, "indices": i})
+        };
+        let m = d.mesh(prim);
+        d.node(json!({"mesh": m}), true);
+        let path = d.write_gltf(&dir, name);
+        assert_err(
+            gltf_load::load_path(&path),
+            &format!("{name}.gltf"),
+            "no triangles",
+        );
+    }
+
     // A bare minimum document.
     let p = dir.join("bare.gltf");
     std::fs::write(&p, br#"{"asset": {"version": "2.0"}}"#).unwrap();
