@@ -98,6 +98,9 @@ pub struct Counts {
     pub sp_warm_kept: Option<u32>,
     /// Rows of the visibility matrix copied from the previous render (kept representatives).
     pub visibility_rows_reused: u32,
+    /// `--method cvrtgi`'s sizes (absent for the other methods).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cvrtgi: Option<crate::method::cvrtgi::CvrtgiReport>,
 }
 
 impl Counts {
@@ -115,6 +118,7 @@ impl Counts {
             sp_iterations: frame.sp_iterations,
             sp_warm_kept: frame.sp_warm_kept,
             visibility_rows_reused: frame.visibility_rows_reused,
+            cvrtgi: frame.cvrtgi,
         }
     }
 }

@@ -742,3 +742,61 @@ fn measure() {
         t.elapsed().as_secs_f64()
     );
 }
+
+/// `render --method cvrtgi --stats`: `counts.cvrtgi` holds the method's sizes (the voxels are the
+/// CPU voxelisation's of the loaded scene, the clusters at most the voxels, the lit ones at most
+/// those, `vpl_clusters_used` the lit clusters), and a colom render has none.
+#[test]
+fn render_stats_count_cvrtgi_voxels_and_clusters() {
+    let d = common::scratch("cvrtgi-stats");
+    let (stats, exr) = (d.join("s.json"), d.join("i.exr"));
+    let args = |method: &str| {
+        [
+            "render",
+            "builtin:cornell",
+            "--method",
+            method,
+            "--voxel-res",
+            "12",
+            "--cluster-step",
+            "4",
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--vpls",
+            "256",
+            "-o",
+            exr.to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+        ]
+        .map(String::from)
+    };
+    let read = || -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap()
+    };
+    let (code, _, err) = common::run_cli(&args("cvrtgi").each_ref().map(String::as_str));
+    assert_eq!(code, 0, "{err}");
+    let j = read();
+    let c = &j["counts"]["cvrtgi"];
+    let n = |k: &str| {
+        c[k].as_u64()
+            .unwrap_or_else(|| panic!("counts.cvrtgi.{k}: {c}"))
+    };
+    let sc = fuzzy_vpl::scene::load("builtin:cornell").unwrap();
+    let voxels = voxel::voxelise(&sc, 12).voxels.len() as u64;
+    assert_eq!(n("voxels"), voxels, "{c}");
+    assert!(n("clusters") > 0 && n("clusters") <= voxels, "{c}");
+    assert!(
+        n("lit_clusters") > 0 && n("lit_clusters") <= n("clusters"),
+        "{c}"
+    );
+    assert!(n("lit_voxels") <= voxels && n("faces") > 0, "{c}");
+    assert_eq!(j["counts"]["vpl_clusters_used"], c["lit_clusters"], "{j}");
+    assert_eq!(c["geometry_built"], true, "{c}");
+    let (code, _, err) = common::run_cli(&args("colom").each_ref().map(String::as_str));
+    assert_eq!(code, 0, "{err}");
+    assert!(read()["counts"].get("cvrtgi").is_none());
+    let _ = std::fs::remove_dir_all(&d);
+}

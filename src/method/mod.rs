@@ -61,6 +61,8 @@ pub struct Counts {
     pub sp_warm_kept: Option<u32>,
     pub gamma_used: Option<u32>,
     pub rows_reused: u32,
+    /// cvrtgi's sizes: voxels, clusters, faces, the lit ones (`Frame::cvrtgi`).
+    pub cvrtgi: Option<cvrtgi::CvrtgiReport>,
 }
 
 /// A method's resident state and the recording of its passes.

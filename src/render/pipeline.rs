@@ -500,6 +500,7 @@ impl Renderer<'_> {
             sp_iterations,
             sp_warm_kept,
             visibility_rows_reused: r.counts.rows_reused,
+            cvrtgi: r.counts.cvrtgi,
         })
     }
 

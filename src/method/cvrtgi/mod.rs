@@ -97,8 +97,9 @@ pub struct CvrtgiInputs<'a> {
     pub d_min: f32,
 }
 
-/// What a `record` did: sizes, and which resident stages it (re)built.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// What a `record` did: sizes, and which resident stages it (re)built. The stats' `counts.cvrtgi`
+/// (docs/design.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct CvrtgiReport {
     pub voxels: u32,
     pub clusters: u32,
@@ -113,7 +114,9 @@ pub struct CvrtgiReport {
     pub escape_rays: u64,
     pub geometry_built: bool,
     pub light_built: bool,
-    /// CPU milliseconds of the stages rebuilt this call (voxelisation, clustering, injection).
+    /// CPU milliseconds of the stages rebuilt this call (voxelisation, clustering, injection); in
+    /// the stats as `timings_ms.cvrtgi`, not among the counts.
+    #[serde(skip)]
     pub cpu_ms: f64,
 }
 
@@ -785,6 +788,7 @@ impl IndirectMethod for Cvrtgi {
         let report = Cvrtgi::record(self, g, &inputs, &f.method.cvrtgi)?;
         n.cpu_ms.push((PASS, report.cpu_ms));
         n.vpl_clusters_used = report.lit_clusters;
+        n.cvrtgi = Some(report);
         Ok(())
     }
 
