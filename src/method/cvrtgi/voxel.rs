@@ -574,5 +574,10 @@ mod tests {
             );
             assert!(eq1_within_angle(at(0.0, 1.0), at(30.0, len), 35.0), "{len}");
         }
+        // "Below" the angle, strictly: perpendicular normals at 90° (acos(0) is 90° exactly in
+        // f32) and equal ones at 0° do not join (cargo-mutants: `<` as `<=` survived).
+        assert!(!eq1_within_angle(Vec3::X, Vec3::Y, 90.0));
+        assert!(!eq1_within_angle(Vec3::Z, Vec3::Z, 0.0));
+        assert!(eq1_within_angle(Vec3::Z, Vec3::Z, 1e-3));
     }
 }
