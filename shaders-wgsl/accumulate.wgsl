@@ -5,16 +5,14 @@
 // CPU twin: src/cpu/accumulate.rs.
 #import common/chunk.wgsl
 #import common/gbuffer.wgsl
+#import common/camera.wgsl
 
 struct AccumulateParams {
     // width, height (both frames); history: 1 when there is a previous frame, 0 for none; same_view:
     // 1 when the previous camera is this frame's (each pixel then reads its own history).
     size: vec4<u32>,
-    // The previous frame's camera (render units), as `CameraParams`.
-    eye: vec4<f32>,
-    right: vec4<f32>,
-    up: vec4<f32>,
-    forward: vec4<f32>,
+    // The previous frame's camera.
+    prev: CameraParams,
     // x: alpha, the new frame's weight once the history is long (1 / frames of the average);
     // y: the depth tolerance (fraction of the depth); z: the normals' cosine tolerance.
     blend: vec4<f32>,
@@ -30,13 +28,13 @@ struct AccumulateParams {
 // World point `q`'s image position (pixels, centres at + 0.5) and depth along the previous view;
 // z <= 0 where it lies behind the eye (`CameraParams::project` with near = 1e-6).
 fn project_prev(q: vec3<f32>) -> vec3<f32> {
-    let d = q - params.eye.xyz;
-    let z = dot(d, params.forward.xyz);
+    let d = q - params.prev.eye.xyz;
+    let z = dot(d, params.prev.forward.xyz);
     if z <= 1e-6 * length(d) {
         return vec3<f32>(0.0, 0.0, -1.0);
     }
-    let r = params.right.xyz;
-    let u = params.up.xyz;
+    let r = params.prev.right.xyz;
+    let u = params.prev.up.xyz;
     let sx = dot(d, r) / (z * dot(r, r));
     let sy = dot(d, u) / (z * dot(u, u));
     return vec3<f32>((sx + 1.0) * 0.5 * f32(params.size.x), (1.0 - sy) * 0.5 * f32(params.size.y), z);

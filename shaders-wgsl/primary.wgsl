@@ -3,16 +3,7 @@
 #import common/surface.wgsl
 #import common/chunk.wgsl
 #import common/gbuffer.wgsl
-
-struct CameraParams {
-    eye: vec4<f32>,
-    // Image-plane axes at unit distance, scaled by tan(fov/2) (and the aspect ratio for `right`).
-    right: vec4<f32>,
-    up: vec4<f32>,
-    forward: vec4<f32>,
-    // width, height, and the rays' sub-pixel jitter (x, y as f32 bits; 0: pixel centres).
-    size: vec4<u32>,
-}
+#import common/camera.wgsl
 
 @group(1) @binding(1) var<uniform> cam: CameraParams;
 @group(1) @binding(2) var<storage, read_write> gbuffer: array<ShadingPoint>;

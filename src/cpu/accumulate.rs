@@ -14,12 +14,12 @@ fn v3(a: [f32; 4]) -> Vec3 {
 /// World point `q`'s image position (pixels) and depth along the previous view; depth −1 where it
 /// lies behind the eye.
 pub fn project_prev(p: &AccumulateParams, q: Vec3) -> Vec3 {
-    let d = q - v3(p.eye);
-    let z = d.dot(v3(p.forward));
+    let d = q - v3(p.prev.eye);
+    let z = d.dot(v3(p.prev.forward));
     if z <= 1e-6 * d.length() {
         return Vec3::new(0.0, 0.0, -1.0);
     }
-    let (r, u) = (v3(p.right), v3(p.up));
+    let (r, u) = (v3(p.prev.right), v3(p.prev.up));
     let sx = d.dot(r) / (z * r.dot(r));
     let sy = d.dot(u) / (z * u.dot(u));
     Vec3::new(

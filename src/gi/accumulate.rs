@@ -38,11 +38,8 @@ pub struct AccumulateParams {
     /// Width, height, 1 when there is a history (0: none), 1 when the previous camera is this
     /// frame's.
     pub size: [u32; 4],
-    /// The previous frame's camera (`CameraParams`' axes, render units).
-    pub eye: [f32; 4],
-    pub right: [f32; 4],
-    pub up: [f32; 4],
-    pub forward: [f32; 4],
+    /// The previous frame's camera (render units; its `size` is the previous frame's).
+    pub prev: CameraParams,
     /// x: α; y: `DEPTH_TOLERANCE`; z: `NORMAL_COS`.
     pub blend: [f32; 4],
 }
@@ -59,10 +56,7 @@ impl AccumulateParams {
                 prev.is_some() as u32,
                 prev.is_some_and(|p| bytemuck::bytes_of(p) == bytemuck::bytes_of(cam)) as u32,
             ],
-            eye: p.eye,
-            right: p.right,
-            up: p.up,
-            forward: p.forward,
+            prev: *p,
             blend: [alpha, DEPTH_TOLERANCE, NORMAL_COS, 0.0],
         }
     }

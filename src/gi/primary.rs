@@ -15,7 +15,7 @@ use crate::scene::Camera;
 pub const SP_BYTES: u64 = 64;
 
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct CameraParams {
     pub eye: [f32; 4],
     pub right: [f32; 4],
