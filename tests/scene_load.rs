@@ -824,6 +824,44 @@ fn degenerate_triangles_are_dropped() {
     assert!(s.triangles.iter().all(|t| t.area() > 0.4));
 }
 
+/// Indices of each unsigned type glTF allows (byte, short, int) give the same triangles: a quad
+/// (0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0) as 0 1 2, 0 2 3 (cargo-mutants: `read_indices`
+/// without its unsigned-byte arm, so bytes read as ints, survived).
+#[test]
+fn byte_short_and_int_indices() {
+    let dir = temp_dir("index_types");
+    let quad = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+    let idx = [0u32, 1, 2, 0, 2, 3];
+    for (name, comp, bytes) in [
+        ("u8", 5121, idx.map(|i| i as u8).to_vec()),
+        (
+            "u16",
+            5123,
+            idx.map(|i| i as u16).map(u16::to_le_bytes).concat(),
+        ),
+        ("u32", 5125, idx.map(u32::to_le_bytes).concat()),
+    ] {
+        let mut d = Doc::new();
+        let p = d.positions(&quad);
+        let view = d.view(&bytes, None);
+        let i = d.push(
+            "accessors",
+            json!({"bufferView": view, "componentType": comp, "count": 6, "type": "SCALAR"}),
+        );
+        let m = d.mesh(json!({"attributes": {"POSITION": p}, "indices": i}));
+        d.node(json!({"mesh": m}), true);
+        let s = load_ok(&d.write_gltf(&dir, name));
+        let got: Vec<[Vec3; 3]> = s.triangles.iter().map(|t| t.p).collect();
+        let v = |k: usize| Vec3::from(quad[k]);
+        assert_eq!(got, [[v(0), v(1), v(2)], [v(0), v(2), v(3)]], "{name}");
+    }
+}
+
 #[test]
 fn non_indexed_strip_and_fan() {
     let dir = temp_dir("modes");
