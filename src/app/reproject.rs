@@ -416,7 +416,7 @@ mod tests {
     /// Thinning a plane facing the eye (one depth) keeps one pixel of each 2×2 block with its
     /// point, and the block's mean colour (every pixel shows the same surface); step 1 keeps all.
     #[test]
-    fn thinning_keeps_each_blocks_nearest_pixel_with_the_blocks_mean_colour() {
+    fn thinning_keeps_a_pixel_of_each_block_with_the_blocks_mean_colour() {
         let (p, pos, rgba) = plane(Vec3::ZERO, 33, 24);
         let t = Thinned::new(&rgba, &pos, &[], (33, 24), 2, &p);
         assert_eq!((t.size, t.step), ((16, 12), 2));
