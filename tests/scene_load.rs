@@ -1260,6 +1260,73 @@ fn quantized_sparse_and_sceneless() {
     assert!(s.path.is_none());
 }
 
+/// A sparse accessor wrong in one respect is refused with one line naming it: a byteStride on the
+/// indices' view only, or on the values' view only (glTF forbids both; cargo-mutants: the test's
+/// `||` as `&&` survived), an index past the count, indices out of order.
+#[test]
+fn bad_sparse_accessors_are_refused() {
+    let dir = temp_dir("bad_sparse");
+    let cases: [(&str, [u8; 2], Option<usize>, Option<usize>, &str); 5] = [
+        ("good", [1, 2], None, None, ""),
+        (
+            "index_stride",
+            [1, 2],
+            Some(4),
+            None,
+            "byteStride, which glTF forbids",
+        ),
+        (
+            "value_stride",
+            [1, 2],
+            None,
+            Some(12),
+            "byteStride, which glTF forbids",
+        ),
+        (
+            "index_past_count",
+            [1, 3],
+            None,
+            None,
+            "sparse index 3 out of range (count 3)",
+        ),
+        (
+            "unordered",
+            [2, 1],
+            None,
+            None,
+            "has sparse index 1 after 2",
+        ),
+    ];
+    for (name, idx, idx_stride, val_stride, needle) in cases {
+        let mut d = Doc::new();
+        let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+        let sidx = d.view(&idx, idx_stride);
+        let vals: Vec<u8> = [[0.0f32, 0.0, 5.0], [0.0, 3.0, 5.0]]
+            .iter()
+            .flatten()
+            .flat_map(|f| f.to_le_bytes())
+            .collect();
+        let sval = d.view(&vals, val_stride);
+        let sp = d.push(
+            "accessors",
+            json!({"componentType": 5126, "count": 3, "type": "VEC3",
+            "min": [0, 0, 0], "max": [1, 3, 5],
+            "sparse": {"count": 2, "indices": {"bufferView": sidx, "componentType": 5121},
+                       "values": {"bufferView": sval}}}),
+        );
+        let m = d.mesh(json!({"attributes": {"POSITION": p}}));
+        let m2 = d.mesh(json!({"attributes": {"POSITION": sp}}));
+        d.node(json!({"mesh": m}), true);
+        d.node(json!({"mesh": m2}), true);
+        let path = d.write_gltf(&dir, name);
+        if needle.is_empty() {
+            assert_eq!(load_ok(&path).triangles.len(), 2, "{name}");
+        } else {
+            assert_err(gltf_load::load_path(&path), &format!("{name}.gltf"), needle);
+        }
+    }
+}
+
 #[test]
 fn load_dispatches_builtin_and_paths() {
     let s = scene::load("builtin:cornell").unwrap();
