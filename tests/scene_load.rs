@@ -1266,8 +1266,9 @@ fn quantized_sparse_and_sceneless() {
 #[test]
 fn bad_sparse_accessors_are_refused() {
     let dir = temp_dir("bad_sparse");
-    let cases: [(&str, [u8; 2], Option<usize>, Option<usize>, &str); 5] = [
-        ("good", [1, 2], None, None, ""),
+    // (name, the two sparse indices, the indices' and the values' byteStride, the error).
+    let cases = [
+        ("good", [1u8, 2], None, None, ""),
         (
             "index_stride",
             [1, 2],
