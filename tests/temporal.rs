@@ -391,35 +391,21 @@ fn temporal_reuse_steadies_the_error_along_an_orbit() {
     // SP clusters: 7.099e-6 against 8.334e-6). Without the
     // warm start the runs are the same frames, and without the accumulation the last two are:
     // every bound below then fails.
-    assert!(
-        reuse.0 < 0.92 * off.0,
-        "instability on {} vs off {}",
-        reuse.0,
-        off.0
+    let below = |what: &str, a: f64, k: f64, b: f64| assert!(a < k * b, "{what}: {a} vs {k} × {b}");
+    below("instability, reuse against off", reuse.0, 0.92, off.0);
+    below("MSE, reuse against off", reuse.1, 1.02, off.1);
+    below(
+        "instability_world, accumulated against reuse",
+        on.3,
+        0.95,
+        reuse.3,
     );
-    assert!(
-        reuse.1 < 1.02 * off.1,
-        "MSE on {} vs off {}",
-        reuse.1,
-        off.1
-    );
+    below("MSE, accumulated against off", on.1, 1.02, off.1);
     assert!(
         reuse.2 * 5 <= off.2,
         "iterations on {} vs off {}",
         reuse.2,
         off.2
-    );
-    assert!(
-        on.3 < 0.95 * reuse.3,
-        "instability_world accumulated {} vs not {}",
-        on.3,
-        reuse.3
-    );
-    assert!(
-        on.1 < 1.02 * off.1,
-        "MSE accumulated {} vs off {}",
-        on.1,
-        off.1
     );
 }
 
