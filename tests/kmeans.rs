@@ -1039,52 +1039,79 @@ fn empty_clusters_are_put_to_use_without_orphans() {
 }
 
 /// One orphan and one empty cluster meet even when the orphan's draws never hit it: a floor, one
-/// sampled point on a small vertical face (no centroid of its orientation), and a last stratum of
-/// invalid points (one cluster starts empty). The seed is chosen so that none of the orphan's ten
-/// draws among the 16 clusters is the empty one; the orphan also proposes itself to the empty
-/// cluster the last update named, gets it in the first iteration, and ends in a cluster facing its
-/// way. GPU equals the CPU twin.
+/// sampled point on a small vertical face (no centroid of its orientation), and a stratum of
+/// invalid points (one cluster starts empty), last or first. The seed is chosen so that none of
+/// the orphan's ten draws among the 16 clusters is the empty one; the orphan also proposes itself
+/// to the empty cluster the last update (here the initial centroids) named, gets it in the first
+/// iteration, and is in a cluster facing its way after the second: the run has 2 iterations, so an
+/// orphan that finds its cluster only later fails (WGSL mutant `init-empty-test-inverted`, the
+/// initial centroids naming the valid clusters instead, survived the 10 iterations this test ran
+/// with). GPU equals the CPU twin. With the invalid stratum first, the cluster named is 0.
 #[test]
 fn an_orphan_finds_the_one_empty_cluster() {
     let ctx = common::gpu();
-    let mut data = Vec::new();
-    let mut push = |p, n, valid| push_point(&mut data, p, n, valid);
-    push(floor(0), [0.0, 0.0, 1.0], true);
-    let orphan = 1;
-    push([1.0, 0.95, 0.1], [1.0, 0.0, 0.0], true);
-    for i in 1..1600 {
-        push(floor(i), [0.0, 0.0, 1.0], true);
+    for invalid_first in [false, true] {
+        let mut data = Vec::new();
+        let mut push = |p, n, valid| push_point(&mut data, p, n, valid);
+        let invalid = 122;
+        if invalid_first {
+            for _ in 0..invalid {
+                push([0.0; 3], [0.0, 0.0, 1.0], false);
+            }
+        }
+        push(floor(0), [0.0, 0.0, 1.0], true);
+        let orphan = if invalid_first { invalid + 1 } else { 1 };
+        push([1.0, 0.95, 0.1], [1.0, 0.0, 0.0], true);
+        for i in 1..1600 {
+            push(floor(i), [0.0, 0.0, 1.0], true);
+        }
+        if !invalid_first {
+            for _ in 0..invalid {
+                push([0.0; 3], [0.0, 0.0, 1.0], false);
+            }
+        }
+        let frame = (Vec3::ZERO, Vec3::new(2.0, 2.0, 0.3));
+        let n = (data.len() / 2) as u32;
+        let empty = if invalid_first { 0 } else { 15 };
+        // The case: a seed whose ten draws for the orphan all miss the empty cluster.
+        let s = (1..1000)
+            .map(|seed| KMeansSettings {
+                seed,
+                ..settings(16, 1, 1, 0.866, 2)
+            })
+            .find(|s| {
+                let p = KmParams::new(n, 2, s, frame);
+                (1..=10).all(|it| kmeans::reseed_target(&p, orphan, it) != empty)
+            })
+            .unwrap();
+        let g = run_gpu(&ctx, &data, 2, &s, frame);
+        let p = &g.params;
+        let starts = strata_starts(p);
+        assert!(!starts.contains(&(orphan as usize)), "{starts:?}");
+        // The empty cluster's stratum holds invalid points only.
+        let e = empty as usize;
+        let stratum = starts[e]..starts.get(e + 1).copied().unwrap_or(n as usize);
+        let invalid_range = if invalid_first {
+            0..invalid as usize
+        } else {
+            n as usize - invalid as usize..n as usize
+        };
+        assert!(
+            invalid_range.contains(&stratum.start) && invalid_range.contains(&(stratum.end - 1)),
+            "stratum {stratum:?}, invalid {invalid_range:?}"
+        );
+        let k = g.sample_assign[orphan as usize];
+        assert!(
+            k != u32::MAX,
+            "the orphan has no cluster (invalid first: {invalid_first})"
+        );
+        assert!(
+            g.centroids[k as usize].nrm.x > 0.866,
+            "the orphan is in cluster {k} facing {:?} (invalid first: {invalid_first})",
+            g.centroids[k as usize].nrm
+        );
+        assert_equals_twin(&g, &points_of(&data, 2), s.iterations);
     }
-    for _ in 0..122 {
-        push([0.0; 3], [0.0, 0.0, 1.0], false);
-    }
-    let frame = (Vec3::ZERO, Vec3::new(2.0, 2.0, 0.3));
-    let n = (data.len() / 2) as u32;
-    let empty = 15;
-    // The case: a seed whose ten draws for the orphan all miss the empty cluster.
-    let s = (1..1000)
-        .map(|seed| KMeansSettings {
-            seed,
-            ..settings(16, 1, 1, 0.866, 10)
-        })
-        .find(|s| {
-            let p = KmParams::new(n, 2, s, frame);
-            (1..=10).all(|it| kmeans::reseed_target(&p, orphan, it) != empty)
-        })
-        .unwrap();
-    let g = run_gpu(&ctx, &data, 2, &s, frame);
-    let p = &g.params;
-    let starts = strata_starts(p);
-    assert!(!starts.contains(&(orphan as usize)), "{starts:?}");
-    assert!(starts[empty as usize] >= 1601, "{starts:?}");
-    let k = g.sample_assign[orphan as usize];
-    assert!(k != u32::MAX, "the orphan has no cluster");
-    assert!(
-        g.centroids[k as usize].nrm.x > 0.866,
-        "the orphan is in cluster {k} facing {:?}",
-        g.centroids[k as usize].nrm
-    );
-    assert_equals_twin(&g, &points_of(&data, 2), s.iterations);
 }
 
 /// With K above the valid points (100 valid, 200 on the background, K 150) every valid point can
