@@ -1041,12 +1041,13 @@ fn empty_clusters_are_put_to_use_without_orphans() {
 /// One orphan and one empty cluster meet even when the orphan's draws never hit it: a floor, one
 /// sampled point on a small vertical face (no centroid of its orientation), and a stratum of
 /// invalid points (one cluster starts empty), last or first. The seed is chosen so that none of
-/// the orphan's ten draws among the 16 clusters is the empty one; the orphan also proposes itself
-/// to the empty cluster the last update (here the initial centroids) named, gets it in the first
-/// iteration, and is in a cluster facing its way after the second: the run has 2 iterations, so an
-/// orphan that finds its cluster only later fails (WGSL mutant `init-empty-test-inverted`, the
-/// initial centroids naming the valid clusters instead, survived the 10 iterations this test ran
-/// with). GPU equals the CPU twin. With the invalid stratum first, the cluster named is 0.
+/// the orphan's draws among the 16 clusters (in the first 10 iterations) is the empty one; the
+/// orphan also proposes itself to the empty cluster the last update (here the initial centroids)
+/// named, gets it in the first iteration, and is in a cluster facing its way after the second. The
+/// run has 2 iterations: an orphan that finds its cluster an iteration later, through the update's
+/// naming, fails, where a run of 10 ends the same (WGSL mutant `init-empty-test-inverted`, the
+/// initial centroids naming the valid clusters instead). GPU equals the CPU twin. With the invalid
+/// stratum first, the cluster named is 0.
 #[test]
 fn an_orphan_finds_the_one_empty_cluster() {
     let ctx = common::gpu();

@@ -97,7 +97,9 @@ impl Thinned {
                 }
             };
             let (mut sum, mut n) = ([0u32; 4], 0u32);
-            for i in block().filter(|&i| same(i)) {
+            // The kept pixel counts whatever its own normal (one without a usable normal or
+            // point fails the test against itself).
+            for i in block().filter(|&i| i == near || same(i)) {
                 for c in 0..4 {
                     sum[c] += rgba[i * 4 + c] as u32;
                 }
@@ -433,36 +435,50 @@ mod tests {
     }
 
     /// A thin foreground part survives thinning: a line one pixel wide, 1 unit in front of a wall
-    /// 5 away, diagonal (pixels (x, x)) and along an odd column (x = 9), thinned by 2. Every block it
+    /// 5 away, diagonal (pixels (y + 1, y)) and along an odd column (x = 9), thinned by 2, without
+    /// normals and with them (the tangent-plane test), and with the top rows sky. Every block it
     /// crosses keeps its point and colour, alone in the block's mean (the wall behind is another
-    /// surface); every other block keeps the wall's. Thinned by keeping every second pixel, the
-    /// odd column vanishes and the diagonal keeps one block in two.
+    /// surface); every other block keeps the wall's, or the sky's. Keeping each block's top-left
+    /// pixel instead drops both lines (neither passes through an even (x, y)).
     #[test]
     fn thinning_keeps_a_line_one_pixel_wide_whole() {
         let (w, h) = (24u32, 16u32);
         let (p, mut pos, _) = plane(Vec3::ZERO, w, h);
         let mut rgba = vec![100u8; (w * h * 4) as usize];
-        let on_line = |x: usize, y: usize| x == y || x == 9;
+        let on_line = |x: usize, y: usize| x == y + 1 || x == 9;
+        let sky = |y: usize| y < 2;
         for i in 0..(w * h) as usize {
             let (x, y) = (i % w as usize, i / w as usize);
-            if on_line(x, y) {
-                let p = Vec4::from(pos[i]).truncate() * 0.8;
-                pos[i] = p.extend(1.0).into();
+            if sky(y) {
+                pos[i] = [0.0; 4];
+                rgba[i * 4..i * 4 + 4].copy_from_slice(&[0, 0, 200, 255]);
+            } else if on_line(x, y) {
+                let q = Vec4::from(pos[i]).truncate() * 0.8;
+                pos[i] = q.extend(1.0).into();
                 rgba[i * 4..i * 4 + 4].copy_from_slice(&[250, 0, 0, 255]);
             }
         }
-        let t = Thinned::new(&rgba, &pos, &[], (w, h), 2, &p);
-        for k in 0..(12 * 8) as usize {
-            let (x0, y0) = (k % 12 * 2, k / 12 * 2);
-            let crossed = (y0..y0 + 2).any(|y| (x0..x0 + 2).any(|x| on_line(x, y)));
-            let want: &[u8] = if crossed {
-                &[250, 0, 0, 255]
-            } else {
-                &[100; 4]
-            };
-            assert_eq!(&t.rgba[k * 4..k * 4 + 4], want, "block {k} at ({x0}, {y0})");
-            let z = t.positions[k][2];
-            assert_eq!(z > -4.5, crossed, "block {k}: depth {z}");
+        let facing = vec![[0.0, 0.0, 1.0, 0.0]; pos.len()];
+        for normals in [&[][..], &facing[..]] {
+            let t = Thinned::new(&rgba, &pos, normals, (w, h), 2, &p);
+            for k in 0..(12 * 8) as usize {
+                let (x0, y0) = (k % 12 * 2, k / 12 * 2);
+                let crossed = (y0..y0 + 2).any(|y| (x0..x0 + 2).any(|x| on_line(x, y)));
+                let want: &[u8] = match () {
+                    _ if sky(y0) => &[0, 0, 200, 255],
+                    _ if crossed => &[250, 0, 0, 255],
+                    _ => &[100; 4],
+                };
+                let what = format!("block {k} at ({x0}, {y0}), {} normals", normals.len());
+                assert_eq!(&t.rgba[k * 4..k * 4 + 4], want, "{what}");
+                let z = t.positions[k][2];
+                assert_eq!(t.positions[k][3] > 0.0, !sky(y0), "{what}");
+                assert_eq!(
+                    !sky(y0) && z > -4.5,
+                    !sky(y0) && crossed,
+                    "{what}: depth {z}"
+                );
+            }
         }
     }
 

@@ -618,7 +618,7 @@ mod tests {
     }
 
     /// One knob a step: under the budget at the fewest clusters with 4 of 16 direct samples
-    /// (10 + 2.5 + 5.3 ms of 40), the step gives the direct light its samples back (4 · 24.5 / 2.5
+    /// (10 + 2.5 + 5.3 ms of 40), the step gives the direct light its samples back (4 · 24.7 / 2.5
     /// → 39, clamped to 16) and leaves K; the next step, with every sample and still under the
     /// budget (25.3 ms), grows K and keeps the samples (cargo-mutants: the direct light's early
     /// return taken when the samples did not change survived).

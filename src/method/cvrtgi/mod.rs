@@ -114,8 +114,8 @@ pub struct CvrtgiReport {
     pub escape_rays: u64,
     pub geometry_built: bool,
     pub light_built: bool,
-    /// CPU milliseconds of the stages rebuilt this call (voxelisation, clustering, injection); in
-    /// the stats as `timings_ms.cvrtgi`, not among the counts.
+    /// CPU milliseconds of the stages rebuilt this call (voxelisation, clustering, injection); not
+    /// among the counts (the stats' `timings_ms.cvrtgi` is the last build's).
     #[serde(skip)]
     pub cpu_ms: f64,
 }
