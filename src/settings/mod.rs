@@ -554,6 +554,22 @@ pub fn parse_light_scale(v: &str) -> Result<f32, Invalid> {
 mod tests {
     use super::*;
 
+    /// n_t = 1 is read as the tightest threshold Eq. (7)'s strict test can pass: equal normals
+    /// (cosine 1 in f32) pass it, and the threshold is 2⁻²⁰ below 1; other values are kept
+    /// (cargo-mutants: the bound as 1 + 2⁻²⁰, which no pair passes, survived).
+    #[test]
+    fn normal_threshold_one_still_admits_equal_normals() {
+        let at = |n_t: f32| ClusterSettings {
+            normal_threshold: n_t,
+            ..Default::default()
+        };
+        let used = at(1.0).normal_threshold_used();
+        assert_eq!(used, 1.0 - 1.0 / (1 << 20) as f32);
+        let n = glam::Vec3::new(0.3, -0.5, 0.8).normalize();
+        assert!(n.dot(n) > used, "{} against {used}", n.dot(n));
+        assert_eq!(at(0.5).normal_threshold_used(), 0.5);
+    }
+
     #[test]
     fn gamma_reads_writes_and_resolves() {
         assert_eq!("auto".parse::<Gamma>(), Ok(Gamma::Auto));
