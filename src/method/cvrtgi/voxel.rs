@@ -494,37 +494,45 @@ mod tests {
     /// the lower index, clusters {0, 3, 5} and {6, 7}, survived).
     #[test]
     fn slic_seeds_at_the_voxels_nearest_the_cell_centres() {
-        let grid = Grid {
-            origin: Vec3::ZERO,
-            size: 1.0,
-            dims: [8, 1, 1],
-        };
-        let frags: Vec<Fragment> = [0.0, 3.0, 5.0, 6.0, 7.0]
-            .map(|x| (Vec3::new(x + 0.5, 0.5, 0.5), Vec3::Y, Vec3::ONE, 1.0))
-            .to_vec();
-        let mut v = Voxels::from_fragments(grid, &frags);
-        let s = SlicSettings {
-            step: 4,
-            iterations: 1,
-            angle: 35.0,
-        };
-        let clusters = slic(&mut v, &s);
-        let of: Vec<u32> = v.voxels.iter().map(|x| x.cluster).collect();
-        assert_eq!(of, [0, 0, 1, 1, 1]);
-        assert_eq!(
-            clusters.iter().map(|c| c.voxels).collect::<Vec<_>>(),
-            [2, 3]
-        );
-        // Each cluster's box spans its voxels' whole cells: x 0..4 and 5..8, y and z 0..1
-        // (cargo-mutants: the far corner as `c * size`, without the + 1, survived).
-        let boxes: Vec<(Vec3, Vec3)> = clusters.iter().map(|c| (c.min, c.max)).collect();
-        assert_eq!(
-            boxes,
-            [
-                (Vec3::ZERO, Vec3::new(4.0, 1.0, 1.0)),
-                (Vec3::new(5.0, 0.0, 0.0), Vec3::new(8.0, 1.0, 1.0)),
-            ]
-        );
+        // On a unit grid and on one of side 0.5 (the same voxels, every length halved).
+        for size in [1.0f32, 0.5] {
+            let grid = Grid {
+                origin: Vec3::ZERO,
+                size,
+                dims: [8, 1, 1],
+            };
+            let frags: Vec<Fragment> = [0.0, 3.0, 5.0, 6.0, 7.0]
+                .map(|x| (Vec3::new(x + 0.5, 0.5, 0.5) * size, Vec3::Y, Vec3::ONE, 1.0))
+                .to_vec();
+            let mut v = Voxels::from_fragments(grid, &frags);
+            let s = SlicSettings {
+                step: 4,
+                iterations: 1,
+                angle: 35.0,
+            };
+            let clusters = slic(&mut v, &s);
+            let of: Vec<u32> = v.voxels.iter().map(|x| x.cluster).collect();
+            assert_eq!(of, [0, 0, 1, 1, 1], "size {size}");
+            assert_eq!(
+                clusters.iter().map(|c| c.voxels).collect::<Vec<_>>(),
+                [2, 3]
+            );
+            // Each cluster's box spans its voxels' whole cells: x 0..4 and 5..8, y and z 0..1,
+            // times the size (cargo-mutants: the far corner as `c * size`, without the + 1, and
+            // as `(c + 1) / size`, survived).
+            let boxes: Vec<(Vec3, Vec3)> = clusters.iter().map(|c| (c.min, c.max)).collect();
+            assert_eq!(
+                boxes,
+                [
+                    (Vec3::ZERO, Vec3::new(4.0, 1.0, 1.0) * size),
+                    (
+                        Vec3::new(5.0, 0.0, 0.0) * size,
+                        Vec3::new(8.0, 1.0, 1.0) * size
+                    ),
+                ],
+                "size {size}"
+            );
+        }
     }
 
     /// A voxel's albedo, position and normal are its fragments' area-weighted means: two fragments of
