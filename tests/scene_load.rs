@@ -49,6 +49,14 @@ fn b64(data: &[u8]) -> String {
     s
 }
 
+/// Little-endian bytes of f32 vectors, as a glTF float accessor stores them.
+fn le_bytes<const N: usize>(data: &[[f32; N]]) -> Vec<u8> {
+    data.iter()
+        .flatten()
+        .flat_map(|f| f.to_le_bytes())
+        .collect()
+}
+
 /// A glTF document under construction with one binary buffer.
 struct Doc {
     json: Value,
@@ -90,12 +98,7 @@ impl Doc {
     }
 
     fn floats<const N: usize>(&mut self, data: &[[f32; N]], ty: &str, bounds: bool) -> usize {
-        let bytes: Vec<u8> = data
-            .iter()
-            .flatten()
-            .flat_map(|f| f.to_le_bytes())
-            .collect();
-        let view = self.view(&bytes, None);
+        let view = self.view(&le_bytes(data), None);
         let mut a =
             json!({"bufferView": view, "componentType": 5126, "count": data.len(), "type": ty});
         if bounds {
@@ -125,6 +128,22 @@ impl Doc {
         let view = self.view(&bytes, None);
         self.push("accessors", json!({"bufferView": view, "componentType": 5123, "count": idx.len(), "type": "SCALAR"}))
     }
+
+    /// A VEC3 float accessor of 3 elements without a bufferView (zeros) whose elements 1 and 2 are
+    /// replaced by (0, 0, 5) and (0, 3, 5) (sparse indices: unsigned bytes in view `indices`; values
+    /// in view `values`); `max` its declared bound.
+    fn sparse_vec3(&mut self, indices: usize, values: usize, max: [f32; 3]) -> usize {
+        self.push(
+            "accessors",
+            json!({"componentType": 5126, "count": 3, "type": "VEC3",
+            "min": [0, 0, 0], "max": max,
+            "sparse": {"count": 2, "indices": {"bufferView": indices, "componentType": 5121},
+                       "values": {"bufferView": values}}}),
+        )
+    }
+
+    /// The values of `sparse_vec3`'s substitution.
+    const SPARSE_VALUES: [[f32; 3]; 2] = [[0.0, 0.0, 5.0], [0.0, 3.0, 5.0]];
 
     /// A mesh with one primitive (attributes by accessor index).
     fn mesh(&mut self, prim: Value) -> usize {
@@ -1212,21 +1231,8 @@ fn quantized_sparse_and_sceneless() {
     d.node(json!({"mesh": m}), true);
     // A sparse accessor with no bufferView: zeros, then vertices 1 and 2 substituted.
     let sidx = d.view(&[1, 2], None);
-    let sval = d.view(
-        &[[0.0f32, 0.0, 5.0], [0.0, 3.0, 5.0]]
-            .iter()
-            .flatten()
-            .flat_map(|f| f.to_le_bytes())
-            .collect::<Vec<u8>>(),
-        None,
-    );
-    let sp = d.push(
-        "accessors",
-        json!({"componentType": 5126, "count": 3, "type": "VEC3",
-        "min": [0, 0, 0], "max": [0, 3, 5],
-        "sparse": {"count": 2, "indices": {"bufferView": sidx, "componentType": 5121},
-                   "values": {"bufferView": sval}}}),
-    );
+    let sval = d.view(&le_bytes(&Doc::SPARSE_VALUES), None);
+    let sp = d.sparse_vec3(sidx, sval, [0.0, 3.0, 5.0]);
     let m = d.mesh(json!({"attributes": {"POSITION": sp}}));
     d.node(json!({"mesh": m}), true);
     d.json["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
@@ -1302,19 +1308,8 @@ fn bad_sparse_accessors_are_refused() {
         let mut d = Doc::new();
         let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
         let sidx = d.view(&idx, idx_stride);
-        let vals: Vec<u8> = [[0.0f32, 0.0, 5.0], [0.0, 3.0, 5.0]]
-            .iter()
-            .flatten()
-            .flat_map(|f| f.to_le_bytes())
-            .collect();
-        let sval = d.view(&vals, val_stride);
-        let sp = d.push(
-            "accessors",
-            json!({"componentType": 5126, "count": 3, "type": "VEC3",
-            "min": [0, 0, 0], "max": [1, 3, 5],
-            "sparse": {"count": 2, "indices": {"bufferView": sidx, "componentType": 5121},
-                       "values": {"bufferView": sval}}}),
-        );
+        let sval = d.view(&le_bytes(&Doc::SPARSE_VALUES), val_stride);
+        let sp = d.sparse_vec3(sidx, sval, [0.0, 3.0, 5.0]);
         let m = d.mesh(json!({"attributes": {"POSITION": p}}));
         let m2 = d.mesh(json!({"attributes": {"POSITION": sp}}));
         d.node(json!({"mesh": m}), true);
