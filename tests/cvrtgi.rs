@@ -228,7 +228,16 @@ fn a_face_under_one_cluster_gets_its_closed_form_irradiance() {
     let scales = twin::conservation_scales(&l, &ids, &slots, 1);
     assert!((scales[ceiling as usize] - 16.0 * pi).abs() < 1e-4 * 16.0 * pi);
     // A cluster no face takes keeps scale 1.
-    assert_eq!(scales[1 - ceiling as usize], 1.0);
+    let other = 1 - ceiling as usize;
+    assert_eq!(scales[other], 1.0);
+    // So does an unlit one (no VPL, nothing sent) that a face lists: nothing to scale.
+    assert_eq!(
+        l.clusters[other][1][3].to_bits(),
+        0,
+        "the other cluster is unlit"
+    );
+    let unlit = twin::conservation_scales(&l, &[other as u32], &[2.0], 1);
+    assert_eq!(unlit[other], 1.0, "an unlit cluster is not scaled");
     twin::set_scales(&mut l, &scales);
     let conserved = ClusterGather::Conserved;
     let e = twin::gather_face(&v, &faces, &l, (up, &[ceiling]), conserved, 0.0, 0.01);
