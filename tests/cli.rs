@@ -394,6 +394,11 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
             vec!["render", "-o", &o, "--light-scale", "5e37"],
             "--light-scale",
         ),
+        // The Cornell box's ceiling emits 27: scaled by 1e35 it emits 2.7e36, past f32's room.
+        (
+            vec!["render", "-o", &o, "--light-scale", "1e35"],
+            "emits 2.700e36 with --light-scale",
+        ),
         (
             vec!["render", "-o", &o, "--path-trace", "0"],
             "--path-trace",
