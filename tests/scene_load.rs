@@ -356,6 +356,32 @@ fn missing_or_short_buffer() {
     d.node(json!({"mesh": m}), true);
     let p = d.write_gltf(&dir, "shortview");
     assert_err(gltf_load::load_path(&p), "shortview.gltf", "too short");
+    // Its last element runs 4 bytes past the view: 4 + 2 · 12 + 12 = 40 bytes of 36 (the element's
+    // size is added, not taken off: cargo-mutants' `+` as `-` in check_fits survived).
+    d.json["accessors"][pos]["count"] = json!(3);
+    d.json["accessors"][pos]["byteOffset"] = json!(4);
+    let p = d.write_gltf(&dir, "lastpast");
+    let e = assert_err(gltf_load::load_path(&p), "lastpast.gltf", "too short");
+    assert!(
+        e.contains("needs 40 bytes but its bufferView holds only 36"),
+        "{e}"
+    );
+
+    // An accessor without a bufferView (zeros, then its sparse values) may declare up to 2^24
+    // elements: one more is refused before anything is read.
+    let mut d = Doc::new();
+    let sidx = d.view(&[1, 2], None);
+    let sval = d.view(&le_bytes(&Doc::SPARSE_VALUES), None);
+    let pos = d.sparse_vec3(sidx, sval, [0.0, 3.0, 5.0]);
+    d.json["accessors"][pos]["count"] = json!((1 << 24) + 1);
+    let m = d.mesh(json!({"attributes": {"POSITION": pos}}));
+    d.node(json!({"mesh": m}), true);
+    let p = d.write_gltf(&dir, "viewless");
+    assert_err(
+        gltf_load::load_path(&p),
+        "viewless.gltf",
+        "has no bufferView and an implausible count 16777217",
+    );
 
     // A bufferView lying outside its buffer (also caught).
     let mut d = Doc::new();
