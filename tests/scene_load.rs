@@ -1354,6 +1354,38 @@ fn bad_sparse_accessors_are_refused() {
     }
 }
 
+/// A sparse accessor's indices read alike as unsigned bytes, shorts and ints (cargo-mutants: with
+/// byte indices only, the short arm deleted and the k-th index's offset `k * size` as `k / size`
+/// survived).
+#[test]
+fn sparse_indices_of_each_width() {
+    let dir = temp_dir("sparse_widths");
+    for (name, comp, bytes) in [
+        ("u8", 5121, vec![1u8, 2]),
+        ("u16", 5123, [1u16, 2].map(u16::to_le_bytes).concat()),
+        ("u32", 5125, [1u32, 2].map(u32::to_le_bytes).concat()),
+    ] {
+        let mut d = Doc::new();
+        let sidx = d.view(&bytes, None);
+        let sval = d.view(&le_bytes(&Doc::SPARSE_VALUES), None);
+        let sp = d.sparse_vec3(sidx, sval, [0.0, 3.0, 5.0]);
+        d.json["accessors"][sp]["sparse"]["indices"]["componentType"] = json!(comp);
+        let m = d.mesh(json!({"attributes": {"POSITION": sp}}));
+        d.node(json!({"mesh": m}), true);
+        let s = load_ok(&d.write_gltf(&dir, name));
+        assert_eq!(s.triangles.len(), 1, "{name}");
+        assert_eq!(
+            s.triangles[0].p,
+            [
+                Vec3::ZERO,
+                Vec3::new(0.0, 0.0, 5.0),
+                Vec3::new(0.0, 3.0, 5.0)
+            ],
+            "{name}"
+        );
+    }
+}
+
 #[test]
 fn load_dispatches_builtin_and_paths() {
     let s = scene::load("builtin:cornell").unwrap();
