@@ -1354,6 +1354,67 @@ fn bad_sparse_accessors_are_refused() {
     }
 }
 
+/// Quantized positions (KHR_mesh_quantization) of each integer component type, plain and
+/// normalised, read per glTF's rules: a signed value c over its type's max, at least -1; an unsigned
+/// one over its max (cargo-mutants: i8 and i16 `to_f32` as constants, `/` as `*` or `%`, survived).
+#[test]
+fn quantized_positions_of_each_component_type() {
+    let dir = temp_dir("quantized_types");
+    // (name, componentType, bytes a component, the vertices' raw components (x, y; z = 0), max).
+    let cases: [(&str, u32, usize, [[i64; 2]; 3], f32); 4] = [
+        ("i8", 5120, 1, [[0, 0], [127, 0], [-128, 64]], 127.0),
+        ("u8", 5121, 1, [[0, 0], [255, 0], [3, 128]], 255.0),
+        (
+            "i16",
+            5122,
+            2,
+            [[0, 0], [32767, 0], [-32768, 16384]],
+            32767.0,
+        ),
+        ("u16", 5123, 2, [[0, 0], [65535, 0], [3, 32768]], 65535.0),
+    ];
+    for (name, comp, size, raw, max) in cases {
+        for normalized in [false, true] {
+            // Each vertex padded to 4-byte alignment, as glTF requires of vertex attributes.
+            let stride = (3 * size).next_multiple_of(4);
+            let mut bytes = Vec::new();
+            for v in raw {
+                for c in [v[0], v[1], 0] {
+                    bytes.extend_from_slice(&c.to_le_bytes()[..size]);
+                }
+                bytes.resize(bytes.len().next_multiple_of(4), 0);
+            }
+            let mut d = Doc::new();
+            let view = d.view(&bytes, Some(stride));
+            let lo = [0, 1].map(|c| raw.iter().map(|v| v[c]).min().unwrap());
+            let hi = [0, 1].map(|c| raw.iter().map(|v| v[c]).max().unwrap());
+            let pos = d.push(
+                "accessors",
+                json!({"bufferView": view, "componentType": comp, "normalized": normalized,
+                "count": 3, "type": "VEC3", "min": [lo[0], lo[1], 0], "max": [hi[0], hi[1], 0]}),
+            );
+            let m = d.mesh(json!({"attributes": {"POSITION": pos}}));
+            d.node(json!({"mesh": m}), true);
+            d.json["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
+            d.json["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+            let file = format!("{name}_{normalized}");
+            let s = load_ok(&d.write_gltf(&dir, &file));
+            assert_eq!(s.triangles.len(), 1, "{file}");
+            let want = raw.map(|v| {
+                let f = |c: i64| {
+                    if normalized {
+                        (c as f32 / max).max(-1.0)
+                    } else {
+                        c as f32
+                    }
+                };
+                Vec3::new(f(v[0]), f(v[1]), 0.0)
+            });
+            assert_eq!(s.triangles[0].p, want, "{file}");
+        }
+    }
+}
+
 /// A sparse accessor's indices read alike as unsigned bytes, shorts and ints (cargo-mutants: with
 /// byte indices only, the short arm deleted and the k-th index's offset `k * size` as `k / size`
 /// survived).
