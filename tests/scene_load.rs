@@ -322,6 +322,19 @@ fn truncated_and_wrong_magic_glb() {
     std::fs::write(&chunk, &bad).unwrap();
     assert_err(gltf_load::load_path(&chunk), "chunk.glb", "GLB");
 
+    // A whole header that declares itself, and 16 bytes: no room for a chunk (20 bytes at least).
+    // The 12-byte file is a header, not a truncated one (cargo-mutants: `< 12` as `<= 12`, and
+    // `declared < 20` as `== 20`, survived).
+    for n in [12usize, 16] {
+        let mut head = glb[..n].to_vec();
+        head[8..12].copy_from_slice(&(n as u32).to_le_bytes());
+        assert_err(
+            gltf_load::load_slice(&head, "head.glb"),
+            "head.glb",
+            &format!("corrupt GLB: header declares {n} bytes, too few for a JSON chunk"),
+        );
+    }
+
     // GLB version 1 is glTF 1.0.
     let mut v1 = glb.clone();
     v1[4] = 1;
@@ -1361,7 +1374,7 @@ fn bad_sparse_accessors_are_refused() {
 fn quantized_positions_of_each_component_type() {
     let dir = temp_dir("quantized_types");
     // (name, componentType, bytes a component, the vertices' raw components (x, y; z = 0), max).
-    let cases: [(&str, u32, usize, [[i64; 2]; 3], f32); 4] = [
+    let cases: [(&str, u32, usize, [[i64; 2]; 3], f32); 5] = [
         ("i8", 5120, 1, [[0, 0], [127, 0], [-128, 64]], 127.0),
         ("u8", 5121, 1, [[0, 0], [255, 0], [3, 128]], 255.0),
         (
@@ -1372,6 +1385,14 @@ fn quantized_positions_of_each_component_type() {
             32767.0,
         ),
         ("u16", 5123, 2, [[0, 0], [65535, 0], [3, 32768]], 65535.0),
+        // Not a glTF vertex type, but read alike (through f64).
+        (
+            "u32",
+            5125,
+            4,
+            [[0, 0], [4294967295, 0], [3, 2147483648]],
+            4294967295.0,
+        ),
     ];
     for (name, comp, size, raw, max) in cases {
         for normalized in [false, true] {
