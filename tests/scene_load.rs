@@ -226,6 +226,10 @@ fn load_ok(path: &Path) -> Scene {
         .unwrap_or_else(|e| panic!("expected {} to load: {e}", path.display()))
 }
 
+fn load_slice_ok(bytes: &[u8], name: &str) -> Scene {
+    gltf_load::load_slice(bytes, name).unwrap_or_else(|e| panic!("expected {name} to load: {e}"))
+}
+
 /// Asserts a load failed with a one-line message naming the file and containing `needle`.
 fn assert_err(result: Result<Scene, SceneError>, file: &str, needle: &str) -> String {
     let e = match result {
@@ -267,6 +271,26 @@ fn bad_json() {
     let p = dir.join("empty.gltf");
     std::fs::write(&p, b"").unwrap();
     assert_err(gltf_load::load_path(&p), "empty.gltf", "json");
+
+    // The validation names two errors (nodes of meshes that do not exist); past two, it counts the rest (cargo-mutants: the count's
+    // `>` as `==`, `<` or `>=` survived).
+    for n in [2, 3] {
+        let mut d = Doc::new();
+        for k in 0..n {
+            d.node(json!({ "mesh": 40 + k }), true);
+        }
+        let name = format!("errors{n}");
+        let e = assert_err(
+            gltf_load::load_path(&d.write_gltf(&dir, &name)),
+            &format!("{name}.gltf"),
+            "invalid glTF: ",
+        );
+        assert_eq!(e.matches("mesh: Index out of bounds").count(), 2, "{e}");
+        assert_eq!(e.contains(" more)"), n == 3, "{e}");
+        if n == 3 {
+            assert!(e.ends_with(" (and 1 more)"), "{e}");
+        }
+    }
 }
 
 #[test]
@@ -307,20 +331,35 @@ fn truncated_and_wrong_magic_glb() {
     assert_err(gltf_load::load_path(&cut), "half.glb", "truncated");
     let tiny = dir.join("tiny.glb");
     std::fs::write(&tiny, &glb[..7]).unwrap();
-    assert_err(gltf_load::load_path(&tiny), "tiny.glb", "GLB");
+    assert_err(
+        gltf_load::load_path(&tiny),
+        "tiny.glb",
+        "truncated GLB: 7 bytes, less than the 12-byte header",
+    );
 
+    // The needles below are whole messages, not words of the file names (which hold "glb" and
+    // "magic"): the chunk's comes from `glb_error` (cargo-mutants: it returning "" or "xyzzy"
+    // survived).
     let mut bad = glb.clone();
     bad[3] = b'X';
     let magic = dir.join("magic.glb");
     std::fs::write(&magic, &bad).unwrap();
-    assert_err(gltf_load::load_path(&magic), "magic.glb", "magic");
+    assert_err(
+        gltf_load::load_path(&magic),
+        "magic.glb",
+        "not a binary glTF file: magic is \"glTX\", expected \"glTF\"",
+    );
 
     // A chunk length pointing past the end.
     let mut bad = glb.clone();
     bad[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
     let chunk = dir.join("chunk.glb");
     std::fs::write(&chunk, &bad).unwrap();
-    assert_err(gltf_load::load_path(&chunk), "chunk.glb", "GLB");
+    assert_err(
+        gltf_load::load_path(&chunk),
+        "chunk.glb",
+        "truncated GLB: the JSON chunk declares 4294967295 bytes but only",
+    );
 
     // A whole header that declares itself, and 16 bytes: no room for a chunk (20 bytes at least).
     // The 12-byte file is a header, not a truncated one (cargo-mutants: `< 12` as `<= 12`, and
@@ -334,6 +373,16 @@ fn truncated_and_wrong_magic_glb() {
             &format!("corrupt GLB: header declares {n} bytes, too few for a JSON chunk"),
         );
     }
+    // 20 bytes hold a JSON chunk's header: an empty JSON chunk, refused as JSON (`declared < 20`
+    // as `<= 20` survived).
+    let mut head = glb[..20].to_vec();
+    head[8..12].copy_from_slice(&20u32.to_le_bytes());
+    head[12..16].copy_from_slice(&0u32.to_le_bytes());
+    assert_err(
+        gltf_load::load_slice(&head, "head.glb"),
+        "head.glb",
+        "bad JSON: EOF while parsing",
+    );
 
     // GLB version 1 is glTF 1.0.
     let mut v1 = glb.clone();
@@ -355,6 +404,17 @@ fn missing_or_short_buffer() {
     std::fs::remove_file(dir.join("nobin.bin")).unwrap();
     let e = assert_err(gltf_load::load_path(&p), "nobin.gltf", "cannot read");
     assert!(e.contains("nobin.bin"), "{e}");
+
+    // A buffer longer than its byteLength is read: a .bin file (read up to byteLength), a data:
+    // URI (cargo-mutants: the length test's `<` as `>` survived).
+    let p = d.write_gltf(&dir, "longbin");
+    let mut long = d.bin.clone();
+    long.extend_from_slice(&[0, 0, 0]);
+    std::fs::write(dir.join("longbin.bin"), &long).unwrap();
+    assert_eq!(load_ok(&p).triangles.len(), 1);
+    let uri = format!("data:application/octet-stream;base64,{}", b64(&long));
+    let j = serde_json::to_vec(&d.with_buffer(Some(uri))).unwrap();
+    assert_eq!(load_slice_ok(&j, "long.gltf").triangles.len(), 1);
 
     // The .bin file is shorter than the buffer's byteLength.
     let p = d.write_gltf(&dir, "shortbin");
