@@ -1659,12 +1659,19 @@ fn vertex_colours_in_every_format() {
     );
     // Out of [0, 1]: clamped with a warning.
     let hot = d.floats(&[[2.0, 0.5, -1.0]; 3], "VEC3", false);
-    for (i, c) in [rgb, u8s, u16s, raw, hot].into_iter().enumerate() {
+    // Each way out alone: above 1, below 0, not finite (a colour with one becomes white).
+    let over = d.floats(&[[2.0, 0.5, 0.0]; 3], "VEC3", false);
+    let under = d.floats(&[[0.5, -1.0, 0.0]; 3], "VEC3", false);
+    let nan = d.floats(&[[f32::NAN, 0.5, 0.0]; 3], "VEC3", false);
+    for (i, c) in [rgb, u8s, u16s, raw, hot, over, under, nan]
+        .into_iter()
+        .enumerate()
+    {
         let m = d.mesh(json!({"attributes": {"POSITION": p, "COLOR_0": c}}));
         d.node(json!({"mesh": m, "translation": [0, 0, i]}), true);
     }
     let s = load_ok(&d.write_gltf(&dir, "colors"));
-    assert_eq!(s.triangles.len(), 5);
+    assert_eq!(s.triangles.len(), 8);
     let by_z = |z: f32| s.triangles.iter().find(|t| t.p[0].z == z).unwrap().color;
     let close4 = |a: Vec4, b: Vec4| (a - b).abs().max_element() < 1e-6;
     let c = by_z(0.0);
@@ -1682,17 +1689,22 @@ fn vertex_colours_in_every_format() {
     assert!(close4(c[2], Vec4::new(0.2, 0.2, 1.0, 1.0)), "{c:?}");
     assert_eq!(by_z(3.0), [Vec4::ONE; 3]);
     assert_eq!(by_z(4.0), [Vec4::new(1.0, 0.5, 0.0, 1.0); 3]);
+    assert_eq!(by_z(5.0), [Vec4::new(1.0, 0.5, 0.0, 1.0); 3]);
+    assert_eq!(by_z(6.0), [Vec4::new(0.5, 0.0, 0.0, 1.0); 3]);
+    assert_eq!(by_z(7.0), [Vec4::ONE; 3]);
     let w = &s.report.warnings;
     assert!(
         w.iter()
             .any(|w| w.contains("COLOR_0") && w.contains("normalised")),
         "{w:?}"
     );
-    assert!(
-        w.iter()
-            .any(|w| w.contains("COLOR_0") && w.contains("clamped")),
-        "{w:?}"
-    );
+    // One warning for each of the four meshes out of [0, 1], none for the others (cargo-mutants:
+    // the test's `||`s as `&&` and its `!` deleted survived a mesh out on every side at once).
+    let clamped: Vec<&String> = w
+        .iter()
+        .filter(|w| w.contains("COLOR_0") && w.contains("clamped"))
+        .collect();
+    assert_eq!(clamped.len(), 4, "{w:?}");
     assert!(s.uses_vertex_colors() && s.features().contains(&"vertex-colors"));
     // Without COLOR_0 the vertices are white and the feature is off.
     let mut d = Doc::new();
