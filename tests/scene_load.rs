@@ -905,8 +905,14 @@ fn negative_scale_keeps_front_faces() {
         true,
     );
     d.node(json!({"mesh": with_n, "translation": [0, 0, 3]}), true);
+    // Flattened along Z (determinant 0, no mirror): the triangle in the XY plane keeps its
+    // winding (cargo-mutants: `det < 0` as `<=` survived).
+    d.node(
+        json!({"mesh": without_n, "scale": [1, 1, 0], "translation": [0, 0, 6]}),
+        true,
+    );
     let s = load_ok(&d.write_gltf(&dir, "mirror"));
-    assert_eq!(s.triangles.len(), 3);
+    assert_eq!(s.triangles.len(), 4);
     for t in &s.triangles {
         let g = t.geometric_normal();
         for n in t.n {
@@ -922,6 +928,9 @@ fn negative_scale_keeps_front_faces() {
     assert!(close(t.geometric_normal(), Vec3::Z));
     // Mirrored in Z: the front face flips to -Z along with the geometry.
     assert!(close(s.triangles[1].geometric_normal(), Vec3::NEG_Z));
+    let flat = s.triangles[3];
+    assert!(flat.p.iter().all(|p| p.z == 6.0), "{:?}", flat.p);
+    assert!(close(flat.geometric_normal(), Vec3::Z));
 }
 
 #[test]

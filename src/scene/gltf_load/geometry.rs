@@ -403,4 +403,31 @@ mod tests {
         assert_eq!(far.node, 3);
         assert!((far.size - 10.0).abs() < 1e-6 && (far.far - 2e7 - 10.0).abs() < 1.0);
     }
+
+    /// At the bound, far · ε = 0.1 · size exactly, a mesh is not too far: a 6 × 8 triangle (diagonal
+    /// 10, 0.1 · 10 = 1 in f64) reaching 2²³ (2²³ · 2⁻²³ = 1). A mesh of one point (size 0) is
+    /// never too far, wherever it is (cargo-mutants: both `>` as `>=` survived).
+    #[test]
+    fn too_far_for_f32_at_its_bound_and_for_a_point() {
+        let tri = |p: [Vec3; 3]| Primitive::Triangles {
+            positions: p.to_vec(),
+            normals: None,
+            uvs: None,
+            colors: None,
+            tris: vec![[0, 1, 2]],
+            material: 0,
+        };
+        let x = 8388608.0;
+        let bound = tri([
+            Vec3::new(x - 6.0, 0.0, 0.0),
+            Vec3::new(x, 0.0, 0.0),
+            Vec3::new(x - 6.0, 8.0, 0.0),
+        ]);
+        assert!(too_far_for_f32(&bound, &Mat4::IDENTITY, 0).is_none());
+        // One unit further, it is.
+        let past = Mat4::from_translation(Vec3::X);
+        assert!(too_far_for_f32(&bound, &past, 0).is_some());
+        let point = tri([Vec3::splat(1e30); 3]);
+        assert!(too_far_for_f32(&point, &Mat4::IDENTITY, 0).is_none());
+    }
 }
