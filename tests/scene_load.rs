@@ -2134,6 +2134,18 @@ fn huge_sparse_files_are_refused_or_read_only_as_declared() {
     let e = assert_err(gltf_load::load_path(&p), "tbimage.gltf", "tb.png");
     quick("1 TiB image", t);
     assert!(e.contains("1.0 TiB") && e.contains("512.0 MiB"), "{e}");
+    // At the cap exactly (512 MiB of zeros), an image is read, not refused (cargo-mutants: the
+    // size test's `>` as `>=` survived): a texture that does not decode.
+    sparse_file(&dir.join("cap.png"), 512 << 20);
+    let t = std::time::Instant::now();
+    let s = load_ok(&textured(json!([{"uri": "cap.png"}])).write_gltf(&dir, "capimage"));
+    quick("512 MiB of zeros as an image", t);
+    let w = &s.report.warnings;
+    assert!(
+        w.iter()
+            .any(|w| w.contains("cap.png") && w.contains("unrecognised image format")),
+        "{w:?}"
+    );
 }
 
 /// A file of another format named .gltf or .glb says what it is instead of "bad JSON at line 1".
