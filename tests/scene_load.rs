@@ -2148,6 +2148,46 @@ fn huge_sparse_files_are_refused_or_read_only_as_declared() {
     );
 }
 
+/// A texture image that does not decode is named in its warning by its name, else its file's name,
+/// else `image N` (a data: URI), and the scene loads without it (cargo-mutants: the name's test
+/// `!` deleted and the URI's guard as `true` survived).
+#[test]
+fn undecodable_images_are_named_in_their_warnings() {
+    let dir = temp_dir("image_names");
+    std::fs::write(dir.join("zeros.png"), [0u8; 64]).unwrap();
+    std::fs::write(dir.join("plain.png"), [0u8; 64]).unwrap();
+    let mut d = Doc::new();
+    let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    let uv = d.floats(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], "VEC2", false);
+    d.json["images"] = json!([
+        {"uri": "zeros.png", "name": "wall"},
+        {"uri": "plain.png", "name": ""},
+        {"uri": format!("data:image/png;base64,{}", b64(&[0u8; 12]))},
+    ]);
+    d.json["textures"] = json!([{"source": 0}, {"source": 1}, {"source": 2}]);
+    d.json["materials"] = json!(
+        (0..3)
+            .map(|i| json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": i}}}))
+            .collect::<Vec<_>>()
+    );
+    for mat in 0..3 {
+        let m = d.mesh(json!({"attributes": {"POSITION": p, "TEXCOORD_0": uv}, "material": mat}));
+        d.node(json!({"mesh": m}), true);
+    }
+    let s = load_ok(&d.write_gltf(&dir, "names"));
+    assert!(s.textures.is_empty());
+    let w: Vec<&String> = s
+        .report
+        .warnings
+        .iter()
+        .filter(|w| w.contains("not usable"))
+        .collect();
+    assert_eq!(w.len(), 3, "{w:?}");
+    for name in ["'wall'", "'plain.png'", "'image 2'"] {
+        assert!(w.iter().any(|w| w.contains(name)), "{name}: {w:?}");
+    }
+}
+
 /// A file of another format named .gltf or .glb says what it is instead of "bad JSON at line 1".
 #[test]
 fn other_formats_named_gltf_say_what_they_are() {

@@ -137,4 +137,20 @@ mod tests {
         assert_eq!(t.rgba8[7], [10, 20, 30, 255]);
         assert!(decode(b"DDS garbage", "y").is_err());
     }
+
+    /// An image whose longer side is the cap keeps its size and its pixels (a gradient, which a
+    /// resampling would blur).
+    #[test]
+    fn an_image_at_the_side_cap_is_kept_as_it_is() {
+        let img = image::RgbaImage::from_fn(MAX_TEXTURE_SIDE, 2, |x, y| {
+            image::Rgba([(x % 256) as u8, (x * 7 % 256) as u8, (y * 255) as u8, 255])
+        });
+        let mut png = Vec::new();
+        img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap();
+        let t = decode(&png, "x").unwrap();
+        assert_eq!((t.width, t.height), (MAX_TEXTURE_SIDE, 2));
+        let want: Vec<[u8; 4]> = img.pixels().map(|p| p.0).collect();
+        assert!(t.rgba8 == want);
+    }
 }

@@ -209,5 +209,9 @@ mod tests {
         assert_eq!(human_bytes(1728), "1.7 KiB");
         assert_eq!(human_bytes(1 << 40), "1.0 TiB");
         assert_eq!(human_bytes(12), "12 bytes");
+        // TiB is the last unit: a PiB and more stay in it (cargo-mutants: the bound `u + 1 <` as
+        // `<=` or `u * 1 <` survived; they index past the units).
+        assert_eq!(human_bytes(1 << 50), "1024.0 TiB");
+        assert_eq!(human_bytes(u64::MAX), "16777216.0 TiB");
     }
 }
