@@ -1443,7 +1443,8 @@ fn bad_sparse_accessors_are_refused() {
 fn quantized_positions_of_each_component_type() {
     let dir = temp_dir("quantized_types");
     // (name, componentType, bytes a component, the vertices' raw components (x, y; z = 0), max).
-    let cases: [(&str, u32, usize, [[i64; 2]; 3], f32); 5] = [
+    type Case = (&'static str, u32, usize, [[i64; 2]; 3], f32);
+    let cases: [Case; 5] = [
         ("i8", 5120, 1, [[0, 0], [127, 0], [-128, 64]], 127.0),
         ("u8", 5121, 1, [[0, 0], [255, 0], [3, 128]], 255.0),
         (
