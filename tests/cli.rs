@@ -394,7 +394,8 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
             vec!["render", "-o", &o, "--light-scale", "5e37"],
             "--light-scale",
         ),
-        // The Cornell box's ceiling emits 27: scaled by 1e35 it emits 2.7e36, past f32's room.
+        // The Cornell box's ceiling emits 27: scaled by 1e35 it emits 2.7e36, past the 1e36 an image
+        // lit by it may reach in f32.
         (
             vec!["render", "-o", &o, "--light-scale", "1e35"],
             "emits 2.700e36 with --light-scale",

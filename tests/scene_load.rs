@@ -272,8 +272,8 @@ fn bad_json() {
     std::fs::write(&p, b"").unwrap();
     assert_err(gltf_load::load_path(&p), "empty.gltf", "json");
 
-    // The validation names two errors (nodes of meshes that do not exist); past two, it counts the rest (cargo-mutants: the count's
-    // `>` as `==`, `<` or `>=` survived).
+    // The validation names two errors (nodes of meshes that do not exist); past two, it counts
+    // the rest (cargo-mutants: the count's `>` as `==`, `<` or `>=` survived).
     for n in [2, 3] {
         let mut d = Doc::new();
         for k in 0..n {
@@ -1438,7 +1438,8 @@ fn bad_sparse_accessors_are_refused() {
 
 /// Quantized positions (KHR_mesh_quantization) of each integer component type, plain and
 /// normalised, read per glTF's rules: a signed value c over its type's max, at least -1; an unsigned
-/// one over its max (cargo-mutants: i8 and i16 `to_f32` as constants, `/` as `*` or `%`, survived).
+/// one over its max (cargo-mutants: `to_f32` of i8, i16 and u32 as constants, `/` as `*` or `%`,
+/// and the -1 bound's `-` deleted, survived).
 #[test]
 fn quantized_positions_of_each_component_type() {
     let dir = temp_dir("quantized_types");

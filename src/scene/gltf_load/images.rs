@@ -138,8 +138,8 @@ mod tests {
         assert!(decode(b"DDS garbage", "y").is_err());
     }
 
-    /// An image whose longer side is the cap keeps its size and its pixels (a gradient, which a
-    /// resampling would blur).
+    /// An image whose longer side is the cap keeps its size and its pixels. The cap's `>` as `>=`
+    /// passes it too: `image`'s resize to the same size returns the image unchanged (equivalent).
     #[test]
     fn an_image_at_the_side_cap_is_kept_as_it_is() {
         let img = image::RgbaImage::from_fn(MAX_TEXTURE_SIDE, 2, |x, y| {
