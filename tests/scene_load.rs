@@ -142,6 +142,28 @@ impl Doc {
         )
     }
 
+    /// A document of one triangle (with texture coordinates) per image of `images`, each with its
+    /// own material whose base colour texture shows that image.
+    fn textured(images: Value) -> Doc {
+        let mut d = Doc::new();
+        let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+        let uv = d.floats(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], "VEC2", false);
+        let n = images.as_array().unwrap().len();
+        d.json["images"] = images;
+        d.json["textures"] = json!((0..n).map(|i| json!({"source": i})).collect::<Vec<_>>());
+        d.json["materials"] = json!(
+            (0..n)
+                .map(|i| json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": i}}}))
+                .collect::<Vec<_>>()
+        );
+        for mat in 0..n {
+            let m =
+                d.mesh(json!({"attributes": {"POSITION": p, "TEXCOORD_0": uv}, "material": mat}));
+            d.node(json!({"mesh": m}), true);
+        }
+        d
+    }
+
     /// The values of `sparse_vec3`'s substitution.
     const SPARSE_VALUES: [[f32; 3]; 2] = [[0.0, 0.0, 5.0], [0.0, 3.0, 5.0]];
 
@@ -224,6 +246,15 @@ impl Doc {
 fn load_ok(path: &Path) -> Scene {
     gltf_load::load_path(path)
         .unwrap_or_else(|e| panic!("expected {} to load: {e}", path.display()))
+}
+
+/// The load's warnings that contain every one of `words`.
+fn warnings_with<'a>(s: &'a Scene, words: &[&str]) -> Vec<&'a String> {
+    s.report
+        .warnings
+        .iter()
+        .filter(|w| words.iter().all(|x| w.contains(x)))
+        .collect()
 }
 
 fn load_slice_ok(bytes: &[u8], name: &str) -> Scene {
@@ -1615,12 +1646,7 @@ fn alpha_modes_and_cutoffs() {
         [false, true, false, true, false, false]
     );
     assert!(s.features().contains(&"alpha-test"));
-    let blend: Vec<&String> = s
-        .report
-        .warnings
-        .iter()
-        .filter(|w| w.contains("BLEND"))
-        .collect();
+    let blend = warnings_with(&s, &["BLEND"]);
     assert_eq!(blend.len(), 1, "{:?}", s.report.warnings);
     assert!(blend[0].contains("2 materials") && blend[0].contains("cutoff 0.5"));
 
@@ -1711,10 +1737,7 @@ fn vertex_colours_in_every_format() {
     );
     // One warning for each of the four meshes out of [0, 1], none for the others (cargo-mutants:
     // the test's `||`s as `&&` and its `!` deleted survived a mesh out on every side at once).
-    let clamped: Vec<&String> = w
-        .iter()
-        .filter(|w| w.contains("COLOR_0") && w.contains("clamped"))
-        .collect();
+    let clamped = warnings_with(&s, &["COLOR_0", "clamped"]);
     assert_eq!(clamped.len(), 4, "{w:?}");
     assert!(s.uses_vertex_colors() && s.features().contains(&"vertex-colors"));
     // Without COLOR_0 the vertices are white and the feature is off.
@@ -1750,12 +1773,7 @@ fn required_extensions_a_diffuse_renderer_can_ignore() {
         "AMD_split_roughnessMetallic": {"roughnessTexture": {"index": 0}}}}]);
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
     let s = load_ok(&d.write_gltf(&dir, "shiny"));
-    let named: Vec<&String> = s
-        .report
-        .warnings
-        .iter()
-        .filter(|w| w.contains("AMD_split_roughnessMetallic"))
-        .collect();
+    let named = warnings_with(&s, &["AMD_split_roughnessMetallic"]);
     assert_eq!(named.len(), 1, "{:?}", s.report.warnings);
     for e in ignorable {
         assert!(named[0].contains(e), "{}", named[0]);
@@ -1829,12 +1847,7 @@ fn textures_only_in_formats_the_loader_cannot_read() {
     let s = load_ok(&doc(false, false).write_gltf(&dir, "normals"));
     assert_eq!(s.materials[0].base_color_texture, Some(0));
     assert_eq!(s.textures.len(), 1);
-    let w: Vec<&String> = s
-        .report
-        .warnings
-        .iter()
-        .filter(|w| w.contains("MSFT_texture_dds"))
-        .collect();
+    let w = warnings_with(&s, &["MSFT_texture_dds"]);
     assert_eq!(w.len(), 1, "{:?}", s.report.warnings);
     assert!(
         w[0].contains("2 textures") && w[0].contains("skipped"),
@@ -2102,27 +2115,8 @@ fn huge_sparse_files_are_refused_or_read_only_as_declared() {
     // its size alone.
     sparse_file(&dir.join("tb.png"), tib);
     sparse_file(&dir.join("zeros.png"), 256 << 20);
-    let textured = |images: Value| {
-        let mut d = Doc::new();
-        let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
-        let uv = d.floats(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], "VEC2", false);
-        let n = images.as_array().unwrap().len();
-        d.json["images"] = images;
-        d.json["textures"] = json!((0..n).map(|i| json!({"source": i})).collect::<Vec<_>>());
-        d.json["materials"] = json!(
-            (0..n)
-                .map(|i| json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": i}}}))
-                .collect::<Vec<_>>()
-        );
-        for mat in 0..n {
-            let m =
-                d.mesh(json!({"attributes": {"POSITION": p, "TEXCOORD_0": uv}, "material": mat}));
-            d.node(json!({"mesh": m}), true);
-        }
-        d
-    };
     let t = std::time::Instant::now();
-    let s = load_ok(&textured(json!([{"uri": "zeros.png"}])).write_gltf(&dir, "zeroimage"));
+    let s = load_ok(&Doc::textured(json!([{"uri": "zeros.png"}])).write_gltf(&dir, "zeroimage"));
     quick("256 MiB of zeros as an image", t);
     assert!(s.textures.is_empty());
     let w = &s.report.warnings;
@@ -2132,7 +2126,7 @@ fn huge_sparse_files_are_refused_or_read_only_as_declared() {
         "{w:?}"
     );
     let t = std::time::Instant::now();
-    let p = textured(json!([{"uri": "tb.png"}])).write_gltf(&dir, "tbimage");
+    let p = Doc::textured(json!([{"uri": "tb.png"}])).write_gltf(&dir, "tbimage");
     let e = assert_err(gltf_load::load_path(&p), "tbimage.gltf", "tb.png");
     quick("1 TiB image", t);
     assert!(e.contains("1.0 TiB") && e.contains("512.0 MiB"), "{e}");
@@ -2140,7 +2134,7 @@ fn huge_sparse_files_are_refused_or_read_only_as_declared() {
     // size test's `>` as `>=` survived): a texture that does not decode.
     sparse_file(&dir.join("cap.png"), 512 << 20);
     let t = std::time::Instant::now();
-    let s = load_ok(&textured(json!([{"uri": "cap.png"}])).write_gltf(&dir, "capimage"));
+    let s = load_ok(&Doc::textured(json!([{"uri": "cap.png"}])).write_gltf(&dir, "capimage"));
     quick("512 MiB of zeros as an image", t);
     let w = &s.report.warnings;
     assert!(
@@ -2158,32 +2152,14 @@ fn undecodable_images_are_named_in_their_warnings() {
     let dir = temp_dir("image_names");
     std::fs::write(dir.join("zeros.png"), [0u8; 64]).unwrap();
     std::fs::write(dir.join("plain.png"), [0u8; 64]).unwrap();
-    let mut d = Doc::new();
-    let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
-    let uv = d.floats(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], "VEC2", false);
-    d.json["images"] = json!([
+    let d = Doc::textured(json!([
         {"uri": "zeros.png", "name": "wall"},
         {"uri": "plain.png", "name": ""},
         {"uri": format!("data:image/png;base64,{}", b64(&[0u8; 12]))},
-    ]);
-    d.json["textures"] = json!([{"source": 0}, {"source": 1}, {"source": 2}]);
-    d.json["materials"] = json!(
-        (0..3)
-            .map(|i| json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": i}}}))
-            .collect::<Vec<_>>()
-    );
-    for mat in 0..3 {
-        let m = d.mesh(json!({"attributes": {"POSITION": p, "TEXCOORD_0": uv}, "material": mat}));
-        d.node(json!({"mesh": m}), true);
-    }
+    ]));
     let s = load_ok(&d.write_gltf(&dir, "names"));
     assert!(s.textures.is_empty());
-    let w: Vec<&String> = s
-        .report
-        .warnings
-        .iter()
-        .filter(|w| w.contains("not usable"))
-        .collect();
+    let w = warnings_with(&s, &["not usable"]);
     assert_eq!(w.len(), 3, "{w:?}");
     for name in ["'wall'", "'plain.png'", "'image 2'"] {
         assert!(w.iter().any(|w| w.contains(name)), "{name}: {w:?}");
