@@ -136,21 +136,9 @@ pub fn sp_clusters(ids: &[u32], shade: &[[f32; 3]], exposure: f32) -> Vec<u8> {
 
 /// Projects a world point to pixel coordinates (None behind the camera or outside the image).
 pub fn project(cam: &CameraParams, p: Vec3) -> Option<(f32, f32)> {
-    let eye = Vec3::from_slice(&cam.eye[..3]);
-    let right = Vec3::from_slice(&cam.right[..3]);
-    let up = Vec3::from_slice(&cam.up[..3]);
-    let fwd = Vec3::from_slice(&cam.forward[..3]);
-    let d = p - eye;
-    let z = d.dot(fwd);
-    if z <= 1e-6 {
-        return None;
-    }
-    let x = d.dot(right) / right.length_squared() / z;
-    let y = d.dot(up) / up.length_squared() / z;
+    let (x, y, _) = cam.project(p - cam.eye_point(), 1e-6)?;
     let (w, h) = (cam.size[0] as f32, cam.size[1] as f32);
-    let px = (x * 0.5 + 0.5) * w;
-    let py = (0.5 - y * 0.5) * h;
-    (px >= 0.0 && py >= 0.0 && px < w && py < h).then_some((px, py))
+    (x >= 0.0 && y >= 0.0 && x < w && y < h).then_some((x, y))
 }
 
 /// VPLs as small grey dots and the light list (VPL-cluster representatives) as larger coloured dots,

@@ -11,22 +11,13 @@ fn v3(a: [f32; 4]) -> Vec3 {
     Vec3::new(a[0], a[1], a[2])
 }
 
-/// World point `q`'s image position (pixels) and depth along the previous view; depth −1 where it
-/// lies behind the eye.
+/// World point `q`'s image position (pixels) and depth along the previous view
+/// (`CameraParams::project` with near = 1e-6, as `accumulate.wgsl`'s `project_prev`); depth −1
+/// where it lies behind the eye.
 pub fn project_prev(p: &AccumulateParams, q: Vec3) -> Vec3 {
-    let d = q - v3(p.prev.eye);
-    let z = d.dot(v3(p.prev.forward));
-    if z <= 1e-6 * d.length() {
-        return Vec3::new(0.0, 0.0, -1.0);
-    }
-    let (r, u) = (v3(p.prev.right), v3(p.prev.up));
-    let sx = d.dot(r) / (z * r.dot(r));
-    let sy = d.dot(u) / (z * u.dot(u));
-    Vec3::new(
-        (sx + 1.0) * 0.5 * p.size[0] as f32,
-        (1.0 - sy) * 0.5 * p.size[1] as f32,
-        z,
-    )
+    p.prev
+        .project(q - p.prev.eye_point(), 1e-6)
+        .map_or(Vec3::new(0.0, 0.0, -1.0), |(x, y, z)| Vec3::new(x, y, z))
 }
 
 /// History tap `j` shows the surface at depth `z` with normal `n`.
