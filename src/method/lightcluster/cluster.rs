@@ -287,4 +287,25 @@ mod tests {
         near(&v([3.0, 4.0, 0.0], [0.0, -1.0, 0.0]), 10.0, 25.0);
         near(&v([3.0, 4.0, 0.0], [1.0, 0.0, 0.0]), 0.5, 5.5);
     }
+
+    /// `power` by hand: Rec. 709 luminance, one channel at a time and a mix (1, 2, 3) → 0.2126 +
+    /// 1.4304 + 0.2166 (cargo-mutants: each `+` and `*` swapped survived, as every sort test had grey
+    /// flux).
+    #[test]
+    fn power_is_the_luminance_of_the_flux() {
+        let v = |f: [f32; 3]| Vpl {
+            pos: [0.0; 4],
+            nrm: [0.0, 1.0, 0.0, 0.0],
+            flux: [f[0], f[1], f[2], 0.0],
+        };
+        for (f, want) in [
+            ([1.0, 0.0, 0.0], 0.2126),
+            ([0.0, 1.0, 0.0], 0.7152),
+            ([0.0, 0.0, 1.0], 0.0722),
+            ([1.0, 2.0, 3.0], 1.8596),
+        ] {
+            let got = power(&v(f));
+            assert!((got - want).abs() < 1e-6, "{f:?}: {got} against {want}");
+        }
+    }
 }
