@@ -288,9 +288,9 @@ mod tests {
         near(&v([3.0, 4.0, 0.0], [1.0, 0.0, 0.0]), 0.5, 5.5);
     }
 
-    /// `power` by hand: Rec. 709 luminance, one channel at a time and a mix (1, 2, 3) → 0.2126 +
-    /// 1.4304 + 0.2166 (cargo-mutants: each `+` and `*` swapped survived, as every sort test had grey
-    /// flux).
+    /// `power` by hand: Rec. 709 luminance, one channel at a time and a mix (2, 4, 8) → 0.4252 +
+    /// 2.8608 + 0.5776, no channel 1 so that a `/` shows (cargo-mutants: each `+` and `*` swapped
+    /// survived, as every sort test had grey flux).
     #[test]
     fn power_is_the_luminance_of_the_flux() {
         let v = |f: [f32; 3]| Vpl {
@@ -302,7 +302,7 @@ mod tests {
             ([1.0, 0.0, 0.0], 0.2126),
             ([0.0, 1.0, 0.0], 0.7152),
             ([0.0, 0.0, 1.0], 0.0722),
-            ([1.0, 2.0, 3.0], 1.8596),
+            ([2.0, 4.0, 8.0], 3.8636),
         ] {
             let got = power(&v(f));
             assert!((got - want).abs() < 1e-6, "{f:?}: {got} against {want}");
