@@ -16,11 +16,10 @@
 struct WangParams {
     width: u32,
     height: u32,
-    // Clusters (sample points).
-    k: u32,
     // s of interp's neighbourhood {-s, 0, s}^2.
     stride: u32,
-    _p: u32,
+    _p0: u32,
+    _p1: u32,
     seed: u32,
     // R_j's clamp [r_min, r_max] (src/cpu/wang.rs, radius_from_sum).
     r_min: f32,

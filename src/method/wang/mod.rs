@@ -48,9 +48,8 @@ pub fn interp_stride(pixels: u32, k: u32) -> u32 {
 pub struct WangParams {
     pub width: u32,
     pub height: u32,
-    pub k: u32,
     pub stride: u32,
-    pub _p: u32,
+    pub _p: [u32; 2],
     pub seed: u32,
     pub r_min: f32,
     pub r_max: f32,
@@ -156,7 +155,6 @@ impl Wang {
             ctx,
             &Bindings {
                 params: WangParams {
-                    k,
                     seed,
                     ..Default::default()
                 },
@@ -195,7 +193,6 @@ impl Wang {
                 params: WangParams {
                     width: img.width,
                     height: img.height,
-                    k: c.k(),
                     stride: interp_stride(n, c.k()),
                     r_min: RADIUS_MIN * diagonal,
                     r_max: diagonal,
