@@ -308,4 +308,40 @@ mod tests {
             assert!((got - want).abs() < 1e-6, "{f:?}: {got} against {want}");
         }
     }
+
+    fn at(p: [f32; 3], flux: f32) -> Vpl {
+        Vpl {
+            pos: [p[0], p[1], p[2], 1.0],
+            nrm: [0.0, 1.0, 0.0, 0.0],
+            flux: [flux, flux, flux, 0.0],
+        }
+    }
+
+    /// §3.1.2's "farther than d_min": with the eye on the brightest light, d_min = d_init = 1, and a
+    /// light exactly 1 away joins it while one 1 + 2⁻²⁰ away starts its own cluster (cargo-mutants:
+    /// `>` as `>=` survived).
+    #[test]
+    fn a_light_at_exactly_d_min_is_not_a_centre() {
+        let far = 1.0 + 2f32.powi(-20);
+        let vpls = [
+            at([0.0; 3], 2.0),
+            at([1.0, 0.0, 0.0], 1.0),
+            at([0.0, 0.0, far], 0.5),
+        ];
+        assert_eq!(d_min(1.0, 0.0, 10.0), 1.0);
+        assert_eq!(leader_centers(&vpls, Vec3::ZERO, 10.0, 1.0), vec![0, 2]);
+    }
+
+    /// §3.1.3 on a tie: a light halfway between two centres goes to the first (cargo-mutants: `<` as
+    /// `<=`, the last, survived).
+    #[test]
+    fn a_light_halfway_between_centres_joins_the_first() {
+        let vpls = [
+            at([-1.0, 0.0, 0.0], 1.0),
+            at([1.0, 0.0, 0.0], 1.0),
+            at([0.0; 3], 1.0),
+        ];
+        assert_eq!(assign_nearest(&vpls, &[0, 1]), vec![0, 1, 0]);
+        assert_eq!(assign_nearest(&vpls, &[1, 0]), vec![1, 0, 0]);
+    }
 }
