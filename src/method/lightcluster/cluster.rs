@@ -344,4 +344,59 @@ mod tests {
         assert_eq!(assign_nearest(&vpls, &[0, 1]), vec![0, 1, 0]);
         assert_eq!(assign_nearest(&vpls, &[1, 0]), vec![1, 0, 0]);
     }
+
+    /// `split_members` worked by hand on 11 lights in the plane z = 0, all facing +z (so
+    /// `member_distance` is the distance), member 0 the centre:
+    ///
+    /// ```text
+    /// member  0     1     2     3     4     5     6     7     8     9     10
+    /// x, y    4,0   1,2   5,0   6,0   1,0   1,1   0,0   3,1   4,3   0,3   2,1
+    /// flux    4     1     8     2     2     4     8     4     4     2     4
+    /// ```
+    ///
+    /// Farthest-point seeds from 0: 9 (5 away), 4 (3; before 6 and 8 on the tie), 8, 3, 1 (√2;
+    /// before 7 and 10), 7, 2 (1; before 5, 6, 10): groups 0..8 seeded by 0 9 4 8 3 1 7 2. The
+    /// nearest seed: 5 is 1 from 4 and from 1, so group 2 (the first); 6 → 2, 10 → 6. Round one:
+    /// group 2 = {4, 5, 6} of flux 2, 4, 8 has its flux-weighted mean at (3/7, 2/7), nearest to 6
+    /// (the plain mean (2/3, 1/3) is nearest to 4, which would stay), so its seed moves to 6; 5 is
+    /// then √2 from 6 and 1 from 1: group 5. Round two: group 5 = {1, 5} of flux 1, 4, mean (1, 1.2),
+    /// seed → 5. Last: 4 is 1 from 6 and from 5 (group 2, the first), 10 is 1 from 5 and from 7
+    /// (group 5). (cargo-mutants: 17 mutants of the seeds' ties, the mean, its weights and the move
+    /// survived, as no test had more than `MEMBER_TARGETS` members with the groups checked.)
+    #[test]
+    fn split_members_by_hand() {
+        let xy = [
+            (4, 0),
+            (1, 2),
+            (5, 0),
+            (6, 0),
+            (1, 0),
+            (1, 1),
+            (0, 0),
+            (3, 1),
+            (4, 3),
+            (0, 3),
+            (2, 1),
+        ];
+        let flux = [4.0, 1.0, 8.0, 2.0, 2.0, 4.0, 8.0, 4.0, 4.0, 2.0, 4.0];
+        let vpls: Vec<Vpl> = xy
+            .iter()
+            .zip(flux)
+            .map(|(&(x, y), f)| Vpl {
+                pos: [x as f32, y as f32, 0.0, 1.0],
+                nrm: [0.0, 0.0, 1.0, 0.0],
+                flux: [f, f, f, 0.0],
+            })
+            .collect();
+        let members: Vec<u32> = (0..11).collect();
+        assert_eq!(
+            split_members(&vpls, &members),
+            vec![0, 5, 7, 4, 2, 5, 2, 6, 3, 1, 5]
+        );
+        // At most `MEMBER_TARGETS` members: each its own group.
+        assert_eq!(
+            split_members(&vpls, &members[..8]),
+            (0..8).collect::<Vec<u32>>()
+        );
+    }
 }
