@@ -1275,3 +1275,29 @@ fn render_layers_add_up_and_the_stats_name_the_indirect_light() {
     let (code, _, err) = common::run_cli(&["render", "--layer", "albedo", "-o", "x.png"]);
     assert_eq!(code, 2, "{err}");
 }
+
+/// `--temporal-alpha` in (0, 1]: the bounds by hand, and a value inside read as itself
+/// (cargo-mutants: `parse_temporal_alpha` as `Ok(1.0)`, its `&&` as `||` and `>` as `>=` survived).
+#[test]
+fn temporal_alpha_is_in_zero_one() {
+    use fuzzy_vpl::settings::parse_temporal_alpha;
+    assert_eq!(parse_temporal_alpha("0.25").unwrap(), 0.25);
+    assert_eq!(parse_temporal_alpha("1").unwrap(), 1.0);
+    for bad in ["0", "-0.5", "1.0001", "2", "nan"] {
+        assert!(parse_temporal_alpha(bad).is_err(), "{bad}");
+    }
+}
+
+/// A weighting's name (what the stats JSON and the CSV write) is its `--weighting` value and its
+/// serde name (cargo-mutants: `Weighting::name` as "" and as "xyzzy" survived the quick binaries).
+#[test]
+fn weighting_names_are_the_cli_and_serde_names() {
+    use clap::ValueEnum;
+    use fuzzy_vpl::settings::Weighting;
+    for w in Weighting::ALL {
+        assert_eq!(w.name(), w.to_possible_value().unwrap().get_name());
+        let json = serde_json::to_string(&w).unwrap();
+        assert_eq!(json, format!("\"{}\"", w.name()));
+    }
+    assert_eq!(Weighting::InverseDistance.name(), "inverse-distance");
+}
