@@ -710,4 +710,115 @@ mod tests {
         assert_eq!(b.controlled, Controlled::VplOnly);
         assert_eq!(b.apply(&c, 300).sp_clusters, 0);
     }
+
+    fn split(frame_ms: f64, fixed_ms: f64, direct_ms: f64) -> Split {
+        Split {
+            frame_ms,
+            fixed_ms,
+            direct_ms,
+            exponent: 1.0,
+        }
+    }
+
+    /// Within `SETTLED` of the budget the direct light keeps its samples, even at the fewest
+    /// clusters with samples to give back: 38 of 40 ms at 4 of 16 samples leaves 4 and grows K (a
+    /// cut or give-back there would ask 4 · 4.5 / 2.5 → 7). Without a direct light (0 ms) a frame
+    /// over the budget at the fewest clusters leaves the samples as they are. (cargo-mutants:
+    /// `off`'s `/` as `*` or `%` and `−` as `+` or `/`, the give-back's `−SETTLED` as `SETTLED` and
+    /// its `&&` as `||`, and `direct_ms > 0` as `>= 0` survived.)
+    #[test]
+    fn the_direct_light_stays_within_the_band_and_without_a_direct_pass() {
+        let st = settings(&ClusterSettings::default(), (320, 240), 8192);
+        let mut b = Budget::new(40.0, &st);
+        let mut s = b.start(&st);
+        s.cluster = b.apply(&s.cluster, MIN_VPL_CLUSTERS);
+        s.frame.direct_samples = 4;
+        let next = b.step(&s, split(38.0, 12.5, 2.5));
+        assert_eq!(next.frame.direct_samples, 4);
+        assert!(
+            next.cluster.vpl_clusters > MIN_VPL_CLUSTERS,
+            "{:?}",
+            next.cluster
+        );
+        let mut b = Budget::new(40.0, &st);
+        s.frame.direct_samples = 16;
+        let next = b.step(&s, split(60.0, 10.0, 0.0));
+        assert_eq!(next.frame.direct_samples, 16);
+        assert_eq!(next.cluster.vpl_clusters, MIN_VPL_CLUSTERS);
+    }
+
+    /// The secant needs K to have moved by more than 5% (ln ratio 0.05): K 1000 → 1020 with the
+    /// variable part doubling (timing noise) keeps the split's exponent 1, so K = 1020 · 30 / 80 =
+    /// 382.5 → 383; the secant there would be ln 2 / ln 1.02 = 35, clamped to 3 (K 736).
+    /// (cargo-mutants: the ratio's `/` as `*` or `%`, and the first `&&` as `||`, survived.)
+    #[test]
+    fn the_secant_waits_for_k_to_move_five_percent() {
+        let st = settings(&ClusterSettings::default(), (320, 240), 8192);
+        let mut b = Budget::new(40.0, &st);
+        let mut s = b.start(&st);
+        s.cluster = b.apply(&s.cluster, 1000);
+        b.step(&s, split(50.0, 10.0, 5.0));
+        s.cluster = b.apply(&s.cluster, 1020);
+        let next = b.step(&s, split(90.0, 10.0, 5.0));
+        assert_eq!(next.cluster.vpl_clusters, 383, "{:?}", b.steps);
+    }
+
+    /// The range of the controlled K: K_SP alone goes up to a quarter of the pixels (16×16: 64),
+    /// K_VPL down to half the VPLs where that is below `MIN_VPL_CLUSTERS` (20 VPLs: 10).
+    /// (cargo-mutants: `pixels / 4` as `* 4` or `% 4`, `vpls / 2` as `* 2` survived.)
+    #[test]
+    fn k_stays_within_a_quarter_of_the_pixels_and_half_the_vpls() {
+        let c = ClusterSettings {
+            sp_clusters: 32,
+            vpl_clusters: 0,
+            ..Default::default()
+        };
+        let (b, s) = run(1e9, &c, (16, 16), 8192);
+        assert_eq!(b.controlled, Controlled::SpOnly);
+        assert_eq!(s.cluster.sp_clusters, 64, "{:?}", b.steps);
+        let c = ClusterSettings {
+            vpl_clusters: 12,
+            ..Default::default()
+        };
+        let (b, s) = run(1e-3, &c, (32, 32), 20);
+        assert_eq!(b.controlled, Controlled::VplOnly);
+        assert_eq!(s.cluster.vpl_clusters, 10, "{:?}", b.steps);
+    }
+
+    /// The viewer's controller: made for one budget and size (`fits`), it keeps its K's while a
+    /// frame lands within `SETTLED` (29.5 of 30 ms) and moves them past it (60 ms: K falls); a
+    /// frame of another size is ignored. (cargo-mutants: `fits` as `true` and its `&&` as `||`,
+    /// `observe`'s band test with `/` as `*` or `%` and `−` as `+` or `/` survived.)
+    #[test]
+    fn the_viewers_controller_moves_k_only_outside_the_band() {
+        let mut st = settings(&ClusterSettings::default(), (320, 240), 8192);
+        st.cluster.target_ms = Some(30.0);
+        let mut c = Controller::new(&st).unwrap();
+        assert!(c.fits(&st));
+        let mut other = st.clone();
+        other.cluster.target_ms = Some(31.0);
+        assert!(!c.fits(&other));
+        let mut other = st.clone();
+        other.frame.width = 321;
+        assert!(!c.fits(&other));
+        let ks = c.ks();
+        let mut s = st.clone();
+        c.apply(&mut s);
+        let f = |ms: f64| {
+            timed(
+                ms,
+                &[
+                    (Pass::Primary, 10.0),
+                    (Pass::Direct, 5.0),
+                    (Pass::Shade, ms - 15.0),
+                ],
+            )
+        };
+        c.observe(&s, &f(29.5));
+        assert_eq!(c.ks(), ks);
+        c.observe(&other, &f(90.0));
+        assert_eq!(c.ks(), ks);
+        c.observe(&s, &f(60.0));
+        assert!(c.ks().1 < ks.1, "{:?} from {ks:?}", c.ks());
+    }
 }
