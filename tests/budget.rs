@@ -16,13 +16,21 @@
 
 mod common;
 
+use std::sync::Mutex;
+
 use fuzzy_vpl::render::budget::{self, Budget};
 use fuzzy_vpl::render::pipeline::{RenderSettings, Renderer};
 use fuzzy_vpl::scene;
 use fuzzy_vpl::settings::FrameSettings;
 
+/// The tests here take turns on the device: the budget's frames are timed, and the other test
+/// rendering beside them shares lavapipe's two cores (in a run where the budget test failed, the
+/// chosen settings' frames took 68.8, 87.4 and 93.4 ms against a budget of 64.6).
+static DEVICE: Mutex<()> = Mutex::new(());
+
 #[test]
 fn a_budget_that_binds_moves_k_and_lands_within_25_percent() {
+    let _turn = DEVICE.lock().unwrap_or_else(|e| e.into_inner());
     let ctx = common::gpu();
     let s = scene::load("builtin:conference").unwrap();
     let mut r = Renderer::new(&ctx, &s).unwrap();
@@ -102,6 +110,7 @@ fn a_budget_that_binds_moves_k_and_lands_within_25_percent() {
 /// 1 ms budget).
 #[test]
 fn the_frame_loop_steps_the_viewers_budget() {
+    let _turn = DEVICE.lock().unwrap_or_else(|e| e.into_inner());
     use fuzzy_vpl::render::timed::FrameLoop;
     let ctx = common::gpu();
     let s = scene::load("builtin:cornell").unwrap();
