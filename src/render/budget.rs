@@ -624,11 +624,7 @@ mod tests {
     /// return taken when the samples did not change survived).
     #[test]
     fn a_step_moves_the_direct_light_or_k_not_both() {
-        let st = settings(&ClusterSettings::default(), (320, 240), 8192);
-        let mut b = Budget::new(40.0, &st);
-        let mut s = b.start(&st);
-        s.cluster = b.apply(&s.cluster, MIN_VPL_CLUSTERS);
-        s.frame.direct_samples = 4;
+        let (mut b, s) = at_k(40.0, MIN_VPL_CLUSTERS, 4);
         let next = b.step(&s, frame(&s));
         assert_eq!(next.frame.direct_samples, 16);
         assert_eq!(next.cluster, s.cluster);
@@ -720,6 +716,17 @@ mod tests {
         }
     }
 
+    /// A controller for `target` ms on 320×240 with 8192 VPLs, and its start's settings with K_VPL
+    /// `k` (K_SP on the line) and `samples` direct samples.
+    fn at_k(target: f64, k: u32, samples: u32) -> (Budget, RenderSettings) {
+        let st = settings(&ClusterSettings::default(), (320, 240), 8192);
+        let b = Budget::new(target, &st);
+        let mut s = b.start(&st);
+        s.cluster = b.apply(&s.cluster, k);
+        s.frame.direct_samples = samples;
+        (b, s)
+    }
+
     /// Within `SETTLED` of the budget the direct light keeps its samples, even at the fewest
     /// clusters with samples to give back: 38 of 40 ms at 4 of 16 samples leaves 4 and grows K (a
     /// cut or give-back there would ask 4 · 4.5 / 2.5 → 7). Without a direct light (0 ms) a frame
@@ -728,11 +735,7 @@ mod tests {
     /// its `&&` as `||`, and `direct_ms > 0` as `>= 0` survived.)
     #[test]
     fn the_direct_light_stays_within_the_band_and_without_a_direct_pass() {
-        let st = settings(&ClusterSettings::default(), (320, 240), 8192);
-        let mut b = Budget::new(40.0, &st);
-        let mut s = b.start(&st);
-        s.cluster = b.apply(&s.cluster, MIN_VPL_CLUSTERS);
-        s.frame.direct_samples = 4;
+        let (mut b, s) = at_k(40.0, MIN_VPL_CLUSTERS, 4);
         let next = b.step(&s, split(38.0, 12.5, 2.5));
         assert_eq!(next.frame.direct_samples, 4);
         assert!(
@@ -740,8 +743,7 @@ mod tests {
             "{:?}",
             next.cluster
         );
-        let mut b = Budget::new(40.0, &st);
-        s.frame.direct_samples = 16;
+        let (mut b, s) = at_k(40.0, MIN_VPL_CLUSTERS, 16);
         let next = b.step(&s, split(60.0, 10.0, 0.0));
         assert_eq!(next.frame.direct_samples, 16);
         assert_eq!(next.cluster.vpl_clusters, MIN_VPL_CLUSTERS);
@@ -750,13 +752,11 @@ mod tests {
     /// The secant needs K to have moved by more than 5% (ln ratio 0.05): K 1000 → 1020 with the
     /// variable part doubling (timing noise) keeps the split's exponent 1, so K = 1020 · 30 / 80 =
     /// 382.5 → 383; the secant there would be ln 2 / ln 1.02 = 35, clamped to 3 (K 736).
-    /// (cargo-mutants: the ratio's `/` as `*` or `%`, and the first `&&` as `||`, survived.)
+    /// (cargo-mutants: the ratio's `/` as `*` or `%`, and each of the guard's three `&&` as `||`,
+    /// survived.)
     #[test]
     fn the_secant_waits_for_k_to_move_five_percent() {
-        let st = settings(&ClusterSettings::default(), (320, 240), 8192);
-        let mut b = Budget::new(40.0, &st);
-        let mut s = b.start(&st);
-        s.cluster = b.apply(&s.cluster, 1000);
+        let (mut b, mut s) = at_k(40.0, 1000, 16);
         b.step(&s, split(50.0, 10.0, 5.0));
         s.cluster = b.apply(&s.cluster, 1020);
         let next = b.step(&s, split(90.0, 10.0, 5.0));
