@@ -110,8 +110,8 @@ fn a_budget_that_binds_moves_k_and_lands_within_25_percent() {
 /// 1 ms budget).
 #[test]
 fn the_frame_loop_steps_the_viewers_budget() {
-    let _turn = DEVICE.lock().unwrap_or_else(|e| e.into_inner());
     use fuzzy_vpl::render::timed::FrameLoop;
+    let _turn = DEVICE.lock().unwrap_or_else(|e| e.into_inner());
     let ctx = common::gpu();
     let s = scene::load("builtin:cornell").unwrap();
     let mut r = Renderer::new(&ctx, &s).unwrap();
