@@ -204,3 +204,118 @@ pub fn set_boxes(l: &mut Lighting, clusters: &[super::voxel::Cluster]) {
         c[4] = cl.max.extend(0.0).into();
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::IVec3;
+
+    use super::*;
+    use crate::method::cvrtgi::voxel::{Grid, Voxels};
+
+    fn vpl(p: [f32; 3], n: Vec3, flux: f32) -> Vpl {
+        Vpl {
+            pos: [p[0], p[1], p[2], 0.0],
+            nrm: n.extend(0.0).into(),
+            flux: [flux, flux, flux, 0.0],
+        }
+    }
+
+    fn near(a: [f32; 4], b: Vec3) -> bool {
+        (Vec3::from_slice(&a[..3]) - b).abs().max_element() < 1e-5
+    }
+
+    /// §4.4's injection worked by hand on a unit grid of 4³ with four occupied voxels (sorted by
+    /// key x + 4 (y + 4 z)): A (1, 0, 1) and B (2, 1, 1) of cluster 0, C (1, 2, 1) of cluster 1, D
+    /// (3, 0, 3) of no cluster; cluster 2 has no VPL. The VPLs (flux f per channel, luminance 3 f;
+    /// `escape` [weight, into the scene]):
+    /// - v1 in A at (1.3, 0.9, 1.5), +y, f 1; v2 in A at (1.7, 0.5, 1.5), +x, f 1/3, into 0.5.
+    /// - v3 in the empty voxel (1, 1, 1) at (1.8, 1.8, 1.5), normal (-1, 1, 0)/√2: half a voxel
+    ///   into its surface (along -n) is B, half a voxel out of it is C. It lies on B.
+    /// - v4 in D and v5 at (3.5, 3.5, 0.5), in no voxel: dropped, 2.
+    /// - v6 in C of weight 0: left out, sends nothing. v7 in C at (1.5, 2.2, 1.5), f 2, escape
+    ///   [0.5, 0.25]: flux 1, sends 6 × 0.25.
+    ///
+    /// So cluster 0 sends 3 + 1 × 0.5 + 3 = 6.5 and cluster 1 1.5; lit voxels A (v1 + v2: flux
+    /// 4/3, position (3 v1 + v2)/4 = (1.4, 0.8, 1.5), normal (x + 3 y)/√10), B (v3) and C (v7);
+    /// cluster 0's light is v1 + v2 + v3 (flux 7/3, position (3 v1 + v2 + 3 v3)/7, first lit 0,
+    /// count 2), cluster 1's v7 (first 2, count 1), cluster 2's zero (first 3, count 0).
+    /// (cargo-mutants: the normal's weight as `/ l`, the lookup's `-n` as `n` (twice), the cluster
+    /// guard as `true` and the dropped count as `-=`, `*=` or absent survived.)
+    #[test]
+    fn injection_by_hand() {
+        let grid = Grid {
+            origin: Vec3::ZERO,
+            size: 1.0,
+            dims: [4; 3],
+        };
+        let cells = [[1, 0, 1], [2, 1, 1], [1, 2, 1], [3, 0, 3]];
+        let frags: Vec<_> = cells
+            .iter()
+            .map(|&c| (IVec3::from(c).as_vec3() + 0.5, Vec3::Y, Vec3::ONE, 1.0))
+            .collect();
+        let mut v = Voxels::from_fragments(grid, &frags);
+        let keys: Vec<u32> = v.voxels.iter().map(|x| x.key).collect();
+        assert_eq!(keys, [17, 22, 25, 51]);
+        for (x, c) in v.voxels.iter_mut().zip([0, 0, 1, INVALID]) {
+            x.cluster = c;
+        }
+        let corner = Vec3::new(-1.0, 1.0, 0.0).normalize();
+        let vpls = [
+            vpl([1.3, 0.9, 1.5], Vec3::Y, 1.0),
+            vpl([1.7, 0.5, 1.5], Vec3::X, 1.0 / 3.0),
+            vpl([1.8, 1.8, 1.5], corner, 1.0),
+            vpl([3.5, 0.5, 3.5], Vec3::Y, 1.0),
+            vpl([3.5, 3.5, 0.5], Vec3::Y, 1.0),
+            vpl([1.5, 2.5, 1.5], Vec3::Y, 1.0),
+            vpl([1.5, 2.2, 1.5], Vec3::Y, 2.0),
+        ];
+        let escape = [
+            [1.0, 1.0],
+            [1.0, 0.5],
+            [1.0, 1.0],
+            [1.0, 1.0],
+            [1.0, 1.0],
+            [0.0, 0.0],
+            [0.5, 0.25],
+        ];
+        let l = inject(&v, 3, &vpls, &escape);
+        assert_eq!(l.dropped, 2);
+        assert_eq!(l.lit_clusters, 2);
+        assert_eq!(l.sent.len(), 3);
+        for (got, want) in l.sent.iter().zip([6.5, 1.5, 0.0]) {
+            assert!((got - want).abs() < 1e-5, "sent {:?}", l.sent);
+        }
+        // The lit voxels: A, B, C.
+        assert_eq!(l.lit.len(), 3, "{:?}", l.lit);
+        let a = &l.lit[0];
+        assert!(near(a.flux, Vec3::splat(4.0 / 3.0)), "{a:?}");
+        assert!(near(a.pos, Vec3::new(1.4, 0.8, 1.5)), "{a:?}");
+        assert!(
+            near(a.nrm, Vec3::new(1.0, 3.0, 0.0) / 10f32.sqrt()),
+            "{a:?}"
+        );
+        let b = &l.lit[1];
+        let v3 = Vec3::new(1.8, 1.8, 1.5);
+        assert!(
+            near(b.pos, v3) && near(b.nrm, corner) && near(b.flux, Vec3::ONE),
+            "{b:?}"
+        );
+        assert!(near(l.lit[2].flux, Vec3::ONE) && near(l.lit[2].pos, Vec3::new(1.5, 2.2, 1.5)));
+        // The cluster lights.
+        assert_eq!(l.clusters.len(), 3);
+        let [pos, nrm, flux, _, _] = l.clusters[0];
+        let want = (3.0 * Vec3::new(1.3, 0.9, 1.5)
+            + Vec3::new(1.7, 0.5, 1.5)
+            + 3.0 * Vec3::new(1.8, 1.8, 1.5))
+            / 7.0;
+        assert!(near(pos, want), "{pos:?}");
+        let n = (3.0 * Vec3::Y + Vec3::X + 3.0 * corner).normalize();
+        assert!(near(nrm, n), "{nrm:?}");
+        assert!(near(flux, Vec3::splat(7.0 / 3.0)), "{flux:?}");
+        let first_count = |c: &ClusterLight| (c[0][3].to_bits(), c[1][3].to_bits(), c[2][3]);
+        assert_eq!(first_count(&l.clusters[0]), (0, 2, 1.0));
+        assert_eq!(first_count(&l.clusters[1]), (2, 1, 1.0));
+        assert_eq!(first_count(&l.clusters[2]), (3, 0, 1.0));
+        assert!(near(l.clusters[2][2], Vec3::ZERO));
+    }
+}
