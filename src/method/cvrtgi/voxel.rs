@@ -607,4 +607,37 @@ mod tests {
         assert!(!eq1_within_angle(Vec3::Z, Vec3::Z, 0.0));
         assert!(eq1_within_angle(Vec3::Z, Vec3::Z, 1e-3));
     }
+
+    /// A voxel's normal is its fragments' area-weighted mean normal, normalised: areas 0.25 (+y)
+    /// and 0.75 (+x) give (3, 1, 0)/√10. Where they nearly cancel (|mean| < 0.1) the heuristic
+    /// normal takes over, and in a voxel with no neighbour its six directions tie on occupancy, so
+    /// the one nearer the fragments' mean wins: +x (area 0.5) against -x (0.45) gives +x, and the
+    /// other way round -x (cargo-mutants: the normal sum `+=` as `-=` survived; every consumer of a
+    /// voxel's normal but this tie takes |axis · n|).
+    #[test]
+    fn voxel_normals_are_the_fragments_mean_or_the_heuristic_nearest_it() {
+        let grid = Grid {
+            origin: Vec3::ZERO,
+            size: 1.0,
+            dims: [3; 3],
+        };
+        let at = Vec3::splat(1.5);
+        let v = Voxels::from_fragments(
+            grid,
+            &[
+                (at, Vec3::Y, Vec3::ONE, 0.25),
+                (at, Vec3::X, Vec3::ONE, 0.75),
+            ],
+        );
+        let want = Vec3::new(3.0, 1.0, 0.0) / 10f32.sqrt();
+        let n = v.voxels[0].normal;
+        assert!((n - want).abs().max_element() < 1e-6, "{n:?}");
+        for (big, want) in [(Vec3::X, Vec3::X), (-Vec3::X, -Vec3::X)] {
+            let v = Voxels::from_fragments(
+                grid,
+                &[(at, big, Vec3::ONE, 0.5), (at, -big, Vec3::ONE, 0.45)],
+            );
+            assert_eq!(v.voxels[0].normal, want, "{big:?}");
+        }
+    }
 }
