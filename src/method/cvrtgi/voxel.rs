@@ -805,4 +805,36 @@ mod tests {
             "{mean:?} against {want:?}"
         );
     }
+
+    /// A seed cell whose two voxels are equally near its centre seeds at the first in key order: on
+    /// an 8 × 2 × 1 grid with S = 4 (cell centres (2, 2, 2) and (6, 2, 2)), voxels (1, 0, 0) and
+    /// (3, 0, 0) tie in the first cell (9 from its centre) and it seeds at (1, 0, 0); the second
+    /// seeds at (6, 0, 0) (8, against 9 for (4, 1, 0), which is scanned after it). One pass gives
+    /// (4, 1, 0) to the seed at (6, 0, 0) (√5 against √10): clusters {(1, 0, 0), (3, 0, 0)} and
+    /// {(6, 0, 0), (4, 1, 0)}. Seeded at (3, 0, 0), (4, 1, 0) would join it (√2) (cargo-mutants: the
+    /// nearest test `d < best` as `<=`, which takes the later voxel of a tie, and as `==`, which
+    /// keeps the first voxel scanned unless a later one ties it, survived).
+    #[test]
+    fn a_tied_seed_cell_seeds_at_its_first_voxel() {
+        let grid = Grid {
+            origin: Vec3::ZERO,
+            size: 1.0,
+            dims: [8, 2, 1],
+        };
+        let frags: Vec<Fragment> = [[1, 0, 0], [3, 0, 0], [6, 0, 0], [4, 1, 0]]
+            .map(|c| (IVec3::from(c).as_vec3() + 0.5, Vec3::Y, Vec3::ONE, 1.0))
+            .to_vec();
+        let mut v = Voxels::from_fragments(grid, &frags);
+        let s = SlicSettings {
+            step: 4,
+            iterations: 1,
+            angle: 35.0,
+        };
+        let clusters = slic(&mut v, &s);
+        let keys: Vec<u32> = v.voxels.iter().map(|x| x.key).collect();
+        assert_eq!(keys, [1, 3, 6, 12]);
+        let of: Vec<u32> = v.voxels.iter().map(|x| x.cluster).collect();
+        assert_eq!(of, [0, 0, 1, 1]);
+        assert_eq!(clusters.len(), 2);
+    }
 }
