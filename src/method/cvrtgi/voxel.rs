@@ -837,4 +837,46 @@ mod tests {
         assert_eq!(of, [0, 0, 1, 1]);
         assert_eq!(clusters.len(), 2);
     }
+
+    /// A cluster that no voxel joins in a pass keeps its centre and may take voxels again later
+    /// (Alg. 1 line 13 moves only clusters that have voxels). Nine voxels on a 7 × 1 × 5 grid (S =
+    /// 3, 6 passes; found by a search over 3000 random grids, 20 of which tell the two apart): the
+    /// cluster seeded at (4, 0, 3) (normal (1, 1, 0)/√2) loses its voxels to its neighbours in
+    /// passes 3 and 4 and takes (4, 0, 3) back in pass 5, so the result has 5 clusters. Moved to
+    /// the mean of no voxels, 0/0, its centre is NaN, it never takes a voxel again, and 4 are left
+    /// (cargo-mutants: `count > 0` as `>=` survived; no other test empties a cluster).
+    #[test]
+    fn an_emptied_cluster_keeps_its_centre_and_can_refill() {
+        let grid = Grid {
+            origin: Vec3::ZERO,
+            size: 1.0,
+            dims: [7, 1, 5],
+        };
+        let diag = Vec3::new(1.0, 1.0, 0.0).normalize();
+        let cells = [
+            ([5, 0, 0], Vec3::X),
+            ([6, 0, 1], Vec3::X),
+            ([0, 0, 2], -Vec3::Y),
+            ([2, 0, 2], -Vec3::Y),
+            ([5, 0, 2], Vec3::Z),
+            ([3, 0, 3], Vec3::X),
+            ([4, 0, 3], diag),
+            ([6, 0, 3], diag),
+            ([5, 0, 4], -Vec3::Y),
+        ];
+        let frags: Vec<Fragment> = cells
+            .iter()
+            .map(|&(c, n)| (IVec3::from(c).as_vec3() + 0.5, n, Vec3::ONE, 1.0))
+            .collect();
+        let mut v = Voxels::from_fragments(grid, &frags);
+        let s = SlicSettings {
+            step: 3,
+            iterations: 6,
+            angle: 35.0,
+        };
+        let clusters = slic(&mut v, &s);
+        let of: Vec<u32> = v.voxels.iter().map(|x| x.cluster).collect();
+        assert_eq!(of, [0, 0, 1, 1, 2, 0, 3, 3, 4]);
+        assert_eq!(clusters.len(), 5);
+    }
 }
