@@ -879,4 +879,42 @@ mod tests {
         assert_eq!(of, [0, 0, 1, 1, 2, 0, 3, 3, 4]);
         assert_eq!(clusters.len(), 5);
     }
+
+    /// Alg. 1 line 15's cluster info: each cluster's mean voxel centre (world space), mean albedo
+    /// and voxel count. The row of `slic_seeds_at_the_voxels_nearest_the_cell_centres` (clusters
+    /// {0, 3} and {5, 6, 7}) with albedos 0.1 and 0.3, then 0.2, 0.4 and 0.9: albedos 0.2 and 0.5,
+    /// centres (2, 0.5, 0.5) and (6.5, 0.5, 0.5) (cargo-mutants: the albedo sum `+=` as `-=` or `*=`
+    /// and its mean `a / k` as `a * k` or `a % k` survived; every other test's albedo is 1).
+    #[test]
+    fn slic_cluster_info_is_the_mean_of_its_voxels() {
+        let grid = Grid {
+            origin: Vec3::ZERO,
+            size: 1.0,
+            dims: [8, 1, 1],
+        };
+        let frags: Vec<Fragment> = [(0.0, 0.1), (3.0, 0.3), (5.0, 0.2), (6.0, 0.4), (7.0, 0.9)]
+            .map(|(x, a)| (Vec3::new(x + 0.5, 0.5, 0.5), Vec3::Y, Vec3::splat(a), 1.0))
+            .to_vec();
+        let mut v = Voxels::from_fragments(grid, &frags);
+        let s = SlicSettings {
+            step: 4,
+            iterations: 1,
+            angle: 35.0,
+        };
+        let clusters = slic(&mut v, &s);
+        let got: Vec<(Vec3, Vec3, u32)> = clusters
+            .iter()
+            .map(|c| (c.centre, c.albedo, c.voxels))
+            .collect();
+        let want = [
+            (Vec3::new(2.0, 0.5, 0.5), Vec3::splat(0.2), 2),
+            (Vec3::new(6.5, 0.5, 0.5), Vec3::splat(0.5), 3),
+        ];
+        assert_eq!(got.len(), 2);
+        for ((c, a, n), (wc, wa, wn)) in got.iter().zip(want) {
+            assert!((*c - wc).abs().max_element() < 1e-6, "{got:?}");
+            assert!((*a - wa).abs().max_element() < 1e-6, "{got:?}");
+            assert_eq!(*n, wn);
+        }
+    }
 }
