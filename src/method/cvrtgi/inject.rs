@@ -210,7 +210,7 @@ mod tests {
     use glam::IVec3;
 
     use super::*;
-    use crate::method::cvrtgi::voxel::{Grid, Voxels};
+    use crate::method::cvrtgi::voxel::tests::unit_voxels;
 
     fn vpl(p: [f32; 3], n: Vec3, flux: f32) -> Vpl {
         Vpl {
@@ -243,17 +243,9 @@ mod tests {
     /// guard as `true` and the dropped count as `-=`, `*=` or absent survived.)
     #[test]
     fn injection_by_hand() {
-        let grid = Grid {
-            origin: Vec3::ZERO,
-            size: 1.0,
-            dims: [4; 3],
-        };
-        let cells = [[1, 0, 1], [2, 1, 1], [1, 2, 1], [3, 0, 3]];
-        let frags: Vec<_> = cells
-            .iter()
-            .map(|&c| (IVec3::from(c).as_vec3() + 0.5, Vec3::Y, Vec3::ONE, 1.0))
-            .collect();
-        let mut v = Voxels::from_fragments(grid, &frags);
+        let cells = [[1, 0, 1], [2, 1, 1], [1, 2, 1], [3, 0, 3]]
+            .map(|c| (IVec3::from(c), Vec3::Y, Vec3::ONE, 1.0));
+        let mut v = unit_voxels([4; 3], &cells);
         let keys: Vec<u32> = v.voxels.iter().map(|x| x.key).collect();
         assert_eq!(keys, [17, 22, 25, 51]);
         for (x, c) in v.voxels.iter_mut().zip([0, 0, 1, INVALID]) {

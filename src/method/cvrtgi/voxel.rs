@@ -459,8 +459,34 @@ pub fn slic(v: &mut Voxels, s: &SlicSettings) -> Vec<Cluster> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+
+    /// Voxels of side 1 on a grid of `dims` from the origin, one fragment at the centre of each
+    /// cell: (cell, normal, albedo, area).
+    pub(crate) fn unit_voxels(dims: [u32; 3], cells: &[(IVec3, Vec3, Vec3, f32)]) -> Voxels {
+        let grid = Grid {
+            origin: Vec3::ZERO,
+            size: 1.0,
+            dims,
+        };
+        let frags: Vec<Fragment> = cells
+            .iter()
+            .map(|&(c, n, a, w)| (c.as_vec3() + 0.5, n, a, w))
+            .collect();
+        Voxels::from_fragments(grid, &frags)
+    }
+
+    /// Alg. 1 on `v` with Eq. (1)'s 35°: each voxel's cluster, and the clusters.
+    fn slic_labels(v: &mut Voxels, step: u32, iterations: u32) -> (Vec<u32>, Vec<Cluster>) {
+        let s = SlicSettings {
+            step,
+            iterations,
+            angle: 35.0,
+        };
+        let clusters = slic(v, &s);
+        (v.voxels.iter().map(|x| x.cluster).collect(), clusters)
+    }
 
     /// A point on a voxel's face, on the empty side, is found half a voxel into the surface, both
     /// ways along `d` (cargo-mutants: the step back as `p - d / h` survived; on the unit grids of the
@@ -505,13 +531,7 @@ mod tests {
                 .map(|x| (Vec3::new(x + 0.5, 0.5, 0.5) * size, Vec3::Y, Vec3::ONE, 1.0))
                 .to_vec();
             let mut v = Voxels::from_fragments(grid, &frags);
-            let s = SlicSettings {
-                step: 4,
-                iterations: 1,
-                angle: 35.0,
-            };
-            let clusters = slic(&mut v, &s);
-            let of: Vec<u32> = v.voxels.iter().map(|x| x.cluster).collect();
+            let (of, clusters) = slic_labels(&mut v, 4, 1);
             assert_eq!(of, [0, 0, 1, 1, 1], "size {size}");
             assert_eq!(
                 clusters.iter().map(|c| c.voxels).collect::<Vec<_>>(),
@@ -617,14 +637,9 @@ mod tests {
     /// voxel's normal but this tie takes |axis · n|).
     #[test]
     fn voxel_normals_are_the_fragments_mean_or_the_heuristic_nearest_it() {
-        let grid = Grid {
-            origin: Vec3::ZERO,
-            size: 1.0,
-            dims: [3; 3],
-        };
-        let at = Vec3::splat(1.5);
-        let v = Voxels::from_fragments(
-            grid,
+        let at = IVec3::ONE;
+        let v = unit_voxels(
+            [3; 3],
             &[
                 (at, Vec3::Y, Vec3::ONE, 0.25),
                 (at, Vec3::X, Vec3::ONE, 0.75),
@@ -634,8 +649,8 @@ mod tests {
         let n = v.voxels[0].normal;
         assert!((n - want).abs().max_element() < 1e-6, "{n:?}");
         for (big, want) in [(Vec3::X, Vec3::X), (-Vec3::X, -Vec3::X)] {
-            let v = Voxels::from_fragments(
-                grid,
+            let v = unit_voxels(
+                [3; 3],
                 &[(at, big, Vec3::ONE, 0.5), (at, -big, Vec3::ONE, 0.45)],
             );
             assert_eq!(v.voxels[0].normal, want, "{big:?}");
@@ -645,16 +660,11 @@ mod tests {
     /// Voxels of side 1 in a 5³ grid at `cells`, each from one fragment at its centre of normal +y
     /// and area `area`.
     fn cells_of(cells: &[IVec3], area: f32) -> Voxels {
-        let grid = Grid {
-            origin: Vec3::ZERO,
-            size: 1.0,
-            dims: [5; 3],
-        };
-        let frags: Vec<Fragment> = cells
+        let cells: Vec<_> = cells
             .iter()
-            .map(|c| (c.as_vec3() + 0.5, Vec3::Y, Vec3::ONE, area))
+            .map(|&c| (c, Vec3::Y, Vec3::ONE, area))
             .collect();
-        Voxels::from_fragments(grid, &frags)
+        unit_voxels([5; 3], &cells)
     }
 
     /// The heuristic normal (§4.2, Fig. 7) by hand: a voxel whose face neighbours are all occupied
@@ -816,24 +826,12 @@ mod tests {
     /// keeps the first voxel scanned unless a later one ties it, survived).
     #[test]
     fn a_tied_seed_cell_seeds_at_its_first_voxel() {
-        let grid = Grid {
-            origin: Vec3::ZERO,
-            size: 1.0,
-            dims: [8, 2, 1],
-        };
-        let frags: Vec<Fragment> = [[1, 0, 0], [3, 0, 0], [6, 0, 0], [4, 1, 0]]
-            .map(|c| (IVec3::from(c).as_vec3() + 0.5, Vec3::Y, Vec3::ONE, 1.0))
-            .to_vec();
-        let mut v = Voxels::from_fragments(grid, &frags);
-        let s = SlicSettings {
-            step: 4,
-            iterations: 1,
-            angle: 35.0,
-        };
-        let clusters = slic(&mut v, &s);
+        let cells = [[1, 0, 0], [3, 0, 0], [6, 0, 0], [4, 1, 0]]
+            .map(|c| (IVec3::from(c), Vec3::Y, Vec3::ONE, 1.0));
+        let mut v = unit_voxels([8, 2, 1], &cells);
         let keys: Vec<u32> = v.voxels.iter().map(|x| x.key).collect();
         assert_eq!(keys, [1, 3, 6, 12]);
-        let of: Vec<u32> = v.voxels.iter().map(|x| x.cluster).collect();
+        let (of, clusters) = slic_labels(&mut v, 4, 1);
         assert_eq!(of, [0, 0, 1, 1]);
         assert_eq!(clusters.len(), 2);
     }
@@ -847,11 +845,6 @@ mod tests {
     /// (cargo-mutants: `count > 0` as `>=` survived; no other test empties a cluster).
     #[test]
     fn an_emptied_cluster_keeps_its_centre_and_can_refill() {
-        let grid = Grid {
-            origin: Vec3::ZERO,
-            size: 1.0,
-            dims: [7, 1, 5],
-        };
         let diag = Vec3::new(1.0, 1.0, 0.0).normalize();
         let cells = [
             ([5, 0, 0], Vec3::X),
@@ -864,18 +857,11 @@ mod tests {
             ([6, 0, 3], diag),
             ([5, 0, 4], -Vec3::Y),
         ];
-        let frags: Vec<Fragment> = cells
-            .iter()
-            .map(|&(c, n)| (IVec3::from(c).as_vec3() + 0.5, n, Vec3::ONE, 1.0))
-            .collect();
-        let mut v = Voxels::from_fragments(grid, &frags);
-        let s = SlicSettings {
-            step: 3,
-            iterations: 6,
-            angle: 35.0,
-        };
-        let clusters = slic(&mut v, &s);
-        let of: Vec<u32> = v.voxels.iter().map(|x| x.cluster).collect();
+        let mut v = unit_voxels(
+            [7, 1, 5],
+            &cells.map(|(c, n)| (IVec3::from(c), n, Vec3::ONE, 1.0)),
+        );
+        let (of, clusters) = slic_labels(&mut v, 3, 6);
         assert_eq!(of, [0, 0, 1, 1, 2, 0, 3, 3, 4]);
         assert_eq!(clusters.len(), 5);
     }
@@ -887,21 +873,10 @@ mod tests {
     /// and its mean `a / k` as `a * k` or `a % k` survived; every other test's albedo is 1).
     #[test]
     fn slic_cluster_info_is_the_mean_of_its_voxels() {
-        let grid = Grid {
-            origin: Vec3::ZERO,
-            size: 1.0,
-            dims: [8, 1, 1],
-        };
-        let frags: Vec<Fragment> = [(0.0, 0.1), (3.0, 0.3), (5.0, 0.2), (6.0, 0.4), (7.0, 0.9)]
-            .map(|(x, a)| (Vec3::new(x + 0.5, 0.5, 0.5), Vec3::Y, Vec3::splat(a), 1.0))
-            .to_vec();
-        let mut v = Voxels::from_fragments(grid, &frags);
-        let s = SlicSettings {
-            step: 4,
-            iterations: 1,
-            angle: 35.0,
-        };
-        let clusters = slic(&mut v, &s);
+        let cells = [(0, 0.1), (3, 0.3), (5, 0.2), (6, 0.4), (7, 0.9)]
+            .map(|(x, a)| (IVec3::new(x, 0, 0), Vec3::Y, Vec3::splat(a), 1.0));
+        let mut v = unit_voxels([8, 1, 1], &cells);
+        let (_, clusters) = slic_labels(&mut v, 4, 1);
         let got: Vec<(Vec3, Vec3, u32)> = clusters
             .iter()
             .map(|c| (c.centre, c.albedo, c.voxels))
