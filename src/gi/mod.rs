@@ -5,6 +5,7 @@
 //! `method`; `render::pipeline` decides which passes run.
 
 pub mod accumulate;
+pub mod compose;
 pub mod direct;
 pub mod dispatch;
 pub mod kmeans;

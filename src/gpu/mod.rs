@@ -2,6 +2,7 @@
 
 pub mod profiler;
 pub mod shader;
+pub mod traffic;
 pub mod warmup;
 
 use anyhow::{Context as _, Result, anyhow};
@@ -196,6 +197,7 @@ impl GpuContext {
         if bytes.len() < 256 {
             bytes.resize(256, 0);
         }
+        traffic::uploaded(bytes.len() as u64);
         self.device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
@@ -219,12 +221,19 @@ impl GpuContext {
     }
 
     pub fn uniform<T: bytemuck::Pod>(&self, label: &str, value: &T) -> wgpu::Buffer {
+        traffic::uploaded(std::mem::size_of::<T>() as u64);
         self.device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
                 contents: bytemuck::bytes_of(value),
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             })
+    }
+
+    /// Writes `data` into `buffer` at `offset` (counted as uploaded: `traffic`).
+    pub fn write_buffer(&self, buffer: &wgpu::Buffer, offset: u64, data: &[u8]) {
+        traffic::uploaded(data.len() as u64);
+        self.queue.write_buffer(buffer, offset, data);
     }
 
     /// Blocks until all submitted work is done.
@@ -270,6 +279,7 @@ impl GpuContext {
             .get_mapped_range()
             .map_err(|e| anyhow!("reading a mapped buffer failed: {e}"))?;
         let out = bytemuck::cast_slice::<u8, T>(&view).to_vec();
+        traffic::read_back(size);
         drop(view);
         staging.unmap();
         Ok(out)
@@ -332,6 +342,7 @@ pub fn read_texture(
     let view = slice
         .get_mapped_range()
         .map_err(|e| anyhow!("reading the texture readback failed: {e}"))?;
+    traffic::read_back(row as u64 * h as u64);
     let mut out = Vec::with_capacity((tight * h) as usize);
     for y in 0..h as usize {
         out.extend_from_slice(&view[y * row as usize..][..tight as usize]);

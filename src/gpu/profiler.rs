@@ -76,6 +76,8 @@ impl Profiler {
                 break r;
             }
         };
+        // Two 8-byte timestamps a query.
+        super::traffic::timestamps(results.len() as u64 * 16);
         let mut out = BTreeMap::new();
         for q in &results {
             if let Some(t) = &q.time {

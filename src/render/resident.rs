@@ -59,8 +59,12 @@ pub struct Renderer<'a> {
     /// frame's history (`None` after a frame without accumulation).
     pub(super) accumulator: std::cell::OnceCell<crate::gi::accumulate::Accumulate>,
     pub(super) history: Option<super::history::History>,
-    /// The last frame's G-buffer and its pixel count (`direct_again`, `last_gbuffer`).
-    pub(super) gbuffer: Option<(wgpu::Buffer, u32)>,
+    /// The last frame's buffers (`direct_again`, `last_gbuffer`: its image G-buffer).
+    pub(super) gbuffer: Option<std::sync::Arc<super::frame::FrameBuffers>>,
+    /// The frames' buffers, reused by size.
+    pub(super) frames: super::frame::FramePool,
+    /// The pass that writes a frame into a caller's texture (`render_to_texture`), built on first use.
+    pub(super) compose: std::cell::OnceCell<crate::gi::compose::Compose>,
     /// The last frame's camera (render units), for `direct_again`'s jittered primary rays.
     pub(super) last_camera: Option<crate::gi::primary::CameraParams>,
     pub vpl_set: Option<ResidentVpls>,
@@ -101,6 +105,11 @@ impl<'a> Renderer<'a> {
                 })
                 .collect(),
         ))
+    }
+
+    /// Sets of frame buffers made so far (`FramePool`): frames of a steady size make none.
+    pub fn frame_sets_made(&self) -> u32 {
+        self.frames.made
     }
 
     /// A method's state (`method::ROOMS`) as its room's type `T`, once a frame has used it (tests
@@ -206,6 +215,8 @@ impl<'a> Renderer<'a> {
             history: None,
             profiler: Profiler::new(ctx),
             gbuffer: None,
+            frames: Default::default(),
+            compose: Default::default(),
             last_camera: None,
             vpl_set: None,
             vpl_traces: 0,
@@ -353,9 +364,10 @@ impl<'a> Renderer<'a> {
         jitter: Option<[f32; 2]>,
     ) -> Result<(Vec<[f32; 3]>, f64)> {
         let ctx = self.ctx;
-        let Some((gbuffer, n)) = self.gbuffer.clone() else {
+        let Some(last) = self.gbuffer.clone() else {
             anyhow::bail!("no frame rendered yet");
         };
+        let (gbuffer, n) = (last.image_gbuffer().clone(), last.size.0 * last.size.1);
         let radiance = ctx.storage("radiance", n as u64 * 16);
         let spp = self.direct_samples(s);
         let _ = self.profiler.collect(ctx)?;
@@ -373,13 +385,13 @@ impl<'a> Renderer<'a> {
     /// The last frame's shading points traced again, each primary ray through sub-pixel offset
     /// `jitter` of its pixel centre (a new G-buffer).
     fn trace_jittered(&mut self, jitter: [f32; 2]) -> Result<wgpu::Buffer> {
-        let (Some((_, n)), Some(cam)) = (&self.gbuffer, self.last_camera) else {
+        let (Some(last), Some(cam)) = (&self.gbuffer, self.last_camera) else {
             anyhow::bail!("no frame rendered yet");
         };
-        let buffer = self.ctx.storage(
-            "gbuffer (jittered)",
-            *n as u64 * crate::gi::primary::SP_BYTES,
-        );
+        let n = last.size.0 as u64 * last.size.1 as u64;
+        let buffer = self
+            .ctx
+            .storage("gbuffer (jittered)", n * crate::gi::primary::SP_BYTES);
         self.primary
             .record(&mut gpu!(self), &cam.with_jitter(jitter), &buffer);
         Ok(buffer)
@@ -387,7 +399,7 @@ impl<'a> Renderer<'a> {
 
     /// `trace_jittered` read back (4 vec4s a pixel, as `last_gbuffer`): what the twins compare.
     pub fn jittered_gbuffer(&mut self, jitter: [f32; 2]) -> Result<Vec<[f32; 4]>> {
-        let n = self.gbuffer.as_ref().map_or(0, |g| g.1) as usize;
+        let n = self.gbuffer.as_ref().map_or(0, |g| g.size.0 * g.size.1) as usize;
         let b = self.trace_jittered(jitter)?;
         let _ = self.profiler.collect(self.ctx)?;
         self.ctx.read_buffer(&b, n * 4)
@@ -421,7 +433,9 @@ impl<'a> Renderer<'a> {
     /// The last frame's shading points, 4 × vec4 each (`common/gbuffer.wgsl`), for tests and views.
     pub fn last_gbuffer(&self) -> Result<Vec<[f32; 4]>> {
         match &self.gbuffer {
-            Some((b, n)) => self.ctx.read_buffer(b, *n as usize * 4),
+            Some(b) => self
+                .ctx
+                .read_buffer(b.image_gbuffer(), (b.size.0 * b.size.1) as usize * 4),
             None => anyhow::bail!("no frame rendered yet"),
         }
     }
