@@ -8,6 +8,7 @@
 //! - `camera.rs`: fly / orbit camera. `settings.rs`: the bookmarks file. `screenshot.rs`: file output.
 
 pub mod camera;
+pub mod display;
 pub mod lights;
 pub mod motion;
 pub mod panel;
@@ -400,6 +401,9 @@ pub struct Viewer {
     pub view: View,
     pub latest: Option<Box<Rendered>>,
     pub texture: Option<egui::TextureHandle>,
+    /// This window frame the image area shows the window's display pass (`display::Display`, on the
+    /// GPU): its texture and size; `None`: `texture`, composed on the CPU (reprojection, FLIP).
+    pub gpu_texture: Option<(egui::TextureId, (u32, u32))>,
     pub image_dirty: bool,
     /// What the displayed image depends on besides the frame (view, exposure, …).
     display_key: String,
@@ -454,6 +458,10 @@ pub struct Viewer {
     pub script: Option<Script>,
     /// Latency and GI frame times while moving (`motion.rs`).
     pub motion: motion::Motion,
+    /// The window frames' own cost: app time and bytes moved (`motion::UiCost`).
+    pub ui_cost: motion::UiCost,
+    /// `gpu::traffic` at the end of the last window frame.
+    pub traffic_mark: crate::gpu::traffic::Traffic,
     /// The composed view of the latest frame (frame id, display key, RGBA, note): reprojected to
     /// every new camera while the next frame renders.
     composed: Option<(u64, String, Vec<u8>, Option<&'static str>)>,

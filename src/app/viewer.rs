@@ -44,6 +44,7 @@ impl Viewer {
             view: opts.view,
             latest: None,
             texture: None,
+            gpu_texture: None,
             image_dirty: false,
             display_key: String::new(),
             note: None,
@@ -86,6 +87,8 @@ impl Viewer {
                 settling: false,
             }),
             motion: motion::Motion::default(),
+            ui_cost: Default::default(),
+            traffic_mark: crate::gpu::traffic::Traffic::now(),
             composed: None,
             thinned: None,
             shown_camera: None,
@@ -396,6 +399,7 @@ impl Viewer {
                 Reply::Refined {
                     id,
                     direct,
+                    auto_exposure,
                     estimates,
                     samples,
                     gpu_ms,
@@ -407,6 +411,7 @@ impl Viewer {
                             .map(|(a, b)| [0, 1, 2].map(|c| a[c] + b[c]))
                             .collect();
                         r.frame.direct = direct;
+                        r.auto_exposure = auto_exposure;
                         r.refined = Some((estimates, samples, gpu_ms));
                         self.image_dirty = true;
                     }
@@ -519,6 +524,73 @@ impl Viewer {
         let diagonal = (info.bounds.1 - info.bounds.0).length();
         let (t0, start) = *self.anim_origin.get_or_insert((Instant::now(), self.cam));
         self.set_camera(start.animated(diagonal, t0.elapsed().as_secs_f32()));
+    }
+
+    /// Whether the latest frame is shown reprojected to a camera it was not rendered for (temporal
+    /// reuse on, the camera moved since): the CPU warp of `current_image` then draws it.
+    pub fn reprojecting(&self) -> bool {
+        self.latest.as_ref().is_some_and(|r| {
+            let f = &r.frame;
+            self.s.cluster.temporal
+                && r.job.camera != self.cam.to_camera()
+                && f.positions.len() == (f.width * f.height) as usize
+        })
+    }
+
+    /// What the window's display pass (`display::Display`, on the GPU) draws this window frame: the
+    /// latest frame's view when it is not reprojected and the view is not FLIP (whose metric runs on
+    /// the CPU); `None` otherwise (`current_image` composes it on the CPU).
+    pub fn gpu_view(&self) -> Option<super::display::GpuView<'_>> {
+        if self.reprojecting() || self.view == View::Flip {
+            return None;
+        }
+        let r = self.latest.as_ref()?;
+        let f = &r.frame;
+        let n = (f.width * f.height) as usize;
+        let id = r.job.id;
+        let refined = r.refined.map_or(0, |x| x.0);
+        let a = (format!("{id}/{refined}"), &f.direct[..], &f.indirect[..]);
+        let no_ref = "no reference for this view yet: press \"compute reference\"";
+        let mut note = None;
+        let mut view = self.view;
+        let reference = match self.reference_for(r) {
+            Some(img) if img.len() == n => Some((format!("{:p}", img.as_ptr()), img)),
+            _ => None,
+        };
+        if matches!(view, View::Reference | View::Error) && reference.is_none() {
+            (view, note) = (View::Final, Some(no_ref));
+        }
+        let b = match &r.b_frame {
+            Some(b) if b.radiance.len() == n => {
+                Some((format!("{id}"), &b.direct[..], &b.indirect[..]))
+            }
+            _ => None,
+        };
+        if matches!(view, View::Split | View::Diff) && b.is_none() {
+            note = Some(if self.b.is_none() {
+                "nothing pinned as B: press \"pin as B\""
+            } else {
+                "B is rendering…"
+            });
+            view = View::Final;
+        }
+        let labels = r.sp_ids.as_deref().map(|l| (format!("{id}"), l));
+        if view == View::SpClusters && labels.is_none() {
+            (view, note) = (View::Final, Some("no SP clustering in this frame"));
+        }
+        Some(super::display::GpuView {
+            note,
+            camera: r.job.camera.clone(),
+            size: (f.width, f.height),
+            view,
+            a,
+            b,
+            reference,
+            labels,
+            exposure: self.s.exposure,
+            direct_on: self.s.direct_on,
+            split: self.split,
+        })
     }
 
     /// The image the area shows now, as an egui image: the latest frame's view, reprojected to the
@@ -697,6 +769,25 @@ impl Viewer {
         }
     }
 
+    /// The window frames' cost over the scripted run (`motion::UiCost`): all of them, and apart
+    /// while moving and at rest.
+    fn ui_stats(&self) -> serde_json::Value {
+        let c = &self.ui_cost;
+        let ms: Vec<f64> = c.frames.iter().map(|f| f.1).collect();
+        let q = |p| motion::quantile(&ms, p);
+        let all = c
+            .stats(true)
+            .map(|m| m.fps)
+            .or(c.stats(false).map(|r| r.fps));
+        serde_json::json!({
+            "cpu_ms": { "p50": q(0.5), "p95": q(0.95) },
+            "fps": all,
+            "frames": c.frames.len(),
+            "moving": c.stats(true),
+            "rest": c.stats(false),
+        })
+    }
+
     /// The scripted run's stats JSON: the scene, the settings, and what `motion` measured.
     fn write_stats(&self, path: &std::path::Path) -> Result<()> {
         let (w, h) = self.full_size();
@@ -718,6 +809,9 @@ impl Viewer {
             "ui_frames": self.ui_frames,
             "motion": self.motion.stats(),
             "rest": self.motion.rest_stats(),
+            // The GI renders on its own device; frames reach the window's through the CPU.
+            "display_path": "split",
+            "ui": self.ui_stats(),
         });
         crate::export::write_json(path, &json)
     }

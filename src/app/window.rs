@@ -54,6 +54,12 @@ struct Gfx {
     egui: egui::Context,
     state: egui_winit::State,
     renderer: egui_wgpu::Renderer,
+    /// The display pass (built on first use), the frame's images on this device, and the texture
+    /// egui draws with the key of what it holds.
+    display: Option<super::display::Display>,
+    uploads: super::display::Uploads,
+    native: Option<(egui::TextureId, (u32, u32))>,
+    drawn: String,
 }
 
 struct App {
@@ -218,6 +224,10 @@ impl App {
             egui,
             state,
             renderer,
+            display: None,
+            uploads: Default::default(),
+            native: None,
+            drawn: String::new(),
         });
         Ok(())
     }
@@ -227,9 +237,11 @@ impl App {
             return Ok(());
         };
         self.last_frame = Instant::now();
+        let started = self.last_frame;
         self.redraw_at = None;
         v.poll();
         v.animate_step();
+        g.draw_display(v);
         let input = g.state.take_egui_input(&g.window);
         let mut out = g.egui.run_ui(input, |ui| v.ui(ui));
         // Textures are uploaded before the surface is asked for (a lost surface returns early) and
@@ -250,13 +262,23 @@ impl App {
             .map(|o| o.repaint_delay)
             .unwrap_or(Duration::MAX);
         let jobs = g.egui.tessellate(out.shapes, out.pixels_per_point);
+        // App code ends here; the surface and present may wait for the display.
+        let app_ms = started.elapsed().as_secs_f64() * 1e3;
         let Some(frame) = g.surface_texture() else {
             g.free_textures(&freed);
             g.window.request_redraw();
             return Ok(());
         };
         let shot = g.present(frame, &jobs, out.pixels_per_point, v.png_request.take());
-        v.presented(Instant::now());
+        let now = Instant::now();
+        v.presented(now);
+        let traffic = crate::gpu::traffic::Traffic::now();
+        if v.script_started.is_some() {
+            let moving = v.animate || v.moving();
+            v.ui_cost
+                .frame(moving, app_ms, traffic.since(v.traffic_mark), now);
+        }
+        v.traffic_mark = traffic;
         v.motion.input_at = None;
         g.free_textures(&freed);
         if let Some((path, tex)) = shot {
@@ -278,6 +300,49 @@ impl App {
 }
 
 impl Gfx {
+    /// Draws the image area's view with the display pass when it applies (`Viewer::gpu_view`), only
+    /// when what it shows changed, and tells the viewer which texture to paint.
+    fn draw_display(&mut self, v: &mut Viewer) {
+        let Some(gv) = v.gpu_view() else {
+            v.gpu_texture = None;
+            return;
+        };
+        let key = gv.key();
+        let (note, camera) = (gv.note, gv.camera.clone());
+        if self.native.is_none() || self.drawn != key {
+            let display = self
+                .display
+                .get_or_insert_with(|| super::display::Display::new(&self.device));
+            let mut enc = self.device.create_command_encoder(&Default::default());
+            let inputs = self.uploads.inputs(&self.device, &self.queue, &gv);
+            let remade = display.record(&self.device, &self.queue, &mut enc, &inputs);
+            self.queue.submit([enc.finish()]);
+            let t = display.target().expect("recorded");
+            let filter = wgpu::FilterMode::Linear;
+            let id = match self.native {
+                Some((id, _)) if remade => {
+                    self.renderer.update_egui_texture_from_wgpu_texture(
+                        &self.device,
+                        &t.srgb_view,
+                        filter,
+                        id,
+                    );
+                    id
+                }
+                Some((id, _)) => id,
+                None => self
+                    .renderer
+                    .register_native_texture(&self.device, &t.srgb_view, filter),
+            };
+            self.native = Some((id, t.size));
+            self.drawn = key;
+        }
+        v.note = note;
+        v.shown_camera = Some(camera);
+        v.gpu_texture = self.native;
+        v.image_dirty = false;
+    }
+
     /// Uploads the textures egui set this frame.
     fn upload_textures(&mut self, textures: &egui::TexturesDelta) {
         for (id, deltas) in &textures.set {

@@ -84,6 +84,8 @@ pub struct Rendered {
     /// Under a time budget: the K_SP and K_VPL its controller chose for the next frame of this
     /// kind (`job.settings` holds the ones this frame ran with).
     pub budget_next: Option<(u32, u32)>,
+    /// `exposure::auto_exposure` of the frame's radiance, computed here, off the UI thread.
+    pub auto_exposure: f32,
 }
 
 pub enum Reply {
@@ -95,6 +97,8 @@ pub enum Reply {
     Refined {
         id: u64,
         direct: Vec<[f32; 3]>,
+        /// `exposure::auto_exposure` of the refined radiance (direct + the frame's indirect).
+        auto_exposure: f32,
         estimates: u32,
         samples: u64,
         gpu_ms: f64,
@@ -333,6 +337,8 @@ struct Accumulation {
     id: u64,
     settings: RenderSettings,
     sum: Vec<[f64; 3]>,
+    /// The frame's indirect light (its exposure is of direct + indirect).
+    indirect: Vec<[f32; 3]>,
     estimates: u32,
 }
 
@@ -342,6 +348,7 @@ impl Accumulation {
             id: r.job.id,
             settings: r.job.settings.clone(),
             sum: r.frame.direct.iter().map(|p| p.map(|c| c as f64)).collect(),
+            indirect: r.frame.indirect.clone(),
             estimates: 1,
         }
     }
@@ -363,9 +370,16 @@ impl Accumulation {
         }
         self.estimates += 1;
         let n = self.estimates as f64;
+        let direct: Vec<[f32; 3]> = self.sum.iter().map(|s| s.map(|c| (c / n) as f32)).collect();
+        let radiance: Vec<[f32; 3]> = direct
+            .iter()
+            .zip(&self.indirect)
+            .map(|(a, b)| [0, 1, 2].map(|c| a[c] + b[c]))
+            .collect();
         Ok(Reply::Refined {
             id: self.id,
-            direct: self.sum.iter().map(|s| s.map(|c| (c / n) as f32)).collect(),
+            auto_exposure: crate::exposure::auto_exposure(&radiance),
+            direct,
             estimates: self.estimates,
             samples: self.estimates as u64 * self.settings.frame.direct_samples as u64,
             gpu_ms,
@@ -451,6 +465,7 @@ fn render(
     }
     let lights_clustered = frame.vpl_clusters_used > 0;
     Ok(Rendered {
+        auto_exposure: crate::exposure::auto_exposure(&frame.radiance),
         job,
         frame,
         sp_ids,

@@ -3,6 +3,7 @@
 
 pub mod accumulate;
 pub mod cvrtgi;
+pub mod display;
 pub mod kmeans;
 pub mod lightcluster;
 pub mod shade;
