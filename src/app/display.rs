@@ -70,6 +70,47 @@ pub struct Target {
     pub size: (u32, u32),
 }
 
+impl Target {
+    /// An output texture of `size`: written as `Rgba8Unorm` storage, sampled as `Rgba8UnormSrgb`,
+    /// read as a texture (the reprojection) and copied (screenshots).
+    pub fn new(device: &wgpu::Device, (w, h): (u32, u32), label: &str) -> Target {
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            usage: wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[wgpu::TextureFormat::Rgba8UnormSrgb],
+        });
+        let srgb_view = texture.create_view(&wgpu::TextureViewDescriptor {
+            format: Some(wgpu::TextureFormat::Rgba8UnormSrgb),
+            usage: Some(wgpu::TextureUsages::TEXTURE_BINDING),
+            ..Default::default()
+        });
+        Target {
+            texture,
+            srgb_view,
+            size: (w, h),
+        }
+    }
+
+    /// The view the passes write.
+    pub fn storage_view(&self) -> wgpu::TextureView {
+        self.texture.create_view(&wgpu::TextureViewDescriptor {
+            usage: Some(wgpu::TextureUsages::STORAGE_BINDING),
+            ..Default::default()
+        })
+    }
+}
+
 pub struct Display {
     log_luminance: wgpu::ComputePipeline,
     exposure: wgpu::ComputePipeline,
@@ -199,32 +240,7 @@ impl Display {
         }
         let remade = self.target.as_ref().is_none_or(|t| t.size != (w, h));
         if remade {
-            let texture = device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("display"),
-                size: wgpu::Extent3d {
-                    width: w,
-                    height: h,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba8Unorm,
-                usage: wgpu::TextureUsages::STORAGE_BINDING
-                    | wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[wgpu::TextureFormat::Rgba8UnormSrgb],
-            });
-            let srgb_view = texture.create_view(&wgpu::TextureViewDescriptor {
-                format: Some(wgpu::TextureFormat::Rgba8UnormSrgb),
-                usage: Some(wgpu::TextureUsages::TEXTURE_BINDING),
-                ..Default::default()
-            });
-            self.target = Some(Target {
-                texture,
-                srgb_view,
-                size: (w, h),
-            });
+            self.target = Some(Target::new(device, (w, h), "display"));
         }
         let view = view_code(inputs.view).unwrap_or(0);
         let flags = inputs.direct_on as u32 | (inputs.exposure.is_auto() as u32) << 1;
@@ -239,15 +255,7 @@ impl Display {
         };
         crate::gpu::traffic::uploaded(std::mem::size_of::<DisplayParams>() as u64);
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
-        let out = self
-            .target
-            .as_ref()
-            .expect("made above")
-            .texture
-            .create_view(&wgpu::TextureViewDescriptor {
-                usage: Some(wgpu::TextureUsages::STORAGE_BINDING),
-                ..Default::default()
-            });
+        let out = self.target.as_ref().expect("made above").storage_view();
         let buffers = [
             &self.params,
             inputs.a.direct,
@@ -295,6 +303,23 @@ impl Display {
 /// they change.
 pub type KeyedImages<'a> = (String, &'a [[f32; 3]], &'a [[f32; 3]]);
 
+/// Where a frame's images are: on the CPU (the split display path: uploaded to the window's device
+/// when their key changes) or in the frame's own buffers on the window's device (shared).
+pub enum Source<'a> {
+    Cpu(KeyedImages<'a>),
+    /// The frame, and a key that changes when its buffers do (the refinement at rest).
+    Gpu(String, &'a crate::render::frame::GpuFrame),
+}
+
+impl Source<'_> {
+    fn key(&self) -> &str {
+        match self {
+            Source::Cpu(k) => &k.0,
+            Source::Gpu(k, _) => k,
+        }
+    }
+}
+
 /// What the window's display pass draws this window frame (`Viewer::gpu_view`): the latest frame's
 /// images on the CPU (the split display path: the GI device is another device) with the keys that
 /// tell whether each must be uploaded again.
@@ -303,14 +328,21 @@ pub struct GpuView<'a> {
     pub note: Option<&'static str>,
     /// The camera the image shows.
     pub camera: crate::scene::Camera,
+    /// Shared path, the camera moved since the frame: show it reprojected (`reproject_gpu`) from
+    /// its camera to the current one (render units), with its G-buffer.
+    pub reproject: Option<(
+        crate::gi::primary::CameraParams,
+        crate::gi::primary::CameraParams,
+        &'a wgpu::Buffer,
+    )>,
     pub size: (u32, u32),
     pub view: View,
     /// A's images keyed by the frame id and its direct-light estimates.
-    pub a: KeyedImages<'a>,
-    pub b: Option<KeyedImages<'a>>,
+    pub a: Source<'a>,
+    pub b: Option<Source<'a>>,
     pub reference: Option<(String, &'a [[f32; 3]])>,
     pub labels: Option<(String, &'a [u32])>,
-    pub exposure: f32,
+    pub exposure: Exposure,
     pub direct_on: bool,
     pub split: f32,
 }
@@ -319,11 +351,11 @@ impl GpuView<'_> {
     /// Everything the drawn image depends on.
     pub fn key(&self) -> String {
         format!(
-            "{:?} {:?} {} {:?} {:?} {:?} {} {} {}",
+            "{:?} {:?} {} {:?} {:?} {:?} {:?} {} {}",
             self.size,
             self.view,
-            self.a.0,
-            self.b.as_ref().map(|b| &b.0),
+            self.a.key(),
+            self.b.as_ref().map(|b| b.key()),
             self.reference.as_ref().map(|r| &r.0),
             self.labels.as_ref().map(|l| &l.0),
             self.exposure,
@@ -381,77 +413,53 @@ impl Uploads {
         &'a mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        v: &GpuView,
+        v: &'a GpuView<'a>,
     ) -> DisplayInputs<'a> {
         let vec4 = |img: &[[f32; 3]]| -> Vec<[f32; 4]> {
             img.iter().map(|p| [p[0], p[1], p[2], 0.0]).collect()
         };
-        let mut keys: [Option<String>; 6] = Default::default();
-        let a = &v.a;
-        self.put(
-            device,
-            queue,
-            0,
-            &a.0,
-            &vec4_if(&self.slots[0], &a.0, a.1, vec4),
-        );
-        self.put(
-            device,
-            queue,
-            1,
-            &a.0,
-            &vec4_if(&self.slots[1], &a.0, a.2, vec4),
-        );
-        keys[0] = Some(a.0.clone());
+        // CPU images into slots (first, second) under their key.
+        let upload = |this: &mut Self, first: usize, src: &Source| {
+            if let Source::Cpu((key, d, i)) = src {
+                let d4 = vec4_if(&this.slots[first], key, d, vec4);
+                this.put(device, queue, first, key, &d4);
+                let i4 = vec4_if(&this.slots[first + 1], key, i, vec4);
+                this.put(device, queue, first + 1, key, &i4);
+            }
+        };
+        upload(self, 0, &v.a);
         if let Some(b) = &v.b {
-            self.put(
-                device,
-                queue,
-                2,
-                &b.0,
-                &vec4_if(&self.slots[2], &b.0, b.1, vec4),
-            );
-            self.put(
-                device,
-                queue,
-                3,
-                &b.0,
-                &vec4_if(&self.slots[3], &b.0, b.2, vec4),
-            );
-            keys[2] = Some(b.0.clone());
+            upload(self, 2, b);
         }
         if let Some(r) = &v.reference {
-            self.put(
-                device,
-                queue,
-                4,
-                &r.0,
-                &vec4_if(&self.slots[4], &r.0, r.1, vec4),
-            );
-            keys[4] = Some(r.0.clone());
+            let r4 = vec4_if(&self.slots[4], &r.0, r.1, vec4);
+            self.put(device, queue, 4, &r.0, &r4);
         }
         if let Some(l) = &v.labels {
             self.put(device, queue, 5, &l.0, l.1);
-            keys[5] = Some(l.0.clone());
         }
-        let buf = |i: usize| self.slots[i].as_ref().map(|s| &s.1);
-        let a = Images {
-            direct: buf(0).expect("uploaded"),
-            indirect: buf(1).expect("uploaded"),
-            scale: 1.0,
+        let this: &'a Self = self;
+        let buf = |i: usize| &this.slots[i].as_ref().expect("uploaded").1;
+        let images = |first: usize, src: &'a Source<'a>| match src {
+            Source::Cpu(_) => Images {
+                direct: buf(first),
+                indirect: buf(first + 1),
+                scale: 1.0,
+            },
+            Source::Gpu(_, g) => Images {
+                direct: &g.buffers.radiance,
+                indirect: g.buffers.image_indirect(),
+                scale: g.output_scale,
+            },
         };
         DisplayInputs {
             size: v.size,
             view: v.view,
-            a,
-            b: keys[2].as_ref().map(|_| Images {
-                direct: buf(2).expect("uploaded"),
-                indirect: buf(3).expect("uploaded"),
-                scale: 1.0,
-            }),
-            reference: keys[4].as_ref().and(buf(4)),
-            labels: keys[5].as_ref().and(buf(5)),
-            exposure: Exposure::Fixed(v.exposure),
+            a: images(0, &v.a),
+            b: v.b.as_ref().map(|b| images(2, b)),
+            reference: v.reference.as_ref().map(|_| buf(4)),
+            labels: v.labels.as_ref().map(|_| buf(5)),
+            exposure: v.exposure,
             direct_on: v.direct_on,
             split: v.split,
         }

@@ -13,6 +13,7 @@ pub mod lights;
 pub mod motion;
 pub mod panel;
 pub mod reproject;
+pub mod reproject_gpu;
 pub mod screenshot;
 pub mod settings;
 pub mod views;
@@ -68,6 +69,33 @@ pub struct ViewOptions {
     pub b: Option<UiSettings>,
     /// Keep references on disk too (`view --keep-references`).
     pub refs_on_disk: bool,
+    /// One device for the GI and the window, or a device each (`view --display-path`).
+    pub display_path: DisplayPath,
+}
+
+/// How a GI frame reaches the window (`view --display-path`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DisplayPath {
+    /// `shared` on a hardware adapter, `split` on a software one (lavapipe), where the GI device's
+    /// threads running at a lower priority keep the window responsive.
+    Auto,
+    /// One device: the GI worker renders on the window's device and the window displays the frames'
+    /// buffers where they are (nothing read back, nothing uploaded).
+    Shared,
+    /// The GI worker on a device of its own: each frame is read back and uploaded to the window's.
+    Split,
+}
+
+impl DisplayPath {
+    /// The path taken on an adapter that is (`software`) or is not a CPU.
+    pub fn resolve(self, software: bool) -> DisplayPath {
+        match self {
+            DisplayPath::Auto if software => DisplayPath::Split,
+            DisplayPath::Auto => DisplayPath::Shared,
+            p => p,
+        }
+    }
 }
 
 pub fn run(opts: ViewOptions) -> Result<()> {
@@ -462,6 +490,10 @@ pub struct Viewer {
     pub ui_cost: motion::UiCost,
     /// `gpu::traffic` at the end of the last window frame.
     pub traffic_mark: crate::gpu::traffic::Traffic,
+    /// The window's device when the GI worker renders on it (`--display-path shared`).
+    pub shared: Option<worker::SharedDevice>,
+    /// Lit-pixel counters of the frames while moving, on the GPU (shared path): ring, slot, pixels.
+    pub lit_slots: Vec<(wgpu::Buffer, u32, u32)>,
     /// The composed view of the latest frame (frame id, display key, RGBA, note): reprojected to
     /// every new camera while the next frame renders.
     composed: Option<(u64, String, Vec<u8>, Option<&'static str>)>,

@@ -273,7 +273,7 @@ impl Viewer {
                 // The γ the last frame sampled with: the slider starts there when auto is unticked.
                 let gamma_used = self.latest.as_ref().and_then(|l| l.frame.gamma_used);
                 let auto_e = self.latest.as_ref().filter(|_| self.s.exposure_auto);
-                let auto_e = auto_e.map(|l| l.auto_exposure);
+                let auto_e = auto_e.and_then(|l| l.auto_exposure);
                 method_controls(ui, &mut self.s);
                 clustering_controls(ui, &mut self.s, &self.ranges, gamma_used);
                 ui.separator();

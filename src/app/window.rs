@@ -60,6 +60,11 @@ struct Gfx {
     uploads: super::display::Uploads,
     native: Option<(egui::TextureId, (u32, u32))>,
     drawn: String,
+    /// The reprojection of the shared path (built on first use), the key of what it holds, and
+    /// whether egui's texture shows it (else the display's output).
+    reproject: Option<super::reproject_gpu::Reproject>,
+    reprojected: String,
+    native_source: bool,
 }
 
 struct App {
@@ -158,9 +163,27 @@ impl App {
             ))
             .into());
         }
+        let software = adapter.get_info().device_type == wgpu::DeviceType::Cpu;
+        let path = opts.display_path.resolve(software);
+        // Shared, the GI renders on this device: it gets the limits and features the GI asks for
+        // (`gpu::required_limits`, with the adapter's texture size for the surface).
+        let (required_limits, required_features) = match path {
+            super::DisplayPath::Shared => (
+                wgpu::Limits {
+                    max_texture_dimension_2d: max_side,
+                    ..crate::gpu::required_limits(&adapter.limits())
+                },
+                adapter.features() & crate::gpu::wanted_features(),
+            ),
+            _ => (
+                wgpu::Limits::default().using_resolution(adapter.limits()),
+                wgpu::Features::empty(),
+            ),
+        };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("fuzzy-vpl window"),
-            required_limits: wgpu::Limits::default().using_resolution(adapter.limits()),
+            required_limits,
+            required_features,
             ..Default::default()
         }))
         .map_err(|e| {
@@ -168,6 +191,12 @@ impl App {
                 "cannot open the window's GPU device ({e}); render headless with `fuzzy-vpl render`"
             ))
         })?;
+        let shared = (path == super::DisplayPath::Shared).then(|| super::worker::SharedDevice {
+            instance: instance.clone(),
+            adapter: adapter.clone(),
+            device: device.clone(),
+            queue: queue.clone(),
+        });
         let caps = surface.get_capabilities(&adapter);
         let format = caps
             .formats
@@ -209,7 +238,7 @@ impl App {
             let _ = proxy.send_event(Wake);
         });
         let ppp = window.scale_factor() as f32;
-        let mut viewer = Viewer::new(opts, wake);
+        let mut viewer = Viewer::new(opts, wake, shared);
         viewer.area_px = [
             (viewer.area_px[0] as f32 * ppp) as u32,
             (viewer.area_px[1] as f32 * ppp) as u32,
@@ -228,6 +257,9 @@ impl App {
             uploads: Default::default(),
             native: None,
             drawn: String::new(),
+            reproject: None,
+            reprojected: String::new(),
+            native_source: false,
         });
         Ok(())
     }
@@ -309,34 +341,58 @@ impl Gfx {
         };
         let key = gv.key();
         let (note, camera) = (gv.note, gv.camera.clone());
-        if self.native.is_none() || self.drawn != key {
-            let display = self
-                .display
-                .get_or_insert_with(|| super::display::Display::new(&self.device));
-            let mut enc = self.device.create_command_encoder(&Default::default());
+        let display = self
+            .display
+            .get_or_insert_with(|| super::display::Display::new(&self.device));
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        let mut remade = false;
+        if display.target().is_none() || self.drawn != key {
             let inputs = self.uploads.inputs(&self.device, &self.queue, &gv);
-            let remade = display.record(&self.device, &self.queue, &mut enc, &inputs);
-            self.queue.submit([enc.finish()]);
-            let t = display.target().expect("recorded");
-            let filter = wgpu::FilterMode::Linear;
-            let id = match self.native {
-                Some((id, _)) if remade => {
-                    self.renderer.update_egui_texture_from_wgpu_texture(
-                        &self.device,
-                        &t.srgb_view,
-                        filter,
-                        id,
-                    );
-                    id
-                }
-                Some((id, _)) => id,
-                None => self
-                    .renderer
-                    .register_native_texture(&self.device, &t.srgb_view, filter),
-            };
-            self.native = Some((id, t.size));
-            self.drawn = key;
+            remade |= display.record(&self.device, &self.queue, &mut enc, &inputs);
+            self.drawn = key.clone();
         }
+        let shown = match gv.reproject {
+            Some((old, new, gbuffer)) => {
+                let rkey = format!("{key} {new:?}");
+                let r = self
+                    .reproject
+                    .get_or_insert_with(|| super::reproject_gpu::Reproject::new(&self.device));
+                if r.target().is_none() || self.reprojected != rkey || remade {
+                    let image = &display.target().expect("drawn").texture;
+                    remade |= r.record(
+                        &self.device,
+                        &self.queue,
+                        &mut enc,
+                        image,
+                        gbuffer,
+                        (&old, &new),
+                    );
+                    self.reprojected = rkey;
+                }
+                r.target().expect("recorded")
+            }
+            None => display.target().expect("drawn"),
+        };
+        self.queue.submit([enc.finish()]);
+        let filter = wgpu::FilterMode::Linear;
+        let source = gv.reproject.is_some();
+        let id = match self.native {
+            Some((id, _)) if remade || self.native_source != source => {
+                self.renderer.update_egui_texture_from_wgpu_texture(
+                    &self.device,
+                    &shown.srgb_view,
+                    filter,
+                    id,
+                );
+                id
+            }
+            Some((id, _)) => id,
+            None => self
+                .renderer
+                .register_native_texture(&self.device, &shown.srgb_view, filter),
+        };
+        self.native = Some((id, shown.size));
+        self.native_source = source;
         v.note = note;
         v.shown_camera = Some(camera);
         v.gpu_texture = self.native;

@@ -55,6 +55,11 @@ pub struct ViewArgs {
     /// panel's "keep on disk".
     #[arg(long)]
     keep_references: bool,
+    /// How GI frames reach the window: `shared` (one device: the window displays the frames'
+    /// buffers where they were rendered), `split` (a device for the GI: frames read back and
+    /// uploaded), `auto` (shared on a hardware adapter, split on a software one).
+    #[arg(long, value_enum, default_value = "auto")]
+    display_path: crate::app::DisplayPath,
     #[command(flatten)]
     b: BArgs,
 }
@@ -199,5 +204,6 @@ pub fn run(a: ViewArgs) -> Result<()> {
         shot_dir: a.shot_dir,
         b,
         refs_on_disk: a.keep_references,
+        display_path: a.display_path,
     })
 }

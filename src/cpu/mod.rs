@@ -6,6 +6,7 @@ pub mod cvrtgi;
 pub mod display;
 pub mod kmeans;
 pub mod lightcluster;
+pub mod reproject;
 pub mod shade;
 pub mod shading;
 pub mod upsample;

@@ -6,6 +6,7 @@
 
 pub mod accumulate;
 pub mod compose;
+pub mod count_lit;
 pub mod direct;
 pub mod dispatch;
 pub mod kmeans;
@@ -14,6 +15,7 @@ pub mod pathtrace;
 pub mod primary;
 pub mod raycast;
 pub mod reference;
+pub mod refine;
 pub mod rng;
 pub mod scene_gpu;
 pub mod shade;

@@ -247,43 +247,59 @@ impl GpuContext {
         Ok(())
     }
 
-    /// Copies a buffer back to the CPU.
+    /// Copies a buffer back to the CPU (`read_buffer`).
     pub fn read_buffer<T: bytemuck::Pod>(
         &self,
         buffer: &wgpu::Buffer,
         count: usize,
     ) -> Result<Vec<T>> {
-        let size = (count * std::mem::size_of::<T>()) as u64;
-        if size == 0 {
-            return Ok(Vec::new());
-        }
-        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut enc = self.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
-        self.queue.submit([enc.finish()]);
-        let slice = staging.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        self.wait()?;
-        rx.recv()
-            .map_err(|_| anyhow!("readback callback dropped"))?
-            .map_err(|e| anyhow!("mapping a readback buffer failed: {e}"))?;
-        let view = slice
-            .get_mapped_range()
-            .map_err(|e| anyhow!("reading a mapped buffer failed: {e}"))?;
-        let out = bytemuck::cast_slice::<u8, T>(&view).to_vec();
-        traffic::read_back(size);
-        drop(view);
-        staging.unmap();
-        Ok(out)
+        read_buffer(&self.device, &self.queue, buffer, count)
     }
+}
+
+/// Copies the first `count` elements of a buffer (`COPY_SRC` usage) back to the CPU, waiting for
+/// the device; the bytes count in `traffic`.
+pub fn read_buffer<T: bytemuck::Pod>(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+    count: usize,
+) -> Result<Vec<T>> {
+    let size = (count * std::mem::size_of::<T>()) as u64;
+    if size == 0 {
+        return Ok(Vec::new());
+    }
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = device.create_command_encoder(&Default::default());
+    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    queue.submit([enc.finish()]);
+    let slice = staging.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    device
+        .poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        })
+        .map_err(|e| anyhow!("GPU wait failed: {e}"))?;
+    rx.recv()
+        .map_err(|_| anyhow!("readback callback dropped"))?
+        .map_err(|e| anyhow!("mapping a readback buffer failed: {e}"))?;
+    let view = slice
+        .get_mapped_range()
+        .map_err(|e| anyhow!("reading a mapped buffer failed: {e}"))?;
+    let out = bytemuck::cast_slice::<u8, T>(&view).to_vec();
+    traffic::read_back(size);
+    drop(view);
+    staging.unmap();
+    Ok(out)
 }
 
 /// Copies a whole 2D texture (`COPY_SRC` usage, a format with a fixed texel size) back to the CPU:

@@ -294,19 +294,27 @@ impl GpuFrame {
     /// The frame read back to the CPU: images in the scene's units, positions and normals, and the
     /// counts of valid shading points and shadow rays.
     pub fn read(&self, ctx: &GpuContext) -> anyhow::Result<Frame> {
+        self.read_with(&ctx.device, &ctx.queue)
+    }
+
+    /// `read` on the device's own handles (another thread's clones of the renderer's device).
+    pub fn read_with(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> anyhow::Result<Frame> {
+        let read = |b: &wgpu::Buffer, n: usize| -> anyhow::Result<Vec<[f32; 4]>> {
+            crate::gpu::read_buffer(device, queue, b, n)
+        };
         let b = &self.buffers;
         let n = (b.size.0 * b.size.1) as usize;
         // The indirect passes traced from the render scale's shading points.
         let traced_points = match b.low {
             Some((w, h)) => {
-                let low: Vec<[f32; 4]> = ctx.read_buffer(&b.gbuffer, (w * h) as usize * 4)?;
+                let low = read(&b.gbuffer, (w * h) as usize * 4)?;
                 Some(low.chunks(4).filter(|sp| sp[0][3] > 0.0).count() as u64)
             }
             None => None,
         };
-        let px: Vec<[f32; 4]> = ctx.read_buffer(&b.radiance, n)?;
-        let ind: Vec<[f32; 4]> = ctx.read_buffer(b.image_indirect(), n)?;
-        let sps: Vec<[f32; 4]> = ctx.read_buffer(b.image_gbuffer(), n * 4)?;
+        let px = read(&b.radiance, n)?;
+        let ind = read(b.image_indirect(), n)?;
+        let sps = read(b.image_gbuffer(), n * 4)?;
         let valid = sps.chunks(4).filter(|sp| sp[0][3] > 0.0).count() as u32;
         let scene_units =
             |p: &[f32; 4]| [0, 1, 2].map(|c| (p[c] * self.output_scale).min(f32::MAX));

@@ -65,6 +65,12 @@ pub struct Renderer<'a> {
     pub(super) frames: super::frame::FramePool,
     /// The pass that writes a frame into a caller's texture (`render_to_texture`), built on first use.
     pub(super) compose: std::cell::OnceCell<crate::gi::compose::Compose>,
+    /// The viewer's refinement at rest on the GPU (`refine_direct`): its kernel and the buffers of
+    /// one estimate (radiance, jittered G-buffer), kept between calls.
+    refine: std::cell::OnceCell<crate::gi::refine::Refine>,
+    estimate: Option<(wgpu::Buffer, wgpu::Buffer, u32)>,
+    /// Lit pixels counted on the GPU (`count_lit`), built on first use.
+    lit: Option<crate::gi::count_lit::CountLit>,
     /// The last frame's camera (render units), for `direct_again`'s jittered primary rays.
     pub(super) last_camera: Option<crate::gi::primary::CameraParams>,
     pub vpl_set: Option<ResidentVpls>,
@@ -217,6 +223,9 @@ impl<'a> Renderer<'a> {
             gbuffer: None,
             frames: Default::default(),
             compose: Default::default(),
+            refine: Default::default(),
+            estimate: None,
+            lit: None,
             last_camera: None,
             vpl_set: None,
             vpl_traces: 0,
@@ -380,6 +389,70 @@ impl<'a> Renderer<'a> {
         let ms: f64 = self.profiler.collect(ctx)?.values().sum();
         let px: Vec<[f32; 4]> = ctx.read_buffer(&radiance, n as usize)?;
         Ok((px.iter().map(|p| self.to_scene_units(p)).collect(), ms))
+    }
+
+    /// `direct_again` on the GPU: another estimate of the last frame's direct light (seed `seed`,
+    /// primary rays through sub-pixel offset `jitter`), blended into `into`'s emission + direct light
+    /// as the running mean of `n` estimates (`gi::refine`). Nothing is read back and, at a steady
+    /// size, nothing allocated but the passes' uniforms. Returns its GPU ms.
+    pub fn refine_direct(
+        &mut self,
+        s: &RenderSettings,
+        seed: u32,
+        jitter: Option<[f32; 2]>,
+        into: &super::frame::FrameBuffers,
+        n: u32,
+    ) -> Result<f64> {
+        let ctx = self.ctx;
+        let Some(last) = self.gbuffer.clone() else {
+            anyhow::bail!("no frame rendered yet");
+        };
+        let pixels = last.size.0 * last.size.1;
+        anyhow::ensure!(into.size == last.size, "the frame changed size");
+        if self.estimate.as_ref().is_none_or(|e| e.2 != pixels) {
+            self.estimate = Some((
+                ctx.storage("radiance (estimate)", pixels as u64 * 16),
+                ctx.storage(
+                    "gbuffer (jittered)",
+                    pixels as u64 * crate::gi::primary::SP_BYTES,
+                ),
+                pixels,
+            ));
+        }
+        let (radiance, jittered, _) = self.estimate.clone().expect("made above");
+        let spp = self.direct_samples(s);
+        let _ = self.profiler.collect(ctx)?;
+        let gbuffer = match (jitter, self.last_camera) {
+            (Some(j), Some(cam)) => {
+                self.primary
+                    .record(&mut gpu!(self), &cam.with_jitter(j), &jittered);
+                &jittered
+            }
+            _ => last.image_gbuffer(),
+        };
+        self.direct
+            .record(&mut gpu!(self), gbuffer, &radiance, pixels, spp, seed);
+        let k = self
+            .refine
+            .get_or_init(|| crate::gi::refine::Refine::new(ctx));
+        k.record(&mut gpu!(self), &radiance, &into.radiance, n, pixels);
+        Ok(self.profiler.collect(ctx)?.values().sum())
+    }
+
+    /// Counts `frame`'s pixels with a surface hit on the GPU into the next slot of the ring of
+    /// counters (`gi::count_lit`); returns the ring and the slot.
+    pub fn count_lit(&mut self, frame: &super::frame::FrameBuffers) -> (wgpu::Buffer, u32) {
+        let ctx = self.ctx;
+        let mut lit = self
+            .lit
+            .take()
+            .unwrap_or_else(|| crate::gi::count_lit::CountLit::new(ctx));
+        let pixels = frame.size.0 * frame.size.1;
+        let slot = lit.record(&mut gpu!(self), frame.image_gbuffer(), pixels);
+        let _ = self.profiler.collect(ctx);
+        let ring = lit.ring.clone();
+        self.lit = Some(lit);
+        (ring, slot)
     }
 
     /// The last frame's shading points traced again, each primary ray through sub-pixel offset
