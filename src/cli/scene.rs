@@ -20,6 +20,11 @@ pub struct SceneArgs {
     /// (repeatable). Only for extensions that change neither geometry nor diffuse colour.
     #[arg(long, value_name = "NAME")]
     pub allow_extension: Vec<String>,
+    /// Let the scene's buffer and image URIs name files outside its folder (absolute paths,
+    /// file: URIs, '..' or symbolic links leading out), which are refused otherwise: a scene from
+    /// elsewhere could read any file you can and show it in the image.
+    #[arg(long)]
+    pub allow_outside_uris: bool,
 }
 
 /// What a picture is made with: the camera, the frame and the clustering (`render` and `view`).
@@ -43,6 +48,7 @@ impl SceneArgs {
     pub fn load(&self) -> Result<Scene> {
         let opts = scene::LoadOptions {
             allow_extensions: self.allow_extension.clone(),
+            allow_outside_uris: self.allow_outside_uris,
         };
         let mut s = scene::load_with(&self.scene, &opts)?;
         for w in &s.report.warnings {

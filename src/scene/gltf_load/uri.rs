@@ -1,6 +1,6 @@
 //! Resolving glTF URIs: `data:` URIs (base64 or percent-encoded) and relative file references.
 
-use std::path::Path;
+use std::path::{Component, Path, PathBuf};
 
 /// What a URI refers to.
 pub(super) enum Resolved {
@@ -10,8 +10,28 @@ pub(super) enum Resolved {
     File(std::path::PathBuf),
 }
 
-/// Resolves `uri` against `base` (the glTF file's folder; `None` for in-memory scenes).
-pub(super) fn resolve(uri: &str, base: Option<&Path>) -> Result<Resolved, String> {
+/// The folder a scene file's relative URIs resolve in, and whether they may name files outside it
+/// (`--allow-outside-uris`).
+pub(super) struct Folder<'a> {
+    pub dir: &'a Path,
+    /// `dir` with every symlink resolved (`None` if it cannot be).
+    canonical: Option<PathBuf>,
+    pub allow_outside: bool,
+}
+
+impl<'a> Folder<'a> {
+    pub fn new(dir: &'a Path, allow_outside: bool) -> Self {
+        Folder {
+            dir,
+            canonical: std::fs::canonicalize(dir).ok(),
+            allow_outside,
+        }
+    }
+}
+
+/// Resolves `uri` against `base` (the glTF file's folder; `None` for in-memory scenes). A URI that
+/// names a file outside the folder is refused by `check_inside` unless the folder allows it.
+pub(super) fn resolve(uri: &str, base: Option<&Folder>) -> Result<Resolved, String> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let (meta, payload) = rest
             .split_once(',')
@@ -35,12 +55,87 @@ pub(super) fn resolve(uri: &str, base: Option<&Path>) -> Result<Resolved, String
     let path = String::from_utf8(path)
         .map_err(|_| format!("URI '{}' is not valid UTF-8 once decoded", short(uri)))?;
     match base {
-        Some(base) => Ok(Resolved::File(base.join(path))),
+        Some(base) => {
+            let file = base.dir.join(&path);
+            check_inside(uri, &path, &file, base)?;
+            Ok(Resolved::File(file))
+        }
         None => Err(format!(
             "external file '{}' cannot be resolved for an in-memory scene",
             short(&path)
         )),
     }
+}
+
+/// The URI policy: a `file:` URI, an absolute path, or a relative path that leads out of the
+/// scene's folder (by `..` once percent-decoded, or through a symbolic link) is refused unless
+/// `--allow-outside-uris` is given, so a scene from elsewhere cannot read (and show in its image)
+/// any file its user can read. `decoded` is the URI's path, `file` where it resolves.
+fn check_inside(uri: &str, decoded: &str, file: &Path, base: &Folder) -> Result<(), String> {
+    if base.allow_outside {
+        return Ok(());
+    }
+    let refuse = |how: &str| {
+        Err(format!(
+            "URI '{}' {how}; a scene may only name files inside its own folder (--allow-outside-uris lets it read others)",
+            short(uri)
+        ))
+    };
+    if uri.starts_with("file:") {
+        return refuse("is a file: URI");
+    }
+    let mut depth = 0i64;
+    for c in Path::new(decoded).components() {
+        match c {
+            Component::Normal(_) => depth += 1,
+            Component::CurDir => {}
+            Component::ParentDir => {
+                depth -= 1;
+                if depth < 0 {
+                    return refuse("leads outside the scene's folder (by '..')");
+                }
+            }
+            Component::RootDir | Component::Prefix(_) => {
+                return refuse("is an absolute path");
+            }
+        }
+    }
+    // Symbolic links: where the file really is. A file that does not exist is left to the reader,
+    // which says so.
+    if let (Some(dir), Ok(real)) = (&base.canonical, std::fs::canonicalize(file))
+        && !real.starts_with(dir)
+    {
+        return refuse(&format!(
+            "leads outside the scene's folder (through a symbolic link, to {})",
+            real.display()
+        ));
+    }
+    Ok(())
+}
+
+/// The external files `doc`'s buffers and images name, resolved in `base`; the first URI the policy
+/// refuses (`check_inside`) is an error naming it. Checked before anything is read, so a refused
+/// URI ends the load whichever texture slot names it.
+pub(super) fn external_files(doc: &gltf::Document, base: &Folder) -> Result<Vec<PathBuf>, String> {
+    let buffers = doc.buffers().filter_map(|b| match b.source() {
+        gltf::buffer::Source::Uri(u) => Some((format!("buffer {}", b.index()), u)),
+        gltf::buffer::Source::Bin => None,
+    });
+    let images = doc.images().filter_map(|i| match i.source() {
+        gltf::image::Source::Uri { uri, .. } => Some((format!("image {}", i.index()), uri)),
+        gltf::image::Source::View { .. } => None,
+    });
+    let mut files = Vec::new();
+    for (what, u) in buffers.chain(images) {
+        match resolve(u, Some(base)) {
+            Ok(Resolved::File(f)) => files.push(f),
+            Ok(Resolved::Data(_)) => {}
+            // Refusals of the policy; other problems are the reader's to report.
+            Err(e) if e.contains("--allow-outside-uris") => return Err(format!("{what}: {e}")),
+            Err(_) => {}
+        }
+    }
+    Ok(files)
 }
 
 /// At most 80 characters of `s`, for messages.
@@ -117,6 +212,7 @@ mod tests {
             Ok(Resolved::Data(d)) if d == [0, 0, 0]
         ));
         assert!(resolve("x.bin", None).is_err());
-        assert!(resolve("http://example.com/x.bin", Some(Path::new("."))).is_err());
+        let here = Folder::new(Path::new("."), false);
+        assert!(resolve("http://example.com/x.bin", Some(&here)).is_err());
     }
 }
