@@ -370,8 +370,30 @@ fn developer_variables_are_checked_like_options() {
     let d = common::scratch("hostile-env");
     let empty = d.join("empty");
     std::fs::create_dir_all(&empty).unwrap();
+    // A copy of the shaders with one file that does not parse (a wgpu validation panic later).
+    let broken = d.join("broken");
+    for sub in ["", "common", "kmeans"] {
+        std::fs::create_dir_all(broken.join(sub)).unwrap();
+        let from = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("shaders-wgsl")
+            .join(sub);
+        for e in std::fs::read_dir(&from).unwrap() {
+            let e = e.unwrap();
+            if e.file_type().unwrap().is_file() {
+                std::fs::copy(e.path(), broken.join(sub).join(e.file_name())).unwrap();
+            }
+        }
+    }
+    let primary = broken.join("primary.wgsl");
+    let text = std::fs::read_to_string(&primary).unwrap() + "\nfn broken(\n";
+    std::fs::write(&primary, text).unwrap();
     let cases = [
         ("FVPL_SHADER_DIR", s(&empty).to_string(), "FVPL_SHADER_DIR"),
+        (
+            "FVPL_SHADER_DIR",
+            s(&broken).to_string(),
+            "pass primary does not validate",
+        ),
         ("FVPL_SHADER_DIR", "/dev/null".into(), "not a directory"),
         ("FVPL_WORK_SCALE", "0".into(), "FVPL_WORK_SCALE=0"),
         ("FVPL_WORK_SCALE", "lots".into(), "FVPL_WORK_SCALE=lots"),

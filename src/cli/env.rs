@@ -65,7 +65,7 @@ pub fn check() -> Result<Vec<String>, String> {
     Ok(warnings)
 }
 
-/// `FVPL_SHADER_DIR`: a folder from which every pass shader composes.
+/// `FVPL_SHADER_DIR`: a folder from which every pass shader composes and validates (naga).
 fn shader_dir(dir: &str) -> Result<(), String> {
     let env = shader::SHADER_DIR_ENV;
     if !std::path::Path::new(dir).is_dir() {
@@ -74,6 +74,13 @@ fn shader_dir(dir: &str) -> Result<(), String> {
     for pass in shader::pass_names() {
         shader::try_compose(pass).map_err(|e| {
             format!("{e} (pass {pass}; {env} must hold every file of shaders-wgsl/)")
+        })?;
+        // Invalid WGSL would be a wgpu validation panic when its pipeline is made.
+        shader::validate(pass).map_err(|e| {
+            format!(
+                "{env}={dir}: pass {pass} does not validate: {}",
+                crate::panic_guard::one_line(&e)
+            )
         })?;
     }
     Ok(())
