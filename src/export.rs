@@ -432,3 +432,87 @@ mod on_signal {
         Pending
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let d =
+            std::env::temp_dir().join(format!("fuzzy-vpl-export-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    fn names(d: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    /// A 255-byte name (NAME_MAX) is written: the temporary name does not grow with it. A failed
+    /// write leaves the old file and no temporary file, and says the file and the reason.
+    #[test]
+    fn atomic_writes_take_any_name_and_leave_nothing_behind() {
+        let d = scratch("names");
+        let long = d.join("n".repeat(255));
+        write_json(&long, &[1, 2]).unwrap();
+        assert_eq!(
+            std::fs::read_to_string(&long)
+                .unwrap()
+                .split_whitespace()
+                .count(),
+            4
+        );
+        let kept = d.join("kept.json");
+        std::fs::write(&kept, "old").unwrap();
+        let e = write_atomic(&kept, |w| {
+            w.write_all(b"new")?;
+            anyhow::bail!("the encoder gave up")
+        })
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("kept.json: cannot write: the encoder gave up"),
+            "{e}"
+        );
+        assert_eq!(std::fs::read_to_string(&kept).unwrap(), "old");
+        assert_eq!(names(&d), vec!["kept.json".to_string(), "n".repeat(255)]);
+    }
+
+    /// What exists at the output and is not a regular file is refused at the write too (it may
+    /// appear after `check_writable`): a symbolic link stays a link to the untouched target.
+    #[cfg(unix)]
+    #[test]
+    fn the_write_refuses_a_link_or_folder_that_appeared() {
+        let d = scratch("links");
+        let target = d.join("t.json");
+        std::fs::write(&target, "target").unwrap();
+        let link = d.join("l.json");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        let e = write_json(&link, &1).unwrap_err().to_string();
+        assert!(e.contains("l.json") && e.contains("symbolic link"), "{e}");
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "target");
+        std::fs::create_dir_all(d.join("dir.json")).unwrap();
+        let e = write_json(&d.join("dir.json"), &1).unwrap_err().to_string();
+        assert!(e.contains("a directory"), "{e}");
+        assert_eq!(names(&d), vec!["dir.json", "l.json", "t.json"]);
+    }
+
+    /// The PNG's warning: black though the radiance is not, white though it varies, else none.
+    #[test]
+    fn a_png_that_hides_the_radiance_is_named() {
+        let img = [[1e-3f32, 0.0, 0.0], [0.0; 3]];
+        let dark = display_warning(&img, &to_srgb8(&img, 1e-6), 1e-6).unwrap();
+        assert!(dark.contains("black") && dark.contains("1e-3"), "{dark}");
+        let white = display_warning(&img, &[255; 6], 1e9).unwrap();
+        assert!(white.contains("white"), "{white}");
+        assert_eq!(display_warning(&img, &to_srgb8(&img, 1e3), 1e3), None);
+        // A black image is black: nothing hidden.
+        assert_eq!(display_warning(&[[0.0; 3]; 2], &[0; 6], 1.0), None);
+    }
+}

@@ -43,21 +43,11 @@ pub(super) fn resolve(uri: &str, base: Option<&Folder>) -> Result<Resolved, Stri
         };
         return Ok(Resolved::Data(bytes));
     }
-    let path = if let Some(p) = uri.strip_prefix("file://") {
-        percent_decode(p)
-    } else if let Some(p) = uri.strip_prefix("file:") {
-        percent_decode(p)
-    } else if has_scheme(uri) {
-        return Err(format!("unsupported URI scheme in '{}'", short(uri)));
-    } else {
-        percent_decode(uri)
-    };
-    let path = String::from_utf8(path)
-        .map_err(|_| format!("URI '{}' is not valid UTF-8 once decoded", short(uri)))?;
+    let path = decoded_path(uri)?;
     match base {
         Some(base) => {
             let file = base.dir.join(&path);
-            check_inside(uri, &path, &file, base)?;
+            check_inside(uri, &path, &file, base).map_err(|Refused(why)| why)?;
             Ok(Resolved::File(file))
         }
         None => Err(format!(
@@ -67,19 +57,37 @@ pub(super) fn resolve(uri: &str, base: Option<&Folder>) -> Result<Resolved, Stri
     }
 }
 
+/// The path a file URI (relative, or `file:`) names, percent-decoded; an error for another scheme.
+fn decoded_path(uri: &str) -> Result<String, String> {
+    let path = if let Some(p) = uri.strip_prefix("file://") {
+        percent_decode(p)
+    } else if let Some(p) = uri.strip_prefix("file:") {
+        percent_decode(p)
+    } else if has_scheme(uri) {
+        return Err(format!("unsupported URI scheme in '{}'", short(uri)));
+    } else {
+        percent_decode(uri)
+    };
+    String::from_utf8(path)
+        .map_err(|_| format!("URI '{}' is not valid UTF-8 once decoded", short(uri)))
+}
+
+/// A URI the policy refuses, with why.
+struct Refused(String);
+
 /// The URI policy: a `file:` URI, an absolute path, or a relative path that leads out of the
 /// scene's folder (by `..` once percent-decoded, or through a symbolic link) is refused unless
 /// `--allow-outside-uris` is given, so a scene from elsewhere cannot read (and show in its image)
 /// any file its user can read. `decoded` is the URI's path, `file` where it resolves.
-fn check_inside(uri: &str, decoded: &str, file: &Path, base: &Folder) -> Result<(), String> {
+fn check_inside(uri: &str, decoded: &str, file: &Path, base: &Folder) -> Result<(), Refused> {
     if base.allow_outside {
         return Ok(());
     }
     let refuse = |how: &str| {
-        Err(format!(
+        Err(Refused(format!(
             "URI '{}' {how}; a scene may only name files inside its own folder (--allow-outside-uris lets it read others)",
             short(uri)
-        ))
+        )))
     };
     if uri.starts_with("file:") {
         return refuse("is a file: URI");
@@ -127,13 +135,16 @@ pub(super) fn external_files(doc: &gltf::Document, base: &Folder) -> Result<Vec<
     });
     let mut files = Vec::new();
     for (what, u) in buffers.chain(images) {
-        match resolve(u, Some(base)) {
-            Ok(Resolved::File(f)) => files.push(f),
-            Ok(Resolved::Data(_)) => {}
-            // Refusals of the policy; other problems are the reader's to report.
-            Err(e) if e.contains("--allow-outside-uris") => return Err(format!("{what}: {e}")),
-            Err(_) => {}
-        }
+        // A data: URI names no file; a URI with no path is the reader's to report.
+        let Some(path) = Some(u)
+            .filter(|u| !u.starts_with("data:"))
+            .and_then(|u| decoded_path(u).ok())
+        else {
+            continue;
+        };
+        let file = base.dir.join(&path);
+        check_inside(u, &path, &file, base).map_err(|Refused(why)| format!("{what}: {why}"))?;
+        files.push(file);
     }
     Ok(files)
 }
@@ -214,5 +225,39 @@ mod tests {
         assert!(resolve("x.bin", None).is_err());
         let here = Folder::new(Path::new("."), false);
         assert!(resolve("http://example.com/x.bin", Some(&here)).is_err());
+    }
+
+    /// The policy by the path alone (no file exists): `..` out, also percent-encoded and after a
+    /// subfolder, absolute and `file:` refused; `..` that stays inside allowed; all allowed with
+    /// `--allow-outside-uris`.
+    #[test]
+    fn uris_leaving_the_folder() {
+        let here = Folder::new(Path::new("no-such-folder"), false);
+        let anywhere = Folder::new(Path::new("no-such-folder"), true);
+        for uri in [
+            "../x.bin",
+            "%2E%2e/x.bin",
+            "a/../../x.bin",
+            "a%2F..%2F..%2Fx.bin",
+            "/etc/passwd",
+            "%2Fetc%2Fpasswd",
+            "file:///etc/passwd",
+            "file:x.bin",
+        ] {
+            let e = resolve(uri, Some(&here))
+                .err()
+                .unwrap_or_else(|| panic!("{uri}"));
+            assert!(e.contains(uri) && e.contains("--allow-outside-uris"), "{e}");
+            assert!(resolve(uri, Some(&anywhere)).is_ok(), "{uri}");
+        }
+        for uri in [
+            "x.bin",
+            "a/../x.bin",
+            "./a/b/../x.bin",
+            "a%2Fx.bin",
+            "..x.bin",
+        ] {
+            assert!(resolve(uri, Some(&here)).is_ok(), "{uri}");
+        }
     }
 }
