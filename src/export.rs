@@ -170,12 +170,22 @@ fn atomically(path: &Path, fill: impl FnOnce(&Path, std::fs::File) -> Result<()>
         return Err(fail("not a file name".into()));
     }
     refuse_non_regular(path).map_err(crate::cli::bad)?;
+    if let Some(input) = crate::files::input_at(path) {
+        return Err(fail(format!("it is {input}, an input of this run")));
+    }
     // Registered before it is created: a signal between the two only removes nothing.
-    let (tmp, file, pending) = loop {
-        let tmp = temp_name(dir, "tmp");
-        let pending = on_signal::remove_on_signal(&tmp);
-        match create_new(&tmp) {
-            Ok(f) => break (tmp, f, pending),
+    let (mut tmp, file) = loop {
+        let path = temp_name(dir, "tmp");
+        let pending = on_signal::remove_on_signal(&path);
+        match create_new(&path) {
+            Ok(f) => {
+                let tmp = Temp {
+                    path,
+                    renamed: false,
+                    _pending: pending,
+                };
+                break (tmp, f);
+            }
             Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
             Err(e) => {
                 return Err(fail(format!(
@@ -185,15 +195,27 @@ fn atomically(path: &Path, fill: impl FnOnce(&Path, std::fs::File) -> Result<()>
             }
         }
     };
-    let result = fill(&tmp, file)
-        .map_err(|e| fail(crate::panic_guard::one_line(&format!("{e:#}"))))
-        .and_then(|()| refuse_non_regular(path).map_err(crate::cli::bad))
-        .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| fail(e.to_string())));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+    fill(&tmp.path, file).map_err(|e| fail(crate::panic_guard::one_line(&format!("{e:#}"))))?;
+    refuse_non_regular(path).map_err(crate::cli::bad)?;
+    std::fs::rename(&tmp.path, path).map_err(|e| fail(e.to_string()))?;
+    tmp.renamed = true;
+    Ok(())
+}
+
+/// A temporary file, removed when dropped unless renamed into place: on an error, and on a panic
+/// in the writer too. Registered for removal on a signal while it lives.
+struct Temp {
+    path: PathBuf,
+    renamed: bool,
+    _pending: on_signal::Pending,
+}
+
+impl Drop for Temp {
+    fn drop(&mut self) {
+        if !self.renamed {
+            let _ = std::fs::remove_file(&self.path);
+        }
     }
-    drop(pending);
-    result
 }
 
 /// Linear → sRGB transfer for one channel in [0, 1].
@@ -482,6 +504,37 @@ mod tests {
         );
         assert_eq!(std::fs::read_to_string(&kept).unwrap(), "old");
         assert_eq!(names(&d), vec!["kept.json".to_string(), "n".repeat(255)]);
+    }
+
+    /// A file recorded as an input of the run is never replaced, whatever name reaches it (here a
+    /// hard link): the backstop behind `render`'s check before the work, for names made up later.
+    #[test]
+    fn an_input_of_the_run_is_not_replaced() {
+        let d = scratch("input");
+        let scene = d.join("scene.gltf");
+        std::fs::write(&scene, "{}").unwrap();
+        std::fs::hard_link(&scene, d.join("grid.png")).unwrap();
+        crate::files::note_inputs(&[("the scene", scene.as_path())]);
+        let e = write_json(&d.join("grid.png"), &1).unwrap_err().to_string();
+        assert!(e.contains("grid.png: cannot write: it is the scene"), "{e}");
+        assert_eq!(std::fs::read_to_string(&scene).unwrap(), "{}");
+        assert_eq!(names(&d), vec!["grid.png", "scene.gltf"]);
+    }
+
+    /// A writer that panics leaves no temporary file either.
+    #[test]
+    fn a_panicking_writer_leaves_nothing_behind() {
+        let d = scratch("panic");
+        let out = d.join("p.json");
+        let r = std::panic::catch_unwind(|| {
+            let _ = write_atomic(&out, |w| {
+                w.write_all(b"partial")?;
+                w.flush()?;
+                panic!("the encoder panicked")
+            });
+        });
+        assert!(r.is_err());
+        assert!(names(&d).is_empty(), "{:?}", names(&d));
     }
 
     /// What exists at the output and is not a regular file is refused at the write too (it may

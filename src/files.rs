@@ -136,6 +136,31 @@ pub fn check_distinct(outputs: &[(&str, &Path)], inputs: &[(&str, &Path)]) -> Re
     Ok(())
 }
 
+/// The inputs of this run (`note_inputs`): no write may replace one (`export::write_atomic` asks
+/// `input_at`), whatever names the output, so a name made up during the run (bench's images) is
+/// covered as well as the options `check_distinct` compares before the work.
+static INPUTS: std::sync::Mutex<Vec<(String, FileKey)>> = std::sync::Mutex::new(Vec::new());
+
+/// Records `inputs` (each with what it is: "the scene") as files no write of this run may replace.
+pub fn note_inputs(inputs: &[(&str, &Path)]) {
+    let mut all = INPUTS.lock().unwrap_or_else(|p| p.into_inner());
+    for (what, p) in inputs {
+        if let Some(key) = FileKey::of(p) {
+            all.push((format!("{what} {}", p.display()), key));
+        }
+    }
+}
+
+/// The recorded input that `path` names, as "the scene x.gltf", if it names one.
+pub fn input_at(path: &Path) -> Option<String> {
+    let all = INPUTS.lock().unwrap_or_else(|p| p.into_inner());
+    if all.is_empty() {
+        return None;
+    }
+    let key = FileKey::of(path)?;
+    all.iter().find(|(_, k)| *k == key).map(|(w, _)| w.clone())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

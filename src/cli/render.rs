@@ -87,6 +87,7 @@ fn extension(p: &std::path::Path) -> Option<String> {
 /// The reference EXR of `--compare`: finite, of the render's size.
 fn read_reference(p: &std::path::Path, f: &FrameSettings) -> Result<Vec<[f32; 3]>> {
     let (w, h, px) = export::read_linear_exr(p)?;
+    crate::files::note_inputs(&[("--compare", p)]);
     if let Some(i) = px.iter().position(|c| c.iter().any(|x| !x.is_finite())) {
         return Err(bad(format!(
             "{}: reference has a non-finite pixel (NaN or infinity) at pixel {i}",

@@ -51,6 +51,17 @@ impl SceneArgs {
             allow_outside_uris: self.allow_outside_uris,
         };
         let mut s = scene::load_with(&self.scene, &opts)?;
+        // The scene and its files are inputs no output of the run may replace.
+        let mut inputs: Vec<(&str, &std::path::Path)> = s
+            .report
+            .files
+            .iter()
+            .map(|f| ("the scene's file", f.as_path()))
+            .collect();
+        if let Some(p) = &s.path {
+            inputs.push(("the scene", p.as_path()));
+        }
+        crate::files::note_inputs(&inputs);
         for w in &s.report.warnings {
             eprintln!("warning: {}: {w}", self.scene);
         }
