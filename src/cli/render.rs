@@ -29,7 +29,8 @@ pub struct RenderArgs {
     /// (chrome://tracing, Perfetto) here.
     #[arg(long, value_name = "TRACE.json")]
     trace: Option<PathBuf>,
-    /// Fill the stats' error block against this reference EXR.
+    /// Fill the stats' error block against this reference: an OpenEXR file of linear radiance
+    /// (as -o X.exr writes); a PNG or JPEG (8-bit sRGB) is refused.
     #[arg(long)]
     compare: Option<PathBuf>,
     /// Write a false-colour per-pixel error image against --compare (log10 rel. error, -4..0; or
