@@ -32,6 +32,11 @@
 //! the other methods (`method`); the frame (`render`); then `bench`, `app` (the viewer) and `cli`.
 //! `cpu` holds the CPU twins the tests check the shaders against.
 
+// First, so that the crate's `println!`, `print!`, `eprintln!` and `eprint!` are these macros,
+// which never panic on a full or closed stream.
+#[macro_use]
+mod stdio;
+
 pub mod app;
 pub mod bench;
 pub mod bvh;
@@ -39,6 +44,7 @@ pub mod cli;
 pub mod cpu;
 pub mod export;
 pub mod exposure;
+pub mod files;
 pub mod gi;
 pub mod gpu;
 pub mod method;

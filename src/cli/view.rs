@@ -158,6 +158,17 @@ pub fn run(a: ViewArgs) -> Result<()> {
     for p in a.screenshot.iter().chain(&a.stats) {
         export::check_writable(p).map_err(bad)?;
     }
+    let outputs: Vec<(&str, &std::path::Path)> =
+        (a.screenshot.iter().map(|p| ("--screenshot", p.as_path())))
+            .chain(a.stats.iter().map(|p| ("--stats", p.as_path())))
+            .collect();
+    let scene_file = std::path::Path::new(&a.scene.scene);
+    let inputs: &[(&str, &std::path::Path)] = if a.scene.scene.starts_with("builtin:") {
+        &[]
+    } else {
+        &[("the scene", scene_file)]
+    };
+    crate::files::check_distinct(&outputs, inputs).map_err(bad)?;
     // The panel's screenshots go there: found out at start, not at the first F11.
     if !a.shot_dir.is_dir() {
         return Err(bad(format!(
