@@ -11,6 +11,8 @@ pub mod camera;
 pub mod display;
 pub mod lights;
 pub mod motion;
+pub mod offscreen;
+pub mod painter;
 pub mod panel;
 pub mod reproject;
 pub mod reproject_gpu;
@@ -71,6 +73,8 @@ pub struct ViewOptions {
     pub refs_on_disk: bool,
     /// One device for the GI and the window, or a device each (`view --display-path`).
     pub display_path: DisplayPath,
+    /// No window: paint into an offscreen texture of the window's size (`view --offscreen`).
+    pub offscreen: bool,
 }
 
 /// How a GI frame reaches the window (`view --display-path`).
@@ -99,7 +103,11 @@ impl DisplayPath {
 }
 
 pub fn run(opts: ViewOptions) -> Result<()> {
-    window::run(opts)
+    if opts.offscreen {
+        offscreen::run(opts)
+    } else {
+        window::run(opts)
+    }
 }
 
 /// The panel's state: the settings types as the renderer takes them, and what only a panel has

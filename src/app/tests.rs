@@ -24,6 +24,7 @@ fn viewer(s: UiSettings) -> Viewer {
         b: None,
         refs_on_disk: false,
         display_path: DisplayPath::Split,
+        offscreen: false,
     };
     Viewer::new(opts, Arc::new(|| {}), None)
 }

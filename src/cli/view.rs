@@ -60,6 +60,11 @@ pub struct ViewArgs {
     /// uploaded), `auto` (shared on a hardware adapter, split on a software one).
     #[arg(long, value_enum, default_value = "auto")]
     display_path: crate::app::DisplayPath,
+    /// No window: the same viewer painted into an offscreen texture of the window's size (the image
+    /// area plus the panel and the stats strip: `--width 900 --height 550` is 1280×800), for a
+    /// scripted run (--frames) on a machine without a display.
+    #[arg(long, requires = "frames")]
+    offscreen: bool,
     #[command(flatten)]
     b: BArgs,
 }
@@ -216,5 +221,6 @@ pub fn run(a: ViewArgs) -> Result<()> {
         b,
         refs_on_disk: a.keep_references,
         display_path: a.display_path,
+        offscreen: a.offscreen,
     })
 }
