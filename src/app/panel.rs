@@ -836,7 +836,9 @@ fn clustering_controls(ui: &mut Ui, s: &mut UiSettings, r: &SliderRanges, gamma_
                 );
             ui.add_enabled(
                 s.plane_gate_on,
-                Slider::new(&mut s.plane_gate_deg, r.plane_gate_min..=90.0).suffix("°"),
+                Slider::new(&mut s.plane_gate_deg, r.plane_gate_min..=90.0)
+                    .suffix("°")
+                    .text("angle"),
             );
         });
     });

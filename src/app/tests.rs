@@ -480,3 +480,87 @@ fn a_preview_keeps_the_image_size_and_lowers_only_the_indirect_light() {
     whole.frame.indirect_scale = 1.0;
     assert_eq!(preview_settings(whole).frame.indirect_scale, 0.5);
 }
+
+/// The panel driven by events, as a user drives it (egui's harness `egui_kittest`, widgets found by
+/// their labels): each view mode, the weightings, a method and back, a slider moved by its keys,
+/// "pin as B" and the split view, W to fly, R to reset, F11 for an EXR and F12 for a PNG.
+#[test]
+fn the_panel_driven_by_events() {
+    use egui_kittest::{Harness, kittest::Queryable};
+    let d = scratch("kittest");
+    let mut v = viewer(small_temporal());
+    v.shot_dir = d.clone();
+    poll_until(&mut v, |v| v.info.is_some());
+    v.schedule();
+    poll_until(&mut v, |v| v.latest.is_some());
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(1200.0, 1400.0))
+        .build_ui_state(
+            |ui, v: &mut Viewer| {
+                v.poll();
+                v.ui(ui);
+                v.tick();
+            },
+            v,
+        );
+    h.run_steps(2);
+    // The first widget of a label (the view's "direct" button comes before the direct checkbox).
+    fn click(h: &mut Harness<'_, Viewer>, label: &str) {
+        h.query_all_by_label(label)
+            .next()
+            .unwrap_or_else(|| panic!("no widget labelled {label:?}"))
+            .click();
+        h.run_steps(2);
+    }
+    for view in View::ALL {
+        click(&mut h, view.name());
+        assert_eq!(h.state().view, view, "clicking {:?}", view.name());
+    }
+    for (label, w) in [
+        ("hard", Weighting::Hard),
+        ("fuzzy (uniform)", Weighting::Uniform),
+        ("weighted", Weighting::InverseDistance),
+    ] {
+        click(&mut h, label);
+        assert_eq!(h.state().s.cluster.weighting, w, "{label}");
+    }
+    click(&mut h, "wang");
+    assert_eq!(h.state().s.method.method, crate::method::Method::Wang);
+    click(&mut h, "colom");
+    assert_eq!(h.state().s.method.method, crate::method::Method::Colom);
+    // A slider takes the arrow keys once focused.
+    let k = h.state().s.cluster.vpl_clusters;
+    h.query_all_by_label("K_VPL")
+        .next()
+        .expect("the K_VPL slider")
+        .focus();
+    h.run_steps(1);
+    h.key_press(egui::Key::ArrowRight);
+    h.run_steps(2);
+    assert!(h.state().s.cluster.vpl_clusters > k, "K_VPL stayed {k}");
+    click(&mut h, "pin as B");
+    assert!(h.state().b.is_some());
+    click(&mut h, View::Split.name());
+    assert_eq!(h.state().view, View::Split);
+    click(&mut h, View::Final.name());
+    // W flies forward; R resets to the start view.
+    h.state_mut().latest.as_ref().expect("a frame");
+    let home = h.state().home;
+    h.key_down(egui::Key::W);
+    h.run_steps(3);
+    h.key_up(egui::Key::W);
+    h.run_steps(1);
+    assert_ne!(h.state().cam, home, "W did not move the camera");
+    h.key_press(egui::Key::R);
+    h.run_steps(2);
+    assert_eq!(h.state().cam, home, "R did not reset the camera");
+    // F11 saves the view as EXR; F12 asks the window for a PNG.
+    h.key_press(egui::Key::F11);
+    h.run_steps(2);
+    let shot = h.state().last_shot.clone();
+    assert!(shot.starts_with("saved") && shot.contains(".exr"), "{shot}");
+    h.key_press(egui::Key::F12);
+    h.run_steps(2);
+    assert!(h.state().png_request.is_some());
+    std::fs::remove_dir_all(&d).unwrap();
+}
