@@ -550,6 +550,24 @@ fn offscreen_viewer_runs_without_a_display_and_shows_what_render_writes() {
     }
     let img = image::open(&png).unwrap();
     assert_eq!((img.width(), img.height()), (540, 370));
+    // The FLIP view (composed on the CPU: the shared path reads the frame back for it) after its
+    // reference.
+    let flip = dir.join("flip.png");
+    let out = run(&[
+        "--view",
+        "flip",
+        "--frames",
+        "2",
+        "--screenshot",
+        flip.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(flip.exists());
     // Each view's displayed image against render's layer, the frame at rest without temporal reuse.
     for (view, layer) in [
         ("final", "final"),

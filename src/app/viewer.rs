@@ -457,16 +457,18 @@ impl Viewer {
     /// The RGBA8 image of the current view, its size, and a note when it cannot be shown.
     pub fn compose(&self) -> Option<(u32, u32, Vec<u8>, Option<&'static str>)> {
         let r = self.latest.as_ref()?;
-        let (w, h) = (r.frame.width, r.frame.height);
+        // On the shared display path the views composed here (FLIP) read the frame back.
+        let frame = self.cpu_frame(r);
+        let (w, h) = (frame.width, frame.height);
         let e = self.s.exposure;
-        let fin = || views::final_image(&r.frame.direct, &r.frame.indirect, self.s.direct_on);
+        let fin = || views::final_image(&frame.direct, &frame.indirect, self.s.direct_on);
         let reference = self.reference_for(r);
         let (img, note) = match self.view {
             View::Final => (views::tonemap(&fin(), e), None),
-            View::Direct => (views::tonemap(&r.frame.direct, e), None),
-            View::Indirect => (views::tonemap(&r.frame.indirect, e), None),
+            View::Direct => (views::tonemap(&frame.direct, e), None),
+            View::Indirect => (views::tonemap(&frame.indirect, e), None),
             View::SpClusters => match &r.sp_ids {
-                Some(ids) => (views::sp_clusters(ids, &r.frame.radiance, e), None),
+                Some(ids) => (views::sp_clusters(ids, &frame.radiance, e), None),
                 None => (
                     views::tonemap(&fin(), e),
                     Some("no SP clustering in this frame"),
@@ -495,7 +497,7 @@ impl Viewer {
                 ),
             },
             View::Split | View::Diff => match &r.b_frame {
-                Some(b) if b.radiance.len() == r.frame.radiance.len() => {
+                Some(b) if b.radiance.len() == frame.radiance.len() => {
                     let bf = views::final_image(&b.direct, &b.indirect, self.s.direct_on);
                     if self.view == View::Split {
                         let a = views::tonemap(&fin(), e);
@@ -517,14 +519,14 @@ impl Viewer {
                 ),
             },
             View::Flip => match reference {
-                Some(img) => (views::flip(&r.frame.radiance, img, w, h, e), None),
+                Some(img) => (views::flip(&frame.radiance, img, w, h, e), None),
                 None => (
                     views::tonemap(&fin(), e),
                     Some("no reference for this view yet: press \"compute reference\""),
                 ),
             },
             View::Error => match reference {
-                Some(img) => (views::error(&r.frame.radiance, img), None),
+                Some(img) => (views::error(&frame.radiance, img), None),
                 None => (
                     views::tonemap(&fin(), e),
                     Some("no reference for this view yet: press \"compute reference\""),
