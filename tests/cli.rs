@@ -756,12 +756,14 @@ fn scene_files_that_are_not_regular_files_are_refused() {
             .stderr(std::process::Stdio::piped())
             .spawn()
             .unwrap();
-        let t = std::time::Instant::now();
+        // A hang guard, not a speed test: 1,500 polls 20 ms apart (at least 30 s).
+        let mut polls = 0;
         while child.try_wait().unwrap().is_none() {
-            if t.elapsed() > std::time::Duration::from_secs(30) {
+            polls += 1;
+            if polls > 1500 {
                 let _ = child.kill();
                 let _ = child.wait();
-                panic!("info {path}: still running after 30 s");
+                panic!("info {path}: still running after 1,500 polls (30 s)");
             }
             std::thread::sleep(std::time::Duration::from_millis(20));
         }
@@ -944,25 +946,25 @@ fn required_extensions_on_the_command_line() {
     assert!(!err.contains("panicked"), "{err}");
 }
 
-/// A 1 TiB sparse file as the scene is refused with exit 2 and one line at once (it used to abort
-/// with exit 134 reserving 1 TiB). Asserted under 1 s for the whole process (measured: ~3 ms).
+/// A 1 TiB sparse file as the scene is refused with exit 2 and one line naming its size against the
+/// cap (it used to abort with exit 134 reserving 1 TiB). That the loader reads none of it is
+/// `scene_load::huge_sparse_files_are_refused_or_read_only_as_declared` (bytes read, not a clock).
 #[test]
 fn a_terabyte_scene_file_is_refused_at_once() {
     let d = common::scratch("cli-sparse");
     for name in ["huge.glb", "huge.gltf"] {
         let p = d.join(name);
         std::fs::File::create(&p).unwrap().set_len(1 << 40).unwrap();
-        let t = std::time::Instant::now();
         let (code, _, err) = run(&["info", p.to_str().unwrap()]);
-        let secs = t.elapsed().as_secs_f64();
         assert_eq!(code, 2, "{err}");
         let lines = common::error_lines(&err);
         assert_eq!(lines.len(), 1, "{err}");
         assert!(
-            lines[0].contains(name) && lines[0].contains("larger than"),
+            lines[0].contains(name)
+                && lines[0].contains("larger than")
+                && lines[0].contains("1.0 TiB"),
             "{err}"
         );
-        assert!(secs < 1.0, "{name}: {secs} s");
         std::fs::remove_file(&p).unwrap();
     }
 }

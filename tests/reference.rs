@@ -67,11 +67,6 @@ fn reference_is_deterministic_finite_and_lit() {
     assert!(ind > 0.1 * lum, "indirect light too weak: {ind} of {lum}");
 }
 
-/// Bounds of the twin comparisons on lavapipe (`common::assert_twins`; docs/testing.md, "Twin
-/// tolerances").
-const TOL_REFERENCE: f32 = 1.8e-7; // measured 9.0e-8
-const TOL_REFERENCE_MANY: f32 = 2.7e-7; // measured 1.3e-7
-
 /// Eq. (5) on the GPU equals its CPU twin for every pixel of a small image.
 #[test]
 fn reference_matches_cpu_twin() {
@@ -85,8 +80,8 @@ fn reference_matches_cpu_twin() {
     common::assert_twins(
         &ctx,
         "reference",
+        "reference::eq5",
         reference_pairs(&r, &s, &f),
-        TOL_REFERENCE,
     );
 }
 
@@ -106,7 +101,12 @@ fn reference_of_a_tiny_image_with_many_vpls_matches_cpu_twin() {
     assert!(common::all_finite(&f.radiance));
     let pairs = reference_pairs(&r, &s, &f);
     let lit = pairs.iter().filter(|(c, _)| c.max_element() > 0.0).count() as u32;
-    common::assert_twins(&ctx, "reference, 4096 VPLs", pairs, TOL_REFERENCE_MANY);
+    common::assert_twins(
+        &ctx,
+        "reference, 4096 VPLs",
+        "reference::eq5_4096_vpls",
+        pairs,
+    );
     assert!(lit * 2 > w * h, "only {lit} pixels lit");
 }
 
