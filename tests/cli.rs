@@ -1337,3 +1337,214 @@ fn weighting_names_are_the_cli_and_serde_names() {
     }
     assert_eq!(Weighting::InverseDistance.name(), "inverse-distance");
 }
+
+/// `--target-ms` through the command line with a budget that binds on any adapter (1 µs, far
+/// below any frame): the controller cuts K and the direct light from the first frame on, every
+/// frame over the budget, and the settings it ends on are the ones rendered.
+#[test]
+fn target_ms_with_a_binding_budget_cuts_k_and_the_direct_light() {
+    let d = common::scratch("cli-target-binding");
+    let stats = d.join("s.json");
+    let out = d.join("t.exr");
+    let (code, _, err) = run(&[
+        "render",
+        "builtin:cornell",
+        "--width",
+        "48",
+        "--height",
+        "32",
+        "--vpls",
+        "256",
+        "--target-ms",
+        "0.001",
+        "-o",
+        out.to_str().unwrap(),
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    let steps = j["target"]["steps"].as_array().unwrap();
+    println!("steps {steps:?}");
+    assert!(steps.len() >= 2, "{j}");
+    for st in steps {
+        assert!(st["frame_ms"].as_f64().unwrap() > 0.001, "{st}");
+    }
+    let first = &steps[0];
+    let last = steps.last().unwrap();
+    let k = |s: &serde_json::Value, f: &str| s[f].as_u64().unwrap();
+    // Below the start's K's and the user's 16 samples: the budget bound.
+    assert!(
+        k(last, "vpl_clusters") < k(first, "vpl_clusters"),
+        "{steps:?}"
+    );
+    assert!(k(last, "direct_samples") < 16, "{steps:?}");
+    for f in ["sp_clusters", "vpl_clusters", "direct_samples"] {
+        assert_eq!(last[f], j["settings"][f], "{f}: {j}");
+    }
+    let (_, _, px) = fuzzy_vpl::export::read_exr(&out).unwrap();
+    assert!(common::all_finite(&px));
+}
+
+/// `render --method wang` and `--method lightcluster`: the method's own passes run (not the
+/// reference nor colom's), the stats name the method, and its indirect light is within 20% of the
+/// reference's on the same frame (measured at 32×24: wang 1.068, lightcluster 1.000).
+#[test]
+fn render_runs_wang_and_lightcluster() {
+    let d = common::scratch("cli-methods");
+    let frame = [
+        "builtin:cornell",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--vpls",
+        "256",
+        "--sp-clusters",
+        "32",
+        "--vpl-clusters",
+        "64",
+    ];
+    let render = |name: &str, extra: &[&str]| -> serde_json::Value {
+        let (out, stats) = (
+            d.join(format!("{name}.exr")),
+            d.join(format!("{name}.json")),
+        );
+        let mut args = vec!["render"];
+        args.extend(frame);
+        args.extend(extra);
+        args.extend([
+            "-o",
+            out.to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+        ]);
+        let (code, _, err) = run(&args);
+        assert_eq!(code, 0, "{args:?}: {err}");
+        let (_, _, px) = fuzzy_vpl::export::read_exr(&out).unwrap();
+        assert!(common::all_finite(&px), "{name}");
+        serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap()
+    };
+    let reference = render("reference", &["--reference"]);
+    let ind_ref = reference["mean_luminance_indirect"].as_f64().unwrap();
+    for (method, own) in [
+        ("wang", &["wang_cluster", "wang_gather", "wang_interp"][..]),
+        (
+            "lightcluster",
+            &["lightcluster_cluster", "lightcluster_shade"][..],
+        ),
+    ] {
+        let j = render(method, &["--method", method]);
+        assert_eq!(j["settings"]["method"].as_str(), Some(method), "{j}");
+        let passes: Vec<&str> = j["passes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| p.as_str().unwrap())
+            .collect();
+        for p in own {
+            assert!(passes.contains(p), "{method}: {passes:?}");
+        }
+        for p in ["reference", "sp_cluster", "shade"] {
+            assert!(!passes.contains(&p), "{method}: {passes:?}");
+        }
+        let ratio = j["mean_luminance_indirect"].as_f64().unwrap() / ind_ref;
+        println!("{method}: passes {passes:?}, indirect / reference {ratio:.3}");
+        assert!(
+            (ratio - 1.0).abs() <= 0.2,
+            "{method}: indirect ratio {ratio}"
+        );
+    }
+}
+
+/// `raybench` from the command line on a small frame: a primary and a shadow row for the scene,
+/// as many primary rays as pixels, a shadow ray per primary hit, every throughput finite and
+/// positive and the ratio GPU ÷ CPU BVH2; the same rows in `--json`. A scene that does not load
+/// exits 2 with one line.
+#[test]
+fn raybench_reports_both_ray_kinds() {
+    let d = common::scratch("cli-raybench");
+    let json = d.join("rays.json");
+    let (code, out, err) = run(&[
+        "raybench",
+        "builtin:cornell",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.starts_with("adapter: "), "{out}");
+    let rows: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), 2, "{rows:?}");
+    let s = fuzzy_vpl::scene::load("builtin:cornell").unwrap();
+    for (row, kind) in rows.iter().zip(["primary", "shadow"]) {
+        assert_eq!(row["kind"].as_str(), Some(kind), "{row}");
+        assert_eq!(row["scene"].as_str(), Some(s.name.as_str()), "{row}");
+        assert_eq!(row["triangles"].as_u64(), Some(s.triangles.len() as u64));
+        let f = |k: &str| row[k].as_f64().unwrap();
+        for k in [
+            "gpu_mrays_s",
+            "cpu_bvh2_mrays_s",
+            "cpu_cwbvh_mrays_s",
+            "ratio",
+        ] {
+            assert!(f(k).is_finite() && f(k) > 0.0, "{k}: {row}");
+        }
+        assert!((f("ratio") - f("gpu_mrays_s") / f("cpu_bvh2_mrays_s")).abs() <= 1e-9 * f("ratio"));
+        assert!(out.contains(kind), "{out}");
+    }
+    // The camera inside the closed box: every primary ray hits, each gives a shadow ray.
+    assert_eq!(rows[0]["rays"].as_u64(), Some(32 * 24));
+    let shadow = rows[1]["rays"].as_u64().unwrap();
+    assert!(shadow > 0 && shadow <= 32 * 24, "{shadow}");
+    common::assert_refused(&["raybench", "nope.glb"], "nope.glb");
+}
+
+/// `FVPL_NO_BOUNDS` and `FVPL_NO_LOOPBOUND` (docs/testing.md) turn off wgpu's bounds checks and
+/// loop bounding in the shaders (`gpu::shader::module`) to measure what they cost; a frame is the
+/// same with them, bit for bit (no access out of bounds, every loop ends).
+#[test]
+fn frames_without_bounds_checks_or_loop_bounding_are_the_same() {
+    let d = common::scratch("cli-no-bounds");
+    let render = |name: &str, env: &[&str]| {
+        let out = d.join(format!("{name}.exr"));
+        let mut c = bin();
+        c.args([
+            "render",
+            "builtin:cornell",
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--vpls",
+            "256",
+            "--sp-clusters",
+            "32",
+            "--vpl-clusters",
+            "64",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        for e in env {
+            c.env(e, "1");
+        }
+        let o = c.output().unwrap();
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let (_, _, px) = fuzzy_vpl::export::read_exr(&out).unwrap();
+        assert!(common::all_finite(&px), "{name}");
+        px
+    };
+    let checked = render("checked", &[]);
+    assert!(checked.iter().flatten().any(|&c| c > 0.0));
+    assert_eq!(render("no-bounds", &["FVPL_NO_BOUNDS"]), checked);
+    assert_eq!(render("no-loopbound", &["FVPL_NO_LOOPBOUND"]), checked);
+}
