@@ -458,3 +458,65 @@ fn cornell_view_at_half_render_scale_beats_an_upscale() {
     assert!(ratio <= 0.3, "ratio {ratio}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The A/B views from the command line (`--view split|diff` with B's weighting hard, A's inverse
+/// distance), headless under Xvfb, each saved as the displayed image (EXR): every pixel finite; the
+/// split view shows A left of the divider (the plain view's pixels there) and B right of it (a
+/// render with B's settings). The diff view runs and saves finite radiance (its EXR holds
+/// radiance, not the false-colour difference the window shows).
+#[test]
+fn split_and_diff_views_show_a_and_b() {
+    let x = display();
+    let dir = std::env::temp_dir().join(format!("fuzzy-vpl-viewer-ab-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (w, h) = (160usize, 120usize);
+    let shot = |name: &str, extra: &[&str]| {
+        let exr = dir.join(format!("{name}.exr"));
+        let mut args = vec![
+            "builtin:cornell",
+            "--width",
+            "160",
+            "--height",
+            "120",
+            "--vpls",
+            "512",
+            "--sp-clusters",
+            "64",
+            "--vpl-clusters",
+            "64",
+            "--frames",
+            "3",
+            "--screenshot",
+            exr.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        let out = view(&x, &dir, &args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{name}: {err}");
+        let (iw, ih, px) = fuzzy_vpl::export::read_exr(&exr).expect("the EXR");
+        assert_eq!((iw as usize, ih as usize), (w, h), "{name}");
+        assert!(px.iter().flatten().all(|c| c.is_finite()), "{name}");
+        px
+    };
+    let plain = shot("plain", &[]);
+    let b = shot("b", &["--weighting", "hard"]);
+    let split = shot("split", &["--view", "split", "--b-weighting", "hard"]);
+    let diff = shot("diff", &["--view", "diff", "--b-weighting", "hard"]);
+    let col = |img: &[[f32; 3]], x: usize| (0..h).map(|y| img[y * w + x]).collect::<Vec<_>>();
+    let (left, right) = (w / 8, w - 1 - w / 8);
+    let differ = |a: &[[f32; 3]], b: &[[f32; 3]]| a.iter().zip(b).filter(|(p, q)| p != q).count();
+    println!(
+        "split: left column differs from A in {}, right from B in {}; A and B differ in {} pixels",
+        differ(&col(&split, left), &col(&plain, left)),
+        differ(&col(&split, right), &col(&b, right)),
+        differ(&plain, &b),
+    );
+    assert!(differ(&plain, &b) > w * h / 10, "A and B alike");
+    assert_eq!(col(&split, left), col(&plain, left), "split: A on the left");
+    assert_eq!(col(&split, right), col(&b, right), "split: B on the right");
+    assert!(
+        diff.iter().flatten().any(|&c| c > 0.0),
+        "diff: a black image"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
