@@ -626,9 +626,9 @@ fn compare(scene_name: &str, (w, h, vpls): (u32, u32, u32), cs: &CvrtgiSettings)
     let rs = settings(w, h, vpls, 1);
     let reference = r.render(&cam, &rs).unwrap();
     let mut pass = Cvrtgi::new();
-    let (ind, report, ms) = cvrtgi_timed(&ctx, &mut r, &mut pass, cs, rs.frame.clamp);
+    let (ind, report, _) = cvrtgi_timed(&ctx, &mut r, &mut pass, cs, rs.frame.clamp);
     // The same frame again: only the per-pixel lookup runs (the stages are resident).
-    let (again, cached, cached_ms) = cvrtgi_timed(&ctx, &mut r, &mut pass, cs, rs.frame.clamp);
+    let (again, cached, _) = cvrtgi_timed(&ctx, &mut r, &mut pass, cs, rs.frame.clamp);
     assert!(!cached.geometry_built && !cached.light_built);
     assert_eq!(again, ind);
     let total = total(&reference.direct, &ind);
@@ -637,8 +637,6 @@ fn compare(scene_name: &str, (w, h, vpls): (u32, u32, u32), cs: &CvrtgiSettings)
         total,
         indirect: ind,
         report,
-        ms,
-        cached_ms,
     }
 }
 
@@ -647,9 +645,6 @@ struct Compared {
     total: Vec<[f32; 3]>,
     indirect: Vec<[f32; 3]>,
     report: CvrtgiReport,
-    /// GPU ms by kernel label: the first frame (every stage built), the second (lookup only).
-    ms: BTreeMap<String, f64>,
-    cached_ms: BTreeMap<String, f64>,
 }
 
 #[test]
@@ -673,70 +668,6 @@ fn cornell_mean_luminance_is_near_the_reference() {
     assert!((lc / lr - 1.0).abs() <= 0.2, "total ratio {}", lc / lr);
     // The indirect light alone within 10% (measured 0.993; the paper's gather: 0.95).
     assert!((ic / ir - 1.0).abs() <= 0.1, "indirect ratio {}", ic / ir);
-}
-
-fn env_u32(name: &str, default: u32) -> u32 {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
-
-/// Measurement for docs/cvrtgi.md: `CV_SCENE=builtin:cornell CV_W=96 CV_H=72 CV_VPLS=1024 CV_RES=32
-/// CV_RAYS=128 CV_STEP=8 CV_FILTER=2 CV_PASSES=2 cargo test --release --test cvrtgi measure -- --ignored
-/// --nocapture`.
-#[test]
-#[ignore]
-fn measure() {
-    let scene_name = std::env::var("CV_SCENE").unwrap_or("builtin:cornell".into());
-    let size = (
-        env_u32("CV_W", 96),
-        env_u32("CV_H", 72),
-        env_u32("CV_VPLS", 1024),
-    );
-    let cs = CvrtgiSettings {
-        voxel_res: env_u32("CV_RES", 32),
-        face_rays: env_u32("CV_RAYS", 128),
-        filter_radius: env_u32("CV_FILTER", 2),
-        filter_passes: env_u32("CV_PASSES", 2),
-        cluster_step: env_u32("CV_STEP", 8),
-        ..Default::default()
-    };
-    let t = std::time::Instant::now();
-    let c = compare(&scene_name, size, &cs);
-    let (reference, tot, ind, report) = (&c.reference, &c.total, &c.indirect, &c.report);
-    println!("reference GPU ms {:?}", reference.timings_ms);
-    println!(
-        "cvrtgi GPU ms, first frame {:?}; cached frame {:?}",
-        c.ms, c.cached_ms
-    );
-    let rel = fuzzy_vpl::metrics::rel_mse(tot, &reference.radiance);
-    // CV_OUT=DIR: the reference and CVRTGI totals and indirect images as PNG, at the reference's
-    // auto exposure (indirect at 4x that).
-    if let Ok(dir) = std::env::var("CV_OUT") {
-        let e = fuzzy_vpl::exposure::auto_exposure(&reference.radiance);
-        let tag = format!("{}_{}", scene_name.replace("builtin:", ""), cs.voxel_res);
-        let (w, h) = (size.0, size.1);
-        for (name, img, k) in [
-            ("reference", &reference.radiance, 1.0),
-            ("cvrtgi", tot, 1.0),
-            ("reference_indirect", &reference.indirect, 4.0),
-            ("cvrtgi_indirect", ind, 4.0),
-        ] {
-            let path = std::path::Path::new(&dir).join(format!("cvrtgi_{tag}_{name}.png"));
-            fuzzy_vpl::export::write_image(&path, w, h, img, e * k).unwrap();
-        }
-    }
-    println!(
-        "{scene_name} {size:?} {cs:?}\n{report:?}\nmean luminance total {:.4} vs reference {:.4} (ratio {:.3}); indirect {:.4} vs {:.4} (ratio {:.3}); relMSE {rel:.4}; {:.1} s",
-        mean_luminance(tot),
-        mean_luminance(&reference.radiance),
-        mean_luminance(tot) / mean_luminance(&reference.radiance),
-        mean_luminance(ind),
-        mean_luminance(&reference.indirect),
-        mean_luminance(ind) / mean_luminance(&reference.indirect),
-        t.elapsed().as_secs_f64()
-    );
 }
 
 /// `render --method cvrtgi --stats`: `counts.cvrtgi` holds the method's sizes (the voxels are the
