@@ -23,7 +23,6 @@ fn parse(args: &[&str], quick: bool) -> Result<Sweep, String> {
 #[test]
 fn quick_bench_writes_csv_plots_and_summary() {
     let d = common::scratch("bench-quick");
-    let t = std::time::Instant::now();
     let (code, out, err) = run(&[
         "bench",
         "builtin:cornell",
@@ -32,7 +31,6 @@ fn quick_bench_writes_csv_plots_and_summary() {
         d.to_str().unwrap(),
     ]);
     assert_eq!(code, 0, "{err}");
-    eprintln!("bench --quick took {:.1} s", t.elapsed().as_secs_f64());
     assert!(out.contains("speedup"), "{out}");
     let text = std::fs::read_to_string(d.join("results.csv")).unwrap();
     assert!(text.lines().next().unwrap().split(',').any(|h| h == "mse"));
