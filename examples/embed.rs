@@ -70,13 +70,16 @@ fn main() -> Result<()> {
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format: wgpu::TextureFormat::Rgba32Float,
-        usage: wgpu::TextureUsages::COPY_DST
+        usage: wgpu::TextureUsages::STORAGE_BINDING
             | wgpu::TextureUsages::COPY_SRC
             | wgpu::TextureUsages::TEXTURE_BINDING,
         view_formats: &[],
     });
     let mut renderer = Renderer::new(&ctx, &scene)?;
-    let frame = renderer.render_to_texture(&camera, &settings, &texture)?;
+    // A compute pass writes the texture from the frame's buffers: nothing goes through the CPU.
+    let frame = renderer
+        .render_to_texture(&camera, &settings, &texture)?
+        .meta;
     println!(
         "{}: {w}×{h}, {} VPLs, passes {:?}, {:.1} ms on {}",
         scene.name,

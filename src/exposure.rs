@@ -82,11 +82,14 @@ pub fn log_average_luminance(radiance: &[[f32; 3]]) -> Option<f64> {
 }
 
 /// The exposure that maps the image's log-average luminance to `KEY`: KEY / L̄. An image without a
-/// lit pixel gets 1. Kept within f32's normal range (1e-30..1e30), so exposure × radiance stays
-/// finite for every pixel that is.
+/// lit pixel gets 1. Kept within f32's positive normal range (1.2e-38..3.4e38), which covers every
+/// log-average of the accepted light range (emitters of 1e-44..1e36) but its last five decades
+/// (an image darker than about 5e-40 on average, where f32 itself is denormal); there the PNG
+/// writer warns that the image is black (`export::write_image`). `to_srgb8` multiplies in f64, so
+/// no pixel overflows.
 pub fn auto_exposure(radiance: &[[f32; 3]]) -> f32 {
     match log_average_luminance(radiance) {
-        Some(l) => (KEY / l).clamp(1e-30, 1e30) as f32,
+        Some(l) => (KEY / l).clamp(f32::MIN_POSITIVE as f64, f32::MAX as f64) as f32,
         None => 1.0,
     }
 }
@@ -129,6 +132,15 @@ mod tests {
             assert!((ek * k as f64 / e - 1.0).abs() < 1e-6, "k {k}: {ek} vs {e}");
         }
         assert_eq!(auto_exposure(&[[0.0; 3]; 4]), 1.0);
+        // The faint and bright ends of the light range `--light-scale` accepts (1e-44..1e36):
+        // a grey image of 1e-36 is exposed by 1.8e35 (the former 1e30 cap left it black), one of
+        // 1e36 by 1.8e-37 (the former 1e-30 cap made it white).
+        for l in [1e-36f32, 1e36] {
+            let e = auto_exposure(&[[l; 3]; 4]) as f64;
+            assert!((e * l as f64 / KEY - 1.0).abs() < 1e-5, "{l}: {e}");
+        }
+        // Below f32's normal range the exposure stops at f32::MAX.
+        assert_eq!(auto_exposure(&[[1e-44; 3]; 4]), f32::MAX);
         assert!((auto_exposure(&[[0.18; 3]; 4]) - 1.0).abs() < 1e-6);
     }
 

@@ -16,9 +16,12 @@
 //! let scene = fuzzy_vpl::scene::load("builtin:cornell")?;
 //! let mut renderer = Renderer::new(&ctx, &scene)?;
 //! let settings = RenderSettings::default(); // 640×480, 8192 VPLs, the paper's fuzzy clustering
-//! // `texture`: Rgba32Float, 640×480, COPY_DST.
+//! // `texture`: Rgba32Float, 640×480, STORAGE_BINDING (or COPY_DST). Written on the GPU.
 //! let frame = renderer.render_to_texture(&scene.default_camera(), &settings, texture)?;
-//! println!("{:.1} ms", frame.frame_ms());
+//! println!("{:.1} ms", frame.meta.frame_ms());
+//! // The images stay on the GPU; read them only when needed:
+//! let on_cpu = frame.read(&ctx)?;
+//! println!("{} pixels", on_cpu.radiance.len());
 //! # Ok(()) }
 //! ```
 //!
@@ -29,6 +32,11 @@
 //! the other methods (`method`); the frame (`render`); then `bench`, `app` (the viewer) and `cli`.
 //! `cpu` holds the CPU twins the tests check the shaders against.
 
+// First, so that the crate's `println!`, `print!`, `eprintln!` and `eprint!` are these macros,
+// which never panic on a full or closed stream.
+#[macro_use]
+mod stdio;
+
 pub mod app;
 pub mod bench;
 pub mod bvh;
@@ -36,6 +44,7 @@ pub mod cli;
 pub mod cpu;
 pub mod export;
 pub mod exposure;
+pub mod files;
 pub mod gi;
 pub mod gpu;
 pub mod method;
@@ -49,7 +58,7 @@ pub mod stats;
 
 pub use gpu::GpuContext;
 pub use method::{Method, MethodSettings};
-pub use render::frame::Frame;
+pub use render::frame::{Frame, GpuFrame};
 pub use render::pipeline::{RenderSettings, Renderer};
 pub use scene::{Camera, Scene};
 pub use settings::{ClusterSettings, FrameSettings, Weighting};

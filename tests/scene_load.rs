@@ -1793,6 +1793,7 @@ fn required_extensions_a_diffuse_renderer_can_ignore() {
     // …and loads with --allow-extension, with one warning.
     let opts = scene::LoadOptions {
         allow_extensions: vec!["VENDOR_fancy_paint".into()],
+        ..Default::default()
     };
     let s = gltf_load::load_path_with(&path, &opts).unwrap();
     assert_eq!(s.report.warnings.len(), 1, "{:?}", s.report.warnings);
@@ -1809,6 +1810,7 @@ fn required_extensions_a_diffuse_renderer_can_ignore() {
         let path = doc(&[ext]).write_gltf(&dir, ext);
         let opts = scene::LoadOptions {
             allow_extensions: vec![ext.into()],
+            ..Default::default()
         };
         let e = assert_err(
             gltf_load::load_path_with(&path, &opts),
@@ -2277,4 +2279,225 @@ fn zero_quaternions_on_cameras_and_lights_warn() {
     assert!((s.cameras[0].forward() - Vec3::NEG_Z).length() < 1e-6);
     assert_eq!(s.lights.len(), 1);
     assert!((s.lights[0].direction - Vec3::NEG_Z).length() < 1e-6);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hostile input (issue 46): URIs outside the scene's folder, indices past u32, misaligned data
+
+/// Buffer and image URIs resolve inside the scene file's folder: `..` (also percent-encoded, also
+/// after a subfolder), absolute paths, `file:` URIs and symbolic links that lead out are refused
+/// with one line naming the URI and the option that allows them, before any file is read; with
+/// `allow_outside_uris` (`--allow-outside-uris`) each loads. URIs that stay inside load, and the
+/// report lists the files they name.
+#[test]
+fn uris_outside_the_scene_folder_are_refused() {
+    let dir = temp_dir("uri-policy");
+    let scene_dir = dir.join("scene");
+    std::fs::create_dir_all(scene_dir.join("sub")).unwrap();
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(false);
+    d.node(json!({"mesh": m}), true);
+    for p in [
+        dir.join("outside.bin"),
+        scene_dir.join("sub").join("in.bin"),
+    ] {
+        std::fs::write(p, &d.bin).unwrap();
+    }
+    let outside = dir.join("outside.bin");
+    let abs = outside.display().to_string();
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink(&outside, scene_dir.join("link.bin")).unwrap();
+        std::os::unix::fs::symlink(&*dir, scene_dir.join("up")).unwrap();
+    }
+    let write = |name: &str, doc: &Value| {
+        let path = scene_dir.join(format!("{name}.gltf"));
+        std::fs::write(&path, serde_json::to_vec(doc).unwrap()).unwrap();
+        path
+    };
+    let refused = [
+        "../outside.bin".to_string(),
+        "%2e%2e/outside.bin".into(),
+        "..%2Foutside.bin".into(),
+        "sub/../../outside.bin".into(),
+        "./sub/./../../outside.bin".into(),
+        abs.clone(),
+        format!("file://{abs}"),
+        format!("file:{abs}"),
+        "link.bin".into(),
+        "up/outside.bin".into(),
+    ];
+    let allow = scene::LoadOptions {
+        allow_outside_uris: true,
+        ..Default::default()
+    };
+    for (i, uri) in refused.iter().enumerate() {
+        let path = write(&format!("out{i}"), &d.with_buffer(Some(uri.clone())));
+        let e = assert_err(gltf_load::load_path(&path), &format!("out{i}.gltf"), uri);
+        assert!(
+            e.contains("buffer 0") && e.contains("--allow-outside-uris"),
+            "{e}"
+        );
+        let s = gltf_load::load_path_with(&path, &allow).unwrap_or_else(|e| panic!("{uri}: {e}"));
+        assert_eq!(s.triangles.len(), 1, "{uri}");
+    }
+    for (i, uri) in [
+        "sub/in.bin",
+        "sub/../sub/in.bin",
+        "./sub/in.bin",
+        "sub%2Fin.bin",
+    ]
+    .iter()
+    .enumerate()
+    {
+        let path = write(&format!("in{i}"), &d.with_buffer(Some(uri.to_string())));
+        let s = load_ok(&path);
+        assert_eq!(
+            s.report.files,
+            vec![scene_dir.join(uri.replace("%2F", "/"))]
+        );
+    }
+    // An image URI is refused even in a slot whose texture would only be skipped.
+    let mut img = Doc::textured(json!([{"uri": "../../etc/passwd"}]));
+    let pbr = img.json["materials"][0]
+        .as_object_mut()
+        .unwrap()
+        .remove("pbrMetallicRoughness")
+        .unwrap();
+    img.json["materials"][0]["normalTexture"] = pbr["baseColorTexture"].clone();
+    std::fs::write(scene_dir.join("img.bin"), &img.bin).unwrap();
+    let path = write("img", &img.with_buffer(Some("img.bin".into())));
+    let e = assert_err(gltf_load::load_path(&path), "img.gltf", "../../etc/passwd");
+    assert!(e.contains("image 0"), "{e}");
+}
+
+/// glTF indices are u32: `gltf` keeps the low 32 bits of a larger one (`"scene": 4294967297` loaded
+/// scene 1). Each kind of index past u32 is refused with its JSON path; a large integer in `extras`
+/// (application data) is not an index and loads.
+#[test]
+fn indices_beyond_u32_are_refused_not_wrapped() {
+    let dir = temp_dir("index-u32");
+    let mut d = Doc::new();
+    let m = d.triangle_mesh(false);
+    d.node(json!({"mesh": m}), true);
+    d.json["scenes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"nodes": [0]}));
+    d.json["materials"] = json!([{}]);
+    d.json["cameras"] =
+        json!([{"type": "perspective", "perspective": {"yfov": 1.0, "znear": 0.1}}]);
+    d.json["samplers"] = json!([{}]);
+    let big = 4_294_967_297u64;
+    type Set = fn(&mut Value, u64);
+    let cases: Vec<(&str, Set)> = vec![
+        ("scene", |j, v| j["scene"] = json!(v)),
+        ("scenes[0].nodes[0]", |j, v| {
+            j["scenes"][0]["nodes"][0] = json!(v)
+        }),
+        ("nodes[0].mesh", |j, v| j["nodes"][0]["mesh"] = json!(v)),
+        ("nodes[0].camera", |j, v| j["nodes"][0]["camera"] = json!(v)),
+        ("attributes.POSITION", |j, v| {
+            j["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(v)
+        }),
+        ("primitives[0].material", |j, v| {
+            j["meshes"][0]["primitives"][0]["material"] = json!(v)
+        }),
+        ("accessors[0].bufferView", |j, v| {
+            j["accessors"][0]["bufferView"] = json!(v)
+        }),
+        ("baseColorTexture.index", |j, v| {
+            j["materials"][0]["pbrMetallicRoughness"] = json!({"baseColorTexture": {"index": v}})
+        }),
+        ("textures[0].sampler", |j, v| {
+            j["textures"] = json!([{"sampler": v, "source": 0}])
+        }),
+    ];
+    for (i, (at, set)) in cases.iter().enumerate() {
+        let mut doc = d.with_buffer(Some(format!("big{i}.bin")));
+        set(&mut doc, big);
+        let path = dir.join(format!("big{i}.gltf"));
+        std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+        std::fs::write(dir.join(format!("big{i}.bin")), &d.bin).unwrap();
+        let e = assert_err(gltf_load::load_path(&path), &format!("big{i}.gltf"), at);
+        assert!(e.contains("4294967297") && e.contains("2^32"), "{e}");
+    }
+    let mut doc = d.with_buffer(Some("extras.bin".into()));
+    doc["extras"] = json!({"id": big, "list": [99_999_999_999u64]});
+    doc["nodes"][0]["extras"] = json!(big);
+    std::fs::write(dir.join("extras.bin"), &d.bin).unwrap();
+    let path = dir.join("extras.gltf");
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    assert_eq!(load_ok(&path).triangles.len(), 1);
+}
+
+/// The glTF specification's alignment rule: an accessor's byteOffset, its bufferView's byteOffset
+/// plus it, and its byteStride are multiples of its component size (the sparse indices' and
+/// values' offsets too); each broken one is refused, naming the accessor, not read as garbage.
+#[test]
+fn misaligned_accessors_are_refused() {
+    let dir = temp_dir("misaligned");
+    let tri = le_bytes(&[[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    let cases: [(&str, usize, usize, Option<usize>, &str); 4] = [
+        // (name, view offset, accessor offset, stride, expected)
+        ("acc2", 0, 2, None, "byteOffset 2"),
+        ("view1", 1, 0, None, "bufferView at byteOffset 1"),
+        ("both", 2, 2, None, "byteOffset 2"),
+        ("stride", 0, 0, Some(14), "byteStride 14"),
+    ];
+    for (name, view_off, acc_off, stride, needle) in cases {
+        let mut bin = vec![0u8; view_off + acc_off];
+        bin.extend(&tri);
+        bin.extend([0u8; 64]);
+        let mut view =
+            json!({"buffer": 0, "byteOffset": view_off, "byteLength": bin.len() - view_off});
+        if let Some(s) = stride {
+            view["byteStride"] = json!(s);
+        }
+        let doc = json!({"asset": {"version": "2.0"},
+            "buffers": [{"uri": format!("{name}.bin"), "byteLength": bin.len()}],
+            "bufferViews": [view],
+            "accessors": [{"bufferView": 0, "byteOffset": acc_off, "componentType": 5126,
+                           "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+            "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}], "scene": 0});
+        std::fs::write(dir.join(format!("{name}.bin")), &bin).unwrap();
+        let path = dir.join(format!("{name}.gltf"));
+        std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+        let e = assert_err(gltf_load::load_path(&path), &format!("{name}.gltf"), needle);
+        assert!(
+            e.contains("accessor 0") && e.contains("component size 4"),
+            "{e}"
+        );
+    }
+    // Aligned, the same layout loads (offsets and stride multiples of 4).
+    let mut d = Doc::new();
+    let mut bin = vec![0u8; 4];
+    bin.extend(&tri);
+    let v = d.view(&bin, Some(12));
+    let a = d.push(
+        "accessors",
+        json!({"bufferView": v, "byteOffset": 4, "componentType": 5126,
+        "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}),
+    );
+    let m = d.mesh(json!({"attributes": {"POSITION": a}}));
+    d.node(json!({"mesh": m}), true);
+    assert_eq!(load_ok(&d.write_gltf(&dir, "aligned")).triangles.len(), 1);
+    // Sparse indices (u16) at an odd offset.
+    let mut d = Doc::new();
+    let p = d.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    let idx = d.view(&[0, 1, 0, 2, 0], None);
+    let vals = d.view(&le_bytes(&Doc::SPARSE_VALUES), None);
+    d.json["accessors"][p]["sparse"] = json!({"count": 2,
+        "indices": {"bufferView": idx, "byteOffset": 1, "componentType": 5123},
+        "values": {"bufferView": vals}});
+    d.json["accessors"][p]["max"] = json!([1, 3, 5]);
+    let m = d.mesh(json!({"attributes": {"POSITION": p}}));
+    d.node(json!({"mesh": m}), true);
+    let e = assert_err(
+        gltf_load::load_path(&d.write_gltf(&dir, "sparse")),
+        "sparse.gltf",
+        "sparse indices",
+    );
+    assert!(e.contains("component size 2"), "{e}");
 }

@@ -8,10 +8,14 @@
 //! - `camera.rs`: fly / orbit camera. `settings.rs`: the bookmarks file. `screenshot.rs`: file output.
 
 pub mod camera;
+pub mod display;
 pub mod lights;
 pub mod motion;
+pub mod offscreen;
+pub mod painter;
 pub mod panel;
 pub mod reproject;
+pub mod reproject_gpu;
 pub mod screenshot;
 pub mod settings;
 pub mod views;
@@ -67,10 +71,43 @@ pub struct ViewOptions {
     pub b: Option<UiSettings>,
     /// Keep references on disk too (`view --keep-references`).
     pub refs_on_disk: bool,
+    /// One device for the GI and the window, or a device each (`view --display-path`).
+    pub display_path: DisplayPath,
+    /// No window: paint into an offscreen texture of the window's size (`view --offscreen`).
+    pub offscreen: bool,
+}
+
+/// How a GI frame reaches the window (`view --display-path`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DisplayPath {
+    /// `shared` on a hardware adapter, `split` on a software one (lavapipe), where the GI device's
+    /// threads running at a lower priority keep the window responsive.
+    Auto,
+    /// One device: the GI worker renders on the window's device and the window displays the frames'
+    /// buffers where they are (nothing read back, nothing uploaded).
+    Shared,
+    /// The GI worker on a device of its own: each frame is read back and uploaded to the window's.
+    Split,
+}
+
+impl DisplayPath {
+    /// The path taken on an adapter that is (`software`) or is not a CPU.
+    pub fn resolve(self, software: bool) -> DisplayPath {
+        match self {
+            DisplayPath::Auto if software => DisplayPath::Split,
+            DisplayPath::Auto => DisplayPath::Shared,
+            p => p,
+        }
+    }
 }
 
 pub fn run(opts: ViewOptions) -> Result<()> {
-    window::run(opts)
+    if opts.offscreen {
+        offscreen::run(opts)
+    } else {
+        window::run(opts)
+    }
 }
 
 /// The panel's state: the settings types as the renderer takes them, and what only a panel has
@@ -400,6 +437,9 @@ pub struct Viewer {
     pub view: View,
     pub latest: Option<Box<Rendered>>,
     pub texture: Option<egui::TextureHandle>,
+    /// This window frame the image area shows the window's display pass (`display::Display`, on the
+    /// GPU): its texture and size; `None`: `texture`, composed on the CPU (reprojection, FLIP).
+    pub gpu_texture: Option<(egui::TextureId, (u32, u32))>,
     pub image_dirty: bool,
     /// What the displayed image depends on besides the frame (view, exposure, …).
     display_key: String,
@@ -454,6 +494,14 @@ pub struct Viewer {
     pub script: Option<Script>,
     /// Latency and GI frame times while moving (`motion.rs`).
     pub motion: motion::Motion,
+    /// The window frames' own cost: app time and bytes moved (`motion::UiCost`).
+    pub ui_cost: motion::UiCost,
+    /// `gpu::traffic` at the end of the last window frame.
+    pub traffic_mark: crate::gpu::traffic::Traffic,
+    /// The window's device when the GI worker renders on it (`--display-path shared`).
+    pub shared: Option<worker::SharedDevice>,
+    /// Lit-pixel counters of the frames while moving, on the GPU (shared path): ring, slot, pixels.
+    pub lit_slots: Vec<(wgpu::Buffer, u32, u32)>,
     /// The composed view of the latest frame (frame id, display key, RGBA, note): reprojected to
     /// every new camera while the next frame renders.
     composed: Option<(u64, String, Vec<u8>, Option<&'static str>)>,

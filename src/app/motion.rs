@@ -155,3 +155,68 @@ mod tests {
         assert!(Motion::default().stats().is_none());
     }
 }
+
+/// What the viewer's own window frames cost (`view --stats`, "ui"): the UI thread's time in app code
+/// a window frame (polling the worker, egui, the display, not waiting for the surface or present),
+/// and the bytes each window frame moved between the CPU and the GPU (`gpu::traffic`, every device
+/// of the process: the split path's GI device included), apart for frames while the camera moves
+/// and at rest.
+#[derive(Default)]
+pub struct UiCost {
+    /// (moving, app ms, bytes read back, bytes uploaded) a window frame.
+    pub frames: Vec<(bool, f64, u64, u64)>,
+    /// The first and last window frame's time.
+    pub span: Option<(Instant, Instant)>,
+}
+
+#[derive(serde::Serialize, Debug, PartialEq)]
+pub struct UiCostStats {
+    pub cpu_ms_p50: f64,
+    pub cpu_ms_p95: f64,
+    /// Window frames a second over the measured span.
+    pub fps: f64,
+    pub frames: usize,
+    /// Mean bytes a window frame (`gpu::traffic`: images, G-buffers, counters; timestamps apart).
+    pub bytes_read_back: f64,
+    pub bytes_uploaded: f64,
+}
+
+impl UiCost {
+    pub fn frame(
+        &mut self,
+        moving: bool,
+        ms: f64,
+        traffic: crate::gpu::traffic::Traffic,
+        at: Instant,
+    ) {
+        self.frames
+            .push((moving, ms, traffic.read_back, traffic.uploaded));
+        let first = self.span.map_or(at, |s| s.0);
+        self.span = Some((first, at));
+    }
+
+    /// The stats of the frames moving (`true`) or at rest; `None` without any.
+    pub fn stats(&self, moving: bool) -> Option<UiCostStats> {
+        let f: Vec<_> = self.frames.iter().filter(|f| f.0 == moving).collect();
+        if f.is_empty() {
+            return None;
+        }
+        let ms: Vec<f64> = f.iter().map(|f| f.1).collect();
+        let n = f.len() as f64;
+        let secs = self
+            .span
+            .map_or(0.0, |(a, b)| b.duration_since(a).as_secs_f64());
+        Some(UiCostStats {
+            cpu_ms_p50: quantile(&ms, 0.5).unwrap_or(0.0),
+            cpu_ms_p95: quantile(&ms, 0.95).unwrap_or(0.0),
+            fps: if secs > 0.0 {
+                (self.frames.len() as f64 - 1.0) / secs
+            } else {
+                0.0
+            },
+            frames: f.len(),
+            bytes_read_back: f.iter().map(|f| f.2 as f64).sum::<f64>() / n,
+            bytes_uploaded: f.iter().map(|f| f.3 as f64).sum::<f64>() / n,
+        })
+    }
+}

@@ -7,7 +7,7 @@ use egui::{Color32, Key, PointerButton, RichText, Sense, Slider, Ui};
 
 use super::camera::Mode as CamMode;
 use super::settings::Bookmark;
-use super::views::View;
+use super::views::{self, View};
 use super::{SliderRanges, UiSettings, Viewer};
 use crate::method::Method;
 use crate::settings::Weighting;
@@ -273,7 +273,7 @@ impl Viewer {
                 // The γ the last frame sampled with: the slider starts there when auto is unticked.
                 let gamma_used = self.latest.as_ref().and_then(|l| l.frame.gamma_used);
                 let auto_e = self.latest.as_ref().filter(|_| self.s.exposure_auto);
-                let auto_e = auto_e.map(|l| crate::exposure::auto_exposure(&l.frame.radiance));
+                let auto_e = auto_e.and_then(|l| l.auto_exposure);
                 method_controls(ui, &mut self.s);
                 clustering_controls(ui, &mut self.s, &self.ranges, gamma_used);
                 ui.separator();
@@ -482,6 +482,38 @@ impl Viewer {
             });
     }
 
+    /// The VPL-clusters view's dots over the display pass's darkened image (`views::vpl_points` draws
+    /// the same into the CPU-composed image): each VPL a grey pixel, each light of a clustered list
+    /// a coloured dot of radius 2 pixels, projected with the frame's camera.
+    fn vpl_dots(&self, ui: &mut Ui, rect: egui::Rect) {
+        let Some(r) = &self.latest else { return };
+        let (w, h) = (r.frame.width, r.frame.height);
+        let cam = crate::gi::primary::CameraParams::new(&r.job.camera, w, h);
+        let px = rect.width() / w as f32;
+        let at = |(x, y): (f32, f32)| {
+            rect.min + egui::vec2((x.floor() + 0.5) * px, (y.floor() + 0.5) * px)
+        };
+        let painter = ui.painter_at(rect);
+        for p in r.vpls.iter() {
+            if let Some(xy) = views::project(&cam, *p) {
+                let c = at(xy);
+                painter.rect_filled(
+                    egui::Rect::from_center_size(c, egui::vec2(px, px)),
+                    0.0,
+                    Color32::from_gray(200),
+                );
+            }
+        }
+        if r.lights_clustered {
+            for (i, p) in r.lights.iter().enumerate() {
+                if let Some(xy) = views::project(&cam, *p) {
+                    let [cr, cg, cb] = views::cluster_colour(i as u32);
+                    painter.circle_filled(at(xy), 2.5 * px, Color32::from_rgb(cr, cg, cb));
+                }
+            }
+        }
+    }
+
     /// The GI image, filling the central area, and the camera input over it.
     fn image_area(&mut self, ui: &mut Ui) {
         let ppp = ui.ctx().pixels_per_point();
@@ -515,7 +547,8 @@ impl Viewer {
         if !on_divider {
             self.camera_input(ui, &response);
         }
-        if self.image_stale()
+        if self.gpu_texture.is_none()
+            && self.image_stale()
             && let Some(img) = self.current_image()
         {
             match &mut self.texture {
@@ -529,13 +562,20 @@ impl Viewer {
                 }
             }
         }
-        if let Some(t) = &self.texture {
+        let texture = match (self.gpu_texture, &self.texture) {
+            (Some((id, _)), _) => Some(id),
+            (None, t) => t.as_ref().map(|t| t.id()),
+        };
+        if let Some(id) = texture {
             ui.painter().image(
-                t.id(),
+                id,
                 rect,
                 egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
                 Color32::WHITE,
             );
+        }
+        if self.gpu_texture.is_some() && self.view == View::VplPoints {
+            self.vpl_dots(ui, rect);
         }
         if split_view && self.note.is_none() {
             let x = rect.left() + rect.width() * self.split;

@@ -27,6 +27,7 @@ impl Viewer {
             want_sp_ids: false,
             preview: false,
             b_settings: None,
+            count_lit: false,
         };
         self.next_id += 1;
         self.worker.send(Job::Reference(job.clone()));
@@ -159,7 +160,13 @@ impl Viewer {
             self.live_error = None;
             return;
         };
-        let img = r.frame.radiance.as_slice();
+        // On the shared display path the frame is read back for this (a reference asks for it).
+        let frame = self.cpu_frame(r);
+        let img = frame.radiance.as_slice();
+        if img.len() != reference.len() {
+            self.live_error = None;
+            return;
+        }
         let (w, h) = (r.frame.width, r.frame.height);
         let err = super::LiveError {
             mse: metrics::mse(img, reference),

@@ -104,9 +104,10 @@ impl Viewer {
         let Some(r) = &self.latest else {
             return Err("no frame yet".into());
         };
+        let frame = self.cpu_frame(r);
         let img = match self.view {
-            View::Direct => r.frame.direct.clone(),
-            View::Indirect => r.frame.indirect.clone(),
+            View::Direct => frame.direct.clone(),
+            View::Indirect => frame.indirect.clone(),
             // Without a reference these views show the clustered frame: saving that under a
             // `_reference_` / `_error_` name would mislabel it.
             View::Reference | View::Error | View::Flip if self.reference_for(r).is_none() => {
@@ -116,7 +117,7 @@ impl Viewer {
                 );
             }
             View::Reference => self.reference_for(r).expect("checked").to_vec(),
-            _ => views::final_image(&r.frame.direct, &r.frame.indirect, self.s.direct_on),
+            _ => views::final_image(&frame.direct, &frame.indirect, self.s.direct_on),
         };
         Ok((r.frame.width, r.frame.height, img))
     }

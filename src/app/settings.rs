@@ -73,29 +73,11 @@ impl SceneSettings {
     /// `MAX_BOOKMARKS` bookmarks, each finite with a name of at most 200 characters; anything else
     /// is a one-line error naming the file.
     pub fn load(path: &Path) -> Result<Self> {
-        use std::io::Read;
-        let meta = match std::fs::metadata(path) {
-            Ok(m) => m,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Self::default()),
-            Err(e) => return Err(e).with_context(|| format!("{}: cannot read", path.display())),
+        let text = match crate::files::read_text(path, MAX_FILE_BYTES, "a settings file") {
+            Ok(t) => t,
+            Err(_) if !path.exists() => return Ok(Self::default()),
+            Err(e) => anyhow::bail!("{}: cannot read: {e}", path.display()),
         };
-        if !meta.is_file() {
-            anyhow::bail!("{}: not a regular file", path.display());
-        }
-        if meta.len() > MAX_FILE_BYTES {
-            anyhow::bail!(
-                "{}: {} bytes, more than a settings file's {MAX_FILE_BYTES}",
-                path.display(),
-                meta.len()
-            );
-        }
-        let mut text = String::new();
-        std::fs::File::open(path)
-            .and_then(|f| f.take(MAX_FILE_BYTES + 1).read_to_string(&mut text))
-            .with_context(|| format!("{}: cannot read", path.display()))?;
-        if text.len() as u64 > MAX_FILE_BYTES {
-            anyhow::bail!("{}: grew past {MAX_FILE_BYTES} bytes", path.display());
-        }
         let s: Self = serde_json::from_str(&text)
             .with_context(|| format!("{}: not a fuzzy-vpl settings file", path.display()))?;
         s.check()

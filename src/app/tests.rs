@@ -23,8 +23,10 @@ fn viewer(s: UiSettings) -> Viewer {
         shot_dir: std::env::temp_dir(),
         b: None,
         refs_on_disk: false,
+        display_path: DisplayPath::Split,
+        offscreen: false,
     };
-    Viewer::new(opts, Arc::new(|| {}))
+    Viewer::new(opts, Arc::new(|| {}), None)
 }
 
 /// One egui frame of the whole window's UI.

@@ -13,12 +13,19 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 impl Viewer {
-    pub fn new(opts: ViewOptions, wake: Arc<dyn Fn() + Send + Sync>) -> Viewer {
+    /// The viewer of `opts`; with `shared` (the window's device) its GI worker renders on that device
+    /// and the window displays the frames where they are (`--display-path shared`).
+    pub fn new(
+        opts: ViewOptions,
+        wake: Arc<dyn Fn() + Send + Sync>,
+        shared: Option<super::worker::SharedDevice>,
+    ) -> Viewer {
         let w = wake.clone();
         let worker = Worker::spawn(
             Source::Loaded(Box::new(opts.scene), opts.spec.clone()),
             opts.loader.clone(),
             Box::new(move || w()),
+            shared.clone(),
         );
         let placeholder = ViewCamera {
             eye: glam::Vec3::ZERO,
@@ -44,6 +51,7 @@ impl Viewer {
             view: opts.view,
             latest: None,
             texture: None,
+            gpu_texture: None,
             image_dirty: false,
             display_key: String::new(),
             note: None,
@@ -86,6 +94,10 @@ impl Viewer {
                 settling: false,
             }),
             motion: motion::Motion::default(),
+            ui_cost: Default::default(),
+            shared,
+            lit_slots: Vec::new(),
+            traffic_mark: crate::gpu::traffic::Traffic::now(),
             composed: None,
             thinned: None,
             shown_camera: None,
@@ -109,6 +121,7 @@ impl Viewer {
             Source::Spec(spec.clone()),
             self.loader.clone(),
             Box::new(move || w()),
+            self.shared.clone(),
         );
         // A load still running is dropped (its worker ends after loading).
         self.loading = Some((spec.clone(), worker));
@@ -296,6 +309,7 @@ impl Viewer {
             want_sp_ids: self.view == View::SpClusters,
             preview,
             b_settings,
+            count_lit: preview && self.script.as_ref().is_some_and(|s| s.stats.is_some()),
         };
         let key = format!(
             "{:?} {:?} {} {:?}",
@@ -362,9 +376,14 @@ impl Viewer {
                     let gpu_ms = r.frame.timings_ms.get("frame").copied().unwrap_or(0.0);
                     if r.job.preview {
                         self.motion.moving_gi_ms.push(gpu_ms);
-                        self.motion
-                            .lit_fractions
-                            .push(motion::lit_fraction(&r.frame.positions));
+                        match &r.lit {
+                            // Counted on the GPU: read once, with the stats.
+                            Some(l) => self.lit_slots.push(l.clone()),
+                            None => self
+                                .motion
+                                .lit_fractions
+                                .push(motion::lit_fraction(&r.frame.positions)),
+                        }
                     } else {
                         self.motion.rest = Some((gpu_ms, r.frame.width, r.frame.height));
                     }
@@ -396,17 +415,21 @@ impl Viewer {
                 Reply::Refined {
                     id,
                     direct,
+                    auto_exposure,
                     estimates,
                     samples,
                     gpu_ms,
                 } => {
                     if let Some(r) = self.latest.as_mut().filter(|r| r.job.id == id) {
-                        r.frame.radiance = direct
-                            .iter()
-                            .zip(&r.frame.indirect)
-                            .map(|(a, b)| [0, 1, 2].map(|c| a[c] + b[c]))
-                            .collect();
-                        r.frame.direct = direct;
+                        if let Some(direct) = direct {
+                            r.frame.radiance = direct
+                                .iter()
+                                .zip(&r.frame.indirect)
+                                .map(|(a, b)| [0, 1, 2].map(|c| a[c] + b[c]))
+                                .collect();
+                            r.frame.direct = direct;
+                        }
+                        r.auto_exposure = auto_exposure;
                         r.refined = Some((estimates, samples, gpu_ms));
                         self.image_dirty = true;
                     }
@@ -519,6 +542,120 @@ impl Viewer {
         let diagonal = (info.bounds.1 - info.bounds.0).length();
         let (t0, start) = *self.anim_origin.get_or_insert((Instant::now(), self.cam));
         self.set_camera(start.animated(diagonal, t0.elapsed().as_secs_f32()));
+    }
+
+    /// `r`'s frame with its images on the CPU: as it came, or (shared display path, asked for by a
+    /// reference, a screenshot) read back from the GPU now. An empty frame where that fails.
+    pub fn cpu_frame<'a>(
+        &self,
+        r: &'a Rendered,
+    ) -> std::borrow::Cow<'a, crate::render::frame::Frame> {
+        match (&r.gpu, &self.shared) {
+            (Some(g), Some(d)) if r.frame.radiance.is_empty() => {
+                std::borrow::Cow::Owned(g.read_with(&d.device, &d.queue).unwrap_or_default())
+            }
+            _ => std::borrow::Cow::Borrowed(&r.frame),
+        }
+    }
+
+    /// Whether the latest frame is shown reprojected to a camera it was not rendered for (temporal
+    /// reuse on, the camera moved since): the CPU warp of `current_image` then draws it.
+    pub fn reprojecting(&self) -> bool {
+        self.latest.as_ref().is_some_and(|r| {
+            let f = &r.frame;
+            self.s.cluster.temporal
+                && r.job.camera != self.cam.to_camera()
+                && f.positions.len() == (f.width * f.height) as usize
+        })
+    }
+
+    /// What the window's display pass (`display::Display`, on the GPU) draws this window frame: the
+    /// latest frame's view when it is not reprojected and the view is not FLIP (whose metric runs on
+    /// the CPU); `None` otherwise (`current_image` composes it on the CPU).
+    pub fn gpu_view(&self) -> Option<super::display::GpuView<'_>> {
+        use super::display::Source;
+        if self.reprojecting() || self.view == View::Flip {
+            return None;
+        }
+        let r = self.latest.as_ref()?;
+        let f = &r.frame;
+        let n = (f.width * f.height) as usize;
+        let id = r.job.id;
+        let refined = r.refined.map_or(0, |x| x.0);
+        let key = format!("{id}/{refined}");
+        let a = match &r.gpu {
+            Some(g) => Source::Gpu(key, g),
+            None => Source::Cpu((key, &f.direct[..], &f.indirect[..])),
+        };
+        let no_ref = "no reference for this view yet: press \"compute reference\"";
+        let mut note = None;
+        let mut view = self.view;
+        let reference = match self.reference_for(r) {
+            Some(img) if img.len() == n => Some((format!("{:p}", img.as_ptr()), img)),
+            _ => None,
+        };
+        if matches!(view, View::Reference | View::Error) && reference.is_none() {
+            (view, note) = (View::Final, Some(no_ref));
+        }
+        let b = match (&r.b_frame, &r.b_gpu) {
+            (_, Some(g)) if g.buffers.size == (f.width, f.height) => {
+                Some(Source::Gpu(format!("{id}"), g))
+            }
+            (Some(b), _) if b.radiance.len() == n => Some(Source::Cpu((
+                format!("{id}"),
+                &b.direct[..],
+                &b.indirect[..],
+            ))),
+            _ => None,
+        };
+        if matches!(view, View::Split | View::Diff) && b.is_none() {
+            note = Some(if self.b.is_none() {
+                "nothing pinned as B: press \"pin as B\""
+            } else {
+                "B is rendering…"
+            });
+            view = View::Final;
+        }
+        let labels = r.sp_ids.as_deref().map(|l| (format!("{id}"), l));
+        if view == View::SpClusters && labels.is_none() {
+            (view, note) = (View::Final, Some("no SP clustering in this frame"));
+        }
+        // Shared path: a frame of another camera is reprojected on the GPU (temporal reuse on).
+        let now = self.cam.to_camera();
+        let reproject = match &r.gpu {
+            Some(g) if self.s.cluster.temporal && r.job.camera != now => {
+                let at = |c: &crate::scene::Camera| {
+                    let mut c = c.clone();
+                    let eye = c.transform.w_axis.truncate().as_dvec3() * g.geometry_scale;
+                    c.transform.w_axis = eye.as_vec3().extend(1.0);
+                    crate::gi::primary::CameraParams::new(&c, f.width, f.height)
+                };
+                Some((at(&r.job.camera), at(&now), g.buffers.image_gbuffer()))
+            }
+            _ => None,
+        };
+        Some(super::display::GpuView {
+            note,
+            camera: if reproject.is_some() {
+                now
+            } else {
+                r.job.camera.clone()
+            },
+            reproject,
+            size: (f.width, f.height),
+            view,
+            a,
+            b,
+            reference,
+            labels,
+            // The auto exposure of a frame on the GPU is reduced there; one on the CPU has it.
+            exposure: match (&r.gpu, self.s.exposure_auto) {
+                (Some(_), true) => crate::exposure::Exposure::Auto,
+                _ => crate::exposure::Exposure::Fixed(self.s.exposure),
+            },
+            direct_on: self.s.direct_on,
+            split: self.split,
+        })
     }
 
     /// The image the area shows now, as an egui image: the latest frame's view, reprojected to the
@@ -697,8 +834,48 @@ impl Viewer {
         }
     }
 
+    /// The lit fractions counted on the GPU (`FrameJob::count_lit`), read back once into `motion`.
+    fn read_lit_counts(&mut self) -> Result<()> {
+        let Some(d) = &self.shared else {
+            return Ok(());
+        };
+        if let Some((ring, _, _)) = self.lit_slots.first() {
+            let counts: Vec<u32> = crate::gpu::read_buffer(
+                &d.device,
+                &d.queue,
+                ring,
+                crate::gi::count_lit::SLOTS as usize,
+            )?;
+            for (_, slot, pixels) in self.lit_slots.drain(..) {
+                let lit = counts[slot as usize] as f64 / pixels.max(1) as f64;
+                self.motion.lit_fractions.push(lit);
+            }
+        }
+        Ok(())
+    }
+
+    /// The window frames' cost over the scripted run (`motion::UiCost`): all of them, and apart
+    /// while moving and at rest.
+    fn ui_stats(&self) -> serde_json::Value {
+        let c = &self.ui_cost;
+        let ms: Vec<f64> = c.frames.iter().map(|f| f.1).collect();
+        let q = |p| motion::quantile(&ms, p);
+        let all = c
+            .stats(true)
+            .map(|m| m.fps)
+            .or(c.stats(false).map(|r| r.fps));
+        serde_json::json!({
+            "cpu_ms": { "p50": q(0.5), "p95": q(0.95) },
+            "fps": all,
+            "frames": c.frames.len(),
+            "moving": c.stats(true),
+            "rest": c.stats(false),
+        })
+    }
+
     /// The scripted run's stats JSON: the scene, the settings, and what `motion` measured.
-    fn write_stats(&self, path: &std::path::Path) -> Result<()> {
+    fn write_stats(&mut self, path: &std::path::Path) -> Result<()> {
+        self.read_lit_counts()?;
         let (w, h) = self.full_size();
         // The settings types as they are, with the display exposure (a number) and the render scale.
         let rs = self.s.frame_settings(w, h);
@@ -718,6 +895,8 @@ impl Viewer {
             "ui_frames": self.ui_frames,
             "motion": self.motion.stats(),
             "rest": self.motion.rest_stats(),
+            "display_path": if self.shared.is_some() { "shared" } else { "split" },
+            "ui": self.ui_stats(),
         });
         crate::export::write_json(path, &json)
     }

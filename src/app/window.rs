@@ -1,7 +1,7 @@
 //! The window: winit event loop, the window's own wgpu device and surface, egui input and rendering,
 //! and the PNG screenshot (egui rendered a second time into an offscreen texture and read back).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -48,12 +48,10 @@ pub struct Wake;
 struct Gfx {
     window: Arc<Window>,
     surface: wgpu::Surface<'static>,
-    device: wgpu::Device,
-    queue: wgpu::Queue,
     config: wgpu::SurfaceConfiguration,
-    egui: egui::Context,
     state: egui_winit::State,
-    renderer: egui_wgpu::Renderer,
+    /// The device, egui and the display passes (shared with `view --offscreen`).
+    p: super::painter::Painter,
 }
 
 struct App {
@@ -85,21 +83,63 @@ pub fn run(opts: ViewOptions) -> Result<()> {
         ))
     })?;
     let viewer = app.viewer.take();
-    if let Some(v) = &viewer
-        && v.script.is_some()
-    {
-        let secs = v.script_started.map_or(0.0, |t| t.elapsed().as_secs_f64());
-        eprintln!(
-            "view: {} window frames ({:.1} fps over the last {secs:.1} s), {} GI frames, mean {:.0} ms wall",
-            v.ui_frames,
-            v.script_frames as f64 / secs.max(1e-9),
-            v.gi_frames,
-            v.gi_ms_sum / v.gi_frames.max(1) as f64
-        );
+    if let Some(v) = &viewer {
+        summary(v);
     }
     // The worker may be inside a long frame: leave without waiting for it.
     std::mem::forget(viewer);
     app.result
+}
+
+/// A scripted run's last line on stderr: window and GI frames and their rates.
+pub(super) fn summary(v: &Viewer) {
+    if v.script.is_none() {
+        return;
+    }
+    let secs = v.script_started.map_or(0.0, |t| t.elapsed().as_secs_f64());
+    eprintln!(
+        "view: {} window frames ({:.1} fps over the last {secs:.1} s), {} GI frames, mean {:.0} ms wall",
+        v.ui_frames,
+        v.script_frames as f64 / secs.max(1e-9),
+        v.gi_frames,
+        v.gi_ms_sum / v.gi_frames.max(1) as f64
+    );
+}
+
+/// The window's device for display path `path`: shared, the GI renders on it, so it gets the limits
+/// and features the GI asks for (`gpu::required_limits`, with the adapter's texture size for the
+/// surface); split, the default limits at the adapter's resolution.
+pub(super) fn device_for(
+    adapter: &wgpu::Adapter,
+    path: super::DisplayPath,
+) -> Result<(wgpu::Device, wgpu::Queue)> {
+    let max_side = adapter.limits().max_texture_dimension_2d;
+    let (required_limits, required_features) = match path {
+        super::DisplayPath::Shared => (
+            wgpu::Limits {
+                max_texture_dimension_2d: max_side,
+                ..crate::gpu::required_limits(&adapter.limits())
+            },
+            adapter.features() & crate::gpu::wanted_features(),
+        ),
+        _ => (
+            wgpu::Limits::default().using_resolution(adapter.limits()),
+            wgpu::Features::empty(),
+        ),
+    };
+    Ok(
+        pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("fuzzy-vpl window"),
+            required_limits,
+            required_features,
+            ..Default::default()
+        }))
+        .map_err(|e| {
+            Unavailable(format!(
+                "cannot open the window's GPU device ({e}); render headless with `fuzzy-vpl render`"
+            ))
+        })?,
+    )
 }
 
 impl App {
@@ -152,16 +192,15 @@ impl App {
             ))
             .into());
         }
-        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-            label: Some("fuzzy-vpl window"),
-            required_limits: wgpu::Limits::default().using_resolution(adapter.limits()),
-            ..Default::default()
-        }))
-        .map_err(|e| {
-            Unavailable(format!(
-                "cannot open the window's GPU device ({e}); render headless with `fuzzy-vpl render`"
-            ))
-        })?;
+        let software = adapter.get_info().device_type == wgpu::DeviceType::Cpu;
+        let path = opts.display_path.resolve(software);
+        let (device, queue) = device_for(&adapter, path)?;
+        let shared = (path == super::DisplayPath::Shared).then(|| super::worker::SharedDevice {
+            instance: instance.clone(),
+            adapter: adapter.clone(),
+            device: device.clone(),
+            queue: queue.clone(),
+        });
         let caps = surface.get_capabilities(&adapter);
         let format = caps
             .formats
@@ -188,22 +227,21 @@ impl App {
             color_space: wgpu::SurfaceColorSpace::Auto,
         };
         surface.configure(&device, &config);
-        let egui = egui::Context::default();
+        let painter = super::painter::Painter::new(device.clone(), queue.clone(), format);
         let state = egui_winit::State::new(
-            egui.clone(),
+            painter.egui.clone(),
             egui::ViewportId::ROOT,
             &window,
             Some(window.scale_factor() as f32),
             None,
             Some(device.limits().max_texture_dimension_2d as usize),
         );
-        let renderer = egui_wgpu::Renderer::new(&device, format, Default::default());
         let proxy = self.proxy.clone();
         let wake: Arc<dyn Fn() + Send + Sync> = Arc::new(move || {
             let _ = proxy.send_event(Wake);
         });
         let ppp = window.scale_factor() as f32;
-        let mut viewer = Viewer::new(opts, wake);
+        let mut viewer = Viewer::new(opts, wake, shared);
         viewer.area_px = [
             (viewer.area_px[0] as f32 * ppp) as u32,
             (viewer.area_px[1] as f32 * ppp) as u32,
@@ -212,12 +250,9 @@ impl App {
         self.gfx = Some(Gfx {
             window,
             surface,
-            device,
-            queue,
             config,
-            egui,
             state,
-            renderer,
+            p: painter,
         });
         Ok(())
     }
@@ -228,41 +263,18 @@ impl App {
         };
         self.last_frame = Instant::now();
         self.redraw_at = None;
-        v.poll();
-        v.animate_step();
         let input = g.state.take_egui_input(&g.window);
-        let mut out = g.egui.run_ui(input, |ui| v.ui(ui));
-        // Textures are uploaded before the surface is asked for (a lost surface returns early) and
-        // freed after the frame; egui asks that the delta be cleared once handled.
-        let mut textures = std::mem::take(&mut out.textures_delta);
-        g.upload_textures(&textures);
-        let freed = std::mem::take(&mut textures.free);
-        textures.clear();
-        v.tick();
-        if v.script_started.is_some() {
-            v.script_frames += 1;
-        }
+        let mut f = g.p.frame(v, input);
         g.state
-            .handle_platform_output(&g.window, out.platform_output);
-        let repaint = out
-            .viewport_output
-            .get(&egui::ViewportId::ROOT)
-            .map(|o| o.repaint_delay)
-            .unwrap_or(Duration::MAX);
-        let jobs = g.egui.tessellate(out.shapes, out.pixels_per_point);
+            .handle_platform_output(&g.window, std::mem::take(&mut f.platform));
+        let repaint = f.repaint;
         let Some(frame) = g.surface_texture() else {
-            g.free_textures(&freed);
+            g.p.free_textures(&f.freed);
             g.window.request_redraw();
             return Ok(());
         };
-        let shot = g.present(frame, &jobs, out.pixels_per_point, v.png_request.take());
-        v.presented(Instant::now());
-        v.motion.input_at = None;
-        g.free_textures(&freed);
-        if let Some((path, tex)) = shot {
-            save_screenshot(g, v, &path, &tex);
-        }
-        if let Some(done) = v.exit.take() {
+        let shot = g.present(frame, &f, v.png_request.take());
+        if let Some(done) = g.p.finish(v, &f, shot) {
             if let Err(e) = done {
                 return Err(anyhow!(e));
             }
@@ -278,22 +290,6 @@ impl App {
 }
 
 impl Gfx {
-    /// Uploads the textures egui set this frame.
-    fn upload_textures(&mut self, textures: &egui::TexturesDelta) {
-        for (id, deltas) in &textures.set {
-            for delta in deltas {
-                self.renderer
-                    .update_texture(&self.device, &self.queue, *id, delta);
-            }
-        }
-    }
-
-    fn free_textures<'a>(&mut self, freed: impl IntoIterator<Item = &'a egui::TextureId>) {
-        for id in freed {
-            self.renderer.free_texture(id);
-        }
-    }
-
     /// The surface's next texture; `None` when there is none this time (an outdated or lost
     /// surface is configured again).
     fn surface_texture(&mut self) -> Option<wgpu::SurfaceTexture> {
@@ -305,108 +301,32 @@ impl Gfx {
                     other,
                     wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost
                 ) {
-                    self.surface.configure(&self.device, &self.config);
+                    self.surface.configure(&self.p.device, &self.config);
                 }
                 None
             }
         }
     }
 
-    /// Draws egui's `jobs` into `frame` and presents it; with a `png` path, also into an offscreen
-    /// texture of the same size and format, returned with the path for `save_screenshot`.
+    /// Paints egui's output into the surface's `frame` and presents it.
     fn present(
         &mut self,
         frame: wgpu::SurfaceTexture,
-        jobs: &[egui::ClippedPrimitive],
-        pixels_per_point: f32,
+        f: &super::painter::Frame,
         png: Option<PathBuf>,
     ) -> Option<(PathBuf, wgpu::Texture)> {
-        let sd = egui_wgpu::ScreenDescriptor {
-            size_in_pixels: [self.config.width, self.config.height],
-            pixels_per_point,
-        };
-        let mut enc = self.device.create_command_encoder(&Default::default());
-        let cmds = self
-            .renderer
-            .update_buffers(&self.device, &self.queue, &mut enc, jobs, &sd);
         let view = frame.texture.create_view(&Default::default());
-        let shot = png.map(|path| {
-            let tex = self.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("screenshot"),
-                size: wgpu::Extent3d {
-                    width: self.config.width,
-                    height: self.config.height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: self.config.format,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            });
-            (path, tex)
-        });
-        let shot_view = shot
-            .as_ref()
-            .map(|(_, t)| t.create_view(&Default::default()));
-        for target in std::iter::once(&view).chain(shot_view.as_ref()) {
-            let mut pass = enc
-                .begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("egui"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: target,
-                        resolve_target: None,
-                        depth_slice: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    depth_stencil_attachment: None,
-                    timestamp_writes: None,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                })
-                .forget_lifetime();
-            self.renderer.render(&mut pass, jobs, &sd);
-        }
-        self.queue
-            .submit(cmds.into_iter().chain(std::iter::once(enc.finish())));
+        let size = (self.config.width, self.config.height);
+        let shot = self.p.paint(&view, size, &f.jobs, f.pixels_per_point, png);
         self.window.pre_present_notify();
-        self.queue.present(frame);
+        self.p.queue.present(frame);
         shot
-    }
-}
-
-/// Reads the screenshot texture back and writes it to `path` as PNG; the outcome goes to the panel
-/// (`last_shot`), and ends a script whose last step it was (an error as the exit's error).
-fn save_screenshot(g: &Gfx, v: &mut Viewer, path: &Path, tex: &wgpu::Texture) {
-    let saved = super::screenshot::read_texture_rgb8(&g.device, &g.queue, tex)
-        .and_then(|(w, h, rgb)| crate::export::write_png_rgb8(path, w, h, rgb));
-    let scripted = v
-        .script
-        .as_ref()
-        .is_some_and(|sc| sc.left == 0 && sc.screenshot.as_deref() == Some(path));
-    match saved {
-        Ok(()) => {
-            v.last_shot = format!("saved {}", path.display());
-            if scripted {
-                v.exit = Some(Ok(()));
-            }
-        }
-        Err(e) => {
-            v.last_shot = format!("{e:#}");
-            if scripted {
-                v.exit = Some(Err(format!("{e:#}")));
-            }
-        }
     }
 }
 
 /// How long until the next redraw: scripted runs, moving cameras and reprojected images draw
 /// continuously; otherwise egui says when (`repaint`; at most 100 ms apart while a script waits).
-fn redraw_delay(v: &Viewer, repaint: Duration) -> Duration {
+pub(super) fn redraw_delay(v: &Viewer, repaint: Duration) -> Duration {
     if v.animate || v.moving() || v.script_started.is_some() || v.image_stale() {
         Duration::ZERO
     } else if v.script.is_some() {
@@ -449,7 +369,7 @@ impl ApplicationHandler<Wake> for App {
         match event {
             WindowEvent::CloseRequested => el.exit(),
             WindowEvent::Resized(size) => {
-                let max_side = g.device.limits().max_texture_dimension_2d;
+                let max_side = g.p.device.limits().max_texture_dimension_2d;
                 (g.config.width, g.config.height) = surface_size(size, max_side);
                 if let Some(v) = &mut self.viewer
                     && (size.width > max_side || size.height > max_side)
@@ -459,7 +379,7 @@ impl ApplicationHandler<Wake> for App {
                         size.width, size.height, g.config.width, g.config.height
                     );
                 }
-                g.surface.configure(&g.device, &g.config);
+                g.surface.configure(&g.p.device, &g.config);
                 g.window.request_redraw();
             }
             WindowEvent::DroppedFile(path) => {

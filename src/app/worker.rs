@@ -50,6 +50,8 @@ pub struct FrameJob {
     pub preview: bool,
     /// The split view's pinned B settings: rendered for the same camera right after this frame.
     pub b_settings: Option<RenderSettings>,
+    /// Count the frame's lit pixels on the GPU (`Rendered::lit`; a scripted run's motion stats).
+    pub count_lit: bool,
 }
 
 pub enum Job {
@@ -64,7 +66,16 @@ pub enum Job {
 /// A finished frame and what the views draw besides the images.
 pub struct Rendered {
     pub job: FrameJob,
+    /// The frame on the CPU; on the shared display path only its timings and counts (`GpuFrame::meta`:
+    /// no images) unless the job needed pixels (SP ids, a reference).
     pub frame: Frame,
+    /// On the shared display path: the frame's images where they were rendered, on the window's
+    /// device.
+    pub gpu: Option<crate::render::frame::GpuFrame>,
+    /// The split view's B frame on the GPU (shared display path).
+    pub b_gpu: Option<crate::render::frame::GpuFrame>,
+    /// The ring of lit-pixel counters, this frame's slot and its pixels (`FrameJob::count_lit`).
+    pub lit: Option<(wgpu::Buffer, u32, u32)>,
     /// Nearest SP cluster per pixel (u32::MAX: none), when asked for and SP clustering ran.
     pub sp_ids: Option<Vec<u32>>,
     /// VPL positions.
@@ -84,6 +95,9 @@ pub struct Rendered {
     /// Under a time budget: the K_SP and K_VPL its controller chose for the next frame of this
     /// kind (`job.settings` holds the ones this frame ran with).
     pub budget_next: Option<(u32, u32)>,
+    /// `exposure::auto_exposure` of the frame's radiance, computed here, off the UI thread (`None` on
+    /// the shared display path, whose display pass reduces it on the GPU).
+    pub auto_exposure: Option<f32>,
 }
 
 pub enum Reply {
@@ -94,7 +108,11 @@ pub enum Reply {
     /// with different seeds (`samples` area samples a pixel in all), while the camera rests.
     Refined {
         id: u64,
-        direct: Vec<[f32; 3]>,
+        /// The mean on the CPU (split display path); `None`: refined in the frame's buffers on the
+        /// GPU (shared).
+        direct: Option<Vec<[f32; 3]>>,
+        /// `exposure::auto_exposure` of the refined radiance (direct + the frame's indirect).
+        auto_exposure: Option<f32>,
         estimates: u32,
         samples: u64,
         gpu_ms: f64,
@@ -115,9 +133,25 @@ pub enum Source {
     Spec(String),
 }
 
+/// The window's device, shared with the GI worker (`--display-path shared`): the worker renders on
+/// it and the window displays the frames' buffers where they are.
+#[derive(Clone)]
+pub struct SharedDevice {
+    pub instance: wgpu::Instance,
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+}
+
 impl Worker {
-    /// Starts a worker on `source`; `wake` is called after each reply.
-    pub fn spawn(source: Source, loader: Loader, wake: Box<dyn Fn() + Send>) -> Worker {
+    /// Starts a worker on `source`, on `shared` (the window's device) or a device of its own;
+    /// `wake` is called after each reply.
+    pub fn spawn(
+        source: Source,
+        loader: Loader,
+        wake: Box<dyn Fn() + Send>,
+        shared: Option<SharedDevice>,
+    ) -> Worker {
         let (tx, jobs) = mpsc::channel::<Job>();
         let (reply_tx, rx) = mpsc::channel::<Reply>();
         let handle = std::thread::Builder::new()
@@ -134,7 +168,7 @@ impl Worker {
                         Err(e) => return send(Reply::LoadFailed(format!("{spec}: {e:#}"))),
                     },
                 };
-                if let Err(e) = serve(&scene, &spec, &jobs, &send) {
+                if let Err(e) = serve(&scene, &spec, &jobs, &send, shared) {
                     send(Reply::LoadFailed(format!("{spec}: {e:#}")));
                 }
             })
@@ -182,9 +216,19 @@ fn lower_priority() {
     }
 }
 
-fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) -> Result<()> {
+fn serve(
+    scene: &Scene,
+    spec: &str,
+    jobs: &Receiver<Job>,
+    send: &dyn Fn(Reply),
+    shared: Option<SharedDevice>,
+) -> Result<()> {
     lower_priority();
-    let ctx = GpuContext::new_headless()?;
+    let on_gpu = shared.is_some();
+    let ctx = match shared {
+        Some(d) => GpuContext::from_device(d.instance, d.adapter, d.device, d.queue)?,
+        None => GpuContext::new_headless()?,
+    };
     let mut renderer = Renderer::new(&ctx, scene)?;
     send(Reply::Loaded(Box::new(SceneInfo {
         spec: spec.to_string(),
@@ -260,7 +304,8 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
                 continue;
             }
             let mut once = FrameLoop::default();
-            match render_guarded(&mut renderer, &mut cache, &mut once, job) {
+            // A reference is read back (once, when done: the error and the plot need its pixels).
+            match render_guarded(&mut renderer, &mut cache, &mut once, job, false) {
                 Ok(r) => send(Reply::Reference(Box::new(r))),
                 Err(e) if e.is::<Cancelled>() => send(Reply::ReferenceCancelled),
                 Err(e) => send(Reply::Failed(format!("reference: {e:#}"))),
@@ -273,7 +318,7 @@ fn serve(scene: &Scene, spec: &str, jobs: &Receiver<Job>, send: &dyn Fn(Reply)) 
                 loops = [FrameLoop::stepping_budget(), FrameLoop::stepping_budget()];
             }
             let frames = &mut loops[job.preview as usize];
-            match render_guarded(&mut renderer, &mut cache, frames, job) {
+            match render_guarded(&mut renderer, &mut cache, frames, job, on_gpu) {
                 Ok(r) => {
                     if r.job.settings.cluster.temporal && !r.job.preview {
                         accumulation = Some(Accumulation::new(&r));
@@ -332,8 +377,20 @@ pub const MAX_ESTIMATES: u32 = 64;
 struct Accumulation {
     id: u64,
     settings: RenderSettings,
-    sum: Vec<[f64; 3]>,
+    target: Refining,
     estimates: u32,
+}
+
+/// Where the mean is kept.
+enum Refining {
+    /// On the CPU (split display path): the sum in f64, and the frame's indirect light (the
+    /// exposure is of direct + indirect).
+    Cpu {
+        sum: Vec<[f64; 3]>,
+        indirect: Vec<[f32; 3]>,
+    },
+    /// In the frame's own emission + direct buffer on the GPU (shared display path).
+    Gpu(std::sync::Arc<crate::render::frame::FrameBuffers>),
 }
 
 impl Accumulation {
@@ -341,7 +398,13 @@ impl Accumulation {
         Accumulation {
             id: r.job.id,
             settings: r.job.settings.clone(),
-            sum: r.frame.direct.iter().map(|p| p.map(|c| c as f64)).collect(),
+            target: match &r.gpu {
+                Some(g) => Refining::Gpu(g.buffers.clone()),
+                None => Refining::Cpu {
+                    sum: r.frame.direct.iter().map(|p| p.map(|c| c as f64)).collect(),
+                    indirect: r.frame.indirect.clone(),
+                },
+            },
             estimates: 1,
         }
     }
@@ -354,20 +417,39 @@ impl Accumulation {
             .wrapping_add(self.estimates.wrapping_mul(0x9e37_79b9));
         // Anti-aliasing at rest: each estimate's primary rays through another sub-pixel offset.
         let jitter = subpixel_jitter(self.estimates);
-        let (direct, gpu_ms) = renderer.direct_again(&self.settings, seed, Some(jitter))?;
-        anyhow::ensure!(direct.len() == self.sum.len(), "the frame changed size");
-        for (s, d) in self.sum.iter_mut().zip(&direct) {
-            for c in 0..3 {
-                s[c] += d[c] as f64;
+        let samples = (self.estimates as u64 + 1) * self.settings.frame.direct_samples as u64;
+        let (direct, auto_exposure, gpu_ms) = match &mut self.target {
+            Refining::Gpu(frame) => {
+                let n = self.estimates + 1;
+                let ms = renderer.refine_direct(&self.settings, seed, Some(jitter), frame, n)?;
+                (None, None, ms)
             }
-        }
+            Refining::Cpu { sum, indirect } => {
+                let (direct, gpu_ms) = renderer.direct_again(&self.settings, seed, Some(jitter))?;
+                anyhow::ensure!(direct.len() == sum.len(), "the frame changed size");
+                for (s, d) in sum.iter_mut().zip(&direct) {
+                    for c in 0..3 {
+                        s[c] += d[c] as f64;
+                    }
+                }
+                let n = (self.estimates + 1) as f64;
+                let direct: Vec<[f32; 3]> = sum.iter().map(|s| s.map(|c| (c / n) as f32)).collect();
+                let radiance: Vec<[f32; 3]> = direct
+                    .iter()
+                    .zip(indirect.iter())
+                    .map(|(a, b)| [0, 1, 2].map(|c| a[c] + b[c]))
+                    .collect();
+                let e = crate::exposure::auto_exposure(&radiance);
+                (Some(direct), Some(e), gpu_ms)
+            }
+        };
         self.estimates += 1;
-        let n = self.estimates as f64;
         Ok(Reply::Refined {
             id: self.id,
-            direct: self.sum.iter().map(|s| s.map(|c| (c / n) as f32)).collect(),
+            direct,
+            auto_exposure,
             estimates: self.estimates,
-            samples: self.estimates as u64 * self.settings.frame.direct_samples as u64,
+            samples,
             gpu_ms,
         })
     }
@@ -390,32 +472,53 @@ fn render_guarded(
     cache: &mut PointCache,
     frames: &mut FrameLoop,
     job: FrameJob,
+    on_gpu: bool,
 ) -> Result<Rendered> {
     let (w, h) = (job.settings.frame.width, job.settings.frame.height);
-    crate::panic_guard::quietly(|| render(renderer, cache, frames, job))
+    crate::panic_guard::quietly(|| render(renderer, cache, frames, job, on_gpu))
         .unwrap_or_else(|msg| Err(anyhow::anyhow!("the {w}x{h} GI frame failed: {msg}")))
 }
 
 /// A job's frame through `frames` (under a time budget, with its controller's K's: the job's
-/// settings come back with them), its SP ids, its B frame, and the points the views draw.
+/// settings come back with them), its SP ids, its B frame, and the points the views draw. With
+/// `on_gpu` (the shared display path) the frames stay on the GPU: read back only for the SP ids.
 fn render(
     renderer: &mut Renderer,
     cache: &mut PointCache,
     frames: &mut FrameLoop,
     mut job: FrameJob,
+    on_gpu: bool,
 ) -> Result<Rendered> {
     let t = Instant::now();
-    let (frame, ran) = frames.next(renderer, &job.camera, &job.settings)?;
+    let (frame, gpu, ran) = if on_gpu {
+        let (g, ran) = frames.next_gpu(renderer, &job.camera, &job.settings)?;
+        let frame = match job.want_sp_ids {
+            true => g.read(renderer.ctx)?,
+            false => g.meta.clone(),
+        };
+        (frame, Some(g), ran)
+    } else {
+        let (f, ran) = frames.next(renderer, &job.camera, &job.settings)?;
+        (f, None, ran)
+    };
     job.settings = ran;
+    let lit = match (&gpu, job.count_lit) {
+        (Some(g), true) => {
+            let (ring, slot) = renderer.count_lit(&g.buffers);
+            Some((ring, slot, frame.width * frame.height))
+        }
+        _ => None,
+    };
     // At the image's size (a render-scale clustering's labels, each image pixel its low-res one's).
     let sp_ids = match job.want_sp_ids {
         true => renderer.sp_labels(&frame)?,
         false => None,
     };
     // B after the SP ids are read (they are A's clustering's).
-    let b_frame = match &job.b_settings {
-        Some(b) => Some(renderer.render(&job.camera, b)?),
-        None => None,
+    let (b_frame, b_gpu) = match &job.b_settings {
+        Some(b) if on_gpu => (None, Some(renderer.render_gpu(&job.camera, b)?)),
+        Some(b) => (Some(renderer.render(&job.camera, b)?), None),
+        None => (None, None),
     };
     let wall_ms = t.elapsed().as_secs_f64() * 1e3;
     let relit = match &renderer.vpl_set {
@@ -451,6 +554,11 @@ fn render(
     }
     let lights_clustered = frame.vpl_clusters_used > 0;
     Ok(Rendered {
+        auto_exposure: (!frame.radiance.is_empty())
+            .then(|| crate::exposure::auto_exposure(&frame.radiance)),
+        gpu,
+        b_gpu,
+        lit,
         job,
         frame,
         sp_ids,

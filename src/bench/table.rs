@@ -162,6 +162,16 @@ fn path_row(run: &str, g: &PathGroup) -> String {
     format!("| {} |", cells.join(" | "))
 }
 
+/// The most bytes read from one `results.csv` or `path.csv` (a sweep's file holds a few hundred
+/// rows of a few hundred bytes).
+pub const MAX_CSV_BYTES: u64 = 64 << 20;
+
+/// A bench CSV file's text: a regular file (a FIFO would block) of at most `MAX_CSV_BYTES`.
+fn read_csv_file(path: &Path) -> Result<String> {
+    crate::files::read_text(path, MAX_CSV_BYTES, "a bench CSV file")
+        .map_err(|e| crate::cli::bad(format!("{}: cannot read: {e}", path.display())))
+}
+
 /// The table of the runs in `dirs` (each holding `results.csv`, `path.csv` or both; the run is
 /// named by the folder's name).
 pub fn markdown(dirs: &[&Path], info: &TableInfo) -> Result<String> {
@@ -182,16 +192,14 @@ pub fn markdown(dirs: &[&Path], info: &TableInfo) -> Result<String> {
             bail!("{}: holds neither results.csv nor path.csv", dir.display());
         }
         if results.exists() {
-            let text = std::fs::read_to_string(&results)
-                .with_context(|| format!("{}: cannot read", results.display()))?;
+            let text = read_csv_file(&results)?;
             for r in from_csv(&text).with_context(|| format!("{}", results.display()))? {
                 note(&r.adapter, &r.driver);
                 rows.push(sweep_row(&run, &r));
             }
         }
         if path.exists() {
-            let text = std::fs::read_to_string(&path)
-                .with_context(|| format!("{}: cannot read", path.display()))?;
+            let text = read_csv_file(&path)?;
             let (groups, device) =
                 read_path(&text).with_context(|| format!("{}", path.display()))?;
             if let Some((a, d)) = device {

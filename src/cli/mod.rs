@@ -2,6 +2,7 @@
 //! share are the types of `crate::settings`, flattened in.
 
 mod bench;
+mod env;
 mod info;
 mod raybench;
 mod render;
@@ -168,14 +169,21 @@ pub fn main() -> ExitCode {
     if args.len() == 1 {
         args.push("view".into());
     }
+    let args_for_errors = args.clone();
     let (cli, given) = match parse(args) {
         Ok(c) => c,
         Err(e) => {
             use clap::error::ErrorKind;
             match e.kind() {
                 ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => {
-                    let _ = e.print();
-                    return ExitCode::SUCCESS;
+                    return match e.print() {
+                        Ok(()) => finish(Ok(())),
+                        Err(why) => finish(Err(bad(format!("cannot write to stdout: {why}")))),
+                    };
+                }
+                ErrorKind::InvalidUtf8 => {
+                    eprintln!("error: {}", not_utf8(&args_for_errors));
+                    return ExitCode::from(2);
                 }
                 ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
                     let _ = e.print();
@@ -187,6 +195,14 @@ pub fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    match env::check() {
+        Ok(warnings) => {
+            for w in warnings {
+                eprintln!("warning: {w}");
+            }
+        }
+        Err(e) => return finish(Err(bad(e))),
+    }
     let result: Result<()> = match cli.command {
         None => match parse(vec!["fuzzy-vpl".into(), "view".into()]) {
             Ok((
@@ -207,6 +223,17 @@ pub fn main() -> ExitCode {
         }
         Some(Command::BenchTable(a)) => bench::table(a),
     };
+    finish(result)
+}
+
+/// The exit code of a run and its error line: 2 for bad input (the user's files, options or
+/// environment, a failed write to stdout), else 1. A run whose results could not all be written
+/// to stdout fails, naming it.
+fn finish(result: Result<()>) -> ExitCode {
+    let result = result.and_then(|()| match crate::stdio::stdout_failure() {
+        Some(why) => Err(bad(format!("cannot write to stdout: {why}"))),
+        None => Ok(()),
+    });
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -221,5 +248,17 @@ pub fn main() -> ExitCode {
                 ExitCode::from(1)
             }
         }
+    }
+}
+
+/// The message for a command line with an argument that is not UTF-8 (a file name in another
+/// encoding): which argument, shown with its bytes escaped.
+fn not_utf8(args: &[std::ffi::OsString]) -> String {
+    match args.iter().find(|a| a.to_str().is_none()) {
+        Some(a) => format!(
+            "argument \"{}\" is not valid UTF-8; fuzzy-vpl takes UTF-8 file names and values (rename the file)",
+            a.to_string_lossy().replace('\u{FFFD}', "?")
+        ),
+        None => "an argument is not valid UTF-8".into(),
     }
 }

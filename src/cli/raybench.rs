@@ -23,6 +23,9 @@ pub struct RaybenchArgs {
 }
 
 pub fn run(a: RaybenchArgs) -> Result<()> {
+    if let Some(p) = &a.json {
+        export::check_writable(p).map_err(super::bad)?;
+    }
     let ctx = GpuContext::new_headless()?;
     println!(
         "adapter: {}; CPU: {} threads (rayon)",

@@ -29,7 +29,8 @@ pub struct RenderArgs {
     /// (chrome://tracing, Perfetto) here.
     #[arg(long, value_name = "TRACE.json")]
     trace: Option<PathBuf>,
-    /// Fill the stats' error block against this reference EXR.
+    /// Fill the stats' error block against this reference: an OpenEXR file of linear radiance
+    /// (as -o X.exr writes); a PNG or JPEG (8-bit sRGB) is refused.
     #[arg(long)]
     compare: Option<PathBuf>,
     /// Write a false-colour per-pixel error image against --compare (log10 rel. error, -4..0; or
@@ -86,7 +87,8 @@ fn extension(p: &std::path::Path) -> Option<String> {
 
 /// The reference EXR of `--compare`: finite, of the render's size.
 fn read_reference(p: &std::path::Path, f: &FrameSettings) -> Result<Vec<[f32; 3]>> {
-    let (w, h, px) = export::read_exr(p).map_err(|e| bad(format!("{e:#}")))?;
+    let (w, h, px) = export::read_linear_exr(p)?;
+    crate::files::note_inputs(&[("--compare", p)]);
     if let Some(i) = px.iter().position(|c| c.iter().any(|x| !x.is_finite())) {
         return Err(bad(format!(
             "{}: reference has a non-finite pixel (NaN or infinity) at pixel {i}",
@@ -112,6 +114,13 @@ pub fn run(a: RenderArgs) -> Result<()> {
         .map(|p| read_reference(p, &a.shot.frame))
         .transpose()?;
     let scene = a.scene.load()?;
+    let read: Vec<(&str, &std::path::Path)> = scene
+        .report
+        .files
+        .iter()
+        .map(|f| ("the scene's file", f.as_path()))
+        .collect();
+    crate::files::check_distinct(&outputs(&a), &read).map_err(bad)?;
     let camera = a.scene.camera(&scene, a.shot.camera)?;
     let ctx = GpuContext::new_headless()?;
     check_vpls(&ctx, a.shot.frame.vpls)?;
@@ -219,16 +228,33 @@ fn check_outputs(a: &RenderArgs) -> Result<()> {
             p.display()
         )));
     }
-    for p in a
-        .output
-        .iter()
-        .chain(&a.stats)
-        .chain(&a.error_map)
-        .chain(&a.trace)
-    {
+    let outputs = outputs(a);
+    for (_, p) in &outputs {
         export::check_writable(p).map_err(bad)?;
     }
+    let mut inputs: Vec<(&str, &std::path::Path)> = Vec::new();
+    if !a.scene.scene.starts_with("builtin:") {
+        inputs.push(("the scene", std::path::Path::new(&a.scene.scene)));
+    }
+    if let Some(c) = &a.compare {
+        inputs.push(("--compare", c));
+    }
+    crate::files::check_distinct(&outputs, &inputs).map_err(bad)?;
     Ok(())
+}
+
+/// Every file the run writes, with the option that names it.
+fn outputs(a: &RenderArgs) -> Vec<(&'static str, &std::path::Path)> {
+    let mut all: Vec<(&'static str, &std::path::Path)> =
+        a.output.iter().map(|p| ("-o", p.as_path())).collect();
+    for (opt, p) in [
+        ("--stats", &a.stats),
+        ("--trace", &a.trace),
+        ("--error-map", &a.error_map),
+    ] {
+        all.extend(p.as_deref().map(|p| (opt, p)));
+    }
+    all
 }
 
 /// The timed frames (`render::timed`): the path tracer's (`--path-trace`) or the VPL frame's (with

@@ -20,6 +20,11 @@ pub struct SceneArgs {
     /// (repeatable). Only for extensions that change neither geometry nor diffuse colour.
     #[arg(long, value_name = "NAME")]
     pub allow_extension: Vec<String>,
+    /// Let the scene's buffer and image URIs name files outside its folder (absolute paths,
+    /// file: URIs, '..' or symbolic links leading out), which are refused otherwise: a scene from
+    /// elsewhere could read any file you can and show it in the image.
+    #[arg(long)]
+    pub allow_outside_uris: bool,
 }
 
 /// What a picture is made with: the camera, the frame and the clustering (`render` and `view`).
@@ -43,8 +48,20 @@ impl SceneArgs {
     pub fn load(&self) -> Result<Scene> {
         let opts = scene::LoadOptions {
             allow_extensions: self.allow_extension.clone(),
+            allow_outside_uris: self.allow_outside_uris,
         };
         let mut s = scene::load_with(&self.scene, &opts)?;
+        // The scene and its files are inputs no output of the run may replace.
+        let mut inputs: Vec<(&str, &std::path::Path)> = s
+            .report
+            .files
+            .iter()
+            .map(|f| ("the scene's file", f.as_path()))
+            .collect();
+        if let Some(p) = &s.path {
+            inputs.push(("the scene", p.as_path()));
+        }
+        crate::files::note_inputs(&inputs);
         for w in &s.report.warnings {
             eprintln!("warning: {}: {w}", self.scene);
         }

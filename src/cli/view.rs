@@ -55,6 +55,16 @@ pub struct ViewArgs {
     /// panel's "keep on disk".
     #[arg(long)]
     keep_references: bool,
+    /// How GI frames reach the window: `shared` (one device: the window displays the frames'
+    /// buffers where they were rendered), `split` (a device for the GI: frames read back and
+    /// uploaded), `auto` (shared on a hardware adapter, split on a software one).
+    #[arg(long, value_enum, default_value = "auto")]
+    display_path: crate::app::DisplayPath,
+    /// No window: the same viewer painted into an offscreen texture of the window's size (the image
+    /// area plus the panel and the stats strip: `--width 900 --height 550` is 1280×800), for a
+    /// scripted run (--frames) on a machine without a display.
+    #[arg(long, requires = "frames")]
+    offscreen: bool,
     #[command(flatten)]
     b: BArgs,
 }
@@ -153,6 +163,17 @@ pub fn run(a: ViewArgs) -> Result<()> {
     for p in a.screenshot.iter().chain(&a.stats) {
         export::check_writable(p).map_err(bad)?;
     }
+    let outputs: Vec<(&str, &std::path::Path)> =
+        (a.screenshot.iter().map(|p| ("--screenshot", p.as_path())))
+            .chain(a.stats.iter().map(|p| ("--stats", p.as_path())))
+            .collect();
+    let scene_file = std::path::Path::new(&a.scene.scene);
+    let inputs: &[(&str, &std::path::Path)] = if a.scene.scene.starts_with("builtin:") {
+        &[]
+    } else {
+        &[("the scene", scene_file)]
+    };
+    crate::files::check_distinct(&outputs, inputs).map_err(bad)?;
     // The panel's screenshots go there: found out at start, not at the first F11.
     if !a.shot_dir.is_dir() {
         return Err(bad(format!(
@@ -199,5 +220,7 @@ pub fn run(a: ViewArgs) -> Result<()> {
         shot_dir: a.shot_dir,
         b,
         refs_on_disk: a.keep_references,
+        display_path: a.display_path,
+        offscreen: a.offscreen,
     })
 }

@@ -3,8 +3,10 @@
 
 pub mod accumulate;
 pub mod cvrtgi;
+pub mod display;
 pub mod kmeans;
 pub mod lightcluster;
+pub mod reproject;
 pub mod shade;
 pub mod shading;
 pub mod upsample;

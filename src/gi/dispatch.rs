@@ -369,8 +369,7 @@ impl Kernel {
             sub_count: sub.1,
             _pad2: [0; 2],
         };
-        ctx.queue
-            .write_buffer(&self.chunk, 0, bytemuck::bytes_of(&c));
+        ctx.write_buffer(&self.chunk, 0, bytemuck::bytes_of(&c));
     }
 
     fn entry_index(&self, entry: &str) -> usize {

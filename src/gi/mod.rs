@@ -5,6 +5,8 @@
 //! `method`; `render::pipeline` decides which passes run.
 
 pub mod accumulate;
+pub mod compose;
+pub mod count_lit;
 pub mod direct;
 pub mod dispatch;
 pub mod kmeans;
@@ -13,6 +15,7 @@ pub mod pathtrace;
 pub mod primary;
 pub mod raycast;
 pub mod reference;
+pub mod refine;
 pub mod rng;
 pub mod scene_gpu;
 pub mod shade;

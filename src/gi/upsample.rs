@@ -20,7 +20,7 @@ use bytemuck::{Pod, Zeroable};
 
 use super::dispatch::{Gpu, Kernel, Run};
 use super::pass::Pass;
-use super::primary::{CameraParams, SP_BYTES};
+use super::primary::CameraParams;
 use super::scene_gpu::{storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
 
@@ -163,25 +163,5 @@ impl Upsample {
         };
         self.up
             .run(g, run, p.image_pixels(), PER_CHUNK, &mut |_, _| {});
-    }
-}
-
-/// A frame's image-resolution buffers while its indirect light runs at the render scale.
-pub struct ImageBuffers {
-    pub cam: CameraParams,
-    pub gbuffer: wgpu::Buffer,
-    pub indirect: wgpu::Buffer,
-    pub params: UpsampleParams,
-}
-
-impl ImageBuffers {
-    pub fn new(ctx: &GpuContext, cam: CameraParams, low: (u32, u32)) -> Self {
-        let n = cam.size[0] as u64 * cam.size[1] as u64;
-        ImageBuffers {
-            gbuffer: ctx.storage("gbuffer (image)", n * SP_BYTES),
-            indirect: ctx.storage("indirect (image)", n * 16),
-            params: UpsampleParams::new(&cam, low),
-            cam,
-        }
     }
 }

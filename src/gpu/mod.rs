@@ -2,6 +2,7 @@
 
 pub mod profiler;
 pub mod shader;
+pub mod traffic;
 pub mod warmup;
 
 use anyhow::{Context as _, Result, anyhow};
@@ -196,6 +197,7 @@ impl GpuContext {
         if bytes.len() < 256 {
             bytes.resize(256, 0);
         }
+        traffic::uploaded(bytes.len() as u64);
         self.device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
@@ -219,12 +221,19 @@ impl GpuContext {
     }
 
     pub fn uniform<T: bytemuck::Pod>(&self, label: &str, value: &T) -> wgpu::Buffer {
+        traffic::uploaded(std::mem::size_of::<T>() as u64);
         self.device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
                 contents: bytemuck::bytes_of(value),
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             })
+    }
+
+    /// Writes `data` into `buffer` at `offset` (counted as uploaded: `traffic`).
+    pub fn write_buffer(&self, buffer: &wgpu::Buffer, offset: u64, data: &[u8]) {
+        traffic::uploaded(data.len() as u64);
+        self.queue.write_buffer(buffer, offset, data);
     }
 
     /// Blocks until all submitted work is done.
@@ -238,42 +247,59 @@ impl GpuContext {
         Ok(())
     }
 
-    /// Copies a buffer back to the CPU.
+    /// Copies a buffer back to the CPU (`read_buffer`).
     pub fn read_buffer<T: bytemuck::Pod>(
         &self,
         buffer: &wgpu::Buffer,
         count: usize,
     ) -> Result<Vec<T>> {
-        let size = (count * std::mem::size_of::<T>()) as u64;
-        if size == 0 {
-            return Ok(Vec::new());
-        }
-        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut enc = self.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
-        self.queue.submit([enc.finish()]);
-        let slice = staging.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        self.wait()?;
-        rx.recv()
-            .map_err(|_| anyhow!("readback callback dropped"))?
-            .map_err(|e| anyhow!("mapping a readback buffer failed: {e}"))?;
-        let view = slice
-            .get_mapped_range()
-            .map_err(|e| anyhow!("reading a mapped buffer failed: {e}"))?;
-        let out = bytemuck::cast_slice::<u8, T>(&view).to_vec();
-        drop(view);
-        staging.unmap();
-        Ok(out)
+        read_buffer(&self.device, &self.queue, buffer, count)
     }
+}
+
+/// Copies the first `count` elements of a buffer (`COPY_SRC` usage) back to the CPU, waiting for
+/// the device; the bytes count in `traffic`.
+pub fn read_buffer<T: bytemuck::Pod>(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+    count: usize,
+) -> Result<Vec<T>> {
+    let size = (count * std::mem::size_of::<T>()) as u64;
+    if size == 0 {
+        return Ok(Vec::new());
+    }
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = device.create_command_encoder(&Default::default());
+    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    queue.submit([enc.finish()]);
+    let slice = staging.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    device
+        .poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        })
+        .map_err(|e| anyhow!("GPU wait failed: {e}"))?;
+    rx.recv()
+        .map_err(|_| anyhow!("readback callback dropped"))?
+        .map_err(|e| anyhow!("mapping a readback buffer failed: {e}"))?;
+    let view = slice
+        .get_mapped_range()
+        .map_err(|e| anyhow!("reading a mapped buffer failed: {e}"))?;
+    let out = bytemuck::cast_slice::<u8, T>(&view).to_vec();
+    traffic::read_back(size);
+    drop(view);
+    staging.unmap();
+    Ok(out)
 }
 
 /// Copies a whole 2D texture (`COPY_SRC` usage, a format with a fixed texel size) back to the CPU:
@@ -332,6 +358,7 @@ pub fn read_texture(
     let view = slice
         .get_mapped_range()
         .map_err(|e| anyhow!("reading the texture readback failed: {e}"))?;
+    traffic::read_back(row as u64 * h as u64);
     let mut out = Vec::with_capacity((tight * h) as usize);
     for y in 0..h as usize {
         out.extend_from_slice(&view[y * row as usize..][..tight as usize]);

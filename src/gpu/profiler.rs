@@ -10,7 +10,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use wgpu_profiler::{GpuProfiler, GpuProfilerSettings, GpuTimerQueryResult};
 
 use super::GpuContext;
@@ -76,6 +76,8 @@ impl Profiler {
                 break r;
             }
         };
+        // Two 8-byte timestamps a query.
+        super::traffic::timestamps(results.len() as u64 * 16);
         let mut out = BTreeMap::new();
         for q in &results {
             if let Some(t) = &q.time {
@@ -92,13 +94,8 @@ impl Profiler {
     /// Perfetto) to `path`.
     pub fn write_trace(&self, path: &Path) -> Result<()> {
         // Written beside the target, then renamed: never a half-written file.
-        let name = path.file_name().unwrap_or_default().to_string_lossy();
-        let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-        wgpu_profiler::chrometrace::write_chrometrace(&tmp, &self.trace)
-            .and_then(|()| std::fs::rename(&tmp, path))
-            .with_context(|| format!("{}: cannot write the trace", path.display()))
-            .inspect_err(|_| {
-                let _ = std::fs::remove_file(&tmp);
-            })
+        crate::export::write_atomic_by_path(path, |tmp| {
+            wgpu_profiler::chrometrace::write_chrometrace(tmp, &self.trace)
+        })
     }
 }

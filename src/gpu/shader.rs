@@ -22,37 +22,55 @@ fn file(path: &str) -> Option<&'static str> {
     FILES.iter().find(|(p, _)| *p == path).map(|(_, s)| *s)
 }
 
+/// The most bytes a WGSL file under `FVPL_SHADER_DIR` may hold.
+pub const MAX_SOURCE_BYTES: u64 = 4 << 20;
+
 /// A file's source: the built-in copy, or with `FVPL_SHADER_DIR` set (shader development) the file
-/// under that folder, so WGSL edits need no rebuild.
-fn source(path: &str) -> Option<String> {
-    match std::env::var_os("FVPL_SHADER_DIR") {
-        Some(dir) => std::fs::read_to_string(std::path::Path::new(&dir).join(path)).ok(),
-        None => file(path).map(str::to_string),
+/// under that folder, so WGSL edits need no rebuild. The error says why the file cannot be had.
+fn source(path: &str) -> Result<String, String> {
+    match std::env::var_os(SHADER_DIR_ENV) {
+        Some(dir) => {
+            let file = std::path::Path::new(&dir).join(path);
+            crate::files::read_text(&file, MAX_SOURCE_BYTES, "a WGSL file")
+                .map_err(|e| format!("{SHADER_DIR_ENV}: {}: cannot read: {e}", file.display()))
+        }
+        None => file(path)
+            .map(str::to_string)
+            .ok_or_else(|| format!("unknown WGSL file {path} (not under shaders-wgsl/)")),
     }
 }
 
-/// The composed source of pass `name` (e.g. "primary").
+/// The variable naming a folder of WGSL files read instead of the built-in ones.
+pub const SHADER_DIR_ENV: &str = "FVPL_SHADER_DIR";
+
+/// The composed source of pass `name` (e.g. "primary"). Panics on a missing file: `cli` checks
+/// every pass composes (`try_compose`) before any work when `FVPL_SHADER_DIR` is set.
 pub fn compose(name: &str) -> String {
+    try_compose(name).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The composed source of pass `name`, or why a file it needs cannot be read.
+pub fn try_compose(name: &str) -> Result<String, String> {
     let mut seen = HashSet::new();
     let mut out = String::new();
-    inline(&format!("{name}.wgsl"), &mut seen, &mut out);
-    out
+    inline(&format!("{name}.wgsl"), &mut seen, &mut out)?;
+    Ok(out)
 }
 
-fn inline(path: &str, seen: &mut HashSet<String>, out: &mut String) {
+fn inline(path: &str, seen: &mut HashSet<String>, out: &mut String) -> Result<(), String> {
     if !seen.insert(path.to_string()) {
-        return;
+        return Ok(());
     }
-    let src = source(path)
-        .unwrap_or_else(|| panic!("unknown WGSL file {path} (not under shaders-wgsl/)"));
+    let src = source(path)?;
     for line in src.lines() {
         if let Some(dep) = line.trim().strip_prefix("#import ") {
-            inline(dep.trim(), seen, out);
+            inline(dep.trim(), seen, out)?;
         } else {
             out.push_str(line);
             out.push('\n');
         }
     }
+    Ok(())
 }
 
 /// Parses and validates a composed shader with naga (no GPU needed).

@@ -29,8 +29,9 @@ impl HistoryKey {
 /// A frame's accumulated indirect light (a vec4 a pixel, w = the frames it averages), on its
 /// G-buffer, seen from `cam` (all at the image's size).
 pub struct History {
-    pub indirect: wgpu::Buffer,
-    pub gbuffer: wgpu::Buffer,
+    /// The frame's buffers: its image G-buffer and accumulated indirect light
+    /// (`FrameBuffers::image_gbuffer`, `image_indirect`), held so that no later frame reuses them.
+    pub buffers: std::sync::Arc<super::frame::FrameBuffers>,
     pub cam: CameraParams,
     pub key: HistoryKey,
 }

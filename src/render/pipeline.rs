@@ -16,18 +16,19 @@
 //!
 //! `Plan::new` lists the passes; `Renderer::render` runs exactly that list, in order.
 
+use std::sync::Arc;
 use std::sync::atomic::Ordering;
 
 use anyhow::Result;
 
 pub use super::frame::{
-    FRAME_KEY, Frame, PATH_TRACE_PIXEL_BYTES, PIXEL_BYTES, TooLarge, check_frame_size,
-    check_visibility_size, max_pixels, visibility_bytes,
+    FRAME_KEY, Frame, FrameBuffers, GpuFrame, PATH_TRACE_PIXEL_BYTES, PIXEL_BYTES, TooLarge,
+    check_frame_size, check_visibility_size, max_pixels, visibility_bytes,
 };
 pub use super::resident::Renderer;
 use crate::gi::accumulate::Accumulate;
 pub use crate::gi::pass::Pass;
-use crate::gi::primary::{CameraParams, SP_BYTES};
+use crate::gi::primary::CameraParams;
 pub use crate::gi::vpl_cluster::LightKey;
 pub use crate::gi::vpl_trace::VplKey;
 use crate::method::Method;
@@ -139,19 +140,27 @@ pub(super) struct FrameResources {
     /// scale's when `image` is set, else the image's.
     pub pixels: u32,
     pub cam: CameraParams,
-    pub gbuffer: wgpu::Buffer,
-    /// Emission + direct light, at the image's size.
-    radiance: wgpu::Buffer,
-    pub indirect: wgpu::Buffer,
-    /// The image's own G-buffer and upsampled indirect light (`Plan::low`, `gi::upsample`).
-    image: Option<crate::gi::upsample::ImageBuffers>,
+    /// The frame's buffers (`FramePool`).
+    pub buffers: Arc<FrameBuffers>,
+    /// The image's camera and the upsampling's uniform when the indirect light is at the render
+    /// scale (`Plan::low`, `gi::upsample`).
+    image: Option<(CameraParams, crate::gi::upsample::UpsampleParams)>,
     /// Area-light samples a pixel the direct pass took.
     direct_samples: u32,
-    /// Shadow rays of the passes that trace per pixel, for each valid shading point (`finish`
+    /// Shadow rays of the passes that trace per pixel, for each valid shading point (`GpuFrame::read`
     /// counts the pixels).
     pub rays_per_point: u64,
     /// The indirect passes' shadow rays in all, SP clusters and VPL clusters used, CPU steps.
     pub counts: Counts,
+}
+
+impl FrameResources {
+    fn gbuffer(&self) -> &wgpu::Buffer {
+        &self.buffers.gbuffer
+    }
+    fn indirect(&self) -> &wgpu::Buffer {
+        &self.buffers.indirect
+    }
 }
 
 impl Renderer<'_> {
@@ -160,7 +169,15 @@ impl Renderer<'_> {
         Plan::new(scene, s).passes()
     }
 
+    /// A frame read back to the CPU (`render_gpu`, then `GpuFrame::read`).
     pub fn render(&mut self, camera: &Camera, s: &RenderSettings) -> Result<Frame> {
+        self.render_gpu(camera, s)?.read(self.ctx)
+    }
+
+    /// A frame whose images stay on the GPU: its passes recorded and submitted, its timings
+    /// collected, nothing of its images read back. The buffers are the renderer's (`FramePool`),
+    /// reused once the returned frame and what else holds them are dropped.
+    pub fn render_gpu(&mut self, camera: &Camera, s: &RenderSettings) -> Result<GpuFrame> {
         let ctx = self.ctx;
         let (width, height) = (s.frame.width, s.frame.height);
         check_frame_size(ctx, width, height, PIXEL_BYTES)?;
@@ -174,12 +191,10 @@ impl Renderer<'_> {
         let mut r = FrameResources {
             pixels: low,
             cam: CameraParams::new(&camera, lw, lh),
-            gbuffer: ctx.storage("gbuffer", low as u64 * SP_BYTES),
-            radiance: ctx.storage("radiance", n as u64 * 16),
-            indirect: ctx.storage("indirect", low as u64 * 16),
+            buffers: self.frames.take(ctx, (width, height), plan.low),
             image: plan.low.map(|l| {
                 let cam = CameraParams::new(&camera, width, height);
-                crate::gi::upsample::ImageBuffers::new(ctx, cam, l)
+                (cam, crate::gi::upsample::UpsampleParams::new(&cam, l))
             }),
             direct_samples: 0,
             rays_per_point: 0,
@@ -206,19 +221,20 @@ impl Renderer<'_> {
                 }
                 Pass::VplCluster => self.ensure_lights(s, &plan)?,
                 Pass::Primary => match &r.image {
-                    Some(i) => {
-                        self.primary.record(&mut gpu!(self), &i.cam, &i.gbuffer);
+                    Some((cam, params)) => {
+                        let image = r.buffers.image_gbuffer();
+                        self.primary.record(&mut gpu!(self), cam, image);
                         let k = self.upsample.get(ctx);
-                        k.downsample(&mut gpu!(self), &i.params, &i.gbuffer, &r.gbuffer);
+                        k.downsample(&mut gpu!(self), params, image, r.gbuffer());
                     }
-                    None => self.primary.record(&mut gpu!(self), &r.cam, &r.gbuffer),
+                    None => self.primary.record(&mut gpu!(self), &r.cam, r.gbuffer()),
                 },
                 Pass::Direct => {
                     r.direct_samples = self.direct_samples(s);
                     self.direct.record(
                         &mut gpu!(self),
-                        r.image.as_ref().map_or(&r.gbuffer, |i| &i.gbuffer),
-                        &r.radiance,
+                        r.buffers.image_gbuffer(),
+                        &r.buffers.radiance,
                         n,
                         r.direct_samples,
                         s.frame.seed,
@@ -229,15 +245,16 @@ impl Renderer<'_> {
                 }
                 Pass::Gather | Pass::Reference => self.gather(pass, si, &mut r)?,
                 Pass::Upsample => {
-                    let i = r.image.as_ref().expect("planned");
+                    let (_, params) = r.image.as_ref().expect("planned");
                     let k = self.upsample.get(ctx);
-                    let gbuffers = (&i.gbuffer, &r.gbuffer);
+                    let b = &r.buffers;
+                    let gbuffers = (b.image_gbuffer(), &b.gbuffer);
                     k.upsample(
                         &mut gpu!(self),
-                        &i.params,
+                        params,
                         gbuffers,
-                        &r.indirect,
-                        &i.indirect,
+                        &b.indirect,
+                        b.image_indirect(),
                     );
                 }
                 Pass::Accumulate => self.accumulate(s, &r),
@@ -248,24 +265,28 @@ impl Renderer<'_> {
         self.finish(s, &plan, passes, r)
     }
 
-    /// `render`, with the frame's final radiance (linear, in the scene's units, alpha 1) also
-    /// written into `texture`, a texture of the caller's device (`GpuContext::from_device`):
-    /// `Rgba32Float`, the frame's size, with `COPY_DST` usage. The frame is returned as `render`
-    /// returns it.
+    /// A frame's final radiance (linear, in the scene's units, alpha 1) written into `texture`, a
+    /// texture of the caller's device (`GpuContext::from_device`): `Rgba32Float`, the frame's size,
+    /// with `STORAGE_BINDING` usage (a compute pass writes it from the frame's buffers) or
+    /// `COPY_DST` (the pass writes a texture of the renderer's, copied over on the GPU): nothing
+    /// goes through the CPU. The frame returned holds the timings and counts (`GpuFrame::meta`) and
+    /// its buffers; `GpuFrame::read` reads its images back when the caller wants them.
     pub fn render_to_texture(
         &mut self,
         camera: &Camera,
         s: &RenderSettings,
         texture: &wgpu::Texture,
-    ) -> Result<Frame> {
+    ) -> Result<GpuFrame> {
         let (w, h) = (s.frame.width, s.frame.height);
         let size = texture.size();
         if texture.format() != wgpu::TextureFormat::Rgba32Float
             || (size.width, size.height, size.depth_or_array_layers) != (w, h, 1)
-            || !texture.usage().contains(wgpu::TextureUsages::COPY_DST)
+            || !texture
+                .usage()
+                .intersects(wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST)
         {
             anyhow::bail!(
-                "render_to_texture: the texture must be Rgba32Float, {w}×{h}, with COPY_DST usage; it is {:?}, {}×{}×{}, {:?}",
+                "render_to_texture: the texture must be Rgba32Float, {w}×{h}, with STORAGE_BINDING or COPY_DST usage; it is {:?}, {}×{}×{}, {:?}",
                 texture.format(),
                 size.width,
                 size.height,
@@ -273,36 +294,23 @@ impl Renderer<'_> {
                 texture.usage()
             );
         }
-        let frame = self.render(camera, s)?;
-        let texels: Vec<[f32; 4]> = frame
-            .radiance
-            .iter()
-            .map(|p| [p[0], p[1], p[2], 1.0])
-            .collect();
-        self.ctx.queue.write_texture(
-            texture.as_image_copy(),
-            bytemuck::cast_slice(&texels),
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(w * 16),
-                rows_per_image: Some(h),
-            },
-            size,
-        );
-        self.ctx.queue.submit([]);
+        let frame = self.render_gpu(camera, s)?;
+        let compose = self
+            .compose
+            .get_or_init(|| crate::gi::compose::Compose::new(self.ctx));
+        compose.record(self.ctx, &frame, texture);
         Ok(frame)
     }
 
     /// Blends the frame's indirect light (at the image's size) with the last frame's history where
     /// it was rendered with the same settings (`gi::accumulate`).
     fn accumulate(&mut self, s: &RenderSettings, r: &FrameResources) {
-        let (gbuffer, indirect, cam) = match &r.image {
-            Some(i) => (&i.gbuffer, &i.indirect, &i.cam),
-            None => (&r.gbuffer, &r.indirect, &r.cam),
-        };
+        let b = &r.buffers;
+        let (gbuffer, indirect) = (b.image_gbuffer(), b.image_indirect());
+        let cam = r.image.as_ref().map_or(&r.cam, |i| &i.0);
         let (p, history) = History::params(self.history.as_ref(), s, cam);
         let kernel = self.accumulator.get_or_init(|| Accumulate::new(self.ctx));
-        let prev = history.map(|h| (&h.gbuffer, &h.indirect));
+        let prev = history.map(|h| (h.buffers.image_gbuffer(), h.buffers.image_indirect()));
         kernel.record(&mut gpu!(self), &p, gbuffer, prev, indirect);
     }
 
@@ -319,10 +327,10 @@ impl Renderer<'_> {
         self.reference.record(
             &mut gpu!(self),
             &crate::gi::reference::GatherInputs {
-                gbuffer: &r.gbuffer,
+                gbuffer: r.gbuffer(),
                 lights: &lights.buffer,
                 num_lights: lights.lights.len() as u32,
-                indirect: &r.indirect,
+                indirect: r.indirect(),
                 pixels: r.pixels,
                 d_min: s.frame.clamp * self.scene.extent(),
                 label,
@@ -374,35 +382,25 @@ impl Renderer<'_> {
             vpls: self.vpl_set.as_ref().expect("vpl_trace ran"),
             lights: self.lights.as_ref(),
             reference: &self.reference,
-            gbuffer: &r.gbuffer,
+            gbuffer: &r.buffers.gbuffer,
             pixels: r.pixels,
             cam: r.cam,
-            indirect: &r.indirect,
+            indirect: &r.buffers.indirect,
         };
         let mut gpu = gpu!(self);
         state.record(pass, &mut gpu, &inputs, &mut r.counts)
     }
 
-    /// Reads the frame back, keeps what the next frame reuses, and adds the timings.
+    /// Keeps what the next frame reuses and collects the timings; reads nothing of the images.
     fn finish(
         &mut self,
         s: &RenderSettings,
         plan: &Plan,
         passes: Vec<Pass>,
-        mut r: FrameResources,
-    ) -> Result<Frame> {
+        r: FrameResources,
+    ) -> Result<GpuFrame> {
         let ctx = self.ctx;
-        // From here on the image's buffers; the indirect passes traced from the render scale's
-        // shading points.
-        let mut traced_points = None;
         self.upsample.last_low = plan.low;
-        if let Some(i) = r.image.take() {
-            let low: Vec<[f32; 4]> = ctx.read_buffer(&r.gbuffer, r.pixels as usize * 4)?;
-            traced_points = Some(low.chunks(4).filter(|sp| sp[0][3] > 0.0).count() as u64);
-            (r.pixels, r.cam) = (i.cam.size[0] * i.cam.size[1], i.cam);
-            (r.gbuffer, r.indirect) = (i.gbuffer, i.indirect);
-        }
-        let n = r.pixels;
         let mut timings_ms = self.profiler.collect(ctx)?;
         // A pass's CPU steps count as its time (docs/methods.md).
         for &(pass, ms) in &r.counts.cpu_ms {
@@ -433,74 +431,46 @@ impl Renderer<'_> {
             .as_ref()
             .filter(|_| plan.indirect)
             .map_or(0, |l| l.list.lights.len() as u32);
-        let px: Vec<[f32; 4]> = ctx.read_buffer(&r.radiance, n as usize)?;
-        let ind: Vec<[f32; 4]> = ctx.read_buffer(&r.indirect, n as usize)?;
-        let sps: Vec<[f32; 4]> = ctx.read_buffer(&r.gbuffer, n as usize * 4)?;
-        let valid = sps.chunks(4).filter(|sp| sp[0][3] > 0.0).count() as u32;
-        let indirect_rays =
-            r.counts.indirect_rays + traced_points.unwrap_or(valid as u64) * r.rays_per_point;
         // Every method's state: this frame's becomes the last one (or, where it did not run, none).
         for m in self.methods.values_mut() {
             m.end_frame();
         }
         let c = &r.counts;
-        let (sp_iterations, sp_warm_kept, gamma_used) =
-            (c.sp_iterations, c.sp_warm_kept, c.gamma_used);
+        let image_cam = r.image.as_ref().map_or(r.cam, |i| i.0);
         self.history = plan.accumulate.then(|| History {
-            indirect: r.indirect.clone(),
-            gbuffer: r.gbuffer.clone(),
-            cam: r.cam,
+            buffers: r.buffers.clone(),
+            cam: image_cam,
             key: HistoryKey::of(s),
         });
-        self.gbuffer = Some((r.gbuffer, n));
-        self.last_camera = Some(r.cam);
-        let direct: Vec<[f32; 3]> = px.iter().map(|p| self.to_scene_units(p)).collect();
-        let indirect: Vec<[f32; 3]> = ind.iter().map(|p| self.to_scene_units(p)).collect();
-        let radiance = direct
-            .iter()
-            .zip(&indirect)
-            .map(|(a, b)| [0, 1, 2].map(|c| (a[c] + b[c]).min(f32::MAX)))
-            .collect();
-        Ok(Frame {
-            width: s.frame.width,
-            height: s.frame.height,
-            radiance,
-            direct,
-            indirect,
-            vpls: self.vpl_set.as_ref().map_or(0, |v| v.set.vpls.len() as u32),
-            passes,
-            timings_ms,
-            shading_points: valid,
-            shadow_rays: valid as u64 * (r.direct_samples as u64 + self.gpu.info.num_lights as u64)
-                + indirect_rays,
-            sp_clusters_used: r.counts.sp_used,
-            vpl_clusters_used: if plan.vpl_clustering {
-                num_lights
-            } else {
-                r.counts.vpl_clusters_used
+        self.gbuffer = Some(r.buffers.clone());
+        self.last_camera = Some(image_cam);
+        let (width, height) = (s.frame.width, s.frame.height);
+        Ok(GpuFrame {
+            output_scale: self.output_scale,
+            geometry_scale: self.geometry_scale,
+            direct_rays_per_point: r.direct_samples as u64 + self.gpu.info.num_lights as u64,
+            rays_per_point: r.rays_per_point,
+            indirect_rays: c.indirect_rays,
+            meta: Frame {
+                width,
+                height,
+                vpls: self.vpl_set.as_ref().map_or(0, |v| v.set.vpls.len() as u32),
+                passes,
+                timings_ms,
+                sp_clusters_used: c.sp_used,
+                vpl_clusters_used: if plan.vpl_clustering {
+                    num_lights
+                } else {
+                    c.vpl_clusters_used
+                },
+                gamma_used: c.gamma_used,
+                sp_iterations: c.sp_iterations,
+                sp_warm_kept: c.sp_warm_kept,
+                visibility_rows_reused: c.rows_reused,
+                cvrtgi: c.cvrtgi,
+                ..Default::default()
             },
-            gamma_used,
-            // In the caller's units (the G-buffer holds the unit frame's, `geometry_scale`).
-            positions: sps
-                .chunks(4)
-                .map(|sp| {
-                    let p = sp[0];
-                    let k = 1.0 / self.geometry_scale;
-                    let q = glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) * k;
-                    [q.x as f32, q.y as f32, q.z as f32, p[3]]
-                })
-                .collect(),
-            normals: sps
-                .chunks(4)
-                .map(|sp| {
-                    let n = sp[1];
-                    [n[0], n[1], n[2], 0.0]
-                })
-                .collect(),
-            sp_iterations,
-            sp_warm_kept,
-            visibility_rows_reused: r.counts.rows_reused,
-            cvrtgi: r.counts.cvrtgi,
+            buffers: r.buffers,
         })
     }
 

@@ -59,8 +59,18 @@ pub struct Renderer<'a> {
     /// frame's history (`None` after a frame without accumulation).
     pub(super) accumulator: std::cell::OnceCell<crate::gi::accumulate::Accumulate>,
     pub(super) history: Option<super::history::History>,
-    /// The last frame's G-buffer and its pixel count (`direct_again`, `last_gbuffer`).
-    pub(super) gbuffer: Option<(wgpu::Buffer, u32)>,
+    /// The last frame's buffers (`direct_again`, `last_gbuffer`: its image G-buffer).
+    pub(super) gbuffer: Option<std::sync::Arc<super::frame::FrameBuffers>>,
+    /// The frames' buffers, reused by size.
+    pub(super) frames: super::frame::FramePool,
+    /// The pass that writes a frame into a caller's texture (`render_to_texture`), built on first use.
+    pub(super) compose: std::cell::OnceCell<crate::gi::compose::Compose>,
+    /// The viewer's refinement at rest on the GPU (`refine_direct`): its kernel and the buffers of
+    /// one estimate (radiance, jittered G-buffer), kept between calls.
+    refine: std::cell::OnceCell<crate::gi::refine::Refine>,
+    estimate: Option<(wgpu::Buffer, wgpu::Buffer, u32)>,
+    /// Lit pixels counted on the GPU (`count_lit`), built on first use.
+    lit: Option<crate::gi::count_lit::CountLit>,
     /// The last frame's camera (render units), for `direct_again`'s jittered primary rays.
     pub(super) last_camera: Option<crate::gi::primary::CameraParams>,
     pub vpl_set: Option<ResidentVpls>,
@@ -101,6 +111,11 @@ impl<'a> Renderer<'a> {
                 })
                 .collect(),
         ))
+    }
+
+    /// Sets of frame buffers made so far (`FramePool`): frames of a steady size make none.
+    pub fn frame_sets_made(&self) -> u32 {
+        self.frames.made
     }
 
     /// A method's state (`method::ROOMS`) as its room's type `T`, once a frame has used it (tests
@@ -206,6 +221,11 @@ impl<'a> Renderer<'a> {
             history: None,
             profiler: Profiler::new(ctx),
             gbuffer: None,
+            frames: Default::default(),
+            compose: Default::default(),
+            refine: Default::default(),
+            estimate: None,
+            lit: None,
             last_camera: None,
             vpl_set: None,
             vpl_traces: 0,
@@ -353,9 +373,10 @@ impl<'a> Renderer<'a> {
         jitter: Option<[f32; 2]>,
     ) -> Result<(Vec<[f32; 3]>, f64)> {
         let ctx = self.ctx;
-        let Some((gbuffer, n)) = self.gbuffer.clone() else {
+        let Some(last) = self.gbuffer.clone() else {
             anyhow::bail!("no frame rendered yet");
         };
+        let (gbuffer, n) = (last.image_gbuffer().clone(), last.size.0 * last.size.1);
         let radiance = ctx.storage("radiance", n as u64 * 16);
         let spp = self.direct_samples(s);
         let _ = self.profiler.collect(ctx)?;
@@ -370,16 +391,80 @@ impl<'a> Renderer<'a> {
         Ok((px.iter().map(|p| self.to_scene_units(p)).collect(), ms))
     }
 
+    /// `direct_again` on the GPU: another estimate of the last frame's direct light (seed `seed`,
+    /// primary rays through sub-pixel offset `jitter`), blended into `into`'s emission + direct light
+    /// as the running mean of `n` estimates (`gi::refine`). Nothing is read back and, at a steady
+    /// size, nothing allocated but the passes' uniforms. Returns its GPU ms.
+    pub fn refine_direct(
+        &mut self,
+        s: &RenderSettings,
+        seed: u32,
+        jitter: Option<[f32; 2]>,
+        into: &super::frame::FrameBuffers,
+        n: u32,
+    ) -> Result<f64> {
+        let ctx = self.ctx;
+        let Some(last) = self.gbuffer.clone() else {
+            anyhow::bail!("no frame rendered yet");
+        };
+        let pixels = last.size.0 * last.size.1;
+        anyhow::ensure!(into.size == last.size, "the frame changed size");
+        if self.estimate.as_ref().is_none_or(|e| e.2 != pixels) {
+            self.estimate = Some((
+                ctx.storage("radiance (estimate)", pixels as u64 * 16),
+                ctx.storage(
+                    "gbuffer (jittered)",
+                    pixels as u64 * crate::gi::primary::SP_BYTES,
+                ),
+                pixels,
+            ));
+        }
+        let (radiance, jittered, _) = self.estimate.clone().expect("made above");
+        let spp = self.direct_samples(s);
+        let _ = self.profiler.collect(ctx)?;
+        let gbuffer = match (jitter, self.last_camera) {
+            (Some(j), Some(cam)) => {
+                self.primary
+                    .record(&mut gpu!(self), &cam.with_jitter(j), &jittered);
+                &jittered
+            }
+            _ => last.image_gbuffer(),
+        };
+        self.direct
+            .record(&mut gpu!(self), gbuffer, &radiance, pixels, spp, seed);
+        let k = self
+            .refine
+            .get_or_init(|| crate::gi::refine::Refine::new(ctx));
+        k.record(&mut gpu!(self), &radiance, &into.radiance, n, pixels);
+        Ok(self.profiler.collect(ctx)?.values().sum())
+    }
+
+    /// Counts `frame`'s pixels with a surface hit on the GPU into the next slot of the ring of
+    /// counters (`gi::count_lit`); returns the ring and the slot.
+    pub fn count_lit(&mut self, frame: &super::frame::FrameBuffers) -> (wgpu::Buffer, u32) {
+        let ctx = self.ctx;
+        let mut lit = self
+            .lit
+            .take()
+            .unwrap_or_else(|| crate::gi::count_lit::CountLit::new(ctx));
+        let pixels = frame.size.0 * frame.size.1;
+        let slot = lit.record(&mut gpu!(self), frame.image_gbuffer(), pixels);
+        let _ = self.profiler.collect(ctx);
+        let ring = lit.ring.clone();
+        self.lit = Some(lit);
+        (ring, slot)
+    }
+
     /// The last frame's shading points traced again, each primary ray through sub-pixel offset
     /// `jitter` of its pixel centre (a new G-buffer).
     fn trace_jittered(&mut self, jitter: [f32; 2]) -> Result<wgpu::Buffer> {
-        let (Some((_, n)), Some(cam)) = (&self.gbuffer, self.last_camera) else {
+        let (Some(last), Some(cam)) = (&self.gbuffer, self.last_camera) else {
             anyhow::bail!("no frame rendered yet");
         };
-        let buffer = self.ctx.storage(
-            "gbuffer (jittered)",
-            *n as u64 * crate::gi::primary::SP_BYTES,
-        );
+        let n = last.size.0 as u64 * last.size.1 as u64;
+        let buffer = self
+            .ctx
+            .storage("gbuffer (jittered)", n * crate::gi::primary::SP_BYTES);
         self.primary
             .record(&mut gpu!(self), &cam.with_jitter(jitter), &buffer);
         Ok(buffer)
@@ -387,7 +472,7 @@ impl<'a> Renderer<'a> {
 
     /// `trace_jittered` read back (4 vec4s a pixel, as `last_gbuffer`): what the twins compare.
     pub fn jittered_gbuffer(&mut self, jitter: [f32; 2]) -> Result<Vec<[f32; 4]>> {
-        let n = self.gbuffer.as_ref().map_or(0, |g| g.1) as usize;
+        let n = self.gbuffer.as_ref().map_or(0, |g| g.size.0 * g.size.1) as usize;
         let b = self.trace_jittered(jitter)?;
         let _ = self.profiler.collect(self.ctx)?;
         self.ctx.read_buffer(&b, n * 4)
@@ -421,7 +506,9 @@ impl<'a> Renderer<'a> {
     /// The last frame's shading points, 4 × vec4 each (`common/gbuffer.wgsl`), for tests and views.
     pub fn last_gbuffer(&self) -> Result<Vec<[f32; 4]>> {
         match &self.gbuffer {
-            Some((b, n)) => self.ctx.read_buffer(b, *n as usize * 4),
+            Some(b) => self
+                .ctx
+                .read_buffer(b.image_gbuffer(), (b.size.0 * b.size.1) as usize * 4),
             None => anyhow::bail!("no frame rendered yet"),
         }
     }

@@ -69,6 +69,39 @@ impl FrameLoop {
         camera: &Camera,
         s: &RenderSettings,
     ) -> Result<(Frame, RenderSettings)> {
+        let s = self.settings_for(renderer, s)?;
+        let frame = match self.kind {
+            FrameKind::Vpl => renderer.render(camera, &s)?,
+            FrameKind::PathTrace(spp) => renderer.path_trace(camera, &s, spp)?,
+        };
+        if let Some(c) = &mut self.controller {
+            c.observe(&s, &frame);
+        }
+        Ok((frame, s))
+    }
+
+    /// `next` with the frame left on the GPU (`Renderer::render_gpu`; the viewer's shared display
+    /// path).
+    pub fn next_gpu(
+        &mut self,
+        renderer: &mut Renderer,
+        camera: &Camera,
+        s: &RenderSettings,
+    ) -> Result<(crate::render::frame::GpuFrame, RenderSettings)> {
+        let s = self.settings_for(renderer, s)?;
+        let frame = renderer.render_gpu(camera, &s)?;
+        if let Some(c) = &mut self.controller {
+            c.observe(&s, &frame.meta);
+        }
+        Ok((frame, s))
+    }
+
+    /// The settings the next frame runs with (a budget's K's), after the warm-up.
+    fn settings_for(
+        &mut self,
+        renderer: &mut Renderer,
+        s: &RenderSettings,
+    ) -> Result<RenderSettings> {
         if self.warmup_ms > 0.0 {
             renderer.ctx.warm_up(self.warmup_ms)?;
         }
@@ -84,14 +117,7 @@ impl FrameLoop {
             }
             _ => self.controller = None,
         }
-        let frame = match self.kind {
-            FrameKind::Vpl => renderer.render(camera, &s)?,
-            FrameKind::PathTrace(spp) => renderer.path_trace(camera, &s, spp)?,
-        };
-        if let Some(c) = &mut self.controller {
-            c.observe(&s, &frame);
-        }
-        Ok((frame, s))
+        Ok(s)
     }
 
     /// The K_SP and K_VPL the next frame under the stepped budget will take (`None`: no budget).

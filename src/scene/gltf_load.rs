@@ -165,10 +165,17 @@ fn load_bytes(
 ) -> Result<Scene, String> {
     let (json, blob) = split_container(bytes, glb_name)?;
     let (doc, (ignored, allowed)) = container::parse_document(&json, opts)?;
+    let folder = base.map(|dir| uri::Folder::new(dir, opts.allow_outside_uris));
+    let base = folder.as_ref();
+    let files = match base {
+        Some(f) => uri::external_files(&doc, f)?,
+        None => Vec::new(),
+    };
     let buffers = container::load_buffers(&doc, base, blob.as_deref())?;
 
     let mut report = LoadReport {
         extensions_used: doc.extensions_used().map(str::to_string).collect(),
+        files,
         ..LoadReport::default()
     };
     warn_ignored_extensions(&ignored, &allowed, &mut report);

@@ -170,6 +170,9 @@ pub struct LoadReport {
     pub skipped_primitives: usize,
     /// Human-readable warnings (printed to stderr by the CLI).
     pub warnings: Vec<String>,
+    /// The external files (buffers, images) the scene's URIs name, resolved: inputs that no output
+    /// of the run may overwrite.
+    pub files: Vec<PathBuf>,
 }
 
 /// A loaded scene, flattened to world space.
@@ -464,6 +467,9 @@ pub struct LoadOptions {
     /// Required glTF extensions the loader does not know that the user declares safe to ignore
     /// (`--allow-extension NAME`): they must change neither geometry nor diffuse colour.
     pub allow_extensions: Vec<String>,
+    /// Whether buffer and image URIs may name files outside the scene file's folder
+    /// (`--allow-outside-uris`; README, "URI policy").
+    pub allow_outside_uris: bool,
 }
 
 /// Loads `builtin:NAME` or a `.gltf`/`.glb` path.

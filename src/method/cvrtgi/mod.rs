@@ -602,8 +602,7 @@ impl Cvrtgi {
             let scales = twin::conservation_scales(&lighting, &ids, &flux, geo.rays as usize);
             twin::set_scales(&mut lighting, &scales);
             cpu_ms += t.elapsed().as_secs_f64() * 1e3;
-            ctx.queue
-                .write_buffer(&lights_buf, 0, bytemuck::cast_slice(&words(&lighting)));
+            ctx.write_buffer(&lights_buf, 0, bytemuck::cast_slice(&words(&lighting)));
             gather(g);
         }
         let ping = [

@@ -82,6 +82,20 @@ fn check_fits(
     }
 }
 
+/// glTF's alignment rule: data of components of `size` bytes starts at a multiple of `size` both
+/// in its bufferView (`offset`) and in its buffer (`offset` + the view's `view_offset`); a file that
+/// breaks it is refused, as the specification requires, not read from the byte it names.
+fn aligned(offset: usize, view_offset: usize, size: usize, what: &str) -> Result<(), String> {
+    if !offset.is_multiple_of(size)
+        || !(offset as u128 + view_offset as u128).is_multiple_of(size as u128)
+    {
+        return Err(format!(
+            "is misaligned: {what} start at byteOffset {offset} in a bufferView at byteOffset {view_offset} of its buffer, and both must be multiples of the component size {size} (glTF requires it)"
+        ));
+    }
+    Ok(())
+}
+
 /// Most elements an accessor without a bufferView (all zeros plus sparse values) may declare.
 const MAX_VIEWLESS: usize = 1 << 24;
 
@@ -97,6 +111,13 @@ fn check(acc: &gltf::Accessor, buffers: &[Vec<u8>], what: &str) -> Result<bool, 
     match acc.view() {
         Some(view) => {
             let bytes = view_bytes(&view, buffers, what)?;
+            let size = acc.data_type().size();
+            aligned(acc.offset(), view.offset(), size, "its data").map_err(ctx)?;
+            if let Some(s) = view.stride().filter(|s| !s.is_multiple_of(size)) {
+                return Err(ctx(format!(
+                    "has byteStride {s}, not a multiple of its component size {size} (glTF requires one)"
+                )));
+            }
             let stride = view.stride().unwrap_or(elem);
             if stride < elem {
                 return Err(ctx(format!(
@@ -129,6 +150,21 @@ fn check(acc: &gltf::Accessor, buffers: &[Vec<u8>], what: &str) -> Result<bool, 
         ));
     }
     let isize = idx.index_type().size();
+    aligned(
+        idx.offset(),
+        idx.view().offset(),
+        isize,
+        "its sparse indices",
+    )
+    .map_err(ctx)?;
+    let size = acc.data_type().size();
+    aligned(
+        vals.offset(),
+        vals.view().offset(),
+        size,
+        "its sparse values",
+    )
+    .map_err(ctx)?;
     let ibytes = view_bytes(&idx.view(), buffers, what)?;
     check_fits(idx.offset(), isize, isize, scount, ibytes.len())
         .map_err(|m| ctx(format!("sparse indices {m}")))?;

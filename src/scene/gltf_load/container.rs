@@ -8,7 +8,6 @@ use super::{
 use crate::scene::LoadOptions;
 use gltf::json::validation::Validate;
 use std::borrow::Cow;
-use std::path::Path;
 
 /// A GLB's JSON chunk and optional BIN chunk.
 pub(super) type GlbChunks<'a> = (Cow<'a, [u8]>, Option<Cow<'a, [u8]>>);
@@ -183,6 +182,7 @@ pub(super) fn parse_document(
     opts: &LoadOptions,
 ) -> Result<(gltf::Document, Ignored), String> {
     let json = json.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(json);
+    check_index_range(json)?;
     let root = gltf::json::Root::from_slice(json).map_err(|e| explain_bad_json(json, &e, opts))?;
     check_version(&root.asset.version)?;
     let ignored = check_required(&root.extensions_required, opts)?;
@@ -224,10 +224,126 @@ pub(super) fn parse_document(
     Ok((gltf::Document::from_json_without_validation(root), ignored))
 }
 
+/// Fields that hold a byte count or offset, not an index: `gltf` reads them as u64, and the loader
+/// checks them against the buffers.
+const BYTE_FIELDS: &[&str] = &["byteLength", "byteOffset", "count"];
+
+/// Refuses an integer of 2^32 or more where `gltf` reads an index (scene, node, mesh, accessor,
+/// camera, texture, sampler, material, …): it would keep the low 32 bits, so `"scene": 4294967297`
+/// would load scene 1. Every integer of the document is looked at but those under `extras`
+/// (application data) and the byte counts (`BYTE_FIELDS`); only a document with a run of ten digits
+/// (2^32 has ten) is walked at all.
+fn check_index_range(json: &[u8]) -> Result<(), String> {
+    let mut run = 0;
+    if !json.iter().any(|b| {
+        run = if b.is_ascii_digit() { run + 1 } else { 0 };
+        run >= 10
+    }) {
+        return Ok(());
+    }
+    let mut path = Vec::new();
+    let mut found = None;
+    let mut de = serde_json::Deserializer::from_slice(json);
+    // A malformed document is the parser's to report, after this.
+    let _ = serde::de::DeserializeSeed::deserialize(
+        IndexScan {
+            path: &mut path,
+            found: &mut found,
+        },
+        &mut de,
+    );
+    match found {
+        Some((at, v)) => Err(format!(
+            "invalid glTF: {at}: {v} is out of range (an index must be below 2^32 = 4294967296)"
+        )),
+        None => Ok(()),
+    }
+}
+
+/// A walk of a JSON value that notes the first too-large integer (`check_index_range`) with its
+/// path (`nodes[3].mesh`).
+struct IndexScan<'a> {
+    path: &'a mut Vec<String>,
+    found: &'a mut Option<(String, u64)>,
+}
+
+impl<'de> serde::de::DeserializeSeed<'de> for IndexScan<'_> {
+    type Value = ();
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for IndexScan<'_> {
+    type Value = ();
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_u64<E>(self, v: u64) -> Result<(), E> {
+        let field = self.path.last().map_or("", String::as_str);
+        if v > u32::MAX as u64 && self.found.is_none() && !BYTE_FIELDS.contains(&field) {
+            let at = self.path.iter().fold(String::new(), |mut s, p| {
+                if !p.starts_with('[') && !s.is_empty() {
+                    s.push('.');
+                }
+                s.push_str(p);
+                s
+            });
+            *self.found = Some((at, v));
+        }
+        Ok(())
+    }
+    fn visit_i64<E>(self, _: i64) -> Result<(), E> {
+        Ok(())
+    }
+    fn visit_f64<E>(self, _: f64) -> Result<(), E> {
+        Ok(())
+    }
+    fn visit_bool<E>(self, _: bool) -> Result<(), E> {
+        Ok(())
+    }
+    fn visit_str<E>(self, _: &str) -> Result<(), E> {
+        Ok(())
+    }
+    fn visit_unit<E>(self) -> Result<(), E> {
+        Ok(())
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+        let mut i = 0usize;
+        loop {
+            self.path.push(format!("[{i}]"));
+            let more = seq.next_element_seed(IndexScan {
+                path: self.path,
+                found: self.found,
+            })?;
+            self.path.pop();
+            if more.is_none() {
+                return Ok(());
+            }
+            i += 1;
+        }
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        while let Some(key) = map.next_key::<std::borrow::Cow<str>>()? {
+            if key == "extras" {
+                map.next_value::<serde::de::IgnoredAny>()?;
+                continue;
+            }
+            self.path.push(key.into_owned());
+            map.next_value_seed(IndexScan {
+                path: self.path,
+                found: self.found,
+            })?;
+            self.path.pop();
+        }
+        Ok(())
+    }
+}
+
 /// Loads every buffer: the GLB BIN chunk, `data:` URIs or files next to the glTF.
 pub(super) fn load_buffers(
     doc: &gltf::Document,
-    base: Option<&Path>,
+    base: Option<&uri::Folder>,
     mut blob: Option<&[u8]>,
 ) -> Result<Vec<Vec<u8>>, String> {
     let mut out = Vec::new();

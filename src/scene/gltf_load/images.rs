@@ -2,7 +2,6 @@
 
 use super::uri::{self, Resolved};
 use crate::scene::Texture;
-use std::path::Path;
 
 /// Largest texture side kept; bigger images are downscaled (aspect ratio preserved).
 pub const MAX_TEXTURE_SIDE: u32 = 2048;
@@ -11,7 +10,7 @@ pub const MAX_TEXTURE_SIDE: u32 = 2048;
 pub(super) fn encoded_bytes(
     image: &gltf::Image,
     buffers: &[Vec<u8>],
-    base: Option<&Path>,
+    base: Option<&uri::Folder>,
 ) -> Result<Vec<u8>, String> {
     match image.source() {
         gltf::image::Source::View { view, .. } => {
@@ -39,7 +38,7 @@ pub(super) fn encoded_bytes(
 /// Why an external image file is refused outright (it is larger than any texture fuzzy-vpl reads:
 /// a 1 TB sparse file, say), or `None`. Unlike an image that does not decode, which costs only its
 /// texture, such a file is an error in the scene, found from its size without reading it.
-pub(super) fn refused_file(image: &gltf::Image, base: Option<&Path>) -> Option<String> {
+pub(super) fn refused_file(image: &gltf::Image, base: Option<&uri::Folder>) -> Option<String> {
     let gltf::image::Source::Uri { uri, .. } = image.source() else {
         return None;
     };

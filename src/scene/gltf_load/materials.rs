@@ -4,7 +4,6 @@ use super::{images, uri};
 use crate::scene::{LoadReport, Material, Texture};
 use glam::{Affine2, Vec3, Vec4};
 use std::collections::HashMap;
-use std::path::Path;
 
 /// Materials plus what triangle emission needs to know about them.
 pub(super) struct MaterialTable {
@@ -52,7 +51,7 @@ pub(super) fn finite_or(v: Vec4, fallback: Vec4) -> Vec4 {
 /// Texture decoding state: each glTF image is decoded at most once.
 struct TextureCache<'a> {
     buffers: &'a [Vec<u8>],
-    base: Option<&'a Path>,
+    base: Option<&'a uri::Folder<'a>>,
     /// glTF image index → `textures` index (`None` when it could not be decoded).
     decoded: HashMap<usize, Option<u32>>,
     textures: Vec<Texture>,
@@ -177,7 +176,7 @@ fn warn_unreadable_textures(doc: &gltf::Document, report: &mut LoadReport) {
 pub(super) fn load_materials(
     doc: &gltf::Document,
     buffers: &[Vec<u8>],
-    base: Option<&Path>,
+    base: Option<&uri::Folder>,
     report: &mut LoadReport,
 ) -> Result<(MaterialTable, Vec<Texture>), String> {
     warn_unreadable_textures(doc, report);

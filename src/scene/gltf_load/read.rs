@@ -8,52 +8,14 @@ use std::fs::File;
 use std::io::Read;
 use std::path::Path;
 
+use crate::files::open_regular;
+
 /// The most bytes read from one scene file or one buffer: 4 GiB, the most a GLB can declare (its
 /// length field is a u32).
 pub const MAX_FILE_BYTES: u64 = u32::MAX as u64;
 /// The most bytes read from one encoded image file (the `image` crate's default decoding
 /// allocation limit is the same 512 MiB; textures are downscaled to `MAX_TEXTURE_SIDE` anyway).
 pub const MAX_IMAGE_BYTES: u64 = 512 << 20;
-
-/// Opens `path` for reading if it is a regular file; returns it with its size. Opened non-blocking
-/// so that a FIFO without a writer does not block before the check.
-fn open_regular(path: &Path) -> Result<(File, u64), String> {
-    let mut opts = std::fs::OpenOptions::new();
-    opts.read(true);
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::OpenOptionsExt;
-        opts.custom_flags(libc::O_NONBLOCK);
-    }
-    let f = opts.open(path).map_err(|e| e.to_string())?;
-    let meta = f.metadata().map_err(|e| e.to_string())?;
-    if !meta.is_file() {
-        let t = meta.file_type();
-        #[cfg(unix)]
-        let kind = {
-            use std::os::unix::fs::FileTypeExt;
-            if t.is_dir() {
-                "a directory"
-            } else if t.is_fifo() {
-                "a FIFO"
-            } else if t.is_socket() {
-                "a socket"
-            } else if t.is_char_device() || t.is_block_device() {
-                "a device"
-            } else {
-                "not a file"
-            }
-        };
-        #[cfg(not(unix))]
-        let kind = if t.is_dir() {
-            "a directory"
-        } else {
-            "not a file"
-        };
-        return Err(format!("not a regular file ({kind})"));
-    }
-    Ok((f, meta.len()))
-}
 
 /// Bytes in a human unit for messages ("1.0 TiB").
 pub fn human_bytes(n: u64) -> String {

@@ -1,0 +1,204 @@
+//! The reprojection of the shared display path on the GPU (`shaders-wgsl/reproject.wgsl`): the last
+//! frame as displayed, shown from the current camera while the next one renders, from the frame's
+//! own G-buffer on the window's device; nothing read back. The split path keeps the CPU warp
+//! (`reproject.rs`), whose frame is on the CPU anyway. CPU twin: `cpu::reproject`.
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::gi::primary::CameraParams;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct ReprojectParams {
+    old: CameraParams,
+    new: CameraParams,
+}
+
+/// The most workgroups a dimension of a dispatch has (WebGPU's default limit).
+const MAX_GROUPS: u32 = 65535;
+
+pub struct Reproject {
+    clear: wgpu::ComputePipeline,
+    splat_depth: wgpu::ComputePipeline,
+    splat_source: wgpu::ComputePipeline,
+    resolve: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    /// Per new pixel: depth and source (made again when the size changes), and the output.
+    scratch: Option<(wgpu::Buffer, wgpu::Buffer, u32)>,
+    target: Option<super::display::Target>,
+}
+
+fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty,
+        count: None,
+    }
+}
+
+fn buffer(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
+    wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    }
+}
+
+impl Reproject {
+    pub fn new(device: &wgpu::Device) -> Self {
+        let storage = |read_only| buffer(wgpu::BufferBindingType::Storage { read_only });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("reproject"),
+            entries: &[
+                entry(0, buffer(wgpu::BufferBindingType::Uniform)),
+                entry(1, storage(true)),
+                entry(2, storage(false)),
+                entry(3, storage(false)),
+                entry(
+                    4,
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                ),
+                entry(
+                    5,
+                    wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::WriteOnly,
+                        format: wgpu::TextureFormat::Rgba8Unorm,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                ),
+            ],
+        });
+        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("reproject"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = crate::gpu::shader::module(device, "reproject");
+        let pipeline = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pl),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        Reproject {
+            clear: pipeline("clear"),
+            splat_depth: pipeline("splat_depth"),
+            splat_source: pipeline("splat_source"),
+            resolve: pipeline("resolve"),
+            layout,
+            params: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("reproject params"),
+                size: std::mem::size_of::<ReprojectParams>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            scratch: None,
+            target: None,
+        }
+    }
+
+    pub fn target(&self) -> Option<&super::display::Target> {
+        self.target.as_ref()
+    }
+
+    /// Records the reprojection of `image` (the old frame as displayed: an `Rgba8Unorm` texture
+    /// with `TEXTURE_BINDING`, of `old`'s size) with its G-buffer (4 vec4s a pixel, render units)
+    /// from camera `old` to `new` (render units, the same size) into `enc`. Returns true when the
+    /// output texture was made again (an egui registration must be updated).
+    pub fn record(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        enc: &mut wgpu::CommandEncoder,
+        image: &wgpu::Texture,
+        gbuffer: &wgpu::Buffer,
+        (old, new): (&CameraParams, &CameraParams),
+    ) -> bool {
+        let (w, h) = (old.size[0], old.size[1]);
+        let n = w * h;
+        let p = ReprojectParams {
+            old: *old,
+            new: CameraParams {
+                size: old.size,
+                ..*new
+            },
+        };
+        crate::gpu::traffic::uploaded(std::mem::size_of::<ReprojectParams>() as u64);
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        if self.scratch.as_ref().is_none_or(|s| s.2 != n) {
+            let b = |label| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: (n as u64 * 4).max(256),
+                    usage: wgpu::BufferUsages::STORAGE,
+                    mapped_at_creation: false,
+                })
+            };
+            self.scratch = Some((b("reproject depth"), b("reproject source"), n));
+        }
+        let remade = self.target.as_ref().is_none_or(|t| t.size != (w, h));
+        if remade {
+            self.target = Some(super::display::Target::new(device, (w, h), "reproject"));
+        }
+        let (depth, source, _) = self.scratch.as_ref().expect("made above");
+        let out = self.target.as_ref().expect("made above");
+        let old_view = image.create_view(&wgpu::TextureViewDescriptor {
+            usage: Some(wgpu::TextureUsages::TEXTURE_BINDING),
+            ..Default::default()
+        });
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("reproject"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.params.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: gbuffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: depth.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: source.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::TextureView(&old_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::TextureView(&out.storage_view()),
+                },
+            ],
+        });
+        let groups = n.div_ceil(64).max(1);
+        let grid = (groups.min(MAX_GROUPS), groups.div_ceil(MAX_GROUPS));
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("reproject"),
+            timestamp_writes: None,
+        });
+        pass.set_bind_group(0, &group, &[]);
+        for p in [&self.clear, &self.splat_depth, &self.splat_source] {
+            pass.set_pipeline(p);
+            pass.dispatch_workgroups(grid.0, grid.1, 1);
+        }
+        pass.set_pipeline(&self.resolve);
+        pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+        remade
+    }
+}

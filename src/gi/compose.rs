@@ -1,0 +1,171 @@
+//! A frame's final radiance written into a caller's texture (`Renderer::render_to_texture`): the
+//! frame's direct and indirect buffers summed on the GPU into an `Rgba32Float` storage texture, as
+//! `GpuFrame::read` sums them on the CPU (`shaders-wgsl/compose.wgsl`). Nothing goes through the CPU
+//! but a 32-byte uniform.
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::gpu::GpuContext;
+use crate::render::frame::GpuFrame;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct ComposeParams {
+    size: [u32; 4],
+    scale: [f32; 4],
+}
+
+pub struct Compose {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    /// For a caller's texture without `STORAGE_BINDING`: the pass writes this one, of the same size,
+    /// and a GPU copy moves it over (made once a size).
+    scratch: std::cell::RefCell<Option<wgpu::Texture>>,
+}
+
+fn storage(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+impl Compose {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("compose"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                storage(1),
+                storage(2),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::WriteOnly,
+                        format: wgpu::TextureFormat::Rgba32Float,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("compose"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = crate::gpu::shader::module(device, "compose");
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("compose"),
+            layout: Some(&pl),
+            module: &module,
+            entry_point: Some("compose"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("compose params"),
+            size: std::mem::size_of::<ComposeParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Compose {
+            pipeline,
+            layout,
+            params,
+            scratch: Default::default(),
+        }
+    }
+
+    /// Writes `frame`'s final radiance into `texture` (`Rgba32Float`, the frame's size, with
+    /// `STORAGE_BINDING` or `COPY_DST` usage) and submits.
+    pub fn record(&self, ctx: &GpuContext, frame: &GpuFrame, texture: &wgpu::Texture) {
+        let b = &frame.buffers;
+        let (w, h) = b.size;
+        let direct = texture
+            .usage()
+            .contains(wgpu::TextureUsages::STORAGE_BINDING);
+        let mut scratch = self.scratch.borrow_mut();
+        if !direct && scratch.as_ref().is_none_or(|t| t.size() != texture.size()) {
+            *scratch = Some(ctx.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("compose scratch"),
+                size: texture.size(),
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Float,
+                usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            }));
+        }
+        let target = if direct {
+            texture
+        } else {
+            scratch.as_ref().expect("made above")
+        };
+        let p = ComposeParams {
+            size: [w, h, 0, 0],
+            scale: [frame.output_scale, 0.0, 0.0, 0.0],
+        };
+        ctx.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        let view = target.create_view(&Default::default());
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("compose"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.params.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: b.radiance.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: b.image_indirect().as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&view),
+                },
+            ],
+        });
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("compose"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+        }
+        if !direct {
+            enc.copy_texture_to_texture(
+                target.as_image_copy(),
+                texture.as_image_copy(),
+                texture.size(),
+            );
+        }
+        ctx.queue.submit([enc.finish()]);
+    }
+}
