@@ -3,14 +3,19 @@
 
 Each mutant is one edit (file, exact original snippet, replacement) to a copy of shaders-wgsl/; the
 GPU test binaries run against it through FVPL_SHADER_DIR (the WGSL is read at run time, no rebuild).
-A mutant is *killed* when a test fails, *killed by compile* when its shader no longer validates (the
-failure names a WGSL parse / validation error), *survived* when every test passes, *timeout* when a
-binary exceeds its limit (counted as killed: the suite noticed).
+A mutant is *killed* when a test fails and, rerun alone on the same mutant, the same test fails
+again; *killed by compile* when its shader no longer validates (the failure names a WGSL parse /
+validation error), twice; *survived* when every test passes. Not counted as killed: *timeout* (a
+binary past its limit), *crash* (a binary that ends without a failed test, by a signal or an exit
+code other than libtest's 101) and *flaky* (a test that failed once and passed on the rerun); the
+script tries the remaining binaries after each of them, and reports the mutant so only if none
+kills it.
 
 Usage (from the repository root, after `cargo test --release --no-run`):
     python3 scripts/wgsl-mutants.py            # every mutant, stage 1 then stage 2
     python3 scripts/wgsl-mutants.py -k clamp   # mutants whose name contains "clamp"
     python3 scripts/wgsl-mutants.py -k bvh- km-   # ... "bvh-" or "km-"
+    python3 scripts/wgsl-mutants.py --files common/lights.wgsl direct.wgsl   # one or more files
     python3 scripts/wgsl-mutants.py --list
 First both stages run on the unmutated shaders: a failing binary stops the script with one line that
 names it and its failed tests. Stage 1 is the oracle binary (tests/oracles.rs, about a second); a
@@ -436,10 +441,14 @@ def binaries():
     return out
 
 
+def failed_names(out):
+    """The failed tests of a libtest output (`test NAME ... FAILED`)."""
+    return [l.split()[1] for l in out.splitlines() if l.startswith("test ") and l.rstrip().endswith("FAILED")]
+
+
 def failing_tests(out):
-    """The names of the failed tests in a libtest output (`test NAME ... FAILED`)."""
-    names = [l.split()[1] for l in out.splitlines() if l.startswith("test ") and l.rstrip().endswith("FAILED")]
-    return ", ".join(names) or "(no test named; see its output)"
+    return ", ".join(failed_names(out)) or "(no test named; see its output)"
+
 
 def run(cmd, env, timeout):
     try:
@@ -449,14 +458,34 @@ def run(cmd, env, timeout):
         return "timeout", ""
 
 
-def verdict(rc, out):
+def attempt(cmd, env, timeout):
+    """One run of a test binary: ("pass" | "failed" | "compile" | "timeout" | "crash", failed tests).
+    A failure is a test's only when libtest names failed tests and exits 101."""
+    rc, out = run(cmd, env, timeout)
     if rc == 0:
-        return None
+        return "pass", []
     if rc == "timeout":
-        return "timeout"
-    if any(m in out for m in COMPILE_MARKERS) and "panicked" in out and "assert" not in out.split("panicked", 1)[1][:400]:
-        return "compile"
-    return "killed"
+        return "timeout", []
+    failed = failed_names(out)
+    if rc != 101 or not failed:
+        return "crash", []
+    tail = out.split("panicked", 1)[1][:400] if "panicked" in out else ""
+    if any(m in out for m in COMPILE_MARKERS) and "panicked" in out and "assert" not in tail:
+        return "compile", failed
+    return "failed", failed
+
+
+def judge(binary, path, env, timeout):
+    """A binary on a mutant, a failure checked by a rerun of the failed tests alone: (verdict, tests).
+    The verdict is "killed" or "compile" only when a test that failed fails again the same way."""
+    kind, failed = attempt([path], env, timeout)
+    if kind not in ("failed", "compile"):
+        return (None if kind == "pass" else kind), []
+    kind2, failed2 = attempt([path, *failed, "--exact"], env, timeout)
+    same = [t for t in failed if t in failed2]
+    if kind2 == kind and same:
+        return ("killed" if kind == "failed" else "compile"), same
+    return "flaky", failed
 
 
 def main():
@@ -466,8 +495,10 @@ def main():
     ap.add_argument("--list", action="store_true")
     ap.add_argument("--full", action="store_true", help="run stage 2 even when stage 1 kills")
     ap.add_argument("--timeout", type=int, default=300, help="seconds per test binary")
+    ap.add_argument("--files", nargs="+", default=None, metavar="FILE",
+                    help="only the mutants of these shader files (paths under shaders-wgsl)")
     a = ap.parse_args()
-    todo = [m for m in MUTANTS if any(k in m[0] for k in a.k)]
+    todo = [m for m in MUTANTS if any(k in m[0] for k in a.k) and (a.files is None or m[1] in a.files)]
     if a.list:
         for m in todo:
             print(f"{m[0]:48} {m[4]:9} {m[1]}")
@@ -501,6 +532,12 @@ def main():
     shutil.rmtree(base)
     print(f"baseline: {len(names)} GPU test binaries pass on the unmutated shaders"
           f" ({time.time() - t_base:.0f} s)", flush=True)
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
+                            text=True).stdout.strip()
+    dirty = subprocess.run(["git", "status", "--porcelain", "--", "shaders-wgsl", "tests", "src"],
+                           capture_output=True, text=True).stdout.strip()
+    print(f"tree: commit {commit}{' with uncommitted changes' if dirty else ''}, "
+          f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}", flush=True)
     rows = []
     for name, f, old, new, part in todo:
         d = tempfile.mkdtemp(prefix="wgsl-mutant-")
@@ -511,34 +548,40 @@ def main():
         open(path, "w").write(src.replace(old, new, 1))
         env["FVPL_SHADER_DIR"] = s
         t0 = time.time()
-        rc, out = run([bins["oracles"]], env, limit["oracles"])
-        v = verdict(rc, out)
-        by = "oracles" if v else ""
-        if v is None or a.full:
-            first = [b for b in HINTS.get(f, []) if b in names]
-            for b in first + [b for b in names[1:] if b not in first]:
-                rc, out2 = run([bins[b]], env, limit[b])
-                v2 = verdict(rc, out2)
-                if v2:
-                    v = v or v2
-                    by = by or b
-                    if not a.full:
-                        break
-        rows.append((name, part, v or "SURVIVED", by, time.time() - t0, f))
-        print(f"{name:48} {part:9} {v or 'SURVIVED':9} {by:13} {time.time() - t0:6.1f}s", flush=True)
+        first = [b for b in HINTS.get(f, []) if b in names[1:]]
+        order = ["oracles"] + first + [b for b in names[1:] if b not in first]
+        v, by, notes = None, "", []
+        for b in order:
+            v2, tests = judge(b, bins[b], env, limit[b])
+            if v2 in ("killed", "compile"):
+                if v is None:
+                    v, by = v2, f"{b}::{tests[0]}"
+                if not a.full:
+                    break
+            elif v2:
+                notes.append(f"{v2} in {b}" + (f" ({', '.join(tests)})" if tests else ""))
+        if v is None:
+            # Not killed: the reason it is not a survivor either, if any binary timed out, crashed
+            # or failed only once.
+            v = next((k for k in ("timeout", "crash", "flaky") if any(n.startswith(k) for n in notes)),
+                     "SURVIVED")
+        rows.append((name, part, v, by, time.time() - t0, f))
+        note = f"  [{'; '.join(notes)}]" if notes else ""
+        print(f"{name:48} {part:9} {v:9} {by:40} {time.time() - t0:6.1f}s{note}", flush=True)
         shutil.rmtree(d)
     n = len(rows)
-    killed = sum(r[2] in ("killed", "timeout") for r in rows)
-    comp = sum(r[2] == "compile" for r in rows)
-    surv = [r[0] for r in rows if r[2] == "SURVIVED"]
-    print(f"\n{n} mutants: {killed} killed by a test, {comp} killed by compile, {len(surv)} survived"
-          f" ({100.0 * (killed + comp) / max(n, 1):.0f}% killed)")
-    for s in surv:
-        print(f"  survived: {s}")
+    count = {k: sum(r[2] == k for r in rows) for k in ("killed", "compile", "timeout", "crash", "flaky", "SURVIVED")}
+    print(f"\n{n} mutants: {count['killed']} killed by a test (the same test failed twice), "
+          f"{count['compile']} killed by compile, {count['timeout']} timed out, {count['crash']} crashed, "
+          f"{count['flaky']} failed only once, {count['SURVIVED']} survived "
+          f"({100.0 * (count['killed'] + count['compile']) / max(n, 1):.0f}% killed)")
+    for r in rows:
+        if r[2] not in ("killed", "compile"):
+            print(f"  {r[2]}: {r[0]}")
     per = {}
     for r in rows:
         k, n_ = per.get(r[5], (0, 0))
-        per[r[5]] = (k + (r[2] != "SURVIVED"), n_ + 1)
+        per[r[5]] = (k + (r[2] in ("killed", "compile")), n_ + 1)
     print("per file: " + ", ".join(f"{f} {k}/{n_}" for f, (k, n_) in sorted(per.items())))
 
 

@@ -77,18 +77,17 @@ fn run(
     let gpu = r.accumulate_buffers(p, g, indirect, prev).unwrap();
     let (pg, ph) = prev.unwrap_or((g, indirect));
     let cpu = twin::accumulate(p, g, pg, ph, indirect);
-    let worst = common::assert_twins(
+    common::assert_twins(
         r.ctx,
         "accumulate",
+        "accumulate::twin",
         (gpu.iter().zip(&cpu)).flat_map(|(a, b)| {
             [
                 (Vec3::from_slice(&b[..3]), Vec3::from_slice(&a[..3])),
                 (Vec3::splat(b[3]), Vec3::splat(a[3])),
             ]
         }),
-        0.0,
     );
-    assert_eq!(worst, 0.0);
     gpu
 }
 

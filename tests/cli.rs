@@ -335,7 +335,8 @@ fn bad_input_exits_2_with_one_line() {
 }
 
 /// Bad arguments, outputs that cannot be written and a reference with NaN are refused before any
-/// rendering: exit 2 and stderr is exactly one line naming the option or file.
+/// rendering: exit 2 and stderr is exactly one line naming the option or file and the words of its
+/// cause.
 #[test]
 fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
     let d = common::scratch("cli-bad-args");
@@ -352,47 +353,72 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
     let png = d.join("v.png").display().to_string();
     let nodir_dir = d.join("nodir").display().to_string();
     let nan = nan_ref.display().to_string();
+    let stats_dir_needle = format!("{dir}|cannot write: it is a directory");
     let cases: Vec<(Vec<&str>, &str)> = vec![
         (
             vec!["render", "-o", &o, "--fuzziness", "2.5"],
-            "--fuzziness",
+            "--fuzziness 2.5|must be 1..16",
         ),
-        (vec!["render", "-o", &o, "--seed=-1"], "--seed"),
+        (
+            vec!["render", "-o", &o, "--seed=-1"],
+            "--seed|not in 0..=4294967295",
+        ),
         (
             vec!["render", "-o", &o, "--width", "3", "--width", "4"],
-            "--width",
+            "--width|cannot be used multiple times",
         ),
         (
             vec!["render", "-o", &o, "--error-map", "e.png"],
-            "--compare",
+            "--compare|required arguments were not provided",
         ),
         (
             vec!["render", "-o", &o, "--error-metric", "flip"],
-            "--error-map",
+            "--error-map|required arguments were not provided",
         ),
-        (vec!["render", "-o", &o, "--target-ms", "0"], "--target-ms"),
-        (vec!["view", "--b-fuzziness", "0"], "--b-fuzziness"),
-        (vec!["view", "--b-weighting", "soft"], "--b-weighting"),
-        (vec!["view", "--target-ms", "0"], "--target-ms"),
-        (vec!["render", "-o", &o, "--target-ms", "-5"], "--target-ms"),
+        (
+            vec!["render", "-o", &o, "--target-ms", "0"],
+            "--target-ms 0|> 0 and at most 1e7",
+        ),
+        (
+            vec!["view", "--b-fuzziness", "0"],
+            "--b-fuzziness 0|must be 1..16",
+        ),
+        (
+            vec!["view", "--b-weighting", "soft"],
+            "--b-weighting|possible values: hard, uniform, inverse-distance",
+        ),
+        (
+            vec!["view", "--target-ms", "0"],
+            "--target-ms 0|> 0 and at most 1e7",
+        ),
+        (
+            vec!["render", "-o", &o, "--target-ms", "-5"],
+            "--target-ms -5|> 0 and at most 1e7",
+        ),
         (
             vec!["render", "-o", &o, "--target-ms", "inf"],
-            "--target-ms",
+            "--target-ms inf|> 0 and at most 1e7",
         ),
         (
             vec!["render", "-o", &o, "--target-ms", "100", "--reference"],
-            "--target-ms",
+            "--target-ms|--reference and --path-trace cluster nothing",
         ),
         (
             vec!["render", "-o", &o, "--no-such-option"],
-            "--no-such-option",
+            "--no-such-option|unexpected argument",
         ),
-        (vec!["render", "-o", &nodir], "nodir"),
-        (vec!["render", "-o", &o, "--stats", &dir], &dir),
-        (vec!["render", "-o", &o, "--compare", &nan], "nan.exr"),
+        (
+            vec!["render", "-o", &nodir],
+            "nodir|cannot write: no directory",
+        ),
+        (vec!["render", "-o", &o, "--stats", &dir], &stats_dir_needle),
+        (
+            vec!["render", "-o", &o, "--compare", &nan],
+            "nan.exr|non-finite pixel|at pixel 5",
+        ),
         (
             vec!["render", "-o", &o, "--light-scale", "5e37"],
-            "--light-scale",
+            "--light-scale|emits 1.350e39|does not fit in f32",
         ),
         // The Cornell box's ceiling emits 27: scaled by 1e35 it emits 2.7e36, past the 1e36 an image
         // lit by it may reach in f32.
@@ -402,12 +428,15 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
         ),
         (
             vec!["render", "-o", &o, "--path-trace", "0"],
-            "--path-trace",
+            "--path-trace|0 is not in 1..=",
         ),
-        (vec!["render", "-o", &o, "--vpls", "100000000"], "--vpls"),
+        (
+            vec!["render", "-o", &o, "--vpls", "100000000"],
+            "--vpls 100000000|at most",
+        ),
         (
             vec!["render", "-o", &o, "--plane-gate", "0"],
-            "--plane-gate",
+            "--plane-gate 0|must be an angle in (0, 90] degrees",
         ),
         // 200,000 SP clusters x 8192 VPLs: a 205 MB visibility matrix (lavapipe binds 128 MiB).
         (
@@ -424,11 +453,11 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
         ),
         (
             vec!["render", "-o", &o, "--plane-gate", "91"],
-            "--plane-gate",
+            "--plane-gate 91|must be an angle in (0, 90] degrees",
         ),
         (
             vec!["render", "-o", &o, "--plane-gate", "NaN"],
-            "--plane-gate",
+            "--plane-gate NaN|must be an angle in (0, 90] degrees",
         ),
         (
             vec!["view", "--frames", "1", "--screenshot", &nodir_png],
@@ -477,8 +506,11 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
             ],
             "--direct-samples 70000",
         ),
-        (vec!["view", "--shot-dir", &nodir_dir], "--shot-dir"),
-        (vec!["view", "--shot-dir", &o], "--shot-dir"),
+        (
+            vec!["view", "--shot-dir", &nodir_dir],
+            "--shot-dir|not a directory",
+        ),
+        (vec!["view", "--shot-dir", &o], "--shot-dir|not a directory"),
         // 64 bytes a pixel in one storage binding: lavapipe's 128 MiB holds 2,097,152 pixels.
         (
             vec!["render", "-o", &o, "--width", "2048", "--height", "1100"],
@@ -510,12 +542,14 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
             "--sp-clusters 200000",
         ),
     ];
+    // Each needle's parts ('|') all in the line: the option or file and the words of the cause,
+    // so that another check refusing the same option or file does not pass for this one.
     for (a, needle) in cases {
         let (code, _, err) = run(&a);
         assert_eq!(code, 2, "{a:?}: {err}");
         assert_eq!(err.lines().count(), 1, "{a:?}: {err}");
         assert!(
-            err.starts_with("error: ") && err.contains(needle),
+            err.starts_with("error: ") && needle.split('|').all(|part| err.contains(part)),
             "{a:?}: {err}"
         );
     }
@@ -756,12 +790,14 @@ fn scene_files_that_are_not_regular_files_are_refused() {
             .stderr(std::process::Stdio::piped())
             .spawn()
             .unwrap();
-        let t = std::time::Instant::now();
+        // A hang guard, not a speed test: 1,500 polls 20 ms apart (at least 30 s).
+        let mut polls = 0;
         while child.try_wait().unwrap().is_none() {
-            if t.elapsed() > std::time::Duration::from_secs(30) {
+            polls += 1;
+            if polls > 1500 {
                 let _ = child.kill();
                 let _ = child.wait();
-                panic!("info {path}: still running after 30 s");
+                panic!("info {path}: still running after 1,500 polls (30 s)");
             }
             std::thread::sleep(std::time::Duration::from_millis(20));
         }
@@ -944,25 +980,25 @@ fn required_extensions_on_the_command_line() {
     assert!(!err.contains("panicked"), "{err}");
 }
 
-/// A 1 TiB sparse file as the scene is refused with exit 2 and one line at once (it used to abort
-/// with exit 134 reserving 1 TiB). Asserted under 1 s for the whole process (measured: ~3 ms).
+/// A 1 TiB sparse file as the scene is refused with exit 2 and one line naming its size against the
+/// cap (it used to abort with exit 134 reserving 1 TiB). That the loader reads none of it is
+/// `scene_load::huge_sparse_files_are_refused_or_read_only_as_declared` (bytes read, not a clock).
 #[test]
 fn a_terabyte_scene_file_is_refused_at_once() {
     let d = common::scratch("cli-sparse");
     for name in ["huge.glb", "huge.gltf"] {
         let p = d.join(name);
         std::fs::File::create(&p).unwrap().set_len(1 << 40).unwrap();
-        let t = std::time::Instant::now();
         let (code, _, err) = run(&["info", p.to_str().unwrap()]);
-        let secs = t.elapsed().as_secs_f64();
         assert_eq!(code, 2, "{err}");
         let lines = common::error_lines(&err);
         assert_eq!(lines.len(), 1, "{err}");
         assert!(
-            lines[0].contains(name) && lines[0].contains("larger than"),
+            lines[0].contains(name)
+                && lines[0].contains("larger than")
+                && lines[0].contains("1.0 TiB"),
             "{err}"
         );
-        assert!(secs < 1.0, "{name}: {secs} s");
         std::fs::remove_file(&p).unwrap();
     }
 }
@@ -1300,4 +1336,215 @@ fn weighting_names_are_the_cli_and_serde_names() {
         assert_eq!(json, format!("\"{}\"", w.name()));
     }
     assert_eq!(Weighting::InverseDistance.name(), "inverse-distance");
+}
+
+/// `--target-ms` through the command line with a budget that binds on any adapter (1 µs, far
+/// below any frame): the controller cuts K and the direct light from the first frame on, every
+/// frame over the budget, and the settings it ends on are the ones rendered.
+#[test]
+fn target_ms_with_a_binding_budget_cuts_k_and_the_direct_light() {
+    let d = common::scratch("cli-target-binding");
+    let stats = d.join("s.json");
+    let out = d.join("t.exr");
+    let (code, _, err) = run(&[
+        "render",
+        "builtin:cornell",
+        "--width",
+        "48",
+        "--height",
+        "32",
+        "--vpls",
+        "256",
+        "--target-ms",
+        "0.001",
+        "-o",
+        out.to_str().unwrap(),
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    let steps = j["target"]["steps"].as_array().unwrap();
+    println!("steps {steps:?}");
+    assert!(steps.len() >= 2, "{j}");
+    for st in steps {
+        assert!(st["frame_ms"].as_f64().unwrap() > 0.001, "{st}");
+    }
+    let first = &steps[0];
+    let last = steps.last().unwrap();
+    let k = |s: &serde_json::Value, f: &str| s[f].as_u64().unwrap();
+    // Below the start's K's and the user's 16 samples: the budget bound.
+    assert!(
+        k(last, "vpl_clusters") < k(first, "vpl_clusters"),
+        "{steps:?}"
+    );
+    assert!(k(last, "direct_samples") < 16, "{steps:?}");
+    for f in ["sp_clusters", "vpl_clusters", "direct_samples"] {
+        assert_eq!(last[f], j["settings"][f], "{f}: {j}");
+    }
+    let (_, _, px) = fuzzy_vpl::export::read_exr(&out).unwrap();
+    assert!(common::all_finite(&px));
+}
+
+/// `render --method wang` and `--method lightcluster`: the method's own passes run (not the
+/// reference nor colom's), the stats name the method, and its indirect light is within 20% of the
+/// reference's on the same frame (measured at 32×24: wang 1.068, lightcluster 1.000).
+#[test]
+fn render_runs_wang_and_lightcluster() {
+    let d = common::scratch("cli-methods");
+    let frame = [
+        "builtin:cornell",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--vpls",
+        "256",
+        "--sp-clusters",
+        "32",
+        "--vpl-clusters",
+        "64",
+    ];
+    let render = |name: &str, extra: &[&str]| -> serde_json::Value {
+        let (out, stats) = (
+            d.join(format!("{name}.exr")),
+            d.join(format!("{name}.json")),
+        );
+        let mut args = vec!["render"];
+        args.extend(frame);
+        args.extend(extra);
+        args.extend([
+            "-o",
+            out.to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+        ]);
+        let (code, _, err) = run(&args);
+        assert_eq!(code, 0, "{args:?}: {err}");
+        let (_, _, px) = fuzzy_vpl::export::read_exr(&out).unwrap();
+        assert!(common::all_finite(&px), "{name}");
+        serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap()
+    };
+    let reference = render("reference", &["--reference"]);
+    let ind_ref = reference["mean_luminance_indirect"].as_f64().unwrap();
+    for (method, own) in [
+        ("wang", &["wang_cluster", "wang_gather", "wang_interp"][..]),
+        (
+            "lightcluster",
+            &["lightcluster_cluster", "lightcluster_shade"][..],
+        ),
+    ] {
+        let j = render(method, &["--method", method]);
+        assert_eq!(j["settings"]["method"].as_str(), Some(method), "{j}");
+        let passes: Vec<&str> = j["passes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| p.as_str().unwrap())
+            .collect();
+        for p in own {
+            assert!(passes.contains(p), "{method}: {passes:?}");
+        }
+        for p in ["reference", "sp_cluster", "shade"] {
+            assert!(!passes.contains(&p), "{method}: {passes:?}");
+        }
+        let ratio = j["mean_luminance_indirect"].as_f64().unwrap() / ind_ref;
+        println!("{method}: passes {passes:?}, indirect / reference {ratio:.3}");
+        assert!(
+            (ratio - 1.0).abs() <= 0.2,
+            "{method}: indirect ratio {ratio}"
+        );
+    }
+}
+
+/// `raybench` from the command line on a small frame: a primary and a shadow row for the scene,
+/// as many primary rays as pixels, a shadow ray per primary hit, every throughput finite and
+/// positive and the ratio GPU ÷ CPU BVH2; the same rows in `--json`. A scene that does not load
+/// exits 2 with one line.
+#[test]
+fn raybench_reports_both_ray_kinds() {
+    let d = common::scratch("cli-raybench");
+    let json = d.join("rays.json");
+    let (code, out, err) = run(&[
+        "raybench",
+        "builtin:cornell",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.starts_with("adapter: "), "{out}");
+    let rows: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), 2, "{rows:?}");
+    let s = fuzzy_vpl::scene::load("builtin:cornell").unwrap();
+    for (row, kind) in rows.iter().zip(["primary", "shadow"]) {
+        assert_eq!(row["kind"].as_str(), Some(kind), "{row}");
+        assert_eq!(row["scene"].as_str(), Some(s.name.as_str()), "{row}");
+        assert_eq!(row["triangles"].as_u64(), Some(s.triangles.len() as u64));
+        let f = |k: &str| row[k].as_f64().unwrap();
+        for k in [
+            "gpu_mrays_s",
+            "cpu_bvh2_mrays_s",
+            "cpu_cwbvh_mrays_s",
+            "ratio",
+        ] {
+            assert!(f(k).is_finite() && f(k) > 0.0, "{k}: {row}");
+        }
+        assert!((f("ratio") - f("gpu_mrays_s") / f("cpu_bvh2_mrays_s")).abs() <= 1e-9 * f("ratio"));
+        assert!(out.contains(kind), "{out}");
+    }
+    // The camera inside the closed box: every primary ray hits, each gives a shadow ray.
+    assert_eq!(rows[0]["rays"].as_u64(), Some(32 * 24));
+    let shadow = rows[1]["rays"].as_u64().unwrap();
+    assert!(shadow > 0 && shadow <= 32 * 24, "{shadow}");
+    common::assert_refused(&["raybench", "nope.glb"], "nope.glb");
+}
+
+/// `FVPL_NO_BOUNDS` and `FVPL_NO_LOOPBOUND` (docs/testing.md) turn off wgpu's bounds checks and
+/// loop bounding in the shaders (`gpu::shader::module`) to measure what they cost; a frame is the
+/// same with them, bit for bit (no access out of bounds, every loop ends).
+#[test]
+fn frames_without_bounds_checks_or_loop_bounding_are_the_same() {
+    let d = common::scratch("cli-no-bounds");
+    let render = |name: &str, env: &[&str]| {
+        let out = d.join(format!("{name}.exr"));
+        let mut c = bin();
+        c.args([
+            "render",
+            "builtin:cornell",
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--vpls",
+            "256",
+            "--sp-clusters",
+            "32",
+            "--vpl-clusters",
+            "64",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        for e in env {
+            c.env(e, "1");
+        }
+        let o = c.output().unwrap();
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let (_, _, px) = fuzzy_vpl::export::read_exr(&out).unwrap();
+        assert!(common::all_finite(&px), "{name}");
+        px
+    };
+    let checked = render("checked", &[]);
+    assert!(checked.iter().flatten().any(|&c| c > 0.0));
+    assert_eq!(render("no-bounds", &["FVPL_NO_BOUNDS"]), checked);
+    assert_eq!(render("no-loopbound", &["FVPL_NO_LOOPBOUND"]), checked);
 }

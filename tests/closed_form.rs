@@ -336,8 +336,109 @@ fn a_square_emitter_gives_the_closed_form_irradiance() {
 /// over seeds 1–16 on lavapipe.
 const SIGMA: f64 = 1.45e-3;
 
+/// Two square emitters of unequal power and area (A: side 0.4 at (−0.6, 0), 1 above the floor, L_e
+/// 6, power ∝ 0.96; B: side 1.2 at (0.7, 0.2), 1.4 above, L_e 0.5, power ∝ 0.72: A is chosen with
+/// probability 0.57 and has 1/9 of B's area), seen from a camera whose view holds floor lit mostly
+/// by A on one side and mostly by B on the other: every pixel against the sum of the two
+/// closed forms, the mean ratio over each half of the image separately. Light selection picks an
+/// emitter by power (`emitter_index`) and divides by its probability and area (`sample_emitter`'s
+/// pdf): a pdf that takes another emitter's power or area, or power for area, or an index off by
+/// one, moves light from one half to the other.
+///
+/// Tolerance from the spread (`FVPL_FURNACE_SEEDS=16`): over seeds 1–16 on lavapipe the per-seed
+/// mean ratios of the two halves had σ `TWO_EMITTER_SIGMA`; the mean of the 4 seeds here must be
+/// within 4 σ / √4 of 1. Each pixel also within a factor 2.
+#[test]
+fn two_emitters_of_unequal_power_and_area_give_the_sum_of_their_closed_forms() {
+    let (a, b) = (
+        (-0.6f32, 0.0f32, 0.2f32, 1.0f32, 6.0f32),
+        (0.7, 0.2, 0.6, 1.4, 0.5),
+    );
+    let mut tris = square(a.0, a.1, a.2, a.3, false, 1).to_vec();
+    tris.extend(square(b.0, b.1, b.2, b.3, false, 2));
+    let mut s = floor_scene(&tris, a.4, Vec::new());
+    s.materials.push(Material {
+        name: "emitter b".into(),
+        base_color: Vec4::new(0.0, 0.0, 0.0, 1.0),
+        emissive: Vec3::splat(b.4),
+        ..Material::default()
+    });
+    let one = |p: glam::DVec3, (cx, cz, half, h, le): (f32, f32, f32, f32, f32)| {
+        let (cx, cz, hf, hh) = (cx as f64, cz as f64, half as f64, h as f64);
+        RHO / PI
+            * le as f64
+            * rect(
+                cx - hf - p.x,
+                cx + hf - p.x,
+                cz - hf - p.z,
+                cz + hf - p.z,
+                hh,
+            )
+    };
+    let want = |p: glam::DVec3| one(p, a) + one(p, b);
+    let seeds = std::env::var("FVPL_FURNACE_SEEDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(4u32);
+    let ctx = common::gpu();
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    assert_eq!(r.gpu.emitters.len(), 4, "two squares, two triangles each");
+    let cam = Camera::look_at(
+        "down",
+        Vec3::new(0.05, 0.8, 0.1),
+        Vec3::new(0.05, 0.0, 0.1),
+        Vec3::Z,
+        1.2,
+    );
+    let mut means = [Vec::new(), Vec::new()];
+    let mut worst_pixel = 1.0f64;
+    let mut share = [(0.0f64, 0usize); 2];
+    for seed in 1..=seeds {
+        let px = floor_pixels(&mut r, &cam, &direct_only(16, seed));
+        let mut sums = [(0.0f64, 0usize); 2];
+        for (p, c) in &px {
+            let wa = one(*p, a) / want(*p);
+            let side = usize::from(wa < 0.5);
+            let ratio = c[1] as f64 / want(*p);
+            worst_pixel = worst_pixel.max(ratio.max(1.0 / ratio));
+            sums[side].0 += ratio;
+            sums[side].1 += 1;
+            share[side].0 += wa;
+            share[side].1 += 1;
+        }
+        for k in 0..2 {
+            assert!(sums[k].1 > 50, "side {k}: {} pixels", sums[k].1);
+            means[k].push(sums[k].0 / sums[k].1 as f64);
+        }
+    }
+    println!(
+        "two emitters: worst pixel factor {worst_pixel:.3}; A's mean share of the closed form on each side {:.3}, {:.3}",
+        share[0].0 / share[0].1 as f64,
+        share[1].0 / share[1].1 as f64
+    );
+    assert!(worst_pixel < 2.0, "a pixel off by a factor {worst_pixel}");
+    for (k, x) in means.iter().enumerate() {
+        let m = x.iter().sum::<f64>() / x.len() as f64;
+        let sd = (x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / (x.len() - 1) as f64).sqrt();
+        let side = ["lit mostly by A", "lit mostly by B"][k];
+        println!(
+            "two emitters, pixels {side}: per-seed mean ratios {x:.5?}: mean {m:.5}, σ {sd:.2e}"
+        );
+        let bound = 4.0 * TWO_EMITTER_SIGMA[k] / (seeds as f64).sqrt();
+        assert!(
+            (m - 1.0).abs() <= bound,
+            "two emitters, pixels {side}: mean ratio {m} over {seeds} seeds, bound 1 ± {bound}"
+        );
+    }
+}
+
+/// σ of the per-seed mean ratios of the two halves of
+/// `two_emitters_of_unequal_power_and_area_give_the_sum_of_their_closed_forms`, measured over
+/// seeds 1–16 on lavapipe.
+const TWO_EMITTER_SIGMA: [f64; 2] = [2.20e-3, 2.69e-3];
+
 /// The inside of the cube [−1, 1]³: every face emits L_e and reflects with albedo ρ, facing in.
-fn furnace_box(le: f32, rho: f32) -> Scene {
+fn furnace_box(le: f32, rho: Vec3) -> Scene {
     let mut triangles = Vec::new();
     for axis in 0..3 {
         for sign in [-1.0f32, 1.0] {
@@ -367,7 +468,7 @@ fn furnace_box(le: f32, rho: f32) -> Scene {
         triangles,
         materials: vec![Material {
             name: "furnace".into(),
-            base_color: Vec4::new(rho, rho, rho, 1.0),
+            base_color: rho.extend(1.0),
             emissive: Vec3::splat(le),
             ..Material::default()
         }],
@@ -393,7 +494,7 @@ fn furnace_box(le: f32, rho: f32) -> Scene {
 #[test]
 fn a_closed_furnace_gives_the_bounce_sum_in_every_pass() {
     let (le, rho) = (1.0f64, 0.5f64);
-    let s = furnace_box(le as f32, rho as f32);
+    let s = furnace_box(le as f32, Vec3::splat(rho as f32));
     let b = fuzzy_vpl::gi::vpl_trace::MAX_DEPTH as i32;
     let sum = |from: i32, to: i32| (from..=to).map(|k| le * rho.powi(k)).sum::<f64>();
     let want = [sum(0, 1), sum(2, b + 1), sum(0, b + 1)];
@@ -447,6 +548,91 @@ fn a_closed_furnace_gives_the_bounce_sum_in_every_pass() {
 /// σ of the per-seed mean ratios of the furnace (direct, VPL indirect, path tracer), measured over
 /// seeds 1–16 on lavapipe.
 const FURNACE_SIGMA: [f64; 3] = [4.67e-3, 1.50e-2, 4.46e-3];
+
+/// The furnace per channel: the same box with albedo ρ = (0.3, 0.5, 0.7), each channel of the
+/// direct frame, the VPL reference's indirect and the path tracer against its own closed form
+/// (L_e (1 + ρ_c), L_e Σ_{k=2}^{B+1} ρ_c^k, L_e Σ_{k=0}^{B+1} ρ_c^k). The channels' sums differ by
+/// 1.6× (direct red against blue) to 9.7× (indirect), so an albedo or a flux whose channels are
+/// swapped, or one channel's albedo used for all, is off by far more than the noise.
+///
+/// Tolerance from the spread (`FVPL_FURNACE_SEEDS=16`): over seeds 1–16 on lavapipe the per-seed
+/// mean ratios had at most the σ in `COLOURED_SIGMA` (per pass, the largest of the channels); the
+/// mean of the 4 seeds must be within 4 σ / √4 of 1 in every channel.
+#[test]
+fn a_coloured_furnace_gives_each_channels_bounce_sum() {
+    let (le, rho) = (1.0f64, [0.3f64, 0.5, 0.7]);
+    let s = furnace_box(
+        le as f32,
+        Vec3::new(rho[0] as f32, rho[1] as f32, rho[2] as f32),
+    );
+    let b = fuzzy_vpl::gi::vpl_trace::MAX_DEPTH as i32;
+    let sum = |r: f64, from: i32, to: i32| (from..=to).map(|k| le * r.powi(k)).sum::<f64>();
+    let want = |c: usize| {
+        [
+            sum(rho[c], 0, 1),
+            sum(rho[c], 2, b + 1),
+            sum(rho[c], 0, b + 1),
+        ]
+    };
+    let ctx = common::gpu();
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let cam = Camera::look_at("in", Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 1.2);
+    let seeds = std::env::var("FVPL_FURNACE_SEEDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(4u32);
+    let mean = |img: &[[f32; 3]], c: usize| {
+        assert!(common::all_finite(img));
+        img.iter().map(|x| x[c] as f64).sum::<f64>() / img.len() as f64
+    };
+    // ratios[pass][channel]: per-seed mean ratios.
+    let mut ratios = vec![vec![Vec::new(); 3]; 3];
+    for seed in 1..=seeds {
+        let rs = RenderSettings {
+            reference: true,
+            frame: FrameSettings {
+                vpls: 4096,
+                ..direct_only(16, seed).frame
+            },
+            ..Default::default()
+        };
+        let f = r.render(&cam, &rs).unwrap();
+        assert!(common::all_finite(&f.radiance));
+        let pt = r.path_trace(&cam, &rs, 64).unwrap();
+        for c in 0..3 {
+            let got = [
+                mean(&f.direct, c),
+                mean(&f.indirect, c),
+                mean(&pt.radiance, c),
+            ];
+            for (i, pass) in ratios.iter_mut().enumerate() {
+                pass[c].push(got[i] / want(c)[i]);
+            }
+        }
+    }
+    for (i, name) in ["direct", "VPL indirect", "path tracer"].iter().enumerate() {
+        for (c, ch) in ["red", "green", "blue"].iter().enumerate() {
+            let x = &ratios[i][c];
+            let m = x.iter().sum::<f64>() / x.len() as f64;
+            let sd =
+                (x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / (x.len() - 1) as f64).sqrt();
+            println!(
+                "coloured furnace {name} {ch} (ρ {}): closed form {:.6}, per-seed mean ratios {x:.5?}: mean {m:.5}, σ {sd:.2e}",
+                rho[c],
+                want(c)[i]
+            );
+            let bound = 4.0 * COLOURED_SIGMA[i] / (seeds as f64).sqrt();
+            assert!(
+                (m - 1.0).abs() <= bound,
+                "coloured furnace {name} {ch}: mean ratio {m} over {seeds} seeds, bound 1 ± {bound}"
+            );
+        }
+    }
+}
+
+/// σ of the per-seed mean ratios of the coloured furnace (direct, VPL indirect, path tracer; the
+/// largest of the three channels), measured over seeds 1–16 on lavapipe.
+const COLOURED_SIGMA: [f64; 3] = [5.76e-3, 1.67e-2, 7.66e-3];
 
 /// The square emitter's particles (the VPL tracer's first hits, `vpl_trace.wgsl`: a point by
 /// `sample_emitter`, a direction by `cosine_hemisphere`, the path tracer's bounce sampling too):

@@ -103,7 +103,7 @@ fn clustered_shading_matches_cpu_twin() {
         // tolerances": 2.6e-8 at most over the three modes).
         let pairs = shading_pairs(&ctx, &r, &s, &f, &fs);
         let name = format!("shading {weighting:?} facing {facing}");
-        common::assert_twins(&ctx, &name, pairs, 5.3e-8);
+        common::assert_twins(&ctx, &name, "clustered::shading", pairs);
     }
 }
 
@@ -127,16 +127,22 @@ fn shading_131072_lights_matches_cpu_twin() {
     assert_eq!(r.lights.as_ref().unwrap().list.lights.len(), 131_072);
     // Every pixel, at the measured maximum × 2 on software (1.06e-6; docs/testing.md).
     let pairs = shading_pairs(&ctx, &r, &s, &f, &fs);
-    common::assert_twins(&ctx, "shading 131,072 lights", pairs, 2.2e-6);
+    common::assert_twins(
+        &ctx,
+        "shading 131,072 lights",
+        "clustered::shading_131072_lights",
+        pairs,
+    );
 }
 
-/// The paper's ordering at equal K, weighted lowest in MSE against the reference, and a large
-/// GPU-time speed-up over it (the held-out check's settings at a smaller size). Uniform against hard
-/// goes either way once the VPL clusters' error is small (docs/clustering.md): here, with the spread
-/// of `eq5_cluster_radiance`, hard 5.61e-5, uniform 6.30e-5, weighted 5.52e-5 (without it 7.66e-5,
-/// 7.48e-5, 6.93e-5).
+/// The paper's ordering at equal K where the measurement supports it: weighted (Eq. 9) below
+/// uniform (Eq. 8) in MSE against the reference by at least 5% (measured on lavapipe: hard 5.61e-5,
+/// uniform 6.30e-5, weighted 5.52e-5, weighted 12% below uniform). Weighted against hard is not
+/// asserted: their 1.6% apart is less than what the seed and the adapter's rounding move (uniform
+/// against hard goes either way once the VPL clusters' error is small, docs/clustering.md). The
+/// GPU-time speed-up over the reference is printed, not asserted (a clock: `bench` reports it).
 #[test]
-fn mse_order_and_speedup_on_the_conference_room() {
+fn mse_order_on_the_conference_room() {
     let ctx = common::gpu();
     let s = scene::load("builtin:conference").unwrap();
     let mut r = Renderer::new(&ctx, &s).unwrap();
@@ -179,12 +185,11 @@ fn mse_order_and_speedup_on_the_conference_room() {
         assert!(common::all_finite(&f.radiance));
         let e = mse(&f.radiance, &reference.radiance);
         let speedup = reference.timings_ms["frame"] / f.timings_ms["frame"];
-        println!("{weighting:?}: mse {e:.3e}, speed-up {speedup:.1}x");
-        assert!(speedup > 2.0, "{weighting:?}: speed-up {speedup}");
+        println!("{weighting:?}: mse {e:.3e}, speed-up {speedup:.1}x (not asserted)");
         errs.push(e);
     }
     assert!(
-        errs[2] <= errs[1] * 1.02 && errs[2] <= errs[0] * 1.02,
+        errs[2] <= errs[1] * 0.95,
         "MSE hard, uniform, weighted: {errs:?}"
     );
     assert!(errs[2] < 5e-3, "{errs:?}");

@@ -7,14 +7,14 @@ mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fuzzy-vpl"))
 }
 
 /// Runs `cmd` (stderr piped, stdout piped unless `stdout` is given) to its end, killing it after
-/// `limit`.
+/// `limit` (a hang guard, not a speed test: polls 20 ms apart, counted, no clock read).
 fn run_within(mut cmd: Command, stdout: Option<std::fs::File>, limit: Duration) -> Output {
     cmd.stdin(Stdio::null()).stderr(Stdio::piped());
     match stdout {
@@ -22,9 +22,10 @@ fn run_within(mut cmd: Command, stdout: Option<std::fs::File>, limit: Duration) 
         None => cmd.stdout(Stdio::piped()),
     };
     let mut child = cmd.spawn().unwrap();
-    let t = Instant::now();
+    let mut polls = 0;
     while child.try_wait().unwrap().is_none() {
-        if t.elapsed() > limit {
+        polls += 1;
+        if polls * 20 > limit.as_millis() {
             let _ = child.kill();
             let _ = child.wait();
             panic!("{cmd:?}: still running after {limit:?}");
@@ -507,8 +508,9 @@ fn a_signal_during_a_write_removes_the_temporary_file() {
             .stderr(Stdio::null())
             .spawn()
             .unwrap();
-        let t = Instant::now();
-        // The temporary file exists once the child has written into it.
+        // The temporary file exists once the child has written into it (up to 6,000 polls 10 ms
+        // apart, 60 s: a hang guard).
+        let mut polls = 0;
         let tmp = loop {
             if let Some(n) = listing(&d)
                 .into_iter()
@@ -516,7 +518,8 @@ fn a_signal_during_a_write_removes_the_temporary_file() {
             {
                 break d.join(n);
             }
-            if t.elapsed() > Duration::from_secs(60) || child.try_wait().unwrap().is_some() {
+            polls += 1;
+            if polls > 6000 || child.try_wait().unwrap().is_some() {
                 let _ = child.kill();
                 panic!("{name}: the child never started its write");
             }
@@ -526,12 +529,14 @@ fn a_signal_during_a_write_removes_the_temporary_file() {
             std::thread::sleep(Duration::from_millis(10));
         }
         unsafe { libc::kill(child.id() as i32, sig) };
-        let t = Instant::now();
+        // Up to 3,000 polls 10 ms apart (30 s): a hang guard.
+        let mut polls = 0;
         let status = loop {
             if let Some(s) = child.try_wait().unwrap() {
                 break s;
             }
-            if t.elapsed() > Duration::from_secs(30) {
+            polls += 1;
+            if polls > 3000 {
                 let _ = child.kill();
                 panic!("{name}: the child did not end");
             }

@@ -282,10 +282,13 @@ fn warm_sp_clustering_matches_its_twin_on_a_moving_view() {
         worst = worst.max((g.pos - t.pos).length());
     }
     // Fixed-point sums are exact and the means the same f32 arithmetic: measured equal on lavapipe
-    // (bound 0); on a GPU the means' rounding may differ, 1e-4.
-    println!("warm centroids: worst distance from the twin's {worst:.3e}");
-    let tol = if ctx.software { 0.0 } else { 1e-4 };
-    assert!(worst <= tol, "warm centroids {worst} from the twin's");
+    // (bound 0; common::BOUNDS).
+    common::assert_measure(
+        &ctx,
+        "temporal::warm_centroids",
+        "warm centroids: worst distance from the twin's",
+        worst,
+    );
     let assign: Vec<u32> = ctx
         .read_buffer(&c.assign, 64 * 48 * c.f() as usize)
         .unwrap();

@@ -13,8 +13,6 @@ use fuzzy_vpl::settings::{ClusterSettings, FrameSettings};
 use glam::Vec3;
 
 const W: u32 = 37;
-/// The twins' bound on lavapipe (`common::assert_twins`): measured maximum × 2.
-const TOL_UPSAMPLE: f32 = 5.9e-7; // measured 2.9e-7
 const H: u32 = 23;
 /// Image column of a pole one pixel wide in front of the planes: no representative lands on it.
 const POLE: u32 = 11;
@@ -128,7 +126,12 @@ fn upsample_kernels_match_cpu_twin_and_oracles() {
         .iter()
         .zip(&gpu)
         .map(|(c, g)| (Vec3::from_slice(&c[..3]), Vec3::from_slice(&g[..3])));
-    worst = worst.max(common::assert_twins(&ctx, "upsample", pairs, TOL_UPSAMPLE));
+    worst = worst.max(common::assert_twins(
+        &ctx,
+        "upsample",
+        "upsample::twin",
+        pairs,
+    ));
     println!("upsample: worst twin difference {worst:e}");
 }
 

@@ -6,7 +6,7 @@ mod common;
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::sync::{Mutex, MutexGuard};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// An Xvfb server we started (killed on drop), or None when a DISPLAY exists already. It holds
 /// `DISPLAY_LOCK` until dropped: the tests of this file run in parallel, and two of them probing for
@@ -28,8 +28,8 @@ impl Drop for Xvfb {
             unsafe {
                 libc::kill(c.id() as libc::pid_t, libc::SIGTERM);
             }
-            let t = Instant::now();
-            while t.elapsed() < Duration::from_secs(5) {
+            // Up to 250 polls 20 ms apart (5 s) for it to exit.
+            for _ in 0..250 {
                 if let Ok(Some(_)) = c.try_wait() {
                     return;
                 }
@@ -77,8 +77,8 @@ fn display() -> Xvfb {
             .stderr(Stdio::null())
             .spawn()
             .expect("starting Xvfb");
-        let t = Instant::now();
-        while t.elapsed() < Duration::from_secs(10) {
+        // Up to 200 polls 50 ms apart (10 s) for its socket.
+        for _ in 0..200 {
             if sock.exists() {
                 return Xvfb(Some(child), format!(":{n}"), guard);
             }
@@ -428,7 +428,10 @@ fn upscale2(px: &[[f32; 3]], w: usize, h: usize, bilinear: bool) -> Vec<[f32; 3]
 /// 20 window frames at rest) against `render` at 640×480 with the same K's and 1024 direct samples;
 /// its MSE at most 0.3× that of the better of a nearest and a bilinear 2× upscale of the same
 /// render at 320×240. About two minutes on lavapipe: run with `--ignored`. `FVPL_TARGET_SCENE`
-/// names another scene to measure the same way.
+/// names another scene to measure the same way. A measurement, not a CI test: how many GI frames
+/// accumulate within the 20 window frames depends on the machine's speed and load (a clock), and on
+/// the 2-core VM beside other builds (2026-11-28) it measured a ratio of 3.5 (viewer MSE 4.27e-4),
+/// where docs/viewer.md's idle run measured 0.16. At 320×240 it measured 1.94.
 #[test]
 #[ignore]
 fn cornell_view_at_half_render_scale_beats_an_upscale() {
@@ -482,6 +485,68 @@ fn cornell_view_at_half_render_scale_beats_an_upscale() {
         "{scene}: MSE: viewer {viewer:e}, nearest {nearest:e}, bilinear {bilinear:e}; ratio {ratio:.3}"
     );
     assert!(ratio <= 0.3, "ratio {ratio}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The A/B views from the command line (`--view split|diff` with B's weighting hard, A's inverse
+/// distance), headless under Xvfb, each saved as the displayed image (EXR): every pixel finite; the
+/// split view shows A left of the divider (the plain view's pixels there) and B right of it (a
+/// render with B's settings). The diff view runs and saves finite radiance (its EXR holds
+/// radiance, not the false-colour difference the window shows).
+#[test]
+fn split_and_diff_views_show_a_and_b() {
+    let x = display();
+    let dir = std::env::temp_dir().join(format!("fuzzy-vpl-viewer-ab-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (w, h) = (160usize, 120usize);
+    let shot = |name: &str, extra: &[&str]| {
+        let exr = dir.join(format!("{name}.exr"));
+        let mut args = vec![
+            "builtin:cornell",
+            "--width",
+            "160",
+            "--height",
+            "120",
+            "--vpls",
+            "512",
+            "--sp-clusters",
+            "64",
+            "--vpl-clusters",
+            "64",
+            "--frames",
+            "3",
+            "--screenshot",
+            exr.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        let out = view(&x, &dir, &args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{name}: {err}");
+        let (iw, ih, px) = fuzzy_vpl::export::read_exr(&exr).expect("the EXR");
+        assert_eq!((iw as usize, ih as usize), (w, h), "{name}");
+        assert!(px.iter().flatten().all(|c| c.is_finite()), "{name}");
+        px
+    };
+    let plain = shot("plain", &[]);
+    let b = shot("b", &["--weighting", "hard"]);
+    let split = shot("split", &["--view", "split", "--b-weighting", "hard"]);
+    let diff = shot("diff", &["--view", "diff", "--b-weighting", "hard"]);
+    let col = |img: &[[f32; 3]], x: usize| (0..h).map(|y| img[y * w + x]).collect::<Vec<_>>();
+    let (left, right) = (w / 8, w - 1 - w / 8);
+    let differ = |a: &[[f32; 3]], b: &[[f32; 3]]| a.iter().zip(b).filter(|(p, q)| p != q).count();
+    println!(
+        "split: left column differs from A in {}, right from B in {}; A and B differ in {} pixels",
+        differ(&col(&split, left), &col(&plain, left)),
+        differ(&col(&split, right), &col(&b, right)),
+        differ(&plain, &b),
+    );
+    assert!(differ(&plain, &b) > w * h / 10, "A and B alike");
+    assert_eq!(col(&split, left), col(&plain, left), "split: A on the left");
+    assert_eq!(col(&split, right), col(&b, right), "split: B on the right");
+    assert!(
+        diff.iter().flatten().any(|&c| c > 0.0),
+        "diff: a black image"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -14,9 +14,11 @@ const SWITCHES: &[&str] = &[
 
 /// Variables the test suite reads (not the program): known, so not warned about.
 const TEST_ONLY: &[&str] = &[
-    "FVPL_CORNELL_WGPU",
+    "FVPL_BOUNDS_UNMEASURED",
     "FVPL_FURNACE_SEEDS",
+    "FVPL_MEASURE_BOUNDS",
     "FVPL_REQUIRE_SCENES",
+    "FVPL_SKIP_LOG",
     "FVPL_TARGET_SCENE",
 ];
 
