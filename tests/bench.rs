@@ -444,7 +444,8 @@ fn target_ms_rows_follow_the_sweep() {
 
 /// `scripts/gpu-bench --quick` end to end on lavapipe (CI has no GPU): every run of the script
 /// finishes and the table has a row for each configuration, named adapter and driver, the software
-/// warning, and finite figures.
+/// warning, and finite figures; after it, the viewer's table (offscreen, shared display path) with
+/// its one row.
 #[test]
 fn gpu_bench_script_runs_and_prints_one_table() {
     let d = common::scratch("gpu-bench-quick");
@@ -460,6 +461,23 @@ fn gpu_bench_script_runs_and_prints_one_table() {
     );
     assert!(out.status.success(), "{stderr}");
     assert_eq!(std::fs::read_to_string(d.join("table.md")).unwrap(), stdout);
+    let (stdout, viewer) = stdout
+        .split_once("| viewer (offscreen, shared, moving) |")
+        .unwrap_or_else(|| panic!("no viewer table: {stdout}"));
+    let viewer_rows: Vec<&str> = viewer
+        .lines()
+        .skip(2)
+        .filter(|l| l.starts_with("| "))
+        .collect();
+    assert_eq!(viewer_rows.len(), 1, "{viewer}");
+    assert!(
+        viewer_rows[0].starts_with("| builtin:conference 160x120 |"),
+        "{viewer}"
+    );
+    assert!(
+        !viewer.contains("NaN") && !viewer.contains("inf"),
+        "{viewer}"
+    );
     let rows: Vec<&str> = stdout
         .lines()
         .filter(|l| l.starts_with("| ") && !l.starts_with("| ---"))
