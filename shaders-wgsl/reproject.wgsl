@@ -129,9 +129,9 @@ fn clear(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) 
     }
 }
 
-@compute @workgroup_size(64)
-fn splat_depth(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g: vec3<u32>) {
-    let i = pixel(id, g);
+// Old pixel i's splat over its footprint: the depth test (an atomic min of its key), or, once every
+// depth is in (`winners`), its index where its key won (the least index on a tie).
+fn splat(i: u32, winners: bool) {
     if i >= width() * height() {
         return;
     }
@@ -142,31 +142,26 @@ fn splat_depth(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgr
     for (var dy = -s.half; dy <= s.half; dy++) {
         for (var dx = -s.half; dx <= s.half; dx++) {
             let t = target_of(s, dx, dy);
-            if t != NONE {
+            if t == NONE {
+                continue;
+            }
+            if !winners {
                 atomicMin(&depth[t], s.key);
+            } else if atomicLoad(&depth[t]) == s.key {
+                atomicMin(&source[t], i);
             }
         }
     }
 }
 
 @compute @workgroup_size(64)
+fn splat_depth(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g: vec3<u32>) {
+    splat(pixel(id, g), false);
+}
+
+@compute @workgroup_size(64)
 fn splat_source(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g: vec3<u32>) {
-    let i = pixel(id, g);
-    if i >= width() * height() {
-        return;
-    }
-    let s = splat_of(i);
-    if !s.found {
-        return;
-    }
-    for (var dy = -s.half; dy <= s.half; dy++) {
-        for (var dx = -s.half; dx <= s.half; dx++) {
-            let t = target_of(s, dx, dy);
-            if t != NONE && atomicLoad(&depth[t]) == s.key {
-                atomicMin(&source[t], i);
-            }
-        }
-    }
+    splat(pixel(id, g), true);
 }
 
 fn colour_of(src: u32) -> vec4<f32> {

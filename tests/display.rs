@@ -325,12 +325,8 @@ fn reprojection_matches_cpu_twin() {
         let gbuffer: Vec<[f32; 4]> = ctx
             .read_buffer(g.buffers.image_gbuffer(), (W * H * 4) as usize)
             .unwrap();
-        let units = |c: &scene::Camera| {
-            let mut c = c.clone();
-            let eye = c.transform.w_axis.truncate().as_dvec3() * g.geometry_scale;
-            c.transform.w_axis = eye.as_vec3().extend(1.0);
-            CameraParams::new(&c, W, H)
-        };
+        let units =
+            |c: &scene::Camera| CameraParams::new(&c.with_eye_scaled(g.geometry_scale), W, H);
         let diag = (sc.bounds().1 - sc.bounds().0).length();
         let moved = |forward: f32, turn: f32| {
             let mut c = cam.clone();

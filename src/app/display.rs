@@ -125,59 +125,21 @@ pub struct Display {
     target: Option<Target>,
 }
 
-fn buffer_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: if binding == 0 {
-                wgpu::BufferBindingType::Uniform
-            } else {
-                wgpu::BufferBindingType::Storage { read_only }
-            },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
 /// The most workgroups a dimension of a dispatch has (WebGPU's default limit).
 const MAX_GROUPS: u32 = 65535;
 
 impl Display {
     pub fn new(device: &wgpu::Device) -> Self {
-        let mut entries: Vec<_> = (0..9).map(|b| buffer_entry(b, b < 7)).collect();
-        entries.push(wgpu::BindGroupLayoutEntry {
-            binding: 9,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::StorageTexture {
-                access: wgpu::StorageTextureAccess::WriteOnly,
-                format: wgpu::TextureFormat::Rgba8Unorm,
-                view_dimension: wgpu::TextureViewDimension::D2,
-            },
-            count: None,
-        });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("display"),
-            entries: &entries,
-        });
-        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("display"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let module = crate::gpu::shader::module(device, "display");
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pl),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        use crate::gi::scene_gpu::{storage_layout, storage_texture_layout, uniform_layout};
+        let mut entries = vec![uniform_layout(0)];
+        entries.extend((1..9).map(|b| storage_layout(b, b < 7)));
+        entries.push(storage_texture_layout(9, wgpu::TextureFormat::Rgba8Unorm));
+        let (layout, [log_luminance, exposure, display]) = crate::gpu::shader::compute_pipelines(
+            device,
+            "display",
+            &entries,
+            ["log_luminance", "exposure", "display"],
+        );
         let buffer = |label, size, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -188,9 +150,9 @@ impl Display {
         };
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
         Display {
-            log_luminance: pipeline("log_luminance"),
-            exposure: pipeline("exposure"),
-            display: pipeline("display"),
+            log_luminance,
+            exposure,
+            display,
             layout,
             params: buffer(
                 "display params",

@@ -15,11 +15,7 @@ use super::{Unavailable, ViewOptions, Viewer};
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 pub fn run(opts: ViewOptions) -> Result<()> {
-    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
-    if std::env::var_os("WGPU_BACKEND").is_none() {
-        desc.backends = wgpu::Backends::PRIMARY;
-    }
-    let instance = wgpu::Instance::new(desc);
+    let instance = crate::gpu::instance();
     let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
         power_preference: wgpu::PowerPreference::HighPerformance,
         force_fallback_adapter: false,
@@ -46,13 +42,7 @@ pub fn run(opts: ViewOptions) -> Result<()> {
     }
     let software = adapter.get_info().device_type == wgpu::DeviceType::Cpu;
     let path = opts.display_path.resolve(software);
-    let (device, queue) = super::window::device_for(&adapter, path)?;
-    let shared = (path == super::DisplayPath::Shared).then(|| super::worker::SharedDevice {
-        instance: instance.clone(),
-        adapter: adapter.clone(),
-        device: device.clone(),
-        queue: queue.clone(),
-    });
+    let (device, queue, shared) = super::window::device_for(&instance, &adapter, path)?;
     let target = device.create_texture(&wgpu::TextureDescriptor {
         label: Some("offscreen window"),
         size: wgpu::Extent3d {

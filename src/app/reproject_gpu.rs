@@ -29,72 +29,31 @@ pub struct Reproject {
     target: Option<super::display::Target>,
 }
 
-fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty,
-        count: None,
-    }
-}
-
-fn buffer(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
-    wgpu::BindingType::Buffer {
-        ty,
-        has_dynamic_offset: false,
-        min_binding_size: None,
-    }
-}
-
 impl Reproject {
     pub fn new(device: &wgpu::Device) -> Self {
-        let storage = |read_only| buffer(wgpu::BufferBindingType::Storage { read_only });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("reproject"),
-            entries: &[
-                entry(0, buffer(wgpu::BufferBindingType::Uniform)),
-                entry(1, storage(true)),
-                entry(2, storage(false)),
-                entry(3, storage(false)),
-                entry(
-                    4,
-                    wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                ),
-                entry(
-                    5,
-                    wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::WriteOnly,
-                        format: wgpu::TextureFormat::Rgba8Unorm,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                    },
-                ),
-            ],
-        });
-        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("reproject"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let module = crate::gpu::shader::module(device, "reproject");
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pl),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
+        use crate::gi::scene_gpu::{
+            data_texture_layout, storage_layout, storage_texture_layout, uniform_layout,
         };
+        let float = wgpu::TextureSampleType::Float { filterable: false };
+        let (layout, [clear, splat_depth, splat_source, resolve]) =
+            crate::gpu::shader::compute_pipelines(
+                device,
+                "reproject",
+                &[
+                    uniform_layout(0),
+                    storage_layout(1, true),
+                    storage_layout(2, false),
+                    storage_layout(3, false),
+                    data_texture_layout(4, float),
+                    storage_texture_layout(5, wgpu::TextureFormat::Rgba8Unorm),
+                ],
+                ["clear", "splat_depth", "splat_source", "resolve"],
+            );
         Reproject {
-            clear: pipeline("clear"),
-            splat_depth: pipeline("splat_depth"),
-            splat_source: pipeline("splat_source"),
-            resolve: pipeline("resolve"),
+            clear,
+            splat_depth,
+            splat_source,
+            resolve,
             layout,
             params: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("reproject params"),

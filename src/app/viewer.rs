@@ -627,9 +627,7 @@ impl Viewer {
         let reproject = match &r.gpu {
             Some(g) if self.s.cluster.temporal && r.job.camera != now => {
                 let at = |c: &crate::scene::Camera| {
-                    let mut c = c.clone();
-                    let eye = c.transform.w_axis.truncate().as_dvec3() * g.geometry_scale;
-                    c.transform.w_axis = eye.as_vec3().extend(1.0);
+                    let c = c.with_eye_scaled(g.geometry_scale);
                     crate::gi::primary::CameraParams::new(&c, f.width, f.height)
                 };
                 Some((at(&r.job.camera), at(&now), g.buffers.image_gbuffer()))

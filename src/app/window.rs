@@ -106,40 +106,52 @@ pub(super) fn summary(v: &Viewer) {
     );
 }
 
-/// The window's device for display path `path`: shared, the GI renders on it, so it gets the limits
-/// and features the GI asks for (`gpu::required_limits`, with the adapter's texture size for the
-/// surface); split, the default limits at the adapter's resolution.
+/// The window's device for display path `path`, and (shared) the handles the GI worker renders
+/// with: shared, the GI renders on it, so it gets the limits and features the GI asks for
+/// (`gpu::required_limits`, with the adapter's texture size for the surface); split, the default
+/// limits at the adapter's resolution.
 pub(super) fn device_for(
+    instance: &wgpu::Instance,
     adapter: &wgpu::Adapter,
     path: super::DisplayPath,
-) -> Result<(wgpu::Device, wgpu::Queue)> {
+) -> Result<(
+    wgpu::Device,
+    wgpu::Queue,
+    Option<super::worker::SharedDevice>,
+)> {
+    let shared = path == super::DisplayPath::Shared;
     let max_side = adapter.limits().max_texture_dimension_2d;
-    let (required_limits, required_features) = match path {
-        super::DisplayPath::Shared => (
+    let (required_limits, required_features) = match shared {
+        true => (
             wgpu::Limits {
                 max_texture_dimension_2d: max_side,
                 ..crate::gpu::required_limits(&adapter.limits())
             },
             adapter.features() & crate::gpu::wanted_features(),
         ),
-        _ => (
+        false => (
             wgpu::Limits::default().using_resolution(adapter.limits()),
             wgpu::Features::empty(),
         ),
     };
-    Ok(
-        pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-            label: Some("fuzzy-vpl window"),
-            required_limits,
-            required_features,
-            ..Default::default()
-        }))
-        .map_err(|e| {
-            Unavailable(format!(
-                "cannot open the window's GPU device ({e}); render headless with `fuzzy-vpl render`"
-            ))
-        })?,
-    )
+    let made = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("fuzzy-vpl window"),
+        required_limits,
+        required_features,
+        ..Default::default()
+    }));
+    let (device, queue) = made.map_err(|e| {
+        Unavailable(format!(
+            "cannot open the window's GPU device ({e}); render headless with `fuzzy-vpl render`"
+        ))
+    })?;
+    let handles = shared.then(|| super::worker::SharedDevice {
+        instance: instance.clone(),
+        adapter: adapter.clone(),
+        device: device.clone(),
+        queue: queue.clone(),
+    });
+    Ok((device, queue, handles))
 }
 
 impl App {
@@ -160,11 +172,7 @@ impl App {
             el.create_window(attrs)
                 .map_err(|e| Unavailable(no_display(&e.to_string())))?,
         );
-        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
-        if std::env::var_os("WGPU_BACKEND").is_none() {
-            desc.backends = wgpu::Backends::PRIMARY;
-        }
-        let instance = wgpu::Instance::new(desc);
+        let instance = crate::gpu::instance();
         let surface = instance.create_surface(window.clone()).map_err(|e| {
             Unavailable(format!(
                 "no GPU adapter can draw into the window ({e}); install mesa-vulkan-drivers, or render headless with `fuzzy-vpl render`"
@@ -194,13 +202,7 @@ impl App {
         }
         let software = adapter.get_info().device_type == wgpu::DeviceType::Cpu;
         let path = opts.display_path.resolve(software);
-        let (device, queue) = device_for(&adapter, path)?;
-        let shared = (path == super::DisplayPath::Shared).then(|| super::worker::SharedDevice {
-            instance: instance.clone(),
-            adapter: adapter.clone(),
-            device: device.clone(),
-            queue: queue.clone(),
-        });
+        let (device, queue, shared) = device_for(&instance, &adapter, path)?;
         let caps = surface.get_capabilities(&adapter);
         let format = caps
             .formats

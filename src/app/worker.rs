@@ -207,7 +207,7 @@ const WORKER_NICE: i32 = 5;
 /// Lowers this thread's scheduling priority. On Linux `nice` is per thread and inherited by the
 /// threads it creates, so a software driver's worker threads made for the GI device below run behind
 /// the UI thread and its own driver threads: the window stays responsive while a frame renders.
-pub(super) fn lower_priority() {
+fn lower_priority() {
     #[cfg(target_os = "linux")]
     // SAFETY: plain syscalls on the calling thread's id; failure only leaves the priority unchanged.
     unsafe {

@@ -5,6 +5,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
+use super::scene_gpu::{storage_layout, storage_texture_layout, uniform_layout};
 use crate::gpu::GpuContext;
 use crate::render::frame::GpuFrame;
 
@@ -24,63 +25,20 @@ pub struct Compose {
     scratch: std::cell::RefCell<Option<wgpu::Texture>>,
 }
 
-fn storage(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: true },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
 impl Compose {
     pub fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("compose"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                storage(1),
-                storage(2),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 3,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::WriteOnly,
-                        format: wgpu::TextureFormat::Rgba32Float,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                    },
-                    count: None,
-                },
+        let (layout, [pipeline]) = crate::gpu::shader::compute_pipelines(
+            device,
+            "compose",
+            &[
+                uniform_layout(0),
+                storage_layout(1, true),
+                storage_layout(2, true),
+                storage_texture_layout(3, wgpu::TextureFormat::Rgba32Float),
             ],
-        });
-        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("compose"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let module = crate::gpu::shader::module(device, "compose");
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("compose"),
-            layout: Some(&pl),
-            module: &module,
-            entry_point: Some("compose"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+            ["compose"],
+        );
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("compose params"),
             size: std::mem::size_of::<ComposeParams>() as u64,

@@ -226,6 +226,23 @@ pub fn data_texture_layout(
     }
 }
 
+/// A layout entry for a write-only 2D storage texture of `format` visible to compute.
+pub fn storage_texture_layout(
+    binding: u32,
+    format: wgpu::TextureFormat,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::StorageTexture {
+            access: wgpu::StorageTextureAccess::WriteOnly,
+            format,
+            view_dimension: wgpu::TextureViewDimension::D2,
+        },
+        count: None,
+    }
+}
+
 /// A 2D texture of 16-byte texels holding `bytes` row by row (`TEXEL_ROW` texels a row, zero padded).
 /// The texel count is checked against the device limit in `SceneBvh::build` (`MAX_TEXELS`).
 fn texture_init(

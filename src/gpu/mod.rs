@@ -55,6 +55,16 @@ fn too_few_storage_buffers(adapter: &wgpu::Adapter, limits: &wgpu::Limits) -> an
     )
 }
 
+/// The wgpu instance fuzzy-vpl's devices come from: the primary backends (Vulkan here, lavapipe
+/// without a GPU; the GL backend only adds noise), `WGPU_BACKEND` overriding.
+pub fn instance() -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+    if std::env::var_os("WGPU_BACKEND").is_none() {
+        desc.backends = wgpu::Backends::PRIMARY;
+    }
+    wgpu::Instance::new(desc)
+}
+
 /// The optional features fuzzy-vpl uses when the adapter has them: timestamp queries (the per-pass
 /// GPU timings).
 pub fn wanted_features() -> wgpu::Features {
@@ -88,14 +98,7 @@ impl GpuContext {
 
     /// Creates a headless context on the first adapter (any backend wgpu finds: Vulkan on lavapipe here).
     pub fn new_headless() -> Result<Self> {
-        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
-        // The primary backends (Vulkan here, lavapipe without a GPU); the GL backend only adds noise.
-        // WGPU_BACKEND still overrides.
-        if std::env::var_os("WGPU_BACKEND").is_none() {
-            desc.backends = wgpu::Backends::PRIMARY;
-        }
-        let instance = wgpu::Instance::new(desc);
-        pollster::block_on(Self::from_instance(instance, None))
+        pollster::block_on(Self::from_instance(instance(), None))
     }
 
     pub async fn from_instance(
@@ -278,7 +281,22 @@ pub fn read_buffer<T: bytemuck::Pod>(
     let mut enc = device.create_command_encoder(&Default::default());
     enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
     queue.submit([enc.finish()]);
-    let slice = staging.slice(..);
+    let out = mapped(device, &staging, "a readback buffer", |view| {
+        bytemuck::cast_slice::<u8, T>(view).to_vec()
+    })?;
+    traffic::read_back(size);
+    Ok(out)
+}
+
+/// Maps `buffer` (`MAP_READ`, its copies submitted) for reading, waits for the device, and hands
+/// its bytes to `read`; unmaps it after. `what` names the buffer in the errors.
+fn mapped<R>(
+    device: &wgpu::Device,
+    buffer: &wgpu::Buffer,
+    what: &str,
+    read: impl FnOnce(&[u8]) -> R,
+) -> Result<R> {
+    let slice = buffer.slice(..);
     let (tx, rx) = std::sync::mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |r| {
         let _ = tx.send(r);
@@ -291,14 +309,13 @@ pub fn read_buffer<T: bytemuck::Pod>(
         .map_err(|e| anyhow!("GPU wait failed: {e}"))?;
     rx.recv()
         .map_err(|_| anyhow!("readback callback dropped"))?
-        .map_err(|e| anyhow!("mapping a readback buffer failed: {e}"))?;
+        .map_err(|e| anyhow!("mapping {what} failed: {e}"))?;
     let view = slice
         .get_mapped_range()
-        .map_err(|e| anyhow!("reading a mapped buffer failed: {e}"))?;
-    let out = bytemuck::cast_slice::<u8, T>(&view).to_vec();
-    traffic::read_back(size);
+        .map_err(|e| anyhow!("reading {what} failed: {e}"))?;
+    let out = read(&view);
     drop(view);
-    staging.unmap();
+    buffer.unmap();
     Ok(out)
 }
 
@@ -341,30 +358,14 @@ pub fn read_texture(
         },
     );
     queue.submit([enc.finish()]);
-    let slice = buffer.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    device
-        .poll(wgpu::PollType::Wait {
-            submission_index: None,
-            timeout: None,
-        })
-        .map_err(|e| anyhow!("GPU wait failed: {e}"))?;
-    rx.recv()
-        .map_err(|_| anyhow!("readback callback dropped"))?
-        .map_err(|e| anyhow!("mapping the texture readback failed: {e}"))?;
-    let view = slice
-        .get_mapped_range()
-        .map_err(|e| anyhow!("reading the texture readback failed: {e}"))?;
+    let out = mapped(device, &buffer, "the texture readback", |view| {
+        let mut out = Vec::with_capacity((tight * h) as usize);
+        for y in 0..h as usize {
+            out.extend_from_slice(&view[y * row as usize..][..tight as usize]);
+        }
+        out
+    })?;
     traffic::read_back(row as u64 * h as u64);
-    let mut out = Vec::with_capacity((tight * h) as usize);
-    for y in 0..h as usize {
-        out.extend_from_slice(&view[y * row as usize..][..tight as usize]);
-    }
-    drop(view);
-    buffer.unmap();
     Ok(out)
 }
 

@@ -136,6 +136,38 @@ pub fn module(device: &wgpu::Device, name: &str) -> wgpu::ShaderModule {
     unsafe { device.create_shader_module_trusted(desc, checks) }
 }
 
+/// The bind-group layout of `entries` (group 0) and the compute pipelines of shader `name`'s
+/// `entry_points` over it, for passes that own their resources outside `gi::dispatch::Kernel` (the
+/// display, the reprojection, `gi::compose`).
+pub fn compute_pipelines<const N: usize>(
+    device: &wgpu::Device,
+    name: &str,
+    entries: &[wgpu::BindGroupLayoutEntry],
+    entry_points: [&str; N],
+) -> (wgpu::BindGroupLayout, [wgpu::ComputePipeline; N]) {
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(name),
+        entries,
+    });
+    let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(name),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    let module = module(device, name);
+    let pipelines = entry_points.map(|entry| {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(&pl),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        })
+    });
+    (layout, pipelines)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

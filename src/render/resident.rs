@@ -238,12 +238,7 @@ impl<'a> Renderer<'a> {
     /// `camera` (in the caller's units) in the rendered scene's units: its eye scaled by
     /// `geometry_scale`.
     pub fn to_render_units(&self, camera: &Camera) -> Camera {
-        let mut c = camera.clone();
-        if self.geometry_scale != 1.0 {
-            let eye = c.transform.w_axis.truncate().as_dvec3() * self.geometry_scale;
-            c.transform.w_axis = eye.as_vec3().extend(1.0);
-        }
-        c
+        camera.with_eye_scaled(self.geometry_scale)
     }
 
     /// Lights that move: replaces the scene's punctual lights with `lights` (in the caller's units,

@@ -131,6 +131,17 @@ pub struct Camera {
 }
 
 impl Camera {
+    /// The same camera in a frame scaled by `k` about the origin (its eye moved, in f64, its axes and
+    /// field of view kept): `Renderer::to_render_units` with the renderer's `geometry_scale`.
+    pub fn with_eye_scaled(&self, k: f64) -> Camera {
+        let mut c = self.clone();
+        if k != 1.0 {
+            let eye = c.transform.w_axis.truncate().as_dvec3() * k;
+            c.transform.w_axis = eye.as_vec3().extend(1.0);
+        }
+        c
+    }
+
     pub fn eye(&self) -> Vec3 {
         self.transform.w_axis.truncate()
     }
