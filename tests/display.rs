@@ -211,8 +211,8 @@ fn display_by_hand() {
     );
 }
 
-/// The frame on the GPU: `render_gpu` reads none of the images back (the bytes it maps are the
-/// clusterings' small counters, far below one image), `GpuFrame::read` gives `render`'s images bit
+/// The frame on the GPU: `render_gpu` reads nothing back, with temporal reuse too (the clusterings'
+/// counts stay on the GPU until `counts` asks for them), `GpuFrame::read` gives `render`'s images bit
 /// for bit, the frame's buffers are reused once released (no allocation at a steady size), and
 /// `render_to_texture` writes the final radiance bit for bit on the GPU, into a storage texture and
 /// into a copy-destination one.
@@ -233,10 +233,23 @@ fn frame_on_the_gpu_reads_nothing_back_and_matches_render() {
     let before = Traffic::now();
     let g = r.render_gpu(&cam, &s).unwrap();
     let moved = Traffic::now().since(before);
-    assert!(
-        moved.read_back < image_bytes / 4,
+    assert_eq!(
+        moved.read_back, 0,
         "render_gpu read back {} bytes (an image is {image_bytes})",
         moved.read_back
+    );
+    // The counts the GPU keeps, on request: the same as render's.
+    let before = Traffic::now();
+    let (meta, _) = g.counts(&ctx.device, &ctx.queue).unwrap();
+    assert!(Traffic::now().since(before).read_back < 128);
+    assert!(meta.sp_clusters_used > 0);
+    assert_eq!(
+        (meta.sp_clusters_used, meta.sp_iterations, meta.sp_warm_kept),
+        (
+            reference.sp_clusters_used,
+            reference.sp_iterations,
+            reference.sp_warm_kept
+        )
     );
     let before = Traffic::now();
     let f = g.read(&ctx).unwrap();
@@ -245,6 +258,24 @@ fn frame_on_the_gpu_reads_nothing_back_and_matches_render() {
     assert_eq!(f.radiance, reference.radiance);
     assert_eq!(f.shading_points, reference.shading_points);
     assert_eq!(f.shadow_rays, reference.shadow_rays);
+    // With temporal reuse (warm-started clusterings, visibility rows copied) neither.
+    let temporal = RenderSettings {
+        cluster: ClusterSettings {
+            temporal: true,
+            ..s.cluster.clone()
+        },
+        ..s.clone()
+    };
+    let mut t = Renderer::new(&ctx, &sc).unwrap();
+    drop(t.render_gpu(&cam, &temporal).unwrap());
+    let before = Traffic::now();
+    let warm = t.render_gpu(&cam, &temporal).unwrap();
+    assert_eq!(Traffic::now().since(before).read_back, 0);
+    let (meta, _) = warm.counts(&ctx.device, &ctx.queue).unwrap();
+    assert!(
+        meta.sp_warm_kept.is_some() && meta.visibility_rows_reused > 0,
+        "{meta:?}"
+    );
     drop(g);
     for _ in 0..4 {
         drop(r.render_gpu(&cam, &s).unwrap());

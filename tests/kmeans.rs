@@ -81,7 +81,7 @@ fn run_gpu_with(
         weights: ctx.read_buffer(&c.weights, (m * p.f) as usize).unwrap(),
         reps: reps.chunks(2).map(|r| r[1]).collect(),
         params: p,
-        iterations_run: c.iterations_run,
+        iterations_run: c.counters(ctx).unwrap().iterations_run,
     }
 }
 

@@ -234,7 +234,7 @@ fn run_kmeans(ctx: &GpuContext, data: &[[f32; 4]], s: &KMeansSettings) -> Fuzzy 
         assign: ctx.read_buffer(&c.assign, m as usize * f).unwrap(),
         weights: ctx.read_buffer(&c.weights, m as usize * f).unwrap(),
         reps: reps.chunks(2).map(|r| r[1]).collect(),
-        iterations_run: c.iterations_run,
+        iterations_run: c.counters(ctx).unwrap().iterations_run,
     }
 }
 

@@ -195,8 +195,9 @@ fn warm_start_keeps_what_the_view_still_sees() {
     let g = KMeans::new()
         .run(&mut on, "t", &on_gpu, &s, frame, Some(&warm))
         .unwrap();
-    assert_eq!(g.warm_kept, Some(2));
-    assert_eq!(g.iterations_run, 0);
+    let counted = g.counters(&ctx).unwrap();
+    assert_eq!(counted.warm_kept, Some(2));
+    assert_eq!(counted.iterations_run, 0);
     assert_eq!(read_centroids(&ctx, &g.centroids, s.k), cpu);
     let (twin, _) = kmeans::kmeans_warm(&points, &g.params, 0, &previous, &reps);
     let gpu_reps = RepPoint::from_vec4s(&ctx.read_buffer(&g.rep_points, 24).unwrap());
@@ -273,7 +274,10 @@ fn warm_sp_clustering_matches_its_twin_on_a_moving_view() {
         &previous_reps,
     );
     assert_eq!(twin_kept, kept);
-    assert_eq!(twin.iterations_run, c.iterations_run);
+    assert_eq!(
+        twin.iterations_run,
+        c.counters(&ctx).unwrap().iterations_run
+    );
     let gpu_centroids = read_centroids(&ctx, &c.centroids, c.k());
     let mut worst = 0f32;
     for (k, (g, t)) in gpu_centroids.iter().zip(&twin.centroids).enumerate() {
@@ -488,8 +492,13 @@ fn relit_renderer_equals_a_fresh_one_of_the_relit_scene() {
     let f = r.render(&cam, &t).unwrap();
     assert!(common::all_finite(&f.radiance));
     let c = r.lights.as_ref().unwrap().list.clustering.as_ref().unwrap();
-    assert_eq!(c.warm_kept, Some(64), "every previous VPL centroid is kept");
-    assert!(c.iterations_run == 1, "{}", c.iterations_run);
+    let counted = c.counters(r.ctx).unwrap();
+    assert_eq!(
+        counted.warm_kept,
+        Some(64),
+        "every previous VPL centroid is kept"
+    );
+    assert!(counted.iterations_run == 1, "{}", counted.iterations_run);
 }
 
 /// The direct light at rest: `direct_again` with the frame's own seed repeats the frame's direct

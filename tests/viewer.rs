@@ -295,6 +295,7 @@ fn worker_replies_with_an_error_for_a_frame_too_large_for_the_device() {
             ..Default::default()
         },
         want_sp_ids: false,
+        want_counts: false,
         preview: false,
         b_settings: None,
         count_lit: false,

@@ -77,8 +77,19 @@ struct Centroid {
 // Centroid bounds as order-preserving float bits: min xyz, max xyz; then per iteration whether the
 // centroids changed (6), the iteration's number (7), whether it found an orphan (8), and the empty
 // cluster an update left (9 + the iteration's parity; k + 1, 0 for none: `last_empty`), and the
-// centroids warm_centroids kept (11).
-@group(1) @binding(5) var<storage, read_write> bounds: array<atomic<u32>, 12>;
+// centroids warm_centroids kept (11). Alg. 1's loop on the GPU (`converge`): whether it has ended
+// (12), the iterations asked for (13) and whether the run started warm (14), both from the host.
+// The counts of the representatives (`rep_count`): clusters with one (15), and those below the
+// previous K that kept the previous frame's (16). The host reads these words only when asked
+// (`Clustering::counters`): never per frame.
+@group(1) @binding(5) var<storage, read_write> bounds: array<atomic<u32>, BOUND_WORDS>;
+const BOUND_WORDS: u32 = 17u;
+
+// Whether Alg. 1's loop has ended (`converge`): the host records every iteration it asked for, and
+// those after the end do nothing.
+fn stopped() -> bool {
+    return atomicLoad(&bounds[12]) != 0u;
+}
 @group(1) @binding(6) var<storage, read_write> grid: Grid;
 // Cell counts (0 outside a grid build), then from MAX_CELLS on each cell's offset within its scan
 // block, then from BLOCK_SUMS the blocks' totals. Fixed places: the next grid may have more cells, and

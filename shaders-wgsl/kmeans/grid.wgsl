@@ -25,6 +25,9 @@ fn add_to_bounds(c: Centroid) {
 // axis. Also resets the bounds for the next iteration.
 @compute @workgroup_size(1)
 fn grid_setup() {
+    if stopped() {
+        return;
+    }
     var lo = vec3<f32>(0.0);
     var hi = vec3<f32>(0.0);
     for (var a = 0u; a < 3u; a++) {
@@ -64,7 +67,7 @@ fn grid_setup() {
 @compute @workgroup_size(64)
 fn grid_count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let k = chunk_item(gid, nwg);
-    if k == INVALID || k >= params.k {
+    if k == INVALID || k >= params.k || stopped() {
         return;
     }
     let c = centroids[k];
@@ -88,10 +91,10 @@ const BLOCK_SUMS: u32 = 2u * MAX_CELLS;
 var<workgroup> wg_cells: u32;
 
 // The grid's cell count as a workgroup-uniform value (a storage value is not one under WGSL's rules for
-// barriers, and the block loops hold barriers).
+// barriers, and the block loops hold barriers); 0 after Alg. 1's loop ended (`stopped`).
 fn workgroup_cells(t: u32) -> u32 {
     if t == 0u {
-        wg_cells = grid.num_cells;
+        wg_cells = select(grid.num_cells, 0u, stopped());
     }
     return workgroupUniformLoad(&wg_cells);
 }
@@ -189,7 +192,7 @@ fn grid_scan_ranges(
 @compute @workgroup_size(64)
 fn grid_scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let k = chunk_item(gid, nwg);
-    if k == INVALID || k >= params.k {
+    if k == INVALID || k >= params.k || stopped() {
         return;
     }
     let c = centroids[k];

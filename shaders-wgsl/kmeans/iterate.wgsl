@@ -11,7 +11,7 @@
 @compute @workgroup_size(64)
 fn assign_sampled(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let s = chunk_item(gid, nwg);
-    if s == INVALID || s >= params.num_sampled {
+    if s == INVALID || s >= params.num_sampled || stopped() {
         return;
     }
     let m = sample_index(s);
@@ -166,7 +166,7 @@ fn name_empty(k: u32, iteration: u32) {
 @compute @workgroup_size(64)
 fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let k = chunk_item(gid, nwg);
-    if k == INVALID || k >= params.k {
+    if k == INVALID || k >= params.k || stopped() {
         return;
     }
     let base = k * WORDS;
@@ -209,4 +209,60 @@ fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     atomicStore(&reps[2u * k], 0u);
     centroids[k] = c;
     add_to_bounds(c);
+}
+
+// Alg. 1's loop, decided on the GPU so that the host reads nothing back (one invocation, after
+// `update`): it ends after an iteration that changed no assignment and re-seeded no cluster (not
+// after the first, whose "previous" assignment was never used: the centroids would stay as they are),
+// or once it ran its count: the iterations asked for (bounds[13]), after a warm start (bounds[14])
+// their share of re-seeded centroids (`warm_iterations`). The host records every iteration asked for;
+// those after the end do nothing (`stopped`).
+@compute @workgroup_size(1)
+fn converge() {
+    if stopped() {
+        return;
+    }
+    let done = atomicLoad(&bounds[7]);
+    var limit = atomicLoad(&bounds[13]);
+    if atomicLoad(&bounds[14]) != 0u {
+        limit = warm_iterations(limit, atomicLoad(&bounds[11]), params.k);
+    }
+    if (done >= 2u && atomicLoad(&bounds[6]) == 0u) || done >= limit {
+        atomicStore(&bounds[12], 1u);
+    }
+}
+
+// After the loop (one invocation): the final grid (Alg. 2) is built whether or not the loop ended
+// early.
+@compute @workgroup_size(1)
+fn loop_end() {
+    atomicStore(&bounds[12], 0u);
+}
+
+// Iterations of Alg. 1 after a warm start that kept `kept` of `k` centroids: the share of re-seeded
+// centroids of `iterations`, rounded up, at least 1. CPU twin: gi::kmeans::warm_iterations (the same
+// ceil(iterations * new / k), here without 64-bit products: the least n with n k >= iterations new).
+fn warm_iterations(iterations: u32, kept: u32, k: u32) -> u32 {
+    if iterations == 0u {
+        return 0u;
+    }
+    let kk = max(k, 1u);
+    let want = mul_wide(iterations, kk - min(kept, kk));
+    for (var n = 1u; n < iterations; n++) {
+        let have = mul_wide(n, kk);
+        if have.y > want.y || (have.y == want.y && have.x >= want.x) {
+            return n;
+        }
+    }
+    return iterations;
+}
+
+// x y as 64 bits (lo, hi).
+fn mul_wide(x: u32, y: u32) -> vec2<u32> {
+    let ll = (x & 0xffffu) * (y & 0xffffu);
+    let lh = (x & 0xffffu) * (y >> 16u);
+    let hl = (x >> 16u) * (y & 0xffffu);
+    let hh = (x >> 16u) * (y >> 16u);
+    let mid = lh + (ll >> 16u) + (hl & 0xffffu);
+    return vec2<u32>((mid << 16u) | (ll & 0xffffu), hh + (mid >> 16u) + (hl >> 16u));
 }

@@ -61,6 +61,37 @@ fn rep_store(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     rep_points[2u * k + 1u] = vec4<f32>(point_nrm(m), 0.0);
 }
 
+// The representatives' counts for the stats, kept on the GPU (bounds[15], [16]; read only when
+// asked): clusters with a representative, and those below the previous K whose representative is the
+// previous frame's (their visibility rows can be copied). A count a workgroup, then one atomic each.
+var<workgroup> wg_reps: array<atomic<u32>, 2>;
+
+@compute @workgroup_size(64)
+fn rep_count(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) t: u32,
+) {
+    let k = chunk_item(gid, nwg);
+    if k != INVALID && k < params.k {
+        if atomicLoad(&reps[2u * k + 1u]) != INVALID {
+            atomicAdd(&wg_reps[0], 1u);
+        }
+        if k < params.warm_size.z && rep_points[2u * k].w > 0.0 && rep_points[2u * k + 1u].w == 1.0 {
+            atomicAdd(&wg_reps[1], 1u);
+        }
+    }
+    workgroupBarrier();
+    if t == 0u {
+        for (var i = 0u; i < 2u; i++) {
+            let n = atomicLoad(&wg_reps[i]);
+            if n > 0u {
+                atomicAdd(&bounds[15u + i], n);
+            }
+        }
+    }
+}
+
 // Optional step 5, Eq. (10) as the paper's text states it: w'_f = 1 / dist(p, p_f) with p_f the
 // representative of cluster f (a real shading point) instead of its centroid (Alg. 2's W). Replaces the
 // weights of final_assign; the same exact case (distance 0 takes the whole weight).

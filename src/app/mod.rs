@@ -468,6 +468,9 @@ pub struct Viewer {
     pub split: f32,
     /// The plot's y axis: FLIP instead of MSE.
     pub plot_flip: bool,
+    /// The panel's counts section is open: each frame's counts the GPU keeps (`GpuFrame::counts`)
+    /// are read back for it (`FrameJob::want_counts`).
+    pub show_counts: bool,
     /// The plot takes the wheel and drags (zoom, pan); off, it always fits its points.
     pub plot_zoom: bool,
     /// Points the plot last fitted to (it re-fits when this changes).

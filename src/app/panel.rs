@@ -364,24 +364,34 @@ impl Viewer {
                 });
                 ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Wrap);
                 ui.label(format!(
-                    "VPLs {} · SPs {} · SP clusters {} · VPL clusters {}",
-                    f.vpls, f.shading_points, f.sp_clusters_used, f.vpl_clusters_used
+                    "VPLs {} · VPL clusters {}",
+                    f.vpls, f.vpl_clusters_used
                 ));
                 if let Some(g) = f.gamma_used {
                     ui.label(format!("γ used {g}"));
-                }
-                if let Some(kept) = f.sp_warm_kept {
-                    ui.label(format!(
-                        "warm start: kept {kept} of {} SP clusters, {} iteration(s)",
-                        f.sp_clusters_used, f.sp_iterations
-                    ));
                 }
                 if let Some((n, spp, ms)) = r.refined {
                     ui.label(format!(
                         "direct light: {spp} samples a pixel ({n} frames at rest, {ms:.0} ms each)"
                     ));
                 }
-                ui.label(format!("shadow rays {}", f.shadow_rays));
+                // Counts the GPU keeps: read back each frame only while this section is open.
+                let counts = egui::CollapsingHeader::new("Counts (read back each frame)")
+                    .default_open(false)
+                    .show(ui, |ui| {
+                        ui.label(format!(
+                            "SPs {} · SP clusters {}",
+                            f.shading_points, f.sp_clusters_used
+                        ));
+                        if let Some(kept) = f.sp_warm_kept {
+                            ui.label(format!(
+                                "warm start: kept {kept} of {} SP clusters, {} iteration(s)",
+                                f.sp_clusters_used, f.sp_iterations
+                            ));
+                        }
+                        ui.label(format!("shadow rays {}", f.shadow_rays));
+                    });
+                self.show_counts = counts.openness > 0.0;
             });
     }
 

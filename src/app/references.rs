@@ -25,6 +25,7 @@ impl Viewer {
             camera: self.cam.to_camera(),
             settings,
             want_sp_ids: false,
+            want_counts: false,
             preview: false,
             b_settings: None,
             count_lit: false,

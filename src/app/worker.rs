@@ -46,6 +46,8 @@ pub struct FrameJob {
     pub settings: RenderSettings,
     /// Read back the SP clustering's nearest cluster per pixel.
     pub want_sp_ids: bool,
+    /// Read back the counts the GPU keeps (`GpuFrame::counts`: the panel's counts section is open).
+    pub want_counts: bool,
     /// A preview rendered while the camera moves (`preview_settings`).
     pub preview: bool,
     /// The split view's pinned B settings: rendered for the same camera right after this frame.
@@ -492,9 +494,16 @@ fn render(
     let t = Instant::now();
     let (frame, gpu, ran) = if on_gpu {
         let (g, ran) = frames.next_gpu(renderer, &job.camera, &job.settings)?;
-        let frame = match job.want_sp_ids {
-            true => g.read(renderer.ctx)?,
-            false => g.meta.clone(),
+        let frame = match (job.want_sp_ids, job.want_counts) {
+            (true, _) => g.read(renderer.ctx)?,
+            (false, true) => {
+                let (meta, rays) = g.counts(&renderer.ctx.device, &renderer.ctx.queue)?;
+                Frame {
+                    shadow_rays: rays,
+                    ..meta
+                }
+            }
+            (false, false) => g.meta.clone(),
         };
         (frame, Some(g), ran)
     } else {

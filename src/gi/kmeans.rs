@@ -202,11 +202,10 @@ pub struct Warm<'a> {
 /// The result of one clustering, resident on the GPU.
 pub struct Clustering {
     pub params: KmParams,
-    /// Iterations of Alg. 1 run: the requested count, or fewer when one changed no assignment or
-    /// after a warm start (`warm_iterations`).
-    pub iterations_run: u32,
-    /// Centroids a warm start kept from the previous clustering (`None`: a cold start).
-    pub warm_kept: Option<u32>,
+    /// Whether it started from a previous clustering (`Warm`).
+    pub warm: bool,
+    /// kmeans.wgsl's `bounds`: the loop's state and the counts `counters` reads.
+    pub bounds: wgpu::Buffer,
     /// K centroids (pos xyz + valid w, normal).
     pub centroids: wgpu::Buffer,
     /// M × F cluster indices (u32::MAX where fewer than F were found).
@@ -222,7 +221,50 @@ pub struct Clustering {
     pub sample_assign: wgpu::Buffer,
 }
 
+/// A clustering's counts, kept on the GPU and read back only when asked (`Clustering::counters`):
+/// the host never waits on them while it records a frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct KmCounters {
+    /// Iterations of Alg. 1 run: the requested count, or fewer when one changed no assignment or
+    /// after a warm start (`warm_iterations`).
+    pub iterations_run: u32,
+    /// Centroids a warm start kept from the previous clustering (`None`: a cold start).
+    pub warm_kept: Option<u32>,
+    /// Clusters with a representative.
+    pub reps_used: u32,
+    /// Clusters below the previous K whose representative is the previous frame's.
+    pub reps_kept: u32,
+}
+
+/// Words of kmeans.wgsl's `bounds` (`BOUND_WORDS`).
+const BOUND_WORDS: usize = 17;
+
+impl KmCounters {
+    /// The counts in kmeans.wgsl's `bounds` words of a clustering that started warm or not. The grid
+    /// builds (word 7) are the iterations run and the final one.
+    pub fn from_words(words: &[u32], warm: bool) -> KmCounters {
+        KmCounters {
+            iterations_run: words[7].saturating_sub(1),
+            warm_kept: warm.then_some(words[11]),
+            reps_used: words[15],
+            reps_kept: words[16],
+        }
+    }
+}
+
 impl Clustering {
+    /// Its counts, read back from the GPU (a small read that waits for the clustering: on request
+    /// only, for the stats and tests).
+    pub fn counters(&self, ctx: &GpuContext) -> Result<KmCounters> {
+        self.counters_with(&ctx.device, &ctx.queue)
+    }
+
+    /// `counters` on a device's own handles (another thread's clones).
+    pub fn counters_with(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<KmCounters> {
+        let words: Vec<u32> = crate::gpu::read_buffer(device, queue, &self.bounds, BOUND_WORDS)?;
+        Ok(KmCounters::from_words(&words, self.warm))
+    }
+
     pub fn k(&self) -> u32 {
         self.params.k
     }
@@ -247,6 +289,9 @@ const ENTRIES: &[&str] = &[
     "rep_pick",
     "rep_store",
     "rep_weights",
+    "converge",
+    "loop_end",
+    "rep_count",
 ];
 
 /// How the k-means runs on an adapter; the clusters do not depend on it (tested). `None` picks the
@@ -331,7 +376,7 @@ impl KMeans {
             p = p.with_warm(w.k, w.view.as_ref());
         }
         let texture_search = self.texture_search(ctx);
-        let b = Buffers::new(ctx, &p, texture_search);
+        let b = Buffers::new(ctx, &p, texture_search, settings.iterations, warm.is_some());
         let kernel = self.kernel(ctx, p.f, p.f > 1 && p.plane_gate <= 1.0);
         let bg = b.bind_group(ctx, kernel, data);
         // After each grid build the search's textures are refreshed (software adapters only).
@@ -350,23 +395,24 @@ impl KMeans {
             seed: settings.seed,
         };
         let mut run = |steps: &[(&str, u32)]| kernel.run_entries(gpu, r, steps, after);
-        let (iterations, warm_kept) =
-            init_centroids(ctx, &p, &b, settings.iterations, warm, &mut run)?;
-        let iterations_run = iterate(ctx, &p, &b.bounds, &grid, iterations, &mut run)?;
-        // Alg. 2 on the last grid, then the representatives.
-        let mut steps = grid.to_vec();
+        init_centroids(ctx, &p, &b, warm, &mut run);
+        iterate(&p, &grid, settings.iterations, &mut run);
+        // Alg. 2 on the last grid, then the representatives and their counts.
+        let mut steps = vec![("loop_end", 1)];
+        steps.extend(grid);
         steps.extend([("rep_clear", kk), ("final_assign", num_points)]);
         run(&steps);
-        run(&[("rep_pick", num_points), ("rep_store", kk)]);
+        run(&[
+            ("rep_pick", num_points),
+            ("rep_store", kk),
+            ("rep_count", kk),
+        ]);
         if settings.weights_to_reps && p.f > 1 {
             run(&[("rep_weights", num_points)]);
         }
-        if std::env::var_os("FVPL_PROFILE_STEPS").is_some() {
-            print_grid(ctx, label, &p, &b.grid, iterations_run)?;
-        }
-        Ok(Clustering {
-            iterations_run,
-            warm_kept,
+        let c = Clustering {
+            warm: warm.is_some(),
+            bounds: b.bounds,
             params: p,
             centroids: b.centroids,
             assign: b.assign,
@@ -374,7 +420,11 @@ impl KMeans {
             reps: b.reps,
             rep_points: b.rep_points,
             sample_assign: b.sample_assign,
-        })
+        };
+        if std::env::var_os("FVPL_PROFILE_STEPS").is_some() {
+            print_grid(ctx, label, &c, &b.grid)?;
+        }
+        Ok(c)
     }
 
     /// Alg. 1 line 5: the grid's steps (the centroids' bounds come from init_centroids and update).
@@ -422,18 +472,26 @@ struct Buffers {
 }
 
 impl Buffers {
-    /// Allocates them for `p` (`texture_search`: `KMeans::texture_search`).
-    fn new(ctx: &GpuContext, p: &KmParams, texture_search: bool) -> Buffers {
+    /// Allocates them for `p` (`texture_search`: `KMeans::texture_search`), for a loop of
+    /// `iterations` from a warm start or not (`converge`).
+    fn new(
+        ctx: &GpuContext,
+        p: &KmParams,
+        texture_search: bool,
+        iterations: u32,
+        warm: bool,
+    ) -> Buffers {
         let k = p.k as u64;
         let m = p.num_points as u64;
         let f = p.f as u64;
         let params = ctx.uniform("kmeans params", p);
         let centroids = ctx.storage("centroids", k * 32);
         let sums = ctx.storage("centroid sums", k * WORDS * 4);
-        let bounds = ctx.storage_init(
-            "centroid bounds",
-            &[u32::MAX, u32::MAX, u32::MAX, 0, 0, 0, 0, 0, 0, 0, 0, 0],
-        );
+        let mut words = [0u32; BOUND_WORDS];
+        words[..3].fill(u32::MAX);
+        words[13] = iterations;
+        words[14] = warm as u32;
+        let bounds = ctx.storage_init("centroid bounds", &words);
         let grid = ctx.storage("grid", 32);
         let cells = ctx.storage("grid cells", (2 * MAX_CELLS + SCAN_BLOCKS) * 4);
         let sample_assign = ctx.storage("sample assign", p.num_sampled as u64 * 4);
@@ -518,17 +576,15 @@ impl Buffers {
 }
 
 /// Alg. 1 line 2: the initial centroids, from `warm`'s (copied in with its representatives) where
-/// the view still sees them (`warm_centroids`), else from strata (`init_centroids`); then the sampled
-/// points. Returns the iterations to run (`warm_iterations` after a warm start) and the centroids a
-/// warm start kept.
+/// the view still sees them (`warm_centroids`, which counts the kept ones: `converge` shortens the
+/// loop by them), else from strata (`init_centroids`); then the sampled points.
 fn init_centroids(
     ctx: &GpuContext,
     p: &KmParams,
     b: &Buffers,
-    iterations: u32,
     warm: Option<&Warm>,
     run: &mut RunSteps,
-) -> Result<(u32, Option<u32>)> {
+) {
     let kk = p.k;
     match warm {
         Some(w) => {
@@ -540,54 +596,32 @@ fn init_centroids(
                 ctx.queue.submit([enc.finish()]);
             }
             run(&[("warm_centroids", kk), ("init_sampled", p.num_sampled)]);
-            let kept = ctx.read_buffer::<u32>(&b.bounds, 12)?[11];
-            Ok((warm_iterations(iterations, kept, kk), Some(kept)))
         }
-        None => {
-            run(&[("init_centroids", kk), ("init_sampled", p.num_sampled)]);
-            Ok((iterations, None))
-        }
+        None => run(&[("init_centroids", kk), ("init_sampled", p.num_sampled)]),
     }
 }
 
-/// Alg. 1 lines 5-18, up to `iterations` times: the grid (`grid`), the sampled points' assignment
-/// and the centroids' update, one submission an iteration. Returns the iterations run.
-fn iterate(
-    ctx: &GpuContext,
-    p: &KmParams,
-    bounds: &wgpu::Buffer,
-    grid: &[(&str, u32)],
-    iterations: u32,
-    run: &mut RunSteps,
-) -> Result<u32> {
-    let mut iterations_run = 0;
-    for i in 0..iterations {
+/// Alg. 1 lines 5-18, `iterations` times: the grid (`grid`), the sampled points' assignment, the
+/// centroids' update and `converge`, one submission an iteration. The GPU ends the loop early
+/// (`converge`: an iteration that changed nothing, or a warm start's shorter count); the iterations
+/// after the end are recorded but do nothing, so the host never waits to read a flag back.
+fn iterate(p: &KmParams, grid: &[(&str, u32)], iterations: u32, run: &mut RunSteps) {
+    for _ in 0..iterations {
         let mut steps = grid.to_vec();
-        steps.extend([("assign_sampled", p.num_sampled), ("update", p.k)]);
+        steps.extend([
+            ("assign_sampled", p.num_sampled),
+            ("update", p.k),
+            ("converge", 1),
+        ]);
         run(&steps);
-        iterations_run += 1;
-        // Alg. 1 ends early once an iteration changed no assignment and re-seeded no cluster:
-        // from then on the centroids stay as they are. (Not after the first: its "previous"
-        // assignment was never used.)
-        if i >= 1 {
-            let b: Vec<u32> = ctx.read_buffer(bounds, 8)?;
-            if b[6] == 0 {
-                break;
-            }
-        }
     }
-    Ok(iterations_run)
 }
 
 /// Diagnosis (`FVPL_PROFILE_STEPS`): the last grid (origin xyz, cell, dims xyz, cells) and the
 /// centroids per cell.
-fn print_grid(
-    ctx: &GpuContext,
-    label: &str,
-    p: &KmParams,
-    grid: &wgpu::Buffer,
-    iterations_run: u32,
-) -> Result<()> {
+fn print_grid(ctx: &GpuContext, label: &str, c: &Clustering, grid: &wgpu::Buffer) -> Result<()> {
+    let p = &c.params;
+    let iterations_run = c.counters(ctx)?.iterations_run;
     let g: Vec<u32> = ctx.read_buffer(grid, 8)?;
     let cell = f32::from_bits(g[3]);
     let cells = g[7].max(1);

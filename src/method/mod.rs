@@ -63,6 +63,55 @@ pub struct Counts {
     pub rows_reused: u32,
     /// cvrtgi's sizes: voxels, clusters, faces, the lit ones (`Frame::cvrtgi`).
     pub cvrtgi: Option<cvrtgi::CvrtgiReport>,
+    /// Counts the GPU keeps (colom's SP clustering): read back only when asked.
+    pub pending: Option<PendingCounts>,
+}
+
+/// colom's counts left on the GPU (its SP clustering's `KmCounters`): the frame's recording never
+/// waits for them, and they are read back only on request (`GpuFrame::read`, `GpuFrame::counts`:
+/// the stats, the panel's counts).
+#[derive(Clone, Debug)]
+pub struct PendingCounts {
+    /// The SP clustering's `Clustering::bounds`.
+    pub bounds: wgpu::Buffer,
+    /// The clustering started warm.
+    pub warm: bool,
+    /// The visibility rows of kept representatives were copied, not traced (same lights).
+    pub rows_copied: bool,
+    pub num_lights: u32,
+}
+
+/// `PendingCounts` read back: the SP clusters used, the clustering's iterations and warm start, the
+/// visibility rows copied and the rays the visibility pass traced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ResolvedCounts {
+    pub sp_used: u32,
+    pub sp_iterations: u32,
+    pub sp_warm_kept: Option<u32>,
+    pub rows_reused: u32,
+    pub indirect_rays: u64,
+}
+
+impl PendingCounts {
+    /// Reads them back (a wait for the frame's clustering and 68 bytes).
+    pub fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<ResolvedCounts> {
+        let words: Vec<u32> = crate::gpu::read_buffer(device, queue, &self.bounds, 17)?;
+        Ok(self.resolve(&crate::gi::kmeans::KmCounters::from_words(
+            &words, self.warm,
+        )))
+    }
+
+    /// The counts from the clustering's.
+    pub fn resolve(&self, k: &crate::gi::kmeans::KmCounters) -> ResolvedCounts {
+        let rows_reused = if self.rows_copied { k.reps_kept } else { 0 };
+        ResolvedCounts {
+            sp_used: k.reps_used,
+            sp_iterations: k.iterations_run,
+            sp_warm_kept: k.warm_kept,
+            rows_reused,
+            indirect_rays: k.reps_used.saturating_sub(rows_reused) as u64 * self.num_lights as u64,
+        }
+    }
 }
 
 /// A method's resident state and the recording of its passes.

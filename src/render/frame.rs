@@ -274,10 +274,13 @@ impl FramePool {
 /// where they are, and `read` copies them to the CPU only when asked (`Renderer::render` does).
 pub struct GpuFrame {
     pub buffers: std::sync::Arc<FrameBuffers>,
-    /// Everything known without reading the images back: size, passes, timings, the clusterings'
-    /// counts. Its images, positions and normals are empty, and `shading_points` and `shadow_rays`
-    /// are 0 until `read`.
+    /// Everything known without reading anything back: size, passes, timings. Its images,
+    /// positions and normals are empty, `shading_points` and `shadow_rays` are 0, and the counts
+    /// the GPU keeps (`pending`: colom's SP clusters used, iterations, warm start, rows copied) are
+    /// 0 until `read` or `counts`.
     pub meta: Frame,
+    /// Counts left on the GPU, read by `counts` and `read`.
+    pub pending: Option<crate::method::PendingCounts>,
     /// The images' factor from render units to the scene's (`Renderer::output_scale`).
     pub output_scale: f32,
     /// The G-buffer's positions' factor from the scene's units to render units.
@@ -297,11 +300,32 @@ impl GpuFrame {
         self.read_with(&ctx.device, &ctx.queue)
     }
 
+    /// `meta` with the counts the GPU keeps read back (68 bytes; the images stay on the GPU), and
+    /// the indirect passes' shadow rays with the ones those counts give.
+    pub fn counts(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> anyhow::Result<(Frame, u64)> {
+        let mut meta = self.meta.clone();
+        let mut rays = self.indirect_rays;
+        if let Some(p) = &self.pending {
+            let c = p.read(device, queue)?;
+            meta.sp_clusters_used = c.sp_used;
+            meta.sp_iterations = c.sp_iterations;
+            meta.sp_warm_kept = c.sp_warm_kept;
+            meta.visibility_rows_reused = c.rows_reused;
+            rays += c.indirect_rays;
+        }
+        Ok((meta, rays))
+    }
+
     /// `read` on the device's own handles (another thread's clones of the renderer's device).
     pub fn read_with(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> anyhow::Result<Frame> {
         let read = |b: &wgpu::Buffer, n: usize| -> anyhow::Result<Vec<[f32; 4]>> {
             crate::gpu::read_buffer(device, queue, b, n)
         };
+        let (meta, indirect_rays) = self.counts(device, queue)?;
         let b = &self.buffers;
         let n = (b.size.0 * b.size.1) as usize;
         // The indirect passes traced from the render scale's shading points.
@@ -332,7 +356,7 @@ impl GpuFrame {
             indirect,
             shading_points: valid,
             shadow_rays: valid as u64 * self.direct_rays_per_point
-                + self.indirect_rays
+                + indirect_rays
                 + traced_points.unwrap_or(valid as u64) * self.rays_per_point,
             // In the caller's units (the G-buffer holds the unit frame's, `geometry_scale`).
             positions: sps
@@ -350,7 +374,7 @@ impl GpuFrame {
                     [n[0], n[1], n[2], 0.0]
                 })
                 .collect(),
-            ..self.meta.clone()
+            ..meta
         })
     }
 }

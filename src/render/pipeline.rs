@@ -451,6 +451,7 @@ impl Renderer<'_> {
             direct_rays_per_point: r.direct_samples as u64 + self.gpu.info.num_lights as u64,
             rays_per_point: r.rays_per_point,
             indirect_rays: c.indirect_rays,
+            pending: c.pending.clone(),
             meta: Frame {
                 width,
                 height,

@@ -13,7 +13,7 @@ use std::any::Any;
 
 use anyhow::Result;
 
-use super::{Counts, FrameInputs, IndirectMethod};
+use super::{Counts, FrameInputs, IndirectMethod, PendingCounts};
 use crate::gi::dispatch::Gpu;
 use crate::gi::kmeans::{Clustering, KMeans, KMeansSettings, Points, Warm};
 use crate::gi::pass::Pass;
@@ -103,10 +103,8 @@ impl Colom {
         self.frame.previous_visibility = self
             .last_visibility
             .take()
-            .filter(|v| f.cluster.temporal && c.warm_kept.is_some() && v.lights == light_key);
+            .filter(|v| f.cluster.temporal && c.warm && v.lights == light_key);
         self.frame.lights = Some(light_key);
-        counts.sp_iterations = c.iterations_run;
-        counts.sp_warm_kept = c.warm_kept;
         counts.gamma_used = Some(c.params.gamma);
         self.frame.clustering = Some(c);
         Ok(())
@@ -115,7 +113,6 @@ impl Colom {
     /// Step 5: the visibility bit matrix between SP-cluster representatives and lights; rows of
     /// representatives kept from the previous frame are copied when the lights are the same.
     fn visibility(&mut self, g: &mut Gpu, f: &FrameInputs, counts: &mut Counts) -> Result<()> {
-        let ctx = g.ctx;
         let lights = &f.lights.expect("colom's lights").list;
         let num_lights = lights.lights.len() as u32;
         let c = self.frame.clustering.as_ref().expect("sp_cluster ran");
@@ -131,21 +128,13 @@ impl Colom {
                 facing: f.cluster.visibility_facing,
             },
         );
-        let reps: Vec<u32> = ctx.read_buffer(&c.reps, c.k() as usize * 2)?;
-        counts.sp_used = reps.chunks(2).filter(|r| r[1] != u32::MAX).count() as u32;
-        if let Some(p) = &previous
-            && p.matrix.words == words
-        {
-            // Rows copied, not traced: kept representatives below the previous row count.
-            let points: Vec<[f32; 4]> = ctx.read_buffer(&c.rep_points, c.k() as usize * 2)?;
-            counts.rows_reused = points
-                .chunks(2)
-                .take(p.matrix.rows as usize)
-                .filter(|r| r[0][3] > 0.0 && r[1][3] == 1.0)
-                .count() as u32;
-        }
-        counts.indirect_rays = (counts.sp_used - counts.rows_reused) as u64 * num_lights as u64;
-        debug_assert!(f.cluster.temporal || counts.rows_reused == 0);
+        // The clusters used, the rows copied and the rays traced stay on the GPU until asked for.
+        counts.pending = Some(PendingCounts {
+            bounds: c.bounds.clone(),
+            warm: c.warm,
+            rows_copied: previous.as_ref().is_some_and(|p| p.matrix.words == words),
+            num_lights,
+        });
         self.frame.visibility = Some(Previous {
             bits,
             rows: c.k(),
