@@ -156,23 +156,72 @@ mod tests {
     }
 }
 
+/// The calling thread's CPU time (Linux: `CLOCK_THREAD_CPUTIME_ID`; `None` elsewhere). Unlike a
+/// clock on the wall it does not count the time the thread waits or is preempted (on a 2-core
+/// machine, by the GI worker's and the software driver's threads).
+pub fn thread_cpu_time() -> Option<std::time::Duration> {
+    #[cfg(target_os = "linux")]
+    {
+        let mut t = libc::timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: clock_gettime writes the timespec it is given.
+        let r = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
+        (r == 0).then(|| std::time::Duration::new(t.tv_sec as u64, t.tv_nsec as u32))
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        None
+    }
+}
+
+/// A window frame's app code measured both ways: the UI thread's CPU time (`thread_cpu_time`; the
+/// wall time where a platform has no thread clock) and the wall time.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AppTime {
+    pub cpu_ms: f64,
+    pub wall_ms: f64,
+}
+
+impl AppTime {
+    /// A clock started now (`stop` reads it).
+    pub fn start() -> (Instant, Option<std::time::Duration>) {
+        (Instant::now(), thread_cpu_time())
+    }
+
+    pub fn stop(started: (Instant, Option<std::time::Duration>)) -> AppTime {
+        let wall_ms = started.0.elapsed().as_secs_f64() * 1e3;
+        let cpu_ms = match (started.1, thread_cpu_time()) {
+            (Some(a), Some(b)) => b.saturating_sub(a).as_secs_f64() * 1e3,
+            _ => wall_ms,
+        };
+        AppTime { cpu_ms, wall_ms }
+    }
+}
+
 /// What the viewer's own window frames cost (`view --stats`, "ui"): the UI thread's time in app code
-/// a window frame (polling the worker, egui, the display, not waiting for the surface or present),
+/// a window frame (polling the worker, egui, the display, not waiting for the surface or present) as
+/// CPU time and on the wall,
 /// and the bytes each window frame moved between the CPU and the GPU (`gpu::traffic`, every device
 /// of the process: the split path's GI device included), apart for frames while the camera moves
 /// and at rest.
 #[derive(Default)]
 pub struct UiCost {
-    /// (moving, app ms, bytes read back, bytes uploaded) a window frame.
-    pub frames: Vec<(bool, f64, u64, u64)>,
+    /// (moving, app time, bytes read back, bytes uploaded) a window frame.
+    pub frames: Vec<(bool, AppTime, u64, u64)>,
     /// The first and last window frame's time.
     pub span: Option<(Instant, Instant)>,
 }
 
 #[derive(serde::Serialize, Debug, PartialEq)]
 pub struct UiCostStats {
+    /// The UI thread's CPU time in app code a window frame (`AppTime::cpu_ms`).
     pub cpu_ms_p50: f64,
     pub cpu_ms_p95: f64,
+    /// The same on the wall (with the time the thread waited or was preempted).
+    pub wall_ms_p50: f64,
+    pub wall_ms_p95: f64,
     /// Window frames a second over the measured span.
     pub fps: f64,
     pub frames: usize,
@@ -185,7 +234,7 @@ impl UiCost {
     pub fn frame(
         &mut self,
         moving: bool,
-        ms: f64,
+        ms: AppTime,
         traffic: crate::gpu::traffic::Traffic,
         at: Instant,
     ) {
@@ -201,7 +250,8 @@ impl UiCost {
         if f.is_empty() {
             return None;
         }
-        let ms: Vec<f64> = f.iter().map(|f| f.1).collect();
+        let ms: Vec<f64> = f.iter().map(|f| f.1.cpu_ms).collect();
+        let wall: Vec<f64> = f.iter().map(|f| f.1.wall_ms).collect();
         let n = f.len() as f64;
         let secs = self
             .span
@@ -209,6 +259,8 @@ impl UiCost {
         Some(UiCostStats {
             cpu_ms_p50: quantile(&ms, 0.5).unwrap_or(0.0),
             cpu_ms_p95: quantile(&ms, 0.95).unwrap_or(0.0),
+            wall_ms_p50: quantile(&wall, 0.5).unwrap_or(0.0),
+            wall_ms_p95: quantile(&wall, 0.95).unwrap_or(0.0),
             fps: if secs > 0.0 {
                 (self.frames.len() as f64 - 1.0) / secs
             } else {

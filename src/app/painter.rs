@@ -198,7 +198,7 @@ impl Painter {
     /// display pass, egui with `input`, the viewer's tick. Returns egui's output, tessellated, with
     /// the textures to free after painting and the app time spent.
     pub fn frame(&mut self, v: &mut Viewer, input: egui::RawInput) -> Frame {
-        let started = Instant::now();
+        let started = super::motion::AppTime::start();
         v.poll();
         v.animate_step();
         self.draw_display(v);
@@ -226,7 +226,7 @@ impl Painter {
             freed,
             repaint,
             // App code ends here; the surface and present may wait for the display.
-            app_ms: started.elapsed().as_secs_f64() * 1e3,
+            app: super::motion::AppTime::stop(started),
         }
     }
 
@@ -244,7 +244,7 @@ impl Painter {
         if v.script_started.is_some() {
             let moving = v.animate || v.moving();
             v.ui_cost
-                .frame(moving, f.app_ms, traffic.since(v.traffic_mark), now);
+                .frame(moving, f.app, traffic.since(v.traffic_mark), now);
         }
         v.traffic_mark = traffic;
         v.motion.input_at = None;
@@ -263,7 +263,7 @@ pub struct Frame {
     pub platform: egui::PlatformOutput,
     pub freed: Vec<egui::TextureId>,
     pub repaint: Duration,
-    pub app_ms: f64,
+    pub app: super::motion::AppTime,
 }
 
 /// Reads the screenshot texture back and writes it to `path` as PNG; the outcome goes to the panel

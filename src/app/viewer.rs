@@ -860,14 +860,17 @@ impl Viewer {
     /// while moving and at rest.
     fn ui_stats(&self) -> serde_json::Value {
         let c = &self.ui_cost;
-        let ms: Vec<f64> = c.frames.iter().map(|f| f.1).collect();
+        let ms: Vec<f64> = c.frames.iter().map(|f| f.1.cpu_ms).collect();
+        let wall: Vec<f64> = c.frames.iter().map(|f| f.1.wall_ms).collect();
         let q = |p| motion::quantile(&ms, p);
+        let qw = |p| motion::quantile(&wall, p);
         let all = c
             .stats(true)
             .map(|m| m.fps)
             .or(c.stats(false).map(|r| r.fps));
         serde_json::json!({
             "cpu_ms": { "p50": q(0.5), "p95": q(0.95) },
+            "wall_ms": { "p50": qw(0.5), "p95": qw(0.95) },
             "fps": all,
             "frames": c.frames.len(),
             "moving": c.stats(true),
