@@ -210,10 +210,13 @@ pub fn main() -> ExitCode {
                     command: Some(Command::View(a)),
                 },
                 _,
-            )) => view::run(a),
+            )) => view::run(a, &[]),
             _ => unreachable!("`fuzzy-vpl view` parses"),
         },
-        Some(Command::View(a)) => view::run(a),
+        Some(Command::View(a)) => {
+            let given: Vec<&str> = given.iter().map(String::as_str).collect();
+            view::run(a, &given)
+        }
         Some(Command::Render(a)) => render::run(a),
         Some(Command::Info(a)) => info::run(a),
         Some(Command::Raybench(a)) => raybench::run(a),

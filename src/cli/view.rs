@@ -61,7 +61,7 @@ pub struct ViewArgs {
     #[arg(long, value_enum, default_value = "auto")]
     display_path: crate::app::DisplayPath,
     /// No window: the same viewer painted into an offscreen texture of the window's size (the image
-    /// area plus the panel and the stats strip: `--width 900 --height 550` is 1280×800), for a
+    /// area plus the panel and the stats strip; by default 900×550 + the panel = 1280×800), for a
     /// scripted run (--frames) on a machine without a display.
     #[arg(long, requires = "frames")]
     offscreen: bool,
@@ -140,7 +140,20 @@ fn parse_render_scale(v: &str) -> Result<f32, Invalid> {
     }
 }
 
-pub fn run(a: ViewArgs) -> Result<()> {
+/// The offscreen window's default image area: with the panel and the stats strip, 1280×800.
+pub const OFFSCREEN_IMAGE: (u32, u32) = (900, 550);
+
+/// `given`: the options the command line gave (`--offscreen` without `--width`/`--height` takes
+/// `OFFSCREEN_IMAGE`).
+pub fn run(mut a: ViewArgs, given: &[&str]) -> Result<()> {
+    if a.offscreen {
+        if !given.contains(&"width") {
+            a.shot.frame.width = OFFSCREEN_IMAGE.0;
+        }
+        if !given.contains(&"height") {
+            a.shot.frame.height = OFFSCREEN_IMAGE.1;
+        }
+    }
     if a.shot.frame.exposure == Exposure::Fixed(0.0) {
         return Err(bad(
             "--exposure 0: the viewer needs an exposure > 0 (or auto)",
