@@ -17,10 +17,12 @@ pub struct Motion {
     pub latencies_ms: Vec<f64>,
     /// GPU ms (timestamps) of the GI frames that finished while the camera moved.
     pub moving_gi_ms: Vec<f64>,
+    /// The worker's wall ms for the same frames (job received → frame done).
+    pub moving_gi_wall_ms: Vec<f64>,
     /// The fraction of those frames' pixels whose primary ray hit a surface (`lit_fraction`).
     pub lit_fractions: Vec<f64>,
-    /// (GPU ms, width, height) of the last GI frame at rest.
-    pub rest: Option<(f64, u32, u32)>,
+    /// (GPU ms, wall ms, width, height) of the last GI frame at rest.
+    pub rest: Option<(f64, f64, u32, u32)>,
 }
 
 /// `motion` and `rest` of the viewer's stats JSON (docs/design.md, "Contracts added later").
@@ -33,6 +35,10 @@ pub struct MotionStats {
     pub changes: usize,
     /// `None` when no GI frame finished while moving.
     pub gi_frame_ms_mean: Option<f64>,
+    /// The worker's wall time for them: on a software adapter the GPU is the CPU and this is the
+    /// figure to read on the shared display path, whose timestamps lavapipe gets wrong
+    /// (docs/viewer.md, "Display paths").
+    pub gi_frame_wall_ms_mean: Option<f64>,
     pub gi_frames: usize,
     /// The smallest fraction of image pixels with a surface hit over the GI frames rendered while
     /// moving (`None` when none finished): a motion that leaves the scene shows black.
@@ -48,6 +54,7 @@ pub fn lit_fraction(positions: &[[f32; 4]]) -> f64 {
 #[derive(Debug, Serialize, PartialEq)]
 pub struct RestStats {
     pub gi_frame_ms: f64,
+    pub gi_frame_wall_ms: f64,
     pub width: u32,
     pub height: u32,
 }
@@ -87,17 +94,21 @@ impl Motion {
             image_latency_ms_max: quantile(&self.latencies_ms, 1.0)?,
             changes: self.latencies_ms.len(),
             gi_frame_ms_mean: (!self.moving_gi_ms.is_empty()).then(|| mean(&self.moving_gi_ms)),
+            gi_frame_wall_ms_mean: (!self.moving_gi_wall_ms.is_empty())
+                .then(|| mean(&self.moving_gi_wall_ms)),
             gi_frames: self.moving_gi_ms.len(),
             lit_fraction_min: self.lit_fractions.iter().copied().reduce(f64::min),
         })
     }
 
     pub fn rest_stats(&self) -> Option<RestStats> {
-        self.rest.map(|(gi_frame_ms, width, height)| RestStats {
-            gi_frame_ms,
-            width,
-            height,
-        })
+        self.rest
+            .map(|(gi_frame_ms, gi_frame_wall_ms, width, height)| RestStats {
+                gi_frame_ms,
+                gi_frame_wall_ms,
+                width,
+                height,
+            })
     }
 }
 
@@ -137,6 +148,7 @@ mod tests {
         m.shown(t0 + Duration::from_millis(130));
         assert!((m.latencies_ms[1] - 30.0).abs() < 1e-6);
         m.moving_gi_ms = vec![10.0, 30.0];
+        m.moving_gi_wall_ms = vec![12.0, 40.0];
         m.lit_fractions = vec![1.0, 0.75];
         let s = m.stats().unwrap();
         assert_eq!(s.lit_fraction_min, Some(0.75));
@@ -151,6 +163,7 @@ mod tests {
         );
         assert_eq!((s.changes, s.gi_frames), (2, 2));
         assert_eq!(s.gi_frame_ms_mean, Some(20.0));
+        assert_eq!(s.gi_frame_wall_ms_mean, Some(26.0));
         assert!((s.image_latency_ms_p95 - 50.0).abs() < 1e-6);
         assert!(Motion::default().stats().is_none());
     }

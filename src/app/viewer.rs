@@ -378,6 +378,7 @@ impl Viewer {
                     let gpu_ms = r.frame.timings_ms.get("frame").copied().unwrap_or(0.0);
                     if r.job.preview {
                         self.motion.moving_gi_ms.push(gpu_ms);
+                        self.motion.moving_gi_wall_ms.push(r.wall_ms);
                         match &r.lit {
                             // Counted on the GPU: read once, with the stats.
                             Some(l) => self.lit_slots.push(l.clone()),
@@ -387,7 +388,7 @@ impl Viewer {
                                 .push(motion::lit_fraction(&r.frame.positions)),
                         }
                     } else {
-                        self.motion.rest = Some((gpu_ms, r.frame.width, r.frame.height));
+                        self.motion.rest = Some((gpu_ms, r.wall_ms, r.frame.width, r.frame.height));
                     }
                     self.budget_step(&r);
                     self.latest = Some(r);
