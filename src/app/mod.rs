@@ -9,6 +9,7 @@
 
 pub mod camera;
 pub mod display;
+pub mod flip;
 pub mod lights;
 pub mod motion;
 pub mod offscreen;
