@@ -184,6 +184,71 @@ fn flip_pass_matches_nv_flip() {
     assert!(worst_twin <= 5e-8, "twin off nv-flip by {worst_twin}");
 }
 
+/// The pass on a device with WebGPU's default limits (the split display path's window device: 8
+/// storage buffers a stage, 16 KiB of workgroup memory, 128 MiB a binding): it fits them and gives
+/// the same map as on the project's device (lavapipe: bit-equal).
+#[test]
+fn flip_pass_runs_under_default_limits() {
+    use wgpu::util::DeviceExt;
+    let ctx = common::gpu();
+    let (device, queue) = pollster::block_on(ctx.adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("default limits"),
+        required_limits: wgpu::Limits::default().using_resolution(ctx.adapter.limits()),
+        ..Default::default()
+    }))
+    .unwrap();
+    let buffer = |data: &[u8]| {
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: None,
+            contents: data,
+            usage: wgpu::BufferUsages::STORAGE,
+        })
+    };
+    let vec4 = |img: &[[f32; 3]]| -> Vec<[f32; 4]> {
+        img.iter().map(|p| [p[0], p[1], p[2], 0.0]).collect()
+    };
+    let (_, x, reference) = pairs(W, H).swap_remove(1);
+    let (direct, zero, ref_buf) = (
+        buffer(bytemuck::cast_slice(&vec4(&x))),
+        buffer(&vec![0u8; x.len() * 16]),
+        buffer(bytemuck::cast_slice(&vec4(&reference))),
+    );
+    let exposure = buffer(bytemuck::cast_slice(&[1.0f32; 64]));
+    let mut f = Flip::new(&device);
+    let mut enc = device.create_command_encoder(&Default::default());
+    f.record(
+        &device,
+        &queue,
+        &mut enc,
+        &FlipInputs {
+            size: (W, H),
+            a: Images {
+                direct: &direct,
+                indirect: &zero,
+                scale: 1.0,
+            },
+            reference: &ref_buf,
+            exposure: &exposure,
+        },
+        None,
+    );
+    queue.submit([enc.finish()]);
+    let map: Vec<f32> =
+        fuzzy_vpl::gpu::read_buffer(&device, &queue, f.map().unwrap(), x.len()).unwrap();
+    let (on_ctx, _) = gpu_flip(
+        &ctx,
+        &mut Flip::new(&ctx.device),
+        &x,
+        &reference,
+        (W, H),
+        1.0,
+    );
+    assert!(map.iter().all(|v| v.is_finite()));
+    let (max, _) = max_mean_abs(&map, &on_ctx);
+    println!("default limits vs the project's device: max abs {max:.2e}");
+    assert!(max <= 1e-6, "{max}");
+}
+
 /// The display pass's FLIP view (the FLIP pass's map in magma) against the viewer's CPU FLIP view
 /// (`views::flip`: nv-flip's map through its magma LUT) on a clustered frame of the Cornell box
 /// against its reference, fixed and automatic exposure, and on the test pairs; the FLIP view

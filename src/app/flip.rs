@@ -108,8 +108,8 @@ pub struct Flip {
     colour: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
-    /// Bound where no picture is asked for (never written then).
-    stand_in: wgpu::Texture,
+    /// Bound where no picture is asked for (never written then): a 1 × 1 texture's storage view.
+    stand_in: wgpu::TextureView,
     /// FLIP's cmax (`cpu::flip::max_distance`).
     cmax: f32,
     sized: Option<Sized>,
@@ -145,7 +145,7 @@ impl Flip {
             contents: bytemuck::bytes_of(&FlipParams::constants()),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
-        let stand_in = super::display::Target::new(device, (1, 1), "flip stand-in").texture;
+        let stand_in = super::display::Target::new(device, (1, 1), "flip stand-in").storage_view();
         Flip {
             filter_x,
             filter_y,
@@ -228,10 +228,6 @@ impl Flip {
         bytes[16..].copy_from_slice(bytemuck::bytes_of(&header.1));
         crate::gpu::traffic::uploaded(HEADER as u64);
         queue.write_buffer(&self.params, 0, &bytes);
-        let stand_in = self.stand_in.create_view(&wgpu::TextureViewDescriptor {
-            usage: Some(wgpu::TextureUsages::STORAGE_BINDING),
-            ..Default::default()
-        });
         self.ensure(device, inputs.size);
         let s = self.sized.as_ref().expect("made by ensure");
         let buffers = [
@@ -255,7 +251,7 @@ impl Flip {
             .collect();
         entries.push(wgpu::BindGroupEntry {
             binding: 9,
-            resource: wgpu::BindingResource::TextureView(picture.unwrap_or(&stand_in)),
+            resource: wgpu::BindingResource::TextureView(picture.unwrap_or(&self.stand_in)),
         });
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("flip"),
