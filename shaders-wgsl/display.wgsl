@@ -5,7 +5,8 @@
 //   log-average luminance shown as the key 0.18, `exposure::auto_exposure`), reduced on the GPU over
 //   A's final radiance, pixels with a finite luminance > 0 only; a fixed exposure is copied through.
 // - `display`: one invocation a pixel: the view (final, direct, indirect, SP clusters, VPL clusters'
-//   darkened base, reference, error, A|B split, A−B), exposure, sRGB, 8 bits.
+//   darkened base, reference, error, A|B split, A−B), exposure, sRGB, 8 bits. The FLIP view is
+//   the FLIP pass's (`flip.wgsl`), which reads the exposure reduced here.
 //
 // Its CPU twin is `cpu::display` (tests/display.rs compares them on every view).
 
@@ -26,6 +27,7 @@ const VIEW_REFERENCE: u32 = 5u;
 const VIEW_ERROR: u32 = 6u;
 const VIEW_SPLIT: u32 = 7u;
 const VIEW_DIFF: u32 = 8u;
+// VIEW_FLIP (9) is drawn by the FLIP pass (`flip.wgsl`'s `colour`), after this shader's exposure.
 
 // The final view adds the direct light (off: the indirect light alone).
 const FLAG_DIRECT: u32 = 1u;

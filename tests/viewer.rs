@@ -609,8 +609,7 @@ fn offscreen_viewer_runs_without_a_display_and_shows_what_render_writes() {
     }
     let img = image::open(&png).unwrap();
     assert_eq!((img.width(), img.height()), (540, 370));
-    // The FLIP view (composed on the CPU: the shared path reads the frame back for it) after its
-    // reference.
+    // The FLIP view (drawn on the GPU by the FLIP pass, `app::flip`) after its reference.
     let flip = dir.join("flip.png");
     let out = run(&[
         "--view",

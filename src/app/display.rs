@@ -1,8 +1,10 @@
 //! The viewer's display pass (`shaders-wgsl/display.wgsl`): what the image area shows, composed on
 //! the GPU from a frame's buffers into an 8-bit texture that egui draws (`register_native_texture`):
-//! the automatic exposure reduced on the GPU, every view but FLIP (whose metric is NVIDIA's CPU
-//! code), exposure, sRGB. It owns its pipelines, its bind-group layout, its uniform and its output
-//! texture, all made once a size: a frame allocates nothing. Its CPU twin is `cpu::display`.
+//! the automatic exposure reduced on the GPU, every view, exposure, sRGB. The FLIP view is the FLIP
+//! pass's (`app::flip`, built on first use): its map of A against the reference at the display's
+//! exposure, in magma, written into the same texture. It owns its pipelines, its bind-group layout,
+//! its uniform and its output texture, all made once a size: a frame allocates nothing. Its CPU twin
+//! is `cpu::display`.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -12,9 +14,9 @@ use crate::exposure::Exposure;
 /// Threads a workgroup of the exposure's reduction (`REDUCE` in the shader).
 const REDUCE: u32 = 256;
 
-/// The view as the shader numbers it (`VIEW_*`); `None` for FLIP, which the pass does not draw.
-pub fn view_code(view: View) -> Option<u32> {
-    Some(match view {
+/// The view as the shader numbers it (`VIEW_*`; FLIP's is drawn by the FLIP pass instead).
+pub fn view_code(view: View) -> u32 {
+    match view {
         View::Final => 0,
         View::Direct => 1,
         View::Indirect => 2,
@@ -24,8 +26,8 @@ pub fn view_code(view: View) -> Option<u32> {
         View::Error => 6,
         View::Split => 7,
         View::Diff => 8,
-        View::Flip => return None,
-    })
+        View::Flip => 9,
+    }
 }
 
 #[repr(C)]
@@ -123,6 +125,8 @@ pub struct Display {
     /// Bound where an input is absent (never read then).
     stand_in: wgpu::Buffer,
     target: Option<Target>,
+    /// The FLIP view's pass, built on first use.
+    flip: Option<super::flip::Flip>,
 }
 
 /// The most workgroups a dimension of a dispatch has (WebGPU's default limit).
@@ -163,6 +167,7 @@ impl Display {
             exposure_buf: buffer("display exposure", 256, storage),
             stand_in: buffer("display stand-in", 256, wgpu::BufferUsages::STORAGE),
             target: None,
+            flip: None,
         }
     }
 
@@ -177,9 +182,23 @@ impl Display {
         &self.exposure_buf
     }
 
+    /// The FLIP pass, once a FLIP view was drawn: its map and mean (`Flip::mean`) are those of the
+    /// last FLIP view.
+    pub fn flip(&self) -> Option<&super::flip::Flip> {
+        self.flip.as_ref()
+    }
+
+    /// Whether the FLIP view of `inputs` is drawn as FLIP (a reference, and a size the FLIP pass
+    /// fits, `Flip::fits`); else it is drawn as the final view.
+    pub fn draws_flip(device: &wgpu::Device, inputs: &DisplayInputs) -> bool {
+        inputs.view == View::Flip
+            && inputs.reference.is_some()
+            && super::flip::Flip::fits(device, inputs.size)
+    }
+
     /// Records the display of `inputs` into `enc`; the output texture is made again only when the
-    /// size changes (returns true then: a texture registered with egui must be updated). FLIP is
-    /// drawn as the final view (the caller draws FLIP itself).
+    /// size changes (returns true then: a texture registered with egui must be updated). The FLIP
+    /// view without a reference (or too large, `draws_flip`) is drawn as the final view.
     pub fn record(
         &mut self,
         device: &wgpu::Device,
@@ -204,7 +223,12 @@ impl Display {
         if remade {
             self.target = Some(Target::new(device, (w, h), "display"));
         }
-        let view = view_code(inputs.view).unwrap_or(0);
+        let flip = Self::draws_flip(device, inputs);
+        let view = if inputs.view == View::Flip && !flip {
+            view_code(View::Final)
+        } else {
+            view_code(inputs.view)
+        };
         let flags = inputs.direct_on as u32 | (inputs.exposure.is_auto() as u32) << 1;
         let fixed = match inputs.exposure {
             Exposure::Fixed(e) => e,
@@ -255,8 +279,28 @@ impl Display {
         pass.dispatch_workgroups(grid.0, grid.1, 1);
         pass.set_pipeline(&self.exposure);
         pass.dispatch_workgroups(1, 1, 1);
-        pass.set_pipeline(&self.display);
-        pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+        if !flip {
+            pass.set_pipeline(&self.display);
+            pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+            return remade;
+        }
+        drop(pass);
+        let f = self
+            .flip
+            .get_or_insert_with(|| super::flip::Flip::new(device));
+        let reference = inputs.reference.expect("draws_flip");
+        f.record(
+            device,
+            queue,
+            enc,
+            &super::flip::FlipInputs {
+                size: (w, h),
+                a: inputs.a,
+                reference,
+                exposure: &self.exposure_buf,
+            },
+            Some(&out),
+        );
         remade
     }
 }

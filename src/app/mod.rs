@@ -9,6 +9,7 @@
 
 pub mod camera;
 pub mod display;
+pub mod flip;
 pub mod lights;
 pub mod motion;
 pub mod offscreen;
@@ -438,7 +439,7 @@ pub struct Viewer {
     pub latest: Option<Box<Rendered>>,
     pub texture: Option<egui::TextureHandle>,
     /// This window frame the image area shows the window's display pass (`display::Display`, on the
-    /// GPU): its texture and size; `None`: `texture`, composed on the CPU (reprojection, FLIP).
+    /// GPU): its texture and size; `None`: `texture`, composed on the CPU (the CPU reprojection).
     pub gpu_texture: Option<(egui::TextureId, (u32, u32))>,
     pub image_dirty: bool,
     /// What the displayed image depends on besides the frame (view, exposure, …).

@@ -575,11 +575,11 @@ impl Viewer {
     }
 
     /// What the window's display pass (`display::Display`, on the GPU) draws this window frame: the
-    /// latest frame's view when it is not reprojected and the view is not FLIP (whose metric runs on
-    /// the CPU); `None` otherwise (`current_image` composes it on the CPU).
+    /// latest frame's view (FLIP too, `app::flip`) when it is not reprojected on the CPU; `None`
+    /// otherwise (`current_image` composes it on the CPU).
     pub fn gpu_view(&self) -> Option<super::display::GpuView<'_>> {
         use super::display::Source;
-        if self.reprojecting() || self.view == View::Flip {
+        if self.reprojecting() {
             return None;
         }
         let r = self.latest.as_ref()?;
@@ -599,7 +599,7 @@ impl Viewer {
             Some(img) if img.len() == n => Some((format!("{:p}", img.as_ptr()), img)),
             _ => None,
         };
-        if matches!(view, View::Reference | View::Error) && reference.is_none() {
+        if matches!(view, View::Reference | View::Error | View::Flip) && reference.is_none() {
             (view, note) = (View::Final, Some(no_ref));
         }
         let b = match (&r.b_frame, &r.b_gpu) {

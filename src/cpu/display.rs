@@ -11,8 +11,8 @@ pub struct Images<'a> {
     pub indirect: &'a [[f32; 3]],
 }
 
-/// What the display pass draws for `view` (FLIP: the final view), and the exposure it used: the
-/// fixed one, or `exposure::auto_exposure` of A's radiance.
+/// What the display pass draws for `view` (FLIP without a reference: the final view), and the
+/// exposure it used: the fixed one, or `exposure::auto_exposure` of A's radiance.
 #[allow(clippy::too_many_arguments)]
 pub fn display(
     view: View,
@@ -35,6 +35,7 @@ pub fn display(
     let fin = |x: Images| views::final_image(x.direct, x.indirect, direct_on);
     let b = b.unwrap_or(a);
     let no_ref = vec![[0.0; 3]; radiance.len()];
+    let flip_ref = reference;
     let reference = reference.unwrap_or(&no_ref);
     let img = match view {
         View::Direct => views::tonemap(a.direct, e),
@@ -54,7 +55,11 @@ pub fn display(
             split,
         ),
         View::Diff => views::error(&fin(a), &fin(b)),
-        View::Final | View::Flip => views::tonemap(&fin(a), e),
+        View::Flip => match flip_ref {
+            Some(r) => views::flip(&radiance, r, w, h, e),
+            None => views::tonemap(&fin(a), e),
+        },
+        View::Final => views::tonemap(&fin(a), e),
     };
     (img, e)
 }
