@@ -14,6 +14,13 @@ use fuzzy_vpl::render::pipeline::{RenderSettings, Renderer};
 use fuzzy_vpl::settings::{ClusterSettings, FrameSettings, Weighting};
 use fuzzy_vpl::{Frame, scene};
 
+/// The bytes and buffers this file's frame test counts are the process's (`gpu::traffic`): its tests
+/// run one at a time.
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    SERIAL.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 const W: u32 = 48;
 const H: u32 = 36;
 
@@ -75,6 +82,7 @@ fn draw(ctx: &GpuContext, d: &mut Display, inputs: &DisplayInputs) -> (Vec<u8>, 
 /// another driver) and 4e-6 on the exposure.
 #[test]
 fn display_matches_cpu_twin_on_every_view() {
+    let _serial = serial();
     let ctx = common::gpu();
     let mut d = Display::new(&ctx.device);
     for name in ["builtin:cornell", "builtin:conference"] {
@@ -167,6 +175,7 @@ fn display_matches_cpu_twin_on_every_view() {
 /// indirect view (all 0) is black and the error view of x = 2 against a reference 1 is red.
 #[test]
 fn display_by_hand() {
+    let _serial = serial();
     let ctx = common::gpu();
     let mut d = Display::new(&ctx.device);
     let direct = upload(&ctx, &[[0.01; 3], [0.1; 3], [1.0; 3], [10.0; 3]]);
@@ -218,6 +227,7 @@ fn display_by_hand() {
 /// into a copy-destination one.
 #[test]
 fn frame_on_the_gpu_reads_nothing_back_and_matches_render() {
+    let _serial = serial();
     let ctx = common::gpu();
     let sc = scene::load("builtin:cornell").unwrap();
     let cam = sc.default_camera();
@@ -276,6 +286,23 @@ fn frame_on_the_gpu_reads_nothing_back_and_matches_render() {
         meta.sp_warm_kept.is_some() && meta.visibility_rows_reused > 0,
         "{meta:?}"
     );
+    drop(warm);
+    // At a steady size a frame makes no buffer (the clusterings' sets, the visibility matrices,
+    // the passes' uniforms and textures are kept), with temporal reuse and without.
+    for settings in [&temporal, &s] {
+        drop(t.render_gpu(&cam, settings).unwrap());
+        drop(t.render_gpu(&cam, settings).unwrap());
+        let made = fuzzy_vpl::gpu::traffic::buffers_made();
+        for _ in 0..3 {
+            drop(t.render_gpu(&cam, settings).unwrap());
+        }
+        assert_eq!(
+            fuzzy_vpl::gpu::traffic::buffers_made(),
+            made,
+            "steady frames made buffers (temporal {})",
+            settings.cluster.temporal
+        );
+    }
     drop(g);
     for _ in 0..4 {
         drop(r.render_gpu(&cam, &s).unwrap());
@@ -329,6 +356,7 @@ fn frame_on_the_gpu_reads_nothing_back_and_matches_render() {
 /// frame's own camera every pixel keeps its colour. Measured on lavapipe: every channel equal.
 #[test]
 fn reprojection_matches_cpu_twin() {
+    let _serial = serial();
     use fuzzy_vpl::app::reproject_gpu::Reproject;
     use fuzzy_vpl::gi::primary::CameraParams;
     let ctx = common::gpu();

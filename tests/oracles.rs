@@ -903,7 +903,7 @@ fn gpu_visibility_matrix_and_its_radiance_by_hand() {
         0xa5a5_0006,
     ];
     let prev = |rows: u32, words: u32| Previous {
-        bits: ctx.storage_init("previous bits", &marks),
+        bits: ctx.storage_init("previous bits", &marks).into(),
         rows,
         words,
     };

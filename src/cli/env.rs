@@ -10,6 +10,7 @@ const SWITCHES: &[&str] = &[
     "FVPL_NO_BOUNDS",
     "FVPL_NO_LOOPBOUND",
     "FVPL_PROFILE_STEPS",
+    "FVPL_TRACE_BUFFERS",
 ];
 
 /// Variables the test suite reads (not the program): known, so not warned about.

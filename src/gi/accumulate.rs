@@ -71,6 +71,9 @@ const PER_CHUNK: u32 = 1 << 20;
 
 pub struct Accumulate {
     kernel: Kernel,
+    params: crate::gpu::persistent::Uniform<AccumulateParams>,
+    /// Stands in for the history's indirect light without a history (made once).
+    stand_in: std::sync::OnceLock<wgpu::Buffer>,
 }
 
 impl Accumulate {
@@ -84,6 +87,8 @@ impl Accumulate {
         ];
         Accumulate {
             kernel: Kernel::with_entries(ctx, None, "accumulate", &["accumulate"], &entries, &[]),
+            params: crate::gpu::persistent::Uniform::new("accumulate params"),
+            stand_in: Default::default(),
         }
     }
 
@@ -102,18 +107,17 @@ impl Accumulate {
         let (prev_gbuffer, prev_indirect) = history.unwrap_or((gbuffer, indirect));
         // A buffer may not be bound both read-only and read-write: without a history the current
         // frame's buffers stand in through copies of one element.
-        let stand_in;
         let prev_indirect = if std::ptr::eq(prev_indirect, indirect) {
-            stand_in = g.ctx.storage("accumulate (no history)", 16);
-            &stand_in
+            self.stand_in
+                .get_or_init(|| g.ctx.storage("accumulate (no history)", 16))
         } else {
             prev_indirect
         };
-        let params = g.ctx.uniform("accumulate params", p);
+        let params = self.params.set(g.ctx, p);
         let bg = self.kernel.bind_group(
             g.ctx,
             &[
-                (1, &params),
+                (1, params),
                 (2, gbuffer),
                 (3, prev_gbuffer),
                 (4, prev_indirect),

@@ -21,6 +21,7 @@ pub const SAMPLES_PER_DISPATCH: u32 = 64;
 
 pub struct Direct {
     kernel: Kernel,
+    params: crate::gpu::persistent::Uniform<DirectParams>,
 }
 
 impl Direct {
@@ -32,6 +33,7 @@ impl Direct {
         ];
         Direct {
             kernel: Kernel::new(ctx, scene, "direct", &entries, &[]),
+            params: crate::gpu::persistent::Uniform::new("direct params"),
         }
     }
 
@@ -46,10 +48,10 @@ impl Direct {
         seed: u32,
     ) {
         let ctx = g.ctx;
-        let params = ctx.uniform("direct params", &DirectParams { spp, _pad: [0; 3] });
+        let params = self.params.set(ctx, &DirectParams { spp, _pad: [0; 3] });
         let bg = self
             .kernel
-            .bind_group(ctx, &[(1, &params), (2, gbuffer), (3, radiance)]);
+            .bind_group(ctx, &[(1, params), (2, gbuffer), (3, radiance)]);
         // The samples (spp area samples, then the punctual lights) in sub ranges of at most
         // SAMPLES_PER_DISPATCH a pixel: lavapipe stops all loops of a SIMD batch after 65,535 trips
         // (direct.wgsl). About 2^20 shadow rays per submission.

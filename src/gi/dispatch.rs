@@ -55,10 +55,43 @@ pub fn data_texture(
     texels: u64,
 ) -> wgpu::Texture {
     let rows = (texels.max(1) as u32).div_ceil(DATA_ROW);
+    crate::gpu::traffic::buffer_made(label);
     ctx.device
         .create_texture(&super::scene_gpu::data_texture_descriptor(
             label, format, rows,
         ))
+}
+
+/// A pass's data texture kept from frame to frame: made again only when it needs more rows.
+pub struct DataTextureSlot {
+    label: &'static str,
+    format: wgpu::TextureFormat,
+    kept: std::sync::Mutex<Option<(wgpu::Texture, wgpu::TextureView)>>,
+}
+
+impl DataTextureSlot {
+    pub const fn new(label: &'static str, format: wgpu::TextureFormat) -> Self {
+        DataTextureSlot {
+            label,
+            format,
+            kept: std::sync::Mutex::new(None),
+        }
+    }
+
+    /// A texture of at least `texels` texels and its view.
+    pub fn get(&self, ctx: &GpuContext, texels: u64) -> (wgpu::Texture, wgpu::TextureView) {
+        let rows = (texels.max(1) as u32).div_ceil(DATA_ROW);
+        let mut kept = self.kept.lock().unwrap_or_else(|e| e.into_inner());
+        match &*kept {
+            Some((t, v)) if t.height() >= rows => (t.clone(), v.clone()),
+            _ => {
+                let t = data_texture(ctx, self.label, self.format, texels);
+                let v = t.create_view(&Default::default());
+                *kept = Some((t.clone(), v.clone()));
+                (t, v)
+            }
+        }
+    }
 }
 
 /// Records a copy of the first `bytes` bytes of `src` into `tex` (a `data_texture`), texel by texel.

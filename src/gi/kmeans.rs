@@ -219,6 +219,8 @@ pub struct Clustering {
     pub rep_points: wgpu::Buffer,
     /// The sampled points' assignment of the last iteration (for tests).
     pub sample_assign: wgpu::Buffer,
+    /// The set these buffers belong to, held (not reused by the next clustering) while this lives.
+    _set: std::sync::Arc<Buffers>,
 }
 
 /// A clustering's counts, kept on the GPU and read back only when asked (`Clustering::counters`):
@@ -311,7 +313,13 @@ pub struct KMeans {
     /// PLANE_GATE`), built the first time that pair is clustered.
     kernels: [[OnceCell<Kernel>; 2]; MAX_F as usize],
     tuning: KMeansTuning,
+    /// The buffer sets of its clusterings, by size (`SetKey`): a clustering holds its set while a
+    /// warm start may read it, so steady frames alternate between two and make none.
+    sets: crate::gpu::persistent::Pool<SetKey, Buffers>,
 }
+
+/// What sizes a clustering's buffers: K, the points, F, the sampled points, the texture search.
+type SetKey = (u32, u32, u32, u32, bool);
 
 impl KMeans {
     pub fn new() -> Self {
@@ -376,7 +384,11 @@ impl KMeans {
             p = p.with_warm(w.k, w.view.as_ref());
         }
         let texture_search = self.texture_search(ctx);
-        let b = Buffers::new(ctx, &p, texture_search, settings.iterations, warm.is_some());
+        let key = (p.k, p.num_points, p.f, p.num_sampled, texture_search);
+        let (b, reused) = self
+            .sets
+            .take(&key, || Buffers::new(ctx, &p, texture_search));
+        b.reset(ctx, &p, settings.iterations, warm.is_some(), reused);
         let kernel = self.kernel(ctx, p.f, p.f > 1 && p.plane_gate <= 1.0);
         let bg = b.bind_group(ctx, kernel, data);
         // After each grid build the search's textures are refreshed (software adapters only).
@@ -412,14 +424,15 @@ impl KMeans {
         }
         let c = Clustering {
             warm: warm.is_some(),
-            bounds: b.bounds,
+            bounds: b.bounds.clone(),
             params: p,
-            centroids: b.centroids,
-            assign: b.assign,
-            weights: b.weights,
-            reps: b.reps,
-            rep_points: b.rep_points,
-            sample_assign: b.sample_assign,
+            centroids: b.centroids.clone(),
+            assign: b.assign.clone(),
+            weights: b.weights.clone(),
+            reps: b.reps.clone(),
+            rep_points: b.rep_points.clone(),
+            sample_assign: b.sample_assign.clone(),
+            _set: b.clone(),
         };
         if std::env::var_os("FVPL_PROFILE_STEPS").is_some() {
             print_grid(ctx, label, &c, &b.grid)?;
@@ -474,24 +487,14 @@ struct Buffers {
 impl Buffers {
     /// Allocates them for `p` (`texture_search`: `KMeans::texture_search`), for a loop of
     /// `iterations` from a warm start or not (`converge`).
-    fn new(
-        ctx: &GpuContext,
-        p: &KmParams,
-        texture_search: bool,
-        iterations: u32,
-        warm: bool,
-    ) -> Buffers {
+    fn new(ctx: &GpuContext, p: &KmParams, texture_search: bool) -> Buffers {
         let k = p.k as u64;
         let m = p.num_points as u64;
         let f = p.f as u64;
         let params = ctx.uniform("kmeans params", p);
         let centroids = ctx.storage("centroids", k * 32);
         let sums = ctx.storage("centroid sums", k * WORDS * 4);
-        let mut words = [0u32; BOUND_WORDS];
-        words[..3].fill(u32::MAX);
-        words[13] = iterations;
-        words[14] = warm as u32;
-        let bounds = ctx.storage_init("centroid bounds", &words);
+        let bounds = ctx.storage("centroid bounds", BOUND_WORDS as u64 * 4);
         let grid = ctx.storage("grid", 32);
         let cells = ctx.storage("grid cells", (2 * MAX_CELLS + SCAN_BLOCKS) * 4);
         let sample_assign = ctx.storage("sample assign", p.num_sampled as u64 * 4);
@@ -542,6 +545,39 @@ impl Buffers {
             sorted_view,
             ranges_view,
         }
+    }
+
+    /// Ready for a clustering with `p`: its parameters and `bounds`' first words (the loop's
+    /// `iterations`, started `warm` or not) written; a `reused` set also cleared, so that it starts
+    /// as a new one (zeroed) does.
+    fn reset(&self, ctx: &GpuContext, p: &KmParams, iterations: u32, warm: bool, reused: bool) {
+        let mut words = [0u32; BOUND_WORDS];
+        words[..3].fill(u32::MAX);
+        words[13] = iterations;
+        words[14] = warm as u32;
+        ctx.write_buffer(&self.bounds, 0, bytemuck::cast_slice(&words));
+        if !reused {
+            return;
+        }
+        ctx.write_buffer(&self.params, 0, bytemuck::bytes_of(p));
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        for b in [
+            &self.centroids,
+            &self.sums,
+            &self.grid,
+            &self.cells,
+            &self.sample_assign,
+            &self.assign,
+            &self.weights,
+            &self.reps,
+            &self.rep_points,
+            &self.member_dists,
+            &self.sorted,
+            &self.ranges,
+        ] {
+            enc.clear_buffer(b, 0, None);
+        }
+        ctx.queue.submit([enc.finish()]);
     }
 
     /// Their bind group for `kernel`, with the points' `data`.

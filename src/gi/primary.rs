@@ -91,12 +91,14 @@ impl CameraParams {
 
 pub struct Primary {
     kernel: Kernel,
+    camera: crate::gpu::persistent::Uniform<CameraParams>,
 }
 
 impl Primary {
     pub fn new(ctx: &GpuContext, scene: &SceneGpu) -> Self {
         let entries = [uniform_layout(1), storage_layout(2, false)];
         Primary {
+            camera: crate::gpu::persistent::Uniform::new("camera"),
             kernel: Kernel::new(ctx, scene, "primary", &entries, &[]),
         }
     }
@@ -104,8 +106,8 @@ impl Primary {
     /// Fills `gbuffer` (width × height shading points) for `camera`.
     pub fn record(&self, g: &mut Gpu, camera: &CameraParams, gbuffer: &wgpu::Buffer) {
         let ctx = g.ctx;
-        let cam = ctx.uniform("camera", camera);
-        let bg = self.kernel.bind_group(ctx, &[(1, &cam), (2, gbuffer)]);
+        let cam = self.camera.set(ctx, camera);
+        let bg = self.kernel.bind_group(ctx, &[(1, cam), (2, gbuffer)]);
         let n = camera.size[0] * camera.size[1];
         let run = Run {
             label: Pass::Primary.name(),

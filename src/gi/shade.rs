@@ -6,7 +6,7 @@ use std::cell::OnceCell;
 use bytemuck::{Pod, Zeroable};
 
 use super::dispatch::{Gpu, Run};
-use super::dispatch::{Kernel, copy_to_texture, data_texture};
+use super::dispatch::{Kernel, copy_to_texture};
 use super::pass::Pass;
 use super::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
@@ -54,12 +54,19 @@ pub fn patterns() -> u32 {
         .map_or(0, |p| p.min(MAX_PATTERNS))
 }
 
-#[derive(Default)]
 pub struct Shade {
     /// One pipeline per F (the shader's `override F`), built the first time that F is shaded.
     kernels: [OnceCell<Kernel>; MAX_F as usize],
     /// The shader's `PATTERNS` (`patterns()` when built).
     patterns: u32,
+    params: crate::gpu::persistent::Uniform<ShadeParams>,
+    lights: super::dispatch::DataTextureSlot,
+}
+
+impl Default for Shade {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl Shade {
@@ -72,6 +79,11 @@ impl Shade {
         Shade {
             kernels: Default::default(),
             patterns: patterns.min(MAX_PATTERNS),
+            params: crate::gpu::persistent::Uniform::new("shade params"),
+            lights: super::dispatch::DataTextureSlot::new(
+                "shade lights",
+                wgpu::TextureFormat::Rgba32Float,
+            ),
         }
     }
 
@@ -92,19 +104,18 @@ impl Shade {
 
     pub fn record(&self, g: &mut Gpu, i: &ShadeInputs) {
         let ctx = g.ctx;
-        let params = ctx.uniform("shade params", &i.params);
+        let params = self.params.set(ctx, &i.params);
         // The lights as a texture (3 texels each; see shade.wgsl).
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         let n = i.params.num_lights as u64;
-        let lights = data_texture(ctx, "shade lights", wgpu::TextureFormat::Rgba32Float, 3 * n);
+        let (lights, lights_view) = self.lights.get(ctx, 3 * n);
         copy_to_texture(&mut enc, i.lights, &lights, 48 * n);
         ctx.queue.submit([enc.finish()]);
-        let lights_view = lights.create_view(&Default::default());
         let kernel = self.kernel(ctx, g.scene, i.params.f);
         let bg = kernel.bind_group_with_textures(
             ctx,
             &[
-                (1, &params),
+                (1, params),
                 (2, i.gbuffer),
                 (4, i.bits),
                 (5, i.assign),

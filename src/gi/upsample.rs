@@ -76,6 +76,8 @@ impl UpsampleParams {
 pub struct Upsample {
     down: Kernel,
     up: Kernel,
+    down_params: crate::gpu::persistent::Uniform<UpsampleParams>,
+    up_params: crate::gpu::persistent::Uniform<UpsampleParams>,
 }
 
 /// What a `Renderer` keeps of this pass: its kernels (built on first use) and the last frame's
@@ -110,6 +112,8 @@ impl Upsample {
         Upsample {
             down: kernel("downsample", &base),
             up: kernel("upsample", &all),
+            down_params: crate::gpu::persistent::Uniform::new("downsample params"),
+            up_params: crate::gpu::persistent::Uniform::new("upsample params"),
         }
     }
 
@@ -122,10 +126,10 @@ impl Upsample {
         image_gbuffer: &wgpu::Buffer,
         low_gbuffer: &wgpu::Buffer,
     ) {
-        let params = g.ctx.uniform("upsample params", p);
+        let params = self.down_params.set(g.ctx, p);
         let bg = self
             .down
-            .bind_group(g.ctx, &[(1, &params), (2, image_gbuffer), (3, low_gbuffer)]);
+            .bind_group(g.ctx, &[(1, params), (2, image_gbuffer), (3, low_gbuffer)]);
         let run = Run {
             label: Pass::Primary.name(),
             group: &bg,
@@ -145,11 +149,11 @@ impl Upsample {
         low_indirect: &wgpu::Buffer,
         image_indirect: &wgpu::Buffer,
     ) {
-        let params = g.ctx.uniform("upsample params", p);
+        let params = self.up_params.set(g.ctx, p);
         let bg = self.up.bind_group(
             g.ctx,
             &[
-                (1, &params),
+                (1, params),
                 (2, gbuffers.0),
                 (3, gbuffers.1),
                 (4, low_indirect),

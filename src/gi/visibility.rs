@@ -4,7 +4,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::dispatch::{Gpu, Run};
-use super::dispatch::{Kernel, copy_to_texture, data_texture};
+use super::dispatch::{Kernel, copy_to_texture};
 use super::pass::Pass;
 use super::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
@@ -23,13 +23,19 @@ struct VisParams {
 /// The previous frame's visibility matrix, for rows a warm start may copy (the light list must be
 /// the same one).
 pub struct Previous {
-    pub bits: wgpu::Buffer,
+    pub bits: std::sync::Arc<wgpu::Buffer>,
     pub rows: u32,
     pub words: u32,
 }
 
 pub struct Visibility {
     kernel: Kernel,
+    params: crate::gpu::persistent::Uniform<VisParams>,
+    /// Bound where there is no previous matrix (made once).
+    none: std::sync::OnceLock<wgpu::Buffer>,
+    /// Bit matrices by size: a frame's stays held while the next one may copy its rows.
+    bits: crate::gpu::persistent::Pool<u64, wgpu::Buffer>,
+    lights: super::dispatch::DataTextureSlot,
 }
 
 /// What step 5 reads: the SP-cluster representatives (`kmeans.wgsl` `rep_points`, `k_sp` of them),
@@ -57,11 +63,18 @@ impl Visibility {
         ];
         Visibility {
             kernel: Kernel::new(ctx, scene, "visibility", &entries, &[]),
+            params: crate::gpu::persistent::Uniform::new("visibility params"),
+            none: Default::default(),
+            bits: Default::default(),
+            lights: super::dispatch::DataTextureSlot::new(
+                "visibility lights",
+                wgpu::TextureFormat::Rgba32Float,
+            ),
         }
     }
 
     /// Returns the bit matrix (`k_sp` rows of ceil(num_lights / 32) words) and the words per row.
-    pub fn record(&self, g: &mut Gpu, i: &VisInputs) -> (wgpu::Buffer, u32) {
+    pub fn record(&self, g: &mut Gpu, i: &VisInputs) -> (std::sync::Arc<wgpu::Buffer>, u32) {
         let VisInputs {
             rep_points,
             lights,
@@ -72,8 +85,8 @@ impl Visibility {
         } = *i;
         let ctx = g.ctx;
         let words = num_lights.div_ceil(32).max(1);
-        let params = ctx.uniform(
-            "visibility params",
+        let params = self.params.set(
+            ctx,
             &VisParams {
                 num_sp_clusters: k_sp,
                 num_lights,
@@ -85,24 +98,22 @@ impl Visibility {
                 _pad: [0; 3],
             },
         );
-        let none = ctx.storage("no previous bits", 4);
-        let prev_bits = previous.map_or(&none, |p| &p.bits);
-        let bits = ctx.storage("visibility bits", k_sp as u64 * words as u64 * 4);
+        let none = self.none.get_or_init(|| ctx.storage("no previous bits", 4));
+        let prev_bits = previous.map_or(none, |p| &*p.bits);
+        // Every word is written (a bit per pair), so a matrix reused from the pool needs no clear.
+        let size = k_sp as u64 * words as u64 * 4;
+        let (bits, _) = self
+            .bits
+            .take(&size, || ctx.storage("visibility bits", size));
         // The lights as a texture (3 texels each; see visibility.wgsl).
         let n = num_lights as u64;
-        let tex = data_texture(
-            ctx,
-            "visibility lights",
-            wgpu::TextureFormat::Rgba32Float,
-            3 * n,
-        );
+        let (tex, view) = self.lights.get(ctx, 3 * n);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         copy_to_texture(&mut enc, lights, &tex, 48 * n);
         ctx.queue.submit([enc.finish()]);
-        let view = tex.create_view(&Default::default());
         let bg = self.kernel.bind_group_with_textures(
             ctx,
-            &[(1, &params), (2, rep_points), (5, &bits), (6, prev_bits)],
+            &[(1, params), (2, rep_points), (5, &bits), (6, prev_bits)],
             &[(4, &view)],
         );
         // About 2^20 rays per submission (32 per item).

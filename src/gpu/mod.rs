@@ -1,5 +1,6 @@
 //! Device set-up, buffer helpers, timestamp profiling and shader composition.
 
+pub mod persistent;
 pub mod profiler;
 pub mod shader;
 pub mod traffic;
@@ -201,6 +202,7 @@ impl GpuContext {
             bytes.resize(256, 0);
         }
         traffic::uploaded(bytes.len() as u64);
+        traffic::buffer_made(label);
         self.device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
@@ -213,6 +215,7 @@ impl GpuContext {
 
     /// An uninitialised (zeroed) storage buffer of `size` bytes.
     pub fn storage(&self, label: &str, size: u64) -> wgpu::Buffer {
+        traffic::buffer_made(label);
         self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
             size: size.max(256),
@@ -225,6 +228,7 @@ impl GpuContext {
 
     pub fn uniform<T: bytemuck::Pod>(&self, label: &str, value: &T) -> wgpu::Buffer {
         traffic::uploaded(std::mem::size_of::<T>() as u64);
+        traffic::buffer_made(label);
         self.device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),

@@ -13,6 +13,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 static READ_BACK: AtomicU64 = AtomicU64::new(0);
 static UPLOADED: AtomicU64 = AtomicU64::new(0);
 static TIMESTAMPS: AtomicU64 = AtomicU64::new(0);
+static BUFFERS_MADE: AtomicU64 = AtomicU64::new(0);
 
 /// `bytes` mapped for reading on the CPU.
 pub fn read_back(bytes: u64) {
@@ -27,6 +28,20 @@ pub fn uploaded(bytes: u64) {
 /// `bytes` of GPU timestamp queries read back.
 pub fn timestamps(bytes: u64) {
     TIMESTAMPS.fetch_add(bytes, Ordering::Relaxed);
+}
+
+/// A buffer made by `GpuContext::storage`, `storage_init` or `uniform` (`FVPL_TRACE_BUFFERS` prints
+/// its label: which pass allocates in a frame).
+pub fn buffer_made(label: &str) {
+    BUFFERS_MADE.fetch_add(1, Ordering::Relaxed);
+    if std::env::var_os("FVPL_TRACE_BUFFERS").is_some() {
+        eprintln!("buffer made: {label}");
+    }
+}
+
+/// Buffers made so far (`buffer_made`): a frame at a steady size should make none.
+pub fn buffers_made() -> u64 {
+    BUFFERS_MADE.load(Ordering::Relaxed)
 }
 
 /// The bytes moved since the process started (`now`), or between two snapshots (`since`).
