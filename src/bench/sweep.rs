@@ -195,6 +195,12 @@ pub struct Sweep {
     /// time (the `front_mse` column).
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::settings::parse_target_ms)]
     pub target_ms: Vec<f64>,
+    /// colom's configurations start from the paper's settings (`render --paper`: point cluster
+    /// lights, no re-seeding or fallbacks, mean centroid normals, n_t = √3/2; with no K lists, the
+    /// paper's K ratios for the frame; the frame without a G-term clamp); the lists given still
+    /// sweep over them (e.g. `--paper --cluster-light point,spread`).
+    #[arg(long)]
+    pub paper: bool,
     /// The methods (`--methods`, default colom) and each one's knob lists (docs/methods.md),
     /// after the other lists: their headings follow.
     #[command(flatten)]
@@ -239,6 +245,7 @@ impl Sweep {
             cluster: c.resolve(quick),
             pairs: or_default(&self.pairs, &[]),
             target_ms: or_default(&self.target_ms, &[]),
+            paper: self.paper,
         };
         s.validate()?;
         Ok(s)
@@ -347,11 +354,16 @@ impl Sweep {
         let mut out = Vec::new();
         for &mode in &self.modes {
             for &(sp, vpl) in ks {
+                let start = if self.paper {
+                    crate::settings::paper::paper_defaults().1
+                } else {
+                    ClusterSettings::default()
+                };
                 let base = ClusterSettings {
                     sp_clusters: sp,
                     vpl_clusters: vpl,
                     weighting: mode.weighting(),
-                    ..Default::default()
+                    ..start
                 };
                 out.extend(lists.configs(&base).into_iter().map(|c| mode.applied(c)));
             }
@@ -428,6 +440,29 @@ fn label_in(mode: Mode, c: &ClusterSettings, m: &MethodSettings) -> String {
     }
     if let Some(g) = c.plane_gate {
         s += &format!(" gate{g}");
+    }
+    s + &adaptations_label(c)
+}
+
+/// The adaptations a configuration departs from the defaults in (`point`, `-reseed`, `-rings`,
+/// `-position`, `mean-normal`), each a word of its label.
+fn adaptations_label(c: &ClusterSettings) -> String {
+    let d = ClusterSettings::default();
+    let mut s = String::new();
+    if c.cluster_light != d.cluster_light {
+        s += &format!(" {}", c.cluster_light);
+    }
+    for (on, default, word) in [
+        (c.reseed, d.reseed, "reseed"),
+        (c.ring_fallback, d.ring_fallback, "rings"),
+        (c.position_fallback, d.position_fallback, "position"),
+    ] {
+        if on != default {
+            s += &format!(" {}{word}", if on { "+" } else { "-" });
+        }
+    }
+    if c.centroid_normal != d.centroid_normal {
+        s += &format!(" {}-normal", c.centroid_normal);
     }
     s
 }

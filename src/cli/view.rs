@@ -140,7 +140,8 @@ fn parse_render_scale(v: &str) -> Result<f32, Invalid> {
     }
 }
 
-pub fn run(a: ViewArgs) -> Result<()> {
+pub fn run(mut a: ViewArgs, given: &[String]) -> Result<()> {
+    a.shot.apply_paper(given);
     if a.shot.frame.exposure == Exposure::Fixed(0.0) {
         return Err(bad(
             "--exposure 0: the viewer needs an exposure > 0 (or auto)",
