@@ -487,8 +487,11 @@ fn representative_weights_match_cpu() {
         ..settings(48, 6, 4, 0.866, 6)
     };
     let g = run_gpu(&ctx, &data, 2, &s, BOX);
+    let plain = run_gpu(&ctx, &data, 2, &settings(48, 6, 4, 0.866, 6), BOX);
     let pts = points_of(&data, 2);
-    let w = kmeans::rep_weights(&pts, g.params.f as usize, &g.assign, &g.reps, 1.0);
+    let n_t = g.params.normal_threshold;
+    let f = g.params.f as usize;
+    let w = kmeans::rep_weights(&pts, f, &g.assign, &g.reps, &plain.weights, 1.0, n_t);
     let worst = worst_difference(&w, &g.weights);
     println!("representative weights: worst difference {worst:e}");
     // Measured on lavapipe: bit-exact (common::BOUNDS).
@@ -622,6 +625,60 @@ fn sphere_points(n: usize, seed: u64) -> Vec<[f32; 4]> {
     out
 }
 
+/// `--weights-to-reps` measures Eq. (10)'s distances with Eq. (7)'s metric: on a sphere with large
+/// clusters a pixel's representative can lie up to 60° from it (30° from the centroid, which lies
+/// within 30° of the pixel), and such a slot gets weight 0 (plain distance would give it one); a
+/// pixel whose representatives all fail keeps Alg. 2's weights. The GPU equals the CPU twin
+/// (measured on lavapipe: bit-exact); there are such slots; every row sums to 1.
+#[test]
+fn representative_weights_use_eq7_metric() {
+    let ctx = common::gpu();
+    let data = sphere_points(6000, 8);
+    let frame = (Vec3::splat(-1.0), Vec3::splat(1.0));
+    let s = KMeansSettings {
+        weights_to_reps: true,
+        ..settings(24, 6, 4, 0.866, 6)
+    };
+    let g = run_gpu(&ctx, &data, 2, &s, frame);
+    let plain = run_gpu(&ctx, &data, 2, &settings(24, 6, 4, 0.866, 6), frame);
+    assert_eq!(g.assign, plain.assign);
+    let pts = points_of(&data, 2);
+    let n_t = g.params.normal_threshold;
+    let w = kmeans::rep_weights(&pts, 6, &g.assign, &g.reps, &plain.weights, 1.0, n_t);
+    let worst = worst_difference(&w, &g.weights);
+    assert!(worst <= 1e-6, "GPU against CPU twin: {worst:e}");
+    let mut failing = 0;
+    for (m, pt) in pts.iter().enumerate() {
+        let row = &g.weights[m * 6..m * 6 + 6];
+        assert!(row.iter().all(|x| x.is_finite()));
+        assert!((row.iter().sum::<f32>() - 1.0).abs() < 1e-4, "{row:?}");
+        // Per slot: Some(whether its representative passes n_t), None without one.
+        let pass: Vec<Option<bool>> = (0..6)
+            .map(|j| {
+                let k = g.assign[m * 6 + j];
+                (k != u32::MAX && g.reps[k as usize] != u32::MAX)
+                    .then(|| pt.nrm.dot(pts[g.reps[k as usize] as usize].nrm) > n_t)
+            })
+            .collect();
+        if pass.contains(&Some(true)) {
+            for j in (0..6).filter(|&j| pass[j] == Some(false)) {
+                failing += 1;
+                assert_eq!(
+                    row[j], 0.0,
+                    "point {m} slot {j}: its representative fails n_t"
+                );
+            }
+        } else {
+            assert_eq!(
+                row,
+                &plain.weights[m * 6..m * 6 + 6],
+                "point {m}: keeps Alg. 2's"
+            );
+        }
+    }
+    println!("slots whose representative fails n_t: {failing} (GPU against twin: {worst:e})");
+    assert!(failing > 0, "the case was not exercised");
+}
 
 /// The weights' exponent p (w'_f = dist^-p): the GPU equals the CPU twin for p = 0, 1, 2.5 and 64 with
 /// the same assignment; p = 0 gives Eq. (8)'s equal weights, a larger p puts more weight on the

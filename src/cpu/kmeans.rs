@@ -721,21 +721,39 @@ pub fn eq10_weights(d: &[f32], p: f32) -> Vec<f32> {
     w
 }
 
-/// Twin of `rep_weights`: Eq. (10) (exponent `p`) with distances to the representatives.
-pub fn rep_weights(points: &[Point], f: usize, assign: &[u32], reps: &[u32], p: f32) -> Vec<f32> {
-    let mut out = vec![0f32; assign.len()];
+/// Twin of `rep_weights`: Eq. (10) (exponent `p`) with Eq. (7)'s distances to the representatives:
+/// one whose normal fails `n_t` is at distance ∞ (weight 0). A point whose representatives all fail
+/// keeps its weights to the centroids (`centroid_weights`, Alg. 2's).
+pub fn rep_weights(
+    points: &[Point],
+    f: usize,
+    assign: &[u32],
+    reps: &[u32],
+    centroid_weights: &[f32],
+    p: f32,
+    n_t: f32,
+) -> Vec<f32> {
+    let mut out = centroid_weights.to_vec();
     for (m, pt) in points.iter().enumerate() {
         let row = &assign[m * f..m * f + f];
         let d: Vec<f32> = row
             .iter()
-            .map(|&k| {
-                if k == u32::MAX {
-                    -1.0
-                } else {
-                    (pt.pos - points[reps[k as usize] as usize].pos).length()
+            .map(|&k| match k {
+                u32::MAX => -1.0,
+                k if reps[k as usize] == u32::MAX => -1.0,
+                k => {
+                    let r = points[reps[k as usize] as usize];
+                    if pt.nrm.dot(r.nrm) > n_t {
+                        (pt.pos - r.pos).length()
+                    } else {
+                        -1.0
+                    }
                 }
             })
             .collect();
+        if d.iter().all(|&x| x < 0.0) {
+            continue;
+        }
         let w = eq10_weights(&d, p);
         out[m * f..m * f + f].copy_from_slice(&w);
     }
