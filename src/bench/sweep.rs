@@ -242,13 +242,41 @@ impl Sweep {
                     &[Mode::Hard, Mode::Uniform, Mode::Weighted]
                 },
             ),
-            cluster: c.resolve(quick),
+            cluster: self.resolve_cluster(quick),
             pairs: or_default(&self.pairs, &[]),
             target_ms: or_default(&self.target_ms, &[]),
             paper: self.paper,
         };
         s.validate()?;
         Ok(s)
+    }
+
+    /// The cluster lists resolved (`ClusterLists::resolve`); with `--paper` the empty lists of the
+    /// settings `--paper` changes take the paper's value instead of the default.
+    fn resolve_cluster(&self, quick: bool) -> ClusterLists {
+        let (c, mut r) = (&self.cluster, self.cluster.resolve(quick));
+        if self.paper {
+            let p = crate::settings::paper::paper_defaults().1;
+            macro_rules! paper {
+                ($($field:ident),+) => {
+                    $(if c.$field.is_empty() {
+                        r.$field = vec![p.$field];
+                    })+
+                };
+            }
+            paper!(
+                normal_threshold,
+                fuzziness,
+                weight_exponent,
+                plane_gate,
+                cluster_light,
+                reseed,
+                ring_fallback,
+                position_fallback,
+                centroid_normal
+            );
+        }
+        r
     }
 
     /// The (K_SP, K_VPL) pairs: `--pairs`, or every `--sp-clusters` × `--vpl-clusters`.
@@ -554,6 +582,43 @@ mod tests {
         let e = parse(&["--vpl-clusters", "-5"], true).unwrap_err();
         assert!(e.contains("-5"), "{e}");
         assert!(parse(&["--gamma", ""], true).is_err());
+    }
+
+    #[test]
+    fn paper_starts_from_the_papers_settings_and_lists_sweep_the_switches() {
+        let s = parse(
+            &[
+                "--paper",
+                "--modes",
+                "weighted",
+                "--pairs",
+                "48/128",
+                "--cluster-light",
+                "point,spread",
+            ],
+            true,
+        )
+        .unwrap();
+        let c = s.configs();
+        assert_eq!(c.len(), 2);
+        assert!(c.iter().all(|c| c.paper && !c.reseed && !c.ring_fallback));
+        let labels: Vec<String> = c.iter().map(label).collect();
+        let paper = " nt0.8660254";
+        let off = " -reseed -rings -position mean-normal";
+        assert_eq!(
+            labels,
+            [
+                format!("weighted 48/128 F6 gauto{paper} point{off}"),
+                format!("weighted 48/128 F6 gauto{paper}{off}"),
+            ]
+        );
+        // Without --paper the switches' lists sweep from the defaults.
+        let s = parse(
+            &["--modes", "hard", "--pairs", "48/128", "--reseed", "on,off"],
+            true,
+        );
+        let labels: Vec<String> = s.unwrap().configs().iter().map(label).collect();
+        assert_eq!(labels, ["hard 48/128 gauto", "hard 48/128 gauto -reseed"]);
     }
 
     #[test]
