@@ -862,6 +862,85 @@ fn auto_gamma_is_written_as_chosen() {
     assert!(err.contains("--gamma"), "{err}");
 }
 
+/// `--paper` sets the paper's choices and the stats record them; an option given on the command
+/// line wins over it (`--clamp`, `--cluster-light`, `--sp-clusters`), and without `--paper` every
+/// switch is at its default. 96×72 with 256 VPLs: the paper's K ratios give 75 SP clusters
+/// (6912 · 8000 / 737,280 = 75.0) and 64 VPL clusters (256 / 4).
+#[test]
+fn paper_sets_the_papers_choices_and_given_options_win() {
+    let d = common::scratch("paper");
+    let o = d.join("p.exr");
+    let stats = d.join("p.json");
+    let render = |extra: &[&str]| -> serde_json::Value {
+        let mut args = vec![
+            "render",
+            "builtin:cornell",
+            "-o",
+            o.to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+            "--width",
+            "96",
+            "--height",
+            "72",
+            "--vpls",
+            "256",
+            "--direct-samples",
+            "1",
+        ];
+        args.extend_from_slice(extra);
+        let (code, _, err) = run(&args);
+        assert_eq!(code, 0, "{extra:?}: {err}");
+        serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap()
+    };
+    let s = &render(&["--paper"])["settings"];
+    assert_eq!(s["paper"], true);
+    assert_eq!(s["cluster_light"], "point");
+    assert_eq!(
+        (&s["reseed"], &s["ring_fallback"], &s["position_fallback"]),
+        (&false.into(), &false.into(), &false.into())
+    );
+    assert_eq!(s["centroid_normal"], "mean");
+    assert_eq!(
+        (&s["sp_clusters"], &s["vpl_clusters"]),
+        (&75.into(), &64.into())
+    );
+    assert_eq!(s["clamp"], 0.0);
+    assert_eq!(s["fuzziness"], 6);
+    assert_eq!(s["weighting"], "inverse-distance");
+    let s = &render(&[
+        "--paper",
+        "--clamp",
+        "0.01",
+        "--cluster-light",
+        "spread",
+        "--sp-clusters",
+        "50",
+    ])["settings"];
+    assert_eq!(
+        (s["paper"].clone(), s["cluster_light"].clone()),
+        (true.into(), "spread".into())
+    );
+    assert_eq!(
+        (&s["sp_clusters"], &s["vpl_clusters"]),
+        (&50.into(), &64.into())
+    );
+    assert!(
+        (s["clamp"].as_f64().unwrap() - 0.01).abs() < 1e-7,
+        "{}",
+        s["clamp"]
+    );
+    assert_eq!(s["reseed"], false);
+    let s = &render(&[])["settings"];
+    assert_eq!(s["paper"], false);
+    assert_eq!(s["cluster_light"], "spread");
+    assert_eq!(
+        (&s["reseed"], &s["ring_fallback"], &s["position_fallback"]),
+        (&true.into(), &true.into(), &true.into())
+    );
+    assert_eq!(s["centroid_normal"], "normalised");
+}
+
 /// A one-quad glTF (two triangles, data: URI) whose material is `material` (JSON) and which
 /// requires `required`.
 fn quad_gltf(path: &std::path::Path, material: &str, required: &[&str]) {

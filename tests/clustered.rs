@@ -72,6 +72,7 @@ fn shading_pairs(
                     weighted: fs.cluster.weighting == Weighting::InverseDistance,
                 },
                 d_min * d_min,
+                fs.cluster.cluster_light,
             );
             (c, Vec3::from(f.indirect[m]))
         })

@@ -412,6 +412,7 @@ fn cpu_twins_agree_on_the_alpha_tested_scene() {
                 weighted: true,
             },
             d_min * d_min,
+            fs.cluster.cluster_light,
         );
         pairs.push((c, Vec3::from(f.indirect[m])));
     }

@@ -299,6 +299,7 @@ fn settings(k: u32, f: u32, gamma: u32, n_t: f32, iterations: u32) -> KMeansSett
         weights_to_reps: false,
         weight_exponent: 1.0,
         plane_gate_deg: None,
+        adapt: Default::default(),
     }
 }
 
@@ -486,8 +487,11 @@ fn representative_weights_match_cpu() {
         ..settings(48, 6, 4, 0.866, 6)
     };
     let g = run_gpu(&ctx, &data, 2, &s, BOX);
+    let plain = run_gpu(&ctx, &data, 2, &settings(48, 6, 4, 0.866, 6), BOX);
     let pts = points_of(&data, 2);
-    let w = kmeans::rep_weights(&pts, g.params.f as usize, &g.assign, &g.reps, 1.0);
+    let n_t = g.params.normal_threshold;
+    let f = g.params.f as usize;
+    let w = kmeans::rep_weights(&pts, f, &g.assign, &g.reps, &plain.weights, 1.0, n_t);
     let worst = worst_difference(&w, &g.weights);
     println!("representative weights: worst difference {worst:e}");
     // Measured on lavapipe: bit-exact (common::BOUNDS).
@@ -498,6 +502,182 @@ fn representative_weights_match_cpu() {
             assert!((row.iter().sum::<f32>() - 1.0).abs() < 1e-4);
         }
     }
+}
+
+/// The sampled and final assignments' agreement of the GPU and the CPU twin for `s` (without
+/// `compare`'s check that every valid point has a cluster: with the fallbacks off some need not).
+fn agreement(
+    ctx: &GpuContext,
+    data: &[[f32; 4]],
+    stride: u32,
+    s: &KMeansSettings,
+    frame: (Vec3, Vec3),
+) -> (GpuResult, kmeans::CpuClustering, f64, f64) {
+    let g = run_gpu(ctx, data, stride, s, frame);
+    let pts = points_of(data, stride as usize);
+    let c = kmeans::kmeans(&pts, &g.params, s.iterations);
+    let share = |a: &[u32], b: &[u32]| {
+        a.iter().zip(b).filter(|(x, y)| x == y).count() as f64 / a.len().max(1) as f64
+    };
+    let (sa, fa) = (
+        share(&g.sample_assign, &c.sample_assign),
+        share(&g.assign, &c.assign),
+    );
+    (g, c, sa, fa)
+}
+
+/// Every k-means adaptation switched off alone and all together (`--paper`: `Adaptations::none`):
+/// the GPU equals the CPU twin (measured on lavapipe: identical sampled and final assignments) on
+/// the conference room's shading points and on a sphere (where the mean normal is shorter than 1).
+#[test]
+fn adaptations_off_match_cpu_twin() {
+    use fuzzy_vpl::settings::Adaptations;
+    let ctx = common::gpu();
+    let (sc, gbuf) = conference_sps(&ctx);
+    let sphere = sphere_points(4000, 3);
+    let unit = (Vec3::splat(-1.0), Vec3::splat(1.0));
+    let mut sets = vec![Adaptations::none()];
+    sets.extend((0..4).map(|b| Adaptations::from_bits(Adaptations::ALL & !(1 << b))));
+    for adapt in sets {
+        let s = KMeansSettings {
+            adapt,
+            ..settings(96, 6, 4, 0.866, 10)
+        };
+        let name = format!("conference SPs, {adapt:?}");
+        let (_, _, a_s, a_f) = agreement(&ctx, &gbuf, 4, &s, sc.bounds());
+        assert_agreement(&name, &ctx, a_s, a_f);
+        let name = format!("sphere, {adapt:?}");
+        let s = KMeansSettings {
+            adapt,
+            ..settings(24, 6, 4, 0.866, 10)
+        };
+        let (g, c, a_s, a_f) = agreement(&ctx, &sphere, 2, &s, unit);
+        assert_agreement(&name, &ctx, a_s, a_f);
+        for (a, b) in g.centroids.iter().zip(&c.centroids) {
+            assert!(
+                a.valid == b.valid && (a.nrm - b.nrm).length() <= 1e-6,
+                "{name}: {a:?} {b:?}"
+            );
+        }
+    }
+}
+
+/// The switches by hand: 400 floor points at y = 0 whose normals lean ±10° about z in turn (20°
+/// apart: within n_t 0.866, 30°, of each other), and one point at (0.5, 0, 0.5) facing +x. K = 1.
+/// The centroid's normal is the mean of the floor's, (0, cos 10°, 0) = (0, 0.9848, 0) with
+/// `--centroid-normal mean` (the paper's value / counter), (0, 1, 0) normalised. The +x point passes n_t against neither: with the
+/// fallbacks (default) the final assignment gives it the cluster by position; without them (the
+/// paper) it has none (Eq. 7: distance ∞), weight 0. GPU and CPU twin alike.
+#[test]
+fn adaptations_by_hand() {
+    use fuzzy_vpl::settings::Adaptations;
+    let ctx = common::gpu();
+    let mut data = Vec::new();
+    let (sn, cs) = 10f32.to_radians().sin_cos();
+    for i in 0..400 {
+        let (x, z) = ((i % 20) as f32 / 20.0, (i / 20) as f32 / 20.0);
+        let lean = if i % 2 == 0 { sn } else { -sn };
+        data.push([x, 0.0, z, 1.0]);
+        data.push([lean, cs, 0.0, 0.0]);
+    }
+    data.push([0.5, 0.0, 0.5, 1.0]);
+    data.push([1.0, 0.0, 0.0, 0.0]);
+    let frame = (Vec3::new(-0.1, -0.1, -0.1), Vec3::new(1.1, 1.1, 1.1));
+    let pts = points_of(&data, 2);
+    for (adapt, len, assigned) in [
+        (Adaptations::default(), 1.0, true),
+        (Adaptations::none(), cs, false),
+    ] {
+        let s = KMeansSettings {
+            adapt,
+            ..settings(1, 1, 1, 0.866, 5)
+        };
+        let g = run_gpu(&ctx, &data, 2, &s, frame);
+        let c = kmeans::kmeans(&pts, &g.params, s.iterations);
+        for (what, cen, assign) in [
+            ("GPU", g.centroids[0], &g.assign),
+            ("CPU", c.centroids[0], &c.assign),
+        ] {
+            assert!(
+                (cen.nrm - Vec3::new(0.0, len, 0.0)).length() < 1e-5,
+                "{what} {adapt:?}: {:?}",
+                cen.nrm
+            );
+            assert_eq!(assign[400] != u32::MAX, assigned, "{what} {adapt:?}");
+            assert!(assign[..400].iter().all(|&k| k == 0), "{what} {adapt:?}");
+        }
+        assert_eq!(g.weights[400], if assigned { 1.0 } else { 0.0 });
+    }
+}
+
+/// Points on a unit sphere (outward normals), all valid.
+fn sphere_points(n: usize, seed: u64) -> Vec<[f32; 4]> {
+    let mut r = Rand(seed);
+    let mut out = Vec::new();
+    for _ in 0..n {
+        let z = 2.0 * r.f32() - 1.0;
+        let phi = std::f32::consts::TAU * r.f32();
+        let s = (1.0 - z * z).max(0.0).sqrt();
+        let p = Vec3::new(s * phi.cos(), s * phi.sin(), z);
+        out.push([p.x, p.y, p.z, 1.0]);
+        out.push([p.x, p.y, p.z, 0.0]);
+    }
+    out
+}
+
+/// `--weights-to-reps` measures Eq. (10)'s distances with Eq. (7)'s metric: on a sphere with large
+/// clusters a pixel's representative can lie up to 60° from it (30° from the centroid, which lies
+/// within 30° of the pixel), and such a slot gets weight 0 (plain distance would give it one); a
+/// pixel whose representatives all fail keeps Alg. 2's weights. The GPU equals the CPU twin
+/// (measured on lavapipe: bit-exact); there are such slots; every row sums to 1.
+#[test]
+fn representative_weights_use_eq7_metric() {
+    let ctx = common::gpu();
+    let data = sphere_points(6000, 8);
+    let frame = (Vec3::splat(-1.0), Vec3::splat(1.0));
+    let s = KMeansSettings {
+        weights_to_reps: true,
+        ..settings(24, 6, 4, 0.866, 6)
+    };
+    let g = run_gpu(&ctx, &data, 2, &s, frame);
+    let plain = run_gpu(&ctx, &data, 2, &settings(24, 6, 4, 0.866, 6), frame);
+    assert_eq!(g.assign, plain.assign);
+    let pts = points_of(&data, 2);
+    let n_t = g.params.normal_threshold;
+    let w = kmeans::rep_weights(&pts, 6, &g.assign, &g.reps, &plain.weights, 1.0, n_t);
+    let worst = worst_difference(&w, &g.weights);
+    assert!(worst <= 1e-6, "GPU against CPU twin: {worst:e}");
+    let mut failing = 0;
+    for (m, pt) in pts.iter().enumerate() {
+        let row = &g.weights[m * 6..m * 6 + 6];
+        assert!(row.iter().all(|x| x.is_finite()));
+        assert!((row.iter().sum::<f32>() - 1.0).abs() < 1e-4, "{row:?}");
+        // Per slot: Some(whether its representative passes n_t), None without one.
+        let pass: Vec<Option<bool>> = (0..6)
+            .map(|j| {
+                let k = g.assign[m * 6 + j];
+                (k != u32::MAX && g.reps[k as usize] != u32::MAX)
+                    .then(|| pt.nrm.dot(pts[g.reps[k as usize] as usize].nrm) > n_t)
+            })
+            .collect();
+        if pass.contains(&Some(true)) {
+            for j in (0..6).filter(|&j| pass[j] == Some(false)) {
+                failing += 1;
+                assert_eq!(
+                    row[j], 0.0,
+                    "point {m} slot {j}: its representative fails n_t"
+                );
+            }
+        } else {
+            assert_eq!(
+                row,
+                &plain.weights[m * 6..m * 6 + 6],
+                "point {m}: keeps Alg. 2's"
+            );
+        }
+    }
+    println!("slots whose representative fails n_t: {failing} (GPU against twin: {worst:e})");
+    assert!(failing > 0, "the case was not exercised");
 }
 
 /// The weights' exponent p (w'_f = dist^-p): the GPU equals the CPU twin for p = 0, 1, 2.5 and 64 with

@@ -21,7 +21,7 @@ use fuzzy_vpl::cpu::vpl::{eq5_cluster_radiance, eq5_vpl_radiance};
 use fuzzy_vpl::export;
 use fuzzy_vpl::gi::dispatch::Gpu;
 use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, Points};
-use fuzzy_vpl::gi::primary::CameraParams;
+use fuzzy_vpl::gi::primary::{CameraParams, ShadingPoint};
 use fuzzy_vpl::gi::reference::{GatherInputs, Reference};
 use fuzzy_vpl::gi::scene_gpu::SceneGpu;
 use fuzzy_vpl::gi::shade::{Shade, ShadeInputs, ShadeParams};
@@ -31,7 +31,7 @@ use fuzzy_vpl::gi::vpl_trace::{Vpl, VplSet};
 use fuzzy_vpl::gpu::{GpuContext, profiler::Profiler};
 use fuzzy_vpl::render::pipeline::{RenderSettings, Renderer};
 use fuzzy_vpl::scene::{self, Camera};
-use fuzzy_vpl::settings::{FrameSettings, Gamma};
+use fuzzy_vpl::settings::{ClusterLight, FrameSettings, Gamma};
 use glam::Vec3;
 
 /// `a` within `rel` of `b` (relative, with an absolute floor of `rel` × 1e-3 for values near 0).
@@ -249,6 +249,7 @@ fn oracle_settings(f: u32, p: f32, to_reps: bool) -> KMeansSettings {
         weights_to_reps: to_reps,
         weight_exponent: p,
         plane_gate_deg: None,
+        adapt: Default::default(),
     }
 }
 
@@ -513,6 +514,7 @@ fn gpu_shading_is_eq6_by_hand() {
                     d_min2: DMIN2,
                     _pad: [0; 3],
                 },
+                light: ClusterLight::Spread,
             },
         );
         let out: Vec<[f32; 4]> = ctx.read_buffer(&indirect, 2).unwrap();
@@ -560,6 +562,7 @@ fn gpu_reference_is_eq5_in_closed_form() {
                 pixels: sps.len() as u32,
                 d_min: DMIN2.sqrt(),
                 label: "reference",
+                light: ClusterLight::Spread,
             },
             &mut |_, _| true,
         );
@@ -768,6 +771,7 @@ fn gpu_visibility_is_pure_visibility_by_default() {
                 d_min2: DMIN2,
                 _pad: [0; 3],
             },
+            light: ClusterLight::Spread,
         },
     );
     let got: Vec<[f32; 4]> = ctx.read_buffer(&indirect, 1).unwrap();
@@ -859,6 +863,7 @@ fn gpu_visibility_matrix_and_its_radiance_by_hand() {
                 d_min2: DMIN2,
                 _pad: [0; 3],
             },
+            light: ClusterLight::Spread,
         },
     );
     let shaded: Vec<[f32; 4]> = ctx.read_buffer(&indirect, 3).unwrap();
@@ -873,6 +878,7 @@ fn gpu_visibility_matrix_and_its_radiance_by_hand() {
             pixels: 3,
             d_min: DMIN2.sqrt(),
             label: "reference",
+            light: ClusterLight::Spread,
         },
         &mut |_, _| true,
     );
@@ -1085,6 +1091,163 @@ fn a_cluster_light_spread_over_its_members_has_no_near_field_spike() {
         eq5_vpl_radiance(far, n, albedo, &l, d_min2).x,
     );
     assert!((a - b).abs() <= 1e-6 * b, "beyond r: {a} against {b}");
+}
+
+/// `--cluster-light point|spread` on one VPL cluster of two VPLs, by hand, on the GPU (the VPL
+/// clustering, the shading pass and the gather) and the CPU twin. In the occluder scene (its quad at
+/// z = 2 is above everything here): A at the origin and B at (2, 0, 0), both facing +z, flux π²·1
+/// and π²·3 (r + g + b: 3π² and 9π²). K_VPL = 1: the centroid is their midpoint and A, at index 0,
+/// is the representative (the nearest member; with the frame (−1, 5) the fixed-point mean lies a
+/// hair nearer A). Its light: position A, flux π²·4, the other members' share 9/12 = 0.75, their
+/// mean squared distance from A r² = 4. The pixel P = (0, 0, 1) faces −z, albedo 0.5; d² = 1 >
+/// d_min² = 0.04, both cosines 1, so a term of flux π²·a is a · 0.5 · G:
+/// - point (the paper's Eq. 6): 4 · 0.5 · 1 = **2**;
+/// - spread: 2 · (1 − 0.75) + 2 · (1 / max(1, 4)) · 0.75 = 0.5 + 0.375 = **0.875**;
+/// - the two VPLs unclustered: A 1 · 0.5 · 1 = 0.5, B (d² 5, cosines 1/√5: G = 1/25) 3 · 0.5 / 25 =
+///   0.06: **0.56** either way (a VPL has no spread).
+///
+/// Measured on lavapipe: exactly the hand values (relative difference 0); bound 2e-6 as the other
+/// GPU oracles.
+#[test]
+fn a_two_vpl_cluster_as_point_or_spread_light_by_hand() {
+    let ctx = common::gpu();
+    let sc = occluder_quad();
+    let bvh = SceneBvh::build(&sc).unwrap();
+    let gpu = SceneGpu::upload(&ctx, &sc, &bvh);
+    let (a, b) = (Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0));
+    let vpls = vec![light(a, UP, [PI2; 3]), light(b, UP, [3.0 * PI2; 3])];
+    let set = VplSet {
+        buffer: ctx.storage_init("vpls", &vpls),
+        vpls: vpls.clone(),
+        paths: 2,
+    };
+    let s = KMeansSettings {
+        k: 1,
+        ..oracle_settings(1, 1.0, false)
+    };
+    let mut prof = Profiler::new(&ctx);
+    let mut g = Gpu {
+        ctx: &ctx,
+        scene: &gpu,
+        profiler: &mut prof,
+    };
+    let frame = (Vec3::splat(-1.0), Vec3::splat(5.0));
+    let list = vpl_cluster::cluster(&mut g, &KMeans::new(), &set, &s, frame, None).unwrap();
+    assert_eq!(list.lights.len(), 1);
+    let l = list.lights[0];
+    assert_eq!(l.pos, vpls[0].pos, "the representative is A");
+    let f4 = 4.0 * PI2;
+    assert!(
+        l.flux[..3].iter().all(|&x| (x - f4).abs() <= 1e-6 * f4),
+        "{:?}",
+        l.flux
+    );
+    assert_eq!((l.flux[3], l.nrm[3]), (0.75, 4.0));
+
+    let pixel = sp(Vec3::new(0.0, 0.0, 1.0), DOWN, [0.5; 3]);
+    let gbuffer = ctx.storage_init("gbuffer", &[pixel]);
+    let worst = std::cell::Cell::new(0f32);
+    let close = |got: f32, want: f32, what: &str| {
+        let rel = (got - want).abs() / want;
+        worst.set(worst.get().max(rel));
+        assert!(
+            rel < 2e-6,
+            "{what}: {got}, by hand {want} (relative {rel:e})"
+        );
+    };
+    for (cl, want) in [(ClusterLight::Point, 2.0f32), (ClusterLight::Spread, 0.875)] {
+        // The shading pass (F = 1, the one SP cluster sees the light).
+        let indirect = ctx.storage("indirect", 16);
+        Shade::new().record(
+            &mut g,
+            &ShadeInputs {
+                gbuffer: &gbuffer,
+                lights: &list.buffer,
+                bits: &ctx.storage_init("bits", &[1u32]),
+                assign: &ctx.storage_init("assign", &[0u32]),
+                weights: &ctx.storage_init("weights", &[1.0f32]),
+                indirect: &indirect,
+                pixels: 1,
+                params: ShadeParams {
+                    num_lights: 1,
+                    words: 1,
+                    f: 1,
+                    weighted: 1,
+                    d_min2: DMIN2,
+                    _pad: [0; 3],
+                },
+                light: cl,
+            },
+        );
+        let got: Vec<[f32; 4]> = ctx.read_buffer(&indirect, 1).unwrap();
+        for x in &got[0][..3] {
+            close(*x, want, &format!("shade, {cl}"));
+        }
+        // The gather (VPL clusters only: every pixel traces its own shadow ray to the light).
+        let gathered = ctx.storage("gathered", 16);
+        Reference::new(&ctx, &gpu).record(
+            &mut g,
+            &GatherInputs {
+                gbuffer: &gbuffer,
+                lights: &list.buffer,
+                num_lights: 1,
+                indirect: &gathered,
+                pixels: 1,
+                d_min: DMIN2.sqrt(),
+                label: "gather",
+                light: cl,
+            },
+            &mut |_, _| true,
+        );
+        let got: Vec<[f32; 4]> = ctx.read_buffer(&gathered, 1).unwrap();
+        for x in &got[0][..3] {
+            close(*x, want, &format!("gather, {cl}"));
+        }
+        // The CPU twin of the shading pass.
+        let spoint = ShadingPoint::from_gpu(&pixel);
+        let twin = fuzzy_vpl::cpu::shade::eq6_indirect(
+            &spoint,
+            &list.lights,
+            &fuzzy_vpl::cpu::shade::Bits {
+                bits: &[1],
+                words: 1,
+            },
+            &fuzzy_vpl::cpu::shade::Slots {
+                assign: &[0],
+                weights: &[1.0],
+                weighted: true,
+            },
+            DMIN2,
+            cl,
+        );
+        for c in 0..3 {
+            close(twin[c], want, &format!("CPU twin, {cl}"));
+        }
+        // The two VPLs themselves: 0.56 whichever light mode.
+        let raw = ctx.storage("raw", 16);
+        Reference::new(&ctx, &gpu).record(
+            &mut g,
+            &GatherInputs {
+                gbuffer: &gbuffer,
+                lights: &set.buffer,
+                num_lights: 2,
+                indirect: &raw,
+                pixels: 1,
+                d_min: DMIN2.sqrt(),
+                label: "reference",
+                light: cl,
+            },
+            &mut |_, _| true,
+        );
+        let got: Vec<[f32; 4]> = ctx.read_buffer(&raw, 1).unwrap();
+        for x in &got[0][..3] {
+            close(*x, 0.56, &format!("unclustered, {cl}"));
+        }
+    }
+    println!(
+        "worst relative difference from the hand values: {:e}",
+        worst.get()
+    );
 }
 
 /// The camera's frustum: the rays through the corner pixels' centres make the angles the vertical

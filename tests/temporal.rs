@@ -140,6 +140,7 @@ fn warm_start_keeps_what_the_view_still_sees() {
         weights_to_reps: false,
         weight_exponent: 1.0,
         plane_gate_deg: None,
+        adapt: Default::default(),
     };
     let frame = (Vec3::new(-10.0, -10.0, -10.0), Vec3::new(10.0, 10.0, 10.0));
     let p = KmParams::new(W * H, 4, &s, frame).with_warm(previous.len() as u32, Some(&cam));

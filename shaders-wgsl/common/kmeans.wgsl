@@ -19,6 +19,18 @@ override TEXTURE_SEARCH: bool = true;
 // Whether final_assign applies the plane gate (params.plane_gate <= 1; src/gi/kmeans.rs builds the
 // pipelines with it on only when asked, so the default frame pays nothing for it).
 override PLANE_GATE: bool = false;
+// The departures from Alg. 1 and 2, each on by default and off with --paper (src/gi/kmeans.rs builds
+// a pipeline set per combination, `settings::Adaptations`, so a switched-off one costs nothing; the
+// CPU twin reads the same switches from params.adapt). docs/clustering.md, "The paper exactly".
+// RESEED: an empty cluster is re-seeded at an orphan or a drawn sampled point (iterate.wgsl).
+override RESEED: bool = true;
+// RING_FALLBACK: with no centroid passing n_t in the 27 cells, rings further out (nearest.wgsl).
+override RING_FALLBACK: bool = true;
+// POSITION_FALLBACK: with none within the rings either, the nearest centroid by position alone.
+override POSITION_FALLBACK: bool = true;
+// NORMALISED_NORMAL: a centroid's normal is its members' mean normal at unit length (off: the plain
+// mean, Alg. 1 line 18's value / counter).
+override NORMALISED_NORMAL: bool = true;
 // Fixed point: positions in the data frame scaled by 2^24, normals (n + 1) by 2^23.
 const POS_SCALE: f32 = 16777216.0;
 const NRM_SCALE: f32 = 8388608.0;
@@ -42,7 +54,8 @@ struct KmParams {
     weight_exponent: f32,
     // The plane gate of the final assignment: sin of its angle, 2 when off (src/gi/kmeans.rs).
     plane_gate: f32,
-    _p1: u32,
+    // settings::Adaptations::bits (for the CPU twin; the shaders use the overrides above).
+    adapt: u32,
     _p2: u32,
     // The temporal warm start (warm_centroids): the new frame's camera as primary.wgsl's
     // CameraParams (eye; image-plane axes scaled by tan(fov/2); forward), with eye.w the same-surface

@@ -3,9 +3,10 @@
 #import common/kmeans.wgsl
 
 // The F nearest centroids of a point by Eq. (7) among the 27 cells around it (Alg. 2 lines 4-17).
-// Falls back, in order, to: rings of cells further out, up to FINAL_RINGS, with the same metric; then
-// the nearest centroid by position alone (ignoring n_t) in the first ring that holds one, so no point
-// is ever left unassigned.
+// Falls back, in order, to: rings of cells further out, up to FINAL_RINGS, with the same metric
+// (RING_FALLBACK); then the nearest centroid by position alone (ignoring n_t) in the first ring that
+// holds one (POSITION_FALLBACK), so no point is left unassigned. With both off (--paper) a point with
+// no centroid passing n_t in its 27 cells gets none: Eq. (7) puts it at distance ∞ from them all.
 struct Nearest {
     idx: array<u32, MAX_F>,
     dist: array<f32, MAX_F>,
@@ -203,10 +204,12 @@ fn nearest(p: vec3<f32>, n: vec3<f32>, f: u32) -> Nearest {
     scan_ring1(&best, p, n, c, f, true);
     if best.count == 0u {
         let maxr = i32(max(grid.dims.x, max(grid.dims.y, grid.dims.z)));
-        for (var ring = 2; ring <= min(FINAL_RINGS, maxr) && best.count == 0u; ring++) {
-            scan_ring(&best, p, n, c, ring, f, true);
+        if RING_FALLBACK {
+            for (var ring = 2; ring <= min(FINAL_RINGS, maxr) && best.count == 0u; ring++) {
+                scan_ring(&best, p, n, c, ring, f, true);
+            }
         }
-        if best.count == 0u {
+        if POSITION_FALLBACK && best.count == 0u {
             scan_ring1(&best, p, n, c, 1u, false);
             for (var ring = 2; ring <= maxr && best.count == 0u; ring++) {
                 scan_ring(&best, p, n, c, ring, 1u, false);
@@ -226,8 +229,10 @@ fn nearest_bounded(p: vec3<f32>, n: vec3<f32>) -> u32 {
     var best = empty_nearest();
     let c = cell_coord(p);
     scan_ring1(&best, p, n, c, 1u, true);
-    for (var ring = 2; ring <= ITER_RINGS && best.count == 0u; ring++) {
-        scan_ring(&best, p, n, c, ring, 1u, true);
+    if RING_FALLBACK {
+        for (var ring = 2; ring <= ITER_RINGS && best.count == 0u; ring++) {
+            scan_ring(&best, p, n, c, ring, 1u, true);
+        }
     }
     return best.idx[0];
 }

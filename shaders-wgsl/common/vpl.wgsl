@@ -31,15 +31,21 @@ fn eq5_vpl_radiance(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, v: Vpl, d_min
     return (v.flux.xyz / PI) * (albedo / PI) * g;
 }
 
+// How a VPL-cluster light reaches a point (--cluster-light): true, the spread below (the default);
+// false, the paper's point light, eq5_vpl_radiance of the representative with the summed flux. Set
+// by the pipelines that shade with cluster lights (src/gi/shade.rs, src/gi/reference.rs), each built
+// per value, so the point light costs no test of the spread.
+override CLUSTER_SPREAD: bool = true;
+
 // Not in the paper (docs/clustering.md, "VPL clusters as lights"): Eq. (5)'s term of a VPL-cluster
-// light. The representative's own share of the flux (1 - flux.w) is its VPL's term; the other
+// light, with CLUSTER_SPREAD (else the representative as a point light). The representative's own share of the flux (1 - flux.w) is its VPL's term; the other
 // members' share (flux.w), which lies around it at a root-mean-square distance r (r^2 = nrm.w), is
 // evaluated with the G-term's d clamped at max(d_min, r): a cluster spread over r is no point closer
 // than r. The same cosines for both. A VPL (flux.w = 0) gives eq5_vpl_radiance's value bit for bit.
 // CPU twin: cpu::vpl::eq5_cluster_radiance.
 fn eq5_cluster_radiance(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, v: Vpl, d_min2: f32) -> vec3<f32> {
     let own = eq5_vpl_radiance(p, n, albedo, v, d_min2);
-    if !(v.flux.w > 0.0) || !any(own > vec3<f32>(0.0)) {
+    if !CLUSTER_SPREAD || !(v.flux.w > 0.0) || !any(own > vec3<f32>(0.0)) {
         return own;
     }
     let d = v.pos.xyz - p;

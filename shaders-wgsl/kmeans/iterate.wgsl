@@ -20,7 +20,7 @@ fn assign_sampled(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
     if p.w > 0.0 {
         k = nearest_bounded(p.xyz, point_nrm(m));
     }
-    if p.w > 0.0 && k == INVALID {
+    if RESEED && p.w > 0.0 && k == INVALID {
         propose_reseed(s);
     }
     let old = sample_assign[s];
@@ -159,10 +159,11 @@ fn name_empty(k: u32, iteration: u32) {
     }
 }
 
-// --- Alg. 1 lines 17-18: centroids = mean position and normalised mean normal (the sums stay: the
-// next assignment updates them). An empty cluster is re-seeded at the orphan proposed to it, or where
-// no orphan was found at a drawn sampled point (above), else keeps its centroid but is marked empty
-// (w = 0) and drops out of the grid. A re-seed counts as a change for Alg. 1's early end.
+// --- Alg. 1 lines 17-18: centroids = mean position and normalised mean normal (the plain mean
+// without NORMALISED_NORMAL; the sums stay: the next assignment updates them). An empty cluster is
+// re-seeded at the orphan proposed to it, or where no orphan was found at a drawn sampled point
+// (above; RESEED), else keeps its centroid but is marked empty (w = 0) and drops out of the grid. A
+// re-seed counts as a change for Alg. 1's early end.
 @compute @workgroup_size(64)
 fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let k = chunk_item(gid, nwg);
@@ -176,11 +177,15 @@ fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
         let rel = vec3<f32>(mean64(base, count), mean64(base + 2u, count), mean64(base + 4u, count)) / POS_SCALE;
         let nrm = vec3<f32>(mean64(base + 6u, count), mean64(base + 8u, count), mean64(base + 10u, count)) / NRM_SCALE - 1.0;
         c.pos = vec4<f32>(params.lo.xyz + rel * params.ext.xyz, 1.0);
-        let l = length(nrm);
-        if l > 1e-6 {
-            c.nrm = vec4<f32>(nrm / l, 0.0);
+        if NORMALISED_NORMAL {
+            let l = length(nrm);
+            if l > 1e-6 {
+                c.nrm = vec4<f32>(nrm / l, 0.0);
+            }
+        } else {
+            c.nrm = vec4<f32>(nrm, 0.0);
         }
-    } else {
+    } else if RESEED {
         // Its sums are exactly zero (every member left), so the points that join add from 0.
         let proposal = atomicLoad(&reps[2u * k]);
         var m = INVALID;
@@ -205,6 +210,9 @@ fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
             c.pos.w = 0.0;
             name_empty(k, atomicLoad(&bounds[7]));
         }
+    } else {
+        // Without re-seeding (the paper) an empty cluster keeps its centroid, out of the grid.
+        c.pos.w = 0.0;
     }
     atomicStore(&reps[2u * k], 0u);
     centroids[k] = c;

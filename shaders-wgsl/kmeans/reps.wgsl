@@ -93,8 +93,11 @@ fn rep_count(
 }
 
 // Optional step 5, Eq. (10) as the paper's text states it: w'_f = 1 / dist(p, p_f) with p_f the
-// representative of cluster f (a real shading point) instead of its centroid (Alg. 2's W). Replaces the
-// weights of final_assign; the same exact case (distance 0 takes the whole weight).
+// representative of cluster f (a real shading point) instead of its centroid (Alg. 2's W), and dist
+// Eq. (7)'s metric: a representative whose normal fails n_t is at distance ∞, weight 0. Replaces the
+// weights of final_assign, except for a point whose representatives all fail n_t, which keeps them
+// (1/∞ over Σ 1/∞ has no value). The same exact case (distance 0 takes the whole weight). CPU twin:
+// cpu::kmeans::rep_weights.
 @compute @workgroup_size(64)
 fn rep_weights(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let m = chunk_item(gid, nwg);
@@ -103,21 +106,27 @@ fn rep_weights(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     }
     let f = F;
     let p = point_pos(m).xyz;
+    let n = point_nrm(m);
     var d: array<f32, MAX_F>;
     var zero = INVALID;
+    var any_passes = false;
     for (var j = 0u; j < f; j++) {
         let k = assign[m * f + j];
         d[j] = -1.0;
         if k != INVALID {
             let r = atomicLoad(&reps[2u * k + 1u]);
-            if r == INVALID {
+            if r == INVALID || !eq7_normals_agree(n, point_nrm(r)) {
                 continue;
             }
             d[j] = length(p - point_pos(r).xyz);
+            any_passes = true;
             if d[j] <= ZERO_DIST && zero == INVALID {
                 zero = j;
             }
         }
+    }
+    if !any_passes {
+        return;
     }
     var w: array<f32, MAX_F>;
     eq10_weights(&d, f, zero, &w);

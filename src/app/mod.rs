@@ -172,6 +172,36 @@ impl UiSettings {
         }
     }
 
+    /// The panel's "the paper" toggle (`--paper`): on, every setting at the paper's choice
+    /// (`settings::paper::apply`, for a frame of `width` × `height`); off, the adaptations and the
+    /// clamp back at their defaults (the clusters' K, F, n_t stay as they are).
+    pub fn set_paper(&mut self, on: bool, width: u32, height: u32) {
+        if on {
+            let mut frame = FrameSettings {
+                width,
+                height,
+                ..self.frame
+            };
+            crate::settings::paper::apply(&mut frame, &mut self.cluster, &|_| false);
+            self.frame.clamp = frame.clamp;
+            self.nt_degrees = self.cluster.normal_threshold.acos().to_degrees();
+            self.plane_gate_on = false;
+            self.render_scale = 1.0;
+            self.sp_on = true;
+            self.vpl_on = true;
+        } else {
+            let d = ClusterSettings::default();
+            let c = &mut self.cluster;
+            c.paper = false;
+            c.cluster_light = d.cluster_light;
+            c.reseed = d.reseed;
+            c.ring_fallback = d.ring_fallback;
+            c.position_fallback = d.position_fallback;
+            c.centroid_normal = d.centroid_normal;
+            self.frame.clamp = FrameSettings::default().clamp;
+        }
+    }
+
     /// The gate's angle when it is on and applies (fuzzy modes).
     pub fn plane_gate(&self) -> Option<f32> {
         (self.plane_gate_on && self.cluster.weighting != Weighting::Hard)

@@ -10,7 +10,7 @@ use super::settings::Bookmark;
 use super::views::{self, View};
 use super::{SliderRanges, UiSettings, Viewer};
 use crate::method::Method;
-use crate::settings::Weighting;
+use crate::settings::{CentroidNormal, ClusterLight, Weighting};
 
 pub const PANEL_WIDTH: f32 = 380.0;
 /// The height of the stats strip under the image (Stats | Reference & error, Screenshots). The
@@ -751,6 +751,54 @@ fn method_controls(ui: &mut Ui, s: &mut UiSettings) {
     }
 }
 
+/// "the paper" (`--paper`) and each adaptation of the paper's method as its own switch
+/// (docs/clustering.md, "The paper exactly").
+fn adaptation_controls(ui: &mut Ui, s: &mut UiSettings, colom: bool) {
+    let mut paper = s.cluster.paper;
+    let w = (s.frame.width, s.frame.height);
+    if ui
+        .checkbox(&mut paper, "the paper")
+        .on_hover_text(
+            "Every setting at the paper's choice (--paper): point cluster lights, no re-seeding, \
+             no fallbacks, mean centroid normals, n_t = √3/2, F 6, weighted, the paper's K ratios, \
+             no G-term clamp",
+        )
+        .changed()
+    {
+        s.set_paper(paper, w.0, w.1);
+    }
+    ui.horizontal(|ui| {
+        ui.label("cluster lights");
+        ui.selectable_value(&mut s.cluster.cluster_light, ClusterLight::Point, "point")
+            .on_hover_text("The paper: the representative VPL with the summed flux");
+        ui.selectable_value(&mut s.cluster.cluster_light, ClusterLight::Spread, "spread")
+            .on_hover_text(
+                "Not in the paper: the other members' flux no closer than their RMS distance",
+            );
+    });
+    ui.add_enabled_ui(colom, |ui| {
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut s.cluster.reseed, "re-seed")
+                .on_hover_text("Not in the paper: empty clusters re-seeded (--reseed)");
+            ui.checkbox(&mut s.cluster.ring_fallback, "rings")
+                .on_hover_text("Not in the paper: search beyond the 27 cells (--ring-fallback)");
+            ui.checkbox(&mut s.cluster.position_fallback, "by position")
+                .on_hover_text(
+                    "Not in the paper: no centroid passing n_t: the nearest by position \
+                     (--position-fallback)",
+                );
+            let mut unit = s.cluster.centroid_normal == CentroidNormal::Normalised;
+            ui.checkbox(&mut unit, "unit normals")
+                .on_hover_text("Not in the paper: centroid normals normalised (--centroid-normal)");
+            s.cluster.centroid_normal = if unit {
+                CentroidNormal::Normalised
+            } else {
+                CentroidNormal::Mean
+            };
+        });
+    });
+}
+
 /// colom's clustering: the weighting, which clusterings run, the time budget, temporal reuse and
 /// the paper's knobs (K, K_VPL, VPLs, F, p, the plane gate, γ, n_t, iterations); the knobs only
 /// colom uses are greyed out for the other methods.
@@ -776,6 +824,7 @@ fn clustering_controls(ui: &mut Ui, s: &mut UiSettings, r: &SliderRanges, gamma_
         ui.checkbox(&mut s.vpl_on, "VPL clustering");
         ui.checkbox(&mut s.direct_on, "direct");
     });
+    adaptation_controls(ui, s, colom);
     ui.horizontal(|ui| {
         let mut on = s.cluster.target_ms.is_some();
         ui.checkbox(&mut on, "time budget")

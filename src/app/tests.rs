@@ -265,6 +265,30 @@ fn auto_gamma_reaches_the_frame_and_the_file_names() {
     assert_eq!(s.frame_settings(64, 48).cluster.gamma, Gamma::Auto);
 }
 
+/// The panel's "the paper": on, the frame settings are `--paper`'s for the image's size (point
+/// lights, every switch off, clamp 0, the paper's K ratios); off, the switches and the clamp back
+/// at their defaults.
+#[test]
+fn the_paper_toggle_sets_and_clears_the_papers_choices() {
+    use crate::settings::{Adaptations, ClusterLight};
+    let mut s = UiSettings::new(&RenderSettings::default());
+    s.set_paper(true, 160, 120);
+    let f = s.frame_settings(160, 120);
+    assert!(f.cluster.paper);
+    assert_eq!(f.cluster.cluster_light, ClusterLight::Point);
+    assert_eq!(f.cluster.adaptations(), Adaptations::none());
+    assert_eq!((f.cluster.sp_clusters, f.cluster.vpl_clusters), (208, 2048));
+    assert_eq!(f.frame.clamp, 0.0);
+    assert!((f.cluster.normal_threshold - 3f32.sqrt() / 2.0).abs() < 1e-6);
+    s.set_paper(false, 160, 120);
+    let f = s.frame_settings(160, 120);
+    let d = ClusterSettings::default();
+    assert!(!f.cluster.paper);
+    assert_eq!(f.cluster.cluster_light, d.cluster_light);
+    assert_eq!(f.cluster.adaptations(), Adaptations::default());
+    assert_eq!(f.frame.clamp, FrameSettings::default().clamp);
+}
+
 #[test]
 fn command_line_values_beyond_the_sliders_survive_the_panel() {
     let fs = RenderSettings {

@@ -87,6 +87,18 @@ pub fn orbit_target(scene: &Scene, bvh: &SceneBvh, cam: &Camera) -> Vec3 {
     }
 }
 
+/// The point `cam` (in the scene's own units) looks at, in the scene's own units: `orbit_target` on
+/// the scene as the renderer holds it, whose geometry is scaled by `geometry_scale` when the scene
+/// lies outside 2^±10 (so the camera is cast in those units and the hit brought back).
+pub fn orbit_target_of(renderer: &Renderer, cam: &Camera) -> Vec3 {
+    let t = orbit_target(
+        &renderer.scene,
+        &renderer.bvh,
+        &renderer.to_render_units(cam),
+    );
+    (t.as_dvec3() / renderer.geometry_scale).as_vec3()
+}
+
 /// One frame of a path: a row of `path.csv`, a field a column, then every method's knobs
 /// (`MethodSettings::columns`). The columns after `reference_ms` were added over time: a file may
 /// stop after any of them, and the missing ones read their defaults.
@@ -229,7 +241,7 @@ pub fn run(
 ) -> Result<Vec<PathRow>> {
     let mut renderer = Renderer::new(ctx, scene)?;
     let start = &plan.cameras.first().ok_or_else(|| anyhow!("no camera"))?.1;
-    let target = orbit_target(&renderer.scene, &renderer.bvh, start);
+    let target = orbit_target_of(&renderer, start);
     let cameras = path.cameras(start, target);
     let reference_settings = plan.reference_settings();
     let timing = Timing {
@@ -527,6 +539,55 @@ mod tests {
             assert!(c.forward().dot(to) > 1.0 - 1e-6);
             assert!((c.eye().length() - 26f32.sqrt()).abs() < 1e-5);
             assert_eq!(c.yfov, 0.8);
+        }
+    }
+
+    /// The orbit's target of a scene scaled by 1e-6 and by 1e6 (rendered with its geometry scaled
+    /// into a unit frame, `Renderer::geometry_scale`) is the unscaled scene's target times the
+    /// scale: the start camera is cast in the renderer's units. Cast in the scene's own units into
+    /// the scaled BVH (as `run` did), the ray starts far outside the scaled scene and misses it.
+    #[test]
+    fn orbit_target_of_scaled_scenes() {
+        let ctx = crate::gpu::GpuContext::new_headless().unwrap();
+        let base = crate::scene::load("builtin:conference").unwrap();
+        let target = |s: &Scene| {
+            let r = Renderer::new(&ctx, s).unwrap();
+            let cam = s.default_camera();
+            let naive = orbit_target(&r.scene, &r.bvh, &cam);
+            (orbit_target_of(&r, &cam), naive, r.geometry_scale)
+        };
+        let (t1, _, g1) = target(&base);
+        assert_eq!(g1, 1.0);
+        let size = {
+            let (lo, hi) = base.bounds();
+            (hi - lo).length()
+        };
+        for k in [1e-6f32, 1e6] {
+            let mut s = base.clone();
+            for t in &mut s.triangles {
+                for p in &mut t.p {
+                    *p *= k;
+                }
+            }
+            for l in &mut s.lights {
+                l.position *= k;
+            }
+            for c in &mut s.cameras {
+                c.transform.w_axis = (c.transform.w_axis.truncate() * k).extend(1.0);
+            }
+            let (t, naive, g) = target(&s);
+            assert_ne!(g, 1.0, "scale {k}: rendered in a unit frame");
+            let err = (t / k - t1).length() / size;
+            assert!(
+                err < 1e-4,
+                "scale {k}: target {t} against {} ({err:e})",
+                t1 * k
+            );
+            let naive_err = (naive / k - t1).length() / size;
+            assert!(
+                naive_err > 1e-2,
+                "scale {k}: the naive cast also hits ({naive_err:e})"
+            );
         }
     }
 

@@ -195,6 +195,12 @@ pub struct Sweep {
     /// time (the `front_mse` column).
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::settings::parse_target_ms)]
     pub target_ms: Vec<f64>,
+    /// colom's configurations start from the paper's settings (`render --paper`: point cluster
+    /// lights, no re-seeding or fallbacks, mean centroid normals, n_t = √3/2; with no K lists, the
+    /// paper's K ratios for the frame; the frame without a G-term clamp); the lists given still
+    /// sweep over them (e.g. `--paper --cluster-light point,spread`).
+    #[arg(long)]
+    pub paper: bool,
     /// The methods (`--methods`, default colom) and each one's knob lists (docs/methods.md),
     /// after the other lists: their headings follow.
     #[command(flatten)]
@@ -236,12 +242,41 @@ impl Sweep {
                     &[Mode::Hard, Mode::Uniform, Mode::Weighted]
                 },
             ),
-            cluster: c.resolve(quick),
+            cluster: self.resolve_cluster(quick),
             pairs: or_default(&self.pairs, &[]),
             target_ms: or_default(&self.target_ms, &[]),
+            paper: self.paper,
         };
         s.validate()?;
         Ok(s)
+    }
+
+    /// The cluster lists resolved (`ClusterLists::resolve`); with `--paper` the empty lists of the
+    /// settings `--paper` changes take the paper's value instead of the default.
+    fn resolve_cluster(&self, quick: bool) -> ClusterLists {
+        let (c, mut r) = (&self.cluster, self.cluster.resolve(quick));
+        if self.paper {
+            let p = crate::settings::paper::paper_defaults().1;
+            macro_rules! paper {
+                ($($field:ident),+) => {
+                    $(if c.$field.is_empty() {
+                        r.$field = vec![p.$field];
+                    })+
+                };
+            }
+            paper!(
+                normal_threshold,
+                fuzziness,
+                weight_exponent,
+                plane_gate,
+                cluster_light,
+                reseed,
+                ring_fallback,
+                position_fallback,
+                centroid_normal
+            );
+        }
+        r
     }
 
     /// The (K_SP, K_VPL) pairs: `--pairs`, or every `--sp-clusters` × `--vpl-clusters`.
@@ -347,11 +382,16 @@ impl Sweep {
         let mut out = Vec::new();
         for &mode in &self.modes {
             for &(sp, vpl) in ks {
+                let start = if self.paper {
+                    crate::settings::paper::paper_defaults().1
+                } else {
+                    ClusterSettings::default()
+                };
                 let base = ClusterSettings {
                     sp_clusters: sp,
                     vpl_clusters: vpl,
                     weighting: mode.weighting(),
-                    ..Default::default()
+                    ..start
                 };
                 out.extend(lists.configs(&base).into_iter().map(|c| mode.applied(c)));
             }
@@ -428,6 +468,29 @@ fn label_in(mode: Mode, c: &ClusterSettings, m: &MethodSettings) -> String {
     }
     if let Some(g) = c.plane_gate {
         s += &format!(" gate{g}");
+    }
+    s + &adaptations_label(c)
+}
+
+/// The adaptations a configuration departs from the defaults in (`point`, `-reseed`, `-rings`,
+/// `-position`, `mean-normal`), each a word of its label.
+fn adaptations_label(c: &ClusterSettings) -> String {
+    let d = ClusterSettings::default();
+    let mut s = String::new();
+    if c.cluster_light != d.cluster_light {
+        s += &format!(" {}", c.cluster_light);
+    }
+    for (on, default, word) in [
+        (c.reseed, d.reseed, "reseed"),
+        (c.ring_fallback, d.ring_fallback, "rings"),
+        (c.position_fallback, d.position_fallback, "position"),
+    ] {
+        if on != default {
+            s += &format!(" {}{word}", if on { "+" } else { "-" });
+        }
+    }
+    if c.centroid_normal != d.centroid_normal {
+        s += &format!(" {}-normal", c.centroid_normal);
     }
     s
 }
@@ -519,6 +582,43 @@ mod tests {
         let e = parse(&["--vpl-clusters", "-5"], true).unwrap_err();
         assert!(e.contains("-5"), "{e}");
         assert!(parse(&["--gamma", ""], true).is_err());
+    }
+
+    #[test]
+    fn paper_starts_from_the_papers_settings_and_lists_sweep_the_switches() {
+        let s = parse(
+            &[
+                "--paper",
+                "--modes",
+                "weighted",
+                "--pairs",
+                "48/128",
+                "--cluster-light",
+                "point,spread",
+            ],
+            true,
+        )
+        .unwrap();
+        let c = s.configs();
+        assert_eq!(c.len(), 2);
+        assert!(c.iter().all(|c| c.paper && !c.reseed && !c.ring_fallback));
+        let labels: Vec<String> = c.iter().map(label).collect();
+        let paper = " nt0.8660254";
+        let off = " -reseed -rings -position mean-normal";
+        assert_eq!(
+            labels,
+            [
+                format!("weighted 48/128 F6 gauto{paper} point{off}"),
+                format!("weighted 48/128 F6 gauto{paper}{off}"),
+            ]
+        );
+        // Without --paper the switches' lists sweep from the defaults.
+        let s = parse(
+            &["--modes", "hard", "--pairs", "48/128", "--reseed", "on,off"],
+            true,
+        );
+        let labels: Vec<String> = s.unwrap().configs().iter().map(label).collect();
+        assert_eq!(labels, ["hard 48/128 gauto", "hard 48/128 gauto -reseed"]);
     }
 
     #[test]

@@ -86,9 +86,12 @@ fn quick_frame(a: &BenchArgs, given: &[&str]) -> FrameSettings {
     f
 }
 
-pub fn run(a: BenchArgs, given: &[&str]) -> Result<()> {
+pub fn run(mut a: BenchArgs, given: &[&str]) -> Result<()> {
+    let mut frame = quick_frame(&a, given);
+    if a.sweep.paper {
+        paper_frame(&mut a.sweep, &mut frame, given);
+    }
     let sweep = a.sweep.resolve(a.quick).map_err(bad)?;
-    let frame = quick_frame(&a, given);
     let repeat = a.repeat.unwrap_or(if a.quick { 3 } else { 10 });
     if frame.vpls == 0 {
         return Err(bad("--vpls must be at least 1"));
@@ -141,6 +144,21 @@ pub fn run(a: BenchArgs, given: &[&str]) -> Result<()> {
     match &a.camera_path {
         Some(path) => along_path(&ctx, &scene, &plan, path, &a.temporal, &a.temporal_alpha),
         None => sweep_table(&ctx, &scene, &plan),
+    }
+}
+
+/// `bench --paper`: the frame without a G-term clamp unless --clamp was given, and without K lists
+/// or pairs the paper's K ratios for the frame (`settings::paper`).
+fn paper_frame(sweep: &mut crate::bench::sweep::Sweep, frame: &mut FrameSettings, given: &[&str]) {
+    use crate::settings::paper;
+    if !given.contains(&"clamp") {
+        frame.clamp = 0.0;
+    }
+    let c = &sweep.cluster;
+    if sweep.pairs.is_empty() && c.sp_clusters.is_empty() && c.vpl_clusters.is_empty() {
+        let sp = paper::paper_sp_clusters(frame.pixels());
+        let vpl = paper::paper_vpl_clusters(frame.vpls);
+        sweep.pairs = vec![crate::bench::sweep::Pair(sp, vpl)];
     }
 }
 

@@ -213,11 +213,8 @@ pub fn main() -> ExitCode {
             )) => view::run(a, &[]),
             _ => unreachable!("`fuzzy-vpl view` parses"),
         },
-        Some(Command::View(a)) => {
-            let given: Vec<&str> = given.iter().map(String::as_str).collect();
-            view::run(a, &given)
-        }
-        Some(Command::Render(a)) => render::run(a),
+        Some(Command::View(a)) => view::run(a, &given),
+        Some(Command::Render(a)) => render::run(a, &given),
         Some(Command::Info(a)) => info::run(a),
         Some(Command::Raybench(a)) => raybench::run(a),
         Some(Command::Bench(a)) => {

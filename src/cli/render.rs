@@ -106,7 +106,8 @@ fn read_reference(p: &std::path::Path, f: &FrameSettings) -> Result<Vec<[f32; 3]
     Ok(px)
 }
 
-pub fn run(a: RenderArgs) -> Result<()> {
+pub fn run(mut a: RenderArgs, given: &[String]) -> Result<()> {
+    a.shot.apply_paper(given);
     check_outputs(&a)?;
     let reference = a
         .compare

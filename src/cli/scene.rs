@@ -42,6 +42,17 @@ pub struct ShotArgs {
     pub method: crate::method::MethodSettings,
 }
 
+impl ShotArgs {
+    /// With `--paper`, the frame and clustering at the paper's choices where the command line
+    /// (`given`: the ids of the options it gave) did not set them (`settings::paper::apply`).
+    pub fn apply_paper(&mut self, given: &[String]) {
+        if self.cluster.paper {
+            let given = |id: &str| given.iter().any(|g| g == id);
+            crate::settings::paper::apply(&mut self.frame, &mut self.cluster, &given);
+        }
+    }
+}
+
 impl SceneArgs {
     /// The scene with the added lights and the emitter scale; warns about what the loader dropped
     /// and about a scene without light.

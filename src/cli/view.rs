@@ -143,14 +143,15 @@ fn parse_render_scale(v: &str) -> Result<f32, Invalid> {
 /// The offscreen window's default image area: with the panel and the stats strip, 1280×800.
 pub const OFFSCREEN_IMAGE: (u32, u32) = (900, 550);
 
-/// `given`: the options the command line gave (`--offscreen` without `--width`/`--height` takes
-/// `OFFSCREEN_IMAGE`).
-pub fn run(mut a: ViewArgs, given: &[&str]) -> Result<()> {
+/// `given`: the options the command line gave (`--paper` yields to them; `--offscreen` without
+/// `--width`/`--height` takes `OFFSCREEN_IMAGE`).
+pub fn run(mut a: ViewArgs, given: &[String]) -> Result<()> {
+    a.shot.apply_paper(given);
     if a.offscreen {
-        if !given.contains(&"width") {
+        if !given.iter().any(|g| g == "width") {
             a.shot.frame.width = OFFSCREEN_IMAGE.0;
         }
-        if !given.contains(&"height") {
+        if !given.iter().any(|g| g == "height") {
             a.shot.frame.height = OFFSCREEN_IMAGE.1;
         }
     }

@@ -4,6 +4,7 @@
 use glam::Vec3;
 
 use crate::gi::kmeans::{KmParams, MAX_DIM};
+use crate::settings::Adaptations;
 
 const POS_SCALE: f32 = 16777216.0;
 const NRM_SCALE: f32 = 8388608.0;
@@ -135,6 +136,11 @@ impl Grid {
     }
 }
 
+/// The adaptations `p` was made with (`KmParams::adapt`; kmeans.wgsl's overrides `RESEED`, ...).
+pub fn adapt(p: &KmParams) -> Adaptations {
+    Adaptations::from_bits(p.adapt)
+}
+
 fn before(r: f32, k: u32, rd: f32, rk: u32) -> bool {
     r < rd || (r == rd && k < rk)
 }
@@ -155,6 +161,7 @@ fn nearest(
     n_t: f32,
     f: usize,
     bounded: bool,
+    adapt: Adaptations,
 ) -> Vec<(u32, f32)> {
     let mut best: Vec<(u32, f32)> = Vec::new();
     let c = g.coord(pt.pos);
@@ -188,7 +195,7 @@ fn nearest(
     if bounded {
         // While iterating: ITER_RINGS rings with the metric, no further fallback.
         let mut ring = 2;
-        while best.is_empty() && ring <= ITER_RINGS {
+        while adapt.ring_fallback && best.is_empty() && ring <= ITER_RINGS {
             scan(&mut best, ring, f, true);
             ring += 1;
         }
@@ -196,12 +203,12 @@ fn nearest(
     }
     let maxr = *g.dims.iter().max().unwrap() as i32;
     let mut ring = 2;
-    while best.is_empty() && ring <= FINAL_RINGS.min(maxr) {
+    while adapt.ring_fallback && best.is_empty() && ring <= FINAL_RINGS.min(maxr) {
         scan(&mut best, ring, f, true);
         ring += 1;
     }
     let mut ring = 1;
-    while best.is_empty() && ring <= maxr {
+    while adapt.position_fallback && best.is_empty() && ring <= maxr {
         scan(&mut best, ring, 1, false);
         ring += 1;
     }
@@ -407,7 +414,7 @@ impl Alg1<'_> {
         for s in 0..p.num_sampled {
             let pt = self.points[sample_index(p, s) as usize];
             let k = if pt.valid {
-                nearest(&g, &self.cs, &pt, p.normal_threshold, 1, true)
+                nearest(&g, &self.cs, &pt, p.normal_threshold, 1, true, adapt(p))
                     .first()
                     .map_or(u32::MAX, |b| b.0)
             } else {
@@ -417,7 +424,7 @@ impl Alg1<'_> {
             self.sample_assign[s as usize] = k;
             // An orphan (no centroid passing n_t near it) proposes itself for re-seeding; a
             // cluster keeps the lowest index proposed to it.
-            if pt.valid && k == u32::MAX {
+            if adapt(p).reseed && pt.valid && k == u32::MAX {
                 orphans = true;
                 let t = reseed_target(p, s, it + 1) as usize;
                 self.proposals[t] = self.proposals[t].min(s);
@@ -467,6 +474,10 @@ impl Alg1<'_> {
         for kk in 0..p.k as usize {
             let count = counts[kk];
             let proposal = std::mem::replace(&mut self.proposals[kk], u32::MAX);
+            if count == 0 && !adapt(p).reseed {
+                self.cs[kk].valid = false;
+                continue;
+            }
             if count == 0 {
                 match self.reseed_at(kk, it, proposal, orphans, &counts) {
                     None => {
@@ -493,7 +504,9 @@ impl Alg1<'_> {
             c.pos = lo + rel * ext;
             c.valid = true;
             let l = nrm.length();
-            if l > 1e-6 {
+            if !adapt(p).normalised_normal {
+                c.nrm = nrm;
+            } else if l > 1e-6 {
                 c.nrm = nrm / l;
             }
         }
@@ -539,7 +552,7 @@ fn fuzzy_assign(points: &[Point], p: &KmParams, cs: &[Centroid]) -> (Vec<u32>, V
     let mut weights = vec![0f32; m * f];
     for (i, pt) in points.iter().enumerate().take(m) {
         let b = if pt.valid {
-            nearest(&g, cs, pt, p.normal_threshold, f, false)
+            nearest(&g, cs, pt, p.normal_threshold, f, false, adapt(p))
         } else {
             Vec::new()
         };
@@ -708,21 +721,39 @@ pub fn eq10_weights(d: &[f32], p: f32) -> Vec<f32> {
     w
 }
 
-/// Twin of `rep_weights`: Eq. (10) (exponent `p`) with distances to the representatives.
-pub fn rep_weights(points: &[Point], f: usize, assign: &[u32], reps: &[u32], p: f32) -> Vec<f32> {
-    let mut out = vec![0f32; assign.len()];
+/// Twin of `rep_weights`: Eq. (10) (exponent `p`) with Eq. (7)'s distances to the representatives:
+/// one whose normal fails `n_t` is at distance ∞ (weight 0). A point whose representatives all fail
+/// keeps its weights to the centroids (`centroid_weights`, Alg. 2's).
+pub fn rep_weights(
+    points: &[Point],
+    f: usize,
+    assign: &[u32],
+    reps: &[u32],
+    centroid_weights: &[f32],
+    p: f32,
+    n_t: f32,
+) -> Vec<f32> {
+    let mut out = centroid_weights.to_vec();
     for (m, pt) in points.iter().enumerate() {
         let row = &assign[m * f..m * f + f];
         let d: Vec<f32> = row
             .iter()
-            .map(|&k| {
-                if k == u32::MAX {
-                    -1.0
-                } else {
-                    (pt.pos - points[reps[k as usize] as usize].pos).length()
+            .map(|&k| match k {
+                u32::MAX => -1.0,
+                k if reps[k as usize] == u32::MAX => -1.0,
+                k => {
+                    let r = points[reps[k as usize] as usize];
+                    if pt.nrm.dot(r.nrm) > n_t {
+                        (pt.pos - r.pos).length()
+                    } else {
+                        -1.0
+                    }
                 }
             })
             .collect();
+        if d.iter().all(|&x| x < 0.0) {
+            continue;
+        }
         let w = eq10_weights(&d, p);
         out[m * f..m * f + f].copy_from_slice(&w);
     }

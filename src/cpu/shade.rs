@@ -4,9 +4,10 @@ use glam::Vec3;
 
 use super::kmeans::RepPoint;
 use super::shading::CpuScene;
-use super::vpl::eq5_cluster_radiance;
+use super::vpl::eq5_cluster_light;
 use crate::gi::primary::ShadingPoint;
 use crate::gi::vpl_trace::Vpl;
+use crate::settings::ClusterLight;
 
 /// The visibility bit matrix: row k (SP cluster with representative point `reps[k]`, or none), bit c
 /// set when light c's representative is visible from it (with `facing`, only when they also face
@@ -90,14 +91,15 @@ pub fn same_visibility(rw: &[u32], b: u32) -> u32 {
     })
 }
 
-/// Eq. (6) for one pixel: Σ_c I_c ρ G Ṽ(p, p_c) over the lights (twin of `eq6_indirect` in
-/// shade.wgsl).
+/// Eq. (6) for one pixel: Σ_c I_c ρ G Ṽ(p, p_c) over the lights, each a point or spread as `light`
+/// says (twin of `eq6_indirect` in shade.wgsl).
 pub fn eq6_indirect(
     sp: &ShadingPoint,
     lights: &[Vpl],
     bits: &Bits,
     slots: &Slots,
     d_min2: f32,
+    light: ClusterLight,
 ) -> Vec3 {
     if !sp.valid {
         return Vec3::ZERO;
@@ -109,7 +111,7 @@ pub fn eq6_indirect(
     };
     let mut sum = Vec3::ZERO;
     for (c, l) in lights.iter().enumerate() {
-        let t = eq5_cluster_radiance(sp.pos, sp.normal, sp.albedo, l, d_min2);
+        let t = eq5_cluster_light(sp.pos, sp.normal, sp.albedo, l, d_min2, light);
         if t.max_element() <= 0.0 {
             continue;
         }

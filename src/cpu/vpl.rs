@@ -5,6 +5,7 @@ use glam::Vec3;
 use super::shading::CpuScene;
 use crate::gi::primary::ShadingPoint;
 use crate::gi::vpl_trace::Vpl;
+use crate::settings::ClusterLight;
 
 /// One term of Eq. (5) without visibility: I_j(p) ρ(p) G(p, p_j), 1/d² clamped at d_min².
 pub fn eq5_vpl_radiance(p: Vec3, n: Vec3, albedo: Vec3, v: &Vpl, d_min2: f32) -> Vec3 {
@@ -38,6 +39,24 @@ pub fn eq5_cluster_radiance(p: Vec3, n: Vec3, albedo: Vec3, v: &Vpl, d_min2: f32
     let d2 = d.dot(d);
     let spread = own * (d2.max(d_min2) / d2.max(d_min2.max(v.nrm[3])));
     own * (1.0 - share) + spread * share
+}
+
+/// Eq. (5)'s term of a VPL-cluster light as `light` says (`--cluster-light`): `Point`, the paper's
+/// point light (`eq5_vpl_radiance` of the representative with the summed flux); `Spread`,
+/// `eq5_cluster_radiance`. Twin of `eq5_cluster_radiance` in `common/vpl.wgsl` with its
+/// `CLUSTER_SPREAD`.
+pub fn eq5_cluster_light(
+    p: Vec3,
+    n: Vec3,
+    albedo: Vec3,
+    v: &Vpl,
+    d_min2: f32,
+    light: ClusterLight,
+) -> Vec3 {
+    match light {
+        ClusterLight::Point => eq5_vpl_radiance(p, n, albedo, v, d_min2),
+        ClusterLight::Spread => eq5_cluster_radiance(p, n, albedo, v, d_min2),
+    }
 }
 
 impl CpuScene<'_> {

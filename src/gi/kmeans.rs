@@ -18,9 +18,13 @@ use super::dispatch::{Kernel, RecordCopies, WORKGROUP, copy_to_texture, data_tex
 use super::primary::CameraParams;
 use super::scene_gpu::{data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
-use crate::settings::{ClusterSettings, Gamma, MAX_F, MAX_NORMAL_THRESHOLD, plane_gate_sine};
+use crate::settings::{
+    Adaptations, ClusterSettings, Gamma, MAX_F, MAX_NORMAL_THRESHOLD, plane_gate_sine,
+};
 
 pub const MAX_DIM: u32 = 64;
+/// The sets of adaptations a pipeline is built for (`Adaptations::bits`).
+const ADAPT_SETS: usize = Adaptations::ALL as usize + 1;
 const WORDS: u64 = 13;
 const MAX_CELLS: u64 = (MAX_DIM as u64).pow(3);
 /// The most blocks of the grid's prefix sum (1024 cells each, kmeans.wgsl `SCAN_BLOCK`).
@@ -70,6 +74,8 @@ pub struct KMeansSettings {
     /// only clusters whose centroid lies within this angle of the point's tangent plane, seen from
     /// the point (`settings::plane_gate_sine`).
     pub plane_gate_deg: Option<f32>,
+    /// The departures from Alg. 1 and 2 in use (all by default; `--paper`: none).
+    pub adapt: Adaptations,
 }
 
 impl KMeansSettings {
@@ -86,6 +92,7 @@ impl KMeansSettings {
             weights_to_reps: c.weights_to_reps,
             weight_exponent: c.weight_exponent,
             plane_gate_deg: c.plane_gate,
+            adapt: c.adaptations(),
         }
     }
 
@@ -102,6 +109,7 @@ impl KMeansSettings {
             weights_to_reps: false,
             weight_exponent: 1.0,
             plane_gate_deg: None,
+            adapt: c.adaptations(),
         }
     }
 }
@@ -122,7 +130,10 @@ pub struct KmParams {
     pub weight_exponent: f32,
     /// `plane_gate_sine` of the settings.
     pub plane_gate: f32,
-    pub _pad: [u32; 2],
+    /// `Adaptations::bits` of the settings: the CPU twin follows them; the shaders take them as
+    /// pipeline constants (`KMeans::kernel`), so they do not read this word.
+    pub adapt: u32,
+    pub _pad: u32,
     /// The temporal warm start's view (kmeans.wgsl `warm_keeps`): the new frame's camera, with
     /// `warm.eye[3]` the same-surface tolerance; `warm.size` = (width, height, previous K, 0), width 0
     /// when the points are no view's pixels. All zero for a cold start.
@@ -148,7 +159,8 @@ impl KmParams {
             ext: [ext.x, ext.y, ext.z, ext.length()],
             weight_exponent: s.weight_exponent,
             plane_gate: plane_gate_sine(s.plane_gate_deg),
-            _pad: [0; 2],
+            adapt: s.adapt.bits(),
+            _pad: 0,
             warm: CameraParams::zeroed(),
         }
     }
@@ -309,9 +321,10 @@ pub struct KMeansTuning {
 
 #[derive(Default)]
 pub struct KMeans {
-    /// One pipeline set per F (the shader's `override F`) and plane gate off / on (`override
-    /// PLANE_GATE`), built the first time that pair is clustered.
-    kernels: [[OnceCell<Kernel>; 2]; MAX_F as usize],
+    /// One pipeline set per F (the shader's `override F`), plane gate off / on (`override
+    /// PLANE_GATE`) and set of adaptations (`Adaptations::bits`, the overrides `RESEED`, ...),
+    /// built the first time that combination is clustered.
+    kernels: [[[OnceCell<Kernel>; ADAPT_SETS]; 2]; MAX_F as usize],
     tuning: KMeansTuning,
     /// The buffer sets of its clusterings, by size (`SetKey`): a clustering holds its set while a
     /// warm start may read it, so steady frames alternate between two and make none.
@@ -337,9 +350,10 @@ impl KMeans {
         self.tuning.texture_search.unwrap_or(ctx.software)
     }
 
-    fn kernel(&self, ctx: &GpuContext, f: u32, gate: bool) -> &Kernel {
+    fn kernel(&self, ctx: &GpuContext, f: u32, gate: bool, adapt: u32) -> &Kernel {
         let f = f.clamp(1, MAX_F);
-        self.kernels[f as usize - 1][gate as usize].get_or_init(|| {
+        let adapt = adapt & Adaptations::ALL;
+        self.kernels[f as usize - 1][gate as usize][adapt as usize].get_or_init(|| {
             let mut entries = vec![uniform_layout(1), storage_layout(2, true)];
             entries.extend((3..=14).map(|b| storage_layout(b, false)));
             entries.push(data_texture_layout(15, wgpu::TextureSampleType::Uint));
@@ -353,10 +367,15 @@ impl KMeans {
                 ENTRIES,
                 &entries,
                 &[
-                    ("F", f as f64),
-                    ("TEXTURE_SEARCH", texture),
-                    ("PLANE_GATE", gate as u32 as f64),
-                ],
+                    [
+                        ("F", f as f64),
+                        ("TEXTURE_SEARCH", texture),
+                        ("PLANE_GATE", gate as u32 as f64),
+                    ]
+                    .as_slice(),
+                    Adaptations::from_bits(adapt).constants().as_slice(),
+                ]
+                .concat(),
             )
         })
     }
@@ -389,7 +408,7 @@ impl KMeans {
             .sets
             .take(&key, || Buffers::new(ctx, &p, texture_search));
         b.reset(ctx, &p, settings.iterations, warm.is_some(), reused);
-        let kernel = self.kernel(ctx, p.f, p.f > 1 && p.plane_gate <= 1.0);
+        let kernel = self.kernel(ctx, p.f, p.f > 1 && p.plane_gate <= 1.0, p.adapt);
         let bg = b.bind_group(ctx, kernel, data);
         // After each grid build the search's textures are refreshed (software adapters only).
         let copy = |enc: &mut wgpu::CommandEncoder| {

@@ -8,6 +8,7 @@ use super::dispatch::Kernel;
 use super::dispatch::{Gpu, Run};
 use super::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
+use crate::settings::ClusterLight;
 
 /// Shadow rays per submission: about a second of lavapipe work.
 pub const RAYS_PER_SUBMISSION: u32 = 1 << 20;
@@ -22,7 +23,11 @@ pub struct RefParams {
 }
 
 pub struct Reference {
+    /// With the VPL-cluster lights' spread (`override CLUSTER_SPREAD`, the default; VPLs have none,
+    /// so the reference is the same either way).
     kernel: Kernel,
+    /// With point cluster lights (`--cluster-light point`), built the first time it gathers.
+    point: std::cell::OnceCell<Kernel>,
 }
 
 /// What a gather reads and writes.
@@ -40,18 +45,24 @@ pub struct GatherInputs<'a> {
     pub d_min: f32,
     /// The profiler label: the pass's name.
     pub label: &'a str,
+    /// How VPL-cluster lights reach a point (`--cluster-light`; VPLs are points either way).
+    pub light: ClusterLight,
+}
+
+fn entries() -> [wgpu::BindGroupLayoutEntry; 4] {
+    [
+        uniform_layout(1),
+        storage_layout(2, true),
+        storage_layout(3, true),
+        storage_layout(4, false),
+    ]
 }
 
 impl Reference {
     pub fn new(ctx: &GpuContext, scene: &SceneGpu) -> Self {
-        let entries = [
-            uniform_layout(1),
-            storage_layout(2, true),
-            storage_layout(3, true),
-            storage_layout(4, false),
-        ];
         Reference {
-            kernel: Kernel::new(ctx, scene, "reference", &entries, &[]),
+            kernel: Kernel::new(ctx, scene, "reference", &entries(), &[]),
+            point: Default::default(),
         }
     }
 
@@ -70,6 +81,7 @@ impl Reference {
             pixels,
             d_min,
             label,
+            light,
         } = *inputs;
         if num_vpls == 0 || pixels == 0 {
             return;
@@ -82,9 +94,14 @@ impl Reference {
                 _pad: [0; 3],
             },
         );
-        let bg = self
-            .kernel
-            .bind_group(ctx, &[(1, &params), (2, gbuffer), (3, vpls), (4, indirect)]);
+        let kernel = match light {
+            ClusterLight::Spread => &self.kernel,
+            ClusterLight::Point => self.point.get_or_init(|| {
+                let spread_off = [("CLUSTER_SPREAD", 0.0)];
+                Kernel::new(ctx, g.scene, "reference", &entries(), &spread_off)
+            }),
+        };
+        let bg = kernel.bind_group(ctx, &[(1, &params), (2, gbuffer), (3, vpls), (4, indirect)]);
         let px_chunk = pixels.min(1 << 14);
         // At most VPLS_PER_DISPATCH shadow rays an invocation: lavapipe stops all loops of a SIMD
         // batch after 65,535 trips (docs/architecture.md), and a small image would otherwise give each pixel
@@ -95,7 +112,6 @@ impl Reference {
             group: &bg,
             seed: 0,
         };
-        self.kernel
-            .run_2d(g, run, (pixels, px_chunk), (num_vpls, vpl_chunk), progress);
+        kernel.run_2d(g, run, (pixels, px_chunk), (num_vpls, vpl_chunk), progress);
     }
 }

@@ -10,7 +10,7 @@ use super::dispatch::{Kernel, copy_to_texture};
 use super::pass::Pass;
 use super::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
-use crate::settings::MAX_F;
+use crate::settings::{ClusterLight, MAX_F};
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -33,6 +33,8 @@ pub struct ShadeInputs<'a> {
     pub indirect: &'a wgpu::Buffer,
     pub pixels: u32,
     pub params: ShadeParams,
+    /// How the lights reach a pixel (`--cluster-light`).
+    pub light: ClusterLight,
 }
 
 /// The most bit words (32 lights each) one invocation walks per dispatch: 16,384 lights, so the
@@ -55,8 +57,9 @@ pub fn patterns() -> u32 {
 }
 
 pub struct Shade {
-    /// One pipeline per F (the shader's `override F`), built the first time that F is shaded.
-    kernels: [OnceCell<Kernel>; MAX_F as usize],
+    /// One pipeline per F (the shader's `override F`) and cluster light (point, spread: its
+    /// `override CLUSTER_SPREAD`), built the first time that pair is shaded.
+    kernels: [[OnceCell<Kernel>; 2]; MAX_F as usize],
     /// The shader's `PATTERNS` (`patterns()` when built).
     patterns: u32,
     params: crate::gpu::persistent::Uniform<ShadeParams>,
@@ -87,9 +90,9 @@ impl Shade {
         }
     }
 
-    fn kernel(&self, ctx: &GpuContext, scene: &SceneGpu, f: u32) -> &Kernel {
+    fn kernel(&self, ctx: &GpuContext, scene: &SceneGpu, f: u32, spread: bool) -> &Kernel {
         let f = f.clamp(1, MAX_F);
-        self.kernels[f as usize - 1].get_or_init(|| {
+        self.kernels[f as usize - 1][spread as usize].get_or_init(|| {
             let mut entries = vec![
                 uniform_layout(1),
                 storage_layout(2, true),
@@ -97,7 +100,11 @@ impl Shade {
             ];
             entries.extend((4..=6).map(|b| storage_layout(b, true)));
             entries.push(storage_layout(7, false));
-            let overrides = [("F", f as f64), ("PATTERNS", self.patterns as f64)];
+            let overrides = [
+                ("F", f as f64),
+                ("PATTERNS", self.patterns as f64),
+                ("CLUSTER_SPREAD", spread as u32 as f64),
+            ];
             Kernel::new(ctx, scene, "shade", &entries, &overrides)
         })
     }
@@ -111,7 +118,7 @@ impl Shade {
         let (lights, lights_view) = self.lights.get(ctx, 3 * n);
         copy_to_texture(&mut enc, i.lights, &lights, 48 * n);
         ctx.queue.submit([enc.finish()]);
-        let kernel = self.kernel(ctx, g.scene, i.params.f);
+        let kernel = self.kernel(ctx, g.scene, i.params.f, i.light == ClusterLight::Spread);
         let bg = kernel.bind_group_with_textures(
             ctx,
             &[

@@ -131,6 +131,8 @@ pub struct LightKey {
     pub k: u32,
     pub normal_threshold_bits: u32,
     pub iterations: u32,
+    /// The k-means adaptations (`Adaptations::bits`).
+    pub adapt: u32,
     pub seed: u32,
     /// The VPL set it clusters.
     pub vpls: VplKey,

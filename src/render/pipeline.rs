@@ -334,6 +334,7 @@ impl Renderer<'_> {
                 pixels: r.pixels,
                 d_min: s.frame.clamp * self.scene.extent(),
                 label,
+                light: s.cluster.cluster_light,
             },
             &mut |done, all| {
                 let pct = done * 100 / all.max(1);

@@ -321,6 +321,7 @@ impl<'a> Renderer<'a> {
             },
             normal_threshold_bits: c.normal_threshold.to_bits(),
             iterations: c.iterations,
+            adapt: c.adaptations().bits(),
             seed: f.seed,
             vpls: self.vpl_set.as_ref().unwrap().key,
         };

@@ -13,6 +13,7 @@
 //! line naming the option and the value, exit 2 (`cli::parse`).
 
 mod knobs;
+pub mod paper;
 pub(crate) use knobs::knobs;
 use knobs::listed;
 use std::fmt;
@@ -78,6 +79,50 @@ impl Weighting {
             Weighting::Uniform => "uniform",
             Weighting::InverseDistance => "inverse-distance",
         }
+    }
+}
+
+/// How a VPL cluster's light reaches a shading point (`--cluster-light`).
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, Serialize, Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum ClusterLight {
+    /// The paper (Eq. 6): the representative VPL as a point light with the members' summed flux.
+    Point,
+    /// Not in the paper: the other members' share of the flux no closer than their RMS distance.
+    #[default]
+    Spread,
+}
+
+impl fmt::Display for ClusterLight {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            ClusterLight::Point => "point",
+            ClusterLight::Spread => "spread",
+        })
+    }
+}
+
+/// A centroid's normal after Alg. 1's update (`--centroid-normal`).
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, Serialize, Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum CentroidNormal {
+    /// Not in the paper: the members' mean normal scaled to unit length.
+    #[default]
+    Normalised,
+    /// The paper (Alg. 1 line 18, value / counter): the members' plain mean normal.
+    Mean,
+}
+
+impl fmt::Display for CentroidNormal {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            CentroidNormal::Normalised => "normalised",
+            CentroidNormal::Mean => "mean",
+        })
     }
 }
 
@@ -296,6 +341,44 @@ pub struct ClusterSettings {
     /// test").
     #[arg(long, default_value = "off", value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub visibility_facing: bool,
+    /// How a VPL cluster lights a point: `point` (the paper's Eq. 6: its representative VPL with
+    /// the members' summed flux) or `spread` (not in the paper, the default: the other members'
+    /// share of the flux is evaluated no closer than their RMS distance from the representative;
+    /// docs/clustering.md, "VPL clusters as lights").
+    #[arg(long, value_enum, default_value_t = ClusterLight::Spread)]
+    pub cluster_light: ClusterLight => list "VPL-cluster lights: point (the paper), spread (default), \
+        e.g. point,spread." (value_enum),
+    /// Not in the paper (on by default): Alg. 1 re-seeds an empty cluster at a sampled point no
+    /// centroid within reach accepts (an orphan), or else at a drawn sampled point
+    /// (docs/clustering.md, "Surfaces without a cluster"). off: an empty cluster stays empty.
+    #[arg(long, default_value = "on", value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    pub reseed: bool => list "Re-seeding of empty clusters: on (default), off (the paper)."
+        (value_parser = parse_on_off),
+    /// Not in the paper (on by default): a point with no centroid passing n_t in the 27 cells
+    /// around it searches rings of cells further out (3 while iterating, 4 in the final
+    /// assignment). off: the 27 cells only, as Alg. 1 and 2 (docs/clustering.md, "Fallbacks").
+    #[arg(long, default_value = "on", value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    pub ring_fallback: bool => list "Ring fallback of the search: on (default), off (the paper)."
+        (value_parser = parse_on_off),
+    /// Not in the paper (on by default): a point the final assignment finds no centroid passing
+    /// n_t for takes the nearest centroid by position alone. off: it stays without a cluster (to
+    /// Eq. 7 it is at distance ∞ from every centroid) and gets no indirect light from SP clusters.
+    #[arg(long, default_value = "on", value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    pub position_fallback: bool => list "Position-only fallback of the final assignment: on \
+        (default), off (the paper)." (value_parser = parse_on_off),
+    /// A centroid's normal (Alg. 1 line 18): `normalised` (the default: the members' mean normal
+    /// scaled to unit length) or `mean` (the paper's value / counter: the plain mean, shorter than 1
+    /// where the members' normals differ, which Eq. 7's test n · n_c > n_t then reads as is).
+    #[arg(long, value_enum, default_value_t = CentroidNormal::Normalised)]
+    pub centroid_normal: CentroidNormal => list "Centroid normals: normalised (default), mean (the \
+        paper)." (value_enum),
+    /// Every setting at the paper's choice (docs/clustering.md, "The paper exactly"): point cluster
+    /// lights, no re-seeding, no fallbacks, mean centroid normals, n_t = √3/2, F 6, inverse-distance
+    /// weights (Eq. 10, p 1, to the centroids), K_SP and K_VPL in the ratios of the paper's
+    /// intermediate setting (8k of 1024×720 pixels, 2k of 8000 VPLs), no G-term clamp, no plane
+    /// gate, facing test or temporal reuse. An option given on the command line wins over it.
+    #[arg(long)]
+    pub paper: bool,
     /// A GPU-time budget for the frame in ms (> 0): K_SP and K_VPL are chosen to meet it (`render`:
     /// a few frames adjusting them, K_SP following K_VPL on a line through the paper's intermediate
     /// setting; `view`: adjusted while
@@ -326,9 +409,74 @@ impl ClusterSettings {
         }
     }
 
+    /// The k-means adaptations these settings switch on (`--reseed`, `--ring-fallback`,
+    /// `--position-fallback`, `--centroid-normal`).
+    pub fn adaptations(&self) -> Adaptations {
+        Adaptations {
+            reseed: self.reseed,
+            ring_fallback: self.ring_fallback,
+            position_fallback: self.position_fallback,
+            normalised_normal: self.centroid_normal == CentroidNormal::Normalised,
+        }
+    }
+
     /// n_t as Eq. (7) uses it: at most `MAX_NORMAL_THRESHOLD`.
     pub fn normal_threshold_used(&self) -> f32 {
         self.normal_threshold.min(MAX_NORMAL_THRESHOLD)
+    }
+}
+
+/// The k-means's departures from Alg. 1 and 2, each on by default (docs/clustering.md, "The
+/// paper exactly"); the shaders take them as pipeline constants (kmeans.wgsl `RESEED`,
+/// `RING_FALLBACK`, `POSITION_FALLBACK`, `NORMALISED_NORMAL`), the CPU twin from `KmParams::adapt`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Adaptations {
+    pub reseed: bool,
+    pub ring_fallback: bool,
+    pub position_fallback: bool,
+    pub normalised_normal: bool,
+}
+
+impl Default for Adaptations {
+    fn default() -> Self {
+        Adaptations::from_bits(Adaptations::ALL)
+    }
+}
+
+impl Adaptations {
+    /// Every adaptation on (the default).
+    pub const ALL: u32 = 0b1111;
+
+    /// As bits: 1 re-seeding, 2 ring fallback, 4 position fallback, 8 normalised normal.
+    pub fn bits(self) -> u32 {
+        self.reseed as u32
+            | (self.ring_fallback as u32) << 1
+            | (self.position_fallback as u32) << 2
+            | (self.normalised_normal as u32) << 3
+    }
+
+    pub fn from_bits(b: u32) -> Adaptations {
+        Adaptations {
+            reseed: b & 1 != 0,
+            ring_fallback: b & 2 != 0,
+            position_fallback: b & 4 != 0,
+            normalised_normal: b & 8 != 0,
+        }
+    }
+
+    /// None of them: Alg. 1 and 2 as the paper writes them.
+    pub fn none() -> Adaptations {
+        Adaptations::from_bits(0)
+    }
+
+    /// The shader's pipeline constants.
+    pub fn constants(self) -> [(&'static str, f64); 4] {
+        [
+            ("RESEED", self.reseed as u32 as f64),
+            ("RING_FALLBACK", self.ring_fallback as u32 as f64),
+            ("POSITION_FALLBACK", self.position_fallback as u32 as f64),
+            ("NORMALISED_NORMAL", self.normalised_normal as u32 as f64),
+        ]
     }
 }
 

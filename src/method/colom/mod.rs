@@ -167,6 +167,7 @@ impl Colom {
                     d_min2: d_min * d_min,
                     _pad: [0; 3],
                 },
+                light: f.cluster.cluster_light,
             },
         );
     }

@@ -39,8 +39,9 @@ knobs! {
     /// lightcluster's knobs, flattened into `method::MethodSettings`.
     pub struct LightClusterSettings, lists LightClusterLists, heading super::super::METHOD_HEADING;
     /// lightcluster: d_init of d_min = d_init (1 − |C_pos| / z_far), in scene diagonals, (0, 10];
-    /// the cluster count is its outcome (the paper's scenes used 0.1–1.6 scene units and 4–40
-    /// clusters). bench sweeps 1, 1.2, 1.8, 2 and 2.2 by default: 28 and 7 clusters on the
+    /// the cluster count is its outcome (the paper's scenes used 0.1–1.6 scene units and 4–80
+    /// clusters: its Table 1 has 80, 44, 26 and 10 for Sponza, 13 to 4 and 12 to 7 for the
+    /// others). bench sweeps 1, 1.2, 1.8, 2 and 2.2 by default: 28 and 7 clusters on the
     /// conference room, 28, 12 and 8 on the Cornell box (docs/methods.md).
     d_init: f32 = 1.0, parse parse_d_init, sweep [1.0, 1.2, 1.8, 2.0, 2.2];
     /// lightcluster: what a cluster's shadow rays aim at: `members` (not in the paper, the

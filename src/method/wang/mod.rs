@@ -297,6 +297,7 @@ impl IndirectMethod for WangMethod {
                         pixels: c.k(),
                         d_min: f.frame.clamp * extent,
                         label: pass.name(),
+                        light: f.cluster.cluster_light,
                     },
                     &mut |_, _| true,
                 );
