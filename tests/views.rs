@@ -164,9 +164,9 @@ fn compare(shown: &[[u8; 3]], expected: &[[u8; 3]], masked: &[bool]) -> (i32, us
 /// levels of the ramp. Against the twin on the viewer's own frame (its EXR
 /// screenshot) the error view is within 1 level everywhere and FLIP within 3 levels on 20 channels
 /// (the FLIP pass against nv-flip: a neighbouring LUT entry); bounds 2 levels and 4 levels, 1‰.
-/// Before this test the display pass's texture was handed to egui through an sRGB view, and egui
-/// 0.37 takes a texture's values as sRGB-encoded: every view was shown darker (74 levels off at
-/// worst), which the EXR screenshot (the frame's radiance, not the display) could not see.
+/// It compares the window's pixels, not the EXR screenshot (the frame's radiance): the display
+/// pass's texture handed to egui through an `Rgba8UnormSrgb` view (egui 0.37 takes a texture's
+/// values as sRGB-encoded) shows every view darker, up to 74 levels off, and fails it.
 #[test]
 fn every_view_shows_what_render_and_the_twin_produce() {
     let dir = common::scratch("views");
