@@ -64,17 +64,19 @@ pub struct DisplayInputs<'a> {
     pub split: f32,
 }
 
-/// The pass's output: an `Rgba8Unorm` texture written with sRGB-encoded values, and a view of it
-/// as `Rgba8UnormSrgb` for sampling (egui then sees linear values, as with its own textures).
+/// The pass's output: an `Rgba8Unorm` texture written with sRGB-encoded values, and the view of it
+/// egui samples. egui-wgpu (0.37) takes a native texture's values as sRGB-encoded (its own textures
+/// are `Rgba8Unorm`, blended in gamma space): a view as `Rgba8UnormSrgb` would hand it linear values
+/// and darken the image (tests/views.rs compares the window's pixels with `render`'s PNG).
 pub struct Target {
     pub texture: wgpu::Texture,
-    pub srgb_view: wgpu::TextureView,
+    pub view: wgpu::TextureView,
     pub size: (u32, u32),
 }
 
 impl Target {
-    /// An output texture of `size`: written as `Rgba8Unorm` storage, sampled as `Rgba8UnormSrgb`,
-    /// read as a texture (the reprojection) and copied (screenshots).
+    /// An output texture of `size`: written as `Rgba8Unorm` storage, sampled by egui as it is
+    /// (sRGB-encoded values), read as a texture (the reprojection) and copied (screenshots).
     pub fn new(device: &wgpu::Device, (w, h): (u32, u32), label: &str) -> Target {
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
@@ -90,16 +92,15 @@ impl Target {
             usage: wgpu::TextureUsages::STORAGE_BINDING
                 | wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[wgpu::TextureFormat::Rgba8UnormSrgb],
+            view_formats: &[],
         });
-        let srgb_view = texture.create_view(&wgpu::TextureViewDescriptor {
-            format: Some(wgpu::TextureFormat::Rgba8UnormSrgb),
+        let view = texture.create_view(&wgpu::TextureViewDescriptor {
             usage: Some(wgpu::TextureUsages::TEXTURE_BINDING),
             ..Default::default()
         });
         Target {
             texture,
-            srgb_view,
+            view,
             size: (w, h),
         }
     }

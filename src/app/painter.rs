@@ -94,7 +94,7 @@ impl Painter {
             Some((id, _)) if remade || self.native_source != source => {
                 self.renderer.update_egui_texture_from_wgpu_texture(
                     &self.device,
-                    &shown.srgb_view,
+                    &shown.view,
                     filter,
                     id,
                 );
@@ -103,7 +103,7 @@ impl Painter {
             Some((id, _)) => id,
             None => self
                 .renderer
-                .register_native_texture(&self.device, &shown.srgb_view, filter),
+                .register_native_texture(&self.device, &shown.view, filter),
         };
         self.native = Some((id, shown.size));
         self.native_source = source;

@@ -508,8 +508,9 @@ fn a_preview_keeps_the_image_size_and_lowers_only_the_indirect_light() {
 }
 
 /// The panel driven by events, as a user drives it (egui's harness `egui_kittest`, widgets found by
-/// their labels): each view mode, the weightings, a method and back, a slider moved by its keys,
-/// "pin as B" and the split view, W to fly, R to reset, F11 for an EXR and F12 for a PNG.
+/// their labels): each view mode, the weightings, each method (a frame of it asked for) and back, a
+/// slider moved by its keys, "pin as B" and the split view, W to fly, R to reset, F11 for an EXR
+/// and F12 for a PNG.
 #[test]
 fn the_panel_driven_by_events() {
     use egui_kittest::{Harness, kittest::Queryable};
@@ -550,10 +551,23 @@ fn the_panel_driven_by_events() {
         click(&mut h, label);
         assert_eq!(h.state().s.cluster.weighting, w, "{label}");
     }
-    click(&mut h, "wang");
-    assert_eq!(h.state().s.method.method, crate::method::Method::Wang);
-    click(&mut h, "colom");
-    assert_eq!(h.state().s.method.method, crate::method::Method::Colom);
+    // Each method, colom (the first) last: each asks the worker for a frame of that method.
+    for m in crate::method::Method::ALL.into_iter().rev() {
+        let sent = h.state().pending;
+        click(&mut h, m.name());
+        assert_eq!(h.state().s.method.method, m, "clicking {:?}", m.name());
+        assert!(
+            h.state().pending > sent,
+            "{:?}: no frame asked for",
+            m.name()
+        );
+        let key = h.state().last_sent.clone().unwrap_or_default();
+        assert!(
+            key.contains(&format!("method: {m:?},")),
+            "{:?}: {key}",
+            m.name()
+        );
+    }
     // A slider takes the arrow keys once focused.
     let k = h.state().s.cluster.vpl_clusters;
     h.query_all_by_label("K_VPL")
@@ -568,6 +582,13 @@ fn the_panel_driven_by_events() {
     assert!(h.state().b.is_some());
     click(&mut h, View::Split.name());
     assert_eq!(h.state().view, View::Split);
+    // The split view asks for A's frame with B's beside it (the job's last part: B's settings; sent
+    // already when B was pinned in the A−B view, where the views above ended).
+    let key = h.state().last_sent.clone().unwrap_or_default();
+    assert!(
+        key.contains(" Some(RenderSettings {"),
+        "split without B: {key}"
+    );
     click(&mut h, View::Final.name());
     // W flies forward; R resets to the start view.
     h.state_mut().latest.as_ref().expect("a frame");
