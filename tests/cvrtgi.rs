@@ -894,8 +894,23 @@ fn measure_excess() {
         .map(|p| lum(Vec3::from(*p)))
         .collect();
     let cv: Vec<f32> = ind.iter().map(|p| lum(Vec3::from(*p))).collect();
+    // The CPU twins' whole chain on the GPU's lists and scales (a GPU-only error would show here).
+    let near = cs.near_voxels * v.grid.size;
+    let mut twin_chain: Vec<Vec3> = (0..nf)
+        .map(|f| {
+            let list = &vis[f * rays..(f + 1) * rays];
+            let m = cs.cluster_gather;
+            twin::gather_face(v, faces, &light.lighting, (f as u32, list), m, near, d_min2)
+        })
+        .collect();
+    for _ in 0..cs.filter_passes {
+        twin_chain = (0..nf)
+            .map(|f| twin::filter_face(v, faces, &twin_chain, f as u32, cs.filter_radius))
+            .collect();
+    }
     let rows = [
         ("reference (per pixel, exact)", refl.clone()),
+        ("CPU twins' gather, filter, lookup", image(&twin_chain)),
         ("lookup of exact face irradiance, no filter", image(&exact)),
         (
             "lookup of exact face irradiance, filtered",
@@ -1135,7 +1150,6 @@ fn measure_excess() {
         let mut l2 = light.lighting.clone();
         let sc = twin::conservation_scales(&l2, &vis, &flat, rays);
         twin::set_scales(&mut l2, &sc);
-        let near = cs.near_voxels * v.grid.size;
         let g2: Vec<Vec3> = (0..nf)
             .map(|f| {
                 twin::gather_face(
