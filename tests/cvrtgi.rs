@@ -908,8 +908,59 @@ fn measure_excess() {
             .map(|f| twin::filter_face(v, faces, &twin_chain, f as u32, cs.filter_radius))
             .collect();
     }
+    // Not shipped: the conserved gather with the clamp counted in what a VPL sends (an escape ray
+    // meeting a surface at t delivers min(1, t²/d_min²) of its share, the clamped Eq. 5's flux on
+    // that surface), the twins' chain on the GPU's lists and slot fluxes.
+    let reach = fuzzy_vpl::method::cvrtgi::ESCAPE_REACH * v.grid.size;
+    let mut clamped = light.lighting.clone();
+    clamped.sent.iter_mut().for_each(|x| *x = 0.0);
+    for (i, vpl) in vpls.iter().enumerate() {
+        let p = Vec3::from_slice(&vpl.pos[..3]);
+        let n = Vec3::from_slice(&vpl.nrm[..3]);
+        let Some(c) = v
+            .at_surface(p, -n)
+            .map(|u| v.voxels[u as usize].cluster)
+            .filter(|&c| c != INVALID)
+        else {
+            continue;
+        };
+        let o = p + n * (cpu.info.eps + 4e-6 * p.abs().max_element());
+        let mut delivered = 0.0f32;
+        for j in 0..cs.escape_rays {
+            let d = twin::escape_ray(i as u32, n, j, cs.escape_rays);
+            if let Some(h) = r.bvh.closest(o.into(), d.into(), 0.0, f32::MAX)
+                && h.t >= reach
+            {
+                delivered += if d_min2 > 0.0 {
+                    (h.t * h.t / d_min2).min(1.0)
+                } else {
+                    1.0
+                };
+            }
+        }
+        let f = (vpl.flux[0] + vpl.flux[1] + vpl.flux[2]).max(0.0);
+        clamped.sent[c as usize] += f * delivered / cs.escape_rays.max(1) as f32;
+    }
+    let sc = twin::conservation_scales(&clamped, &vis, &slot, rays);
+    twin::set_scales(&mut clamped, &sc);
+    let mut clamp_chain: Vec<Vec3> = (0..nf)
+        .map(|f| {
+            let list = &vis[f * rays..(f + 1) * rays];
+            let m = cs.cluster_gather;
+            twin::gather_face(v, faces, &clamped, (f as u32, list), m, near, d_min2)
+        })
+        .collect();
+    for _ in 0..cs.filter_passes {
+        clamp_chain = (0..nf)
+            .map(|f| twin::filter_face(v, faces, &clamp_chain, f as u32, cs.filter_radius))
+            .collect();
+    }
     let rows = [
         ("reference (per pixel, exact)", refl.clone()),
+        (
+            "not shipped: the clamp counted in the sent flux",
+            image(&clamp_chain),
+        ),
         ("CPU twins' gather, filter, lookup", image(&twin_chain)),
         ("lookup of exact face irradiance, no filter", image(&exact)),
         (
