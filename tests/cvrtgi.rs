@@ -727,3 +727,516 @@ fn render_stats_count_cvrtgi_voxels_and_clusters() {
     assert!(read()["counts"].get("cvrtgi").is_none());
     let _ = std::fs::remove_dir_all(&d);
 }
+
+// ---- the excess, measured (docs/cvrtgi.md, "Where the excess comes from") ----
+
+/// The faces `lookup_pixel` reads for `sp` with their trilinear weights (before renormalising),
+/// or the fallback face with weight 1.
+fn faces_read(v: &Voxels, faces: &Faces, sp: &ShadingPoint) -> Vec<(u32, f32)> {
+    let g = v.grid;
+    let dir = voxel::dominant_face(sp.normal);
+    let q = (sp.pos - g.origin) / g.size - 0.5;
+    let b = q.floor();
+    let t = q - b;
+    let base = b.as_ivec3();
+    let mut out = Vec::new();
+    for corner in 0..8 {
+        let o = glam::IVec3::new(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+        let w: f32 = [0, 1, 2]
+            .map(|a| if o[a] == 1 { t[a] } else { 1.0 - t[a] })
+            .iter()
+            .product();
+        let Some(u) = v.find(base + o) else { continue };
+        let f = faces.of_voxel[(6 * u + dir) as usize];
+        if f != INVALID {
+            out.push((f, w));
+        }
+    }
+    if out.iter().map(|x| x.1).sum::<f32>() > 0.0 {
+        return out;
+    }
+    let Some(u) = v.at_surface(sp.pos, -sp.normal) else {
+        return Vec::new();
+    };
+    let mut best = (0.0f32, INVALID);
+    for dir in 0..6 {
+        let f = faces.of_voxel[(6 * u + dir) as usize];
+        let c = voxel::face_axis(dir).dot(sp.normal);
+        if f != INVALID && c > best.0 {
+            best = (c, f);
+        }
+    }
+    if best.1 == INVALID {
+        Vec::new()
+    } else {
+        vec![(best.1, 1.0)]
+    }
+}
+
+fn env_or<T: std::str::FromStr>(k: &str, d: T) -> T {
+    std::env::var(k)
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(d)
+}
+
+/// Not an assertion: prints where CVRTGI's indirect light departs from the reference's, stage by
+/// stage (docs/cvrtgi.md, "Where the excess comes from"). Env: `CV_SCENE`, `CV_SUN`, `CV_W`,
+/// `CV_H`, `CV_VPLS`, `CV_SEED`, `CV_RES`, `CV_STEP`, `CV_CLAMP`; `CV_PIXELS` adds Eq. 5 at every
+/// pixel with its normal and with the face axis; `CV_ALL_FACES` the exact irradiance of every face
+/// (else only of the faces the pixels read, and the filtered row sees the others as unlit) and the
+/// flux balance; `CV_OUT=DIR` writes ratio maps.
+#[test]
+#[ignore]
+fn measure_excess() {
+    let ctx = common::gpu();
+    let name = std::env::var("CV_SCENE").unwrap_or("builtin:cornell".into());
+    let mut s = scene::load(&name).unwrap();
+    if let Ok(sun) = std::env::var("CV_SUN") {
+        s.lights.push(scene::extra_lights::parse_sun(&sun).unwrap());
+    }
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let cam = s.default_camera();
+    let mut rs = settings(
+        env_or("CV_W", 96),
+        env_or("CV_H", 72),
+        env_or("CV_VPLS", 2048),
+        env_or("CV_SEED", 1),
+    );
+    rs.frame.clamp = env_or("CV_CLAMP", rs.frame.clamp);
+    let reference = r.render(&cam, &rs).unwrap();
+    let cs = CvrtgiSettings {
+        voxel_res: env_or("CV_RES", 32),
+        cluster_step: env_or("CV_STEP", 8),
+        ..Default::default()
+    };
+    let mut pass = Cvrtgi::new();
+    let (ind, report) = cvrtgi_indirect(&ctx, &mut r, &mut pass, &cs, rs.frame.clamp);
+    println!("{report:?}");
+    let geo = pass.geometry().unwrap();
+    let light = pass.light().unwrap();
+    let (v, faces, rays) = (&geo.voxels, &geo.faces, geo.rays as usize);
+    let cpu = common::cpu_scene(&r, &r.scene);
+    let vpls = &r.vpl_set.as_ref().unwrap().set.vpls;
+    let d_min = rs.frame.clamp * r.scene.extent();
+    let d_min2 = d_min * d_min;
+    let k = r.output_scale;
+    let gbuf = r.last_gbuffer().unwrap();
+    let sps: Vec<ShadingPoint> = (0..gbuf.len() / 4)
+        .map(|px| ShadingPoint::from_gpu(&gbuf[px * 4..px * 4 + 4]))
+        .collect();
+    let gathered = pass.read_faces(&ctx, &light.gathered).unwrap();
+    let filtered = pass.read_faces(&ctx, &light.filtered).unwrap();
+    let vis = pass.read_visibility(&ctx).unwrap();
+    let slot = pass.read_slot_flux(&ctx).unwrap();
+    let nf = faces.voxel_dir.len();
+    // The exact irradiance of every face the pixels read (Eq. 5 without ρ/π at the face's point,
+    // normal its axis, every VPL with its shadow ray), and of every face for the flux balance.
+    let exact_face = |f: usize| -> Vec3 {
+        let vd = faces.voxel_dir[f];
+        let x = v.voxels[(vd / 6) as usize].pos;
+        let n = voxel::face_axis(vd % 6);
+        vpls.iter()
+            .map(|l| {
+                let e = twin::face_irradiance(x, n, l, d_min2);
+                if e.max_element() > 0.0 && cpu.vpl_visible(x, n, l) {
+                    e
+                } else {
+                    Vec3::ZERO
+                }
+            })
+            .sum()
+    };
+    let mut read = vec![false; nf];
+    let reads: Vec<Vec<(u32, f32)>> = sps
+        .iter()
+        .map(|sp| {
+            if sp.valid {
+                faces_read(v, faces, sp)
+            } else {
+                Vec::new()
+            }
+        })
+        .collect();
+    for r in &reads {
+        for &(f, _) in r {
+            read[f as usize] = true;
+        }
+    }
+    let all = std::env::var("CV_ALL_FACES").is_ok();
+    use rayon::prelude::*;
+    let exact: Vec<Vec3> = (0..nf)
+        .into_par_iter()
+        .map(|f| {
+            if read[f] || all {
+                exact_face(f)
+            } else {
+                Vec3::ZERO
+            }
+        })
+        .collect();
+    let mut filt_exact = exact.clone();
+    for _ in 0..cs.filter_passes {
+        filt_exact = (0..nf)
+            .map(|f| twin::filter_face(v, faces, &filt_exact, f as u32, cs.filter_radius))
+            .collect();
+    }
+    let lum = |c: Vec3| fuzzy_vpl::metrics::luminance(c.into());
+    let image = |irr: &[Vec3]| -> Vec<f32> {
+        sps.iter()
+            .map(|sp| lum(twin::lookup_pixel(v, faces, irr, sp) * k))
+            .collect()
+    };
+    let mean = |x: &[f32]| x.iter().map(|&a| a as f64).sum::<f64>() / x.len() as f64;
+    let refl: Vec<f32> = reference
+        .indirect
+        .iter()
+        .map(|p| lum(Vec3::from(*p)))
+        .collect();
+    let cv: Vec<f32> = ind.iter().map(|p| lum(Vec3::from(*p))).collect();
+    // The CPU twins' whole chain on the GPU's lists and scales (a GPU-only error would show here).
+    let near = cs.near_voxels * v.grid.size;
+    let mut twin_chain: Vec<Vec3> = (0..nf)
+        .map(|f| {
+            let list = &vis[f * rays..(f + 1) * rays];
+            let m = cs.cluster_gather;
+            twin::gather_face(v, faces, &light.lighting, (f as u32, list), m, near, d_min2)
+        })
+        .collect();
+    for _ in 0..cs.filter_passes {
+        twin_chain = (0..nf)
+            .map(|f| twin::filter_face(v, faces, &twin_chain, f as u32, cs.filter_radius))
+            .collect();
+    }
+    // Not shipped: the conserved gather with the clamp counted in what a VPL sends (an escape ray
+    // meeting a surface at t delivers min(1, t²/d_min²) of its share, the clamped Eq. 5's flux on
+    // that surface), the twins' chain on the GPU's lists and slot fluxes.
+    let reach = fuzzy_vpl::method::cvrtgi::ESCAPE_REACH * v.grid.size;
+    let mut clamped = light.lighting.clone();
+    clamped.sent.iter_mut().for_each(|x| *x = 0.0);
+    for (i, vpl) in vpls.iter().enumerate() {
+        let p = Vec3::from_slice(&vpl.pos[..3]);
+        let n = Vec3::from_slice(&vpl.nrm[..3]);
+        let Some(c) = v
+            .at_surface(p, -n)
+            .map(|u| v.voxels[u as usize].cluster)
+            .filter(|&c| c != INVALID)
+        else {
+            continue;
+        };
+        let o = p + n * (cpu.info.eps + 4e-6 * p.abs().max_element());
+        let mut delivered = 0.0f32;
+        for j in 0..cs.escape_rays {
+            let d = twin::escape_ray(i as u32, n, j, cs.escape_rays);
+            if let Some(h) = r.bvh.closest(o.into(), d.into(), 0.0, f32::MAX)
+                && h.t >= reach
+            {
+                delivered += if d_min2 > 0.0 {
+                    (h.t * h.t / d_min2).min(1.0)
+                } else {
+                    1.0
+                };
+            }
+        }
+        let f = (vpl.flux[0] + vpl.flux[1] + vpl.flux[2]).max(0.0);
+        clamped.sent[c as usize] += f * delivered / cs.escape_rays.max(1) as f32;
+    }
+    let sc = twin::conservation_scales(&clamped, &vis, &slot, rays);
+    twin::set_scales(&mut clamped, &sc);
+    let mut clamp_chain: Vec<Vec3> = (0..nf)
+        .map(|f| {
+            let list = &vis[f * rays..(f + 1) * rays];
+            let m = cs.cluster_gather;
+            twin::gather_face(v, faces, &clamped, (f as u32, list), m, near, d_min2)
+        })
+        .collect();
+    for _ in 0..cs.filter_passes {
+        clamp_chain = (0..nf)
+            .map(|f| twin::filter_face(v, faces, &clamp_chain, f as u32, cs.filter_radius))
+            .collect();
+    }
+    let rows = [
+        ("reference (per pixel, exact)", refl.clone()),
+        (
+            "not shipped: the clamp counted in the sent flux",
+            image(&clamp_chain),
+        ),
+        ("CPU twins' gather, filter, lookup", image(&twin_chain)),
+        ("lookup of exact face irradiance, no filter", image(&exact)),
+        (
+            "lookup of exact face irradiance, filtered",
+            image(&filt_exact),
+        ),
+        ("lookup of the gather, no filter", image(&gathered)),
+        ("cvrtgi as shipped (gather, filter, lookup)", cv.clone()),
+    ];
+    let m0 = mean(&refl);
+    // The reference's sum on the CPU at the pixel, with the pixel's normal and with the face axis.
+    let at_pixel = |axis: bool| -> Vec<f32> {
+        sps.par_iter()
+            .map(|sp| {
+                if !sp.valid {
+                    return 0.0;
+                }
+                let n = if axis {
+                    voxel::face_axis(voxel::dominant_face(sp.normal))
+                } else {
+                    sp.normal
+                };
+                let e: Vec3 = vpls
+                    .iter()
+                    .map(|l| {
+                        let e = twin::face_irradiance(sp.pos, n, l, d_min2);
+                        if e.max_element() > 0.0 && cpu.vpl_visible(sp.pos, n, l) {
+                            e
+                        } else {
+                            Vec3::ZERO
+                        }
+                    })
+                    .sum();
+                lum(sp.albedo / std::f32::consts::PI * e * k)
+            })
+            .collect()
+    };
+    let mut rows = rows.to_vec();
+    if std::env::var("CV_PIXELS").is_ok() {
+        let (own, axis) = (at_pixel(false), at_pixel(true));
+        let mut hist = [0usize; 10];
+        for sp in sps.iter().filter(|sp| sp.valid) {
+            let deg = sp
+                .normal
+                .abs()
+                .max_element()
+                .clamp(-1.0, 1.0)
+                .acos()
+                .to_degrees();
+            hist[((deg / 6.0) as usize).min(9)] += 1;
+        }
+        println!("pixels by the angle of their normal to its axis (6° bins): {hist:?}");
+        // Pixels whose normal is within 2.6° of an axis (|n_dominant| > 0.999) and the others.
+        for aligned in [true, false] {
+            let idx: Vec<usize> = (0..sps.len())
+                .filter(|&i| sps[i].valid && (sps[i].normal.abs().max_element() > 0.999) == aligned)
+                .collect();
+            let s = |x: &[f32]| idx.iter().map(|&i| x[i] as f64).sum::<f64>();
+            println!(
+                "pixels {} an axis: {:5} px, {:.1}% of the reference; face axis / own normal {:.4}, exact faces {:.4}, cvrtgi {:.4} (of the reference there)",
+                if aligned { "on" } else { "off" },
+                idx.len(),
+                100.0 * s(&refl) / (m0 * sps.len() as f64),
+                s(&axis) / s(&own),
+                s(&image(&exact)) / s(&refl),
+                s(&cv) / s(&refl)
+            );
+        }
+        rows.insert(1, ("CPU Eq. 5 at the pixel, its normal", own));
+        rows.insert(2, ("CPU Eq. 5 at the pixel, the face axis", axis));
+    }
+    for (what, img) in &rows {
+        println!(
+            "{what:48} mean {:.5e} ratio {:.4}",
+            mean(img),
+            mean(img) / m0
+        );
+    }
+    // Per face read by pixels: gather / exact, weighted by the pixels' weights on it.
+    let mut wf = vec![0.0f64; nf];
+    for r in &reads {
+        let ws: f32 = r.iter().map(|x| x.1).sum();
+        for &(f, w) in r {
+            wf[f as usize] += (w / ws.max(1e-30)) as f64;
+        }
+    }
+    let (mut ge, mut ee, mut fe) = (0.0f64, 0.0f64, 0.0f64);
+    for f in 0..nf {
+        ge += wf[f] * lum(gathered[f]) as f64;
+        fe += wf[f] * lum(filtered[f]) as f64;
+        ee += wf[f] * lum(exact[f]) as f64;
+    }
+    println!(
+        "faces read, pixel-weighted: gather/exact {:.4}, filtered/exact {:.4}",
+        ge / ee,
+        fe / ee
+    );
+    // By the pixel's dominant normal direction.
+    let dirs = ["+x", "-x", "+y", "-y", "+z", "-z"];
+    let ex_img = image(&exact);
+    for d in 0..6u32 {
+        let idx: Vec<usize> = (0..sps.len())
+            .filter(|&i| sps[i].valid && voxel::dominant_face(sps[i].normal) == d)
+            .collect();
+        if idx.is_empty() {
+            continue;
+        }
+        let s = |x: &[f32]| idx.iter().map(|&i| x[i] as f64).sum::<f64>() / sps.len() as f64;
+        println!(
+            "pixels facing {}: {:5} px, reference {:.3e} ({:.1}% of the mean), exact faces {:.3}, cvrtgi {:.3} (of the reference there)",
+            dirs[d as usize],
+            idx.len(),
+            s(&refl),
+            100.0 * s(&refl) / m0,
+            s(&ex_img) / s(&refl),
+            s(&cv) / s(&refl)
+        );
+    }
+    // Image tiles (4 × 3): cvrtgi / reference.
+    let (w, h) = (rs.frame.width as usize, rs.frame.height as usize);
+    for ty in 0..3 {
+        let mut line = String::new();
+        for tx in 0..4 {
+            let (mut a, mut b) = (0.0f64, 0.0f64);
+            for y in ty * h / 3..(ty + 1) * h / 3 {
+                for x in tx * w / 4..(tx + 1) * w / 4 {
+                    a += cv[y * w + x] as f64;
+                    b += refl[y * w + x] as f64;
+                }
+            }
+            line += &format!(" {:.3} ({:4.1}%)", a / b, 100.0 * b / (m0 * (w * h) as f64));
+        }
+        println!("tiles cvrtgi/reference (share of the reference):{line}");
+    }
+    // Ratio maps (4× upscaled PNGs: log2 of the ratio, blue −1 … red +1, grey where the
+    // reference is below 2% of its mean) and the exact-face image.
+    if let Ok(dir) = std::env::var("CV_OUT") {
+        let ratio_png = |img: &[f32], name: &str| {
+            let mut out = image::RgbImage::new(4 * w as u32, 4 * h as u32);
+            for (i, (&a, &b)) in img.iter().zip(&refl).enumerate() {
+                let px = if (b as f64) < 0.02 * m0 {
+                    [128, 128, 128]
+                } else {
+                    let t = ((a / b).max(1e-6).log2()).clamp(-1.0, 1.0);
+                    if t > 0.0 {
+                        [255, (255.0 * (1.0 - t)) as u8, (255.0 * (1.0 - t)) as u8]
+                    } else {
+                        [(255.0 * (1.0 + t)) as u8, (255.0 * (1.0 + t)) as u8, 255]
+                    }
+                };
+                let (x, y) = ((i % w) as u32, (i / w) as u32);
+                for dy in 0..4 {
+                    for dx in 0..4 {
+                        out.put_pixel(4 * x + dx, 4 * y + dy, image::Rgb(px));
+                    }
+                }
+            }
+            out.save(format!("{dir}/{name}.png")).unwrap();
+        };
+        ratio_png(&ex_img, "exact_faces_over_reference");
+        ratio_png(&cv, "cvrtgi_over_reference");
+        ratio_png(&image(&gathered), "gather_over_reference");
+        let grey = |img: &[f32], name: &str| {
+            let mut out = image::GrayImage::new(4 * w as u32, 4 * h as u32);
+            for (i, &a) in img.iter().enumerate() {
+                let g = (255.0 * (a as f64 / (4.0 * m0)).min(1.0).sqrt()) as u8;
+                let (x, y) = ((i % w) as u32, (i / w) as u32);
+                for dy in 0..4 {
+                    for dx in 0..4 {
+                        out.put_pixel(4 * x + dx, 4 * y + dy, image::Luma([g]));
+                    }
+                }
+            }
+            out.save(format!("{dir}/{name}.png")).unwrap();
+        };
+        grey(&refl, "reference");
+        grey(&cv, "cvrtgi");
+        grey(&ex_img, "exact_faces");
+    }
+    // Flux: what the clusters send, what the faces take (slot fluxes before and after the scales).
+    let l = &light.lighting;
+    let sent: f64 = l.sent.iter().map(|&x| x as f64).sum();
+    let (mut taken, mut taken_scaled) = (0.0f64, 0.0f64);
+    for f in 0..nf {
+        for j in 0..rays {
+            let c = vis[f * rays + j];
+            if c == INVALID {
+                break;
+            }
+            if l.clusters[c as usize][1][3].to_bits() == 0 {
+                continue;
+            }
+            taken += slot[f * rays + j] as f64;
+            taken_scaled += (slot[f * rays + j] * l.clusters[c as usize][2][3]) as f64;
+        }
+    }
+    let vpl_flux: f64 = vpls
+        .iter()
+        .map(|p| (p.flux[0] + p.flux[1] + p.flux[2]) as f64)
+        .sum();
+    println!(
+        "flux (r+g+b): VPLs {vpl_flux:.4e}, clusters send {sent:.4e}, faces take {taken:.4e} at scale 1, {taken_scaled:.4e} scaled"
+    );
+    if all {
+        let area = |f: usize| {
+            let vd = faces.voxel_dir[f];
+            let s = v.grid.size;
+            s * s
+                * v.voxels[(vd / 6) as usize]
+                    .normal
+                    .dot(voxel::face_axis(vd % 6))
+                    .abs()
+        };
+        let fx: f64 = (0..nf)
+            .map(|f| (area(f) * (exact[f].x + exact[f].y + exact[f].z)) as f64)
+            .sum();
+        let fg: f64 = (0..nf)
+            .map(|f| (area(f) * (gathered[f].x + gathered[f].y + gathered[f].z)) as f64)
+            .sum();
+        let fa: f64 = (0..nf).map(|f| area(f) as f64).sum();
+        let mut exposed_area = 0.0f64;
+        for x in &v.voxels {
+            if x.exposed != 0 {
+                exposed_area += x.area as f64;
+            }
+        }
+        // The conserved gather again with each face's area s² (the walls' geometric normals are
+        // their axes; the voxels' normals are the interpolated shading normals).
+        let mut flat = slot.clone();
+        for f in 0..nf {
+            let a = area(f);
+            for j in 0..rays {
+                if a > 0.0 {
+                    flat[f * rays + j] /= a / (v.grid.size * v.grid.size);
+                }
+            }
+        }
+        let mut l2 = light.lighting.clone();
+        let sc = twin::conservation_scales(&l2, &vis, &flat, rays);
+        twin::set_scales(&mut l2, &sc);
+        let g2: Vec<Vec3> = (0..nf)
+            .map(|f| {
+                twin::gather_face(
+                    v,
+                    faces,
+                    &l2,
+                    (f as u32, &vis[f * rays..(f + 1) * rays]),
+                    cs.cluster_gather,
+                    near,
+                    d_min2,
+                )
+            })
+            .collect();
+        let mut f2 = g2.clone();
+        for _ in 0..cs.filter_passes {
+            f2 = (0..nf)
+                .map(|f| twin::filter_face(v, faces, &f2, f as u32, cs.filter_radius))
+                .collect();
+        }
+        println!(
+            "with face area s²: gather {:.4}, shipped chain {:.4}",
+            mean(&image(&g2)) / m0,
+            mean(&image(&f2)) / m0
+        );
+        let fx2: f64 = (0..nf)
+            .map(|f| ((v.grid.size * v.grid.size) * (exact[f].x + exact[f].y + exact[f].z)) as f64)
+            .sum();
+        println!(
+            "flux over all faces, s² × E exact: {:.4} of sent",
+            fx2 / sent
+        );
+        println!("area: faces s²|axis·n| {fa:.4e}, fragments of exposed voxels {exposed_area:.4e}");
+        println!(
+            "flux over all faces, s²|axis·n| × E: exact {fx:.4e} ({:.4} of sent), gathered {fg:.4e} ({:.4})",
+            fx / sent,
+            fg / sent
+        );
+    }
+}
