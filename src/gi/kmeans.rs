@@ -264,19 +264,25 @@ impl KmCounters {
             reps_kept: words[16],
         }
     }
+
+    /// Reads a clustering's `bounds` back (a small read that waits for the clustering: on request
+    /// only) and decodes them (`from_words`).
+    pub fn read(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        bounds: &wgpu::Buffer,
+        warm: bool,
+    ) -> Result<KmCounters> {
+        let words: Vec<u32> = crate::gpu::read_buffer(device, queue, bounds, BOUND_WORDS)?;
+        Ok(KmCounters::from_words(&words, warm))
+    }
 }
 
 impl Clustering {
     /// Its counts, read back from the GPU (a small read that waits for the clustering: on request
     /// only, for the stats and tests).
     pub fn counters(&self, ctx: &GpuContext) -> Result<KmCounters> {
-        self.counters_with(&ctx.device, &ctx.queue)
-    }
-
-    /// `counters` on a device's own handles (another thread's clones).
-    pub fn counters_with(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<KmCounters> {
-        let words: Vec<u32> = crate::gpu::read_buffer(device, queue, &self.bounds, BOUND_WORDS)?;
-        Ok(KmCounters::from_words(&words, self.warm))
+        KmCounters::read(&ctx.device, &ctx.queue, &self.bounds, self.warm)
     }
 
     pub fn k(&self) -> u32 {

@@ -95,10 +95,8 @@ pub struct ResolvedCounts {
 impl PendingCounts {
     /// Reads them back (a wait for the frame's clustering and 68 bytes).
     pub fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<ResolvedCounts> {
-        let words: Vec<u32> = crate::gpu::read_buffer(device, queue, &self.bounds, 17)?;
-        Ok(self.resolve(&crate::gi::kmeans::KmCounters::from_words(
-            &words, self.warm,
-        )))
+        let k = crate::gi::kmeans::KmCounters::read(device, queue, &self.bounds, self.warm)?;
+        Ok(self.resolve(&k))
     }
 
     /// The counts from the clustering's.
