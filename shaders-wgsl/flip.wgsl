@@ -312,6 +312,20 @@ fn filter_y(@builtin(global_invocation_id) id: vec3<u32>) {
     flip_map[y * width() + x] = pow0(cd, 1.0 - fd);
 }
 
+// The sum of every invocation's `s` over the workgroup (a tree in `wg_sum`); every invocation
+// calls it, and gets the sum.
+fn workgroup_sum(t: u32, s: f32) -> f32 {
+    wg_sum[t] = s;
+    workgroupBarrier();
+    for (var step = REDUCE / 2u; step > 0u; step = step / 2u) {
+        if (t < step) {
+            wg_sum[t] = wg_sum[t] + wg_sum[t + step];
+        }
+        workgroupBarrier();
+    }
+    return wg_sum[0];
+}
+
 // The sum of the map over this workgroup's pixels into sums[1 + workgroup].
 @compute @workgroup_size(256)
 fn mean_partial(@builtin(local_invocation_index) t: u32, @builtin(workgroup_id) wg: vec3<u32>,
@@ -322,16 +336,9 @@ fn mean_partial(@builtin(local_invocation_index) t: u32, @builtin(workgroup_id) 
     if (i < pixels()) {
         s = flip_map[i];
     }
-    wg_sum[t] = s;
-    workgroupBarrier();
-    for (var step = REDUCE / 2u; step > 0u; step = step / 2u) {
-        if (t < step) {
-            wg_sum[t] = wg_sum[t] + wg_sum[t + step];
-        }
-        workgroupBarrier();
-    }
+    let total = workgroup_sum(t, s);
     if (t == 0u) {
-        sums[1u + group] = wg_sum[0];
+        sums[1u + group] = total;
     }
 }
 
@@ -343,16 +350,9 @@ fn mean_final(@builtin(local_invocation_index) t: u32) {
     for (var g = t; g < groups; g = g + REDUCE) {
         s = s + sums[1u + g];
     }
-    wg_sum[t] = s;
-    workgroupBarrier();
-    for (var step = REDUCE / 2u; step > 0u; step = step / 2u) {
-        if (t < step) {
-            wg_sum[t] = wg_sum[t] + wg_sum[t + step];
-        }
-        workgroupBarrier();
-    }
+    let total = workgroup_sum(t, s);
     if (t == 0u) {
-        sums[0] = wg_sum[0] / f32(max(pixels(), 1u));
+        sums[0] = total / f32(max(pixels(), 1u));
     }
 }
 
