@@ -812,6 +812,31 @@ fn scene_files_that_are_not_regular_files_are_refused() {
     }
 }
 
+/// `render builtin:cornell` with `frame` and `extra` and one direct sample, into `o`, which must
+/// exit 0; its stats JSON (written to `stats`).
+fn render_stats(
+    o: &std::path::Path,
+    stats: &std::path::Path,
+    frame: &[&str],
+    extra: &[&str],
+) -> serde_json::Value {
+    let mut args = vec![
+        "render",
+        "builtin:cornell",
+        "-o",
+        o.to_str().unwrap(),
+        "--stats",
+        stats.to_str().unwrap(),
+        "--direct-samples",
+        "1",
+    ];
+    args.extend_from_slice(frame);
+    args.extend_from_slice(extra);
+    let (code, _, err) = run(&args);
+    assert_eq!(code, 0, "{extra:?}: {err}");
+    serde_json::from_slice(&std::fs::read(stats).unwrap()).unwrap()
+}
+
 /// `--gamma auto` (the default) writes the rule's γ for the frame's size and K into the stats, and the
 /// k-means samples with it; a γ asked is written as asked.
 #[test]
@@ -820,13 +845,7 @@ fn auto_gamma_is_written_as_chosen() {
     let o = d.join("a.png");
     let stats = d.join("a.json");
     let render = |extra: &[&str]| -> serde_json::Value {
-        let mut args = vec![
-            "render",
-            "builtin:cornell",
-            "-o",
-            o.to_str().unwrap(),
-            "--stats",
-            stats.to_str().unwrap(),
+        let frame = [
             "--width",
             "400",
             "--height",
@@ -837,13 +856,8 @@ fn auto_gamma_is_written_as_chosen() {
             "512",
             "--vpl-clusters",
             "64",
-            "--direct-samples",
-            "1",
         ];
-        args.extend_from_slice(extra);
-        let (code, _, err) = run(&args);
-        assert_eq!(code, 0, "{extra:?}: {err}");
-        serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap()
+        render_stats(&o, &stats, &frame, extra)
     };
     // 120,000 pixels, K 100: 40 a cluster allows 30, 19,200 in all allows 6.
     for extra in [&[][..], &["--gamma", "auto"][..]] {
@@ -872,26 +886,8 @@ fn paper_sets_the_papers_choices_and_given_options_win() {
     let o = d.join("p.exr");
     let stats = d.join("p.json");
     let render = |extra: &[&str]| -> serde_json::Value {
-        let mut args = vec![
-            "render",
-            "builtin:cornell",
-            "-o",
-            o.to_str().unwrap(),
-            "--stats",
-            stats.to_str().unwrap(),
-            "--width",
-            "96",
-            "--height",
-            "72",
-            "--vpls",
-            "256",
-            "--direct-samples",
-            "1",
-        ];
-        args.extend_from_slice(extra);
-        let (code, _, err) = run(&args);
-        assert_eq!(code, 0, "{extra:?}: {err}");
-        serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap()
+        let frame = ["--width", "96", "--height", "72", "--vpls", "256"];
+        render_stats(&o, &stats, &frame, extra)
     };
     let s = &render(&["--paper"])["settings"];
     assert_eq!(s["paper"], true);

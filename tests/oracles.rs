@@ -1023,6 +1023,18 @@ fn light_list_flux_sums_to_the_vpls_flux() {
     );
 }
 
+/// `set`'s VPLs clustered into one VPL-cluster light (K_VPL 1) by the GPU.
+fn one_cluster(g: &mut Gpu, set: &VplSet) -> vpl_cluster::LightList {
+    let s = KMeansSettings {
+        k: 1,
+        ..oracle_settings(1, 1.0, false)
+    };
+    let frame = (Vec3::splat(-1.0), Vec3::splat(5.0));
+    let list = vpl_cluster::cluster(g, &KMeans::new(), set, &s, frame, None).unwrap();
+    assert_eq!(list.lights.len(), 1);
+    list
+}
+
 /// The near-field spike of a VPL-cluster light (Sponza's, docs/methods.md "Indirect light, per
 /// method"), by hand: VPLs A (0,0,0), C (1,0,0), B (4,0,0), normals +y, flux 1 each, as one cluster
 /// (K = 1): the representative is C, nearest the centroid (5/3, 0, 0); the other members' share is
@@ -1044,19 +1056,13 @@ fn a_cluster_light_spread_over_its_members_has_no_near_field_spike() {
         vpls: vpls.clone(),
         paths: 3,
     };
-    let s = KMeansSettings {
-        k: 1,
-        ..oracle_settings(1, 1.0, false)
-    };
     let mut prof = Profiler::new(&ctx);
     let mut g = Gpu {
         ctx: &ctx,
         scene: &gpu,
         profiler: &mut prof,
     };
-    let frame = (Vec3::splat(-1.0), Vec3::splat(5.0));
-    let list = vpl_cluster::cluster(&mut g, &KMeans::new(), &set, &s, frame, None).unwrap();
-    assert_eq!(list.lights.len(), 1);
+    let list = one_cluster(&mut g, &set);
     let l = list.lights[0];
     assert_eq!(l.pos, vpls[1].pos, "the representative is C");
     assert_eq!(l.flux, [3.0, 3.0, 3.0, 2.0 / 3.0]);
@@ -1121,19 +1127,13 @@ fn a_two_vpl_cluster_as_point_or_spread_light_by_hand() {
         vpls: vpls.clone(),
         paths: 2,
     };
-    let s = KMeansSettings {
-        k: 1,
-        ..oracle_settings(1, 1.0, false)
-    };
     let mut prof = Profiler::new(&ctx);
     let mut g = Gpu {
         ctx: &ctx,
         scene: &gpu,
         profiler: &mut prof,
     };
-    let frame = (Vec3::splat(-1.0), Vec3::splat(5.0));
-    let list = vpl_cluster::cluster(&mut g, &KMeans::new(), &set, &s, frame, None).unwrap();
-    assert_eq!(list.lights.len(), 1);
+    let list = one_cluster(&mut g, &set);
     let l = list.lights[0];
     assert_eq!(l.pos, vpls[0].pos, "the representative is A");
     let f4 = 4.0 * PI2;

@@ -493,23 +493,8 @@ fn split_and_diff_views_show_a_and_b() {
     let (w, h) = (160usize, 120usize);
     let shot = |name: &str, extra: &[&str]| {
         let exr = dir.join(format!("{name}.exr"));
-        let mut args = vec![
-            "builtin:cornell",
-            "--width",
-            "160",
-            "--height",
-            "120",
-            "--vpls",
-            "512",
-            "--sp-clusters",
-            "64",
-            "--vpl-clusters",
-            "64",
-            "--frames",
-            "3",
-            "--screenshot",
-            exr.to_str().unwrap(),
-        ];
+        let mut args = common::CORNELL_160.to_vec();
+        args.extend(["--frames", "3", "--screenshot", exr.to_str().unwrap()]);
         args.extend(extra);
         let out = view(&x, &dir, &args);
         let err = String::from_utf8_lossy(&out.stderr);
@@ -555,19 +540,7 @@ fn split_and_diff_views_show_a_and_b() {
 fn offscreen_viewer_runs_without_a_display_and_shows_what_render_writes() {
     let dir = std::env::temp_dir().join(format!("fuzzy-vpl-offscreen-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let common = [
-        "builtin:cornell",
-        "--width",
-        "160",
-        "--height",
-        "120",
-        "--vpls",
-        "512",
-        "--sp-clusters",
-        "64",
-        "--vpl-clusters",
-        "64",
-    ];
+    let common = common::CORNELL_160;
     let run_on = |path: &str, extra: &[&str]| {
         Command::new(env!("CARGO_BIN_EXE_fuzzy-vpl"))
             .env_remove("DISPLAY")

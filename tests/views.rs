@@ -20,22 +20,25 @@ const H: u32 = 120;
 /// A fixed exposure (the automatic one of this frame is 2.76), so that no reduction decides it.
 const EXPOSURE: f32 = 2.5;
 
-/// The settings every run shares: `builtin:cornell` 160 × 120, 512 VPLs, K_SP 64, K_VPL 64.
-const COMMON: [&str; 13] = [
-    "builtin:cornell",
-    "--width",
-    "160",
-    "--height",
-    "120",
-    "--vpls",
-    "512",
-    "--sp-clusters",
-    "64",
-    "--vpl-clusters",
-    "64",
-    "--exposure",
-    "2.5",
-];
+/// The settings every run shares: `common::CORNELL_160` at the fixed exposure.
+const COMMON: [&str; 13] = {
+    let c = common::CORNELL_160;
+    [
+        c[0],
+        c[1],
+        c[2],
+        c[3],
+        c[4],
+        c[5],
+        c[6],
+        c[7],
+        c[8],
+        c[9],
+        c[10],
+        "--exposure",
+        "2.5",
+    ]
+};
 
 /// `fuzzy-vpl ARGS`, which must exit 0.
 fn run(dir: &Path, args: &[&str]) {

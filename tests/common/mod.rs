@@ -114,6 +114,22 @@ pub enum Family {
     Apple,
 }
 
+/// The viewer tests' small frame (`view` and `render` arguments): `builtin:cornell` at 160 × 120,
+/// 512 VPLs, K_SP 64, K_VPL 64.
+pub const CORNELL_160: [&str; 11] = [
+    "builtin:cornell",
+    "--width",
+    "160",
+    "--height",
+    "120",
+    "--vpls",
+    "512",
+    "--sp-clusters",
+    "64",
+    "--vpl-clusters",
+    "64",
+];
+
 /// The Mesa release lavapipe's bounds were measured on (`.ci/run` installs it): lavapipe of another
 /// release is an unmeasured adapter.
 pub const MEASURED_MESA: &str = "Mesa 22.3.6";
