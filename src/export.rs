@@ -164,12 +164,12 @@ pub fn write_atomic_by_path(
 /// The temporary file (created new, removed on an error or on SIGINT, SIGTERM or SIGHUP), `fill`
 /// given its path and handle, then the rename, if `path` is still absent or a regular file.
 fn atomically(path: &Path, fill: impl FnOnce(&Path, std::fs::File) -> Result<()>) -> Result<()> {
-    let fail = |why: String| crate::cli::bad(format!("{}: cannot write: {why}", path.display()));
+    let fail = |why: String| crate::input::bad(format!("{}: cannot write: {why}", path.display()));
     let dir = folder_of(path);
     if path.file_name().is_none() {
         return Err(fail("not a file name".into()));
     }
-    refuse_non_regular(path).map_err(crate::cli::bad)?;
+    refuse_non_regular(path).map_err(crate::input::bad)?;
     if let Some(input) = crate::files::input_at(path) {
         return Err(fail(format!("it is {input}, an input of this run")));
     }
@@ -196,7 +196,7 @@ fn atomically(path: &Path, fill: impl FnOnce(&Path, std::fs::File) -> Result<()>
         }
     };
     fill(&tmp.path, file).map_err(|e| fail(crate::panic_guard::one_line(&format!("{e:#}"))))?;
-    refuse_non_regular(path).map_err(crate::cli::bad)?;
+    refuse_non_regular(path).map_err(crate::input::bad)?;
     std::fs::rename(&tmp.path, path).map_err(|e| fail(e.to_string()))?;
     tmp.renamed = true;
     Ok(())
@@ -318,7 +318,7 @@ pub const MAX_IMAGE_FILE_BYTES: u64 = 2 << 30;
 /// The bytes of image file `path`: a regular file of at most `MAX_IMAGE_FILE_BYTES`.
 fn image_bytes(path: &Path) -> Result<Vec<u8>> {
     crate::files::read_regular(path, MAX_IMAGE_FILE_BYTES, "an image file")
-        .map_err(|e| crate::cli::bad(format!("{}: cannot read: {e}", path.display())))
+        .map_err(|e| crate::input::bad(format!("{}: cannot read: {e}", path.display())))
 }
 
 /// Decodes an image's bytes as linear RGB (8-bit formats as stored, without the sRGB transfer).
@@ -326,7 +326,7 @@ fn decode_rgb32f(path: &Path, bytes: &[u8]) -> Result<(u32, u32, Vec<[f32; 3]>)>
     let img = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()?
         .decode()
-        .map_err(|e| crate::cli::bad(format!("{}: not a readable image: {e}", path.display())))?
+        .map_err(|e| crate::input::bad(format!("{}: not a readable image: {e}", path.display())))?
         .into_rgb32f();
     let (w, h) = img.dimensions();
     let px = img.pixels().map(|p| p.0).collect();
@@ -351,7 +351,7 @@ pub fn read_linear_exr(path: &Path) -> Result<(u32, u32, Vec<[f32; 3]>)> {
             Err(_) if bytes.is_empty() => "empty".into(),
             Err(_) => "not an image fuzzy-vpl knows".into(),
         };
-        return Err(crate::cli::bad(format!(
+        return Err(crate::input::bad(format!(
             "{}: the reference must be an OpenEXR file (linear radiance, as `render -o X.exr` writes); it is {what}",
             path.display()
         )));

@@ -47,6 +47,7 @@ pub mod exposure;
 pub mod files;
 pub mod gi;
 pub mod gpu;
+pub mod input;
 pub mod method;
 pub mod metrics;
 pub mod panic_guard;
@@ -58,7 +59,6 @@ pub mod stats;
 
 pub use gpu::GpuContext;
 pub use method::{Method, MethodSettings};
-pub use render::frame::{Frame, GpuFrame};
-pub use render::pipeline::{RenderSettings, Renderer};
+pub use render::{Frame, GpuFrame, RenderSettings, Renderer};
 pub use scene::{Camera, Scene};
 pub use settings::{ClusterSettings, FrameSettings, Weighting};

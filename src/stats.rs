@@ -7,7 +7,7 @@ use serde::Serialize;
 use crate::exposure::Exposure;
 use crate::method::MethodSettings;
 use crate::metrics;
-use crate::render::pipeline::{Frame, RenderSettings};
+use crate::render::{Frame, RenderSettings};
 use crate::scene::Scene;
 use crate::settings::{ClusterSettings, FrameSettings, Gamma, LightSettings};
 

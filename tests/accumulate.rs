@@ -6,8 +6,9 @@ mod common;
 
 use fuzzy_vpl::cpu::accumulate as twin;
 use fuzzy_vpl::gi::accumulate::AccumulateParams;
+use fuzzy_vpl::gi::pass::Pass;
 use fuzzy_vpl::gi::primary::CameraParams;
-use fuzzy_vpl::render::pipeline::{Pass, RenderSettings, Renderer};
+use fuzzy_vpl::render::{RenderSettings, Renderer};
 use fuzzy_vpl::scene;
 use fuzzy_vpl::settings::{ClusterSettings, FrameSettings};
 use glam::Vec3;

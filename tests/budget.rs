@@ -13,9 +13,10 @@ mod common;
 
 use std::sync::Mutex;
 
+use fuzzy_vpl::gi::pass::Pass;
 use fuzzy_vpl::render::budget::{self, Budget, Split};
-use fuzzy_vpl::render::frame::{FRAME_KEY, Frame};
-use fuzzy_vpl::render::pipeline::{Pass, RenderSettings, Renderer};
+use fuzzy_vpl::render::{FRAME_KEY, Frame};
+use fuzzy_vpl::render::{RenderSettings, Renderer};
 use fuzzy_vpl::scene;
 use fuzzy_vpl::settings::FrameSettings;
 

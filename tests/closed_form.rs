@@ -14,7 +14,7 @@
 
 mod common;
 
-use fuzzy_vpl::render::pipeline::{RenderSettings, Renderer};
+use fuzzy_vpl::render::{RenderSettings, Renderer};
 use fuzzy_vpl::scene::{Camera, LightKind, Material, PunctualLight, Scene, Triangle};
 use fuzzy_vpl::settings::FrameSettings;
 use glam::{Vec2, Vec3, Vec4};

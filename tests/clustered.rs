@@ -6,8 +6,10 @@ mod common;
 use fuzzy_vpl::cpu::kmeans::RepPoint;
 use fuzzy_vpl::cpu::shade;
 use fuzzy_vpl::gi::primary::ShadingPoint;
+use fuzzy_vpl::method::Method;
+use fuzzy_vpl::method::colom::Colom;
 use fuzzy_vpl::metrics::{mean_luminance, mse};
-use fuzzy_vpl::render::pipeline::{Frame, RenderSettings, Renderer};
+use fuzzy_vpl::render::{Frame, RenderSettings, Renderer};
 use fuzzy_vpl::scene::{self, Scene};
 #[allow(unused_imports)]
 use fuzzy_vpl::settings::{ClusterSettings, FrameSettings, Gamma, Weighting};
@@ -493,7 +495,7 @@ fn work_per_submission_does_not_change_the_image() {
     );
 }
 
-/// The shade pass's pattern table (`PATTERNS`, gi::shade::patterns) changes how Ṽ is found, never
+/// The shade pass's pattern table (`PATTERNS`, method::colom::shade::patterns) changes how Ṽ is found, never
 /// the image: with 0 (Ṽ per light), 1, 3 and 8 patterns a word the indirect light is bit-identical,
 /// in Eq. (9) and Eq. (8) mode, at F 6 and F 16 (more patterns than the table holds), on the
 /// conference room (shadow edges under the table and chairs give words several patterns).
@@ -513,7 +515,8 @@ fn the_pattern_table_does_not_change_the_image() {
         rs.cluster.fuzziness = f;
         let mut images = Vec::new();
         for patterns in [0, 1, 3, 8] {
-            r.set_shade_patterns(patterns);
+            let colom = r.method_state_mut::<Colom>(Method::Colom).unwrap();
+            colom.set_shade_patterns(patterns);
             let frame = r.render(&cam, &rs).unwrap();
             assert!(common::all_finite(&frame.radiance));
             images.push(frame.indirect);

@@ -14,7 +14,7 @@ use fuzzy_vpl::method::cvrtgi::settings::{ClusterGather, CvrtgiSettings};
 use fuzzy_vpl::method::cvrtgi::voxel::{self, Grid, SlicSettings, Voxels, eq1_within_angle};
 use fuzzy_vpl::method::cvrtgi::{Cvrtgi, CvrtgiInputs, CvrtgiReport};
 use fuzzy_vpl::metrics::mean_luminance;
-use fuzzy_vpl::render::pipeline::{Frame, RenderSettings, Renderer};
+use fuzzy_vpl::render::{Frame, RenderSettings, Renderer};
 use fuzzy_vpl::scene::{self, Camera};
 use fuzzy_vpl::settings::FrameSettings;
 use std::collections::BTreeMap;

@@ -10,7 +10,7 @@ use fuzzy_vpl::app::views::View;
 use fuzzy_vpl::cpu::display as twin;
 use fuzzy_vpl::exposure::Exposure;
 use fuzzy_vpl::gpu::{GpuContext, read_texture, traffic::Traffic};
-use fuzzy_vpl::render::pipeline::{RenderSettings, Renderer};
+use fuzzy_vpl::render::{RenderSettings, Renderer};
 use fuzzy_vpl::settings::{ClusterSettings, FrameSettings, Weighting};
 use fuzzy_vpl::{Frame, scene};
 

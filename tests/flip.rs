@@ -258,7 +258,7 @@ fn flip_pass_runs_under_default_limits() {
 /// one pixel in 2000, the mean 2e-7.
 #[test]
 fn display_flip_view_matches_views_flip() {
-    use fuzzy_vpl::render::pipeline::{RenderSettings, Renderer};
+    use fuzzy_vpl::render::{RenderSettings, Renderer};
     use fuzzy_vpl::settings::{ClusterSettings, FrameSettings};
     let ctx = common::gpu();
     let mut d = Display::new(&ctx.device);

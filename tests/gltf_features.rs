@@ -9,9 +9,10 @@
 mod common;
 
 use fuzzy_vpl::cpu::shade;
+use fuzzy_vpl::gi::pass::Pass;
 use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::gi::primary::ShadingPoint;
-use fuzzy_vpl::render::pipeline::{Frame, Pass, RenderSettings, Renderer};
+use fuzzy_vpl::render::{Frame, RenderSettings, Renderer};
 use fuzzy_vpl::scene::{Camera, LightKind, Material, PunctualLight, Scene, Texture, Triangle};
 #[allow(unused_imports)]
 use fuzzy_vpl::settings::{ClusterSettings, DEFAULT_CLAMP, FrameSettings, Gamma, Weighting};

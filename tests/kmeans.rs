@@ -10,7 +10,7 @@ use fuzzy_vpl::gi::dispatch::Gpu;
 use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KMeansTuning, KmParams, Points, scan_groups};
 use fuzzy_vpl::gi::scene_gpu::SceneGpu;
 use fuzzy_vpl::gpu::{GpuContext, profiler::Profiler};
-use fuzzy_vpl::render::pipeline::{RenderSettings, Renderer};
+use fuzzy_vpl::render::{RenderSettings, Renderer};
 use fuzzy_vpl::scene;
 #[allow(unused_imports)]
 use fuzzy_vpl::settings::{ClusterSettings, FrameSettings, Gamma};

@@ -7,6 +7,7 @@ use fuzzy_vpl::bvh::SceneBvh;
 use fuzzy_vpl::cpu::vpl::eq5_vpl_radiance;
 use fuzzy_vpl::cpu::wang as twin;
 use fuzzy_vpl::gi::dispatch::Gpu;
+use fuzzy_vpl::gi::pass::Pass;
 use fuzzy_vpl::gi::primary::ShadingPoint;
 use fuzzy_vpl::gi::scene_gpu::SceneGpu;
 use fuzzy_vpl::gpu::profiler::Profiler;
@@ -15,7 +16,7 @@ use fuzzy_vpl::method::wang::cluster::{ClusterParams, WangCluster, WangClusterin
 use fuzzy_vpl::method::wang::{self, WangFrame, WangMethod};
 use fuzzy_vpl::method::{Method, MethodSettings};
 use fuzzy_vpl::metrics;
-use fuzzy_vpl::render::pipeline::{Pass, RenderSettings, Renderer};
+use fuzzy_vpl::render::{RenderSettings, Renderer};
 use fuzzy_vpl::scene;
 use fuzzy_vpl::settings::{ClusterSettings, FrameSettings};
 use glam::Vec3;
@@ -185,7 +186,7 @@ fn wang_frame_matches_twin(
     name: &str,
     r: &Renderer,
     s: &scene::Scene,
-    (fs, f): (&RenderSettings, &fuzzy_vpl::render::pipeline::Frame),
+    (fs, f): (&RenderSettings, &fuzzy_vpl::render::Frame),
     iterations: u32,
     key: &str,
 ) {

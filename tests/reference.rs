@@ -8,7 +8,7 @@ use fuzzy_vpl::gi::pathtrace::{PathTrace, PtSamples};
 use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::gi::primary::ShadingPoint;
 use fuzzy_vpl::metrics::{mean_luminance, rel_mse};
-use fuzzy_vpl::render::pipeline::{Frame, RenderSettings, Renderer};
+use fuzzy_vpl::render::{Frame, RenderSettings, Renderer};
 use fuzzy_vpl::scene;
 #[allow(unused_imports)]
 use fuzzy_vpl::settings::{ClusterSettings, DEFAULT_CLAMP, FrameSettings, Gamma};
@@ -134,7 +134,7 @@ fn a_light_far_outside_the_scene_traces_without_a_panic() {
 fn reference_and_path_trace(
     ctx: &fuzzy_vpl::gpu::GpuContext,
     s: &scene::Scene,
-) -> (fuzzy_vpl::render::pipeline::Frame, Vec<[f32; 3]>) {
+) -> (fuzzy_vpl::render::Frame, Vec<[f32; 3]>) {
     let mut r = Renderer::new(ctx, s).unwrap();
     let cam = s.default_camera();
     let (w, h) = (32, 32);
@@ -225,7 +225,7 @@ fn path_trace_alone_in_scene_units() {
     let fs = reference(16, 12, 256, 3);
     let mut r = Renderer::new(&ctx, &s).unwrap();
     let f = r.path_trace(&s.default_camera(), &fs, 8).unwrap();
-    assert_eq!(f.passes, vec![fuzzy_vpl::render::pipeline::Pass::PathTrace]);
+    assert_eq!(f.passes, vec![fuzzy_vpl::gi::pass::Pass::PathTrace]);
     assert!(r.vpl_set.is_none(), "the VPL frame ran as well");
     assert!(common::all_finite(&f.radiance));
     let mut bright = s.clone();

@@ -5,7 +5,7 @@ mod common;
 use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::gi::primary::ShadingPoint;
 use fuzzy_vpl::metrics::mean_luminance;
-use fuzzy_vpl::render::pipeline::{Frame, RenderSettings, Renderer};
+use fuzzy_vpl::render::{Frame, RenderSettings, Renderer};
 use fuzzy_vpl::scene::{self, Scene};
 #[allow(unused_imports)]
 use fuzzy_vpl::settings::{ClusterSettings, FrameSettings, Gamma};

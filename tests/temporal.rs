@@ -11,7 +11,7 @@ use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KmParams, Points, Warm, warm
 use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::gi::scene_gpu::SceneGpu;
 use fuzzy_vpl::gpu::{GpuContext, profiler::Profiler};
-use fuzzy_vpl::render::pipeline::{Frame, RenderSettings, Renderer};
+use fuzzy_vpl::render::{Frame, RenderSettings, Renderer};
 #[allow(unused_imports)]
 use fuzzy_vpl::settings::{ClusterSettings, FrameSettings, Gamma, Weighting};
 use fuzzy_vpl::{metrics, scene};

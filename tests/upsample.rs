@@ -4,10 +4,11 @@
 mod common;
 
 use fuzzy_vpl::cpu::upsample as twin;
+use fuzzy_vpl::gi::pass::Pass;
 use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::gi::upsample::{UpsampleParams, indirect_size};
 use fuzzy_vpl::method::{Method, MethodSettings};
-use fuzzy_vpl::render::pipeline::{Pass, RenderSettings, Renderer};
+use fuzzy_vpl::render::{RenderSettings, Renderer};
 use fuzzy_vpl::scene;
 use fuzzy_vpl::settings::{ClusterSettings, FrameSettings};
 use glam::Vec3;

@@ -262,7 +262,7 @@ fn windows_wider_than_8192_px_present_and_wider_than_the_adapter_are_refused() {
 #[test]
 fn worker_replies_with_an_error_for_a_frame_too_large_for_the_device() {
     use fuzzy_vpl::app::worker::{FrameJob, Job, Loader, Reply, Source, Worker};
-    use fuzzy_vpl::render::pipeline::RenderSettings;
+    use fuzzy_vpl::render::RenderSettings;
     use fuzzy_vpl::settings::FrameSettings;
     let scene = fuzzy_vpl::scene::load("builtin:cornell").unwrap();
     let camera = scene.default_camera();

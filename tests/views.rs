@@ -12,7 +12,7 @@ use fuzzy_vpl::app::views::{self, View};
 use fuzzy_vpl::cpu::display as twin;
 use fuzzy_vpl::exposure::Exposure;
 use fuzzy_vpl::gi::primary::CameraParams;
-use fuzzy_vpl::render::pipeline::{RenderSettings, Renderer};
+use fuzzy_vpl::render::{RenderSettings, Renderer};
 use fuzzy_vpl::settings::{ClusterSettings, FrameSettings};
 
 const W: u32 = 160;

@@ -315,7 +315,7 @@ pub type KeyedImages<'a> = (String, &'a [[f32; 3]], &'a [[f32; 3]]);
 pub enum Source<'a> {
     Cpu(KeyedImages<'a>),
     /// The frame, and a key that changes when its buffers do (the refinement at rest).
-    Gpu(String, &'a crate::render::frame::GpuFrame),
+    Gpu(String, &'a crate::render::GpuFrame),
 }
 
 impl Source<'_> {

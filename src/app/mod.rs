@@ -31,7 +31,7 @@ use anyhow::Result;
 
 use crate::exposure::Exposure;
 use crate::method::{MethodSettings, Room};
-use crate::render::pipeline::{Control, RenderSettings};
+use crate::render::{Control, RenderSettings};
 use crate::scene::Scene;
 use crate::settings::{
     AUTO_GAMMA_MIN, ClusterSettings, DEFAULT_PLANE_GATE_DEG, FrameSettings, Gamma, Weighting,
@@ -245,7 +245,7 @@ impl UiSettings {
     /// The scatter plot's series: how the indirect light is computed.
     pub fn mode_label(&self) -> String {
         let p = self.cluster.weight_exponent;
-        let room = self.method.room();
+        let room = self.method.knobs_room();
         let series = |r: &Room| format!("{} {}", r.method, (r.series)(&self.method));
         match (self.sp_on, self.vpl_on) {
             _ if room.is_some_and(|r| !r.clusters_sps) => series(room.unwrap()),
@@ -283,7 +283,7 @@ impl UiSettings {
     pub fn short(&self) -> String {
         let c = &self.cluster;
         let mode = match c.weighting {
-            _ if let Some(r) = self.method.room() => {
+            _ if let Some(r) = self.method.knobs_room() => {
                 format!("{}-{}", r.method, (r.short)(&self.method))
             }
             Weighting::InverseDistance if c.weight_exponent == 1.0 => "weighted".to_string(),

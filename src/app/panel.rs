@@ -354,7 +354,7 @@ impl Viewer {
                         .passes
                         .iter()
                         .map(|p| p.name())
-                        .chain([crate::render::pipeline::FRAME_KEY])
+                        .chain([crate::render::FRAME_KEY])
                         .filter(|p| f.timings_ms.contains_key(*p))
                     {
                         ui.label(p);
@@ -736,17 +736,12 @@ impl Viewer {
 fn method_controls(ui: &mut Ui, s: &mut UiSettings) {
     ui.horizontal(|ui| {
         ui.label("method");
-        ui.selectable_value(&mut s.method.method, Method::Colom, "colom")
-            .on_hover_text(
-                "Colom et al. 2022: fuzzy k-means of SPs and VPLs, Eq. (6) per pixel \
-                     and VPL cluster (docs/methods.md)",
-            );
         for r in crate::method::ROOMS {
             ui.selectable_value(&mut s.method.method, r.method, r.method.name())
                 .on_hover_text(r.about);
         }
     });
-    if let Some(r) = s.method.room() {
+    if let Some(r) = s.method.knobs_room() {
         (r.ui)(ui, &mut s.method);
     }
 }

@@ -551,10 +551,7 @@ impl Viewer {
 
     /// `r`'s frame with its images on the CPU: as it came, or (shared display path, asked for by a
     /// reference, a screenshot) read back from the GPU now. An empty frame where that fails.
-    pub fn cpu_frame<'a>(
-        &self,
-        r: &'a Rendered,
-    ) -> std::borrow::Cow<'a, crate::render::frame::Frame> {
+    pub fn cpu_frame<'a>(&self, r: &'a Rendered) -> std::borrow::Cow<'a, crate::render::Frame> {
         match (&r.gpu, &self.shared) {
             (Some(g), Some(d)) if r.frame.radiance.is_empty() => {
                 std::borrow::Cow::Owned(g.read_with(&d.device, &d.queue).unwrap_or_default())

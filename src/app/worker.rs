@@ -12,9 +12,10 @@ use std::time::Instant;
 use anyhow::Result;
 use glam::Vec3;
 
+use crate::gi::pass::Pass;
 use crate::gpu::GpuContext;
-use crate::render::pipeline::{Cancelled, Control, Frame, Pass, RenderSettings, Renderer};
 use crate::render::timed::FrameLoop;
+use crate::render::{Cancelled, Control, Frame, RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
 
 /// Loads a scene by its spec, with the command line's added lights.
@@ -73,9 +74,9 @@ pub struct Rendered {
     pub frame: Frame,
     /// On the shared display path: the frame's images where they were rendered, on the window's
     /// device.
-    pub gpu: Option<crate::render::frame::GpuFrame>,
+    pub gpu: Option<crate::render::GpuFrame>,
     /// The split view's B frame on the GPU (shared display path).
-    pub b_gpu: Option<crate::render::frame::GpuFrame>,
+    pub b_gpu: Option<crate::render::GpuFrame>,
     /// The ring of lit-pixel counters, this frame's slot and its pixels (`FrameJob::count_lit`).
     pub lit: Option<(wgpu::Buffer, u32, u32)>,
     /// Nearest SP cluster per pixel (u32::MAX: none), when asked for and SP clustering ran.
@@ -243,7 +244,7 @@ fn serve(
         emissive_triangles: scene.emissive_triangle_count(),
         adapter: ctx.adapter_name.clone(),
         software: ctx.software,
-        max_pixels: crate::render::pipeline::max_pixels(&ctx, crate::render::pipeline::PIXEL_BYTES),
+        max_pixels: crate::render::max_pixels(&ctx, crate::render::PIXEL_BYTES),
     })));
     let mut cache = PointCache::default();
     // The frame loops of previews and of frames at rest, each stepping its own time budget.
@@ -392,7 +393,7 @@ enum Refining {
         indirect: Vec<[f32; 3]>,
     },
     /// In the frame's own emission + direct buffer on the GPU (shared display path).
-    Gpu(std::sync::Arc<crate::render::frame::FrameBuffers>),
+    Gpu(std::sync::Arc<crate::render::FrameBuffers>),
 }
 
 impl Accumulation {
@@ -460,9 +461,9 @@ impl Accumulation {
 /// VPL and light positions, recomputed only when the resident sets change.
 #[derive(Default)]
 struct PointCache {
-    vpl_key: Option<crate::render::pipeline::VplKey>,
+    vpl_key: Option<crate::gi::vpl_trace::VplKey>,
     vpls: Arc<Vec<Vec3>>,
-    light_key: Option<crate::render::pipeline::LightKey>,
+    light_key: Option<crate::gi::vpl_cluster::LightKey>,
     lights: Arc<Vec<Vec3>>,
 }
 

@@ -16,9 +16,10 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use crate::gi::pass::Pass;
 use crate::gpu::GpuContext;
-use crate::render::pipeline::{FRAME_KEY, Frame, Pass, RenderSettings, Renderer};
 use crate::render::timed::{FrameKind, Timed, Timing, timed};
+use crate::render::{FRAME_KEY, Frame, RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
 use crate::settings::FrameSettings;
 use crate::stats::ErrorStats;
@@ -257,9 +258,8 @@ impl Bench<'_> {
         let mut jobs: Vec<(Config, Option<f64>)> =
             configs.iter().map(|c| (c.clone(), None)).collect();
         let has_k = |c: &&Config| {
-            c.method
-                .room()
-                .is_none_or(|r| r.clusters_sps || r.vpl_clusters)
+            let r = c.method.room();
+            r.clusters_sps || r.vpl_clusters
         };
         for &t in &self.plan.sweep.target_ms {
             let mut seen = Vec::new();
@@ -347,7 +347,8 @@ impl Bench<'_> {
         let mut label = sweep::label_ran(
             c,
             frame.ran(Pass::SpCluster)
-                || (c.method.room()).is_some_and(|r| r.clusters_sps && frame.ran(r.passes[0])),
+                || (c.method.knobs_room())
+                    .is_some_and(|r| r.clusters_sps && frame.ran(r.passes[0])),
             frame.ran(Pass::VplCluster),
             frame.gamma_used,
         );

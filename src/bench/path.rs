@@ -15,11 +15,12 @@ use serde::{Deserialize, Serialize};
 use super::BenchPlan;
 use super::sweep::{self, Config};
 use crate::bvh::SceneBvh;
+use crate::gi::pass::Pass;
 use crate::gi::primary::CameraParams;
 use crate::gpu::GpuContext;
 use crate::method::MethodSettings;
-use crate::render::pipeline::{FRAME_KEY, Frame, Pass, Renderer};
 use crate::render::timed::{FrameKind, FrameLoop, Timing, timed};
+use crate::render::{FRAME_KEY, Frame, Renderer};
 use crate::scene::{Camera, Scene};
 use crate::{export, metrics};
 

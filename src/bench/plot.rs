@@ -35,7 +35,6 @@ pub fn mode_colour(mode: &str) -> RGBColor {
         "weighted" => RGBColor(31, 119, 180),
         "vpl-only" => RGBColor(44, 160, 44),
         "sp-only" => RGBColor(148, 103, 189),
-        "colom" => RGBColor(140, 86, 75),
         m => match crate::method::ROOMS.iter().find(|r| r.method.name() == m) {
             Some(r) => RGBColor(r.colour[0], r.colour[1], r.colour[2]),
             None => RGBColor(90, 90, 90),

@@ -303,8 +303,8 @@ impl Sweep {
         let colom = methods.contains(&Method::Colom);
         let sp_room = methods
             .iter()
-            .filter_map(|&m| crate::method::room(m))
-            .find(|r| r.clusters_sps);
+            .map(|&m| crate::method::room(m))
+            .find(|r| r.own_knobs && r.clusters_sps);
         if let Some(r) = sp_room
             && sps.contains(&0)
         {
@@ -336,10 +336,11 @@ impl Sweep {
             }
         };
         for method in self.method.methods() {
-            let Some(room) = crate::method::room(method) else {
+            let room = crate::method::room(method);
+            if !room.own_knobs {
                 self.colom_configs(&ks).into_iter().for_each(&mut push);
                 continue;
-            };
+            }
             let own = self.method.configs_of(method);
             let uses_k = room.clusters_sps || room.vpl_clusters;
             let ks = if uses_k { ks.clone() } else { vec![(0, 0)] };
@@ -434,7 +435,7 @@ fn label_in(mode: Mode, c: &ClusterSettings, m: &MethodSettings) -> String {
             v.to_string()
         }
     };
-    if let Some(room) = m.room() {
+    if let Some(room) = m.knobs_room() {
         let own = (room.label)(m);
         if !(room.clusters_sps || room.vpl_clusters) {
             return format!("{} {own}", room.method);

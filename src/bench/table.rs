@@ -169,7 +169,7 @@ pub const MAX_CSV_BYTES: u64 = 64 << 20;
 /// A bench CSV file's text: a regular file (a FIFO would block) of at most `MAX_CSV_BYTES`.
 fn read_csv_file(path: &Path) -> Result<String> {
     crate::files::read_text(path, MAX_CSV_BYTES, "a bench CSV file")
-        .map_err(|e| crate::cli::bad(format!("{}: cannot read: {e}", path.display())))
+        .map_err(|e| crate::input::bad(format!("{}: cannot read: {e}", path.display())))
 }
 
 /// The table of the runs in `dirs` (each holding `results.csv`, `path.csv` or both; the run is

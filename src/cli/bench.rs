@@ -5,12 +5,12 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 
-use super::bad;
 use super::scene::{SceneArgs, check_size, check_vpls};
 use crate::bench::{self, path::CameraPath, sweep::Sweep};
 use crate::export;
 use crate::gpu::GpuContext;
-use crate::render::pipeline;
+use crate::input::bad;
+use crate::render;
 use crate::settings::{FrameSettings, TimingSettings, parse_on_off};
 
 pub const BENCH_HELP: &str = "\
@@ -121,7 +121,7 @@ pub fn run(mut a: BenchArgs, given: &[&str]) -> Result<()> {
     }
     let ctx = GpuContext::new_headless()?;
     check_vpls(&ctx, frame.vpls)?;
-    check_size(&ctx, frame.width, frame.height, pipeline::PIXEL_BYTES)?;
+    check_size(&ctx, frame.width, frame.height, render::PIXEL_BYTES)?;
     std::fs::create_dir_all(&images)
         .map_err(|e| bad(format!("{}: cannot create: {e}", images.display())))?;
     let plan = bench::BenchPlan {
@@ -138,8 +138,8 @@ pub fn run(mut a: BenchArgs, given: &[&str]) -> Result<()> {
     // Every configuration's visibility matrix fits the adapter: checked before any work.
     for c in plan.sweep.configs() {
         let s = plan.settings(&c);
-        let p = pipeline::Plan::new(&scene, &s);
-        pipeline::check_visibility_size(&ctx, &p, &s).map_err(bad)?;
+        let p = render::Plan::new(&scene, &s);
+        render::check_method_limits(&ctx, &p, &s).map_err(bad)?;
     }
     match &a.camera_path {
         Some(path) => along_path(&ctx, &scene, &plan, path, &a.temporal, &a.temporal_alpha),

@@ -48,7 +48,7 @@ pub fn check() -> Result<Vec<String>, String> {
             shader::SHADER_DIR_ENV => shader_dir(text)?,
             "FVPL_WORK_SCALE" => integer(&name, text, 1, u32::MAX)?,
             "FVPL_SHADE_PATTERNS" => {
-                integer(&name, text, 0, crate::gi::shade::MAX_PATTERNS)?
+                integer(&name, text, 0, crate::method::colom::shade::MAX_PATTERNS)?
             }
             n if SWITCHES.contains(&n) => {
                 if text != "1" {

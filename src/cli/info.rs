@@ -4,7 +4,7 @@ use anyhow::Result;
 use clap::Args;
 
 use super::scene::SceneArgs;
-use crate::render::pipeline::{RenderSettings, Renderer};
+use crate::render::{RenderSettings, Renderer};
 use crate::scene::{self, Scene};
 
 #[derive(Args)]

@@ -11,6 +11,7 @@ mod view;
 
 use std::process::ExitCode;
 
+use crate::input::bad;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
@@ -96,20 +97,6 @@ fn given_ids(m: &clap::ArgMatches) -> Vec<String> {
         .filter(|id| sub.value_source(id.as_str()) == Some(clap::parser::ValueSource::CommandLine))
         .map(|id| id.to_string())
         .collect()
-}
-
-/// An error that is the user's input: exit code 2.
-#[derive(Debug)]
-pub struct BadInput(pub String);
-impl std::fmt::Display for BadInput {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-impl std::error::Error for BadInput {}
-
-pub fn bad(msg: impl Into<String>) -> anyhow::Error {
-    BadInput(msg.into()).into()
 }
 
 /// One line for a clap error: a value a `settings` parser refused reads `--option VALUE: why`;
@@ -237,7 +224,7 @@ fn finish(result: Result<()>) -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            let is_input = e.downcast_ref::<BadInput>().is_some()
+            let is_input = e.downcast_ref::<crate::input::BadInput>().is_some()
                 || e.downcast_ref::<crate::scene::SceneError>().is_some()
                 || e.downcast_ref::<crate::gi::scene_gpu::TooBig>().is_some()
                 || e.downcast_ref::<crate::app::Unavailable>().is_some();

@@ -24,7 +24,7 @@ pub struct RaybenchArgs {
 
 pub fn run(a: RaybenchArgs) -> Result<()> {
     if let Some(p) = &a.json {
-        export::check_writable(p).map_err(super::bad)?;
+        export::check_writable(p).map_err(crate::input::bad)?;
     }
     let ctx = GpuContext::new_headless()?;
     println!(

@@ -5,12 +5,13 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 
-use super::bad;
 use super::scene::{SceneArgs, ShotArgs, check_size, check_vpls};
 use crate::gpu::GpuContext;
-use crate::render::frame::Frame;
-use crate::render::pipeline::{self, RenderSettings, Renderer};
+use crate::input::bad;
+use crate::render;
+use crate::render::Frame;
 use crate::render::timed::{FrameKind, Timed, Timing, timed};
+use crate::render::{RenderSettings, Renderer};
 use crate::settings::{FrameSettings, TimingSettings};
 use crate::{export, metrics, stats};
 
@@ -126,8 +127,8 @@ pub fn run(mut a: RenderArgs, given: &[String]) -> Result<()> {
     let ctx = GpuContext::new_headless()?;
     check_vpls(&ctx, a.shot.frame.vpls)?;
     let bytes = match a.path_trace {
-        Some(_) => pipeline::PATH_TRACE_PIXEL_BYTES,
-        None => pipeline::PIXEL_BYTES,
+        Some(_) => render::PATH_TRACE_PIXEL_BYTES,
+        None => render::PIXEL_BYTES,
     };
     check_size(&ctx, a.shot.frame.width, a.shot.frame.height, bytes)?;
     let mut renderer = Renderer::new(&ctx, &scene)?;
@@ -141,8 +142,8 @@ pub fn run(mut a: RenderArgs, given: &[String]) -> Result<()> {
         control: None,
     };
     if a.path_trace.is_none() {
-        let plan = pipeline::Plan::new(&scene, &settings);
-        pipeline::check_visibility_size(&ctx, &plan, &settings).map_err(bad)?;
+        let plan = render::Plan::new(&scene, &settings);
+        render::check_method_limits(&ctx, &plan, &settings).map_err(bad)?;
     }
     if settings.cluster.target_ms.is_some() && (a.reference || a.path_trace.is_some()) {
         return Err(bad(
@@ -172,7 +173,7 @@ pub fn run(mut a: RenderArgs, given: &[String]) -> Result<()> {
         a.scene.scene,
         frame.width,
         frame.height,
-        t.timings_ms[pipeline::FRAME_KEY],
+        t.timings_ms[render::FRAME_KEY],
         passes.join(" + "),
         metrics::mean_luminance(&frame.radiance),
         outputs.join(", ")

@@ -4,8 +4,8 @@
 use anyhow::Result;
 use clap::Args;
 
-use super::bad;
 use crate::gpu::GpuContext;
+use crate::input::bad;
 use crate::scene::{self, Scene, extra_lights};
 use crate::settings::{ClusterSettings, FrameSettings, LightSettings};
 
@@ -134,7 +134,7 @@ pub fn check_vpls(ctx: &GpuContext, vpls: u32) -> Result<()> {
 
 /// The largest image this device renders: each per-pixel buffer is one storage binding.
 pub fn check_size(ctx: &GpuContext, width: u32, height: u32, bytes_per_pixel: u64) -> Result<()> {
-    crate::render::pipeline::check_frame_size(ctx, width, height, bytes_per_pixel).map_err(|e| {
+    crate::render::check_frame_size(ctx, width, height, bytes_per_pixel).map_err(|e| {
         bad(format!(
             "--width/--height {width}x{height}: {} pixels, at most {} on this adapter ({} bytes a pixel in one {}-byte storage binding)",
             width as u64 * height as u64,

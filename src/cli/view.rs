@@ -5,12 +5,12 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 
-use super::bad;
 use super::scene::{SceneArgs, ShotArgs, check_vpls};
 use crate::export;
 use crate::exposure::Exposure;
 use crate::gpu::GpuContext;
-use crate::render::pipeline::RenderSettings;
+use crate::input::bad;
+use crate::render::RenderSettings;
 use crate::settings::Invalid;
 
 #[derive(Args)]

@@ -7,13 +7,22 @@ use bytemuck::{Pod, Zeroable};
 
 use super::scene_gpu::{storage_layout, storage_texture_layout, uniform_layout};
 use crate::gpu::GpuContext;
-use crate::render::frame::GpuFrame;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct ComposeParams {
     size: [u32; 4],
     scale: [f32; 4],
+}
+
+/// A frame's light on the GPU, as the renderer hands it over: emission + direct and the indirect
+/// light (a vec4 an image pixel each, render units) at the image's size, and the factor to the
+/// scene's units.
+pub struct FrameLight<'a> {
+    pub direct: &'a wgpu::Buffer,
+    pub indirect: &'a wgpu::Buffer,
+    pub size: (u32, u32),
+    pub output_scale: f32,
 }
 
 pub struct Compose {
@@ -53,11 +62,10 @@ impl Compose {
         }
     }
 
-    /// Writes `frame`'s final radiance into `texture` (`Rgba32Float`, the frame's size, with
-    /// `STORAGE_BINDING` or `COPY_DST` usage) and submits.
-    pub fn record(&self, ctx: &GpuContext, frame: &GpuFrame, texture: &wgpu::Texture) {
-        let b = &frame.buffers;
-        let (w, h) = b.size;
+    /// Writes a frame's final radiance (its `light` at its `size`) into `texture` (`Rgba32Float`,
+    /// the frame's size, with `STORAGE_BINDING` or `COPY_DST` usage) and submits.
+    pub fn record(&self, ctx: &GpuContext, light: &FrameLight, texture: &wgpu::Texture) {
+        let (w, h) = light.size;
         let direct = texture
             .usage()
             .contains(wgpu::TextureUsages::STORAGE_BINDING);
@@ -81,7 +89,7 @@ impl Compose {
         };
         let p = ComposeParams {
             size: [w, h, 0, 0],
-            scale: [frame.output_scale, 0.0, 0.0, 0.0],
+            scale: [light.output_scale, 0.0, 0.0, 0.0],
         };
         ctx.write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
         let view = target.create_view(&Default::default());
@@ -95,11 +103,11 @@ impl Compose {
                 },
                 wgpu::BindGroupEntry {
                     binding: 1,
-                    resource: b.radiance.as_entire_binding(),
+                    resource: light.direct.as_entire_binding(),
                 },
                 wgpu::BindGroupEntry {
                     binding: 2,
-                    resource: b.image_indirect().as_entire_binding(),
+                    resource: light.indirect.as_entire_binding(),
                 },
                 wgpu::BindGroupEntry {
                     binding: 3,

@@ -1,8 +1,7 @@
 //! The shared GI passes, one module per pass, each owning its pipeline and bind-group layout and
 //! driving the WGSL file of the same name: the scene on the GPU, VPLs (step 1) and their clustering
-//! (step 2), primary rays (step 3), direct light, the unclustered gather (Eq. 5), the k-means and
-//! colom's clustered visibility and shading (steps 4–6). The other methods' passes are in
-//! `method`; `render::pipeline` decides which passes run.
+//! (step 2), primary rays (step 3), direct light, the unclustered gather (Eq. 5) and the k-means.
+//! The methods' own passes are in their rooms (`method`); `render::Plan` decides which passes run.
 
 pub mod accumulate;
 pub mod compose;
@@ -18,8 +17,6 @@ pub mod reference;
 pub mod refine;
 pub mod rng;
 pub mod scene_gpu;
-pub mod shade;
 pub mod upsample;
-pub mod visibility;
 pub mod vpl_cluster;
 pub mod vpl_trace;

@@ -4,7 +4,7 @@
 //! passes of `gi` (VPLs, primary rays, direct light, the gather of Eq. 5) and reach the frame
 //! through one trait, `IndirectMethod`. colom (the paper) is the default and every method's
 //! reference; `rooms!` below is the registry of the others (`ROOMS`, `Method`, `MethodSettings`,
-//! `MethodLists`), from which `render::pipeline` picks a method's passes and state. A new method
+//! `MethodLists`), from which `render::Plan` picks a method's passes and state. A new method
 //! is its folder and one line of the registry (docs/architecture.md, "Adding a method").
 
 pub mod colom;
@@ -43,8 +43,28 @@ pub struct FrameInputs<'a> {
     pub reference: &'a Reference,
     pub gbuffer: &'a wgpu::Buffer,
     pub pixels: u32,
+    /// The size the method's passes work at: the render scale's (`--indirect-scale`), else the
+    /// image's (`pixels` = its product).
+    pub size: (u32, u32),
+    /// The G-term clamp's distance in render units (`FrameSettings::d_min` of the scene's extent).
+    pub d_min: f32,
     pub cam: CameraParams,
     pub indirect: &'a wgpu::Buffer,
+}
+
+/// What a method's largest buffers are checked against before a frame (`Room::limits`): one
+/// storage binding's bytes, the clustering settings and the lights its passes see.
+pub struct Limits<'a> {
+    pub max_binding: u64,
+    pub cluster: &'a ClusterSettings,
+    /// The VPL clusters asked (`lights_clustered`), or every VPL.
+    pub lights: u32,
+    pub lights_clustered: bool,
+}
+
+/// A room's `limits` with no buffer beyond the frame's.
+pub fn no_limits(_: &Limits) -> Result<(), String> {
+    Ok(())
 }
 
 /// What a frame's indirect passes report for the stats (`Frame`): the shadow rays they traced, the
@@ -139,6 +159,12 @@ pub trait IndirectMethod: Any {
 
     /// Puts back what `take_past` took.
     fn put_past(&mut self, _past: Box<dyn Any>) {}
+
+    /// The last frame's SP clustering, where the method keeps one (tests, the views' cluster
+    /// labels, `Renderer::sp_clustering`); none by default.
+    fn sp_clustering(&self) -> Option<&crate::gi::kmeans::Clustering> {
+        None
+    }
 }
 
 /// A method in the registry: its name, its passes in order, how its state is built (the first time
@@ -152,8 +178,14 @@ pub struct Room {
     pub build: fn(&GpuContext, &SceneGpu) -> Box<dyn IndirectMethod>,
     /// It clusters the shading points with `--sp-clusters` as K (and needs 0 < K < pixels).
     pub clusters_sps: bool,
-    /// Its lights are colom's resident VPL clusters (step 2, `--vpl-clusters`).
+    /// Its lights are the resident VPL clusters (step 2, `--vpl-clusters`).
     pub vpl_clusters: bool,
+    /// Refuses a frame whose largest buffer of its own exceeds a storage binding (the message
+    /// names the options); `no_limits` where it has none.
+    pub limits: fn(&Limits) -> Result<(), String>,
+    /// Its knobs are its own (`MethodSettings`' field of its name); colom's are the paper's
+    /// `ClusterSettings`, shown and swept on their own.
+    pub own_knobs: bool,
     /// One line for the viewer's method selector.
     pub about: &'static str,
     /// Its colour in the bench's plots (sRGB).
@@ -175,9 +207,8 @@ pub struct Room {
 macro_rules! rooms {
     ($($module:ident: $Variant:ident),+ $(,)?) => {
 
-        /// The registry. colom (the paper) is not here: its passes are the renderer's own, since
-        /// every method's reference is colom's unclustered gather.
-        pub const ROOMS: &[Room] = &[$($module::ROOM),+];
+        /// The registry: colom (the paper, the default) and the others.
+        pub const ROOMS: &[Room] = &[colom::ROOM, $($module::ROOM),+];
 
         /// Which system computes the indirect light (docs/methods.md). Every method reuses the
         /// VPLs, the BVH, the primary rays, the direct light, the reference and the metrics, and
@@ -185,7 +216,7 @@ macro_rules! rooms {
         /// (`rooms!`). (`Ord`: the renderer keeps the methods' state in a map by method.)
         #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
         pub enum Method {
-            /// Colom, Marques, Santos 2022 (seed 000), the paper this tool rebuilds (`COLOM_DOC`).
+            /// Colom, Marques, Santos 2022 (seed 000), the paper this tool rebuilds (its room's `doc`).
             #[default]
             Colom,
             $(
@@ -305,28 +336,26 @@ rooms! {
     cvrtgi: Cvrtgi,
 }
 
-/// `method`'s room, `None` for colom.
-pub fn room(method: Method) -> Option<&'static Room> {
-    ROOMS.iter().find(|r| r.method == method)
+/// `method`'s room.
+pub fn room(method: Method) -> &'static Room {
+    ROOMS
+        .iter()
+        .find(|r| r.method == method)
+        .expect("every method has a room")
 }
 
-/// How `method`'s state is built: its room's `build`, or colom's.
+/// How `method`'s state is built: its room's `build`.
 pub fn build(method: Method) -> fn(&GpuContext, &SceneGpu) -> Box<dyn IndirectMethod> {
-    room(method).map_or(colom::build, |r| r.build)
+    room(method).build
 }
 
 /// The `--help` group of the method and its knobs.
 pub const METHOD_HEADING: &str = "Method (docs/methods.md)";
 
-/// colom's line in `--method`'s help (the others' are their rooms' `doc`).
-pub const COLOM_DOC: &str = "Colom, Marques, Santos 2022 (seed 000): fuzzy k-means of SPs and \
-                             VPLs, visibility between cluster representatives, Eq. (6) shading \
-                             per pixel × VPL cluster";
-
 impl Method {
     /// Its line in `--method`'s help.
     pub fn doc(self) -> &'static str {
-        room(self).map_or(COLOM_DOC, |r| r.doc)
+        room(self).doc
     }
 }
 
@@ -365,9 +394,15 @@ impl fmt::Display for Method {
 }
 
 impl MethodSettings {
-    /// The asked method's room (`None`: colom).
-    pub fn room(&self) -> Option<&'static Room> {
+    /// The asked method's room.
+    pub fn room(&self) -> &'static Room {
         room(self.method)
+    }
+
+    /// The asked method's room where its knobs are its own (`Room::own_knobs`; `None`: colom,
+    /// whose knobs are the paper's `ClusterSettings`).
+    pub fn knobs_room(&self) -> Option<&'static Room> {
+        Some(self.room()).filter(|r| r.own_knobs)
     }
 }
 
@@ -423,12 +458,13 @@ mod tests {
     }
 
     #[test]
-    fn every_method_but_colom_has_a_room() {
+    fn every_method_has_one_room() {
         for m in Method::ALL {
-            assert_eq!(room(m).is_some(), m != Method::Colom, "{m}");
-            assert_eq!(room(m).map(|r| r.method), (m != Method::Colom).then_some(m));
+            assert_eq!(room(m).method, m);
+            assert_eq!(ROOMS.iter().filter(|r| r.method == m).count(), 1, "{m}");
+            assert_eq!(room(m).own_knobs, m != Method::Colom, "{m}");
         }
-        assert_eq!(ROOMS.len() + 1, Method::ALL.len());
+        assert_eq!(ROOMS.len(), Method::ALL.len());
     }
 
     /// `--method`'s possible values carry each method's line (colom's, its room's `doc`), and an
@@ -441,7 +477,11 @@ mod tests {
             assert_eq!(v.get_name(), m.name());
             assert_eq!(v.get_help().unwrap().to_string(), m.doc());
         }
-        assert_eq!(Method::Colom.doc(), COLOM_DOC);
+        assert!(
+            Method::Colom
+                .doc()
+                .starts_with("Colom, Marques, Santos 2022")
+        );
         assert!(Method::Wang.doc().starts_with("Wang et al. 2009"));
         let e = serde_json::from_str::<Method>("\"fuzzy\"")
             .unwrap_err()
@@ -455,7 +495,8 @@ mod tests {
     fn pass_names_are_unique() {
         let mut names: Vec<&str> = Pass::TIMED.iter().map(|p| p.name()).collect();
         names.extend([Pass::PathTrace, Pass::Upsample].map(|p| p.name()));
-        for r in ROOMS {
+        // colom's passes are among the contract's timed ones (`Pass::TIMED`).
+        for r in ROOMS.iter().filter(|r| r.own_knobs) {
             assert!(!r.passes.is_empty(), "{}", r.method);
             names.extend(r.passes.iter().map(|p| p.name()));
         }
@@ -470,6 +511,7 @@ mod tests {
     fn knob_columns_follow_the_registry() {
         let want: Vec<&str> = ROOMS
             .iter()
+            .filter(|r| r.own_knobs)
             .flat_map(|r| {
                 let m = MethodSettings {
                     method: r.method,

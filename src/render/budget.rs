@@ -20,7 +20,8 @@
 use anyhow::Result;
 
 use super::frame::Frame;
-use super::pipeline::{Pass, RenderSettings, Renderer};
+use super::{RenderSettings, Renderer};
+use crate::gi::pass::Pass;
 use crate::scene::Camera;
 use crate::settings::ClusterSettings;
 

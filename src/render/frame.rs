@@ -1,108 +1,11 @@
-//! What a frame produces and what bounds it: the `Frame` a render returns, the checks that its
-//! buffers fit the adapter's storage bindings, and the `Control` another thread stops it with.
+//! What a frame is: the `Frame` a render returns (read back), the `GpuFrame` whose images stay on
+//! the GPU, and the per-pixel buffers (`FrameBuffers`) a renderer reuses by size (`FramePool`).
 
 use std::collections::BTreeMap;
 
-use super::pipeline::{Pass, Plan, RenderSettings};
+use crate::gi::pass::Pass;
 use crate::gi::primary::SP_BYTES;
-
 use crate::gpu::GpuContext;
-use crate::settings::MAX_F;
-
-/// Bytes a pixel takes in a frame's largest per-pixel storage binding: the G-buffer (`SP_BYTES`);
-/// the k-means' per-pixel assign and weight lists (F ≤ `MAX_F` words) are no larger. One binding
-/// holds at most `max_storage_buffer_binding_size` bytes (lavapipe: 128 MiB, 2,097,152 pixels).
-pub const PIXEL_BYTES: u64 = if SP_BYTES > MAX_F as u64 * 4 {
-    SP_BYTES
-} else {
-    MAX_F as u64 * 4
-};
-
-/// The path tracer's: its accumulation buffer, 16 bytes a pixel.
-pub const PATH_TRACE_PIXEL_BYTES: u64 = 16;
-
-/// The most pixels a frame may have on `ctx` when each takes `bytes_per_pixel` in one binding.
-pub fn max_pixels(ctx: &GpuContext, bytes_per_pixel: u64) -> u64 {
-    ctx.max_binding() / bytes_per_pixel
-}
-
-/// A frame too large for one storage binding of this adapter (creating its bind groups would be a
-/// wgpu panic).
-#[derive(Debug, thiserror::Error)]
-#[error(
-    "a {width}x{height} frame has {} pixels; this adapter holds at most {most} ({bytes} bytes a pixel in one {binding}-byte storage binding)",
-    *width as u64 * *height as u64
-)]
-pub struct TooLarge {
-    pub width: u32,
-    pub height: u32,
-    pub most: u64,
-    pub bytes: u64,
-    pub binding: u64,
-}
-
-/// Refuses a frame whose per-pixel buffers do not fit in one storage binding of `ctx`.
-pub fn check_frame_size(
-    ctx: &GpuContext,
-    width: u32,
-    height: u32,
-    bytes_per_pixel: u64,
-) -> Result<(), TooLarge> {
-    let most = max_pixels(ctx, bytes_per_pixel);
-    if width as u64 * height as u64 > most {
-        return Err(TooLarge {
-            width,
-            height,
-            most,
-            bytes: bytes_per_pixel,
-            binding: ctx.max_binding(),
-        });
-    }
-    Ok(())
-}
-
-/// Bytes of the visibility bit matrix a frame records (0 when it clusters no SPs): one row per SP
-/// cluster, one bit per light, the lights being the VPL clusters or, unclustered, every VPL (an
-/// upper bound: fewer may be traced or used). It is one storage binding.
-pub fn visibility_bytes(plan: &Plan, s: &RenderSettings) -> u64 {
-    if !plan.sp_clustering {
-        return 0;
-    }
-    s.cluster.sp_clusters as u64 * visibility_lights(plan, s).div_ceil(32).max(1) as u64 * 4
-}
-
-fn visibility_lights(plan: &Plan, s: &RenderSettings) -> u32 {
-    if plan.vpl_clustering {
-        s.cluster.vpl_clusters
-    } else {
-        s.frame.vpls
-    }
-}
-
-/// Refuses a frame whose visibility bit matrix does not fit in one storage binding of `ctx` (K_sp ×
-/// lights / 8 bytes: 200,000 SP clusters × 8192 VPLs is 205 MB, lavapipe binds 128 MiB): the message
-/// names the options.
-pub fn check_visibility_size(
-    ctx: &GpuContext,
-    plan: &Plan,
-    s: &RenderSettings,
-) -> Result<(), String> {
-    let bytes = visibility_bytes(plan, s);
-    let binding = ctx.max_binding();
-    if bytes > binding {
-        let lights = visibility_lights(plan, s);
-        let what = if plan.vpl_clustering {
-            "VPL clusters"
-        } else {
-            "VPLs"
-        };
-        return Err(format!(
-            "--sp-clusters {} with {lights} {what}: the visibility bit matrix (a bit per SP cluster and light) takes {bytes} bytes, more than the {binding} bytes of one storage binding on this adapter; use fewer SP clusters or cluster the VPLs",
-            s.cluster.sp_clusters
-        ));
-    }
-    Ok(())
-}
 
 /// A rendered frame: linear radiance per pixel, row-major from the top-left.
 #[derive(Clone, Debug, Default)]

@@ -18,7 +18,8 @@ use anyhow::Result;
 
 use super::budget::{self, Budget, Controller};
 use super::frame::Frame;
-use super::pipeline::{Pass, RenderSettings, Renderer};
+use super::{RenderSettings, Renderer};
+use crate::gi::pass::Pass;
 use crate::scene::Camera;
 
 /// What a frame is: the VPL frame (`Renderer::render`) or the diffuse path tracer's with SPP

@@ -1,6 +1,6 @@
 //! The settings model: one type per idea, each declared once with its command-line form (clap
 //! `Args`) and its serialised form (serde), flattened into `render`, `view` and `bench` and used as
-//! they are by the renderer (`render::pipeline::RenderSettings`), the viewer's state, the stats JSON
+//! they are by the renderer (`render::RenderSettings`), the viewer's state, the stats JSON
 //! and the bench CSV.
 //!
 //! - `ClusterSettings`: the paper's knobs (K_SP, K_VPL, F, γ, n_t, iterations, weighting, p, the
@@ -545,6 +545,12 @@ impl Default for FrameSettings {
 impl FrameSettings {
     pub fn pixels(&self) -> u32 {
         self.width * self.height
+    }
+
+    /// The G-term clamp's distance in a scene `extent` across (its diagonal): the VPL distance
+    /// in 1/d² is at least this (`--clamp` × extent).
+    pub fn d_min(&self, extent: f32) -> f32 {
+        self.clamp * extent
     }
 }
 

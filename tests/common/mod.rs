@@ -5,7 +5,7 @@ use fuzzy_vpl::cpu::kmeans::RepPoint;
 use fuzzy_vpl::cpu::shading::CpuScene;
 use fuzzy_vpl::gi::primary::ShadingPoint;
 use fuzzy_vpl::gpu::GpuContext;
-use fuzzy_vpl::render::pipeline::Renderer;
+use fuzzy_vpl::render::Renderer;
 use fuzzy_vpl::scene::Scene;
 
 pub fn gpu() -> GpuContext {

@@ -1,28 +1,77 @@
 //! The `colom` method (Colom, Marques, Santos 2022, seed 000; the paper this tool rebuilds): the
 //! shading points clustered by fuzzy k-means (step 4, Alg. 1 and 2, `gi::kmeans`), one shadow ray
-//! per SP-cluster representative and light (step 5, `gi::visibility`), and Eq. (6) per pixel with
-//! Eq. (8) or (9) (step 6, `gi::shade`). Its lights are the resident VPL clusters (step 2) or the
-//! VPLs. The passes are `Pass::SpCluster` → `Pass::Visibility` → `Pass::Shade` (`render::Plan`);
-//! without SP clustering colom's frame is the renderer's gather (VPL clusters) or reference.
+//! per SP-cluster representative and light (step 5, `visibility`), and Eq. (6) per pixel with
+//! Eq. (8) or (9) (step 6, `shade`). Its lights are the resident VPL clusters (step 2) or the VPLs.
+//! Its passes are `Pass::SpCluster` → `Pass::Visibility` → `Pass::Shade` (its `ROOM`); where K_SP
+//! does not apply, the frame is the renderer's shared gather (VPL clusters) or reference.
 //!
 //! Its state is what temporal reuse starts from: the last frame's SP clustering (its centroids warm
 //! the next k-means) and visibility matrix (rows of representatives the warm start kept are copied
 //! while the lights are the same).
 
+pub mod shade;
+pub mod visibility;
+
 use std::any::Any;
 
 use anyhow::Result;
 
-use super::{Counts, FrameInputs, IndirectMethod, PendingCounts};
+use super::{Counts, FrameInputs, IndirectMethod, Limits, Method, PendingCounts, Room};
 use crate::gi::dispatch::Gpu;
 use crate::gi::kmeans::{Clustering, KMeans, KMeansSettings, Points, Warm};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::SceneGpu;
-use crate::gi::shade::{Shade, ShadeInputs, ShadeParams};
-use crate::gi::visibility::{Previous, VisInputs, Visibility};
 use crate::gi::vpl_cluster::LightKey;
 use crate::gpu::GpuContext;
 use crate::settings::Weighting;
+use shade::{Shade, ShadeInputs, ShadeParams};
+use visibility::{Previous, VisInputs, Visibility};
+
+/// colom's line of the registry. Its knobs are the paper's (`ClusterSettings`: K, F, γ, n_t, the
+/// weighting and the adaptations), shown and swept by the viewer's and the bench's own controls.
+pub const ROOM: Room = Room {
+    method: Method::Colom,
+    doc: "Colom, Marques, Santos 2022 (seed 000): fuzzy k-means of SPs and VPLs, visibility \
+          between cluster representatives, Eq. (6) shading per pixel × VPL cluster",
+    passes: &[Pass::SpCluster, Pass::Visibility, Pass::Shade],
+    build,
+    clusters_sps: true,
+    vpl_clusters: true,
+    limits,
+    own_knobs: false,
+    colour: [140, 86, 75],
+    about: "Colom et al. 2022: fuzzy k-means of SPs and VPLs, Eq. (6) per pixel and VPL cluster \
+            (docs/methods.md)",
+    label: |_| String::new(),
+    series: |_| String::new(),
+    short: |_| String::new(),
+    ui: |_, _| {},
+};
+
+/// Bytes of the visibility bit matrix (step 5): one row per SP cluster, one bit per light, the
+/// lights being the VPL clusters or, unclustered, every VPL (an upper bound: fewer may be traced or
+/// used). It is one storage binding.
+pub fn visibility_bytes(l: &Limits) -> u64 {
+    l.cluster.sp_clusters as u64 * l.lights.div_ceil(32).max(1) as u64 * 4
+}
+
+/// Refuses a visibility bit matrix larger than one storage binding (K_SP × lights / 8 bytes:
+/// 200,000 SP clusters × 8192 VPLs is 205 MB, lavapipe binds 128 MiB): the message names the
+/// options.
+fn limits(l: &Limits) -> Result<(), String> {
+    let bytes = visibility_bytes(l);
+    if bytes > l.max_binding {
+        let what = match l.lights_clustered {
+            true => "VPL clusters",
+            false => "VPLs",
+        };
+        return Err(format!(
+            "--sp-clusters {} with {} {what}: the visibility bit matrix (a bit per SP cluster and light) takes {bytes} bytes, more than the {} bytes of one storage binding on this adapter; use fewer SP clusters or cluster the VPLs",
+            l.cluster.sp_clusters, l.lights, l.max_binding
+        ));
+    }
+    Ok(())
+}
 
 /// A clustered frame's visibility matrix and the light list it was traced against.
 pub struct LastVisibility {
@@ -71,7 +120,7 @@ impl Colom {
         }
     }
 
-    /// The shade pass's `PATTERNS` (`gi::shade::patterns`, 0..8): its pipelines are built again.
+    /// The shade pass's `PATTERNS` (`shade::patterns`, 0..8): its pipelines are built again.
     /// The image does not depend on it.
     pub fn set_shade_patterns(&mut self, patterns: u32) {
         self.shade = Shade::with_patterns(patterns);
@@ -148,7 +197,7 @@ impl Colom {
         let lights = &f.lights.expect("colom's lights").list;
         let c = self.frame.clustering.as_ref().expect("sp_cluster ran");
         let v = self.frame.visibility.as_ref().expect("visibility ran");
-        let d_min = f.frame.clamp * f.scene.extent();
+        let d_min = f.d_min;
         self.shade.record(
             g,
             &ShadeInputs {
@@ -217,5 +266,9 @@ impl IndirectMethod for Colom {
         if let Ok(p) = past.downcast::<Past>() {
             (self.clustering, self.last_visibility) = (p.clustering, p.last_visibility);
         }
+    }
+
+    fn sp_clustering(&self) -> Option<&Clustering> {
+        self.clustering.as_ref()
     }
 }

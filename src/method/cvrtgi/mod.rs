@@ -726,6 +726,8 @@ pub const ROOM: Room = Room {
     build: |_, _| Box::new(Cvrtgi::new()),
     clusters_sps: false,
     vpl_clusters: false,
+    limits: super::no_limits,
+    own_knobs: true,
     colour: [188, 189, 34],
     about: "CVRTGI: voxel clusters (SLIC, 35° rule) light every voxel face; pixels read their \
             face's filtered irradiance, cached while the lights stay (docs/methods.md)",
@@ -782,7 +784,7 @@ impl IndirectMethod for Cvrtgi {
             gbuffer: f.gbuffer,
             pixels: f.pixels,
             indirect: f.indirect,
-            d_min: f.frame.clamp * f.scene.extent(),
+            d_min: f.d_min,
         };
         let report = Cvrtgi::record(self, g, &inputs, &f.method.cvrtgi)?;
         n.cpu_ms.push((PASS, report.cpu_ms));

@@ -152,6 +152,8 @@ pub const ROOM: Room = Room {
     build: |ctx, gpu| Box::new(LightClusterMethod::new(ctx, gpu)),
     clusters_sps: false,
     vpl_clusters: false,
+    limits: super::no_limits,
+    own_knobs: true,
     colour: [23, 190, 207],
     about: "LightCluster: VPLs in minimum-distance clusters whose visibility a few rays estimate \
             (to member VPLs, or to the paper's disc); every VPL shaded (docs/methods.md)",
@@ -225,7 +227,7 @@ impl IndirectMethod for LightClusterMethod {
                     clusters: self.clusters.as_ref().expect("lightcluster_cluster ran"),
                     indirect: f.indirect,
                     pixels: f.pixels,
-                    d_min: f.frame.clamp * extent,
+                    d_min: f.d_min,
                     visibility: f.method.lightcluster.lightcluster_visibility,
                 };
                 // The rays traced, as each pixel counted them: a disc's DISC_SAMPLES where one of

@@ -228,6 +228,8 @@ pub const ROOM: Room = Room {
     build: |ctx, gpu| Box::new(WangMethod::new(ctx, gpu)),
     clusters_sps: true,
     vpl_clusters: true,
+    limits: super::no_limits,
+    own_knobs: true,
     colour: [140, 86, 75],
     about: "Wang et al. 2009: irradiance only at the SP clusters' sample points, interpolated per \
             pixel (docs/methods.md)",
@@ -264,8 +266,8 @@ impl IndirectMethod for WangMethod {
         let wang = &self.wang;
         let img = Image {
             gbuffer: f.gbuffer,
-            width: f.frame.width,
-            height: f.frame.height,
+            width: f.size.0,
+            height: f.size.1,
         };
         let extent = f.scene.extent();
         match pass {
@@ -295,7 +297,7 @@ impl IndirectMethod for WangMethod {
                         num_lights,
                         indirect: &irradiance,
                         pixels: c.k(),
-                        d_min: f.frame.clamp * extent,
+                        d_min: f.d_min,
                         label: pass.name(),
                         light: f.cluster.cluster_light,
                     },

@@ -3,10 +3,10 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::dispatch::{Gpu, Run};
-use super::dispatch::{Kernel, copy_to_texture};
-use super::pass::Pass;
-use super::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
+use crate::gi::dispatch::{Gpu, Run};
+use crate::gi::dispatch::{Kernel, copy_to_texture};
+use crate::gi::pass::Pass;
+use crate::gi::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
 
 #[repr(C)]
@@ -35,7 +35,7 @@ pub struct Visibility {
     none: std::sync::OnceLock<wgpu::Buffer>,
     /// Bit matrices by size: a frame's stays held while the next one may copy its rows.
     bits: crate::gpu::persistent::Pool<u64, wgpu::Buffer>,
-    lights: super::dispatch::DataTextureSlot,
+    lights: crate::gi::dispatch::DataTextureSlot,
 }
 
 /// What step 5 reads: the SP-cluster representatives (`kmeans.wgsl` `rep_points`, `k_sp` of them),
@@ -66,7 +66,7 @@ impl Visibility {
             params: crate::gpu::persistent::Uniform::new("visibility params"),
             none: Default::default(),
             bits: Default::default(),
-            lights: super::dispatch::DataTextureSlot::new(
+            lights: crate::gi::dispatch::DataTextureSlot::new(
                 "visibility lights",
                 wgpu::TextureFormat::Rgba32Float,
             ),

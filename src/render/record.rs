@@ -1,137 +1,23 @@
-//! The frame graph: the one place that decides which passes run for a scene and its settings, in what
-//! order (the paper's Fig. 2), and runs them.
-//!
-//! Resident (per scene / light change, `resident.rs`): BVH and scene buffers; VPLs (step 1) and their
-//! clusters (step 2), rebuilt only when their inputs change.
-//! Per frame: primary (step 3) → direct + emission → indirect, one of
-//! - `reference`: every pixel × every VPL (Eq. 5), the paper's "no clustering";
-//! - `gather`: every pixel × every light, the lights being VPL clusters ("VPLs only");
-//! - `sp_cluster` (step 4) → `visibility` (step 5) → `shade` (step 6, Eq. 6 with Eq. 8 or 9), the lights
-//!   being VPL clusters ("both") or the VPLs ("SPs only").
-//!
-//! The other methods (`method::Method`, docs/methods.md) reuse the VPLs, the primary rays, the
-//! direct light and the reference, and replace the clustered indirect passes with their own:
-//! each method's room (`method::ROOMS`) lists its passes and records them through
-//! `method::IndirectMethod`.
-//!
-//! `Plan::new` lists the passes; `Renderer::render` runs exactly that list, in order.
+//! A frame's recording: `Plan::passes` run in order (the shared passes of `gi`, then the method's
+//! through `method::IndirectMethod`, then the shared ones again), its timings collected and what the
+//! next frame reuses kept; nothing of its images read back (`GpuFrame`).
 
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
 
 use anyhow::Result;
 
-pub use super::frame::{
-    FRAME_KEY, Frame, FrameBuffers, GpuFrame, PATH_TRACE_PIXEL_BYTES, PIXEL_BYTES, TooLarge,
-    check_frame_size, check_visibility_size, max_pixels, visibility_bytes,
-};
-pub use super::resident::Renderer;
+use super::frame::{FRAME_KEY, Frame, FrameBuffers, GpuFrame};
+use super::history::{History, HistoryKey};
+use super::limits::{PIXEL_BYTES, check_frame_size, check_method_limits};
+use super::plan::Plan;
+use super::renderer::{Renderer, gpu};
+use super::settings::{Cancelled, RenderSettings};
 use crate::gi::accumulate::Accumulate;
-pub use crate::gi::pass::Pass;
+use crate::gi::pass::Pass;
 use crate::gi::primary::CameraParams;
-pub use crate::gi::vpl_cluster::LightKey;
-pub use crate::gi::vpl_trace::VplKey;
-use crate::method::Method;
-use crate::method::{Counts, FrameInputs};
-use crate::render::history::{History, HistoryKey};
-pub use crate::render::settings::{Cancelled, Control, RenderSettings};
+use crate::method::{Counts, FrameInputs, Method};
 use crate::scene::{Camera, Scene};
-use crate::settings::FrameSettings;
-
-/// Which passes a frame runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Plan {
-    pub indirect: bool,
-    /// Step 2 (the resident VPL clustering: colom's lights, and a room's with `vpl_clusters`).
-    pub vpl_clustering: bool,
-    /// Colom's SP clustering (steps 4–6).
-    pub sp_clustering: bool,
-    /// The method whose own passes compute the indirect light: the one asked, or `Colom` (whose
-    /// unclustered passes `gather` and `reference` then run) for the reference and where the
-    /// method asked does not apply (one that clusters SPs without 0 < K_SP < pixels).
-    pub method: Method,
-    /// The render-scale size the indirect light is computed at when it is upsampled to the image
-    /// (`--indirect-scale` below 1, not for the reference); `None`: at the image's size.
-    pub low: Option<(u32, u32)>,
-    /// Temporal accumulation of the indirect light (`--temporal on` with α below 1, clustered
-    /// frames: `gi::accumulate`).
-    pub accumulate: bool,
-}
-
-impl Plan {
-    pub fn new(scene: &Scene, s: &RenderSettings) -> Plan {
-        let (f, c) = (&s.frame, &s.cluster);
-        let indirect = f.vpls > 0 && scene.has_light();
-        let clustered = indirect && !s.reference;
-        let low = Some(crate::gi::upsample::indirect_size(
-            f.width,
-            f.height,
-            f.indirect_scale,
-        ))
-        .filter(|&l| clustered && l != (f.width, f.height));
-        let pixels = low.map_or(f.width * f.height, |(w, h)| w * h);
-        let sp = clustered && c.sp_clusters > 0 && c.sp_clusters < pixels;
-        // A method's room runs where it applies (one clustering SPs needs 0 < K_SP < pixels);
-        // elsewhere colom's unclustered passes do.
-        let room = s
-            .method
-            .room()
-            .filter(|r| clustered && (sp || !r.clusters_sps));
-        let method = room.map_or(Method::Colom, |r| r.method);
-        Plan {
-            indirect,
-            vpl_clustering: clustered
-                && room.is_none_or(|r| r.vpl_clusters)
-                && c.vpl_clusters > 0
-                && c.vpl_clusters < f.vpls,
-            sp_clustering: sp && method == Method::Colom,
-            method,
-            low,
-            accumulate: clustered && c.temporal && c.temporal_alpha < 1.0,
-        }
-    }
-
-    /// The passes, in the order they run.
-    pub fn passes(&self) -> Vec<Pass> {
-        let mut p = vec![];
-        if self.indirect {
-            p.push(Pass::VplTrace);
-        }
-        if self.vpl_clustering {
-            p.push(Pass::VplCluster);
-        }
-        p.extend([Pass::Primary, Pass::Direct]);
-        if self.indirect {
-            p.extend_from_slice(match self.method {
-                Method::Colom if self.sp_clustering => {
-                    &[Pass::SpCluster, Pass::Visibility, Pass::Shade][..]
-                }
-                Method::Colom if self.vpl_clustering => &[Pass::Gather],
-                Method::Colom => &[Pass::Reference],
-                m => crate::method::room(m).expect("a method's room").passes,
-            });
-        }
-        if self.low.is_some() {
-            p.push(Pass::Upsample);
-        }
-        if self.accumulate {
-            p.push(Pass::Accumulate);
-        }
-        p
-    }
-}
-
-/// The `dispatch::Gpu` of a `Renderer` (a macro, so that the passes stay borrowable beside it).
-macro_rules! gpu {
-    ($r:ident) => {
-        crate::gi::dispatch::Gpu {
-            ctx: $r.ctx,
-            scene: &$r.gpu,
-            profiler: &mut $r.profiler,
-        }
-    };
-}
-pub(crate) use gpu;
 
 /// A frame's buffers and what its passes hand on to the next ones (the other methods' passes read
 /// it as `method::FrameInputs`).
@@ -183,7 +69,7 @@ impl Renderer<'_> {
         check_frame_size(ctx, width, height, PIXEL_BYTES)?;
         let n = width * height;
         let plan = Plan::new(&self.scene, s);
-        check_visibility_size(ctx, &plan, s).map_err(anyhow::Error::msg)?;
+        check_method_limits(ctx, &plan, s).map_err(anyhow::Error::msg)?;
         let passes = plan.passes();
         let camera = self.to_render_units(camera);
         let (lw, lh) = plan.low.unwrap_or((width, height));
@@ -200,16 +86,6 @@ impl Renderer<'_> {
             rays_per_point: 0,
             counts: Counts::default(),
         };
-        // The indirect passes see the render scale's frame.
-        let at_scale = plan.low.map(|(width, height)| RenderSettings {
-            frame: FrameSettings {
-                width,
-                height,
-                ..s.frame
-            },
-            ..s.clone()
-        });
-        let si = at_scale.as_ref().unwrap_or(s);
         for &pass in &passes {
             match pass {
                 Pass::VplTrace => {
@@ -240,10 +116,7 @@ impl Renderer<'_> {
                         s.frame.seed,
                     );
                 }
-                Pass::SpCluster | Pass::Visibility | Pass::Shade => {
-                    self.method_pass(Method::Colom, pass, si, &mut r)?
-                }
-                Pass::Gather | Pass::Reference => self.gather(pass, si, &mut r)?,
+                Pass::Gather | Pass::Reference => self.gather(pass, s, &mut r)?,
                 Pass::Upsample => {
                     let (_, params) = r.image.as_ref().expect("planned");
                     let k = self.upsample.get(ctx);
@@ -259,7 +132,10 @@ impl Renderer<'_> {
                 }
                 Pass::Accumulate => self.accumulate(s, &r),
                 Pass::PathTrace => unreachable!("the path tracer is `path_trace`"),
-                _ => self.method_pass(plan.method, pass, si, &mut r)?,
+                _ => {
+                    let method = plan.method.expect("a method's pass");
+                    self.method_pass(method, pass, s, &mut r)?
+                }
             }
         }
         self.finish(s, &plan, passes, r)
@@ -298,7 +174,13 @@ impl Renderer<'_> {
         let compose = self
             .compose
             .get_or_init(|| crate::gi::compose::Compose::new(self.ctx));
-        compose.record(self.ctx, &frame, texture);
+        let light = crate::gi::compose::FrameLight {
+            direct: &frame.buffers.radiance,
+            indirect: frame.buffers.image_indirect(),
+            size: frame.buffers.size,
+            output_scale: frame.output_scale,
+        };
+        compose.record(self.ctx, &light, texture);
         Ok(frame)
     }
 
@@ -332,7 +214,7 @@ impl Renderer<'_> {
                 num_lights: lights.lights.len() as u32,
                 indirect: r.indirect(),
                 pixels: r.pixels,
-                d_min: s.frame.clamp * self.scene.extent(),
+                d_min: s.frame.d_min(self.scene.extent()),
                 label,
                 light: s.cluster.cluster_light,
             },
@@ -370,11 +252,8 @@ impl Renderer<'_> {
         s: &RenderSettings,
         r: &mut FrameResources,
     ) -> Result<()> {
-        let ctx = self.ctx;
-        let state = self
-            .methods
-            .entry(method)
-            .or_insert_with(|| crate::method::build(method)(ctx, &self.gpu));
+        self.method(method);
+        let state = self.methods.get_mut(&method).expect("built above");
         let inputs = FrameInputs {
             scene: &self.scene,
             frame: &s.frame,
@@ -385,6 +264,8 @@ impl Renderer<'_> {
             reference: &self.reference,
             gbuffer: &r.buffers.gbuffer,
             pixels: r.pixels,
+            size: r.buffers.low.unwrap_or(r.buffers.size),
+            d_min: s.frame.d_min(self.scene.extent()),
             cam: r.cam,
             indirect: &r.buffers.indirect,
         };
@@ -408,7 +289,7 @@ impl Renderer<'_> {
             *timings_ms.entry(pass.name().into()).or_insert(0.0) += ms;
         }
         // A method's resident stages are not the frame's (as the VPLs and their clustering).
-        let resident = match self.methods.get_mut(&plan.method) {
+        let resident = match plan.method.and_then(|m| self.methods.get_mut(&m)) {
             Some(m) if plan.indirect => m.take_resident_timings(&mut timings_ms),
             _ => Default::default(),
         };
@@ -436,6 +317,7 @@ impl Renderer<'_> {
         for m in self.methods.values_mut() {
             m.end_frame();
         }
+        self.last_method = plan.method.filter(|_| plan.indirect);
         let c = &r.counts;
         let image_cam = r.image.as_ref().map_or(r.cam, |i| i.0);
         self.history = plan.accumulate.then(|| History {
@@ -473,50 +355,6 @@ impl Renderer<'_> {
                 ..Default::default()
             },
             buffers: r.buffers,
-        })
-    }
-
-    /// The diffuse path tracer (`--path-trace`, the check of the VPL reference's own bias) instead of
-    /// the VPL frame: `spp` samples a pixel with the settings' bounce budget and seed, in the scene's
-    /// own units (scaled back like `render`). Nothing of the VPL frame runs.
-    pub fn path_trace(&mut self, camera: &Camera, s: &RenderSettings, spp: u32) -> Result<Frame> {
-        let ctx = self.ctx;
-        let f = &s.frame;
-        check_frame_size(ctx, f.width, f.height, PATH_TRACE_PIXEL_BYTES)?;
-        let pt = crate::gi::pathtrace::PathTrace::new(ctx, &self.gpu);
-        let cam = CameraParams::new(&self.to_render_units(camera), f.width, f.height);
-        let _ = self.profiler.collect(ctx)?;
-        // Samples an invocation traces per pass. lavapipe ends all loops of a SIMD batch after
-        // 65,535 trips (docs/architecture.md): 16 samples of up to 9 vertices lost up to 2 of them on
-        // 1% of the breakfast room's pixels (262k triangles; none on the built-in rooms), 4 lose none.
-        let per_pass = if ctx.software && self.gpu.info.num_nodes > 1 << 16 {
-            4
-        } else {
-            16
-        };
-        let samples = crate::gi::pathtrace::PtSamples {
-            spp: spp.max(1),
-            per_pass,
-        };
-        let img = pt.render(&mut gpu!(self), &cam, samples, f.seed, f.bounces)?;
-        let mut timings_ms = self.profiler.collect(ctx)?;
-        let ms: f64 = timings_ms.values().sum();
-        timings_ms.insert(FRAME_KEY.into(), ms);
-        let radiance: Vec<[f32; 3]> = img
-            .iter()
-            .map(|p| self.to_scene_units(&[p[0], p[1], p[2], 0.0]))
-            .collect();
-        let n = radiance.len();
-        Ok(Frame {
-            width: f.width,
-            height: f.height,
-            // The path tracer does not separate direct from indirect light: all of it is here.
-            direct: radiance.clone(),
-            indirect: vec![[0.0; 3]; n],
-            radiance,
-            passes: vec![Pass::PathTrace],
-            timings_ms,
-            ..Default::default()
         })
     }
 }

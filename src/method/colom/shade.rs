@@ -5,10 +5,10 @@ use std::cell::OnceCell;
 
 use bytemuck::{Pod, Zeroable};
 
-use super::dispatch::{Gpu, Run};
-use super::dispatch::{Kernel, copy_to_texture};
-use super::pass::Pass;
-use super::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
+use crate::gi::dispatch::{Gpu, Run};
+use crate::gi::dispatch::{Kernel, copy_to_texture};
+use crate::gi::pass::Pass;
+use crate::gi::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
 use crate::settings::{ClusterLight, MAX_F};
 
@@ -63,7 +63,7 @@ pub struct Shade {
     /// The shader's `PATTERNS` (`patterns()` when built).
     patterns: u32,
     params: crate::gpu::persistent::Uniform<ShadeParams>,
-    lights: super::dispatch::DataTextureSlot,
+    lights: crate::gi::dispatch::DataTextureSlot,
 }
 
 impl Default for Shade {
@@ -83,7 +83,7 @@ impl Shade {
             kernels: Default::default(),
             patterns: patterns.min(MAX_PATTERNS),
             params: crate::gpu::persistent::Uniform::new("shade params"),
-            lights: super::dispatch::DataTextureSlot::new(
+            lights: crate::gi::dispatch::DataTextureSlot::new(
                 "shade lights",
                 wgpu::TextureFormat::Rgba32Float,
             ),
