@@ -119,17 +119,9 @@ impl SceneArgs {
     }
 }
 
-/// The most VPLs this device holds: the VPL buffer is one storage binding.
+/// The most VPLs this device holds (`render::check_vpls`), as bad input.
 pub fn check_vpls(ctx: &GpuContext, vpls: u32) -> Result<()> {
-    use crate::gi::vpl_trace::VPL_BYTES;
-    let binding = ctx.max_binding();
-    let most = binding / VPL_BYTES;
-    if vpls as u64 > most {
-        return Err(bad(format!(
-            "--vpls {vpls}: at most {most} on this adapter ({VPL_BYTES} bytes a VPL in one {binding}-byte storage binding)"
-        )));
-    }
-    Ok(())
+    crate::render::check_vpls(ctx, vpls).map_err(bad)
 }
 
 /// The largest image this device renders: each per-pixel buffer is one storage binding.
