@@ -305,7 +305,7 @@ fn wang_clustering_matches_cpu_twin_with_thousands_of_clusters() {
         .iter()
         .map(twin::Center::from_gpu)
         .collect();
-    let cells = twin::CentreGrid::build(&c.params, &centres).cells();
+    let cells = twin::centre_grid(&c.params, &centres).cells();
     println!("{cells} grid cells");
     assert!(cells > 1024, "{cells} cells");
     let key = "methods::wang_128x96";

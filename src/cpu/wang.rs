@@ -19,12 +19,13 @@
 
 use glam::Vec3;
 
+pub use super::grid::CentreGrid;
 use super::shading::{CpuScene, onb};
 use crate::gi::primary::ShadingPoint;
 use crate::gi::rng::{rng_next, rng_seed};
 pub use crate::method::wang::cluster::{
-    APPORTION_ROUNDS, ClusterParams, EPS_MAX, EPS_SCALE, INVALID, MAX_DIM,
-    MIN_GRID_POINTS_PER_CLUSTER, NRM_SCALE, POS_SCALE, grid_step, quadtree_levels, stored_nodes,
+    APPORTION_ROUNDS, ClusterParams, EPS_MAX, EPS_SCALE, INVALID, MIN_GRID_POINTS_PER_CLUSTER,
+    NRM_SCALE, POS_SCALE, grid_step, quadtree_levels, stored_nodes,
 };
 pub use crate::method::wang::{RADIUS_MIN, RADIUS_RAYS, RADIUS_RAYS_PER_DISPATCH, interp_stride};
 
@@ -300,7 +301,7 @@ pub fn quadtree_seeds(img: GridImage, tree: &mut Quadtree) -> Vec<u32> {
     seeds
 }
 
-/// The first assignment's hint of grid pixel (x, y) (`CentreGrid::nearest`): the first seed of the
+/// The first assignment's hint of grid pixel (x, y) (`nearest`): the first seed of the
 /// deepest node on its way down from the root that got any (after `quadtree_seeds`).
 pub fn seed_hint(tree: &Quadtree, x: u32, y: u32) -> u32 {
     let levels = tree.levels;
@@ -341,81 +342,43 @@ impl Center {
     }
 }
 
-/// The uniform grid over the valid centres that the assignment searches (twin of
-/// `wang_cluster.wgsl`'s `grid_*` steps; colom's sizing, `cpu::kmeans`).
-pub struct CentreGrid {
-    origin: Vec3,
-    cell: f32,
-    dims: [u32; 3],
-    cells: Vec<Vec<u32>>,
+/// The grid over the valid centres that the assignment searches (twin of wang/grid.wgsl: the
+/// shared `cpu::grid` with the guard for centres along a line).
+pub fn centre_grid(p: &ClusterParams, cs: &[Center]) -> CentreGrid {
+    let valid = cs.iter().enumerate().filter(|(_, c)| c.count > 0);
+    let centres = valid.map(|(k, c)| (k as u32, c.pos));
+    CentreGrid::build(centres, p.k, p.lo, p.ext, true)
 }
 
-impl CentreGrid {
-    pub fn build(p: &ClusterParams, cs: &[Center]) -> CentreGrid {
-        let centres = cs.iter().filter(|c| c.count > 0).map(|c| c.pos);
-        let (lo, e) = super::kmeans::centre_bounds(centres, p.lo, p.ext);
-        let area = 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x);
-        let emax = e.x.max(e.y.max(e.z));
-        let spacing = (area / p.k.max(1) as f32)
-            .sqrt()
-            .max(emax / p.k.max(1) as f32);
-        let (cell, dims) = super::kmeans::cell_side_and_dims(e, spacing, p.ext[3], MAX_DIM);
-        let mut g = CentreGrid {
-            origin: lo,
-            cell,
-            dims,
-            cells: vec![Vec::new(); (dims[0] * dims[1] * dims[2]) as usize],
-        };
-        for (k, c) in cs.iter().enumerate() {
-            if c.count > 0 {
-                let i = g.index(g.coord(c.pos));
-                g.cells[i].push(k as u32);
+/// The centre of least Eq. (2) error (the lower index on a tie) among `hint` (when it is a cluster
+/// with members) and the centres of the 27 cells of `grid` around `pos`; without either, the first
+/// ring of cells further out that holds a centre; `INVALID` without any valid centre (twin of
+/// wang/assign.wgsl's `nearest`).
+pub fn nearest(
+    grid: &CentreGrid,
+    cs: &[Center],
+    alpha: f32,
+    (pos, nrm): (Vec3, Vec3),
+    hint: u32,
+) -> u32 {
+    let c = grid.coord(pos);
+    let (mut best_e, mut best) = match cs.get(hint as usize) {
+        Some(h) if h.count > 0 => (eq2_error(alpha, pos, nrm, h.pos, h.nrm), hint),
+        _ => (f32::MAX, INVALID),
+    };
+    for ring in 1..=grid.max_ring() {
+        for k in grid.ring(c, ring) {
+            let ck = &cs[k as usize];
+            let e = eq2_error(alpha, pos, nrm, ck.pos, ck.nrm);
+            if e < best_e || (e == best_e && k < best) {
+                (best_e, best) = (e, k);
             }
         }
-        g
-    }
-
-    /// Cells of the grid.
-    pub fn cells(&self) -> usize {
-        self.cells.len()
-    }
-
-    fn coord(&self, p: Vec3) -> [i32; 3] {
-        let c = ((p - self.origin) / self.cell).floor();
-        [0, 1, 2].map(|a| c[a].clamp(0.0, self.dims[a] as f32 - 1.0) as i32)
-    }
-
-    fn index(&self, c: [i32; 3]) -> usize {
-        ((c[2] as u32 * self.dims[1] + c[1] as u32) * self.dims[0] + c[0] as u32) as usize
-    }
-
-    /// The centre of least Eq. (2) error (the lower index on a tie) among `hint` (when it is a
-    /// cluster with members) and the centres of the 27 cells around `pos`; without either, the first
-    /// ring of cells further out that holds a centre; `INVALID` without any valid centre.
-    pub fn nearest(&self, cs: &[Center], alpha: f32, pos: Vec3, nrm: Vec3, hint: u32) -> u32 {
-        let c = self.coord(pos);
-        let d = self.dims.map(|x| x as i32);
-        let maxr = d[0].max(d[1]).max(d[2]);
-        let (mut best_e, mut best) = match cs.get(hint as usize) {
-            Some(h) if h.count > 0 => (eq2_error(alpha, pos, nrm, h.pos, h.nrm), hint),
-            _ => (f32::MAX, INVALID),
-        };
-        for ring in 1..=maxr {
-            for cell in super::kmeans::ring_cells(c, ring, d) {
-                for &k in &self.cells[self.index(cell)] {
-                    let ck = &cs[k as usize];
-                    let e = eq2_error(alpha, pos, nrm, ck.pos, ck.nrm);
-                    if e < best_e || (e == best_e && k < best) {
-                        (best_e, best) = (e, k);
-                    }
-                }
-            }
-            if best != INVALID {
-                break;
-            }
+        if best != INVALID {
+            break;
         }
-        best
     }
+    best
 }
 
 /// The centres of `labels` (K of them, `prev` the centres before): mean position and normalised
@@ -503,7 +466,7 @@ pub struct WangClusters {
     pub passes: u32,
 }
 
-/// Every valid pixel m of `pixels` to its nearest centre (`CentreGrid::nearest` on a grid over `cs`)
+/// Every valid pixel m of `pixels` to its nearest centre (`nearest` on the grid over `cs`)
 /// with the hint `hint(m, labels)`.
 fn assign(
     p: &ClusterParams,
@@ -513,12 +476,12 @@ fn assign(
     labels: &mut [u32],
     hint: impl Fn(u32, &[u32]) -> u32,
 ) {
-    let grid = CentreGrid::build(p, cs);
+    let grid = centre_grid(p, cs);
     for &m in pixels {
         let sp = &sps[m as usize];
         if sp.valid {
             let h = hint(m, labels);
-            labels[m as usize] = grid.nearest(cs, p.alpha, sp.pos, sp.normal, h);
+            labels[m as usize] = nearest(&grid, cs, p.alpha, (sp.pos, sp.normal), h);
         }
     }
 }
