@@ -586,7 +586,8 @@ fn wang_cluster_border_moves_as_far_as_the_data_asks() {
 }
 
 /// Hand-worked oracle of the assignment's grid search beyond the first ring and at the grid's far
-/// faces (`wang_cluster.wgsl`'s `scan_ring` and `cell_coord`): a 32×16 image (K 8: a grid step of 2,
+/// faces (`common/grid.wgsl`'s `scan_ring` and `cell_coord`, with wang's metric and its guard for
+/// centres along a line): a 32×16 image (K 8: a grid step of 2,
 /// so the pixels off the grid image are labelled afterwards with no hint) of eight 8×8 blocks, each
 /// block one clump of equal points on the line x = z = 0. The quadtree root's two quadrants with
 /// points (blocks 0, 1, 4, 5 and 2, 3, 6, 7) hold the same clumps shifted by 0.1 along y (t = 0,
