@@ -17,16 +17,22 @@ fn sample_clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     atomicStore(&sums[WORDS * j + 14u], INVALID);
 }
 
+// The pixel of invocation gid when it has a cluster, else INVALID.
+fn labelled_pixel(gid: vec3<u32>, nwg: vec3<u32>) -> u32 {
+    let m = chunk_item(gid, nwg);
+    if m >= params.pixels || labels[m] == INVALID {
+        return INVALID;
+    }
+    return m;
+}
+
 @compute @workgroup_size(64)
 fn sample_dist(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let m = chunk_item(gid, nwg);
-    if m >= params.pixels {
+    let m = labelled_pixel(gid, nwg);
+    if m == INVALID {
         return;
     }
     let l = labels[m];
-    if l == INVALID {
-        return;
-    }
     let sp = gbuffer[m];
     let bits = bitcast<u32>(eq2_error(sp.pos.xyz, sp.nrm.xyz, centres[2u * l].xyz, centres[2u * l + 1u].xyz));
     labels[params.pixels + m] = bits;
@@ -37,14 +43,11 @@ fn sample_dist(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
 
 @compute @workgroup_size(64)
 fn sample_pick(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let m = chunk_item(gid, nwg);
-    if m >= params.pixels {
+    let m = labelled_pixel(gid, nwg);
+    if m == INVALID {
         return;
     }
     let l = labels[m];
-    if l == INVALID {
-        return;
-    }
     if labels[params.pixels + m] == atomicLoad(&sums[WORDS * l + 13u]) {
         atomicMin(&sums[WORDS * l + 14u], m);
     }

@@ -12,6 +12,14 @@ fn node_index(l: u32, x: u32, y: u32) -> u32 {
 }
 
 
+// Node i of level l as (x, y) (row-major within the level); INVALID past the level's nodes.
+fn level_node(i: u32, l: u32) -> vec2<u32> {
+    if i >= (1u << (2u * l)) {
+        return vec2<u32>(INVALID);
+    }
+    return vec2<u32>(i & ((1u << l) - 1u), i >> l);
+}
+
 fn node_count(n: u32) -> u32 {
     return u32(nodes[2u * n].w);
 }
@@ -33,6 +41,13 @@ fn node_mean(n: u32) -> Mean {
     return Mean(s.xyz / s.w, nrm);
 }
 
+// A node's sums: positions, normals, valid points.
+struct NodeSums {
+    ps: vec3<f32>,
+    ns: vec3<f32>,
+    c: f32,
+}
+
 // Level L - 1 (2x2 grid pixels a node): sums of the valid points, in the order (0,0), (1,0), (0,1),
 // (1,1); the node's words cleared. Also starts the level counter.
 @compute @workgroup_size(64)
@@ -42,28 +57,25 @@ fn seed_leaves(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     if i == 0u {
         atomicStore(&bounds[LEVEL], 0u);
     }
-    if i >= (1u << (2u * l)) {
+    let node = level_node(i, l);
+    if node.x == INVALID {
         return;
     }
-    let x = i & ((1u << l) - 1u);
-    let y = i >> l;
-    var ps = vec3<f32>(0.0);
-    var ns = vec3<f32>(0.0);
-    var c = 0.0;
+    var s = NodeSums();
     for (var q = 0u; q < 4u; q++) {
-        let m = valid_pixel(2u * x + (q & 1u), 2u * y + (q >> 1u));
+        let m = valid_pixel(2u * node.x + (q & 1u), 2u * node.y + (q >> 1u));
         if m != INVALID {
-            ps += gbuffer[m].pos.xyz;
-            ns += gbuffer[m].nrm.xyz;
-            c += 1.0;
+            s.ps += gbuffer[m].pos.xyz;
+            s.ns += gbuffer[m].nrm.xyz;
+            s.c += 1.0;
         }
     }
-    store_node(node_index(l, x, y), ps, ns, c);
+    store_node(node_index(l, node.x, node.y), s);
 }
 
-fn store_node(n: u32, ps: vec3<f32>, ns: vec3<f32>, c: f32) {
-    nodes[2u * n] = vec4<f32>(ps, c);
-    nodes[2u * n + 1u] = vec4<f32>(ns, 0.0);
+fn store_node(n: u32, s: NodeSums) {
+    nodes[2u * n] = vec4<f32>(s.ps, s.c);
+    nodes[2u * n + 1u] = vec4<f32>(s.ns, 0.0);
     for (var w = 0u; w < 4u; w++) {
         atomicStore(&tree[4u * n + w], 0u);
     }
@@ -74,22 +86,19 @@ fn store_node(n: u32, ps: vec3<f32>, ns: vec3<f32>, c: f32) {
 fn seed_up(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = chunk_item(gid, nwg);
     let l = params.levels - 2u - atomicLoad(&bounds[LEVEL]);
-    if i >= (1u << (2u * l)) {
+    let node = level_node(i, l);
+    if node.x == INVALID {
         return;
     }
-    let x = i & ((1u << l) - 1u);
-    let y = i >> l;
-    var ps = vec3<f32>(0.0);
-    var ns = vec3<f32>(0.0);
-    var c = 0.0;
+    var s = NodeSums();
     for (var q = 0u; q < 4u; q++) {
-        let child = node_index(l + 1u, 2u * x + (q & 1u), 2u * y + (q >> 1u));
-        let s = nodes[2u * child];
-        ps += s.xyz;
-        ns += nodes[2u * child + 1u].xyz;
-        c += s.w;
+        let child = node_index(l + 1u, 2u * node.x + (q & 1u), 2u * node.y + (q >> 1u));
+        let sums = nodes[2u * child];
+        s.ps += sums.xyz;
+        s.ns += nodes[2u * child + 1u].xyz;
+        s.c += sums.w;
     }
-    store_node(node_index(l, x, y), ps, ns, c);
+    store_node(node_index(l, node.x, node.y), s);
 }
 
 // The level counter's next value (one invocation between two levels' steps).
@@ -282,11 +291,12 @@ fn nth_point(l_in: u32, x_in: u32, y_in: u32, r_in: u32) -> u32 {
 fn seed_split(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = chunk_item(gid, nwg);
     let l = atomicLoad(&bounds[LEVEL]) - (params.levels - 1u);
-    if i >= (1u << (2u * l)) {
+    let node = level_node(i, l);
+    if node.x == INVALID {
         return;
     }
-    let x = i & ((1u << l) - 1u);
-    let y = i >> l;
+    let x = node.x;
+    let y = node.y;
     let n = node_index(l, x, y);
     let count = node_count(n);
     var kn = atomicLoad(&tree[4u * n + 2u]);
