@@ -5,6 +5,7 @@ mod common;
 
 use common::Rand;
 use fuzzy_vpl::bvh::SceneBvh;
+use fuzzy_vpl::cpu::grid::CentreGrid;
 use fuzzy_vpl::cpu::kmeans::{self, Centroid, Point};
 use fuzzy_vpl::gi::dispatch::Gpu;
 use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KMeansTuning, KmParams, Points, scan_groups};
@@ -607,6 +608,63 @@ fn adaptations_by_hand() {
             assert!(assign[..400].iter().all(|&k| k == 0), "{what} {adapt:?}");
         }
         assert_eq!(g.weights[400], if assigned { 1.0 } else { 0.0 });
+    }
+}
+
+/// The grid itself (`common/grid.wgsl`: bounds, sizing, counting sort, block prefix sum, scatter)
+/// against its CPU twin (`cpu::grid::CentreGrid`): the grid of the final assignment over the final
+/// centroids has the twin's origin, cell side and size to the bit, and every cell the twin's
+/// centroids (the scatter's order within a cell varies: compared sorted). Surfaces of a box with
+/// K from 7 to 3000 (one to many scan blocks), and the conference room's shading points.
+#[test]
+fn grid_matches_cpu_twin() {
+    let ctx = common::gpu();
+    let (sc, sps) = conference_sps(&ctx);
+    let cases = [
+        (box_points(6000, 4), 2, BOX, 7),
+        (box_points(6000, 4), 2, BOX, 300),
+        (box_points(20000, 5), 2, BOX, 3000),
+        (sps, 4, sc.bounds(), 500),
+    ];
+    for (data, stride, frame, k) in cases {
+        let s = settings(k, 1, 1, 0.5, 3);
+        let points = ctx.storage_init("data", &data);
+        let sc = scene::load("builtin:cornell").unwrap();
+        let bvh = SceneBvh::build(&sc).unwrap();
+        let gpu = SceneGpu::upload(&ctx, &sc, &bvh);
+        let mut prof = Profiler::new(&ctx);
+        let mut g = Gpu {
+            ctx: &ctx,
+            scene: &gpu,
+            profiler: &mut prof,
+        };
+        let pts = Points {
+            data: &points,
+            count: data.len() as u32 / stride,
+            stride,
+        };
+        let c = KMeans::new()
+            .run(&mut g, "test", &pts, &s, frame, None)
+            .unwrap();
+        let raw: Vec<[f32; 4]> = ctx.read_buffer(&c.centroids, 2 * k as usize).unwrap();
+        let centres = raw
+            .chunks(2)
+            .enumerate()
+            .filter(|(_, c)| c[0][3] > 0.0)
+            .map(|(i, c)| (i as u32, Vec3::new(c[0][0], c[0][1], c[0][2])));
+        let p = c.params;
+        let twin = CentreGrid::build(centres, p.k, p.lo, p.ext, false);
+        let gpu_grid = c.read_grid(&ctx).unwrap();
+        let case = format!("K {k}, {} points", pts.count);
+        assert_eq!(gpu_grid.origin, twin.origin(), "{case}");
+        assert_eq!(gpu_grid.cell.to_bits(), twin.cell().to_bits(), "{case}");
+        assert_eq!(gpu_grid.dims, twin.dims(), "{case}");
+        assert_eq!(gpu_grid.cells.len(), twin.cells(), "{case}");
+        for (i, cell) in gpu_grid.cells.iter().enumerate() {
+            let mut got = cell.clone();
+            got.sort_unstable();
+            assert_eq!(got, twin.members(i), "{case}: cell {i}");
+        }
     }
 }
 

@@ -58,6 +58,16 @@ impl CentreGrid {
         self.cell
     }
 
+    /// The lowest corner of cell (0, 0, 0).
+    pub fn origin(&self) -> Vec3 {
+        self.origin
+    }
+
+    /// The centres of cell `i` (x fastest, then y, then z), in the order given to `build`.
+    pub fn members(&self, i: usize) -> &[u32] {
+        &self.cells[i]
+    }
+
     /// The cell of `p` (`cell_coord`: clamped to the grid).
     pub fn coord(&self, p: Vec3) -> [i32; 3] {
         let c = ((p - self.origin) / self.cell).floor();

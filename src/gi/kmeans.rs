@@ -279,6 +279,11 @@ impl KmCounters {
 }
 
 impl Clustering {
+    /// The grid of its final assignment (Alg. 2), read back (tests).
+    pub fn read_grid(&self, ctx: &GpuContext) -> Result<GridSnapshot> {
+        self._set.grid.read(ctx)
+    }
+
     /// Its counts, read back from the GPU (a small read that waits for the clustering: on request
     /// only, for the stats and tests).
     pub fn counters(&self, ctx: &GpuContext) -> Result<KmCounters> {
@@ -541,6 +546,36 @@ impl GridBuffers {
     pub fn buffers(&self) -> [&wgpu::Buffer; 4] {
         [&self.grid, &self.cells, &self.sorted, &self.ranges]
     }
+
+    /// The grid as its last build left it (read back; tests).
+    pub fn read(&self, ctx: &GpuContext) -> Result<GridSnapshot> {
+        let g: Vec<u32> = ctx.read_buffer(&self.grid, 8)?;
+        let f = |i: usize| f32::from_bits(g[i]);
+        let n = g[7] as usize;
+        let ranges: Vec<[u32; 4]> = ctx.read_buffer(&self.ranges, n)?;
+        let total = ranges.iter().map(|r| r[2]).max().unwrap_or(0) as usize;
+        let sorted: Vec<[u32; 4]> = ctx.read_buffer(&self.sorted, 2 * total)?;
+        let cells = ranges
+            .iter()
+            .map(|r| (r[1]..r[2]).map(|s| sorted[2 * s as usize][3]).collect())
+            .collect();
+        Ok(GridSnapshot {
+            origin: Vec3::new(f(0), f(1), f(2)),
+            cell: f(3),
+            dims: [g[4], g[5], g[6]],
+            cells,
+        })
+    }
+}
+
+/// A grid over centres as the GPU built it (`GridBuffers::read`): origin, cell side, cells an axis
+/// and each cell's centres (in the scatter's order, which varies).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridSnapshot {
+    pub origin: Vec3,
+    pub cell: f32,
+    pub dims: [u32; 3],
+    pub cells: Vec<Vec<u32>>,
 }
 
 /// Runs k-means steps in one submission (`Kernel::run_entries` with the clustering's bind group).
