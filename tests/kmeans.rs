@@ -5,6 +5,7 @@ mod common;
 
 use common::Rand;
 use fuzzy_vpl::bvh::SceneBvh;
+use fuzzy_vpl::cpu::grid::CentreGrid;
 use fuzzy_vpl::cpu::kmeans::{self, Centroid, Point};
 use fuzzy_vpl::gi::dispatch::Gpu;
 use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, KMeansTuning, KmParams, Points, scan_groups};
@@ -607,6 +608,139 @@ fn adaptations_by_hand() {
             assert!(assign[..400].iter().all(|&k| k == 0), "{what} {adapt:?}");
         }
         assert_eq!(g.weights[400], if assigned { 1.0 } else { 0.0 });
+    }
+}
+
+/// The grid itself (`common/grid.wgsl`: bounds, sizing, counting sort, block prefix sum, scatter)
+/// against its CPU twin (`cpu::grid::CentreGrid`): the grid of the final assignment over the final
+/// centroids has the twin's origin, cell side and size to the bit, and every cell the twin's
+/// centroids (the scatter's order within a cell varies: compared sorted). Surfaces of a box with
+/// K from 7 to 3000 (one to many scan blocks), and the conference room's shading points.
+#[test]
+fn grid_matches_cpu_twin() {
+    let ctx = common::gpu();
+    let (sc, sps) = conference_sps(&ctx);
+    let cases = [
+        (box_points(6000, 4), 2, BOX, 7),
+        (box_points(6000, 4), 2, BOX, 300),
+        (box_points(20000, 5), 2, BOX, 3000),
+        (sps, 4, sc.bounds(), 500),
+    ];
+    for (data, stride, frame, k) in cases {
+        let s = settings(k, 1, 1, 0.5, 3);
+        let points = ctx.storage_init("data", &data);
+        let sc = scene::load("builtin:cornell").unwrap();
+        let bvh = SceneBvh::build(&sc).unwrap();
+        let gpu = SceneGpu::upload(&ctx, &sc, &bvh);
+        let mut prof = Profiler::new(&ctx);
+        let mut g = Gpu {
+            ctx: &ctx,
+            scene: &gpu,
+            profiler: &mut prof,
+        };
+        let pts = Points {
+            data: &points,
+            count: data.len() as u32 / stride,
+            stride,
+        };
+        let c = KMeans::new()
+            .run(&mut g, "test", &pts, &s, frame, None)
+            .unwrap();
+        let raw: Vec<[f32; 4]> = ctx.read_buffer(&c.centroids, 2 * k as usize).unwrap();
+        let centres = raw
+            .chunks(2)
+            .enumerate()
+            .filter(|(_, c)| c[0][3] > 0.0)
+            .map(|(i, c)| (i as u32, Vec3::new(c[0][0], c[0][1], c[0][2])));
+        let p = c.params;
+        let twin = CentreGrid::build(centres, p.k, p.lo, p.ext, false);
+        let gpu_grid = c.read_grid(&ctx).unwrap();
+        let case = format!("K {k}, {} points", pts.count);
+        assert_eq!(gpu_grid.origin, twin.origin(), "{case}");
+        assert_eq!(gpu_grid.cell.to_bits(), twin.cell().to_bits(), "{case}");
+        assert_eq!(gpu_grid.dims, twin.dims(), "{case}");
+        assert_eq!(gpu_grid.cells.len(), twin.cells(), "{case}");
+        for (i, cell) in gpu_grid.cells.iter().enumerate() {
+            let mut got = cell.clone();
+            got.sort_unstable();
+            assert_eq!(got, twin.members(i), "{case}: cell {i}");
+        }
+    }
+}
+
+/// Hand-worked oracle of colom's ring search with Eq. (7) (`common/grid.wgsl`'s rings,
+/// `common/nearest.wgsl`'s metric) on centroids along a line: the degenerate grid that wang's guard
+/// for centres along a line would change (colom's grid has none: `grid_build`'s `along_line`). Ten
+/// points, K 5, γ 1, no iteration, F 2, n_t 0.5: each stratum is two points, its first the
+/// centroid: c0 (0, 0, 0), c1 (0.15, 0, 0), c2 (1, 0, 0), c3 (3, 0, 0) facing −z, c4 (4, 0, 0), the
+/// others facing +z. The centroids span x in [0, 4] with no area: cells of 4 / 64 = 0.0625 (the
+/// floor), 64 × 1 × 1. The other point of each stratum:
+/// - (0.1, 0, 0), +z: cell 1; ring 1 (cells 0–2) holds c0 (cell 0, 0.1 away) and c1 (cell 2,
+///   0.05): [c1, c0], in both modes.
+/// - (0.12, 0, 0), −z: ring 1 holds c0 and c1, both facing +z: none passes n_t. Rings 2–4 (cells
+///   up to 5 away) hold no centroid; the fallback by position alone then finds c1 (0.03 away) in
+///   ring 1. (With wang's guard the cells would be 1.2 wide, 4 of them, and ring 2 would give c3,
+///   facing −z, 2.88 away.)
+/// - (1.2, 0, 0), +z: cell 19; c2 (cell 16) lies in ring 3: [c2] by the ring fallback.
+/// - (2.9, 0, 0), −z: cell 46; c3 (cell 48, −z) lies in ring 2: [c3] by the ring fallback.
+/// - (3.95, 0, 0), +z: cell 63 (c4's, clamped), 0.05 from c4: [c4], in both modes.
+///
+/// Without the fallbacks (`--paper`) the second to fourth points get none.
+/// GPU and CPU twin alike.
+#[test]
+fn ring_search_by_hand_on_a_line_of_centroids() {
+    use fuzzy_vpl::settings::Adaptations;
+    let ctx = common::gpu();
+    let up = [0.0, 0.0, 1.0];
+    let down = [0.0, 0.0, -1.0];
+    let strata = [
+        ([0.0, 0.0, 0.0], up, [0.1, 0.0, 0.0], up),
+        ([0.15, 0.0, 0.0], up, [0.12, 0.0, 0.0], down),
+        ([1.0, 0.0, 0.0], up, [1.2, 0.0, 0.0], up),
+        ([3.0, 0.0, 0.0], down, [2.9, 0.0, 0.0], down),
+        ([4.0, 0.0, 0.0], up, [3.95, 0.0, 0.0], up),
+    ];
+    let mut data = Vec::new();
+    for (c, cn, q, qn) in strata {
+        push_point(&mut data, c, cn, true);
+        push_point(&mut data, q, qn, true);
+    }
+    let pts = points_of(&data, 2);
+    let frame = (Vec3::splat(-1.0), Vec3::splat(5.0));
+    let none = u32::MAX;
+    for (adapt, want) in [
+        (
+            Adaptations::default(),
+            [[1, 0], [1, none], [2, none], [3, none], [4, none]],
+        ),
+        (
+            Adaptations::none(),
+            [[1, 0], [none, none], [none, none], [none, none], [4, none]],
+        ),
+    ] {
+        let s = KMeansSettings {
+            adapt,
+            ..settings(5, 2, 1, 0.5, 0)
+        };
+        let g = run_gpu(&ctx, &data, 2, &s, frame);
+        let c = kmeans::kmeans(&pts, &g.params, 0);
+        assert_eq!(kmeans::grid_cells(&g.params, &c.centroids), 64);
+        for (what, cs, assign) in [
+            ("GPU", &g.centroids, &g.assign),
+            ("CPU", &c.centroids, &c.assign),
+        ] {
+            for (k, (pos, ..)) in strata.iter().enumerate() {
+                assert_eq!(
+                    cs[k].pos,
+                    Vec3::from(*pos),
+                    "{what} {adapt:?}: centroid {k}"
+                );
+            }
+            for (i, w) in want.iter().enumerate() {
+                let m = 2 * i + 1;
+                assert_eq!(&assign[2 * m..2 * m + 2], w, "{what} {adapt:?}: point {m}");
+            }
+        }
     }
 }
 

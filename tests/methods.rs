@@ -306,7 +306,7 @@ fn wang_clustering_matches_cpu_twin_with_thousands_of_clusters() {
         .iter()
         .map(twin::Center::from_gpu)
         .collect();
-    let cells = twin::CentreGrid::build(&c.params, &centres).cells();
+    let cells = twin::centre_grid(&c.params, &centres).cells();
     println!("{cells} grid cells");
     assert!(cells > 1024, "{cells} cells");
     let key = "methods::wang_128x96";
@@ -587,7 +587,8 @@ fn wang_cluster_border_moves_as_far_as_the_data_asks() {
 }
 
 /// Hand-worked oracle of the assignment's grid search beyond the first ring and at the grid's far
-/// faces (`wang_cluster.wgsl`'s `scan_ring` and `cell_coord`): a 32×16 image (K 8: a grid step of 2,
+/// faces (`common/grid.wgsl`'s `scan_ring` and `cell_coord`, with wang's metric and its guard for
+/// centres along a line): a 32×16 image (K 8: a grid step of 2,
 /// so the pixels off the grid image are labelled afterwards with no hint) of eight 8×8 blocks, each
 /// block one clump of equal points on the line x = z = 0. The quadtree root's two quadrants with
 /// points (blocks 0, 1, 4, 5 and 2, 3, 6, 7) hold the same clumps shifted by 0.1 along y (t = 0,

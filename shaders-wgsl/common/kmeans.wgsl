@@ -1,12 +1,11 @@
 // What the k-means steps share (shaders-wgsl/kmeans.wgsl and kmeans/*.wgsl): the parameters, the
-// bindings, point access, Eq. (7) and the grid's cell arithmetic.
+// bindings, point access and Eq. (7); the grid over the centroids is common/grid.wgsl's.
 #import common/chunk.wgsl
+#import common/grid.wgsl
 
 const INVALID: u32 = 0xffffffffu;
 const BIG: f32 = 3.4028235e38;
 const MAX_F: u32 = 16u;
-const MAX_DIM: u32 = 64u;
-const MAX_CELLS: u32 = MAX_DIM * MAX_DIM * MAX_DIM;
 // F of the pipeline (params.f; src/gi/kmeans.rs builds one pipeline set per F in use): loops over the
 // F slots of a point have a constant trip count, so its list lives in registers.
 override F: u32 = 1u;
@@ -68,14 +67,6 @@ struct KmParams {
     warm_size: vec4<u32>,
 }
 
-// The grid over the centroids (written by grid_setup).
-struct Grid {
-    origin: vec3<f32>,
-    cell: f32,
-    dims: vec3<u32>,
-    num_cells: u32,
-}
-
 struct Centroid {
     // xyz position; w = 1 when the cluster holds at least one point.
     pos: vec4<f32>,
@@ -134,11 +125,6 @@ fn stopped() -> bool {
 // the host copied in) that may be kept.
 @group(1) @binding(17) var<storage, read_write> rep_points: array<vec4<f32>>;
 
-// Texel i of a data texture: 4096 texels a row (DATA_ROW in src/gi/dispatch.rs).
-fn texel_xy(i: u32) -> vec2<u32> {
-    return vec2<u32>(i & 4095u, i >> 12u);
-}
-
 const WORDS: u32 = 13u;
 
 fn point_pos(m: u32) -> vec4<f32> {
@@ -169,25 +155,4 @@ fn eq7_dist(p: vec3<f32>, n: vec3<f32>, c: vec3<f32>, nc: vec3<f32>) -> f32 {
 // `eq7_dist`, half the texel fetches).
 fn eq7_normals_agree(n: vec3<f32>, nc: vec3<f32>) -> bool {
     return dot(n, nc) > params.normal_threshold;
-}
-
-// Order-preserving map of floats to u32 (for atomicMin/Max on floats).
-fn float_key(x: f32) -> u32 {
-    let b = bitcast<u32>(x);
-    return select(b | 0x80000000u, ~b, (b & 0x80000000u) != 0u);
-}
-
-fn key_float(k: u32) -> f32 {
-    return bitcast<f32>(select(~k, k & 0x7fffffffu, (k & 0x80000000u) != 0u));
-}
-
-fn cell_coord(p: vec3<f32>) -> vec3<i32> {
-    let c = floor((p - grid.origin) / grid.cell);
-    let hi = vec3<f32>(grid.dims) - 1.0;
-    return vec3<i32>(clamp(c, vec3<f32>(0.0), hi));
-}
-
-fn cell_index(c: vec3<i32>) -> u32 {
-    let d = grid.dims;
-    return (u32(c.z) * d.y + u32(c.y)) * d.x + u32(c.x);
 }

@@ -26,7 +26,7 @@ fn set_initial(k: u32, c: Centroid) {
         name_empty(k, 0u);
     }
     centroids[k] = c;
-    add_to_bounds(c);
+    add_to_bounds(c.pos);
 }
 
 @compute @workgroup_size(64)

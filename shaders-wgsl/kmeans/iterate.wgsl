@@ -216,7 +216,7 @@ fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     }
     atomicStore(&reps[2u * k], 0u);
     centroids[k] = c;
-    add_to_bounds(c);
+    add_to_bounds(c.pos);
 }
 
 // Alg. 1's loop, decided on the GPU so that the host reads nothing back (one invocation, after

@@ -3,7 +3,8 @@
 
 use glam::Vec3;
 
-use crate::gi::kmeans::{KmParams, MAX_DIM};
+use super::grid::CentreGrid;
+use crate::gi::kmeans::KmParams;
 use crate::settings::Adaptations;
 
 const POS_SCALE: f32 = 16777216.0;
@@ -91,49 +92,18 @@ pub fn eq7_dist(p: &Point, c: &Centroid, n_t: f32) -> f32 {
     }
 }
 
-struct Grid {
-    origin: Vec3,
-    cell: f32,
-    dims: [u32; 3],
-    /// Centroid indices per cell.
-    cells: Vec<Vec<u32>>,
+/// Alg. 1 line 5: the grid over the valid centroids (`cpu::grid`; kmeans/grid.wgsl builds it
+/// without wang's guard for centres along a line).
+fn grid(p: &KmParams, cs: &[Centroid]) -> CentreGrid {
+    let valid = cs.iter().enumerate().filter(|(_, c)| c.valid);
+    let centres = valid.map(|(k, c)| (k as u32, c.pos));
+    CentreGrid::build(centres, p.k, p.lo, p.ext, false)
 }
 
 /// Cells of the grid Alg. 1 line 5 builds over these centroids (the GPU's grid has the same; tests use
 /// it to know how many blocks its prefix sum spans).
 pub fn grid_cells(p: &KmParams, cs: &[Centroid]) -> u32 {
-    Grid::build(p, cs).cells.len() as u32
-}
-
-impl Grid {
-    fn build(p: &KmParams, cs: &[Centroid]) -> Grid {
-        let (lo, e) = centre_bounds(cs.iter().filter(|c| c.valid).map(|c| c.pos), p.lo, p.ext);
-        let area = 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x);
-        let spacing = (area / p.k.max(1) as f32).sqrt();
-        let (cell, dims) = cell_side_and_dims(e, spacing, p.ext[3], MAX_DIM);
-        let mut g = Grid {
-            origin: lo,
-            cell,
-            dims,
-            cells: vec![Vec::new(); (dims[0] * dims[1] * dims[2]) as usize],
-        };
-        for (k, c) in cs.iter().enumerate() {
-            if c.valid {
-                let i = g.index(g.coord(c.pos));
-                g.cells[i].push(k as u32);
-            }
-        }
-        g
-    }
-
-    fn coord(&self, p: Vec3) -> [i32; 3] {
-        let c = ((p - self.origin) / self.cell).floor();
-        [0, 1, 2].map(|a| c[a].clamp(0.0, self.dims[a] as f32 - 1.0) as i32)
-    }
-
-    fn index(&self, c: [i32; 3]) -> usize {
-        ((c[2] as u32 * self.dims[1] + c[1] as u32) * self.dims[0] + c[0] as u32) as usize
-    }
+    grid(p, cs).cells() as u32
 }
 
 /// The adaptations `p` was made with (`KmParams::adapt`; kmeans.wgsl's overrides `RESEED`, ...).
@@ -155,7 +125,7 @@ pub const FINAL_RINGS: i32 = 4;
 /// The F nearest centroids by Eq. (7) in the 27 cells around the point, with the shader's fallbacks
 /// (`bounded`: the iterations' search, `ITER_RINGS` rings and no fallback).
 fn nearest(
-    g: &Grid,
+    g: &CentreGrid,
     cs: &[Centroid],
     pt: &Point,
     n_t: f32,
@@ -166,28 +136,25 @@ fn nearest(
     let mut best: Vec<(u32, f32)> = Vec::new();
     let c = g.coord(pt.pos);
     let scan = |best: &mut Vec<(u32, f32)>, ring: i32, f: usize, normals: bool| {
-        let dims = g.dims.map(|d| d as i32);
-        for cell in ring_cells(c, ring, dims) {
-            for &k in &g.cells[g.index(cell)] {
-                let r = if normals {
-                    eq7_dist(pt, &cs[k as usize], n_t)
-                } else {
-                    (pt.pos - cs[k as usize].pos).length()
-                };
-                if r < f32::MAX {
-                    if best.len() == f {
-                        let (lk, lr) = best[f - 1];
-                        if !before(r, k, lr, lk) {
-                            continue;
-                        }
-                        best.pop();
+        for k in g.ring(c, ring) {
+            let r = if normals {
+                eq7_dist(pt, &cs[k as usize], n_t)
+            } else {
+                (pt.pos - cs[k as usize].pos).length()
+            };
+            if r < f32::MAX {
+                if best.len() == f {
+                    let (lk, lr) = best[f - 1];
+                    if !before(r, k, lr, lk) {
+                        continue;
                     }
-                    let at = best
-                        .iter()
-                        .position(|&(bk, br)| before(r, k, br, bk))
-                        .unwrap_or(best.len());
-                    best.insert(at, (k, r));
+                    best.pop();
                 }
+                let at = best
+                    .iter()
+                    .position(|&(bk, br)| before(r, k, br, bk))
+                    .unwrap_or(best.len());
+                best.insert(at, (k, r));
             }
         }
     };
@@ -201,7 +168,7 @@ fn nearest(
         }
         return best;
     }
-    let maxr = *g.dims.iter().max().unwrap() as i32;
+    let maxr = g.max_ring();
     let mut ring = 2;
     while adapt.ring_fallback && best.is_empty() && ring <= FINAL_RINGS.min(maxr) {
         scan(&mut best, ring, f, true);
@@ -408,7 +375,7 @@ impl Alg1<'_> {
     /// many assignments changed and whether there was an orphan.
     fn assign_samples(&mut self, it: u32) -> (u32, bool) {
         let p = self.p;
-        let g = Grid::build(p, &self.cs);
+        let g = grid(p, &self.cs);
         let mut changed = 0u32;
         let mut orphans = false;
         for s in 0..p.num_sampled {
@@ -546,7 +513,7 @@ impl Alg1<'_> {
 /// gate. Returns the M × F assignments and weights.
 fn fuzzy_assign(points: &[Point], p: &KmParams, cs: &[Centroid]) -> (Vec<u32>, Vec<f32>) {
     let f = p.f as usize;
-    let g = Grid::build(p, cs);
+    let g = grid(p, cs);
     let m = p.num_points as usize;
     let mut assign = vec![u32::MAX; m * f];
     let mut weights = vec![0f32; m * f];
@@ -758,49 +725,4 @@ pub fn rep_weights(
         out[m * f..m * f + f].copy_from_slice(&w);
     }
     out
-}
-
-/// The bounds a search grid spans: the centres' (lowest corner, extent), or the frame `lo`, `ext`
-/// given to the kernels when there is no centre.
-pub fn centre_bounds(
-    centres: impl Iterator<Item = Vec3>,
-    lo: [f32; 4],
-    ext: [f32; 4],
-) -> (Vec3, Vec3) {
-    let (mut a, mut b) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    for c in centres {
-        a = a.min(c);
-        b = b.max(c);
-    }
-    if a.x > b.x {
-        a = Vec3::from_slice(&lo[..3]);
-        b = a + Vec3::from_slice(&ext[..3]);
-    }
-    (a, (b - a).max(Vec3::ZERO))
-}
-
-/// The cells of a search grid of `dims` cells at Chebyshev distance `ring` from cell `c` (ring 1:
-/// the 27 around it, `c` included), clipped to the grid, z then y then x ascending (the kernels'
-/// order).
-pub fn ring_cells(c: [i32; 3], ring: i32, dims: [i32; 3]) -> impl Iterator<Item = [i32; 3]> {
-    let lo = [0, 1, 2].map(|a| (c[a] - ring).max(0));
-    let hi = [0, 1, 2].map(|a| (c[a] + ring).min(dims[a] - 1));
-    (lo[2]..=hi[2])
-        .flat_map(move |z| {
-            (lo[1]..=hi[1]).flat_map(move |y| (lo[0]..=hi[0]).map(move |x| [x, y, z]))
-        })
-        .filter(move |&[x, y, z]| {
-            let cheb = (x - c[0]).abs().max((y - c[1]).abs()).max((z - c[2]).abs());
-            ring <= 1 || cheb == ring
-        })
-}
-
-/// A search grid's cell side and size over extent `e`: 1.5 centre spacings, but no finer than
-/// `max_dim` cells along the longest side nor than 1e-7 of the scene diagonal `diag` (the
-/// kernels' `grid_setup`; shared by the twins that search a grid of centres).
-pub fn cell_side_and_dims(e: Vec3, spacing: f32, diag: f32, max_dim: u32) -> (f32, [u32; 3]) {
-    let floor_cell = (e.max_element() / max_dim as f32).max(1e-7 * diag.max(1e-30));
-    let cell = (1.5 * spacing).max(floor_cell);
-    let dims = [e.x, e.y, e.z].map(|x| ((x / cell).ceil() as u32).clamp(1, max_dim));
-    (cell, dims)
 }

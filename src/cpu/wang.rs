@@ -1,7 +1,8 @@
 //! CPU twins of wang's shaders (seed 001, docs/methods.md "wang"): the whole §3.2 clustering of
-//! `shaders-wgsl/wang_cluster.wgsl` (`cluster`: the quadtree seeding, the k-means with Eq. (2) over
-//! a grid of the centres, the centre updates and the sample points, in the same f32 arithmetic and
-//! fixed-point sums as the GPU) and §3.4's R_j and interpolation of `shaders-wgsl/wang.wgsl`
+//! `shaders-wgsl/wang_cluster.wgsl` (`cluster`: the quadtree seeding of `wang/seed.wgsl`, the
+//! k-means with Eq. (2) over the grid of the centres shared with colom's (`wang/grid.wgsl`,
+//! `wang/assign.wgsl`; `cpu::grid`), the centre updates of `wang/centres.wgsl` and the sample points
+//! of `wang/sample.wgsl`, in the same f32 arithmetic and fixed-point sums as the GPU) and §3.4's R_j and interpolation of `shaders-wgsl/wang.wgsl`
 //! (`harmonic_radius`, `interpolate`).
 //!
 //! - §3.2, Eq. (2): ε = α‖x_i − x_k‖ + √(2 − 2 n_i·n_k), positions in scene diagonals
@@ -19,14 +20,17 @@
 
 use glam::Vec3;
 
+pub use super::grid::CentreGrid;
 use super::shading::{CpuScene, onb};
 use crate::gi::primary::ShadingPoint;
 use crate::gi::rng::{rng_next, rng_seed};
 pub use crate::method::wang::cluster::{
-    APPORTION_ROUNDS, ClusterParams, EPS_MAX, EPS_SCALE, INVALID, MAX_DIM,
-    MIN_GRID_POINTS_PER_CLUSTER, NRM_SCALE, POS_SCALE, grid_step, quadtree_levels, stored_nodes,
+    APPORTION_ROUNDS, ClusterParams, EPS_MAX, EPS_SCALE, INVALID, MIN_GRID_POINTS_PER_CLUSTER,
+    NRM_SCALE, POS_SCALE, grid_step, quadtree_levels, stored_nodes,
 };
 pub use crate::method::wang::{RADIUS_MIN, RADIUS_RAYS, RADIUS_RAYS_PER_DISPATCH, interp_stride};
+
+// --- wang/common.wgsl (Eq. 2) and wang.wgsl (§3.4's weight and R_j).
 
 /// Eq. (2) of §3.2: the geometric error of shading point (x_i, n_i) against centre (x_k, n_k);
 /// `alpha` is α per unit of length (the paper's α over the scene diagonal: "after the scene geometry
@@ -52,10 +56,12 @@ pub fn radius_from_sum(sum_inv: f32, diagonal: f32) -> f32 {
     r.clamp(RADIUS_MIN * diagonal, diagonal)
 }
 
+// --- wang/seed.wgsl: the quadtree seeding.
+
 /// Splits `k` seeds among a node's four children in proportion to `weight` (their ε_q), each at most
 /// `cap` (its valid shading points): floors first, then the largest remainders (lowest index on a
 /// tie), repeated over the children with room until every seed is placed (at most
-/// `APPORTION_ROUNDS` rounds). With no weight anywhere, equal shares. In f32, as `wang_cluster.wgsl`.
+/// `APPORTION_ROUNDS` rounds). With no weight anywhere, equal shares. In f32, as `wang/seed.wgsl`.
 pub fn apportion(k: u32, weight: [f32; 4], cap: [u32; 4]) -> [u32; 4] {
     let mut a = [0u32; 4];
     let mut left = k.min(cap.iter().sum());
@@ -143,7 +149,7 @@ pub struct Quadtree {
 }
 
 impl Quadtree {
-    /// Builds it as `wang_cluster.wgsl` does: 2×2 leaves in the order (0,0), (1,0), (0,1), (1,1),
+    /// Builds it as `wang/seed.wgsl` does: 2×2 leaves in the order (0,0), (1,0), (0,1), (1,1),
     /// each level up the sum of its children in that order; then ε_q, Eq. (2) of each point against
     /// the node's mean (`mean`), `EPS_SCALE` fixed point, summed exactly.
     pub fn build(img: GridImage, alpha: f32) -> Quadtree {
@@ -287,7 +293,7 @@ impl Quadtree {
     }
 }
 
-/// §3.2's adaptive seeding over the grid image (twin of `wang_cluster.wgsl`'s `seed_*` steps):
+/// §3.2's adaptive seeding over the grid image (twin of `wang/seed.wgsl`'s `seed_*` steps):
 /// min(K, valid points) seed pixels (image pixels, distinct, valid), in the order of a depth-first
 /// walk of the quadtree in Z order; a node with as many seeds as points takes them all, one with a
 /// single seed draws it uniformly among its points (stream `rng_seed(seed, node, 0x5eed)`), a node
@@ -300,7 +306,7 @@ pub fn quadtree_seeds(img: GridImage, tree: &mut Quadtree) -> Vec<u32> {
     seeds
 }
 
-/// The first assignment's hint of grid pixel (x, y) (`CentreGrid::nearest`): the first seed of the
+/// The first assignment's hint of grid pixel (x, y) (`nearest`): the first seed of the
 /// deepest node on its way down from the root that got any (after `quadtree_seeds`).
 pub fn seed_hint(tree: &Quadtree, x: u32, y: u32) -> u32 {
     let levels = tree.levels;
@@ -320,6 +326,8 @@ pub fn seed_hint(tree: &Quadtree, x: u32, y: u32) -> u32 {
     hint
 }
 
+// --- wang/centres.wgsl: the centres and their update.
+
 /// A cluster centre: mean position and normalised mean normal of its members (`count` 0: empty, out
 /// of the grid).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -338,83 +346,6 @@ impl Center {
             nrm: Vec3::new(c[1][0], c[1][1], c[1][2]),
             count: (c[0][3] > 0.0) as u32,
         }
-    }
-}
-
-/// The uniform grid over the valid centres that the assignment searches (twin of
-/// `wang_cluster.wgsl`'s `grid_*` steps; colom's sizing, `cpu::kmeans`).
-pub struct CentreGrid {
-    origin: Vec3,
-    cell: f32,
-    dims: [u32; 3],
-    cells: Vec<Vec<u32>>,
-}
-
-impl CentreGrid {
-    pub fn build(p: &ClusterParams, cs: &[Center]) -> CentreGrid {
-        let centres = cs.iter().filter(|c| c.count > 0).map(|c| c.pos);
-        let (lo, e) = super::kmeans::centre_bounds(centres, p.lo, p.ext);
-        let area = 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x);
-        let emax = e.x.max(e.y.max(e.z));
-        let spacing = (area / p.k.max(1) as f32)
-            .sqrt()
-            .max(emax / p.k.max(1) as f32);
-        let (cell, dims) = super::kmeans::cell_side_and_dims(e, spacing, p.ext[3], MAX_DIM);
-        let mut g = CentreGrid {
-            origin: lo,
-            cell,
-            dims,
-            cells: vec![Vec::new(); (dims[0] * dims[1] * dims[2]) as usize],
-        };
-        for (k, c) in cs.iter().enumerate() {
-            if c.count > 0 {
-                let i = g.index(g.coord(c.pos));
-                g.cells[i].push(k as u32);
-            }
-        }
-        g
-    }
-
-    /// Cells of the grid.
-    pub fn cells(&self) -> usize {
-        self.cells.len()
-    }
-
-    fn coord(&self, p: Vec3) -> [i32; 3] {
-        let c = ((p - self.origin) / self.cell).floor();
-        [0, 1, 2].map(|a| c[a].clamp(0.0, self.dims[a] as f32 - 1.0) as i32)
-    }
-
-    fn index(&self, c: [i32; 3]) -> usize {
-        ((c[2] as u32 * self.dims[1] + c[1] as u32) * self.dims[0] + c[0] as u32) as usize
-    }
-
-    /// The centre of least Eq. (2) error (the lower index on a tie) among `hint` (when it is a
-    /// cluster with members) and the centres of the 27 cells around `pos`; without either, the first
-    /// ring of cells further out that holds a centre; `INVALID` without any valid centre.
-    pub fn nearest(&self, cs: &[Center], alpha: f32, pos: Vec3, nrm: Vec3, hint: u32) -> u32 {
-        let c = self.coord(pos);
-        let d = self.dims.map(|x| x as i32);
-        let maxr = d[0].max(d[1]).max(d[2]);
-        let (mut best_e, mut best) = match cs.get(hint as usize) {
-            Some(h) if h.count > 0 => (eq2_error(alpha, pos, nrm, h.pos, h.nrm), hint),
-            _ => (f32::MAX, INVALID),
-        };
-        for ring in 1..=maxr {
-            for cell in super::kmeans::ring_cells(c, ring, d) {
-                for &k in &self.cells[self.index(cell)] {
-                    let ck = &cs[k as usize];
-                    let e = eq2_error(alpha, pos, nrm, ck.pos, ck.nrm);
-                    if e < best_e || (e == best_e && k < best) {
-                        (best_e, best) = (e, k);
-                    }
-                }
-            }
-            if best != INVALID {
-                break;
-            }
-        }
-        best
     }
 }
 
@@ -465,6 +396,70 @@ pub fn update_centers(
         .collect()
 }
 
+// --- wang/grid.wgsl and wang/assign.wgsl: the grid over the centres (`cpu::grid`) and the
+// assignment with Eq. (2).
+
+/// The grid over the valid centres that the assignment searches (twin of wang/grid.wgsl: the
+/// shared `cpu::grid` with the guard for centres along a line).
+pub fn centre_grid(p: &ClusterParams, cs: &[Center]) -> CentreGrid {
+    let valid = cs.iter().enumerate().filter(|(_, c)| c.count > 0);
+    let centres = valid.map(|(k, c)| (k as u32, c.pos));
+    CentreGrid::build(centres, p.k, p.lo, p.ext, true)
+}
+
+/// The centre of least Eq. (2) error (the lower index on a tie) among `hint` (when it is a cluster
+/// with members) and the centres of the 27 cells of `grid` around `pos`; without either, the first
+/// ring of cells further out that holds a centre; `INVALID` without any valid centre (twin of
+/// wang/assign.wgsl's `nearest`).
+pub fn nearest(
+    grid: &CentreGrid,
+    cs: &[Center],
+    alpha: f32,
+    (pos, nrm): (Vec3, Vec3),
+    hint: u32,
+) -> u32 {
+    let c = grid.coord(pos);
+    let (mut best_e, mut best) = match cs.get(hint as usize) {
+        Some(h) if h.count > 0 => (eq2_error(alpha, pos, nrm, h.pos, h.nrm), hint),
+        _ => (f32::MAX, INVALID),
+    };
+    for ring in 1..=grid.max_ring() {
+        for k in grid.ring(c, ring) {
+            let ck = &cs[k as usize];
+            let e = eq2_error(alpha, pos, nrm, ck.pos, ck.nrm);
+            if e < best_e || (e == best_e && k < best) {
+                (best_e, best) = (e, k);
+            }
+        }
+        if best != INVALID {
+            break;
+        }
+    }
+    best
+}
+
+/// Every valid pixel m of `pixels` to its nearest centre (`nearest` on the grid over `cs`)
+/// with the hint `hint(m, labels)`.
+fn assign(
+    p: &ClusterParams,
+    sps: &[ShadingPoint],
+    cs: &[Center],
+    pixels: &[u32],
+    labels: &mut [u32],
+    hint: impl Fn(u32, &[u32]) -> u32,
+) {
+    let grid = centre_grid(p, cs);
+    for &m in pixels {
+        let sp = &sps[m as usize];
+        if sp.valid {
+            let h = hint(m, labels);
+            labels[m as usize] = nearest(&grid, cs, p.alpha, (sp.pos, sp.normal), h);
+        }
+    }
+}
+
+// --- wang/sample.wgsl: the sample points.
+
 /// Each cluster's irradiance sample point (§3.2: "in each cluster, we pick the shading point with
 /// the smallest error"): the member pixel closest to its centre by Eq. (2), the lowest index on a
 /// tie; `INVALID` for an empty cluster.
@@ -488,6 +483,8 @@ pub fn sample_points(
     best.into_iter().map(|b| b.1).collect()
 }
 
+// --- The whole clustering (wang_cluster.wgsl's steps in order).
+
 /// Wang's clustering (§3.2), done.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WangClusters {
@@ -501,26 +498,6 @@ pub struct WangClusters {
     pub samples: Vec<u32>,
     /// Assignment passes run.
     pub passes: u32,
-}
-
-/// Every valid pixel m of `pixels` to its nearest centre (`CentreGrid::nearest` on a grid over `cs`)
-/// with the hint `hint(m, labels)`.
-fn assign(
-    p: &ClusterParams,
-    sps: &[ShadingPoint],
-    cs: &[Center],
-    pixels: &[u32],
-    labels: &mut [u32],
-    hint: impl Fn(u32, &[u32]) -> u32,
-) {
-    let grid = CentreGrid::build(p, cs);
-    for &m in pixels {
-        let sp = &sps[m as usize];
-        if sp.valid {
-            let h = hint(m, labels);
-            labels[m as usize] = grid.nearest(cs, p.alpha, sp.pos, sp.normal, h);
-        }
-    }
 }
 
 /// The whole §3.2 clustering of `sps` (twin of `method::wang::cluster::WangCluster::run` with the

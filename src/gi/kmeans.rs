@@ -279,6 +279,11 @@ impl KmCounters {
 }
 
 impl Clustering {
+    /// The grid of its final assignment (Alg. 2), read back (tests).
+    pub fn read_grid(&self, ctx: &GpuContext) -> Result<GridSnapshot> {
+        self._set.grid.read(ctx)
+    }
+
     /// Its counts, read back from the GPU (a small read that waits for the clustering: on request
     /// only, for the stats and tests).
     pub fn counters(&self, ctx: &GpuContext) -> Result<KmCounters> {
@@ -417,10 +422,7 @@ impl KMeans {
         let kernel = self.kernel(ctx, p.f, p.f > 1 && p.plane_gate <= 1.0, p.adapt);
         let bg = b.bind_group(ctx, kernel, data);
         // After each grid build the search's textures are refreshed (software adapters only).
-        let copy = |enc: &mut wgpu::CommandEncoder| {
-            copy_to_texture(enc, &b.sorted, &b.sorted_tex, p.k as u64 * 32);
-            copy_to_texture(enc, &b.ranges, &b.ranges_tex, MAX_CELLS * 16);
-        };
+        let copy = |enc: &mut wgpu::CommandEncoder| b.grid.copy_to_textures(enc);
         let after = texture_search.then_some(("grid_scatter", &copy as &RecordCopies));
         let kk = p.k;
         let grid = self.grid_steps(kk);
@@ -460,7 +462,7 @@ impl KMeans {
             _set: b.clone(),
         };
         if std::env::var_os("FVPL_PROFILE_STEPS").is_some() {
-            print_grid(ctx, label, &c, &b.grid)?;
+            print_grid(ctx, label, &c, &b.grid.grid)?;
         }
         Ok(c)
     }
@@ -473,15 +475,107 @@ impl KMeans {
             .tuning
             .scan_groups
             .map_or_else(|| scan_groups(kk), |g| g.clamp(1, SCAN_BLOCKS as u32));
-        let scan = WORKGROUP * groups;
-        [
-            ("grid_setup", 1),
-            ("grid_count", kk),
-            ("grid_scan_blocks", scan),
-            ("grid_scan_ranges", scan),
-            ("grid_scatter", kk),
-        ]
+        grid_steps(kk, groups)
     }
+}
+
+/// The steps that build the grid over `k` centres (`shaders-wgsl/common/grid.wgsl`, colom's and
+/// wang's), the prefix sum in `groups` workgroups: every count is of invocations of `WORKGROUP` (the
+/// scan's workgroups are 256 wide, one each).
+pub fn grid_steps(k: u32, groups: u32) -> [(&'static str, u32); 5] {
+    let scan = WORKGROUP * groups;
+    [
+        ("grid_setup", 1),
+        ("grid_count", k),
+        ("grid_scan_blocks", scan),
+        ("grid_scan_ranges", scan),
+        ("grid_scatter", k),
+    ]
+}
+
+/// The resources of the grid over cluster centres (`shaders-wgsl/common/grid.wgsl`), colom's k-means'
+/// and wang's: the grid, the cell counts and scan words, the centres sorted by cell (2 texels each)
+/// and per cell the sorted offsets of it and its row neighbours (one texel gives a row run of three
+/// cells). On a software adapter (`texture_search`) the search reads copies of the last two in
+/// textures, refreshed after each grid build (lavapipe fetches texels with vector code, storage reads
+/// per lane with scalar loops); otherwise the textures are bound but never read: one texel each.
+pub struct GridBuffers {
+    pub grid: wgpu::Buffer,
+    pub cells: wgpu::Buffer,
+    pub sorted: wgpu::Buffer,
+    pub ranges: wgpu::Buffer,
+    sorted_tex: wgpu::Texture,
+    ranges_tex: wgpu::Texture,
+    pub sorted_view: wgpu::TextureView,
+    pub ranges_view: wgpu::TextureView,
+    /// Bytes of `sorted` (2 vec4 a centre).
+    sorted_bytes: u64,
+}
+
+impl GridBuffers {
+    /// Allocates them for `k` centres.
+    pub fn new(ctx: &GpuContext, k: u64, texture_search: bool) -> GridBuffers {
+        let grid = ctx.storage("grid", 32);
+        let cells = ctx.storage("grid cells", (2 * MAX_CELLS + SCAN_BLOCKS) * 4);
+        let sorted = ctx.storage("sorted centres", k * 32);
+        let ranges = ctx.storage("cell ranges", MAX_CELLS * 16);
+        let texels = |n: u64| if texture_search { n } else { 1 };
+        let uint = wgpu::TextureFormat::Rgba32Uint;
+        let sorted_tex = data_texture(ctx, "sorted centres", uint, texels(2 * k));
+        let ranges_tex = data_texture(ctx, "cell ranges", uint, texels(MAX_CELLS));
+        GridBuffers {
+            sorted_view: sorted_tex.create_view(&Default::default()),
+            ranges_view: ranges_tex.create_view(&Default::default()),
+            grid,
+            cells,
+            sorted,
+            ranges,
+            sorted_tex,
+            ranges_tex,
+            sorted_bytes: k * 32,
+        }
+    }
+
+    /// The search's textures refreshed from the last grid build (after `grid_scatter`).
+    pub fn copy_to_textures(&self, enc: &mut wgpu::CommandEncoder) {
+        copy_to_texture(enc, &self.sorted, &self.sorted_tex, self.sorted_bytes);
+        copy_to_texture(enc, &self.ranges, &self.ranges_tex, MAX_CELLS * 16);
+    }
+
+    /// The buffers, to clear a reused set.
+    pub fn buffers(&self) -> [&wgpu::Buffer; 4] {
+        [&self.grid, &self.cells, &self.sorted, &self.ranges]
+    }
+
+    /// The grid as its last build left it (read back; tests).
+    pub fn read(&self, ctx: &GpuContext) -> Result<GridSnapshot> {
+        let g: Vec<u32> = ctx.read_buffer(&self.grid, 8)?;
+        let f = |i: usize| f32::from_bits(g[i]);
+        let n = g[7] as usize;
+        let ranges: Vec<[u32; 4]> = ctx.read_buffer(&self.ranges, n)?;
+        let total = ranges.iter().map(|r| r[2]).max().unwrap_or(0) as usize;
+        let sorted: Vec<[u32; 4]> = ctx.read_buffer(&self.sorted, 2 * total)?;
+        let cells = ranges
+            .iter()
+            .map(|r| (r[1]..r[2]).map(|s| sorted[2 * s as usize][3]).collect())
+            .collect();
+        Ok(GridSnapshot {
+            origin: Vec3::new(f(0), f(1), f(2)),
+            cell: f(3),
+            dims: [g[4], g[5], g[6]],
+            cells,
+        })
+    }
+}
+
+/// A grid over centres as the GPU built it (`GridBuffers::read`): origin, cell side, cells an axis
+/// and each cell's centres (in the scatter's order, which varies).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridSnapshot {
+    pub origin: Vec3,
+    pub cell: f32,
+    pub dims: [u32; 3],
+    pub cells: Vec<Vec<u32>>,
 }
 
 /// Runs k-means steps in one submission (`Kernel::run_entries` with the clustering's bind group).
@@ -493,20 +587,13 @@ struct Buffers {
     centroids: wgpu::Buffer,
     sums: wgpu::Buffer,
     bounds: wgpu::Buffer,
-    grid: wgpu::Buffer,
-    cells: wgpu::Buffer,
+    grid: GridBuffers,
     sample_assign: wgpu::Buffer,
     assign: wgpu::Buffer,
     weights: wgpu::Buffer,
     reps: wgpu::Buffer,
     rep_points: wgpu::Buffer,
     member_dists: wgpu::Buffer,
-    sorted: wgpu::Buffer,
-    ranges: wgpu::Buffer,
-    sorted_tex: wgpu::Texture,
-    ranges_tex: wgpu::Texture,
-    sorted_view: wgpu::TextureView,
-    ranges_view: wgpu::TextureView,
 }
 
 impl Buffers {
@@ -520,55 +607,25 @@ impl Buffers {
         let centroids = ctx.storage("centroids", k * 32);
         let sums = ctx.storage("centroid sums", k * WORDS * 4);
         let bounds = ctx.storage("centroid bounds", BOUND_WORDS as u64 * 4);
-        let grid = ctx.storage("grid", 32);
-        let cells = ctx.storage("grid cells", (2 * MAX_CELLS + SCAN_BLOCKS) * 4);
         let sample_assign = ctx.storage("sample assign", p.num_sampled as u64 * 4);
         let assign = ctx.storage("assign", m * f * 4);
         let weights = ctx.storage("weights", m * f * 4);
         let reps = ctx.storage("representatives", k * 8);
         let rep_points = ctx.storage("representative points", k * 32);
         let member_dists = ctx.storage("member distances", m * f * 4);
-        // The grid for the nearest-centroid search: centroids sorted by cell (2 texels each) and per
-        // cell the sorted offsets of it and its row neighbours (one texel gives a row run of three
-        // cells). On a software adapter they are copied into textures after each grid build
-        // (lavapipe fetches texels with vector code, storage reads per lane with scalar loops).
-        let sorted = ctx.storage("sorted centroids", k * 32);
-        let ranges = ctx.storage("cell ranges", MAX_CELLS * 16);
-        // (Without the texture search the textures are bound but never read: one texel each.)
-        let texels = |n: u64| if texture_search { n } else { 1 };
-        let sorted_tex = data_texture(
-            ctx,
-            "sorted centroids",
-            wgpu::TextureFormat::Rgba32Uint,
-            texels(2 * k),
-        );
-        let ranges_tex = data_texture(
-            ctx,
-            "cell ranges",
-            wgpu::TextureFormat::Rgba32Uint,
-            texels(MAX_CELLS),
-        );
-        let sorted_view = sorted_tex.create_view(&Default::default());
-        let ranges_view = ranges_tex.create_view(&Default::default());
+        let grid = GridBuffers::new(ctx, k, texture_search);
         Buffers {
             params,
             centroids,
             sums,
             bounds,
             grid,
-            cells,
             sample_assign,
             assign,
             weights,
             reps,
             rep_points,
             member_dists,
-            sorted,
-            ranges,
-            sorted_tex,
-            ranges_tex,
-            sorted_view,
-            ranges_view,
         }
     }
 
@@ -589,17 +646,16 @@ impl Buffers {
         for b in [
             &self.centroids,
             &self.sums,
-            &self.grid,
-            &self.cells,
             &self.sample_assign,
             &self.assign,
             &self.weights,
             &self.reps,
             &self.rep_points,
             &self.member_dists,
-            &self.sorted,
-            &self.ranges,
-        ] {
+        ]
+        .into_iter()
+        .chain(self.grid.buffers())
+        {
             enc.clear_buffer(b, 0, None);
         }
         ctx.queue.submit([enc.finish()]);
@@ -620,18 +676,18 @@ impl Buffers {
                 (3, &self.centroids),
                 (4, &self.sums),
                 (5, &self.bounds),
-                (6, &self.grid),
-                (7, &self.cells),
+                (6, &self.grid.grid),
+                (7, &self.grid.cells),
                 (8, &self.member_dists),
                 (9, &self.sample_assign),
                 (10, &self.assign),
                 (11, &self.weights),
                 (12, &self.reps),
-                (13, &self.sorted),
-                (14, &self.ranges),
+                (13, &self.grid.sorted),
+                (14, &self.grid.ranges),
                 (17, &self.rep_points),
             ],
-            &[(15, &self.sorted_view), (16, &self.ranges_view)],
+            &[(15, &self.grid.sorted_view), (16, &self.grid.ranges_view)],
         )
     }
 }

@@ -8,8 +8,8 @@ use std::collections::HashSet;
 /// `build.rs` from the folder, so a new pass (a method's included) adds its file and nothing else.
 pub const FILES: &[(&str, &str)] = include!(concat!(env!("OUT_DIR"), "/wgsl_files.rs"));
 
-/// The pass shaders (top-level files; `common/` holds shared code, `kmeans/` the steps of the
-/// k-means pass), each composed and validated on its own.
+/// The pass shaders (top-level files; `common/` holds shared code, `kmeans/` and `wang/` the steps
+/// of the k-means and wang_cluster passes), each composed and validated on its own.
 pub fn pass_names() -> impl Iterator<Item = &'static str> {
     FILES
         .iter()
@@ -176,7 +176,7 @@ mod tests {
     fn every_wgsl_file_is_listed() {
         let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/shaders-wgsl");
         let mut on_disk = Vec::new();
-        for sub in ["", "common/", "kmeans/"] {
+        for sub in ["", "common/", "kmeans/", "wang/"] {
             for e in std::fs::read_dir(format!("{dir}/{sub}")).unwrap() {
                 let name = e.unwrap().file_name().into_string().unwrap();
                 if name.ends_with(".wgsl") {

@@ -1,6 +1,6 @@
 //! `wang_cluster` (Wang, Wang, Zhou, Pan, Bao 2009, seed `001`, §3.2; docs/methods.md, "wang"): the
-//! clustering of a frame's shading points, all of it on the GPU (`shaders-wgsl/wang_cluster.wgsl`),
-//! the G-buffer never read back. CPU twin: `cpu::wang::cluster`.
+//! clustering of a frame's shading points, all of it on the GPU (`shaders-wgsl/wang_cluster.wgsl`,
+//! its steps in `shaders-wgsl/wang/`), the G-buffer never read back. CPU twin: `cpu::wang::cluster`.
 //!
 //! 1. **Adaptive seeding**: a screen-space quadtree of the shading points (sums per node, built
 //!    level by level from 2×2 leaves), each node's variation ε_q by Eq. (2) against its mean
@@ -10,7 +10,8 @@
 //! 2. **k-means with Eq. (2)**: every point to the centre of least error among its own cluster's
 //!    (in the first assignment: the seed of its quadtree node) and those of the 27 cells of a
 //!    uniform grid over the centres around it (the paper uses a kd-tree of the centres "to constrain
-//!    the search within a small Euclidean distance"; the grid is built on the GPU every iteration as colom's is), so
+//!    the search within a small Euclidean distance"; the grid is colom's, `shaders-wgsl/common/grid.wgsl`,
+//!    built on the GPU every iteration), so
 //!    a border moves as far as the centres ask, up to a cell (1.5 cluster spacings) an iteration,
 //!    whatever the pixels; centres the mean position and normal of their members, from 64-bit
 //!    fixed-point sums that a point changing cluster updates with atomics.
@@ -28,17 +29,14 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use super::Image;
-use crate::gi::dispatch::{
-    Gpu, Kernel, RecordCopies, Run, WORKGROUP, copy_to_texture, data_texture,
-};
-use crate::gi::kmeans::scan_groups;
+use crate::gi::dispatch::{Gpu, Kernel, RecordCopies, Run, WORKGROUP};
+use crate::gi::kmeans::{GridBuffers, grid_steps, scan_groups};
 use crate::gi::scene_gpu::{data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
 
 pub const INVALID: u32 = u32::MAX;
-/// At most this many grid cells an axis (`wang_cluster.wgsl`'s `MAX_DIM`).
-pub const MAX_DIM: u32 = 64;
-const MAX_CELLS: u64 = (MAX_DIM as u64).pow(3);
+/// At most this many grid cells an axis (`common/grid.wgsl`'s `MAX_DIM`).
+pub use crate::gi::kmeans::MAX_DIM;
 /// Words a cluster in `WangClustering::sums`: six 64-bit sums, the count, the sample point's error
 /// bits and pixel, one spare.
 pub const WORDS: u32 = 16;
@@ -49,7 +47,7 @@ pub const POS_SCALE: f32 = 16_777_216.0;
 pub const NRM_SCALE: f32 = 8_388_608.0;
 pub const EPS_SCALE: f32 = 65_536.0;
 pub const EPS_MAX: f32 = 8_388_607.0;
-/// Rounds of `apportion` (wang_cluster.wgsl's `APPORTION_ROUNDS`).
+/// Rounds of `apportion` (wang/seed.wgsl's `APPORTION_ROUNDS`).
 pub const APPORTION_ROUNDS: u32 = 8;
 /// Grid points a cluster below which the iterations use every pixel (`grid_step`).
 pub const MIN_GRID_POINTS_PER_CLUSTER: u32 = 16;
@@ -216,7 +214,7 @@ const ENTRIES: &[&str] = &[
     "sample_store",
 ];
 
-/// The pipelines of `wang_cluster.wgsl`.
+/// The pipelines of `wang_cluster.wgsl` (its steps in `shaders-wgsl/wang/`).
 pub struct WangCluster {
     kernel: Kernel,
     /// The search reads the grid through textures (`TEXTURE_SEARCH`: on a software adapter).
@@ -234,9 +232,9 @@ impl WangCluster {
     pub fn with_texture_search(ctx: &GpuContext, texture_search: bool) -> Self {
         let mut entries = vec![uniform_layout(1), storage_layout(2, true)];
         entries.extend((3..=13).map(|b| storage_layout(b, false)));
-        let float = wgpu::TextureSampleType::Float { filterable: false };
-        entries.push(data_texture_layout(14, float));
+        entries.push(data_texture_layout(14, wgpu::TextureSampleType::Uint));
         entries.push(data_texture_layout(15, wgpu::TextureSampleType::Uint));
+        entries.push(storage_layout(16, false));
         let constants = [("TEXTURE_SEARCH", texture_search as u32 as f64)];
         WangCluster {
             kernel: Kernel::with_entries(ctx, None, "wang_cluster", ENTRIES, &entries, &constants),
@@ -260,31 +258,13 @@ impl WangCluster {
         let params = ctx.uniform("wang cluster params", p);
         let node_sums = ctx.storage("wang quadtree sums", nodes * 32);
         let tree = ctx.storage("wang quadtree", (4 * nodes + k) * 4);
-        let state = ctx.storage("wang cluster state", 16 * 4);
-        let cells = ctx.storage("wang grid cells", (2 * MAX_CELLS + 256) * 4);
-        let sorted = ctx.storage("wang sorted centres", k * 32);
+        let bounds = ctx.storage("wang cluster bounds", 8 * 4);
+        let centre_grid = GridBuffers::new(ctx, k, self.texture_search);
         let sums = ctx.storage("wang centre sums", k * WORDS as u64 * 4);
         let labels = ctx.storage("wang labels", 2 * p.pixels as u64 * 4);
         let centres = ctx.storage("wang centres", k * 32);
         let samples = ctx.storage("wang samples", k * 32);
         let sample_gbuffer = ctx.storage("wang sample gbuffer", k * 64);
-        let offsets = ctx.storage("wang cell slots", MAX_CELLS * 8);
-        // (Without the texture search the textures are bound but never read: one texel each.)
-        let texels = |n: u64| if self.texture_search { n } else { 1 };
-        let sorted_tex = data_texture(
-            ctx,
-            "wang sorted centres",
-            wgpu::TextureFormat::Rgba32Float,
-            texels(2 * k),
-        );
-        let offsets_tex = data_texture(
-            ctx,
-            "wang cell slots",
-            wgpu::TextureFormat::Rg32Uint,
-            texels(MAX_CELLS),
-        );
-        let sorted_view = sorted_tex.create_view(&Default::default());
-        let offsets_view = offsets_tex.create_view(&Default::default());
         let bg = self.kernel.bind_group_with_textures(
             ctx,
             &[
@@ -292,23 +272,24 @@ impl WangCluster {
                 (2, img.gbuffer),
                 (3, &node_sums),
                 (4, &tree),
-                (5, &state),
-                (6, &cells),
-                (7, &sorted),
+                (5, &bounds),
+                (6, &centre_grid.cells),
+                (7, &centre_grid.sorted),
                 (8, &sums),
                 (9, &labels),
                 (10, &centres),
                 (11, &samples),
                 (12, &sample_gbuffer),
-                (13, &offsets),
+                (13, &centre_grid.ranges),
+                (16, &centre_grid.grid),
             ],
-            &[(14, &sorted_view), (15, &offsets_view)],
+            &[
+                (14, &centre_grid.sorted_view),
+                (15, &centre_grid.ranges_view),
+            ],
         );
         // After each grid build the search's textures are refreshed (software adapters only).
-        let copy = |enc: &mut wgpu::CommandEncoder| {
-            copy_to_texture(enc, &sorted, &sorted_tex, k * 32);
-            copy_to_texture(enc, &offsets, &offsets_tex, MAX_CELLS * 8);
-        };
+        let copy = |enc: &mut wgpu::CommandEncoder| centre_grid.copy_to_textures(enc);
         let after = self
             .texture_search
             .then_some(("grid_scatter", &copy as &RecordCopies));
@@ -319,14 +300,7 @@ impl WangCluster {
         };
         let kk = p.k;
         let grid_points = p.gw * p.gh;
-        let scan = WORKGROUP * scan_groups(kk);
-        let grid = [
-            ("grid_setup", 1),
-            ("grid_count", kk),
-            ("grid_scan_blocks", scan),
-            ("grid_scan_ranges", scan),
-            ("grid_scatter", kk),
-        ];
+        let grid = grid_steps(kk, scan_groups(kk));
         let nodes_at = |l: u32| 1u32 << (2 * l);
         let side = 1u32 << p.levels;
         let tiles = (side / 16).max(1).pow(2);
@@ -376,7 +350,7 @@ impl WangCluster {
             ],
             None,
         );
-        let used = ctx.read_buffer::<u32>(&state, 8)?[7];
+        let used = ctx.read_buffer::<u32>(&bounds, 8)?[7];
         Ok(WangClustering {
             params: *p,
             labels,

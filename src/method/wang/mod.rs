@@ -2,7 +2,8 @@
 //! by §3.2's adaptively seeded k-means with the Eq. (2) metric, the indirect irradiance gathered only
 //! at each cluster's sample point (every light with its own shadow ray: `reference.wgsl`), §3.4's
 //! R_j traced there, and every pixel interpolating from the sample points around it with §3.4's
-//! weight. Shaders: `shaders-wgsl/wang_cluster.wgsl` (the clustering, `cluster`) and
+//! weight. Shaders: `shaders-wgsl/wang_cluster.wgsl` (the clustering, `cluster`; its steps in
+//! `shaders-wgsl/wang/`) and
 //! `shaders-wgsl/wang.wgsl` (`radius`, `interp`); CPU twins `cpu::wang`.
 //! The passes are `CLUSTER` → `GATHER` → `INTERP` (`ROOM`).
 
