@@ -8,6 +8,7 @@ pub mod flip;
 pub mod kmeans;
 pub mod lightcluster;
 pub mod reproject;
+pub mod restir;
 pub mod shade;
 pub mod shading;
 pub mod upsample;
