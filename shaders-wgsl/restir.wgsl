@@ -12,8 +12,9 @@
 //   against the pixel, combined with it; n iterations, each reading the last one's reservoirs.
 // - 3, shade: the reservoir's light, f(y) V(y) W, added to `indirect` (one shadow ray).
 // Combination (the paper's §4): biased, W = w_sum / (p̂(y) Σ M); unbiased, Σ M over the inputs
-// whose p̂ · V at y is positive (a shadow ray from each reused point but the pixel's own, whose
-// V(y) the shade's ray applies).
+// whose p̂ · V at y is positive (a shadow ray from each reused point), and W = 0 where y is hidden
+// from the pixel (one more ray), so that every reservoir's samples lie where its p̂ · V is positive,
+// what the next combination's Z assumes.
 #import common/bvh.wgsl
 #import common/camera.wgsl
 #import common/chunk.wgsl
@@ -171,6 +172,18 @@ fn prev_pixel(sp: ShadingPoint) -> u32 {
     return j;
 }
 
+// Unbiased: a combined reservoir's W is 0 where its sample is hidden from the pixel (one shadow
+// ray), as the initial one's, so that every reservoir's samples lie where p̂ · V is positive (what
+// the next combination's Z counts). Twin: the end of temporal and spatial.
+fn own_visibility(i: u32, sp: ShadingPoint, r: ptr<function, Reservoir>) {
+    if (params.opts.y & UNBIASED) != 0u && (*r).w > 0.0 {
+        rays[i] += 1u;
+        if !visible(sp, (*r).y) {
+            (*r).w = 0.0;
+        }
+    }
+}
+
 fn initial(i: u32, sp: ShadingPoint) {
     var r = Reservoir(NONE, 0.0, 0.0, 0.0);
     var traced = 0u;
@@ -230,6 +243,7 @@ fn temporal(i: u32, sp: ShadingPoint) {
         }
     }
     r.w = res_weight(r.w_sum, ph, z);
+    own_visibility(i, sp, &r);
     res_out[i] = res_pack(r);
 }
 
@@ -285,6 +299,7 @@ fn spatial(i: u32, sp: ShadingPoint, iteration: u32) {
         }
     }
     r.w = res_weight(r.w_sum, ph, zm);
+    own_visibility(i, sp, &r);
     res_out[i] = res_pack(r);
 }
 

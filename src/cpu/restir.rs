@@ -122,7 +122,8 @@ impl Stages<'_> {
     }
 
     fn visible(&self, sp: &ShadingPoint, y: u32) -> bool {
-        self.cs.vpl_visible(sp.pos, sp.normal, &self.vpls[y as usize])
+        self.cs
+            .vpl_visible(sp.pos, sp.normal, &self.vpls[y as usize])
     }
 
     fn seed(&self) -> u32 {
@@ -131,6 +132,18 @@ impl Stages<'_> {
 
     fn unbiased(&self) -> bool {
         self.params.opts[1] & UNBIASED != 0
+    }
+
+    /// Unbiased: W = 0 where the sample is hidden from the pixel; the rays traced. Twin of
+    /// `own_visibility`.
+    fn own_visibility(&self, sp: &ShadingPoint, r: &mut Reservoir) -> u32 {
+        if !self.unbiased() || r.w.is_nan() || r.w <= 0.0 {
+            return 0;
+        }
+        if !self.visible(sp, r.y) {
+            r.w = 0.0;
+        }
+        1
     }
 
     /// Stage 0 of pixel i: its reservoir and the shadow rays it traced. Twin of `initial`.
@@ -229,6 +242,7 @@ impl Stages<'_> {
             }
         }
         r.w = weight(r.w_sum, ph, z);
+        traced += self.own_visibility(sp, &mut r);
         (r, traced)
     }
 
@@ -260,8 +274,7 @@ impl Stages<'_> {
                 continue;
             }
             let j = nx as u32 + ny as u32 * w;
-            if j == i || !self.same_surface(&self.params.cam, &self.sps[j as usize], z, sp.normal)
-            {
+            if j == i || !self.same_surface(&self.params.cam, &self.sps[j as usize], z, sp.normal) {
                 continue;
             }
             let q = input[j as usize];
@@ -284,6 +297,7 @@ impl Stages<'_> {
             }
         }
         r.w = weight(r.w_sum, ph, zm);
+        traced += self.own_visibility(sp, &mut r);
         (r, traced)
     }
 

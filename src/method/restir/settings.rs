@@ -75,19 +75,11 @@ pub fn parse_candidates(v: &str) -> Result<u32, Invalid> {
 }
 
 pub fn parse_neighbours(v: &str) -> Result<u32, Invalid> {
-    in_range(
-        v,
-        |k: u32| k <= MAX_NEIGHBOURS,
-        "must be a count in 0..=16",
-    )
+    in_range(v, |k: u32| k <= MAX_NEIGHBOURS, "must be a count in 0..=16")
 }
 
 pub fn parse_iterations(v: &str) -> Result<u32, Invalid> {
-    in_range(
-        v,
-        |n: u32| n <= MAX_ITERATIONS,
-        "must be a count in 0..=8",
-    )
+    in_range(v, |n: u32| n <= MAX_ITERATIONS, "must be a count in 0..=8")
 }
 
 pub fn parse_radius(v: &str) -> Result<f32, Invalid> {
@@ -138,7 +130,11 @@ mod tests {
         assert!(parse_combine("fair").is_err());
         let d = RestirSettings::default();
         assert_eq!(
-            (d.restir_candidates, d.restir_neighbours, d.restir_iterations),
+            (
+                d.restir_candidates,
+                d.restir_neighbours,
+                d.restir_iterations
+            ),
             (32, 5, 2)
         );
         assert_eq!(d.restir_combine, Combine::Biased);
