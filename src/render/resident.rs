@@ -133,10 +133,17 @@ impl<'a> Renderer<'a> {
             .as_ref()
     }
 
-    /// Forgets the last frame's SP clustering and accumulated indirect light: the next frame starts
-    /// cold (a camera path run).
+    /// Forgets the last frame's SP clustering, every other method's past (`take_past`, dropped)
+    /// and the accumulated indirect light: the next frame starts cold (a camera path run).
     pub fn forget_past(&mut self) {
         self.colom().clustering = None;
+        for (_, state) in self
+            .methods
+            .iter_mut()
+            .filter(|(m, _)| **m != Method::Colom)
+        {
+            drop(state.take_past());
+        }
         self.history = None;
     }
 
