@@ -18,6 +18,13 @@ use fuzzy_vpl::scene::{self, Camera, Scene};
 use fuzzy_vpl::settings::{ClusterSettings, FrameSettings};
 use glam::Vec3;
 
+/// The tests of this file one at a time: `restir_steady_frames_make_no_buffer` counts the buffers
+/// made by the whole process.
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    SERIAL.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 fn settings(w: u32, h: u32, vpls: u32) -> RenderSettings {
     RenderSettings {
         frame: FrameSettings {
@@ -125,6 +132,7 @@ fn stages<'a>(
 /// 4.8e-7 relative (f32 sums in another order); the shaded light within 1.3e-7 of twin_diff.
 #[test]
 fn restir_stages_match_cpu_twin() {
+    let _serial = serial();
     let ctx = common::gpu();
     for (name, s) in rooms() {
         let mut r = Renderer::new(&ctx, &s).unwrap();
@@ -151,7 +159,8 @@ fn restir_stages_match_cpu_twin() {
             let cs = common::cpu_scene(&r, &s);
             let table = alias::build(&r.vpl_set.as_ref().unwrap().set.vpls);
             let st = stages(&r, &cs, &sps, &sps, &table);
-            let initial: Vec<Reservoir> = (0..n as u32).map(|i| st.initial(i).0).collect();
+            let (initial, mut rays): (Vec<Reservoir>, Vec<u32>) =
+                (0..n as u32).map(|i| st.initial(i)).unzip();
             if iterations == 0 {
                 let (differ, worst) = compare(&format!("{what} initial"), &initial, &gpu);
                 assert!(differ == 0 && worst < 1e-6, "{what}: {differ}, {worst}");
@@ -165,7 +174,10 @@ fn restir_stages_match_cpu_twin() {
                 // from the twin (a different draw would show as differing samples).
                 let mut input = initial;
                 for it in 0..iterations {
-                    input = (0..n as u32).map(|i| st.spatial(i, &input, it).0).collect();
+                    let (next, r): (Vec<Reservoir>, Vec<u32>) =
+                        (0..n as u32).map(|i| st.spatial(i, &input, it)).unzip();
+                    rays.extend(r);
+                    input = next;
                 }
                 let (differ, worst) = compare(&format!("{what} spatial"), &input, &gpu);
                 assert!(differ == 0 && worst < 1e-6, "{what}: {differ}, {worst}");
@@ -187,6 +199,13 @@ fn restir_stages_match_cpu_twin() {
                 .fold(0f32, f32::max);
             println!("{what} shade: worst twin_diff {worst:.2e}");
             assert!(worst < 3e-7, "{what} shade: {worst}");
+            // The shadow rays the frame counted: the direct light's, then the twin's of each stage
+            // (its chain's: the same samples) and of the shade.
+            rays.extend((0..n as u32).map(|i| st.shade(i, &gpu[i as usize]).1));
+            let valid = sps.iter().filter(|p| p.valid).count() as u64;
+            let direct = valid * (fs.frame.direct_samples + r.gpu.info.num_lights) as u64;
+            let twin: u64 = rays.iter().map(|&r| r as u64).sum();
+            assert_eq!(f.shadow_rays - direct, twin, "{what}: indirect shadow rays");
         }
     }
 }
@@ -198,6 +217,7 @@ fn restir_stages_match_cpu_twin() {
 /// w_sum/M/W within 4.7e-7 relative.
 #[test]
 fn restir_temporal_matches_cpu_twin() {
+    let _serial = serial();
     let ctx = common::gpu();
     let s = scene::load("builtin:cornell").unwrap();
     let mut r = Renderer::new(&ctx, &s).unwrap();
@@ -246,6 +266,7 @@ fn restir_temporal_matches_cpu_twin() {
 /// and with `--temporal off`.
 #[test]
 fn restir_history_is_dropped_when_the_vpls_change() {
+    let _serial = serial();
     let ctx = common::gpu();
     let s = scene::load("builtin:cornell").unwrap();
     let mut r = Renderer::new(&ctx, &s).unwrap();
@@ -287,6 +308,36 @@ fn restir_history_is_dropped_when_the_vpls_change() {
     );
 }
 
+/// Frames at a steady size make no buffer (the rule: resources made once per size), with temporal
+/// reuse and both combinations; a new size or VPL set makes them again.
+#[test]
+fn restir_steady_frames_make_no_buffer() {
+    let _serial = serial();
+    use fuzzy_vpl::gpu::traffic::buffers_made;
+    let ctx = common::gpu();
+    let s = scene::load("builtin:cornell").unwrap();
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let cam = s.default_camera();
+    let mut fs = settings(16, 12, 64);
+    fs.cluster.temporal = true;
+    fs.cluster.temporal_alpha = 1.0;
+    for combine in [Combine::Biased, Combine::Unbiased] {
+        fs.method.restir.restir_combine = combine;
+        r.render(&cam, &fs).unwrap();
+        r.render(&cam, &fs).unwrap();
+        let made = buffers_made();
+        for _ in 0..3 {
+            let f = r.render(&cam, &fs).unwrap();
+            assert!(common::all_finite(&f.radiance));
+        }
+        assert_eq!(
+            buffers_made(),
+            made,
+            "{combine}: steady frames made buffers"
+        );
+    }
+}
+
 /// Mean and standard error of the mean of `xs`.
 fn mean_se(xs: &[f64]) -> (f64, f64) {
     let n = xs.len() as f64;
@@ -324,6 +375,7 @@ fn seeds(
 /// at least 90% of the lit pixels within 3 of their own standard errors.
 #[test]
 fn restir_unbiased_mean_is_the_exact_sum_on_hand_placed_vpls() {
+    let _serial = serial();
     let ctx = common::gpu();
     let s = scene::load("builtin:cornell").unwrap();
     let mut r = Renderer::new(&ctx, &s).unwrap();
@@ -428,6 +480,7 @@ fn restir_unbiased_mean_is_the_exact_sum_on_hand_placed_vpls() {
 /// independent).
 #[test]
 fn restir_unbiased_mean_is_the_reference_on_the_built_in_rooms() {
+    let _serial = serial();
     let ctx = common::gpu();
     for (name, s) in rooms() {
         let mut r = Renderer::new(&ctx, &s).unwrap();
@@ -457,6 +510,7 @@ fn restir_unbiased_mean_is_the_reference_on_the_built_in_rooms() {
 /// a frame stays one sample a pixel (docs/methods.md, "restir", measures 160×120 and 4096 VPLs).
 #[test]
 fn restir_temporal_reuse_converges_on_a_static_camera() {
+    let _serial = serial();
     let ctx = common::gpu();
     let s = scene::load("builtin:conference").unwrap();
     let mut r = Renderer::new(&ctx, &s).unwrap();
@@ -489,6 +543,7 @@ fn restir_temporal_reuse_converges_on_a_static_camera() {
 #[test]
 #[ignore]
 fn measure_restir_convergence() {
+    let _serial = serial();
     let spec = std::env::var("FVPL_RESTIR")
         .unwrap_or_else(|_| "builtin:conference,64,48,1024,biased,32".into());
     let v: Vec<&str> = spec.split(',').collect();
@@ -540,6 +595,7 @@ fn settings_combine(s: &str) -> Combine {
 #[test]
 #[ignore]
 fn restir_unbiased_mean_is_the_reference_on_dense_3m() {
+    let _serial = serial();
     let ctx = common::gpu();
     let s = scene::load("builtin:dense-3m").unwrap();
     let mut r = Renderer::new(&ctx, &s).unwrap();

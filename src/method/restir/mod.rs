@@ -103,12 +103,13 @@ pub struct Past {
     pixels: u32,
 }
 
-/// The buffers of a frame size: two reservoir buffers (read one, write the other) and the rays
-/// each pixel traced.
+/// The buffers of a frame size: two reservoir buffers (read one, write the other), the rays each
+/// pixel traced and the buffer they are read back through.
 struct SizeBuffers {
     pixels: u32,
     reservoirs: [wgpu::Buffer; 2],
     rays: wgpu::Buffer,
+    rays_read: wgpu::Buffer,
 }
 
 /// What the last frame ran with (tests read it: `Renderer::method_state`).
@@ -190,6 +191,15 @@ impl RestirMethod {
                     ctx.storage("restir reservoirs 1", bytes),
                 ],
                 rays: ctx.storage("restir rays", pixels as u64 * 4),
+                rays_read: {
+                    crate::gpu::traffic::buffer_made("restir rays (read back)");
+                    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("restir rays (read back)"),
+                        size: (pixels as u64 * 4).max(4),
+                        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    })
+                },
             });
         }
         if self.past.as_ref().is_none_or(|p| p.pixels != pixels) {
@@ -290,18 +300,44 @@ impl RestirMethod {
         let size = self.size.as_ref().expect("prepared");
         let past = self.past.as_mut().expect("prepared");
         past.key = self.key;
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
         if self.key.is_some() {
-            let mut enc = ctx.device.create_command_encoder(&Default::default());
             let res = &size.reservoirs[self.cur];
-            enc.copy_buffer_to_buffer(res, 0, &past.reservoirs, 0, f.pixels as u64 * 16);
+            let bytes = f.pixels as u64 * RESERVOIR_BYTES;
+            enc.copy_buffer_to_buffer(res, 0, &past.reservoirs, 0, bytes);
             enc.copy_buffer_to_buffer(f.gbuffer, 0, &past.gbuffer, 0, f.pixels as u64 * SP_BYTES);
-            ctx.queue.submit([enc.finish()]);
             past.cam = f.cam;
         }
-        let rays: Vec<u32> = ctx.read_buffer(&size.rays, f.pixels as usize)?;
-        n.indirect_rays += rays.iter().map(|&r| r as u64).sum::<u64>();
+        let bytes = f.pixels as u64 * 4;
+        enc.copy_buffer_to_buffer(&size.rays, 0, &size.rays_read, 0, bytes);
+        ctx.queue.submit([enc.finish()]);
+        n.indirect_rays += sum_rays(ctx, &size.rays_read, bytes)?;
         Ok(())
     }
+}
+
+/// The sum of the first `bytes` of `buffer` (`MAP_READ`, its copy submitted) as u32s, waiting for
+/// the device.
+fn sum_rays(ctx: &GpuContext, buffer: &wgpu::Buffer, bytes: u64) -> anyhow::Result<u64> {
+    if bytes == 0 {
+        return Ok(0);
+    }
+    let slice = buffer.slice(..bytes);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    ctx.wait()?;
+    rx.recv()??;
+    let view = slice.get_mapped_range()?;
+    let sum = bytemuck::cast_slice::<u8, u32>(&view)
+        .iter()
+        .map(|&r| r as u64)
+        .sum();
+    drop(view);
+    buffer.unmap();
+    crate::gpu::traffic::read_back(bytes);
+    Ok(sum)
 }
 
 impl IndirectMethod for RestirMethod {
