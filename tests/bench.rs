@@ -565,6 +565,21 @@ fn methods_expand_with_their_own_knobs() {
     assert_eq!(labels, ["lightcluster d0.05", "lightcluster d0.2"]);
     assert_eq!(mode_name(&s.configs()[0]), "lightcluster");
     assert!(parse(&["--d-init", "0"], true).is_err());
+    // restir sweeps M, k and n by default (8 and 32, 3 and 5, 1 and 2), its other knobs at theirs.
+    let s = parse(&["--methods", "restir"], true).unwrap();
+    let labels: Vec<String> = s.configs().iter().map(label).collect();
+    assert_eq!(labels.len(), 8, "{labels:?}");
+    assert_eq!(
+        (labels[0].as_str(), labels[7].as_str()),
+        ("restir M8 k3 n1", "restir M32 k5 n2")
+    );
+    let s = parse(
+        &["--methods", "restir", "--restir-combine", "unbiased"],
+        true,
+    )
+    .unwrap();
+    assert!(label(&s.configs()[0]).ends_with(" unbiased"));
+    assert!(parse(&["--restir-candidates", "0"], true).is_err());
     let e = parse(&["--methods", "colom,foo"], true).unwrap_err();
     assert!(e.contains("--methods") && e.contains("foo"), "{e}");
     let e = parse(&["--wang-alpha", "0"], true).unwrap_err();
@@ -573,7 +588,8 @@ fn methods_expand_with_their_own_knobs() {
     assert!(e.contains("wang"), "{e}");
 }
 
-/// `bench --methods colom,restir` at a tiny size (issue 43): restir's M and iteration lists beside
+/// `bench --methods colom,restir` at a tiny size (issue 43): restir's M and iteration lists (its k
+/// one value, to keep it short; by default bench sweeps M, k and n) beside
 /// colom's K's on the same fronts against the same reference, each row finite (MSE, rel MSE,
 /// FLIP), restir's rows labelled with their knobs, and the knobs' columns filled for its rows only;
 /// then the camera path with `--temporal off,on` (α 1: restir's own temporal reuse, no
@@ -604,6 +620,8 @@ fn bench_methods_colom_restir_at_a_tiny_size() {
         "24/32,48/64",
         "--restir-candidates",
         "4,16",
+        "--restir-neighbours",
+        "5",
         "--restir-iterations",
         "0,1",
         "--repeat",
@@ -652,6 +670,8 @@ fn bench_methods_colom_restir_at_a_tiny_size() {
         "restir",
         "--restir-candidates",
         "8",
+        "--restir-neighbours",
+        "5",
         "--restir-iterations",
         "1",
         "--camera-path",

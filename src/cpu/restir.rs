@@ -354,8 +354,9 @@ mod tests {
     }
 
     /// Resampled importance sampling with the reservoir is unbiased: the mean of f(y) W over many
-    /// seeds is Σ f. Closed form on 4 "lights" with f = p̂ = (1, 2, 3, 4), p = (0.4, 0.3, 0.2, 0.1): the mean of
-    /// p̂(y) W over 200 000 runs of M = 3 candidates is Σ p̂ = 10 within 4 standard errors.
+    /// seeds is Σ f. Closed form on 4 "lights" with f = p̂ = (1, 2, 3, 4) and source pdf p = (0.4,
+    /// 0.3, 0.2, 0.1): the mean of p̂(y) W over 200,000 runs of M = 3 candidates is Σ p̂ = 10 within
+    /// 4 standard errors.
     #[test]
     fn ris_is_unbiased_on_four_lights() {
         let p_hat = [1.0f32, 2.0, 3.0, 4.0];

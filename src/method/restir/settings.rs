@@ -46,20 +46,19 @@ pub const MAX_ITERATIONS: u32 = 8;
 knobs! {
     /// restir's knobs, flattened into `method::MethodSettings`.
     pub struct RestirSettings, lists RestirLists, heading super::super::METHOD_HEADING;
-    /// restir: initial candidates a pixel, drawn by flux (the paper's M; its figures use 32),
+    /// restir: initial candidates a pixel, drawn by flux (the paper's M; default 32, the issue's),
     /// 1..=1024. bench sweeps 8 and 32 by default.
     restir_candidates: u32 = 32, parse parse_candidates, sweep [8, 32];
-    /// restir: neighbours a spatial iteration reuses (the paper's k: 5 biased, 3 unbiased),
-    /// 0..=16.
-    restir_neighbours: u32 = 5, parse parse_neighbours;
+    /// restir: neighbours a spatial iteration reuses (k; default 5, the issue's), 0..=16. bench
+    /// sweeps 3 and 5 by default.
+    restir_neighbours: u32 = 5, parse parse_neighbours, sweep [3, 5];
     /// restir: the radius the spatial neighbours are drawn in, in pixels at 1080 lines (scaled by
-    /// the frame's height / 1080; the paper: 30), (0, 1000].
+    /// the frame's height / 1080; default 30, the issue's), (0, 1000].
     restir_radius: f32 = 30.0, parse parse_radius;
-    /// restir: spatial iterations (the paper: 2 biased, 1 unbiased), 0..=8. bench sweeps 1 and 2
-    /// by default.
+    /// restir: spatial iterations (n; default 2), 0..=8. bench sweeps 1 and 2 by default.
     restir_iterations: u32 = 2, parse parse_iterations, sweep [1, 2];
     /// restir, with `--temporal on`: the previous frame's reservoir counts at most this many times
-    /// the current pixel's candidates (the paper's confidence cap: 20), (0, 1000].
+    /// the current pixel's candidates (the confidence cap; default 20, the issue's), (0, 1000].
     restir_cap: f32 = 20.0, parse parse_cap;
     /// restir: `biased` (the paper's Alg. 4, the default) or `unbiased` (Alg. 6 with a shadow ray
     /// from each reused pixel's point to the sample).
