@@ -565,10 +565,144 @@ fn methods_expand_with_their_own_knobs() {
     assert_eq!(labels, ["lightcluster d0.05", "lightcluster d0.2"]);
     assert_eq!(mode_name(&s.configs()[0]), "lightcluster");
     assert!(parse(&["--d-init", "0"], true).is_err());
+    // restir sweeps M, k and n by default (8 and 32, 3 and 5, 1 and 2), its other knobs at theirs.
+    let s = parse(&["--methods", "restir"], true).unwrap();
+    let labels: Vec<String> = s.configs().iter().map(label).collect();
+    assert_eq!(labels.len(), 8, "{labels:?}");
+    assert_eq!(
+        (labels[0].as_str(), labels[7].as_str()),
+        ("restir M8 k3 n1", "restir M32 k5 n2")
+    );
+    let s = parse(
+        &["--methods", "restir", "--restir-combine", "unbiased"],
+        true,
+    )
+    .unwrap();
+    assert!(label(&s.configs()[0]).ends_with(" unbiased"));
+    assert!(parse(&["--restir-candidates", "0"], true).is_err());
     let e = parse(&["--methods", "colom,foo"], true).unwrap_err();
     assert!(e.contains("--methods") && e.contains("foo"), "{e}");
     let e = parse(&["--wang-alpha", "0"], true).unwrap_err();
     assert!(e.contains("--wang-alpha"), "{e}");
     let e = parse(&["--methods", "wang", "--sp-clusters", "0"], true).unwrap_err();
     assert!(e.contains("wang"), "{e}");
+}
+
+/// `bench --methods colom,restir` at a tiny size (issue 43): restir's M and iteration lists (its k
+/// one value, to keep it short; by default bench sweeps M, k and n) beside
+/// colom's K's on the same fronts against the same reference, each row finite (MSE, rel MSE,
+/// FLIP), restir's rows labelled with their knobs, and the knobs' columns filled for its rows only;
+/// then the camera path with `--temporal off,on` (α 1: restir's own temporal reuse, no
+/// accumulation), whose rows report MSE and `instability_world` from frame 1 on.
+#[test]
+fn bench_methods_colom_restir_at_a_tiny_size() {
+    let d = common::scratch("bench-restir");
+    let size = [
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--vpls",
+        "256",
+        "--direct-samples",
+        "1",
+    ];
+    let mut args = vec![
+        "bench",
+        "builtin:cornell",
+        "--out-dir",
+        d.to_str().unwrap(),
+        "--methods",
+        "colom,restir",
+        "--modes",
+        "weighted",
+        "--pairs",
+        "24/32,48/64",
+        "--restir-candidates",
+        "4,16",
+        "--restir-neighbours",
+        "5",
+        "--restir-iterations",
+        "0,1",
+        "--repeat",
+        "1",
+        "--reference-repeat",
+        "1",
+    ];
+    args.extend(size);
+    let (code, _, err) = run(&args);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(d.join("results.csv")).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    assert!(header.contains(&"restir_candidates") && header.contains(&"restir_combine"));
+    let rows = csv::from_csv(&text).unwrap();
+    let restir: Vec<&csv::Row> = rows.iter().filter(|r| r.mode == "restir").collect();
+    assert_eq!(rows.len() - restir.len(), 2, "{text}");
+    let labels: Vec<&str> = restir.iter().map(|r| r.label.as_str()).collect();
+    assert_eq!(
+        labels,
+        [
+            "restir M4 k5 n0",
+            "restir M4 k5 n1",
+            "restir M16 k5 n0",
+            "restir M16 k5 n1"
+        ],
+        "{text}"
+    );
+    for r in &rows {
+        assert!(r.mse.is_finite() && r.mse > 0.0, "{r:?}");
+        assert!(r.rel_mse.is_finite() && r.rel_mse > 0.0, "{r:?}");
+        let f = r.flip.unwrap();
+        assert!(f.is_finite() && (0.0..=1.0).contains(&f), "{r:?}");
+        assert!(r.frame_ms() > 0.0 && r.shadow_rays > 0, "{r:?}");
+    }
+    for p in ["pareto.png", "stages.png"] {
+        assert!(image::open(d.join(p)).unwrap().width() > 100, "{p}");
+    }
+    // The camera path, restir alone at its defaults.
+    let p = common::scratch("bench-restir-path");
+    let mut args = vec![
+        "bench",
+        "builtin:conference",
+        "--out-dir",
+        p.to_str().unwrap(),
+        "--methods",
+        "restir",
+        "--restir-candidates",
+        "8",
+        "--restir-neighbours",
+        "5",
+        "--restir-iterations",
+        "1",
+        "--camera-path",
+        "orbit:3:2",
+        "--temporal",
+        "off,on",
+        "--temporal-alpha",
+        "1",
+    ];
+    args.extend(size);
+    let (code, _, err) = run(&args);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(p.join("path.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col =
+        |row: &[String], name: &str| row[header.iter().position(|h| *h == name).unwrap()].clone();
+    let rows: Vec<Vec<String>> = lines.map(csv::split_line).collect();
+    assert_eq!(rows.len(), 6, "{text}");
+    for (i, r) in rows.iter().enumerate() {
+        let (on, frame) = (i >= 3, i % 3);
+        assert_eq!(col(r, "temporal"), if on { "on" } else { "off" });
+        assert!(col(r, "label").starts_with("restir"), "{r:?}");
+        let mse: f64 = col(r, "mse").parse().unwrap();
+        assert!(mse.is_finite() && mse > 0.0, "{r:?}");
+        let world = col(r, "instability_world");
+        if frame > 0 {
+            let v: f64 = world.parse().unwrap();
+            assert!(v.is_finite() && v >= 0.0, "{r:?}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&d);
+    let _ = std::fs::remove_dir_all(&p);
 }

@@ -36,7 +36,7 @@ pub struct SceneInfo {
     pub adapter: String,
     /// The worker's adapter runs on the CPU (lavapipe): window frames share its cores.
     pub software: bool,
-    /// The most pixels a GI frame may have on the worker's device (`pipeline::max_pixels`).
+    /// The most pixels a GI frame may have on the worker's device (`render::max_pixels`).
     pub max_pixels: u64,
 }
 

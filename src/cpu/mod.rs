@@ -9,6 +9,7 @@ pub mod grid;
 pub mod kmeans;
 pub mod lightcluster;
 pub mod reproject;
+pub mod restir;
 pub mod shade;
 pub mod shading;
 pub mod upsample;

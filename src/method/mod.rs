@@ -248,7 +248,8 @@ macro_rules! rooms {
             /// rebuilds), wang (Wang et al. 2009: irradiance at SP-cluster centres,
             /// interpolated), lightcluster (LightCluster: VPLs clustered by distance, a disc's
             /// visibility per cluster), cvrtgi (clustered voxel GI: irradiance per voxel face
-            /// from voxel clusters). docs/methods.md.
+            /// from voxel clusters), restir (ReSTIR DI over the VPLs: resampled candidates,
+            /// temporal and spatial reuse). docs/methods.md.
             #[arg(long, value_enum, default_value_t = Method::Colom, help_heading = METHOD_HEADING)]
             pub method: Method,
             $(
@@ -285,7 +286,7 @@ macro_rules! rooms {
         /// `bench`'s lists: the methods to compare and each method's knob lists.
         #[derive(Args, Clone, Debug, Default, PartialEq)]
         pub struct MethodLists {
-            /// Methods to compare: colom,wang,lightcluster,cvrtgi (default colom;
+            /// Methods to compare: colom,wang,lightcluster,cvrtgi,restir (default colom;
             /// docs/methods.md). `--modes` and the fuzzy knobs apply to colom; a method that
             /// clusters the SPs (wang) also takes the K's and --iterations; each method's own
             /// knob lists follow.
@@ -328,12 +329,14 @@ macro_rules! rooms {
 // (cargo-mutants: docs/testing.md) see them.
 pub mod cvrtgi;
 pub mod lightcluster;
+pub mod restir;
 pub mod wang;
 
 rooms! {
     wang: Wang,
     lightcluster: LightCluster,
     cvrtgi: Cvrtgi,
+    restir: Restir,
 }
 
 /// `method`'s room.
