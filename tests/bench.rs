@@ -482,9 +482,9 @@ fn gpu_bench_script_runs_and_prints_one_table() {
         .lines()
         .filter(|l| l.starts_with("| ") && !l.starts_with("| ---"))
         .collect();
-    // Header; paper 6 (3 settings x hard, weighted); patterns3 1; orbit 2 (off, on); methods 6
-    // (colom and wang at 2 settings each, lightcluster, cvrtgi); dense 2 + 2.
-    assert_eq!(rows.len(), 1 + 6 + 1 + 2 + 6 + 4, "{stdout}");
+    // Header; paper 6 (3 settings x hard, weighted); patterns3 1; orbit 2 (off, on); methods 7
+    // (colom and wang at 2 settings each, lightcluster, cvrtgi, restir); dense 2 + 2.
+    assert_eq!(rows.len(), 1 + 6 + 1 + 2 + 7 + 4, "{stdout}");
     for run in [
         "paper",
         "patterns3",
