@@ -1,6 +1,6 @@
 //! The FLIP pass (`app::flip`, `shaders-wgsl/flip.wgsl`) against NVIDIA's FLIP (`metrics::flip_map`,
 //! `metrics::flip`: the C++ of the `nv-flip` crate, the oracle) and against its CPU twin
-//! (`cpu::flip`), on small images; and the display pass's FLIP view against the viewer's CPU FLIP
+//! (`metrics::ldr_flip`), on small images; and the display pass's FLIP view against the viewer's CPU FLIP
 //! view (`views::flip`).
 
 mod common;
@@ -10,7 +10,7 @@ use fuzzy_vpl::app::flip::{Flip, FlipInputs};
 use fuzzy_vpl::app::views::{self, View};
 use fuzzy_vpl::exposure::Exposure;
 use fuzzy_vpl::gpu::{GpuContext, read_texture};
-use fuzzy_vpl::{cpu, metrics};
+use fuzzy_vpl::metrics;
 
 const W: u32 = 64;
 const H: u32 = 48;
@@ -148,7 +148,7 @@ fn flip_pass_matches_nv_flip() {
                 );
                 assert!(mean.is_finite());
                 let nv = metrics::flip_map(&x, &reference, size.0, size.1, exposure);
-                let twin = cpu::flip::flip_map(&x, &reference, size.0, size.1, exposure);
+                let twin = metrics::ldr_flip::flip_map(&x, &reference, size.0, size.1, exposure);
                 let (max, mean_abs) = max_mean_abs(&map, &nv);
                 let (twin_max, _) = max_mean_abs(&twin, &nv);
                 let (gpu_twin, _) = max_mean_abs(&map, &twin);

@@ -1,7 +1,7 @@
 //! LDR FLIP on the GPU (`shaders-wgsl/flip.wgsl`): the per-pixel FLIP error of a frame against a
 //! reference, both shown as the viewer shows them, its mean reduced to one f32, and its magma
 //! picture, all without reading the frame back. What `metrics::flip_map` and `metrics::flip` compute
-//! through NVIDIA's C++ (`nv-flip`), at the same 67 pixels per degree; its CPU twin is `cpu::flip`.
+//! through NVIDIA's C++ (`nv-flip`), at the same 67 pixels per degree; its CPU twin is `metrics::ldr_flip`.
 //!
 //! Inputs, as the display pass reads them (`display::Images`): A's emission + direct and indirect
 //! buffers (vec4 a pixel, render units) with their factor to the scene's units (A's radiance is their
@@ -18,7 +18,7 @@ use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use super::display::Images;
-use crate::cpu::flip as twin;
+use crate::metrics::ldr_flip as twin;
 
 /// Pixels a workgroup of `filter_x` / `filter_y` covers in a row (`ROW` in the shader).
 const ROW: u32 = 64;
@@ -110,7 +110,7 @@ pub struct Flip {
     params: wgpu::Buffer,
     /// Bound where no picture is asked for (never written then): a 1 × 1 texture's storage view.
     stand_in: wgpu::TextureView,
-    /// FLIP's cmax (`cpu::flip::max_distance`).
+    /// FLIP's cmax (`metrics::ldr_flip::max_distance`).
     cmax: f32,
     sized: Option<Sized>,
 }
@@ -284,7 +284,7 @@ impl Flip {
 mod tests {
     use super::*;
 
-    /// The shader's filter sizes are FLIP's at its default pixels per degree (`cpu::flip`), and its
+    /// The shader's filter sizes are FLIP's at its default pixels per degree (`metrics::ldr_flip`), and its
     /// uniform is laid out as `FlipParams`.
     #[test]
     fn shader_constants_match_flip() {

@@ -4,7 +4,6 @@
 pub mod accumulate;
 pub mod cvrtgi;
 pub mod display;
-pub mod flip;
 pub mod grid;
 pub mod kmeans;
 pub mod lightcluster;

@@ -1,4 +1,8 @@
-//! Error metrics of docs/design.md, "Error metrics".
+//! Error metrics of docs/design.md, "Error metrics". FLIP through NVIDIA's C++ (`flip`,
+//! `flip_map`) and from its definition in Rust (`ldr_flip`: the GPU pass's filters and constants,
+//! and its CPU twin).
+
+pub mod ldr_flip;
 
 /// The paper's MSE: mean over pixels and RGB channels of (x − ref)², both clamped to [0, 1].
 pub fn mse(x: &[[f32; 3]], reference: &[[f32; 3]]) -> f64 {

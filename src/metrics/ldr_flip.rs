@@ -1,4 +1,5 @@
-//! The CPU twin of the FLIP pass (`app::flip`, `shaders-wgsl/flip.wgsl`): LDR FLIP (Andersson et al.
+//! LDR FLIP from its definition, the FLIP pass's (`app::flip`, `shaders-wgsl/flip.wgsl`) filters
+//! and constants and its CPU twin: LDR FLIP (Andersson et al.
 //! 2020, "FLIP: A Difference Evaluator for Alternating Images") written from its definition as
 //! NVIDIA's reference code computes it (the C++ that the `nv-flip` crate wraps, `image.h`,
 //! `color.h`, `sharedflip.h`), in f32 and in its order of operations, so that it reproduces
