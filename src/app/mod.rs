@@ -253,7 +253,7 @@ impl UiSettings {
             (false, true) => "VPL clusters only".into(),
             (true, _) if let Some(r) = room => {
                 let m = series(r);
-                if self.vpl_on || !r.vpl_clusters {
+                if self.vpl_on || !(r.vpl_clusters)(&self.method) {
                     m
                 } else {
                     format!("{m}, all VPLs")

@@ -259,7 +259,7 @@ impl Bench<'_> {
             configs.iter().map(|c| (c.clone(), None)).collect();
         let has_k = |c: &&Config| {
             let r = c.method.room();
-            r.clusters_sps || r.vpl_clusters
+            r.clusters_sps || (r.vpl_clusters)(&c.method)
         };
         for &t in &self.plan.sweep.target_ms {
             let mut seen = Vec::new();

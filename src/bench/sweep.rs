@@ -342,7 +342,7 @@ impl Sweep {
                 continue;
             }
             let own = self.method.configs_of(method);
-            let uses_k = room.clusters_sps || room.vpl_clusters;
+            let uses_k = room.clusters_sps || own.iter().any(room.vpl_clusters);
             let ks = if uses_k { ks.clone() } else { vec![(0, 0)] };
             let iterations = if room.clusters_sps {
                 self.cluster.iterations.clone()
@@ -355,7 +355,7 @@ impl Sweep {
                         push(Config {
                             cluster: ClusterSettings {
                                 sp_clusters: if room.clusters_sps { sp } else { 0 },
-                                vpl_clusters: if room.vpl_clusters { vpl } else { 0 },
+                                vpl_clusters: if (room.vpl_clusters)(&m) { vpl } else { 0 },
                                 fuzziness: 1,
                                 weighting: Weighting::Hard,
                                 iterations,
@@ -437,7 +437,7 @@ fn label_in(mode: Mode, c: &ClusterSettings, m: &MethodSettings) -> String {
     };
     if let Some(room) = m.knobs_room() {
         let own = (room.label)(m);
-        if !(room.clusters_sps || room.vpl_clusters) {
+        if !(room.clusters_sps || (room.vpl_clusters)(m)) {
             return format!("{} {own}", room.method);
         }
         let mut s = format!(

@@ -178,8 +178,9 @@ pub struct Room {
     pub build: fn(&GpuContext, &SceneGpu) -> Box<dyn IndirectMethod>,
     /// It clusters the shading points with `--sp-clusters` as K (and needs 0 < K < pixels).
     pub clusters_sps: bool,
-    /// Its lights are the resident VPL clusters (step 2, `--vpl-clusters`).
-    pub vpl_clusters: bool,
+    /// Its lights are the resident VPL clusters (step 2, `--vpl-clusters`) with these knobs
+    /// (else the VPLs).
+    pub vpl_clusters: fn(&MethodSettings) -> bool,
     /// Refuses a frame whose largest buffer of its own exceeds a storage binding (the message
     /// names the options); `no_limits` where it has none.
     pub limits: fn(&Limits) -> Result<(), String>,

@@ -56,7 +56,7 @@ impl Plan {
         Plan {
             indirect,
             vpl_clustering: clustered
-                && room.is_none_or(|r| r.vpl_clusters)
+                && room.is_none_or(|r| (r.vpl_clusters)(&s.method))
                 && c.vpl_clusters > 0
                 && c.vpl_clusters < f.vpls,
             method: room.map(|r| r.method),

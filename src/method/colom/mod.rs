@@ -36,7 +36,7 @@ pub const ROOM: Room = Room {
     passes: &[Pass::SpCluster, Pass::Visibility, Pass::Shade],
     build,
     clusters_sps: true,
-    vpl_clusters: true,
+    vpl_clusters: |_| true,
     limits,
     own_knobs: false,
     colour: [140, 86, 75],

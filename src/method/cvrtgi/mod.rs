@@ -725,7 +725,7 @@ pub const ROOM: Room = Room {
     passes: &[PASS],
     build: |_, _| Box::new(Cvrtgi::new()),
     clusters_sps: false,
-    vpl_clusters: false,
+    vpl_clusters: |_| false,
     limits: super::no_limits,
     own_knobs: true,
     colour: [188, 189, 34],

@@ -151,7 +151,7 @@ pub const ROOM: Room = Room {
     passes: &[CLUSTER, SHADE],
     build: |ctx, gpu| Box::new(LightClusterMethod::new(ctx, gpu)),
     clusters_sps: false,
-    vpl_clusters: false,
+    vpl_clusters: |_| false,
     limits: super::no_limits,
     own_knobs: true,
     colour: [23, 190, 207],

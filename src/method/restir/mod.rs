@@ -17,14 +17,14 @@ use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
 
-use self::settings::Combine;
+use self::settings::{Combine, RestirLights};
 use super::Method;
 use super::{Counts, FrameInputs, IndirectMethod, Room};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::primary::{CameraParams, SP_BYTES};
 use crate::gi::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
-use crate::gi::vpl_trace::VplKey;
+use crate::gi::vpl_cluster::LightKey;
 use crate::gpu::GpuContext;
 use crate::gpu::persistent::Uniform;
 use crate::settings::FrameSettings;
@@ -87,7 +87,7 @@ pub fn frame_seed(frame: u32, seed: u32) -> u32 {
 /// What a history must match to be reused: the VPL set (its ids), the frame's settings, the knobs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct HistoryKey {
-    vpls: VplKey,
+    lights: LightKey,
     frame: FrameSettings,
     knobs: Knobs,
     pixels: u32,
@@ -127,7 +127,7 @@ pub struct LastFrame {
 pub struct RestirMethod {
     kernel: Kernel,
     params: Uniform<RestirParams>,
-    table: Option<(VplKey, wgpu::Buffer)>,
+    table: Option<(LightKey, wgpu::Buffer)>,
     size: Option<SizeBuffers>,
     past: Option<Past>,
     /// This frame: its bind groups (reading reservoirs 0 / 1), the buffer holding the current
@@ -175,9 +175,11 @@ impl RestirMethod {
     fn prepare(&mut self, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) {
         let ctx = g.ctx;
         let t = Instant::now();
-        let key = f.vpls.key;
+        // The light list: the VPLs themselves, or the VPL clusters (`--restir-lights`).
+        let lights = f.lights.expect("the renderer's light list");
+        let key = lights.key;
         if self.table.as_ref().is_none_or(|(k, _)| *k != key) {
-            let table = alias::build(&f.vpls.set.vpls);
+            let table = alias::build(&lights.list.lights);
             self.table = Some((key, ctx.storage_init("restir alias", &table)));
         }
         n.cpu_ms.push((PREPARE, t.elapsed().as_secs_f64() * 1e3));
@@ -213,7 +215,7 @@ impl RestirMethod {
         }
         let k = f.method.restir;
         let hk = HistoryKey {
-            vpls: key,
+            lights: key,
             frame: *f.frame,
             knobs: k,
             pixels,
@@ -233,7 +235,7 @@ impl RestirMethod {
             dims: [
                 f.cam.size[0],
                 f.cam.size[1],
-                f.vpls.set.vpls.len() as u32,
+                lights.list.lights.len() as u32,
                 k.restir_candidates,
             ],
             opts: [
@@ -259,7 +261,7 @@ impl RestirMethod {
                     (1, uniform),
                     (2, f.gbuffer),
                     (3, &past.gbuffer),
-                    (4, &f.vpls.set.buffer),
+                    (4, &lights.list.buffer),
                     (5, table),
                     (6, &size.reservoirs[read]),
                     (7, &past.reservoirs),
@@ -411,9 +413,13 @@ fn label(m: &super::MethodSettings) -> String {
         "M{} k{} n{}",
         k.restir_candidates, k.restir_neighbours, k.restir_iterations
     );
-    match k.restir_combine {
+    let base = match k.restir_combine {
         Combine::Biased => base,
         Combine::Unbiased => format!("{base} unbiased"),
+    };
+    match k.restir_lights {
+        RestirLights::Vpls => base,
+        RestirLights::Clusters => format!("{base} clusters"),
     }
 }
 
@@ -427,7 +433,7 @@ pub const ROOM: Room = Room {
     passes: &[PREPARE, INITIAL, TEMPORAL, SPATIAL, SHADE],
     build: |ctx, gpu| Box::new(RestirMethod::new(ctx, gpu)),
     clusters_sps: false,
-    vpl_clusters: false,
+    vpl_clusters: |m| m.restir.restir_lights == RestirLights::Clusters,
     limits: super::no_limits,
     own_knobs: true,
     colour: [227, 119, 194],
@@ -460,6 +466,12 @@ pub const ROOM: Room = Room {
             ui.label("combination");
             ui.radio_value(c, Combine::Biased, "biased");
             ui.radio_value(c, Combine::Unbiased, "unbiased");
+        });
+        let l = &mut k.restir_lights;
+        ui.horizontal(|ui| {
+            ui.label("lights");
+            ui.radio_value(l, RestirLights::Vpls, "VPLs");
+            ui.radio_value(l, RestirLights::Clusters, "VPL clusters");
         });
     },
 };

@@ -36,6 +36,33 @@ impl fmt::Display for Combine {
     }
 }
 
+/// restir's light set (`--restir-lights`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RestirLights {
+    /// The frame's VPLs, each a point light (the default).
+    #[default]
+    Vpls,
+    /// The resident VPL clusters (step 2, `--vpl-clusters`), each a point light at its
+    /// representative with the members' summed flux (colom's `--cluster-light point`).
+    Clusters,
+}
+
+impl RestirLights {
+    pub fn name(self) -> &'static str {
+        match self {
+            RestirLights::Vpls => "vpls",
+            RestirLights::Clusters => "clusters",
+        }
+    }
+}
+
+impl fmt::Display for RestirLights {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// The most candidates a pixel (`--restir-candidates`).
 pub const MAX_CANDIDATES: u32 = 1024;
 /// The most spatial neighbours an iteration (`--restir-neighbours`; the shader's list holds them).
@@ -63,6 +90,10 @@ knobs! {
     /// restir: `biased` (the paper's Alg. 4, the default) or `unbiased` (Alg. 6 with a shadow ray
     /// from each reused pixel's point to the sample).
     restir_combine: Combine = Combine::Biased, parse parse_combine;
+    /// restir: its lights, `vpls` (the frame's VPLs, the default) or `clusters` (the resident VPL
+    /// clusters of `--vpl-clusters`, each a point light at its representative with the summed
+    /// flux).
+    restir_lights: RestirLights = RestirLights::Vpls, parse parse_lights;
 }
 
 pub fn parse_candidates(v: &str) -> Result<u32, Invalid> {
@@ -95,6 +126,14 @@ pub fn parse_cap(v: &str) -> Result<f32, Invalid> {
         |c: f32| c > 0.0 && c <= 1000.0,
         "must be a multiple of the candidates in (0, 1000]",
     )
+}
+
+pub fn parse_lights(v: &str) -> Result<RestirLights, Invalid> {
+    match v.trim() {
+        "vpls" => Ok(RestirLights::Vpls),
+        "clusters" => Ok(RestirLights::Clusters),
+        _ => invalid("must be vpls or clusters"),
+    }
 }
 
 pub fn parse_combine(v: &str) -> Result<Combine, Invalid> {

@@ -228,7 +228,7 @@ pub const ROOM: Room = Room {
     passes: &[CLUSTER, GATHER, INTERP],
     build: |ctx, gpu| Box::new(WangMethod::new(ctx, gpu)),
     clusters_sps: true,
-    vpl_clusters: true,
+    vpl_clusters: |_| true,
     limits: super::no_limits,
     own_knobs: true,
     colour: [140, 86, 75],
