@@ -706,3 +706,73 @@ fn bench_methods_colom_restir_at_a_tiny_size() {
     let _ = std::fs::remove_dir_all(&d);
     let _ = std::fs::remove_dir_all(&p);
 }
+
+/// `bench --paper off,on`: each configuration with the defaults and with `--paper` (the same K's,
+/// the paper's ratios for the frame), the paper's row labelled `paper` and measured against its own
+/// reference (no G-term clamp); a camera path needs one reference and refuses both without --clamp.
+#[test]
+fn paper_off_on_runs_both_side_by_side() {
+    let d = common::scratch("bench-paper-off-on");
+    let dir = d.to_str().unwrap();
+    let args = [
+        "bench",
+        "builtin:cornell",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--vpls",
+        "64",
+        "--modes",
+        "hard",
+        "--paper",
+        "off,on",
+        "--repeat",
+        "1",
+        "--out-dir",
+        dir,
+    ];
+    let (code, _, err) = run(&args);
+    assert_eq!(code, 0, "{err}");
+    let rows = csv::from_csv(&std::fs::read_to_string(d.join("results.csv")).unwrap()).unwrap();
+    assert_eq!(rows.len(), 2, "{rows:?}");
+    let (def, paper) = (&rows[0], &rows[1]);
+    // 768 pixels and 64 VPLs: the paper's K ratios, 8 / 16, for both.
+    assert_eq!((def.sp_clusters, def.vpl_clusters), (8, 16), "{def:?}");
+    assert_eq!(
+        (paper.sp_clusters, paper.vpl_clusters),
+        (8, 16),
+        "{paper:?}"
+    );
+    assert!(!def.label.contains("paper"), "{def:?}");
+    assert!(paper.label.ends_with(" paper"), "{paper:?}");
+    assert!(def.mse.is_finite() && paper.mse.is_finite());
+    assert_ne!(def.mse, paper.mse, "the same image both ways");
+    // Two references, one a frame (at this size no pixel is near enough a VPL for the clamp to
+    // change the image: both are the same to the bit here, so the test reads the files, not pixels).
+    for f in ["reference.exr", "reference_paper.exr"] {
+        let (w, h, px) = fuzzy_vpl::export::read_exr(&d.join(f)).unwrap();
+        assert_eq!((w, h), (32, 24), "{f}");
+        assert!(common::all_finite(&px), "{f}");
+    }
+    assert!(def.reference_ms > 0.0 && paper.reference_ms > 0.0);
+    let md = std::fs::read_to_string(d.join("summary.md")).unwrap();
+    assert!(md.contains("reference_paper.exr"), "{md}");
+    // With --clamp both frames are one: one reference, both rows against it.
+    let mut clamped = args.to_vec();
+    clamped.extend(["--clamp", "0.02"]);
+    let (code, _, err) = run(&clamped);
+    assert_eq!(code, 0, "{err}");
+    let rows = csv::from_csv(&std::fs::read_to_string(d.join("results.csv")).unwrap()).unwrap();
+    assert_eq!(rows.len(), 2, "{rows:?}");
+    assert!(rows[1].label.ends_with(" paper"), "{rows:?}");
+    assert_eq!(rows[0].reference_ms, rows[1].reference_ms);
+    let md = std::fs::read_to_string(d.join("summary.md")).unwrap();
+    assert!(!md.contains("reference_paper.exr"), "{md}");
+    let mut path = args.to_vec();
+    path.extend(["--camera-path", "orbit:2:10"]);
+    let (code, _, err) = run(&path);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--clamp"), "{err}");
+    let _ = std::fs::remove_dir_all(&d);
+}

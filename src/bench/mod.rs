@@ -37,6 +37,9 @@ pub struct BenchPlan {
     /// Size, VPLs, seed, clamp, direct samples and exposure (PNG; `Auto` is resolved once a camera
     /// from its reference, so that every image of a camera is shown at the same exposure).
     pub frame: FrameSettings,
+    /// The frame of the configurations with `--paper` (`ClusterSettings::paper`): `frame` without a
+    /// G-term clamp unless --clamp was given (`paper_frame`).
+    pub paper_frame: FrameSettings,
     /// Resolved (`Sweep::resolve`): every list has its values.
     pub sweep: Sweep,
     /// (name written in the rows, camera).
@@ -49,21 +52,51 @@ pub struct BenchPlan {
     pub progress: bool,
 }
 
+/// `bench --paper`'s frame: `frame` without a G-term clamp (the paper's Eq. 5 and 6 have none),
+/// unless the command line gave --clamp (`clamp_given`).
+pub fn paper_frame(frame: &FrameSettings, clamp_given: bool) -> FrameSettings {
+    FrameSettings {
+        clamp: if clamp_given { frame.clamp } else { 0.0 },
+        ..*frame
+    }
+}
+
 impl BenchPlan {
+    /// The frame of configuration `c`: `paper_frame` with `--paper`, else `frame`.
+    pub fn frame_of(&self, c: &Config) -> FrameSettings {
+        if c.paper {
+            self.paper_frame
+        } else {
+            self.frame
+        }
+    }
+
     /// The render settings of configuration `c`.
     pub fn settings(&self, c: &Config) -> RenderSettings {
         RenderSettings {
-            frame: self.frame,
+            frame: self.frame_of(c),
             cluster: c.cluster.clone(),
             method: c.method,
             ..Default::default()
         }
     }
 
-    /// The render settings of the unclustered reference.
-    pub fn reference_settings(&self) -> RenderSettings {
+    /// The distinct frames of `configs`, in order: one reference each (two where `--paper off,on`
+    /// changes the clamp).
+    pub fn frames(&self, configs: &[Config]) -> Vec<FrameSettings> {
+        let mut out: Vec<FrameSettings> = Vec::new();
+        for f in configs.iter().map(|c| self.frame_of(c)) {
+            if !out.contains(&f) {
+                out.push(f);
+            }
+        }
+        out
+    }
+
+    /// The render settings of the unclustered reference of `frame`.
+    pub fn reference_settings(&self, frame: FrameSettings) -> RenderSettings {
         RenderSettings {
-            frame: self.frame,
+            frame,
             reference: true,
             ..Default::default()
         }
@@ -254,7 +287,17 @@ impl Bench<'_> {
         } else {
             String::new()
         };
-        let reference = self.reference(cam_name, camera, &suffix)?;
+        // One reference per frame: the first is `reference`, a second (`--paper off,on`, the
+        // paper's frame without the clamp) `reference_paper`.
+        let mut references = Vec::new();
+        for (i, f) in self.plan.frames(configs).into_iter().enumerate() {
+            let name = if i == 0 {
+                "reference"
+            } else {
+                "reference_paper"
+            };
+            references.push((f, self.reference(cam_name, camera, f, name, &suffix)?));
+        }
         let mut jobs: Vec<(Config, Option<f64>)> =
             configs.iter().map(|c| (c.clone(), None)).collect();
         let has_k = |c: &&Config| {
@@ -274,7 +317,13 @@ impl Bench<'_> {
         let mut cam_rows = Vec::new();
         for (i, (c, target_ms)) in jobs.iter().enumerate() {
             let stem_no = format!("{:02}{suffix}", i + 1);
-            let row = self.measure(cam_name, camera, c, *target_ms, &reference, &stem_no)?;
+            let frame = self.plan.frame_of(c);
+            let reference = &references
+                .iter()
+                .find(|r| r.0 == frame)
+                .expect("a frame's")
+                .1;
+            let row = self.measure(cam_name, camera, c, *target_ms, reference, &stem_no)?;
             cam_rows.push(row);
         }
         self.mark_front(cam_name, &mut cam_rows);
@@ -285,32 +334,43 @@ impl Bench<'_> {
         write_csv(&self.csv_path, &self.rows)?;
         let just: Vec<Row> = cam_rows.iter().map(|r| r.0.clone()).collect();
         let plots = self.plots(&just, &suffix)?;
+        let reference = &references[0].1;
         Ok(CameraSummary {
             camera: cam_name.to_string(),
             reference_ms: reference.ms,
-            reference_image: reference.exr,
+            reference_image: reference.exr.clone(),
+            paper_reference: references.get(1).map(|r| (r.1.ms, r.1.exr.clone())),
             plots,
             rows: cam_rows,
         })
     }
 
-    /// The reference: every pixel × every VPL, timed and written as EXR and PNG.
-    fn reference(&mut self, cam_name: &str, camera: &Camera, suffix: &str) -> Result<Reference> {
-        self.pb.set_message(format!("camera {cam_name}: reference"));
-        let s = self.plan.reference_settings();
+    /// The reference of `frame`: every pixel × every VPL, timed and written as EXR and PNG
+    /// (`name{suffix}`).
+    fn reference(
+        &mut self,
+        cam_name: &str,
+        camera: &Camera,
+        frame: FrameSettings,
+        name: &str,
+        suffix: &str,
+    ) -> Result<Reference> {
+        self.pb.set_message(format!("camera {cam_name}: {name}"));
+        let s = self.plan.reference_settings(frame);
         let t = self.timed(camera, &s, self.plan.reference_repeat)?;
         let (frame, ms) = (t.frame, t.timings_ms[FRAME_KEY]);
         let out = &self.plan.out_dir;
-        let exposure = self.plan.frame.exposure.resolve(&frame.radiance);
-        let exr = format!("reference{suffix}.exr");
+        let exposure = s.frame.exposure.resolve(&frame.radiance);
+        let exr = format!("{name}{suffix}.exr");
         export::write_exr(&out.join(&exr), frame.width, frame.height, &frame.radiance)?;
-        let png = out.join(format!("reference{suffix}.png"));
+        let png = out.join(format!("{name}{suffix}.png"));
         export::write_image(&png, frame.width, frame.height, &frame.radiance, exposure)?;
         self.files.extend([out.join(&exr), png]);
         self.say(format!(
-            "camera {cam_name}: reference {:.1} ms GPU ({} VPLs, mean luminance {:.3})",
+            "camera {cam_name}: {name} {:.1} ms GPU ({} VPLs, clamp {}, mean luminance {:.3})",
             ms,
             frame.vpls,
+            s.frame.clamp,
             metrics::mean_luminance(&frame.radiance)
         ));
         Ok(Reference {

@@ -244,7 +244,10 @@ pub fn run(
     let start = &plan.cameras.first().ok_or_else(|| anyhow!("no camera"))?.1;
     let target = orbit_target_of(&renderer, start);
     let cameras = path.cameras(start, target);
-    let reference_settings = plan.reference_settings();
+    let configs = plan.sweep.configs();
+    // One frame along a path (`bench --camera-path` refuses `--paper off,on` without --clamp).
+    let frame = plan.frames(&configs).first().copied().unwrap_or(plan.frame);
+    let reference_settings = plan.reference_settings(frame);
     let timing = Timing {
         repeat: 1,
         warmup_ms: plan.timing.warmup_ms,
@@ -262,7 +265,7 @@ pub fn run(
         references.push((t.frame.radiance, ms));
     }
     let mut rows = Vec::new();
-    for c in &plan.sweep.configs() {
+    for c in &configs {
         let runs = temporal.iter().flat_map(|&on| {
             let a: Vec<Option<f32>> = match on {
                 true => alphas.iter().map(|&a| Some(a)).collect(),

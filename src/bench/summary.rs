@@ -29,6 +29,8 @@ pub struct CameraSummary {
     pub camera: String,
     pub reference_ms: f64,
     pub reference_image: String,
+    /// With `--paper off,on`: the paper's reference (no clamp), its frame time and image.
+    pub paper_reference: Option<(f64, String)>,
     pub plots: Vec<(String, String)>,
     pub rows: Vec<(Row, String, String)>,
 }
@@ -85,6 +87,14 @@ pub fn markdown(s: &SummaryInfo) -> String {
             c.reference_image,
             c.reference_image
         );
+        if let Some((ms, img)) = &c.paper_reference {
+            let _ = writeln!(
+                m,
+                "The `paper` rows' reference (`--paper`: no G-term clamp): **{} ms** per frame, \
+                 image [`{img}`]({img}).\n",
+                fmt_ms(*ms)
+            );
+        }
         for (title, file) in &c.plots {
             let _ = writeln!(m, "### {title}\n\n![{title}]({file})\n");
         }
@@ -189,6 +199,7 @@ mod tests {
                 camera: "default".into(),
                 reference_ms: 50.0,
                 reference_image: "reference.exr".into(),
+                paper_reference: None,
                 plots: vec![("Stage times".into(), "stages.png".into())],
                 rows,
             }],

@@ -195,12 +195,16 @@ pub struct Sweep {
     /// time (the `front_mse` column).
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::settings::parse_target_ms)]
     pub target_ms: Vec<f64>,
-    /// colom's configurations start from the paper's settings (`render --paper`: point cluster
-    /// lights, no re-seeding or fallbacks, mean centroid normals, n_t = √3/2; with no K lists, the
-    /// paper's K ratios for the frame; the frame without a G-term clamp); the lists given still
-    /// sweep over them (e.g. `--paper --cluster-light point,spread`).
-    #[arg(long)]
-    pub paper: bool,
+    /// `--paper` (on), or a list of off / on: the configurations with it start from the paper's
+    /// settings (`render --paper`: colom's point cluster lights, no re-seeding or fallbacks, mean
+    /// centroid normals, n_t = √3/2; every method's frame without a G-term clamp unless --clamp is
+    /// given, against a reference without it too); with no K lists, every configuration takes the
+    /// paper's K ratios for the frame. The lists given still sweep over them (`--paper --cluster-light
+    /// point,spread`); `--paper off,on` puts the defaults and the paper side by side (label word
+    /// `paper`).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::settings::parse_on_off,
+          num_args = 0..=1, default_missing_value = "on")]
+    pub paper: Vec<bool>,
     /// The methods (`--methods`, default colom) and each one's knob lists (docs/methods.md),
     /// after the other lists: their headings follow.
     #[command(flatten)]
@@ -245,22 +249,22 @@ impl Sweep {
             cluster: self.resolve_cluster(quick),
             pairs: or_default(&self.pairs, &[]),
             target_ms: or_default(&self.target_ms, &[]),
-            paper: self.paper,
+            paper: or_default(&self.paper, &[false]),
         };
         s.validate()?;
         Ok(s)
     }
 
     /// The cluster lists resolved (`ClusterLists::resolve`); with `--paper` the empty lists of the
-    /// settings `--paper` changes take the paper's value instead of the default.
+    /// settings `--paper` changes stay empty, so that each configuration keeps its start's value
+    /// (the paper's with `--paper`, the default without).
     fn resolve_cluster(&self, quick: bool) -> ClusterLists {
         let (c, mut r) = (&self.cluster, self.cluster.resolve(quick));
-        if self.paper {
-            let p = crate::settings::paper::paper_defaults().1;
+        if self.paper.contains(&true) {
             macro_rules! paper {
                 ($($field:ident),+) => {
                     $(if c.$field.is_empty() {
-                        r.$field = vec![p.$field];
+                        r.$field = Vec::new();
                     })+
                 };
             }
@@ -349,20 +353,23 @@ impl Sweep {
             } else {
                 vec![ClusterSettings::default().iterations]
             };
-            for &(sp, vpl) in &ks {
-                for &iterations in &iterations {
-                    for &m in &own {
-                        push(Config {
-                            cluster: ClusterSettings {
-                                sp_clusters: if room.clusters_sps { sp } else { 0 },
-                                vpl_clusters: if (room.vpl_clusters)(&m) { vpl } else { 0 },
-                                fuzziness: 1,
-                                weighting: Weighting::Hard,
-                                iterations,
-                                ..Default::default()
-                            },
-                            method: m,
-                        });
+            for &paper in &self.paper {
+                for &(sp, vpl) in &ks {
+                    for &iterations in &iterations {
+                        for &m in &own {
+                            push(Config {
+                                cluster: ClusterSettings {
+                                    sp_clusters: if room.clusters_sps { sp } else { 0 },
+                                    vpl_clusters: if (room.vpl_clusters)(&m) { vpl } else { 0 },
+                                    fuzziness: 1,
+                                    weighting: Weighting::Hard,
+                                    iterations,
+                                    paper,
+                                    ..Default::default()
+                                },
+                                method: m,
+                            });
+                        }
                     }
                 }
             }
@@ -370,9 +377,9 @@ impl Sweep {
         out
     }
 
-    /// colom's configurations: each mode × K pair × every combination of the other lists
-    /// (`ClusterLists::configs`, in the order of their fields), with what the mode ignores set to
-    /// its neutral value.
+    /// colom's configurations: each `--paper` value × mode × K pair × every combination of the
+    /// other lists (`ClusterLists::configs`, in the order of their fields), with what the mode
+    /// ignores set to its neutral value.
     fn colom_configs(&self, ks: &[(u32, u32)]) -> Vec<Config> {
         // The K's come from the pairs, one (K_SP, K_VPL) at a time.
         let lists = ClusterLists {
@@ -381,20 +388,22 @@ impl Sweep {
             ..self.cluster.clone()
         };
         let mut out = Vec::new();
-        for &mode in &self.modes {
-            for &(sp, vpl) in ks {
-                let start = if self.paper {
-                    crate::settings::paper::paper_defaults().1
-                } else {
-                    ClusterSettings::default()
-                };
-                let base = ClusterSettings {
-                    sp_clusters: sp,
-                    vpl_clusters: vpl,
-                    weighting: mode.weighting(),
-                    ..start
-                };
-                out.extend(lists.configs(&base).into_iter().map(|c| mode.applied(c)));
+        for &paper in &self.paper {
+            let start = if paper {
+                crate::settings::paper::paper_defaults().1
+            } else {
+                ClusterSettings::default()
+            };
+            for &mode in &self.modes {
+                for &(sp, vpl) in ks {
+                    let base = ClusterSettings {
+                        sp_clusters: sp,
+                        vpl_clusters: vpl,
+                        weighting: mode.weighting(),
+                        ..start.clone()
+                    };
+                    out.extend(lists.configs(&base).into_iter().map(|c| mode.applied(c)));
+                }
             }
         }
         out.into_iter().map(Config::from).collect()
@@ -427,7 +436,23 @@ pub fn label(c: &Config) -> String {
     label_in(mode(c), c, &c.method)
 }
 
+/// The settings a configuration starts from: the paper's with `--paper`, else the defaults; its
+/// label names what departs from them.
+fn start_of(c: &ClusterSettings) -> ClusterSettings {
+    if c.paper {
+        crate::settings::paper::paper_defaults().1
+    } else {
+        ClusterSettings::default()
+    }
+}
+
+/// `label_of` with the word `paper` for a configuration with `--paper`.
 fn label_in(mode: Mode, c: &ClusterSettings, m: &MethodSettings) -> String {
+    let s = label_of(mode, c, m);
+    if c.paper { s + " paper" } else { s }
+}
+
+fn label_of(mode: Mode, c: &ClusterSettings, m: &MethodSettings) -> String {
     let k = |v: u32| {
         if v == 0 {
             "-".to_string()
@@ -458,7 +483,7 @@ fn label_in(mode: Mode, c: &ClusterSettings, m: &MethodSettings) -> String {
     if mode.clusters_sps() && c.sp_clusters > 0 {
         s += &format!(" g{}", c.gamma);
     }
-    if c.normal_threshold != ClusterSettings::default().normal_threshold {
+    if c.normal_threshold != start_of(c).normal_threshold {
         s += &format!(" nt{}", c.normal_threshold);
     }
     if c.iterations != ClusterSettings::default().iterations {
@@ -473,10 +498,11 @@ fn label_in(mode: Mode, c: &ClusterSettings, m: &MethodSettings) -> String {
     s + &adaptations_label(c)
 }
 
-/// The adaptations a configuration departs from the defaults in (`point`, `-reseed`, `-rings`,
-/// `-position`, `mean-normal`), each a word of its label.
+/// The adaptations a configuration departs from its start in (`point`, `-reseed`, `-rings`,
+/// `-position`, `mean-normal`; with `--paper` the reverse: `spread`, `+reseed`, ...), each a word
+/// of its label.
 fn adaptations_label(c: &ClusterSettings) -> String {
-    let d = ClusterSettings::default();
+    let d = start_of(c);
     let mut s = String::new();
     if c.cluster_light != d.cluster_light {
         s += &format!(" {}", c.cluster_light);
@@ -604,13 +630,12 @@ mod tests {
         assert_eq!(c.len(), 2);
         assert!(c.iter().all(|c| c.paper && !c.reseed && !c.ring_fallback));
         let labels: Vec<String> = c.iter().map(label).collect();
-        let paper = " nt0.8660254";
-        let off = " -reseed -rings -position mean-normal";
+        // A label names what departs from the paper's settings, and the word paper.
         assert_eq!(
             labels,
             [
-                format!("weighted 48/128 F6 gauto{paper} point{off}"),
-                format!("weighted 48/128 F6 gauto{paper}{off}"),
+                "weighted 48/128 F6 gauto paper",
+                "weighted 48/128 F6 gauto spread paper",
             ]
         );
         // Without --paper the switches' lists sweep from the defaults.
@@ -620,6 +645,52 @@ mod tests {
         );
         let labels: Vec<String> = s.unwrap().configs().iter().map(label).collect();
         assert_eq!(labels, ["hard 48/128 gauto", "hard 48/128 gauto -reseed"]);
+    }
+
+    /// `--paper off,on`: every configuration once with the defaults and once with the paper's
+    /// settings (each method's), the defaults first; a bare `--paper` is on, none is off.
+    #[test]
+    fn paper_off_on_sweeps_the_defaults_and_the_paper() {
+        let s = parse(
+            &[
+                "--paper",
+                "off,on",
+                "--modes",
+                "hard",
+                "--pairs",
+                "48/128",
+                "--methods",
+                "colom,lightcluster",
+                "--d-init",
+                "0.5",
+            ],
+            true,
+        )
+        .unwrap();
+        assert_eq!(s.paper, [false, true]);
+        let c = s.configs();
+        let labels: Vec<String> = c.iter().map(label).collect();
+        let d = ClusterSettings::default();
+        let p = crate::settings::paper::paper_defaults().1;
+        assert_eq!(
+            labels[..2],
+            ["hard 48/128 gauto", "hard 48/128 gauto paper"]
+        );
+        assert_eq!(c.len(), 4, "{labels:?}");
+        assert!(!c[0].paper && c[0].reseed == d.reseed && c[0].cluster_light == d.cluster_light);
+        assert!(c[1].paper && c[1].reseed == p.reseed && c[1].cluster_light == p.cluster_light);
+        assert!(!c[1].ring_fallback && !c[1].position_fallback);
+        let lc: Vec<&Config> = c
+            .iter()
+            .filter(|c| c.method.method != Method::Colom)
+            .collect();
+        assert_eq!(lc.len(), 2);
+        assert!(!lc[0].paper && lc[1].paper);
+        assert!(label(lc[1]).ends_with(" paper") && !label(lc[0]).contains("paper"));
+        assert_eq!(parse(&["--paper"], true).unwrap().paper, [true]);
+        assert_eq!(parse(&[], true).unwrap().paper, [false]);
+        assert_eq!(parse(&["--paper", "on,on"], true).unwrap().paper, [true]);
+        assert!(parse(&["--paper", "yes"], true).is_err());
     }
 
     #[test]

@@ -87,9 +87,9 @@ fn quick_frame(a: &BenchArgs, given: &[&str]) -> FrameSettings {
 }
 
 pub fn run(mut a: BenchArgs, given: &[&str]) -> Result<()> {
-    let mut frame = quick_frame(&a, given);
-    if a.sweep.paper {
-        paper_frame(&mut a.sweep, &mut frame, given);
+    let frame = quick_frame(&a, given);
+    if a.sweep.paper.contains(&true) {
+        paper_ks(&mut a.sweep, &frame);
     }
     let sweep = a.sweep.resolve(a.quick).map_err(bad)?;
     let repeat = a.repeat.unwrap_or(if a.quick { 3 } else { 10 });
@@ -128,6 +128,7 @@ pub fn run(mut a: BenchArgs, given: &[&str]) -> Result<()> {
         scene_name: a.scene.scene.clone(),
         out_dir: a.out_dir.clone(),
         frame,
+        paper_frame: bench::paper_frame(&frame, given.contains(&"clamp")),
         sweep,
         cameras,
         repeat,
@@ -147,13 +148,11 @@ pub fn run(mut a: BenchArgs, given: &[&str]) -> Result<()> {
     }
 }
 
-/// `bench --paper`: the frame without a G-term clamp unless --clamp was given, and without K lists
-/// or pairs the paper's K ratios for the frame (`settings::paper`).
-fn paper_frame(sweep: &mut crate::bench::sweep::Sweep, frame: &mut FrameSettings, given: &[&str]) {
+/// `bench --paper`: without K lists or pairs, the paper's K ratios for the frame
+/// (`settings::paper`), for every configuration (the frame without a G-term clamp is
+/// `bench::paper_frame`).
+fn paper_ks(sweep: &mut crate::bench::sweep::Sweep, frame: &FrameSettings) {
     use crate::settings::paper;
-    if !given.contains(&"clamp") {
-        frame.clamp = 0.0;
-    }
     let c = &sweep.cluster;
     if sweep.pairs.is_empty() && c.sp_clusters.is_empty() && c.vpl_clusters.is_empty() {
         let sp = paper::paper_sp_clusters(frame.pixels());
@@ -175,6 +174,12 @@ fn along_path(
             "--camera-path starts from one camera; --camera lists {}",
             plan.cameras.len()
         )));
+    }
+    if plan.frames(&plan.sweep.configs()).len() > 1 {
+        return Err(bad(
+            "--camera-path compares every frame with one reference: --paper off,on needs --clamp \
+             (the paper's frame has no clamp)",
+        ));
     }
     let temporal = if temporal.is_empty() {
         &[false]
