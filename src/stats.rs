@@ -98,9 +98,10 @@ pub struct Counts {
     pub sp_warm_kept: Option<u32>,
     /// Rows of the visibility matrix copied from the previous render (kept representatives).
     pub visibility_rows_reused: u32,
-    /// `--method cvrtgi`'s sizes (absent for the other methods).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub cvrtgi: Option<crate::method::cvrtgi::CvrtgiReport>,
+    /// The method's own report under its name (`--method cvrtgi`: `cvrtgi`, its sizes; absent for
+    /// a method without one).
+    #[serde(flatten)]
+    pub method: BTreeMap<String, serde_json::Value>,
 }
 
 impl Counts {
@@ -118,7 +119,9 @@ impl Counts {
             sp_iterations: frame.sp_iterations,
             sp_warm_kept: frame.sp_warm_kept,
             visibility_rows_reused: frame.visibility_rows_reused,
-            cvrtgi: frame.cvrtgi,
+            method: (frame.report.iter())
+                .map(|(m, v)| (m.name().to_string(), v.clone()))
+                .collect(),
         }
     }
 }

@@ -81,8 +81,9 @@ pub struct Counts {
     pub sp_warm_kept: Option<u32>,
     pub gamma_used: Option<u32>,
     pub rows_reused: u32,
-    /// cvrtgi's sizes: voxels, clusters, faces, the lit ones (`Frame::cvrtgi`).
-    pub cvrtgi: Option<cvrtgi::CvrtgiReport>,
+    /// The method's own report (cvrtgi's sizes: voxels, clusters, faces, the lit ones), one serde
+    /// value: `Frame::report`, the stats' `counts.<method>`.
+    pub report: Option<serde_json::Value>,
     /// Counts the GPU keeps (colom's SP clustering): read back only when asked.
     pub pending: Option<PendingCounts>,
 }

@@ -42,9 +42,10 @@ pub struct Frame {
     /// Rows of the visibility matrix copied from the previous frame instead of traced (kept
     /// representatives, same lights).
     pub visibility_rows_reused: u32,
-    /// With `--method cvrtgi`: its voxels, clusters, faces and lit clusters and voxels, and the
-    /// rays and CPU time of the resident stages this frame (re)built.
-    pub cvrtgi: Option<crate::method::cvrtgi::CvrtgiReport>,
+    /// The method's own report and its name (`method::Counts::report`; cvrtgi's voxels, clusters,
+    /// faces and lit clusters and voxels, and the rays and CPU time of the resident stages this
+    /// frame (re)built): the stats' `counts.<method>`.
+    pub report: Option<(crate::method::Method, serde_json::Value)>,
 }
 
 impl Frame {

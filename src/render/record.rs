@@ -351,7 +351,7 @@ impl Renderer<'_> {
                 sp_iterations: c.sp_iterations,
                 sp_warm_kept: c.sp_warm_kept,
                 visibility_rows_reused: c.rows_reused,
-                cvrtgi: c.cvrtgi,
+                report: plan.method.zip(c.report.clone()),
                 ..Default::default()
             },
             buffers: r.buffers,

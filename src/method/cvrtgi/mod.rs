@@ -789,7 +789,7 @@ impl IndirectMethod for Cvrtgi {
         let report = Cvrtgi::record(self, g, &inputs, &f.method.cvrtgi)?;
         n.cpu_ms.push((PASS, report.cpu_ms));
         n.vpl_clusters_used = report.lit_clusters;
-        n.cvrtgi = Some(report);
+        n.report = Some(serde_json::to_value(report).expect("a plain struct"));
         Ok(())
     }
 
