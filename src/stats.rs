@@ -98,7 +98,7 @@ pub struct Counts {
     pub sp_warm_kept: Option<u32>,
     /// Rows of the visibility matrix copied from the previous render (kept representatives).
     pub visibility_rows_reused: u32,
-    /// The method's own report under its name (`--method cvrtgi`: `cvrtgi`, its sizes; absent for
+    /// The method's own report under its name (e.g. a method's sizes; absent for
     /// a method without one).
     #[serde(flatten)]
     pub method: BTreeMap<String, serde_json::Value>,

@@ -42,9 +42,8 @@ pub struct Frame {
     /// Rows of the visibility matrix copied from the previous frame instead of traced (kept
     /// representatives, same lights).
     pub visibility_rows_reused: u32,
-    /// The method's own report and its name (`method::Counts::report`; cvrtgi's voxels, clusters,
-    /// faces and lit clusters and voxels, and the rays and CPU time of the resident stages this
-    /// frame (re)built): the stats' `counts.<method>`.
+    /// The method's own report and its name (`method::Counts::report`: what its room counts, e.g.
+    /// sizes and the resident stages this frame (re)built): the stats' `counts.<method>`.
     pub report: Option<(crate::method::Method, serde_json::Value)>,
 }
 
@@ -180,7 +179,7 @@ pub struct GpuFrame {
     pub buffers: std::sync::Arc<FrameBuffers>,
     /// Everything known without reading anything back: size, passes, timings. Its images,
     /// positions and normals are empty, `shading_points` and `shadow_rays` are 0, and the counts
-    /// the GPU keeps (`pending`: colom's SP clusters used, iterations, warm start, rows copied) are
+    /// the GPU keeps (`pending`: a clustering's SP clusters used, iterations, warm start, rows copied) are
     /// 0 until `read` or `counts`.
     pub meta: Frame,
     /// Counts left on the GPU, read by `counts` and `read`.

@@ -75,7 +75,7 @@ pub fn check_vpls(ctx: &GpuContext, vpls: u32) -> Result<(), String> {
 }
 
 /// Refuses a frame whose method's own largest buffer does not fit one storage binding of `ctx`
-/// (its room's `limits`: colom's visibility bit matrix, K_SP × lights bits); the message names the
+/// (its room's `limits`, e.g. a visibility bit matrix of K_SP × lights bits); the message names the
 /// options. The shared gather has none.
 pub fn check_method_limits(
     ctx: &GpuContext,

@@ -4,7 +4,7 @@
 //!
 //! Resident (per scene / light change, `resident.rs`): the VPLs (step 1) and their clusters (step 2).
 //! Per frame: primary (step 3) → direct + emission → indirect, one of
-//! - a method's own passes (its room's `passes`, `method::ROOMS`): colom's are `sp_cluster` (step 4)
+//! - a method's own passes (its room's `passes`, `method::ROOMS`); the paper's are `sp_cluster` (step 4)
 //!   → `visibility` (step 5) → `shade` (step 6, Eq. 6 with Eq. 8 or 9), the lights being VPL
 //!   clusters ("both") or the VPLs ("SPs only");
 //! - where no method's passes apply (the reference, or a method that clusters the SPs without
@@ -22,7 +22,7 @@ use crate::scene::Scene;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Plan {
     pub indirect: bool,
-    /// Step 2 (the resident VPL clustering: colom's lights, and a room's with `vpl_clusters`).
+    /// Step 2 (the resident VPL clustering: the lights of a room whose `vpl_clusters` asks for it).
     pub vpl_clustering: bool,
     /// The method whose own passes (its room's `passes`) compute the indirect light: the one asked
     /// where it applies; `None` for the reference and where the method asked does not apply (one

@@ -170,7 +170,7 @@ impl<'a> Renderer<'a> {
             self.direct = Direct::new(ctx, &gpu);
             self.vpl_trace = VplTrace::new(ctx, &gpu);
             self.reference = Reference::new(ctx, &gpu);
-            // The methods' pipelines are built again; their past (colom's last SP clustering and
+            // The methods' pipelines are built again; their past (a last SP clustering and
             // visibility) carries over.
             let pasts: Vec<_> = (self.methods.iter_mut())
                 .map(|(&m, state)| (m, state.take_past()))

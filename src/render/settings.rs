@@ -13,7 +13,7 @@ use crate::settings::{ClusterSettings, FrameSettings};
 pub struct RenderSettings {
     pub frame: FrameSettings,
     pub cluster: ClusterSettings,
-    /// The method and its knobs (colom's are `cluster`).
+    /// The method and its knobs (the paper's are `cluster`).
     pub method: MethodSettings,
     /// No clustering at all (Eq. 5 per pixel and VPL).
     pub reference: bool,
