@@ -294,7 +294,7 @@ pub fn read_buffer<T: bytemuck::Pod>(
 
 /// Maps `buffer` (`MAP_READ`, its copies submitted) for reading, waits for the device, and hands
 /// its bytes to `read`; unmaps it after. `what` names the buffer in the errors.
-fn mapped<R>(
+pub fn mapped<R>(
     device: &wgpu::Device,
     buffer: &wgpu::Buffer,
     what: &str,

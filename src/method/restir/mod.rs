@@ -317,26 +317,18 @@ impl RestirMethod {
     }
 }
 
-/// The sum of the first `bytes` of `buffer` (`MAP_READ`, its copy submitted) as u32s, waiting for
-/// the device.
+/// The sum of `buffer` (`MAP_READ`, `bytes` long, its copy submitted) as u32s, waiting for the
+/// device (`gpu::mapped`).
 fn sum_rays(ctx: &GpuContext, buffer: &wgpu::Buffer, bytes: u64) -> anyhow::Result<u64> {
     if bytes == 0 {
         return Ok(0);
     }
-    let slice = buffer.slice(..bytes);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    ctx.wait()?;
-    rx.recv()??;
-    let view = slice.get_mapped_range()?;
-    let sum = bytemuck::cast_slice::<u8, u32>(&view)
-        .iter()
-        .map(|&r| r as u64)
-        .sum();
-    drop(view);
-    buffer.unmap();
+    let sum = crate::gpu::mapped(&ctx.device, buffer, "restir's ray counts", |view| {
+        bytemuck::cast_slice::<u8, u32>(view)
+            .iter()
+            .map(|&r| r as u64)
+            .sum()
+    })?;
     crate::gpu::traffic::read_back(bytes);
     Ok(sum)
 }
