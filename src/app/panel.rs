@@ -9,8 +9,8 @@ use super::camera::Mode as CamMode;
 use super::settings::Bookmark;
 use super::views::{self, View};
 use super::{SliderRanges, UiSettings, Viewer};
-use crate::method::Method;
-use crate::settings::{CentroidNormal, ClusterLight, Weighting};
+use crate::method::{Method, MethodSettings};
+use crate::settings::{CentroidNormal, ClusterLight, Control, Weighting};
 
 pub const PANEL_WIDTH: f32 = 380.0;
 /// The height of the stats strip under the image (Stats | Reference & error, Screenshots). The
@@ -741,8 +741,52 @@ fn method_controls(ui: &mut Ui, s: &mut UiSettings) {
                 .on_hover_text(r.about);
         }
     });
-    if let Some(r) = s.method.knobs_room() {
-        (r.ui)(ui, &mut s.method);
+    knob_controls(ui, &mut s.method);
+}
+
+/// The chosen method's own knobs, drawn from their declarations (`knobs!`'s `ui "label"
+/// control`): a slider over the declared range and scale, or a radio button a value. A value
+/// goes back through the knob's parser, so the panel sets only what `--option` would accept.
+fn knob_controls(ui: &mut Ui, m: &mut MethodSettings) {
+    for c in m.controls() {
+        let Some(text) = m.knob(c.name) else {
+            continue;
+        };
+        let next = match c.control {
+            Control::Slider {
+                lo,
+                hi,
+                log,
+                integer,
+            } => {
+                let Ok(old) = text.parse::<f64>() else {
+                    continue;
+                };
+                let mut v = old;
+                let slider = Slider::new(&mut v, lo..=hi).logarithmic(log).text(c.label);
+                ui.add(if integer { slider.integer() } else { slider });
+                (v != old).then(|| match integer {
+                    true => format!("{}", v.round()),
+                    false => format!("{v}"),
+                })
+            }
+            Control::Choice(values) => {
+                let mut pick = None;
+                ui.horizontal(|ui| {
+                    ui.label(c.label);
+                    for &(value, label) in values {
+                        if ui.radio(text == value, label).clicked() && text != value {
+                            pick = Some(value.to_string());
+                        }
+                    }
+                });
+                pick
+            }
+        };
+        if let Some(t) = next {
+            // A value its parser refuses leaves the knob as it was.
+            let _ = m.set_column(c.name, &t);
+        }
     }
 }
 

@@ -568,6 +568,26 @@ fn the_panel_driven_by_events() {
             "{:?}: {key}",
             m.name()
         );
+        // Its knobs, drawn from their declarations (`knobs!`'s `ui`): every label is there.
+        for c in h.state().s.method.controls() {
+            let found = h.query_all_by_label(c.label).next().is_some();
+            assert!(found, "{m}: no widget labelled {:?}", c.label);
+        }
+        if m == crate::method::Method::Restir {
+            // A choice is a radio button a value; a slider takes the arrow keys.
+            click(&mut h, "unbiased");
+            let k = h.state().s.method.restir;
+            assert_eq!(k.restir_combine.name(), "unbiased");
+            h.query_all_by_label("candidates M")
+                .next()
+                .expect("the candidates slider")
+                .focus();
+            h.run_steps(1);
+            h.key_press(egui::Key::ArrowRight);
+            h.run_steps(2);
+            let after = h.state().s.method.restir.restir_candidates;
+            assert!(after > k.restir_candidates, "M stayed {after}");
+        }
     }
     // A slider takes the arrow keys once focused.
     let k = h.state().s.cluster.vpl_clusters;

@@ -27,7 +27,7 @@ use crate::gi::vpl_cluster::ResidentLights;
 use crate::gi::vpl_trace::ResidentVpls;
 use crate::gpu::GpuContext;
 use crate::scene::Scene;
-use crate::settings::{ClusterSettings, FrameSettings, Invalid};
+use crate::settings::{ClusterSettings, FrameSettings, Invalid, KnobControl};
 
 /// What a method's passes read from the frame: the scene and settings, the resident VPLs (and the
 /// VPL clustering when the plan asks for one), the shared gather pass, the G-buffer of primary hits
@@ -197,8 +197,6 @@ pub struct Room {
     pub label: fn(&MethodSettings) -> String,
     pub series: fn(&MethodSettings) -> String,
     pub short: fn(&MethodSettings) -> String,
-    /// Its knobs in the viewer's panel.
-    pub ui: fn(&mut egui::Ui, &mut MethodSettings),
 }
 
 /// Declares the registry from one line a method (`module: Variant`), the method's folder (declared
@@ -276,6 +274,23 @@ macro_rules! rooms {
                     false => vec![String::new(); v.len()],
                 };
                 [$(own(Method::$Variant, self.$module.values())),+].concat()
+            }
+
+            /// The asked method's knobs as the viewer shows them (`knobs!`'s `CONTROLS`; none
+            /// for colom, whose knobs are the paper's `ClusterSettings`).
+            pub fn controls(&self) -> &'static [KnobControl] {
+                match self.method {
+                    Method::Colom => &[],
+                    $(Method::$Variant => $module::Knobs::CONTROLS,)+
+                }
+            }
+
+            /// The asked method's knob `name` as text; `None` when it has no such knob.
+            pub fn knob(&self, name: &str) -> Option<String> {
+                match self.method {
+                    Method::Colom => None,
+                    $(Method::$Variant => self.$module.get(name),)+
+                }
             }
 
             /// Sets the knob of column `name` from its text; `None` when no method has that
@@ -425,16 +440,6 @@ impl MethodLists {
         }
         out
     }
-}
-
-/// A knob's logarithmic slider in a room's panel section.
-pub fn log_slider(
-    ui: &mut egui::Ui,
-    v: &mut f32,
-    range: std::ops::RangeInclusive<f32>,
-    text: &str,
-) {
-    ui.add(egui::Slider::new(v, range).logarithmic(true).text(text));
 }
 
 pub fn parse_method(item: &str) -> Result<Method, Invalid> {

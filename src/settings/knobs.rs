@@ -1,7 +1,8 @@
 //! `knobs!`: a group of settings declared once. From one list of fields (doc, type, default, value
-//! parser) it makes the settings struct (clap `Args` for `render` and `view`, serde for the stats
-//! and the viewer's files, `Default` from the same defaults) and its bench lists (`bench --NAME
-//! a,b,c`: one `Vec` a knob, `configs()` every combination), so a knob is one field, not five.
+//! parser, optionally its viewer control) it makes the settings struct (clap `Args` for `render`
+//! and `view`, serde for the stats and the viewer's files, `Default` from the same defaults), its
+//! viewer controls (`CONTROLS`, drawn by the app) and its bench lists (`bench --NAME a,b,c`: one
+//! `Vec` a knob, `configs()` every combination), so a knob is one field, not five.
 //!
 //! `listed!` does the same for a settings type whose fields need their own clap and serde
 //! attributes (`ClusterSettings`): the struct is written as it is, and a field marked `=> list
@@ -10,7 +11,8 @@
 //! (`configs`).
 
 /// Declares `$Settings` and `$Lists` (see the module). Each field: its doc comment, then
-/// `name: Type = default, parse parser;` with `parser(&str) -> Result<Type, Invalid>`.
+/// `name: Type = default, parse parser[, sweep [a, b]][, ui "label" control];` with
+/// `parser(&str) -> Result<Type, Invalid>` and `control` a `settings::Control`.
 macro_rules! knobs {
     (
         $(#[doc = $sdoc:expr])*
@@ -18,7 +20,8 @@ macro_rules! knobs {
         $(
             $(#[doc = $doc:expr])*
             $field:ident: $ty:ty = $default:expr, parse $parser:path
-                $(, sweep [$($sweep:expr),+ $(,)?])?;
+                $(, sweep [$($sweep:expr),+ $(,)?])?
+                $(, ui $label:literal $control:expr)?;
         )+
     ) => {
         $(#[doc = $sdoc])*
@@ -48,6 +51,25 @@ macro_rules! knobs {
             /// The knobs' values as the CSV writes them, in the order of `NAMES`.
             pub fn values(&self) -> Vec<String> {
                 vec![$(self.$field.to_string()),+]
+            }
+
+            /// The knobs the viewer shows, each with its label and control (`ui "label"
+            /// control`), in order; the viewer draws them from this.
+            pub const CONTROLS: &'static [$crate::settings::KnobControl] = &[$($(
+                $crate::settings::KnobControl {
+                    name: stringify!($field),
+                    label: $label,
+                    control: $control,
+                },
+            )?)+];
+
+            /// Knob `name`'s value as text (as `values` writes it); `None` when `name` is not
+            /// one of these knobs.
+            pub fn get(&self, name: &str) -> Option<String> {
+                match name {
+                    $(stringify!($field) => Some(self.$field.to_string()),)+
+                    _ => None,
+                }
             }
 
             /// Sets knob `name` from its text (as the CSV holds it) with its value parser; `None`
@@ -231,7 +253,7 @@ mod tests {
         /// The first.
         a: u32 = 3, parse parse_small;
         /// The second.
-        b: f32 = 0.5, parse parse_half, sweep [0.25, 0.75];
+        b: f32 = 0.5, parse parse_half, sweep [0.25, 0.75], ui "the b" super::super::Control::log(0.1, 1.0);
     }
 
     #[test]
@@ -255,6 +277,15 @@ mod tests {
         );
         assert!(Cli::try_parse_from(["x", "--a", "12"]).is_err());
         assert_eq!(Pair::NAMES, &["a", "b"]);
+        // Only `b` declares a control; its value reads back as its text.
+        let c = super::super::KnobControl {
+            name: "b",
+            label: "the b",
+            control: super::super::Control::log(0.1, 1.0),
+        };
+        assert_eq!(Pair::CONTROLS, &[c]);
+        assert_eq!(Pair::default().get("b").as_deref(), Some("0.5"));
+        assert_eq!(Pair::default().get("c"), None);
         assert_eq!(Pair { a: 7, b: 0.25 }.values(), vec!["7", "0.25"]);
         let mut p = Pair::default();
         assert_eq!(p.set("b", "0.25"), Some(Ok(())));

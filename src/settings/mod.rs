@@ -40,6 +40,61 @@ pub fn invalid<T>(msg: impl Into<String>) -> Result<T, Invalid> {
     Err(Invalid(msg.into()))
 }
 
+/// How the viewer shows a knob: the core describes it, the app draws it (the core knows no UI
+/// toolkit). The value goes through the knob's text (`get`, and `set` with its value parser).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Control {
+    /// A slider over [lo, hi]; `log`: a logarithmic scale; `integer`: whole numbers.
+    Slider {
+        lo: f64,
+        hi: f64,
+        log: bool,
+        integer: bool,
+    },
+    /// One of these values (each the knob's text, as its parser reads it, and its label).
+    Choice(&'static [(&'static str, &'static str)]),
+}
+
+impl Control {
+    /// Whole numbers in [lo, hi] on a linear slider.
+    pub const fn int(lo: u32, hi: u32) -> Control {
+        Control::Slider {
+            lo: lo as f64,
+            hi: hi as f64,
+            log: false,
+            integer: true,
+        }
+    }
+
+    /// Whole numbers in [lo, hi] on a logarithmic slider.
+    pub const fn int_log(lo: u32, hi: u32) -> Control {
+        Control::Slider {
+            lo: lo as f64,
+            hi: hi as f64,
+            log: true,
+            integer: true,
+        }
+    }
+
+    /// Numbers in [lo, hi] on a logarithmic slider.
+    pub const fn log(lo: f64, hi: f64) -> Control {
+        Control::Slider {
+            lo,
+            hi,
+            log: true,
+            integer: false,
+        }
+    }
+}
+
+/// A knob in the viewer: its field name (its option and column), its label and its control.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KnobControl {
+    pub name: &'static str,
+    pub label: &'static str,
+    pub control: Control,
+}
+
 /// How a pixel's F SP clusters combine their visibility.
 #[derive(
     Clone,

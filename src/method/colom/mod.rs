@@ -45,7 +45,6 @@ pub const ROOM: Room = Room {
     label: |_| String::new(),
     series: |_| String::new(),
     short: |_| String::new(),
-    ui: |_, _| {},
 };
 
 /// Bytes of the visibility bit matrix (step 5): one row per SP cluster, one bit per light, the

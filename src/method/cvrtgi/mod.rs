@@ -747,28 +747,6 @@ pub const ROOM: Room = Room {
         let v = &m.cvrtgi;
         format!("v{}-s{}-r{}", v.voxel_res, v.cluster_step, v.face_rays)
     },
-    ui: |ui, m| {
-        use egui::Slider;
-        let v = &mut m.cvrtgi;
-        ui.add(Slider::new(&mut v.voxel_res, 8..=128).text("voxels (longest axis)"));
-        ui.add(Slider::new(&mut v.cluster_step, 1..=32).text("SLIC seed spacing"));
-        ui.add(
-            Slider::new(&mut v.face_rays, 8..=512)
-                .logarithmic(true)
-                .text("rays per face"),
-        );
-        ui.add(Slider::new(&mut v.filter_passes, 0..=8).text("filter passes"));
-        ui.add(Slider::new(&mut v.escape_rays, 0..=64).text("escape rays per VPL"));
-        ui.horizontal(|ui| {
-            ui.label("cluster light");
-            ui.radio_value(&mut v.cluster_gather, ClusterGather::Conserved, "conserved");
-            ui.radio_value(
-                &mut v.cluster_gather,
-                ClusterGather::AnyHit,
-                "any hit (paper)",
-            );
-        });
-    },
 };
 
 impl IndirectMethod for Cvrtgi {

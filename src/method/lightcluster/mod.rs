@@ -166,16 +166,6 @@ pub const ROOM: Room = Room {
     },
     series: |m| format!("d_init {}", m.lightcluster.d_init),
     short: |m| format!("d{}", m.lightcluster.d_init),
-    ui: |ui, m| {
-        let text = "d_init (scene diagonals)";
-        super::log_slider(ui, &mut m.lightcluster.d_init, 0.001..=10.0, text);
-        let v = &mut m.lightcluster.lightcluster_visibility;
-        ui.horizontal(|ui| {
-            ui.label("rays to");
-            ui.radio_value(v, LcVisibility::Members, "member VPLs");
-            ui.radio_value(v, LcVisibility::Disc, "the disc (paper)");
-        });
-    },
 };
 
 /// lightcluster's state: its kernel and the frame's clusters (from `CLUSTER` to `SHADE`).

@@ -441,29 +441,4 @@ pub const ROOM: Room = Room {
         )
     },
     short: |m| label(m).replace(' ', "-"),
-    ui: |ui, m| {
-        let k = &mut m.restir;
-        ui.add(egui::Slider::new(&mut k.restir_candidates, 1..=256).text("candidates M"));
-        ui.add(egui::Slider::new(&mut k.restir_neighbours, 0..=16).text("neighbours k"));
-        ui.add(egui::Slider::new(&mut k.restir_iterations, 0..=4).text("spatial iterations"));
-        super::log_slider(
-            ui,
-            &mut k.restir_radius,
-            1.0..=200.0,
-            "radius (px at 1080p)",
-        );
-        super::log_slider(ui, &mut k.restir_cap, 1.0..=100.0, "confidence cap (× M)");
-        let c = &mut k.restir_combine;
-        ui.horizontal(|ui| {
-            ui.label("combination");
-            ui.radio_value(c, Combine::Biased, "biased");
-            ui.radio_value(c, Combine::Unbiased, "unbiased");
-        });
-        let l = &mut k.restir_lights;
-        ui.horizontal(|ui| {
-            ui.label("lights");
-            ui.radio_value(l, RestirLights::Vpls, "VPLs");
-            ui.radio_value(l, RestirLights::Clusters, "VPL clusters");
-        });
-    },
 };
