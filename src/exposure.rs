@@ -39,6 +39,16 @@ impl Exposure {
     }
 }
 
+/// As the command line writes it: `auto` or the factor.
+impl std::fmt::Display for Exposure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Exposure::Auto => f.write_str("auto"),
+            Exposure::Fixed(e) => write!(f, "{e}"),
+        }
+    }
+}
+
 /// Serialised as the command line writes it: `"auto"` or the factor.
 impl serde::Serialize for Exposure {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {

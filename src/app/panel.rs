@@ -10,7 +10,7 @@ use super::settings::Bookmark;
 use super::views::{self, View};
 use super::{SliderRanges, UiSettings, Viewer};
 use crate::method::{Method, MethodSettings};
-use crate::settings::{CentroidNormal, ClusterLight, Control, Weighting};
+use crate::settings::{CentroidNormal, ClusterLight, Weighting, Widget};
 
 pub const PANEL_WIDTH: f32 = 380.0;
 /// The height of the stats strip under the image (Stats | Reference & error, Screenshots). The
@@ -752,8 +752,8 @@ fn knob_controls(ui: &mut Ui, m: &mut MethodSettings) {
         let Some(text) = m.knob(c.name) else {
             continue;
         };
-        let next = match c.control {
-            Control::Slider {
+        let next = match c.widget {
+            Widget::Slider {
                 lo,
                 hi,
                 log,
@@ -770,7 +770,7 @@ fn knob_controls(ui: &mut Ui, m: &mut MethodSettings) {
                     false => format!("{v}"),
                 })
             }
-            Control::Choice(values) => {
+            Widget::Choice(values) => {
                 let mut pick = None;
                 ui.horizontal(|ui| {
                     ui.label(c.label);

@@ -27,7 +27,7 @@ use crate::gi::vpl_cluster::ResidentLights;
 use crate::gi::vpl_trace::ResidentVpls;
 use crate::gpu::GpuContext;
 use crate::scene::Scene;
-use crate::settings::{ClusterSettings, FrameSettings, Invalid, KnobControl};
+use crate::settings::{ClusterSettings, FrameSettings, Invalid, KnobWidget};
 
 /// What a method's passes read from the frame: the scene and settings, the resident VPLs (and the
 /// VPL clustering when the plan asks for one), the shared gather pass, the G-buffer of primary hits
@@ -278,7 +278,7 @@ macro_rules! rooms {
 
             /// The asked method's knobs as the viewer shows them (`knobs!`'s `CONTROLS`; none
             /// for colom, whose knobs are the paper's `ClusterSettings`).
-            pub fn controls(&self) -> &'static [KnobControl] {
+            pub fn controls(&self) -> &'static [KnobWidget] {
                 match self.method {
                     Method::Colom => &[],
                     $(Method::$Variant => $module::Knobs::CONTROLS,)+

@@ -12,7 +12,7 @@
 
 /// Declares `$Settings` and `$Lists` (see the module). Each field: its doc comment, then
 /// `name: Type = default, parse parser[, sweep [a, b]][, ui "label" control];` with
-/// `parser(&str) -> Result<Type, Invalid>` and `control` a `settings::Control`.
+/// `parser(&str) -> Result<Type, Invalid>` and `control` a `settings::Widget`.
 macro_rules! knobs {
     (
         $(#[doc = $sdoc:expr])*
@@ -55,11 +55,11 @@ macro_rules! knobs {
 
             /// The knobs the viewer shows, each with its label and control (`ui "label"
             /// control`), in order; the viewer draws them from this.
-            pub const CONTROLS: &'static [$crate::settings::KnobControl] = &[$($(
-                $crate::settings::KnobControl {
+            pub const CONTROLS: &'static [$crate::settings::KnobWidget] = &[$($(
+                $crate::settings::KnobWidget {
                     name: stringify!($field),
                     label: $label,
-                    control: $control,
+                    widget: $control,
                 },
             )?)+];
 
@@ -253,7 +253,7 @@ mod tests {
         /// The first.
         a: u32 = 3, parse parse_small;
         /// The second.
-        b: f32 = 0.5, parse parse_half, sweep [0.25, 0.75], ui "the b" super::super::Control::log(0.1, 1.0);
+        b: f32 = 0.5, parse parse_half, sweep [0.25, 0.75], ui "the b" super::super::Widget::log(0.1, 1.0);
     }
 
     #[test]
@@ -278,10 +278,10 @@ mod tests {
         assert!(Cli::try_parse_from(["x", "--a", "12"]).is_err());
         assert_eq!(Pair::NAMES, &["a", "b"]);
         // Only `b` declares a control; its value reads back as its text.
-        let c = super::super::KnobControl {
+        let c = super::super::KnobWidget {
             name: "b",
             label: "the b",
-            control: super::super::Control::log(0.1, 1.0),
+            widget: super::super::Widget::log(0.1, 1.0),
         };
         assert_eq!(Pair::CONTROLS, &[c]);
         assert_eq!(Pair::default().get("b").as_deref(), Some("0.5"));

@@ -43,7 +43,7 @@ pub fn invalid<T>(msg: impl Into<String>) -> Result<T, Invalid> {
 /// How the viewer shows a knob: the core describes it, the app draws it (the core knows no UI
 /// toolkit). The value goes through the knob's text (`get`, and `set` with its value parser).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Control {
+pub enum Widget {
     /// A slider over [lo, hi]; `log`: a logarithmic scale; `integer`: whole numbers.
     Slider {
         lo: f64,
@@ -55,10 +55,10 @@ pub enum Control {
     Choice(&'static [(&'static str, &'static str)]),
 }
 
-impl Control {
+impl Widget {
     /// Whole numbers in [lo, hi] on a linear slider.
-    pub const fn int(lo: u32, hi: u32) -> Control {
-        Control::Slider {
+    pub const fn int(lo: u32, hi: u32) -> Widget {
+        Widget::Slider {
             lo: lo as f64,
             hi: hi as f64,
             log: false,
@@ -67,8 +67,8 @@ impl Control {
     }
 
     /// Whole numbers in [lo, hi] on a logarithmic slider.
-    pub const fn int_log(lo: u32, hi: u32) -> Control {
-        Control::Slider {
+    pub const fn int_log(lo: u32, hi: u32) -> Widget {
+        Widget::Slider {
             lo: lo as f64,
             hi: hi as f64,
             log: true,
@@ -77,8 +77,8 @@ impl Control {
     }
 
     /// Numbers in [lo, hi] on a logarithmic slider.
-    pub const fn log(lo: f64, hi: f64) -> Control {
-        Control::Slider {
+    pub const fn log(lo: f64, hi: f64) -> Widget {
+        Widget::Slider {
             lo,
             hi,
             log: true,
@@ -87,12 +87,12 @@ impl Control {
     }
 }
 
-/// A knob in the viewer: its field name (its option and column), its label and its control.
+/// A knob in the viewer: its field name (its option and column), its label and its widget.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct KnobControl {
+pub struct KnobWidget {
     pub name: &'static str,
     pub label: &'static str,
-    pub control: Control,
+    pub widget: Widget,
 }
 
 /// How a pixel's F SP clusters combine their visibility.
@@ -181,14 +181,9 @@ impl fmt::Display for CentroidNormal {
     }
 }
 
-/// The defaults of a group of options as clap gives them: a settings type's `Default` is its
-/// options' `default_value_t` / `default_value`, so each default is declared once.
-pub fn clap_defaults<T: clap::Args + clap::FromArgMatches>() -> T {
-    let cmd = T::augment_args(clap::Command::new("defaults"));
-    let m = cmd
-        .try_get_matches_from(["defaults"])
-        .expect("every option of a settings group has a default or is optional");
-    T::from_arg_matches(&m).expect("the defaults are valid values")
+/// An on/off option's default as its text (`default_value = on_off(DEFAULT.field)`).
+pub const fn on_off(b: bool) -> &'static str {
+    if b { "on" } else { "off" }
 }
 
 /// The default for the most VPLs one light path leaves (its bounce count); Russian roulette usually
@@ -331,38 +326,38 @@ listed! {
 #[serde(default)]
 pub struct ClusterSettings {
     /// K of the shading-point clustering (0 = no SP clustering; off when ≥ the pixel count).
-    #[arg(long, default_value_t = 3072)]
+    #[arg(long, default_value_t = ClusterSettings::DEFAULT.sp_clusters)]
     pub sp_clusters: u32 => list "SP cluster counts (default 768,1536,3072; quick 48,96)." ()
         default [768, 1536, 3072] quick [48, 96],
     /// K of the VPL clustering (0 = no VPL clustering; off when ≥ --vpls).
-    #[arg(long, default_value_t = 1024)]
+    #[arg(long, default_value_t = ClusterSettings::DEFAULT.vpl_clusters)]
     pub vpl_clusters: u32 => list "VPL cluster counts (default 1024; quick 128)." () quick [128],
     /// F: SP clusters per pixel (fuzziness), 1..16 (hard weighting uses 1).
-    #[arg(long, default_value_t = 6, value_parser = parse_fuzziness)]
+    #[arg(long, default_value_t = ClusterSettings::DEFAULT.fuzziness, value_parser = parse_fuzziness)]
     pub fuzziness: u32 => list "F values, 1..16 (default 6)." (value_parser = parse_fuzziness),
     /// γ: SP downsampling factor for the k-means iterations, or `auto`: the largest γ in 4..16 that
     /// keeps 40 sampled points a cluster and 19,200 in all. Either way at most pixels / K, so that at
     /// least K points are sampled.
-    #[arg(long, default_value = "auto", value_parser = parse_gamma)]
+    #[arg(long, default_value_t = ClusterSettings::DEFAULT.gamma, value_parser = parse_gamma)]
     pub gamma: Gamma => list "γ values: `auto` (the default: the largest γ in 4..16 that keeps 40 \
         sampled points a cluster and 19,200 in all) or factors of at least 1, e.g. auto,4,16."
         (value_parser = parse_gamma),
     /// n_t of Eq. (7): cosine of the largest normal angle within a cluster, in [-1, 1] (Eq. 7's test
     /// is strict, so 1 is read as 1 - 2^-20: the same normal only).
-    #[arg(long, default_value_t = 0.866, value_parser = parse_normal_threshold)]
+    #[arg(long, default_value_t = ClusterSettings::DEFAULT.normal_threshold, value_parser = parse_normal_threshold)]
     pub normal_threshold: f32 => list "n_t values of Eq. (7), cosines in [-1, 1] (default 0.866)."
         (value_parser = parse_normal_threshold, allow_hyphen_values = true),
     /// k-means iterations (Alg. 1), 0..=1000.
-    #[arg(long, default_value_t = 10, value_parser = parse_iterations)]
+    #[arg(long, default_value_t = ClusterSettings::DEFAULT.iterations, value_parser = parse_iterations)]
     pub iterations: u32 => list "k-means iterations (default 10)." (value_parser = parse_iterations),
     /// How a pixel's F clusters combine visibility: hard (F = 1), uniform (Eq. 8), inverse-distance
     /// (Eq. 9).
-    #[arg(long, value_enum, default_value_t = Weighting::InverseDistance)]
+    #[arg(long, value_enum, default_value_t = ClusterSettings::DEFAULT.weighting)]
     pub weighting: Weighting,
     /// p of the inverse-distance weights, w'_f = dist^-p: 1 is Eq. (10); larger p falls off faster
     /// (the paper's §6 suggestion), 0 is Eq. (8)'s plain mean (but a point on a centroid still takes
     /// it alone), 64 is nearly hard clustering. [0, 64].
-    #[arg(long, default_value_t = 1.0, value_parser = parse_weight_exponent)]
+    #[arg(long, default_value_t = ClusterSettings::DEFAULT.weight_exponent, value_parser = parse_weight_exponent)]
     pub weight_exponent: f32 => list "p values of the inverse-distance weights w'_f = dist^-p, for \
         weighted and sp-only (default 1, Eq. 10)." (value_parser = parse_weight_exponent),
     /// Not in the paper (off by default): the fuzzy modes' slots 2..F keep only SP clusters whose
@@ -381,50 +376,50 @@ pub struct ClusterSettings {
     /// Temporal reuse (on|off): each frame's SP clustering starts from the previous one's centroids
     /// where the view still sees them, the VPL clustering from its last centroids when the lights
     /// change (docs/temporal.md). A single `render` has no past: only --repeat's later renders reuse.
-    #[arg(long, default_value = "off", value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    #[arg(long, default_value = on_off(ClusterSettings::DEFAULT.temporal), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub temporal: bool,
     /// With temporal reuse on: the weight of a new frame's indirect light once a surface point's
     /// history is long (it is the plain mean over the point's first frames). Each pixel's surface
     /// point is found in the previous frame and the indirect light blended there, an exponential
     /// moving average over about 1/α frames (docs/temporal.md, "Accumulation"). 1: no
     /// accumulation. (0, 1].
-    #[arg(long, default_value_t = 0.7, value_name = "ALPHA", value_parser = parse_temporal_alpha)]
+    #[arg(long, default_value_t = ClusterSettings::DEFAULT.temporal_alpha, value_name = "ALPHA", value_parser = parse_temporal_alpha)]
     pub temporal_alpha: f32,
     /// Not in the paper (off by default): step 5 traces only representative pairs that face each
     /// other (both cosines positive) and leaves the others' V at 0. The paper's V is pure
     /// visibility; Eq. (6) applies each pixel's own cosines (docs/clustering.md, "V and the facing
     /// test").
-    #[arg(long, default_value = "off", value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    #[arg(long, default_value = on_off(ClusterSettings::DEFAULT.visibility_facing), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub visibility_facing: bool,
     /// How a VPL cluster lights a point: `point` (the paper's Eq. 6: its representative VPL with
     /// the members' summed flux) or `spread` (not in the paper, the default: the other members'
     /// share of the flux is evaluated no closer than their RMS distance from the representative;
     /// docs/clustering.md, "VPL clusters as lights").
-    #[arg(long, value_enum, default_value_t = ClusterLight::Spread)]
+    #[arg(long, value_enum, default_value_t = ClusterSettings::DEFAULT.cluster_light)]
     pub cluster_light: ClusterLight => list "VPL-cluster lights: point (the paper), spread (default), \
         e.g. point,spread." (value_enum),
     /// Not in the paper (on by default): Alg. 1 re-seeds an empty cluster at a sampled point no
     /// centroid within reach accepts (an orphan), or else at a drawn sampled point
     /// (docs/clustering.md, "Surfaces without a cluster"). off: an empty cluster stays empty.
-    #[arg(long, default_value = "on", value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    #[arg(long, default_value = on_off(ClusterSettings::DEFAULT.reseed), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub reseed: bool => list "Re-seeding of empty clusters: on (default), off (the paper)."
         (value_parser = parse_on_off),
     /// Not in the paper (on by default): a point with no centroid passing n_t in the 27 cells
     /// around it searches rings of cells further out (3 while iterating, 4 in the final
     /// assignment). off: the 27 cells only, as Alg. 1 and 2 (docs/clustering.md, "Fallbacks").
-    #[arg(long, default_value = "on", value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    #[arg(long, default_value = on_off(ClusterSettings::DEFAULT.ring_fallback), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub ring_fallback: bool => list "Ring fallback of the search: on (default), off (the paper)."
         (value_parser = parse_on_off),
     /// Not in the paper (on by default): a point the final assignment finds no centroid passing
     /// n_t for takes the nearest centroid by position alone. off: it stays without a cluster (to
     /// Eq. 7 it is at distance ∞ from every centroid) and gets no indirect light from SP clusters.
-    #[arg(long, default_value = "on", value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    #[arg(long, default_value = on_off(ClusterSettings::DEFAULT.position_fallback), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub position_fallback: bool => list "Position-only fallback of the final assignment: on \
         (default), off (the paper)." (value_parser = parse_on_off),
     /// A centroid's normal (Alg. 1 line 18): `normalised` (the default: the members' mean normal
     /// scaled to unit length) or `mean` (the paper's value / counter: the plain mean, shorter than 1
     /// where the members' normals differ, which Eq. 7's test n · n_c > n_t then reads as is).
-    #[arg(long, value_enum, default_value_t = CentroidNormal::Normalised)]
+    #[arg(long, value_enum, default_value_t = ClusterSettings::DEFAULT.centroid_normal)]
     pub centroid_normal: CentroidNormal => list "Centroid normals: normalised (default), mean (the \
         paper)." (value_enum),
     /// Every setting at the paper's choice (docs/clustering.md, "The paper exactly"): point cluster
@@ -448,13 +443,37 @@ pub struct ClusterLists, heading "Sweep (comma-separated lists)";
 }
 
 impl Default for ClusterSettings {
-    /// The options' defaults (`default_value_t`), declared once.
     fn default() -> Self {
-        clap_defaults()
+        ClusterSettings::DEFAULT
     }
 }
 
 impl ClusterSettings {
+    /// The defaults, declared once: the options' defaults (`default_value_t = DEFAULT.field`) and
+    /// `Default`.
+    pub const DEFAULT: ClusterSettings = ClusterSettings {
+        sp_clusters: 3072,
+        vpl_clusters: 1024,
+        fuzziness: 6,
+        gamma: Gamma::Auto,
+        normal_threshold: 0.866,
+        iterations: 10,
+        weighting: Weighting::InverseDistance,
+        weight_exponent: 1.0,
+        plane_gate: None,
+        weights_to_reps: false,
+        temporal: false,
+        temporal_alpha: 0.7,
+        visibility_facing: false,
+        cluster_light: ClusterLight::Spread,
+        reseed: true,
+        ring_fallback: true,
+        position_fallback: true,
+        centroid_normal: CentroidNormal::Normalised,
+        paper: false,
+        target_ms: None,
+    };
+
     /// F in effect: 1 for hard clustering.
     pub fn f(&self) -> u32 {
         if self.weighting == Weighting::Hard {
@@ -550,38 +569,38 @@ pub fn plane_gate_sine(deg: Option<f32>) -> f32 {
 #[serde(default)]
 pub struct FrameSettings {
     /// Image width, 1..16384.
-    #[arg(long, default_value_t = 640, value_parser = parse_side)]
+    #[arg(long, default_value_t = FrameSettings::DEFAULT.width, value_parser = parse_side)]
     pub width: u32,
     /// Image height, 1..16384.
-    #[arg(long, default_value_t = 480, value_parser = parse_side)]
+    #[arg(long, default_value_t = FrameSettings::DEFAULT.height, value_parser = parse_side)]
     pub height: u32,
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = FrameSettings::DEFAULT.seed)]
     pub seed: u32,
     /// Number of VPLs (traced once, resident).
-    #[arg(long, default_value_t = 8192)]
+    #[arg(long, default_value_t = FrameSettings::DEFAULT.vpls)]
     pub vpls: u32,
     /// Indirect bounce budget: the most VPLs a light path deposits (the path tracer gets the same),
     /// 1..64.
-    #[arg(long, default_value_t = MAX_DEPTH, value_parser = parse_bounces)]
+    #[arg(long, default_value_t = FrameSettings::DEFAULT.bounces, value_parser = parse_bounces)]
     pub bounces: u32,
     /// Area-light samples (shadow rays) per pixel for direct light, 1..=65536.
-    #[arg(long, default_value_t = 16, value_parser = parse_direct_samples)]
+    #[arg(long, default_value_t = FrameSettings::DEFAULT.direct_samples, value_parser = parse_direct_samples)]
     pub direct_samples: u32,
     /// Exposure of PNG images and the viewer: `auto` (the default: the image's log-average
     /// luminance is shown as middle grey 0.18, Reinhard et al. 2002) or a factor >= 0. EXR stays
     /// linear, unscaled radiance.
-    #[arg(long, default_value = "auto", value_parser = parse_exposure)]
+    #[arg(long, default_value_t = FrameSettings::DEFAULT.exposure, value_parser = parse_exposure)]
     pub exposure: Exposure,
     /// G-term clamp: the VPL distance in 1/d² is at least CLAMP × scene diagonal (scale-free),
     /// [0, 1).
-    #[arg(long, default_value_t = DEFAULT_CLAMP, value_parser = parse_clamp)]
+    #[arg(long, default_value_t = FrameSettings::DEFAULT.clamp, value_parser = parse_clamp)]
     pub clamp: f32,
     /// The indirect light's resolution as a fraction of the image's, (0, 1]: below 1 the
     /// primary rays and the direct light stay at the image's size and the indirect light is
     /// computed on a G-buffer of this scale, then upsampled with depth- and normal-aware weights
     /// (`gi::upsample`). The unclustered reference ignores it; `view` takes it from --render-scale.
     /// Written to the stats only when not 1.
-    #[arg(long, default_value_t = 1.0, value_parser = parse_indirect_scale)]
+    #[arg(long, default_value_t = FrameSettings::DEFAULT.indirect_scale, value_parser = parse_indirect_scale)]
     #[serde(skip_serializing_if = "is_one")]
     pub indirect_scale: f32,
 }
@@ -591,13 +610,26 @@ fn is_one(x: &f32) -> bool {
 }
 
 impl Default for FrameSettings {
-    /// The options' defaults (`default_value_t`), declared once.
     fn default() -> Self {
-        clap_defaults()
+        FrameSettings::DEFAULT
     }
 }
 
 impl FrameSettings {
+    /// The defaults, declared once: the options' defaults (`default_value_t = DEFAULT.field`) and
+    /// `Default`.
+    pub const DEFAULT: FrameSettings = FrameSettings {
+        width: 640,
+        height: 480,
+        seed: 1,
+        vpls: 8192,
+        bounces: MAX_DEPTH,
+        direct_samples: 16,
+        exposure: Exposure::Auto,
+        clamp: DEFAULT_CLAMP,
+        indirect_scale: 1.0,
+    };
+
     pub fn pixels(&self) -> u32 {
         self.width * self.height
     }
@@ -610,7 +642,7 @@ impl FrameSettings {
 }
 
 /// Lights added to a scene (for scenes that ship without any) and the scale of its emitters.
-#[derive(Args, Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Args, Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[command(next_help_heading = "Added lights")]
 pub struct LightSettings {
     /// Add a directional light: DX,DY,DZ,E\[,R,G,B\] (direction towards the sun).
@@ -632,8 +664,23 @@ pub struct LightSettings {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub point: Vec<String>,
     /// Multiply every emitter's power by this factor (>= 0).
-    #[arg(long, default_value_t = 1.0, value_parser = parse_light_scale)]
+    #[arg(long, default_value_t = LightSettings::DEFAULT.light_scale, value_parser = parse_light_scale)]
     pub light_scale: f32,
+}
+
+impl LightSettings {
+    /// The defaults, declared once (the options' and `Default`): no added light, scale 1.
+    pub const DEFAULT: LightSettings = LightSettings {
+        sun: Vec::new(),
+        point: Vec::new(),
+        light_scale: 1.0,
+    };
+}
+
+impl Default for LightSettings {
+    fn default() -> Self {
+        LightSettings::DEFAULT
+    }
 }
 
 // ---- value parsers: one line each, `cli::parse` prefixes the option and the value ----
@@ -762,6 +809,27 @@ pub fn parse_light_scale(v: &str) -> Result<f32, Invalid> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The defaults of a group of options as clap gives them.
+    fn clap_defaults<T: clap::Args + clap::FromArgMatches>() -> T {
+        let cmd = T::augment_args(clap::Command::new("defaults"));
+        let m = cmd
+            .try_get_matches_from(["defaults"])
+            .expect("every option of a settings group has a default or is optional");
+        T::from_arg_matches(&m).expect("the defaults are valid values")
+    }
+
+    /// The options' defaults are the types' `DEFAULT` (declared once; the options name it), also
+    /// for the on/off options and flags, whose defaults clap takes as text or as absent.
+    #[test]
+    fn the_options_defaults_are_the_declared_defaults() {
+        assert_eq!(clap_defaults::<ClusterSettings>(), ClusterSettings::DEFAULT);
+        assert_eq!(clap_defaults::<FrameSettings>(), FrameSettings::DEFAULT);
+        assert_eq!(clap_defaults::<LightSettings>(), LightSettings::DEFAULT);
+        assert_eq!(clap_defaults::<TimingSettings>(), TimingSettings::DEFAULT);
+        let m = clap_defaults::<crate::method::MethodSettings>();
+        assert_eq!(m, crate::method::MethodSettings::default());
+    }
 
     /// n_t = 1 is read as the tightest threshold Eq. (7)'s strict test can pass: equal normals
     /// (cosine 1 in f32) pass it, and the threshold is 2⁻²⁰ below 1; other values are kept
@@ -987,14 +1055,20 @@ pub const WARMUP_MS: f64 = 200.0;
 pub struct TimingSettings {
     /// Milliseconds of GPU work before the timed renders (a busy kernel, src/gpu/warmup.rs), so
     /// the GPU runs at its working clock; before each camera-path frame too. 0: none.
-    #[arg(long, value_name = "MS", default_value_t = WARMUP_MS, value_parser = parse_warmup_ms)]
+    #[arg(long, value_name = "MS", default_value_t = TimingSettings::DEFAULT.warmup_ms, value_parser = parse_warmup_ms)]
     pub warmup_ms: f64,
 }
 
+impl TimingSettings {
+    /// The defaults, declared once (the options' and `Default`).
+    pub const DEFAULT: TimingSettings = TimingSettings {
+        warmup_ms: WARMUP_MS,
+    };
+}
+
 impl Default for TimingSettings {
-    /// The options' defaults (`default_value_t`), declared once.
     fn default() -> Self {
-        clap_defaults()
+        TimingSettings::DEFAULT
     }
 }
 

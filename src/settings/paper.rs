@@ -2,9 +2,7 @@
 //! default departs from it (docs/clustering.md, "The paper exactly"). Options given on the command
 //! line win: `--paper --clamp 0.02` is the paper with the default clamp.
 
-use super::{
-    CentroidNormal, ClusterLight, ClusterSettings, FrameSettings, Weighting, clap_defaults,
-};
+use super::{CentroidNormal, ClusterLight, ClusterSettings, FrameSettings, Weighting};
 
 /// n_t: "a threshold of √3/2 (corresponding to the cosine of a maximum angle of π/6)" (§3.2.1); the
 /// default 0.866 is the same to three digits.
@@ -75,8 +73,8 @@ pub fn apply(
 
 /// The settings with `--paper` and nothing else given (`clap` defaults, then `apply`).
 pub fn paper_defaults() -> (FrameSettings, ClusterSettings) {
-    let mut f: FrameSettings = clap_defaults();
-    let mut c: ClusterSettings = clap_defaults();
+    let mut f = FrameSettings::DEFAULT;
+    let mut c = ClusterSettings::DEFAULT;
     apply(&mut f, &mut c, &|_| false);
     (f, c)
 }
@@ -112,8 +110,8 @@ mod tests {
     /// An option given on the command line wins over `--paper`.
     #[test]
     fn given_options_win() {
-        let mut f: FrameSettings = clap_defaults();
-        let mut c: ClusterSettings = clap_defaults();
+        let mut f = FrameSettings::DEFAULT;
+        let mut c = ClusterSettings::DEFAULT;
         f.clamp = 0.01;
         c.cluster_light = ClusterLight::Spread;
         c.sp_clusters = 0;

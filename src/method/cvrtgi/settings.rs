@@ -5,7 +5,7 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
-use crate::settings::{Control, Invalid, in_range, invalid, knobs};
+use crate::settings::{Invalid, Widget, in_range, invalid, knobs};
 
 /// How a face takes the light of a cluster its rays found (`--cluster-gather`; docs/cvrtgi.md).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -47,10 +47,10 @@ knobs! {
     /// (as lists) `bench`.
     pub struct CvrtgiSettings, lists CvrtgiLists, heading "CVRTGI (voxel clusters)";
     /// Voxels along the longest axis of the scene bounds (§4.1), 1..=256.
-    voxel_res: u32 = 32, parse parse_voxel_res, ui "voxels (longest axis)" Control::int(8, 128);
+    voxel_res: u32 = 32, parse parse_voxel_res, ui "voxels (longest axis)" Widget::int(8, 128);
     /// Spacing in voxels of the SLIC seeds (§4.2, Achanta et al.'s S), 1..=64. Fewer, larger
     /// clusters are found by more of a face's rays (docs/cvrtgi.md measures 4, 6 and 8).
-    cluster_step: u32 = 8, parse parse_cluster_step, ui "SLIC seed spacing" Control::int(1, 32);
+    cluster_step: u32 = 8, parse parse_cluster_step, ui "SLIC seed spacing" Widget::int(1, 32);
     /// Iterations of Alg. 1's loop (the paper: 10), 0..=100.
     cluster_iterations: u32 = 10, parse parse_cluster_iterations;
     /// Eq. (1)'s angle in degrees: a voxel joins a cluster whose normal is within it (the paper:
@@ -58,7 +58,7 @@ knobs! {
     cluster_angle: f32 = 35.0, parse parse_cluster_angle;
     /// Rays per exposed voxel face for the cluster visibility cache (§4.3; the paper: 32..128,
     /// 128 by default), 1..=1024.
-    face_rays: u32 = 128, parse parse_face_rays, ui "rays per face" Control::int_log(8, 512);
+    face_rays: u32 = 128, parse parse_face_rays, ui "rays per face" Widget::int_log(8, 512);
     /// Clusters nearer than this many voxels to a face give their lit voxels one by one instead of
     /// the cluster as one light (§4.4), [0, 64].
     near_voxels: f32 = 2.0, parse parse_near_voxels;
@@ -66,17 +66,17 @@ knobs! {
     /// 5³ kernel is r = 2), 0..=4.
     filter_radius: u32 = 2, parse parse_filter_radius;
     /// Times the filter is applied (the paper: twice), 0..=8.
-    filter_passes: u32 = 2, parse parse_filter_passes, ui "filter passes" Control::int(0, 8);
+    filter_passes: u32 = 2, parse parse_filter_passes, ui "filter passes" Widget::int(0, 8);
     /// How a face takes a cluster its rays met: `any-hit` (§4.4: the whole cluster as a point
     /// light) or `conserved` (not in the paper, the default: the same, scaled per cluster so that
     /// the faces whose rays met it receive, in all, the flux it sends) (docs/cvrtgi.md).
     cluster_gather: ClusterGather = ClusterGather::Conserved, parse parse_cluster_gather,
-        ui "cluster light" Control::Choice(&[("conserved", "conserved"), ("any-hit", "any hit (paper)")]);
+        ui "cluster light" Widget::Choice(&[("conserved", "conserved"), ("any-hit", "any hit (paper)")]);
     /// Rays per VPL that find where its light goes (not in the paper): its flux is weighed by the
     /// fraction that leaves its surface (past a tenth of a voxel), and `conserved` takes the
     /// fraction that meets a surface as what it sends; 0: every VPL counts whole, as the paper's
     /// lit voxels. 0..=256.
-    escape_rays: u32 = 16, parse parse_escape_rays, ui "escape rays per VPL" Control::int(0, 64);
+    escape_rays: u32 = 16, parse parse_escape_rays, ui "escape rays per VPL" Widget::int(0, 64);
 }
 
 pub fn parse_cluster_gather(v: &str) -> Result<ClusterGather, Invalid> {

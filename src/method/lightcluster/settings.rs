@@ -5,7 +5,7 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
-use crate::settings::{Control, Invalid, in_range, invalid, knobs};
+use crate::settings::{Invalid, Widget, in_range, invalid, knobs};
 
 /// What a cluster's shadow rays aim at (`--lightcluster-visibility`; docs/methods.md).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -44,13 +44,13 @@ knobs! {
     /// others). bench sweeps 1, 1.2, 1.8, 2 and 2.2 by default: 28 and 7 clusters on the
     /// conference room, 28, 12 and 8 on the Cornell box (docs/methods.md).
     d_init: f32 = 1.0, parse parse_d_init, sweep [1.0, 1.2, 1.8, 2.0, 2.2],
-        ui "d_init (scene diagonals)" Control::log(0.001, 10.0);
+        ui "d_init (scene diagonals)" Widget::log(0.001, 10.0);
     /// lightcluster: what a cluster's shadow rays aim at: `members` (not in the paper, the
     /// default: a target member of each of up to 8 member groups, every VPL taking its group's
     /// visibility) or `disc` (§3.2.2: 8 points of a disc of radius d_min, every VPL taking the
     /// fraction seen) (docs/methods.md).
     lightcluster_visibility: LcVisibility = LcVisibility::Members, parse parse_lc_visibility,
-        ui "rays to" Control::Choice(&[("members", "member VPLs"), ("disc", "the disc (paper)")]);
+        ui "rays to" Widget::Choice(&[("members", "member VPLs"), ("disc", "the disc (paper)")]);
 }
 
 pub fn parse_lc_visibility(v: &str) -> Result<LcVisibility, Invalid> {

@@ -7,7 +7,7 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
-use crate::settings::{Control, Invalid, in_range, invalid, knobs};
+use crate::settings::{Invalid, Widget, in_range, invalid, knobs};
 
 /// How reservoirs are combined (`--restir-combine`; the paper's §4).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -76,29 +76,29 @@ knobs! {
     /// restir: initial candidates a pixel, drawn by flux (the paper's M; default 32, the issue's),
     /// 1..=1024. bench sweeps 8 and 32 by default.
     restir_candidates: u32 = 32, parse parse_candidates, sweep [8, 32],
-        ui "candidates M" Control::int(1, 256);
+        ui "candidates M" Widget::int(1, 256);
     /// restir: neighbours a spatial iteration reuses (k; default 5, the issue's), 0..=16. bench
     /// sweeps 3 and 5 by default.
     restir_neighbours: u32 = 5, parse parse_neighbours, sweep [3, 5],
-        ui "neighbours k" Control::int(0, 16);
+        ui "neighbours k" Widget::int(0, 16);
     /// restir: the radius the spatial neighbours are drawn in, in pixels at 1080 lines (scaled by
     /// the frame's height / 1080; default 30, the issue's), (0, 1000].
-    restir_radius: f32 = 30.0, parse parse_radius, ui "radius (px at 1080p)" Control::log(1.0, 200.0);
+    restir_radius: f32 = 30.0, parse parse_radius, ui "radius (px at 1080p)" Widget::log(1.0, 200.0);
     /// restir: spatial iterations (n; default 2), 0..=8. bench sweeps 1 and 2 by default.
     restir_iterations: u32 = 2, parse parse_iterations, sweep [1, 2],
-        ui "spatial iterations" Control::int(0, 4);
+        ui "spatial iterations" Widget::int(0, 4);
     /// restir, with `--temporal on`: the previous frame's reservoir counts at most this many times
     /// the current pixel's candidates (the confidence cap; default 20, the issue's), (0, 1000].
-    restir_cap: f32 = 20.0, parse parse_cap, ui "confidence cap (× M)" Control::log(1.0, 100.0);
+    restir_cap: f32 = 20.0, parse parse_cap, ui "confidence cap (× M)" Widget::log(1.0, 100.0);
     /// restir: `biased` (the paper's Alg. 4, the default) or `unbiased` (Alg. 6 with a shadow ray
     /// from each reused pixel's point to the sample).
     restir_combine: Combine = Combine::Biased, parse parse_combine,
-        ui "combination" Control::Choice(&[("biased", "biased"), ("unbiased", "unbiased")]);
+        ui "combination" Widget::Choice(&[("biased", "biased"), ("unbiased", "unbiased")]);
     /// restir: its lights, `vpls` (the frame's VPLs, the default) or `clusters` (the resident VPL
     /// clusters of `--vpl-clusters`, each a point light at its representative with the summed
     /// flux).
     restir_lights: RestirLights = RestirLights::Vpls, parse parse_lights,
-        ui "lights" Control::Choice(&[("vpls", "VPLs"), ("clusters", "VPL clusters")]);
+        ui "lights" Widget::Choice(&[("vpls", "VPLs"), ("clusters", "VPL clusters")]);
 }
 
 pub fn parse_candidates(v: &str) -> Result<u32, Invalid> {

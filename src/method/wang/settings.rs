@@ -1,7 +1,7 @@
 //! wang's knobs (Wang et al. 2009, seed 001; docs/methods.md): Eq. (2)'s α. Its K is the SP
 //! clustering's (`--sp-clusters`) and its iterations the k-means' (`--iterations`).
 
-use crate::settings::{Control, Invalid, in_range, knobs};
+use crate::settings::{Invalid, Widget, in_range, knobs};
 
 knobs! {
     /// wang's knobs, flattened into `method::MethodSettings`.
@@ -9,7 +9,7 @@ knobs! {
     /// wang: α of Eq. (2), the position term's weight with positions in scene diagonals, (0, 100]
     /// (the paper: 0.1–0.5).
     wang_alpha: f32 = 0.3, parse parse_wang_alpha,
-        ui "α (Eq. 2: position against normal)" Control::log(0.01, 100.0);
+        ui "α (Eq. 2: position against normal)" Widget::log(0.01, 100.0);
 }
 
 pub fn parse_wang_alpha(v: &str) -> Result<f32, Invalid> {
