@@ -1,16 +1,16 @@
 //! restir (ReSTIR DI over the VPLs, `method::restir`, docs/methods.md): each stage of
-//! `restir.wgsl` against its CPU twin (`cpu::restir`) on small frames, the unbiased combination's
+//! `restir.wgsl` against its CPU twin (`method::restir::twin`) on small frames, the unbiased combination's
 //! mean over seeds against the exact Eq. (5) sum (the reference, every VPL with its shadow ray) on
 //! hand-placed VPLs and on the built-in scenes, the history's life, and convergence with temporal
 //! reuse on a static camera.
 
 mod common;
 
-use fuzzy_vpl::cpu::restir::{Reservoir, Stages};
 use fuzzy_vpl::gi::pass::Pass;
 use fuzzy_vpl::gi::primary::ShadingPoint;
 use fuzzy_vpl::gi::vpl_trace::{ResidentVpls, Vpl, VplKey, VplSet};
 use fuzzy_vpl::method::restir::settings::Combine;
+use fuzzy_vpl::method::restir::twin::{Reservoir, Stages};
 use fuzzy_vpl::method::restir::{self, RestirMethod, alias};
 use fuzzy_vpl::method::{Method, MethodSettings};
 use fuzzy_vpl::metrics;
