@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
 """The dependency graph of src/'s top-level modules (`crate::X` and `use crate::{X, ..}` outside
 `#[cfg(test)]` blocks), printed one module a line, and any cycle between them (exit 1 on a cycle).
-Also counts production imports of `cpu::` (the CPU twins) and the files outside each method's folder
-that name it."""
+Also counts production imports of the CPU twins (`cpu::`, and a room's own `method::<m>::twin`;
+production is every file but `cpu/` and the rooms' `twin.rs`, outside `#[cfg(test)]`) and the
+files outside each method's folder that name it. A room's `twin.rs` is twin code: its imports are
+drawn as `cpu`'s."""
 import collections
 import os
 import re
@@ -26,6 +28,10 @@ for dp, _, fn in os.walk(root):
         top = rel[0][:-3] if rel[0].endswith(".rs") else rel[0]
         if top in ("lib", "main"):
             continue
+        room = rel[1] if top == "method" and len(rel) == 3 else None
+        if room and rel[2] == "twin.rs":
+            top = "cpu"
+            edges[top].add("method")
         src = re.split(r"#\[cfg\(test\)\]", open(p).read())[0]
         code = "\n".join(l for l in src.split("\n") if not l.strip().startswith("//"))
         for m in re.findall(r"crate::(\w+)", code):
@@ -35,7 +41,10 @@ for dp, _, fn in os.walk(root):
             for n in re.findall(r"(\w+)", group):
                 if n in tops and n != top:
                     edges[top].add(n)
-        if top != "cpu" and re.search(r"\bcpu::", code):
+        twin = re.search(r"method::\w+::(twin\b|\{[^}]*\btwin\b)", code)
+        if room:
+            twin = twin or re.search(r"\btwin::|::twin\b|\{[^}]*\btwin\b", code)
+        if top != "cpu" and (re.search(r"\bcpu::", code) or twin):
             cpu_imports.append(os.path.relpath(p, root))
 for k in sorted(edges):
     print(f"{k} -> {', '.join(sorted(edges[k]))}")
@@ -69,7 +78,7 @@ for v in sorted(tops):
         visit(v)
 cycles = [s for s in sccs if len(s) > 1]
 print(f"cycles: {len(cycles)} {cycles if cycles else ''}")
-print(f"production imports of cpu::: {len(cpu_imports)} {cpu_imports if cpu_imports else ''}")
+print(f"production imports of cpu:: or method::<m>::twin: {len(cpu_imports)} {cpu_imports if cpu_imports else ''}")
 methods = os.path.join(root, "method")
 for m in sorted(d for d in os.listdir(methods) if os.path.isdir(os.path.join(methods, d))):
     named = []

@@ -230,7 +230,7 @@ MUTANTS = [
     # --- raycast.wgsl (batch queries of tests/traversal.rs)
     ("raycast-u-v-swapped", "raycast.wgsl", "bitcast<u32>(h.u), bitcast<u32>(h.v)", "bitcast<u32>(h.v), bitcast<u32>(h.u)", "raycast"),
     ("raycast-mode-swapped", "raycast.wgsl", "if params.mode == 0u {", "if params.mode != 0u {", "raycast"),
-    # --- lightcluster.wgsl (CPU twin src/cpu/lightcluster.rs)
+    # --- lightcluster.wgsl (CPU twin src/method/lightcluster/twin.rs)
     ("lc-disc-radius-not-sqrt", "lightcluster.wgsl", "a.w * sqrt((f32(i) + 0.5) / f32(DISC_SAMPLES))", "a.w * ((f32(i) + 0.5) / f32(DISC_SAMPLES))", "lightcl."),
     ("lc-disc-golden-angle-wrong", "lightcluster.wgsl", "let th = 2.399963 * f32(i);", "let th = 2.0 * PI * f32(i) / f32(DISC_SAMPLES);", "lightcl."),
     ("lc-disc-fraction-off-by-one", "lightcluster.wgsl", "f32(seen) / f32(DISC_SAMPLES)", "f32(seen) / f32(DISC_SAMPLES - 1u)", "lightcl."),
@@ -241,7 +241,7 @@ MUTANTS = [
     ("lc-member-flush-ignores-visibility", "lightcluster.wgsl", "if vpl_visible(p, n, v.pos.xyz, v.nrm.xyz) {", "if true {", "lightcl."),
     ("lc-member-group-weight-one-channel", "lightcluster.wgsl", "let w = t.x + t.y + t.z;", "let w = t.x;", "lightcl."),
     ("lc-visibility-cache-never-refreshed", "lightcluster.wgsl", "if c != cur {", "if cur == INVALID {", "lightcl."),
-    # --- wang.wgsl (CPU twin src/cpu/wang.rs)
+    # --- wang.wgsl (CPU twin src/method/wang/twin.rs)
     ("wang-label-texel-row-2048", "wang.wgsl", "vec2<u32>(q & 4095u, q >> 12u)", "vec2<u32>(q & 2047u, q >> 11u)", "wang"),
     ("wang-point-texel-column-even", "wang.wgsl", "vec2<u32>(i & 4095u, i >> 12u)", "vec2<u32>(i & 4094u, i >> 12u)", "wang"),
     ("wang-neighbour-bound-off-by-one", "wang.wgsl", "qx >= i32(params.width)", "qx > i32(params.width)", "wang"),
@@ -249,7 +249,7 @@ MUTANTS = [
     ("wang-radius-ratio-inverted", "wang.wgsl", "r = f32(params.rays) / s;", "r = s / f32(params.rays);", "wang"),
     ("wang-interp-distance-times-radius", "wang.wgsl", "length(sp.pos.xyz - pj.xyz) / radius_of(j)", "length(sp.pos.xyz - pj.xyz) * radius_of(j)", "wang"),
     ("wang-interp-not-normalised", "wang.wgsl", "        e = sum / wsum;", "        e = sum;", "wang"),
-    # --- wang_cluster.wgsl = wang/*.wgsl (CPU twin cpu::wang::cluster): the quadtree seeding, the grid search,
+    # --- wang_cluster.wgsl = wang/*.wgsl (CPU twin method::wang::twin::cluster): the quadtree seeding, the grid search,
     # the fixed-point updates, the sample points
     ("wang-cluster-storage-slots-empty", "common/grid.wgsl", "    return ranges[i];\n}", "    return ranges[i].yyyy;\n}", "wang"),
     ("wang-cluster-eps-normal-term-dropped", "wang/seed.wgsl", "q = u32(min(eq2_error(p, n, mean.pos, mean.nrm) * EPS_SCALE, EPS_MAX));", "q = u32(min(params.alpha * length(p - mean.pos) * EPS_SCALE, EPS_MAX));", "wang"),
@@ -294,7 +294,7 @@ MUTANTS = [
     ("wang-cluster-sample-error-starts-at-zero", "wang/sample.wgsl", "atomicStore(&sums[WORDS * j + 13u], 0xffffffffu);", "atomicStore(&sums[WORDS * j + 13u], 0u);", "wang"),
     ("wang-cluster-sample-min-swapped", "wang/sample.wgsl", "if bits < atomicLoad(&sums[WORDS * l + 13u]) {", "if bits > atomicLoad(&sums[WORDS * l + 13u]) {", "wang"),
     ("wang-cluster-sample-albedo-slot-off-by-one", "wang/sample.wgsl", "sample_gbuffer[4u * j + 2u] = albedo;", "sample_gbuffer[4u * j + 3u] = albedo;", "wang"),
-    # --- cvrtgi.wgsl (CPU twin src/cpu/cvrtgi.rs)
+    # --- cvrtgi.wgsl (CPU twin src/method/cvrtgi/twin.rs)
     ("cv-face-axis-sign-swapped", "cvrtgi.wgsl", "select(-1.0, 1.0, dir % 2u == 0u)", "select(1.0, -1.0, dir % 2u == 0u)", "cvrtgi"),
     ("cv-dominant-face-sign-swapped", "cvrtgi.wgsl", "select(0u, 1u, n[axis] < 0.0)", "select(1u, 0u, n[axis] < 0.0)", "cvrtgi"),
     ("cv-voxel-coord-rounded", "cvrtgi.wgsl", "floor((p - params.origin.xyz) / params.origin.w)", "floor((p - params.origin.xyz) / params.origin.w + 0.5)", "cvrtgi"),

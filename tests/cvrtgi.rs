@@ -5,12 +5,12 @@
 
 mod common;
 
-use fuzzy_vpl::cpu::cvrtgi::{self as twin, Faces, INVALID, Lighting};
 use fuzzy_vpl::gi::dispatch::Gpu;
 use fuzzy_vpl::gi::primary::ShadingPoint;
 use fuzzy_vpl::gi::vpl_trace::Vpl;
 use fuzzy_vpl::gpu::GpuContext;
 use fuzzy_vpl::method::cvrtgi::settings::{ClusterGather, CvrtgiSettings};
+use fuzzy_vpl::method::cvrtgi::twin::{self, Faces, INVALID, Lighting};
 use fuzzy_vpl::method::cvrtgi::voxel::{self, Grid, SlicSettings, Voxels, eq1_within_angle};
 use fuzzy_vpl::method::cvrtgi::{Cvrtgi, CvrtgiInputs, CvrtgiReport};
 use fuzzy_vpl::metrics::mean_luminance;

@@ -5,7 +5,6 @@ mod common;
 
 use fuzzy_vpl::bvh::SceneBvh;
 use fuzzy_vpl::cpu::vpl::eq5_vpl_radiance;
-use fuzzy_vpl::cpu::wang as twin;
 use fuzzy_vpl::gi::dispatch::Gpu;
 use fuzzy_vpl::gi::pass::Pass;
 use fuzzy_vpl::gi::primary::ShadingPoint;
@@ -13,6 +12,7 @@ use fuzzy_vpl::gi::scene_gpu::SceneGpu;
 use fuzzy_vpl::gpu::profiler::Profiler;
 use fuzzy_vpl::method::lightcluster;
 use fuzzy_vpl::method::wang::cluster::{ClusterParams, WangCluster, WangClustering};
+use fuzzy_vpl::method::wang::twin;
 use fuzzy_vpl::method::wang::{self, WangFrame, WangMethod};
 use fuzzy_vpl::method::{Method, MethodSettings};
 use fuzzy_vpl::metrics;
@@ -69,7 +69,7 @@ fn shading_points(r: &Renderer) -> Vec<ShadingPoint> {
         .collect()
 }
 
-/// wang's GPU clustering (`wang_cluster.wgsl`) against its CPU twin (`cpu::wang::cluster`) with the
+/// wang's GPU clustering (`wang_cluster.wgsl`) against its CPU twin (`method::wang::twin::cluster`) with the
 /// same parameters on the frame's shading points: the seeds, every label and every sample point
 /// equal on lavapipe (measured: all, both rooms, 40×30 and 64×48); the centres differ by at most
 /// their bound (relative to the scene diagonal; measured 0). Bounds in `common::BOUNDS`. Returns the
@@ -155,7 +155,7 @@ fn wang_clustering_matches_twin(
 }
 
 /// wang: the GPU's clustering, gather at the sample points, R_j and interpolation equal the CPU
-/// twins (`cpu::wang`, `cpu::vpl`) on a 40×30 frame of each room.
+/// twins (`method::wang::twin`, `cpu::vpl`) on a 40×30 frame of each room.
 #[test]
 fn wang_matches_cpu_twin() {
     let ctx = common::gpu();
@@ -656,8 +656,8 @@ fn wang_cluster_search_reaches_whole_ring_rows_and_the_last_row() {
 /// equals the CPU twin given the same clusters, and the clusters are the leader algorithm's.
 #[test]
 fn lightcluster_matches_cpu_twin() {
-    use fuzzy_vpl::cpu::lightcluster as lc;
     use fuzzy_vpl::method::lightcluster::settings::LcVisibility;
+    use fuzzy_vpl::method::lightcluster::twin as lc;
     let ctx = common::gpu();
     for (name, s) in rooms() {
         let mut r = Renderer::new(&ctx, &s).unwrap();
@@ -870,7 +870,7 @@ fn every_method_indirect_is_within_10_percent_under_a_slab_emitter() {
 /// with a shadow ray a VPL), up to the order of the sums.
 #[test]
 fn lightcluster_with_single_vpl_groups_is_the_reference() {
-    use fuzzy_vpl::cpu::lightcluster as lc;
+    use fuzzy_vpl::method::lightcluster::twin as lc;
     let ctx = common::gpu();
     let s = scene::load("builtin:cornell").unwrap();
     let mut r = Renderer::new(&ctx, &s).unwrap();

@@ -1,16 +1,16 @@
 //! restir (ReSTIR DI over the VPLs, `method::restir`, docs/methods.md): each stage of
-//! `restir.wgsl` against its CPU twin (`cpu::restir`) on small frames, the unbiased combination's
+//! `restir.wgsl` against its CPU twin (`method::restir::twin`) on small frames, the unbiased combination's
 //! mean over seeds against the exact Eq. (5) sum (the reference, every VPL with its shadow ray) on
 //! hand-placed VPLs and on the built-in scenes, the history's life, and convergence with temporal
 //! reuse on a static camera.
 
 mod common;
 
-use fuzzy_vpl::cpu::restir::{Reservoir, Stages};
 use fuzzy_vpl::gi::pass::Pass;
 use fuzzy_vpl::gi::primary::ShadingPoint;
 use fuzzy_vpl::gi::vpl_trace::{ResidentVpls, Vpl, VplKey, VplSet};
 use fuzzy_vpl::method::restir::settings::Combine;
+use fuzzy_vpl::method::restir::twin::{Reservoir, Stages};
 use fuzzy_vpl::method::restir::{self, RestirMethod, alias};
 use fuzzy_vpl::method::{Method, MethodSettings};
 use fuzzy_vpl::metrics;
@@ -542,36 +542,78 @@ fn restir_over_vpl_clusters_is_the_gather_of_the_clusters() {
 /// room at 64×48 with 1024 VPLs, the relative MSE of the 32nd frame with `--temporal on` (α = 1:
 /// restir's reuse alone, no accumulation) is at most 0.6 of the first frame's (measured 0.46 on
 /// lavapipe). Not the 0.25: the reservoirs' confidence cap bounds what the reuse adds, and
-/// a frame stays one sample a pixel (docs/methods.md, "restir", measures 160×120 and 4096 VPLs).
+/// a frame stays one sample a pixel (docs/methods.md, "restir", measures 160×120 and 4096 VPLs);
+/// the accumulation reaches it (the next test).
 #[test]
 fn restir_temporal_reuse_converges_on_a_static_camera() {
     let _serial = serial();
+    let errs = rel_mse_by_frame("builtin:conference", (64, 48, 1024), 32, 1.0);
+    println!("conference 64x48, 1024 VPLs, α 1, rel MSE by frame: {errs:.4?}");
+    assert!(errs[31] <= 0.6 * errs[0], "{} vs {}", errs[31], errs[0]);
+}
+
+/// The convergence target at a test's size: with `--temporal on` and the accumulation's α
+/// at 1 / frames (the plain mean of the frames) besides restir's own reuse, the conference room at
+/// 80×60 with 1024 VPLs has, after 32 frames of a static camera, at most 0.35 of the first frame's
+/// rel MSE. Measured on lavapipe: 0.203 (the default seed, 1); seeds 2–7 0.264, 0.163, 0.130,
+/// 0.119, 0.209, 0.165; with α 0.7 (the default) 0.424, α 1 (restir's reuse alone) 0.479. The
+/// issue's size, 160×120 with 4096 VPLs, measures 0.130 (docs/methods.md, "restir"); 64×48 measures
+/// 0.40, its error held up by a few pixels whose sample seldom changes. Fails if restir stops
+/// converging: a reservoir that keeps its sample (a broken cap or history) or a bias that does not
+/// average out.
+#[test]
+fn restir_converges_with_accumulation_on_a_static_camera() {
+    let _serial = serial();
+    let frames = 32;
+    let errs = rel_mse_by_frame(
+        "builtin:conference",
+        (80, 60, 1024),
+        frames,
+        1.0 / frames as f32,
+    );
+    println!("conference 80x60, 1024 VPLs, α 1/{frames}, rel MSE by frame: {errs:.4?}");
+    let ratio = errs[frames - 1] / errs[0];
+    assert!(
+        ratio <= 0.35,
+        "frame {frames} / frame 1: {ratio} ({errs:?})"
+    );
+}
+
+/// The relative MSE against the reference of the same VPLs of `frames` frames of restir (its
+/// defaults, biased) on `scene`'s default camera at `(width, height, vpls)`, with `--temporal on`
+/// and the accumulation's α `alpha` (1: restir's reuse alone); every frame's pixels finite.
+fn rel_mse_by_frame(
+    scene: &str,
+    (w, h, vpls): (u32, u32, u32),
+    frames: usize,
+    alpha: f32,
+) -> Vec<f64> {
     let ctx = common::gpu();
-    let s = scene::load("builtin:conference").unwrap();
+    let s = scene::load(scene).unwrap();
     let mut r = Renderer::new(&ctx, &s).unwrap();
     let cam = s.default_camera();
-    let mut fs = settings(64, 48, 1024);
+    let mut fs = settings(w, h, vpls);
     fs.cluster.temporal = true;
-    fs.cluster.temporal_alpha = 1.0;
+    fs.cluster.temporal_alpha = alpha;
     let reference = RenderSettings {
         reference: true,
         ..fs.clone()
     };
     let refl = r.render(&cam, &reference).unwrap();
-    let mut errs = Vec::new();
-    for _ in 0..32 {
-        let f = r.render(&cam, &fs).unwrap();
-        assert!(common::all_finite(&f.radiance));
-        errs.push(metrics::rel_mse(&f.radiance, &refl.radiance));
-    }
-    println!("conference 64x48, 1024 VPLs, rel MSE by frame: {errs:.4?}");
-    assert!(errs[31] <= 0.6 * errs[0], "{} vs {}", errs[31], errs[0]);
+    assert!(common::all_finite(&refl.radiance));
+    (0..frames)
+        .map(|_| {
+            let f = r.render(&cam, &fs).unwrap();
+            assert!(common::all_finite(&f.radiance));
+            metrics::rel_mse(&f.radiance, &refl.radiance)
+        })
+        .collect()
 }
 
 /// A measurement (not run by default; docs/methods.md quotes it): rel MSE, MSE and mean luminance
 /// by frame of restir with temporal reuse on a static camera against the reference, for the
 /// scene, size, VPL count, combination, frames and the accumulation's α in `FVPL_RESTIR`
-/// (`scene,width,height,vpls,combine,frames[,alpha]`; default
+/// (`scene,width,height,vpls,combine,frames[,alpha[,seed]]`; default
 /// `builtin:conference,64,48,1024,biased,32,1`, α 1: restir's temporal reuse alone):
 /// `FVPL_RESTIR=builtin:conference,160,120,4096,biased,32 cargo test --release --test restir
 /// measure_restir_convergence -- --ignored --nocapture`.
@@ -595,6 +637,9 @@ fn measure_restir_convergence() {
     let mut fs = settings(w, h, vpls);
     fs.cluster.temporal = true;
     fs.cluster.temporal_alpha = v.get(6).map_or(1.0, |a| a.parse().unwrap());
+    if let Some(seed) = v.get(7) {
+        fs.frame.seed = seed.parse().unwrap();
+    }
     fs.method.restir.restir_combine = settings_combine(v[4]);
     let reference = RenderSettings {
         reference: true,

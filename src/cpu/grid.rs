@@ -1,7 +1,7 @@
 //! CPU twin of `shaders-wgsl/common/grid.wgsl`: the uniform grid over cluster centres and its rings
-//! of cells, one for colom's k-means (`cpu::kmeans`, searched with Eq. 7) and wang's (`cpu::wang`,
-//! with Eq. 2). The kernels' ring search skips cells that cannot change the result; the twins scan
-//! every cell of a ring, which gives the same result.
+//! of cells, one for colom's k-means (`cpu::kmeans`, searched with Eq. 7) and one for a room's own
+//! k-means (its twin, searched with its own metric). The kernels' ring search skips cells that
+//! cannot change the result; the twins scan every cell of a ring, which gives the same result.
 
 use glam::Vec3;
 
@@ -19,7 +19,8 @@ pub struct CentreGrid {
 impl CentreGrid {
     /// The grid over the valid centres `(index, position)` of a clustering into `k` clusters
     /// (`grid_build`): over their bounds, or the frame (`lo`, `ext`, `ext[3]` its diagonal) when
-    /// there are none; `along_line`: wang's guard for centres along a line (`centre_spacing`).
+    /// there are none; `along_line`: the guard for centres along a line (`centre_spacing`; a room's
+    /// k-means sets it).
     pub fn build(
         centres: impl Iterator<Item = (u32, Vec3)> + Clone,
         k: u32,

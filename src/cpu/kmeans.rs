@@ -93,7 +93,7 @@ pub fn eq7_dist(p: &Point, c: &Centroid, n_t: f32) -> f32 {
 }
 
 /// Alg. 1 line 5: the grid over the valid centroids (`cpu::grid`; kmeans/grid.wgsl builds it
-/// without wang's guard for centres along a line).
+/// without the guard for centres along a line, `along_line`).
 fn grid(p: &KmParams, cs: &[Centroid]) -> CentreGrid {
     let valid = cs.iter().enumerate().filter(|(_, c)| c.valid);
     let centres = valid.map(|(k, c)| (k as u32, c.pos));

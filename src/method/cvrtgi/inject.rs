@@ -1,6 +1,6 @@
 //! CVRTGI's CPU step between the clustering and the kernels (Cosin Ayerbe & Patow 2022, seed 003;
 //! docs/cvrtgi.md): the exposed faces, and the VPLs' light pulled into their voxels and clusters
-//! (§4.4's lit voxels and lit clusters). The kernels' CPU twin is `cpu::cvrtgi`.
+//! (§4.4's lit voxels and lit clusters). The kernels' CPU twin is `super::twin`.
 
 use glam::Vec3;
 

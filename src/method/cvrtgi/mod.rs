@@ -16,11 +16,13 @@
 //!    (`filter`) on the GPU;
 //! 3. per frame: each pixel reads its face's filtered irradiance (§4.5, `lookup`).
 //!
-//! Shader: `shaders-wgsl/cvrtgi.wgsl`; CPU twin of every kernel: `cpu::cvrtgi`. The pass is
+//! Shader: `shaders-wgsl/cvrtgi.wgsl`; CPU twin of every kernel: `twin`. The pass is
 //! `PASS` (`ROOM`).
 
 pub mod inject;
 pub mod settings;
+/// The CPU twin of this room's shader, for tests only: no production code calls it.
+pub mod twin;
 pub mod voxel;
 
 use std::cell::OnceCell;
@@ -30,7 +32,7 @@ use anyhow::{Result, bail};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use self::inject::{self as twin, Faces, Lighting};
+use self::inject::{Faces, Lighting};
 use self::settings::{ClusterGather, CvrtgiSettings};
 use self::voxel::{Cluster, SlicSettings, Voxels};
 use super::Method;
@@ -365,7 +367,7 @@ impl Cvrtgi {
                 angle: s.cluster_angle,
             };
             let clusters = voxel::slic(&mut voxels, &slic);
-            let faces = twin::faces(&voxels);
+            let faces = inject::faces(&voxels);
             report.cpu_ms += t.elapsed().as_secs_f64() * 1e3;
             let rays = s.face_rays.max(1);
             let vis_bytes = faces.voxel_dir.len() as u64 * rays as u64 * 4;
@@ -390,7 +392,7 @@ impl Cvrtgi {
             let mut face_words = faces.of_voxel.clone();
             face_words.extend_from_slice(&faces.voxel_dir);
             // Empty scenes still bind something.
-            face_words.push(twin::INVALID);
+            face_words.push(inject::INVALID);
             let mut packed = packed;
             if packed.is_empty() {
                 packed.push([0.0; 4]);
@@ -423,8 +425,9 @@ impl Cvrtgi {
             report.escape_rays = i.vpls.vpls.len() as u64 * s.escape_rays as u64;
             let t = Instant::now();
             let geo = &self.geometry.as_ref().unwrap().1;
-            let mut lighting = twin::inject(&geo.voxels, geo.clusters.len(), &i.vpls.vpls, &escape);
-            twin::set_boxes(&mut lighting, &geo.clusters);
+            let mut lighting =
+                inject::inject(&geo.voxels, geo.clusters.len(), &i.vpls.vpls, &escape);
+            inject::set_boxes(&mut lighting, &geo.clusters);
             report.cpu_ms += t.elapsed().as_secs_f64() * 1e3;
             let (light, ms) = self.run_light(g, s, i.d_min, lighting, escape)?;
             report.cpu_ms += ms;
@@ -440,7 +443,7 @@ impl Cvrtgi {
             .voxels
             .voxels
             .iter()
-            .filter(|v| v.cluster == twin::INVALID)
+            .filter(|v| v.cluster == inject::INVALID)
             .count() as u32;
         report.faces = geo.faces.voxel_dir.len() as u32;
         report.lit_clusters = light.lighting.lit_clusters;
@@ -599,8 +602,8 @@ impl Cvrtgi {
             let ids: Vec<u32> = ctx.read_buffer(&geo.vis, n)?;
             let flux: Vec<f32> = ctx.read_buffer(&slot_flux, n)?;
             let t = Instant::now();
-            let scales = twin::conservation_scales(&lighting, &ids, &flux, geo.rays as usize);
-            twin::set_scales(&mut lighting, &scales);
+            let scales = inject::conservation_scales(&lighting, &ids, &flux, geo.rays as usize);
+            inject::set_scales(&mut lighting, &scales);
             cpu_ms += t.elapsed().as_secs_f64() * 1e3;
             ctx.write_buffer(&lights_buf, 0, bytemuck::cast_slice(&words(&lighting)));
             gather(g);

@@ -1,7 +1,7 @@
 //! LightCluster (Wiesenhütter, Klein et al.; seed `002`, "LightCluster – Clustering Lights to
 //! Accelerate Shadow Computation") adapted to VPLs and ray-traced visibility (docs/methods.md,
 //! "lightcluster"): the clustering itself, which runs on the CPU as the paper's does (§4). The CPU twin
-//! of `shaders-wgsl/lightcluster.wgsl` is `cpu::lightcluster`.
+//! of `shaders-wgsl/lightcluster.wgsl` is `super::twin`.
 //!
 //! - §3.1.2: the lights sorted by decreasing power (the paper: attenuation range); the first is a
 //!   cluster centre, and every next light farther than d_min from every centre becomes one, with

@@ -5,17 +5,19 @@
 //! its term is visible, one ray a group, at most `MEMBER_TARGETS` a cluster; with
 //! `--lightcluster-visibility disc` every VPL takes its cluster's disc's visibility from
 //! `DISC_SAMPLES` shadow rays (§3.2) (`shaders-wgsl/lightcluster.wgsl`, CPU twin
-//! `cpu::lightcluster`). The passes are `CLUSTER` → `SHADE` (`ROOM`).
+//! `twin`). The passes are `CLUSTER` → `SHADE` (`ROOM`).
 
 pub mod cluster;
 pub mod settings;
+/// The CPU twin of this room's shader, for tests only: no production code calls it.
+pub mod twin;
 
 use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use self::cluster::{self as twin, LightClusters};
+use self::cluster::LightClusters;
 use self::settings::LcVisibility;
 use super::Method;
 use super::{Counts, FrameInputs, IndirectMethod, Room};
@@ -199,7 +201,7 @@ impl IndirectMethod for LightClusterMethod {
                 let t = Instant::now();
                 let eye = f.cam.eye_point();
                 let far = z_far(eye, f.scene.bounds());
-                let c = twin::cluster(
+                let c = cluster::cluster(
                     &f.vpls.set.vpls,
                     eye,
                     far,

@@ -1,6 +1,6 @@
 //! restir's candidate distribution: the VPLs drawn in proportion to their flux's luminance from an
 //! alias table (Walker 1977, Vose's construction), built on the CPU once per VPL set and read by
-//! `restir.wgsl`'s `alias_draw` (CPU twin: `cpu::restir::alias_draw`).
+//! `restir.wgsl`'s `alias_draw` (CPU twin: `super::twin::alias_draw`).
 
 use crate::gi::vpl_trace::Vpl;
 use crate::metrics::luminance;

@@ -3,7 +3,7 @@
 //! alias table built once per VPL set, `alias`) by Eq. (5)'s unshadowed term, traces one shadow ray
 //! to its sample, reuses the previous frame's reservoir (with `--temporal on`) and its neighbours'
 //! (k of them, n iterations), then shades with its sample's term and weight W and one more shadow
-//! ray (`shaders-wgsl/restir.wgsl`, CPU twin `cpu::restir`). The passes are `PREPARE` → `INITIAL`
+//! ray (`shaders-wgsl/restir.wgsl`, CPU twin `twin`). The passes are `PREPARE` → `INITIAL`
 //! → `TEMPORAL` → `SPATIAL` → `SHADE` (`ROOM`).
 //!
 //! The VPLs' ids are their indices in the resident set: the history is kept only while that set
@@ -12,6 +12,8 @@
 
 pub mod alias;
 pub mod settings;
+/// The CPU twin of this room's shader, for tests only: no production code calls it.
+pub mod twin;
 
 use std::time::Instant;
 

@@ -1,6 +1,6 @@
 //! `wang_cluster` (Wang, Wang, Zhou, Pan, Bao 2009, seed `001`, §3.2; docs/methods.md, "wang"): the
 //! clustering of a frame's shading points, all of it on the GPU (`shaders-wgsl/wang_cluster.wgsl`,
-//! its steps in `shaders-wgsl/wang/`), the G-buffer never read back. CPU twin: `cpu::wang::cluster`.
+//! its steps in `shaders-wgsl/wang/`), the G-buffer never read back. CPU twin: `super::twin::cluster`.
 //!
 //! 1. **Adaptive seeding**: a screen-space quadtree of the shading points (sums per node, built
 //!    level by level from 2×2 leaves), each node's variation ε_q by Eq. (2) against its mean

@@ -4,11 +4,13 @@
 //! R_j traced there, and every pixel interpolating from the sample points around it with §3.4's
 //! weight. Shaders: `shaders-wgsl/wang_cluster.wgsl` (the clustering, `cluster`; its steps in
 //! `shaders-wgsl/wang/`) and
-//! `shaders-wgsl/wang.wgsl` (`radius`, `interp`); CPU twins `cpu::wang`.
+//! `shaders-wgsl/wang.wgsl` (`radius`, `interp`); CPU twins `twin`.
 //! The passes are `CLUSTER` → `GATHER` → `INTERP` (`ROOM`).
 
 pub mod cluster;
 pub mod settings;
+/// The CPU twin of this room's shaders, for tests only: no production code calls it.
+pub mod twin;
 
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
@@ -64,7 +66,7 @@ pub struct WangFrame {
     pub clustering: WangClustering,
     /// vec4 a sample point: its gathered irradiance times 1/π.
     pub irradiance: wgpu::Buffer,
-    /// vec4 a sample point: x the summed 1/t of its R_j rays (`cpu::wang::radius_from_sum`).
+    /// vec4 a sample point: x the summed 1/t of its R_j rays (`twin::radius_from_sum`).
     pub radius: wgpu::Buffer,
 }
 
@@ -176,7 +178,7 @@ impl Wang {
     }
 
     /// §3.4's interpolation of `f`'s sample points into `indirect` (vec4 a pixel, written);
-    /// `diagonal` bounds R_j (`cpu::wang::radius_from_sum`).
+    /// `diagonal` bounds R_j (`twin::radius_from_sum`).
     pub fn interp(
         &self,
         g: &mut Gpu,

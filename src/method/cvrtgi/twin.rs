@@ -1,17 +1,19 @@
 //! CPU twin of `shaders-wgsl/cvrtgi.wgsl` (CVRTGI, Cosin Ayerbe & Patow 2022, seed 003;
 //! docs/cvrtgi.md): one function per kernel step, same formulas. The CPU steps before the kernels
 //! (voxels, SLIC, injection) are production code in `method::cvrtgi`, re-exported here.
+//!
+//! For tests only (`tests/cvrtgi.rs` checks the shader against it): no production code calls it.
 
 use glam::{IVec3, Vec3};
 
-pub use crate::method::cvrtgi::inject::*;
+pub use super::inject::*;
 
+use super::settings::ClusterGather;
+use super::voxel::{Voxels, face_axis};
 use crate::bvh::SceneBvh;
 use crate::gi::primary::ShadingPoint;
 use crate::gi::rng::pcg_hash;
 use crate::gi::vpl_trace::Vpl;
-use crate::method::cvrtgi::settings::ClusterGather;
-use crate::method::cvrtgi::voxel::{Voxels, face_axis};
 
 /// Van der Corput radical inverse in base 2.
 fn radical_inverse(k: u32) -> f32 {
@@ -80,7 +82,7 @@ pub fn escape_ray(i: u32, n: Vec3, k: u32, rays: u32) -> Vec3 {
     let turn = (pcg_hash(i ^ 0x9e37_79b9) >> 8) as f32 * (1.0 / 16777216.0);
     let u1 = (k as f32 + 0.5) / rays as f32;
     let u2 = (radical_inverse(k) + turn).fract();
-    let (t, b) = super::shading::onb(n);
+    let (t, b) = crate::cpu::shading::onb(n);
     let r = u1.sqrt();
     let phi = 2.0 * std::f32::consts::PI * u2;
     let local = Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u1).max(0.0).sqrt());
@@ -125,7 +127,7 @@ pub fn escape_fractions(
 /// d_min²): seed 000's Eq. (5) term with ρ/π left out, so that ρ/π · E is Eq. (5)'s radiance and the
 /// pixels compare with the reference in its units.
 pub fn face_irradiance(x: Vec3, n: Vec3, light: &Vpl, d_min2: f32) -> Vec3 {
-    super::vpl::eq5_vpl_radiance(x, n, Vec3::splat(std::f32::consts::PI), light, d_min2)
+    crate::cpu::vpl::eq5_vpl_radiance(x, n, Vec3::splat(std::f32::consts::PI), light, d_min2)
 }
 
 fn bits(x: f32) -> u32 {
@@ -262,7 +264,7 @@ pub fn lookup_pixel(v: &Voxels, faces: &Faces, irr: &[Vec3], sp: &ShadingPoint) 
         return Vec3::ZERO;
     }
     let g = v.grid;
-    let dir = crate::method::cvrtgi::voxel::dominant_face(sp.normal);
+    let dir = super::voxel::dominant_face(sp.normal);
     let q = (sp.pos - g.origin) / g.size - 0.5;
     let b = q.floor();
     let t = q - b;

@@ -2,17 +2,19 @@
 //! cluster-shadowed shading, with the paper's disc (`disc_points`, `disc_visibility`) or member
 //! targets (`target_visible`; not in the paper), `shade`. The clustering (§3.1) and the member
 //! groups are production code, `method::lightcluster::cluster`, re-exported here.
+//!
+//! For tests only (`tests/methods.rs` checks the shader against it): no production code calls it.
 
 use glam::Vec3;
 
-pub use crate::method::lightcluster::cluster::*;
+pub use super::cluster::*;
 
-use super::shading::{CpuScene, onb};
-use super::vpl::eq5_vpl_radiance;
+use super::settings::LcVisibility;
+use crate::cpu::shading::{CpuScene, onb};
+use crate::cpu::vpl::eq5_vpl_radiance;
 use crate::gi::primary::ShadingPoint;
 use crate::gi::rng::pcg_hash;
 use crate::gi::vpl_trace::Vpl;
-use crate::method::lightcluster::settings::LcVisibility;
 
 /// The `DISC_SAMPLES` points of a disc the visibility rays aim at: a Vogel (golden-angle) spiral,
 /// r = R √((i + ½) / N), θ = 2.39996 i, in the disc's plane (Duff et al.'s basis of its normal).

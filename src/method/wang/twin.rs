@@ -17,18 +17,20 @@
 //!   (`update_centers`, `sample_points`, `cluster`).
 //! - §3.4's weight w(s_j) = 1 / (‖x − s_j‖ / R_j + √(2 − 2 n(x)·n(s_j))) (`interpolation_weight`)
 //!   and R_j from its rays (`radius_from_sum`).
+//!
+//! For tests only (`tests/methods.rs` checks the shaders against it): no production code calls it.
 
 use glam::Vec3;
 
-pub use super::grid::CentreGrid;
-use super::shading::{CpuScene, onb};
-use crate::gi::primary::ShadingPoint;
-use crate::gi::rng::{rng_next, rng_seed};
-pub use crate::method::wang::cluster::{
+pub use super::cluster::{
     APPORTION_ROUNDS, ClusterParams, EPS_MAX, EPS_SCALE, INVALID, MIN_GRID_POINTS_PER_CLUSTER,
     NRM_SCALE, POS_SCALE, grid_step, quadtree_levels, stored_nodes,
 };
-pub use crate::method::wang::{RADIUS_MIN, RADIUS_RAYS, RADIUS_RAYS_PER_DISPATCH, interp_stride};
+pub use super::{RADIUS_MIN, RADIUS_RAYS, RADIUS_RAYS_PER_DISPATCH, interp_stride};
+pub use crate::cpu::grid::CentreGrid;
+use crate::cpu::shading::{CpuScene, onb};
+use crate::gi::primary::ShadingPoint;
+use crate::gi::rng::{rng_next, rng_seed};
 
 // --- wang/common.wgsl (Eq. 2) and wang.wgsl (§3.4's weight and R_j).
 

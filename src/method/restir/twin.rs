@@ -1,15 +1,17 @@
 //! CPU twin of `shaders-wgsl/restir.wgsl` (ReSTIR DI over the VPLs, `method::restir`): the
 //! reservoir's update, the combination of reservoirs (biased and unbiased), W, the alias draw and
 //! each stage of a pixel with the same random numbers.
+//!
+//! For tests only (`tests/restir.rs` checks the shader against it): no production code calls it.
 
 use glam::Vec3;
 
-use super::shading::CpuScene;
-use super::vpl::eq5_vpl_radiance;
+use super::{HISTORY, RestirParams, UNBIASED};
+use crate::cpu::shading::CpuScene;
+use crate::cpu::vpl::eq5_vpl_radiance;
 use crate::gi::primary::{CameraParams, ShadingPoint};
 use crate::gi::rng::{rng_next, rng_seed};
 use crate::gi::vpl_trace::Vpl;
-use crate::method::restir::{HISTORY, RestirParams, UNBIASED};
 use crate::metrics::luminance;
 
 /// No sample.
