@@ -7,7 +7,7 @@
 //   conservation scale, not in the paper);
 // - filter_faces (§4.4): one pass of the Gaussian filter over same-direction faces;
 // - lookup (§4.5): per pixel, ρ/π times its voxel face's filtered irradiance.
-// CPU twin: src/cpu/cvrtgi.rs (same names).
+// CPU twin: src/method/cvrtgi/twin.rs (same names).
 #import common/bvh.wgsl
 #import common/chunk.wgsl
 #import common/gbuffer.wgsl
@@ -138,7 +138,7 @@ fn radical_inverse(k: u32) -> f32 {
     return f32(reverseBits(k) >> 8u) * (1.0 / 16777216.0);
 }
 
-// Twin of cpu::cvrtgi::face_ray: Hammersley over the hemisphere, turned by a per-face angle.
+// Twin of method::cvrtgi::twin::face_ray: Hammersley over the hemisphere, turned by a per-face angle.
 fn face_ray(f: u32, dir: u32, k: u32, rays: u32) -> vec3<f32> {
     let cos_t = (f32(k) + 0.5) / f32(rays);
     let sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
@@ -199,7 +199,7 @@ fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     }
 }
 
-// Twin of cpu::cvrtgi::escape_ray: ray k of n about the VPL's normal, cosine-distributed
+// Twin of method::cvrtgi::twin::escape_ray: ray k of n about the VPL's normal, cosine-distributed
 // (Hammersley), turned by a per-VPL angle.
 fn escape_ray(i: u32, n: vec3<f32>, k: u32, rays: u32) -> vec3<f32> {
     let turn = f32(pcg_hash(i ^ 0x9e3779b9u) >> 8u) * (1.0 / 16777216.0);

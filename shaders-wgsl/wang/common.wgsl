@@ -83,7 +83,7 @@ const LEVEL: u32 = 6u;
 const USED: u32 = 7u;
 const WORDS: u32 = 16u;
 
-// Eq. (2) of §3.2 (twin: cpu::wang::eq2_error; wang.wgsl has the same).
+// Eq. (2) of §3.2 (twin: method::wang::twin::eq2_error; wang.wgsl has the same).
 fn eq2_error(xi: vec3<f32>, ni: vec3<f32>, xk: vec3<f32>, nk: vec3<f32>) -> f32 {
     return params.alpha * length(xi - xk) + sqrt(max(0.0, 2.0 - 2.0 * dot(ni, nk)));
 }

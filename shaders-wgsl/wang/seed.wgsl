@@ -195,7 +195,7 @@ fn eps_weight(n: u32) -> f32 {
 // valid points): floors first, then the largest remainders (lowest index on a tie), repeated over the
 // children with room until every seed is placed; with no weight anywhere, equal shares. A round that
 // leaves seeds fills a child (or, from f32 rounding of the shares, leaves fewer than one), so
-// APPORTION_ROUNDS place them all. Twin: cpu::wang::apportion.
+// APPORTION_ROUNDS place them all. Twin: method::wang::twin::apportion.
 const APPORTION_ROUNDS: u32 = 8u;
 fn apportion(k: u32, w: vec4<f32>, cap: vec4<u32>) -> vec4<u32> {
     var a = vec4<u32>(0u);

@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::metrics;
+use crate::settings::Widget;
 use std::time::Duration;
 
 /// A viewer on builtin:cornell with `s`, without a window (its worker starts on lavapipe).
@@ -553,6 +554,7 @@ fn the_panel_driven_by_events() {
         assert_eq!(h.state().s.cluster.weighting, w, "{label}");
     }
     // Each method, colom (the first) last: each asks the worker for a frame of that method.
+    let (mut choices, mut sliders) = (0, 0);
     for m in crate::method::Method::ALL.into_iter().rev() {
         let sent = h.state().pending;
         click(&mut h, m.name());
@@ -573,22 +575,43 @@ fn the_panel_driven_by_events() {
             let found = h.query_all_by_label(c.label).next().is_some();
             assert!(found, "{m}: no widget labelled {:?}", c.label);
         }
-        if m == crate::method::Method::Restir {
-            // A choice is a radio button a value; a slider takes the arrow keys.
-            click(&mut h, "unbiased");
-            let k = h.state().s.method.restir;
-            assert_eq!(k.restir_combine.name(), "unbiased");
-            h.query_all_by_label("candidates M")
-                .next()
-                .expect("the candidates slider")
-                .focus();
+        // A choice is a radio button a value; an integer slider takes the arrow keys.
+        let controls = h.state().s.method.controls();
+        let choice = controls.iter().find_map(|c| match c.widget {
+            Widget::Choice(values) => Some((c.name, values)),
+            _ => None,
+        });
+        if let Some((name, values)) = choice {
+            let now = h.state().s.method.knob(name).unwrap();
+            let (value, label) = values.iter().find(|(v, _)| *v != now).unwrap();
+            click(&mut h, label);
+            assert_eq!(
+                h.state().s.method.knob(name).as_deref(),
+                Some(*value),
+                "{m}"
+            );
+            choices += 1;
+        }
+        let slider = controls.iter().find(|c| {
+            matches!(c.widget, Widget::Slider { integer: true, hi, .. }
+                if h.state().s.method.knob(c.name).unwrap().parse::<f64>().unwrap() < hi)
+        });
+        if let Some(c) = slider {
+            let before: f64 = h.state().s.method.knob(c.name).unwrap().parse().unwrap();
+            h.query_all_by_label(c.label).next().unwrap().focus();
             h.run_steps(1);
             h.key_press(egui::Key::ArrowRight);
             h.run_steps(2);
-            let after = h.state().s.method.restir.restir_candidates;
-            assert!(after > k.restir_candidates, "M stayed {after}");
+            let after: f64 = h.state().s.method.knob(c.name).unwrap().parse().unwrap();
+            assert!(after > before, "{m}: {} stayed {before}", c.label);
+            sliders += 1;
         }
     }
+    // Three rooms declare a choice today, two an integer slider.
+    assert!(
+        choices >= 3 && sliders >= 2,
+        "{choices} choices, {sliders} sliders"
+    );
     // A slider takes the arrow keys once focused.
     let k = h.state().s.cluster.vpl_clusters;
     h.query_all_by_label("K_VPL")
