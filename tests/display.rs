@@ -254,11 +254,11 @@ fn frame_on_the_gpu_reads_nothing_back_and_matches_render() {
     assert!(Traffic::now().since(before).read_back < 128);
     assert!(meta.sp_clusters_used > 0);
     assert_eq!(
-        (meta.sp_clusters_used, meta.sp_iterations, meta.sp_warm_kept),
+        (meta.sp_clusters_used, common::colom(&meta).sp_iterations, common::colom(&meta).sp_warm_kept),
         (
             reference.sp_clusters_used,
-            reference.sp_iterations,
-            reference.sp_warm_kept
+            common::colom(&reference).sp_iterations,
+            common::colom(&reference).sp_warm_kept
         )
     );
     let before = Traffic::now();
@@ -283,7 +283,7 @@ fn frame_on_the_gpu_reads_nothing_back_and_matches_render() {
     assert_eq!(Traffic::now().since(before).read_back, 0);
     let (meta, _) = warm.counts(&ctx.device, &ctx.queue).unwrap();
     assert!(
-        meta.sp_warm_kept.is_some() && meta.visibility_rows_reused > 0,
+        common::colom(&meta).sp_warm_kept.is_some() && common::colom(&meta).visibility_rows_reused > 0,
         "{meta:?}"
     );
     drop(warm);

@@ -747,6 +747,7 @@ pub const ROOM: Room = Room {
         let v = &m.cvrtgi;
         format!("v{}-s{}-r{}", v.voxel_res, v.cluster_step, v.face_rays)
     },
+    report_columns: &[],
     ui: |ui, m| {
         use egui::Slider;
         let v = &mut m.cvrtgi;

@@ -18,7 +18,8 @@ use glam::Vec3;
 use self::cluster::{self as twin, LightClusters};
 use self::settings::LcVisibility;
 use super::Method;
-use super::{Counts, FrameInputs, IndirectMethod, Room};
+use super::{Counts, FrameInputs, IndirectMethod, PendingRays, Room};
+use crate::gi::sum::{WordSum, Words};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
@@ -166,6 +167,7 @@ pub const ROOM: Room = Room {
     },
     series: |m| format!("d_init {}", m.lightcluster.d_init),
     short: |m| format!("d{}", m.lightcluster.d_init),
+    report_columns: &[],
     ui: |ui, m| {
         let text = "d_init (scene diagonals)";
         super::log_slider(ui, &mut m.lightcluster.d_init, 0.001..=10.0, text);
@@ -182,6 +184,8 @@ pub const ROOM: Room = Room {
 pub struct LightClusterMethod {
     kernel: LightCluster,
     clusters: Option<LightClusters>,
+    /// The pixels' rays summed on the GPU (the state's third word).
+    rays: WordSum,
 }
 
 impl LightClusterMethod {
@@ -189,6 +193,7 @@ impl LightClusterMethod {
         LightClusterMethod {
             kernel: LightCluster::new(ctx, scene),
             clusters: None,
+            rays: WordSum::new(ctx),
         }
     }
 }
@@ -221,7 +226,6 @@ impl IndirectMethod for LightClusterMethod {
             }
             // §3.2: every pixel × every VPL with its cluster's disc visibility.
             SHADE => {
-                let ctx = g.ctx;
                 let inputs = ShadeInputs {
                     gbuffer: f.gbuffer,
                     clusters: self.clusters.as_ref().expect("lightcluster_cluster ran"),
@@ -232,10 +236,15 @@ impl IndirectMethod for LightClusterMethod {
                 };
                 // The rays traced, as each pixel counted them: a disc's DISC_SAMPLES where one of
                 // its cluster's terms is positive, once; one a member group where one of its
-                // group's terms is positive.
+                // group's terms is positive. Summed on the GPU and read only on request.
                 if let Some(state) = self.kernel.record(g, &inputs) {
-                    let st: Vec<[u32; 8]> = ctx.read_buffer(&state, f.pixels as usize)?;
-                    n.indirect_rays += st.iter().map(|p| p[2] as u64).sum::<u64>();
+                    let words = Words {
+                        items: f.pixels,
+                        stride: 8,
+                        word: 2,
+                    };
+                    let sum = self.rays.record(g, SHADE.name(), &state, words);
+                    n.pending = Some(std::sync::Arc::new(PendingRays(sum)));
                 }
             }
             _ => unreachable!("{pass} is not lightcluster's"),

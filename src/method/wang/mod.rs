@@ -237,6 +237,7 @@ pub const ROOM: Room = Room {
     label: |m| format!("a{}", m.wang.wang_alpha),
     series: |m| format!("α {}", m.wang.wang_alpha),
     short: |m| format!("a{}", m.wang.wang_alpha),
+    report_columns: &[],
     ui: |ui, m| {
         let text = "α (Eq. 2: position against normal)";
         super::log_slider(ui, &mut m.wang.wang_alpha, 0.01..=100.0, text)
