@@ -242,7 +242,11 @@ fn warm_sp_clustering_matches_its_twin_on_a_moving_view() {
     };
     let cams = orbit(&sc, &r, 2, 1.0);
     let a = r.render(&cams[0], &s).unwrap();
-    assert_eq!(common::colom(&a).sp_warm_kept, None, "the first frame has no past");
+    assert_eq!(
+        common::colom(&a).sp_warm_kept,
+        None,
+        "the first frame has no past"
+    );
     let prev_k = r.sp_clustering().unwrap().k();
     let previous = read_centroids(&ctx, &r.sp_clustering().unwrap().centroids, prev_k);
     let previous_reps = RepPoint::from_vec4s(
@@ -251,7 +255,9 @@ fn warm_sp_clustering_matches_its_twin_on_a_moving_view() {
     );
     let b = r.render(&cams[1], &s).unwrap();
     assert!(common::all_finite(&b.radiance));
-    let kept = common::colom(&b).sp_warm_kept.expect("the second frame starts warm");
+    let kept = common::colom(&b)
+        .sp_warm_kept
+        .expect("the second frame starts warm");
     // Measured 44 of 48 kept at one degree; a warm start that keeps fewer than 3/4 is broken.
     assert!(kept >= 36, "kept {kept} of 48");
     assert_eq!(
@@ -382,7 +388,10 @@ fn temporal_reuse_steadies_the_error_along_an_orbit() {
             .unwrap()
         });
         let mse = mean(&|i| metrics::mse(&frames[i].radiance, &refs[i]));
-        let iterations: u32 = frames[1..].iter().map(|f| common::colom(f).sp_iterations).sum();
+        let iterations: u32 = frames[1..]
+            .iter()
+            .map(|f| common::colom(f).sp_iterations)
+            .sum();
         for f in &frames {
             assert!(common::all_finite(&f.radiance));
         }
@@ -606,7 +615,11 @@ fn the_warm_up_leaves_no_past() {
     );
     let after = r.render(&cam, &rs).unwrap();
     assert!(common::all_finite(&after.radiance));
-    assert_eq!(common::colom(&after).sp_warm_kept, None, "a warm start after the warm-up");
+    assert_eq!(
+        common::colom(&after).sp_warm_kept,
+        None,
+        "a warm start after the warm-up"
+    );
     assert!(
         after.radiance == cold.radiance,
         "the warm-up changed the frame"

@@ -405,7 +405,10 @@ pub(crate) fn read_rows<T: de::DeserializeOwned + MethodCells>(
         let own = cols.iter().filter(|c| !report.contains(c));
         own.map(|c| c.to_string()).collect()
     };
-    let (own_h, full) = (own(&h), own(&full.iter().map(String::as_str).collect::<Vec<_>>()));
+    let (own_h, full) = (
+        own(&h),
+        own(&full.iter().map(String::as_str).collect::<Vec<_>>()),
+    );
     let required = full.iter().position(|c| c == last_required).unwrap() + 1;
     if own_h.len() < required || own_h.len() > full.len() || full[..own_h.len()] != own_h[..] {
         bail!("unexpected CSV header: {}", h.join(","));

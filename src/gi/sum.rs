@@ -69,7 +69,13 @@ impl WordSum {
     /// Records the sum of word `w.word` of each of the `w.items` items of `data` into the next
     /// slot (cleared first), timed under `label` (the pass whose counts they are); nothing is read
     /// back.
-    pub fn record(&mut self, g: &mut Gpu, label: &str, data: &wgpu::Buffer, w: Words) -> PendingSum {
+    pub fn record(
+        &mut self,
+        g: &mut Gpu,
+        label: &str,
+        data: &wgpu::Buffer,
+        w: Words,
+    ) -> PendingSum {
         assert!(w.word < w.stride, "word {} of {}", w.word, w.stride);
         let slot = self.next % SLOTS;
         self.next = self.next.wrapping_add(1);

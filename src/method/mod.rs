@@ -204,7 +204,10 @@ pub struct Room {
 
 /// Every method's report columns in registry order (the CSVs' last columns, after the knobs').
 pub fn report_columns() -> Vec<&'static str> {
-    ROOMS.iter().flat_map(|r| r.report_columns.iter().copied()).collect()
+    ROOMS
+        .iter()
+        .flat_map(|r| r.report_columns.iter().copied())
+        .collect()
 }
 
 /// A row's values of `report_columns()`: its method's report's (numbers and text as they are,
@@ -214,7 +217,9 @@ pub fn report_values(method: Method, report: Option<&serde_json::Value>) -> Vec<
         .iter()
         .flat_map(|r| {
             r.report_columns.iter().map(move |key| {
-                let v = report.filter(|_| r.method == method).and_then(|v| v.get(key));
+                let v = report
+                    .filter(|_| r.method == method)
+                    .and_then(|v| v.get(key));
                 match v {
                     None | Some(serde_json::Value::Null) => String::new(),
                     Some(serde_json::Value::String(s)) => s.clone(),
@@ -555,6 +560,50 @@ mod tests {
         sorted.sort_unstable();
         sorted.dedup();
         assert_eq!(sorted.len(), names.len(), "{names:?}");
+    }
+
+    /// A report's columns round-trip: its method's keys written as their JSON scalars (absent ones
+    /// empty), read back from the cells by name; another method's row leaves them empty and reads
+    /// none.
+    #[test]
+    fn report_columns_round_trip() {
+        let cols = report_columns();
+        assert_eq!(
+            cols,
+            ["sp_iterations", "sp_warm_kept", "visibility_rows_reused"]
+        );
+        let report = serde_json::json!({"sp_iterations": 3, "visibility_rows_reused": 7});
+        let cells = report_values(Method::Colom, Some(&report));
+        assert_eq!(cells, ["3", "", "7"]);
+        let back = report_of_cells(
+            Method::Colom,
+            cols.iter().copied().zip(cells.iter().map(String::as_str)),
+        );
+        assert_eq!(back, Some(report.clone()));
+        let other = report_values(Method::Wang, Some(&report));
+        assert!(other.iter().all(String::is_empty));
+        assert_eq!(
+            report_of_cells(Method::Wang, cols.iter().copied().zip(["3", "", "7"])),
+            None
+        );
+        assert_eq!(
+            report_of_cells(Method::Colom, [("sp_iterations", "x")]),
+            Some(serde_json::json!({"sp_iterations": "x"}))
+        );
+    }
+
+    /// Reports join key by key; one alone is kept.
+    #[test]
+    fn reports_join() {
+        let a = serde_json::json!({"a": 1, "b": 2});
+        let b = serde_json::json!({"b": 3, "c": 4});
+        assert_eq!(
+            join_reports(Some(a.clone()), Some(b.clone())),
+            Some(serde_json::json!({"a": 1, "b": 3, "c": 4}))
+        );
+        assert_eq!(join_reports(Some(a.clone()), None), Some(a));
+        assert_eq!(join_reports(None, Some(b.clone())), Some(b));
+        assert_eq!(join_reports(None, None), None);
     }
 
     /// The knobs' columns follow the registry's order, a room's own filled and the others' empty.

@@ -52,6 +52,7 @@ pub const ROOM: Room = Room {
 /// colom's counts: the stats' `counts.colom` and path.csv's columns of the same names (read back
 /// from its SP clustering's counters on request, `PendingSp`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct Report {
     /// Alg. 1 iterations the SP clustering ran.
     pub sp_iterations: u32,
@@ -80,12 +81,19 @@ pub struct PendingSp {
     pub bounds: wgpu::Buffer,
     /// The clustering started warm.
     pub warm: bool,
-    /// The visibility rows of kept representatives were copied, not traced (same lights).
+    pub visibility: VisibilityRows,
+}
+
+/// What the visibility pass did with the clustering's representatives' rows.
+#[derive(Clone, Copy, Debug)]
+pub struct VisibilityRows {
+    /// The rows of kept representatives were copied, not traced (same lights).
     pub rows_copied: bool,
+    /// The lights a traced row has a ray to.
     pub num_lights: u32,
 }
 
-impl PendingSp {
+impl VisibilityRows {
     /// The counts from the clustering's.
     pub fn resolve(&self, k: &KmCounters) -> Resolved {
         let rows_reused = if self.rows_copied { k.reps_kept } else { 0 };
@@ -106,7 +114,7 @@ impl PendingReport for PendingSp {
     /// Reads them back (a wait for the frame's clustering and 68 bytes).
     fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Resolved> {
         let k = KmCounters::read(device, queue, &self.bounds, self.warm)?;
-        Ok(self.resolve(&k))
+        Ok(self.visibility.resolve(&k))
     }
 }
 
@@ -243,8 +251,10 @@ impl Colom {
         counts.pending = Some(std::sync::Arc::new(PendingSp {
             bounds: c.bounds.clone(),
             warm: c.warm,
-            rows_copied: previous.as_ref().is_some_and(|p| p.matrix.words == words),
-            num_lights,
+            visibility: VisibilityRows {
+                rows_copied: previous.as_ref().is_some_and(|p| p.matrix.words == words),
+                num_lights,
+            },
         }));
         self.frame.visibility = Some(Previous {
             bits,
@@ -332,5 +342,51 @@ impl IndirectMethod for Colom {
 
     fn sp_clustering(&self) -> Option<&Clustering> {
         self.clustering.as_ref()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Hand-worked: 40 representatives of which 30 kept with their rows copied, 64 lights: 10 rows
+    /// traced (640 rays); without the copy every row is traced. The report is `counts.colom`'s.
+    #[test]
+    fn pending_counts_resolve_to_rays_and_the_report() {
+        let ctx_free = |rows_copied| VisibilityRows {
+            rows_copied,
+            num_lights: 64,
+        };
+        let k = KmCounters {
+            iterations_run: 2,
+            warm_kept: Some(33),
+            reps_used: 40,
+            reps_kept: 30,
+        };
+        let r = ctx_free(true).resolve(&k);
+        assert_eq!((r.indirect_rays, r.sp_used), (640, Some(40)));
+        assert_eq!(
+            r.report,
+            Some(serde_json::json!({
+                "sp_iterations": 2,
+                "sp_warm_kept": 33,
+                "visibility_rows_reused": 30
+            }))
+        );
+        let r = ctx_free(false).resolve(&k);
+        assert_eq!(r.indirect_rays, 40 * 64);
+        let cold = KmCounters {
+            warm_kept: None,
+            ..k
+        };
+        let back = Report::of(ctx_free(false).resolve(&cold).report.as_ref()).unwrap();
+        assert_eq!(
+            back,
+            Report {
+                sp_iterations: 2,
+                sp_warm_kept: None,
+                visibility_rows_reused: 0
+            }
+        );
     }
 }

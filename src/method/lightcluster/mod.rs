@@ -19,10 +19,10 @@ use self::cluster::{self as twin, LightClusters};
 use self::settings::LcVisibility;
 use super::Method;
 use super::{Counts, FrameInputs, IndirectMethod, PendingRays, Room};
-use crate::gi::sum::{WordSum, Words};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
+use crate::gi::sum::{WordSum, Words};
 use crate::gpu::GpuContext;
 
 pub use settings::{LightClusterLists as KnobLists, LightClusterSettings as Knobs};
