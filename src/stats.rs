@@ -91,8 +91,8 @@ pub struct Counts {
     pub shadow_rays: u64,
     pub emissive_triangles: u64,
     pub punctual_lights: u64,
-    /// The method's own report under its name (`Frame::report`: e.g. colom's SP iterations,
-    /// cvrtgi's sizes; absent for a method without one).
+    /// The method's own report under its name (`Frame::report`: e.g. an SP clustering's
+    /// iterations, a voxel grid's sizes; absent for a method without one).
     #[serde(flatten)]
     pub method: BTreeMap<String, serde_json::Value>,
 }

@@ -159,9 +159,9 @@ pub struct PathRow {
     /// light changes when read between the previous frame's pixels (docs/temporal.md).
     #[serde(default)]
     pub instability_world_direct_only: Option<f64>,
-    /// The method's report (`Frame::report`: colom's SP iterations, warm start and visibility rows
-    /// reused), in the report columns after the knobs (`method::report_columns`; files of
-    /// versions that had colom's among their own columns read them there).
+    /// The method's report (`Frame::report`), in the report columns after the knobs
+    /// (`method::report_columns`; files of versions that had some among their own columns read
+    /// them there, by name).
     #[serde(skip)]
     pub report: Option<serde_json::Value>,
 }
@@ -664,7 +664,7 @@ mod tests {
         assert_eq!((f0[1], f0[2], f0[7]), ("off", "0", ""));
         let f4: Vec<&str> = lines[5].split(',').collect();
         assert_eq!(f4[1], "on");
-        // colom's report in its columns (found by name: the adapter's cell holds a comma).
+        // The report in its columns (found by name: the adapter's cell holds a comma).
         let cell = |line: &str, c: &str| {
             let at = header().iter().position(|h| h == c).unwrap();
             super::super::csv::split_line(line)[at].clone()
@@ -727,8 +727,11 @@ weighted 192/512 F6 g4,on,1,10.5,2.5,0.0001,0.002,0.00003,1,180,192,400
             (
                 rows[0].temporal,
                 rows[0].frame,
-                crate::method::colom::Report::of(rows[0].report.as_ref())
-                    .and_then(|r| r.sp_warm_kept),
+                rows[0]
+                    .report
+                    .as_ref()
+                    .and_then(|r| r.get("sp_warm_kept"))
+                    .and_then(|k| k.as_u64()),
                 rows[0].reference_ms
             ),
             (true, 1, Some(180), 400.0)

@@ -170,7 +170,7 @@ mod tests {
         let mut sum = WordSum::new(&ctx);
         let mut profiler = crate::gpu::profiler::Profiler::new(&ctx);
         let cases: Vec<(Vec<u32>, Words)> = vec![
-            // 3000 pixels of one word, counts 0..=12 (a restir frame's rays).
+            // 3000 pixels of one word, counts 0..=12 (a frame's rays, one word a pixel).
             (
                 (0..3000u32).map(|i| i * 7 % 13).collect(),
                 Words {
@@ -179,7 +179,7 @@ mod tests {
                     word: 0,
                 },
             ),
-            // 200 items of 8 words, the third summed (lightcluster's state).
+            // 200 items of 8 words, the third summed (a state of 8 words a pixel).
             (
                 (0..1600u32).map(|i| i * 31 % 97).collect(),
                 Words {

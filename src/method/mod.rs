@@ -562,36 +562,6 @@ mod tests {
         assert_eq!(sorted.len(), names.len(), "{names:?}");
     }
 
-    /// A report's columns round-trip: its method's keys written as their JSON scalars (absent ones
-    /// empty), read back from the cells by name; another method's row leaves them empty and reads
-    /// none.
-    #[test]
-    fn report_columns_round_trip() {
-        let cols = report_columns();
-        assert_eq!(
-            cols,
-            ["sp_iterations", "sp_warm_kept", "visibility_rows_reused"]
-        );
-        let report = serde_json::json!({"sp_iterations": 3, "visibility_rows_reused": 7});
-        let cells = report_values(Method::Colom, Some(&report));
-        assert_eq!(cells, ["3", "", "7"]);
-        let back = report_of_cells(
-            Method::Colom,
-            cols.iter().copied().zip(cells.iter().map(String::as_str)),
-        );
-        assert_eq!(back, Some(report.clone()));
-        let other = report_values(Method::Wang, Some(&report));
-        assert!(other.iter().all(String::is_empty));
-        assert_eq!(
-            report_of_cells(Method::Wang, cols.iter().copied().zip(["3", "", "7"])),
-            None
-        );
-        assert_eq!(
-            report_of_cells(Method::Colom, [("sp_iterations", "x")]),
-            Some(serde_json::json!({"sp_iterations": "x"}))
-        );
-    }
-
     /// Reports join key by key; one alone is kept.
     #[test]
     fn reports_join() {

@@ -349,6 +349,34 @@ impl IndirectMethod for Colom {
 mod tests {
     use super::*;
 
+    /// colom's report columns round-trip: its keys written as their JSON scalars (absent ones
+    /// empty), read back from the cells by name; another method's row leaves them empty and reads
+    /// none.
+    #[test]
+    fn report_columns_round_trip() {
+        let cols = crate::method::report_columns();
+        assert_eq!(
+            cols,
+            ["sp_iterations", "sp_warm_kept", "visibility_rows_reused"]
+        );
+        let report = serde_json::json!({"sp_iterations": 3, "visibility_rows_reused": 7});
+        let cells = crate::method::report_values(Method::Colom, Some(&report));
+        assert_eq!(cells, ["3", "", "7"]);
+        let back = crate::method::report_of_cells(
+            Method::Colom,
+            cols.iter().copied().zip(cells.iter().map(String::as_str)),
+        );
+        assert_eq!(back, Some(report.clone()));
+        let other = crate::method::report_values(Method::Wang, Some(&report));
+        assert!(other.iter().all(String::is_empty));
+        let cells = cols.iter().copied().zip(["3", "", "7"]);
+        assert_eq!(crate::method::report_of_cells(Method::Wang, cells), None);
+        assert_eq!(
+            crate::method::report_of_cells(Method::Colom, [("sp_iterations", "x")]),
+            Some(serde_json::json!({"sp_iterations": "x"}))
+        );
+    }
+
     /// Hand-worked: 40 representatives of which 30 kept with their rows copied, 64 lights: 10 rows
     /// traced (640 rays); without the copy every row is traced. The report is `counts.colom`'s.
     #[test]
