@@ -254,6 +254,7 @@ fn method_counts_stay_on_the_gpu() {
         assert!(read == 8 || read == 32, "{m}: {read} bytes");
         assert!(rays > 0, "{m}");
         let f = g.read(&ctx).unwrap();
+        assert!(common::all_finite(&f.radiance), "{m}");
         assert_eq!(f.radiance, reference.radiance, "{m}");
         assert_eq!(f.shadow_rays, reference.shadow_rays, "{m}");
         assert_eq!(f.sp_clusters_used, reference.sp_clusters_used, "{m}");
