@@ -91,15 +91,8 @@ pub struct Counts {
     pub shadow_rays: u64,
     pub emissive_triangles: u64,
     pub punctual_lights: u64,
-    /// Alg. 1 iterations the SP clustering ran (0: none ran).
-    pub sp_iterations: u32,
-    /// SP centroids a temporal warm start kept from the previous render (absent: a cold start).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub sp_warm_kept: Option<u32>,
-    /// Rows of the visibility matrix copied from the previous render (kept representatives).
-    pub visibility_rows_reused: u32,
-    /// The method's own report under its name (e.g. a method's sizes; absent for
-    /// a method without one).
+    /// The method's own report under its name (`Frame::report`: e.g. an SP clustering's
+    /// iterations, a voxel grid's sizes; absent for a method without one).
     #[serde(flatten)]
     pub method: BTreeMap<String, serde_json::Value>,
 }
@@ -116,9 +109,6 @@ impl Counts {
             shadow_rays: frame.shadow_rays,
             emissive_triangles,
             punctual_lights: scene.lights.len() as u64,
-            sp_iterations: frame.sp_iterations,
-            sp_warm_kept: frame.sp_warm_kept,
-            visibility_rows_reused: frame.visibility_rows_reused,
             method: (frame.report.iter())
                 .map(|(m, v)| (m.name().to_string(), v.clone()))
                 .collect(),

@@ -385,12 +385,18 @@ fn header_has_the_contract_columns_in_order() {
         "cluster_gather",
         "escape_rays",
     ];
-    // A method added later appends its knobs: the columns above stay a prefix, and the knobs are
-    // the last columns, in the registry's order.
+    // A method added later appends its knobs: the columns above stay a prefix, and the knobs
+    // follow, in the registry's order, before the report columns (read by name).
     assert_eq!(h[..want.len()], want.map(String::from));
     let knobs = fuzzy_vpl::method::MethodSettings::columns();
     let at = h.iter().position(|c| c == "driver").unwrap() + 1;
-    assert_eq!(h[at..], knobs);
+    assert_eq!(h[at..at + knobs.len()], knobs);
+    // Then every method's report columns (colom's counts), the last ones.
+    assert_eq!(h[at + knobs.len()..], fuzzy_vpl::method::report_columns());
+    assert_eq!(
+        fuzzy_vpl::method::report_columns(),
+        ["sp_iterations", "sp_warm_kept", "visibility_rows_reused"]
+    );
     let csv = csv::to_csv(&[]);
     assert_eq!(csv.lines().count(), 1);
     assert_eq!(csv::split_line(csv.trim_end()), h);

@@ -198,7 +198,7 @@ fn wang_frame_matches_twin(
     let (labels, sample_pixels) =
         wang_clustering_matches_twin(ctx, name, &sps, c, iterations, s.extent());
     assert_eq!(
-        c.used as usize,
+        c.read_used(ctx).unwrap() as usize,
         sample_pixels
             .iter()
             .filter(|&&p| p != twin::INVALID)
@@ -498,7 +498,7 @@ fn wang_cluster_of_two_patches_by_hand() {
     let samples = c.read_sample_pixels(&ctx).unwrap();
     assert!([9, 10, 17, 18].contains(&samples[0]), "{samples:?}");
     assert!([13, 14, 21, 22].contains(&samples[1]), "{samples:?}");
-    assert_eq!(c.used, 2);
+    assert_eq!(c.read_used(&ctx).unwrap(), 2);
     let sg: Vec<[f32; 4]> = ctx.read_buffer(&c.sample_gbuffer, 8).unwrap();
     assert_eq!(sg[0], gbuffer[4 * samples[0] as usize]);
     assert_eq!(sg[2], [1.0, 1.0, 1.0, 0.0], "albedo 1");

@@ -242,7 +242,11 @@ fn warm_sp_clustering_matches_its_twin_on_a_moving_view() {
     };
     let cams = orbit(&sc, &r, 2, 1.0);
     let a = r.render(&cams[0], &s).unwrap();
-    assert_eq!(a.sp_warm_kept, None, "the first frame has no past");
+    assert_eq!(
+        common::colom(&a).sp_warm_kept,
+        None,
+        "the first frame has no past"
+    );
     let prev_k = r.sp_clustering().unwrap().k();
     let previous = read_centroids(&ctx, &r.sp_clustering().unwrap().centroids, prev_k);
     let previous_reps = RepPoint::from_vec4s(
@@ -251,18 +255,20 @@ fn warm_sp_clustering_matches_its_twin_on_a_moving_view() {
     );
     let b = r.render(&cams[1], &s).unwrap();
     assert!(common::all_finite(&b.radiance));
-    let kept = b.sp_warm_kept.expect("the second frame starts warm");
+    let kept = common::colom(&b)
+        .sp_warm_kept
+        .expect("the second frame starts warm");
     // Measured 44 of 48 kept at one degree; a warm start that keeps fewer than 3/4 is broken.
     assert!(kept >= 36, "kept {kept} of 48");
     assert_eq!(
-        b.sp_iterations,
+        common::colom(&b).sp_iterations,
         warm_iterations(s.cluster.iterations, kept, 48)
     );
     assert!(
-        b.sp_iterations < a.sp_iterations,
+        common::colom(&b).sp_iterations < common::colom(&a).sp_iterations,
         "{} vs {}",
-        b.sp_iterations,
-        a.sp_iterations
+        common::colom(&b).sp_iterations,
+        common::colom(&a).sp_iterations
     );
     let c = r.sp_clustering().unwrap();
     let gb = r.last_gbuffer().unwrap();
@@ -382,7 +388,10 @@ fn temporal_reuse_steadies_the_error_along_an_orbit() {
             .unwrap()
         });
         let mse = mean(&|i| metrics::mse(&frames[i].radiance, &refs[i]));
-        let iterations: u32 = frames[1..].iter().map(|f| f.sp_iterations).sum();
+        let iterations: u32 = frames[1..]
+            .iter()
+            .map(|f| common::colom(f).sp_iterations)
+            .sum();
         for f in &frames {
             assert!(common::all_finite(&f.radiance));
         }
@@ -606,7 +615,11 @@ fn the_warm_up_leaves_no_past() {
     );
     let after = r.render(&cam, &rs).unwrap();
     assert!(common::all_finite(&after.radiance));
-    assert_eq!(after.sp_warm_kept, None, "a warm start after the warm-up");
+    assert_eq!(
+        common::colom(&after).sp_warm_kept,
+        None,
+        "a warm start after the warm-up"
+    );
     assert!(
         after.radiance == cold.radiance,
         "the warm-up changed the frame"
@@ -615,5 +628,5 @@ fn the_warm_up_leaves_no_past() {
     r.warm_up(&cam, &rs, 5.0).unwrap();
     assert!(r.sp_clustering().is_some());
     let next = r.render(&cam, &rs).unwrap();
-    assert!(next.sp_warm_kept.is_some());
+    assert!(common::colom(&next).sp_warm_kept.is_some());
 }

@@ -191,9 +191,9 @@ fn frames_at_half_indirect_scale() {
     r.render(&cam, &t).unwrap();
     let again = r.render(&cam, &t).unwrap();
     assert!(
-        again.sp_warm_kept.is_some_and(|k| k > 0),
+        common::colom(&again).sp_warm_kept.is_some_and(|k| k > 0),
         "{:?}",
-        again.sp_warm_kept
+        common::colom(&again).sp_warm_kept
     );
     for m in [Method::Wang, Method::LightCluster, Method::Cvrtgi] {
         let f = r.render(&cam, &frame_settings(0.5, m)).unwrap();

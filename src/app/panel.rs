@@ -383,11 +383,11 @@ impl Viewer {
                             "SPs {} · SP clusters {}",
                             f.shading_points, f.sp_clusters_used
                         ));
-                        if let Some(kept) = f.sp_warm_kept {
-                            ui.label(format!(
-                                "warm start: kept {kept} of {} SP clusters, {} iteration(s)",
-                                f.sp_clusters_used, f.sp_iterations
-                            ));
+                        // The method's report, key by key (colom's: SP iterations, warm start,
+                        // visibility rows reused).
+                        let report = f.report.as_ref().and_then(|(_, v)| v.as_object());
+                        for (key, v) in report.into_iter().flatten() {
+                            ui.label(format!("{} {v}", key.replace('_', " ")));
                         }
                         ui.label(format!("shadow rays {}", f.shadow_rays));
                     });

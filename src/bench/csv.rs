@@ -134,6 +134,19 @@ pub struct Row {
     pub adapter: String,
     #[serde(default)]
     pub driver: String,
+    /// The method's report (`Frame::report`), in the report columns after the knobs
+    /// (`method::report_columns`); files without them read none.
+    #[serde(skip)]
+    pub report: Option<serde_json::Value>,
+}
+
+impl MethodCells for Row {
+    fn knobs(&mut self) -> &mut MethodSettings {
+        &mut self.method
+    }
+    fn report(&mut self) -> &mut Option<serde_json::Value> {
+        &mut self.report
+    }
 }
 
 /// The stage columns by stage name: the one place the fields meet `stages()`' names.
@@ -271,12 +284,30 @@ pub(crate) fn fields_of<'de, T: Deserialize<'de>>() -> &'static [&'static str] {
     names
 }
 
-/// A row type's header: its fields, then every method's knobs.
+/// A row type's header: its fields, then every method's knobs, then every method's report
+/// columns (`method::report_columns`).
 pub(crate) fn header_of<'de, T: Deserialize<'de>>() -> Vec<String> {
     let own = fields_of::<T>().iter().copied();
     own.chain(MethodSettings::columns())
+        .chain(crate::method::report_columns())
         .map(String::from)
         .collect()
+}
+
+/// A row's report columns (`method::report_values`), after its knobs: serialised as their values.
+pub(crate) struct ReportCells(pub Vec<String>);
+
+impl Serialize for ReportCells {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(&self.0)
+    }
+}
+
+/// What a row type holds beside its own columns: its method's knobs and the method's report (one
+/// serde value, `Frame::report`'s), read from and written to the knob and report columns.
+pub(crate) trait MethodCells {
+    fn knobs(&mut self) -> &mut MethodSettings;
+    fn report(&mut self) -> &mut Option<serde_json::Value>;
 }
 
 /// The header, in order.
@@ -303,25 +334,31 @@ pub const ERROR_COLUMNS: [&str; 7] = [
     "front_mse",
 ];
 
-/// `rows` (each a `T` followed by its knob columns) under `header` as CSV text, `\n` line ends.
+/// `rows` (each a `T` followed by its knob columns and its report columns) under `header` as CSV
+/// text, `\n` line ends.
 pub(crate) fn write_rows<'a, T: Serialize + 'a>(
     header: &[String],
-    rows: impl IntoIterator<Item = (&'a T, &'a MethodSettings)>,
+    rows: impl IntoIterator<Item = (&'a T, &'a MethodSettings, Option<&'a serde_json::Value>)>,
 ) -> String {
     let mut w = ::csv::WriterBuilder::new()
         .has_headers(false)
         .terminator(::csv::Terminator::Any(b'\n'))
         .from_writer(Vec::new());
     w.write_record(header).expect("writing to memory");
-    for (r, m) in rows {
-        w.serialize((r, KnobCells(m))).expect("writing to memory");
+    for (r, m, report) in rows {
+        let cells = ReportCells(crate::method::report_values(m.method, report));
+        w.serialize((r, KnobCells(m), cells))
+            .expect("writing to memory");
     }
     String::from_utf8(w.into_inner().expect("writing to memory")).expect("UTF-8 fields")
 }
 
 /// The whole file: header and rows, `\n` line ends.
 pub fn to_csv(rows: &[Row]) -> String {
-    write_rows(&header(), rows.iter().map(|r| (r, &r.method)))
+    write_rows(
+        &header(),
+        rows.iter().map(|r| (r, &r.method, r.report.as_ref())),
+    )
 }
 
 /// One CSV line's fields (for tests and tools reading `path.csv`).
@@ -346,15 +383,16 @@ pub fn write_records(records: impl IntoIterator<Item = Vec<String>>) -> String {
     String::from_utf8(w.into_inner().expect("writing to memory")).expect("UTF-8 fields")
 }
 
-/// A file's rows as `T` (a row type written by `write_rows`): its header a prefix of `full` that
-/// holds at least the columns through `last_required`, every line as many fields as the header,
-/// the knob columns it has set into the row's `MethodSettings` (`knobs`). `fix` completes a row
+/// A file's rows as `T` (a row type written by `write_rows`): its header, less the report columns
+/// (`method::report_columns`, found by name wherever they stand: older files have some of them
+/// among their own), a prefix of `full`'s that holds at least the columns through
+/// `last_required`; every line as many fields as the header; the knob columns it has set into the
+/// row's `MethodSettings` and its method's report columns into its report. `fix` completes a row
 /// from what the header lacks.
-pub(crate) fn read_rows<T: de::DeserializeOwned>(
+pub(crate) fn read_rows<T: de::DeserializeOwned + MethodCells>(
     text: &str,
     full: &[String],
     last_required: &str,
-    knobs: fn(&mut T) -> &mut MethodSettings,
     fix: impl Fn(&mut T, &::csv::StringRecord),
 ) -> Result<Vec<T>> {
     let mut reader = ::csv::ReaderBuilder::new()
@@ -362,8 +400,17 @@ pub(crate) fn read_rows<T: de::DeserializeOwned>(
         .from_reader(text.as_bytes());
     let head = reader.headers().context("reading the header")?.clone();
     let h: Vec<&str> = head.iter().collect();
+    let report = crate::method::report_columns();
+    let own = |cols: &[&str]| -> Vec<String> {
+        let own = cols.iter().filter(|c| !report.contains(c));
+        own.map(|c| c.to_string()).collect()
+    };
+    let (own_h, full) = (
+        own(&h),
+        own(&full.iter().map(String::as_str).collect::<Vec<_>>()),
+    );
     let required = full.iter().position(|c| c == last_required).unwrap() + 1;
-    if h.len() < required || h.len() > full.len() || full[..h.len()] != h[..] {
+    if own_h.len() < required || own_h.len() > full.len() || full[..own_h.len()] != own_h[..] {
         bail!("unexpected CSV header: {}", h.join(","));
     }
     let mut rows = Vec::new();
@@ -379,12 +426,14 @@ pub(crate) fn read_rows<T: de::DeserializeOwned>(
         let mut row: T = record
             .deserialize(Some(&head))
             .with_context(|| format!("line {line}"))?;
-        let m = knobs(&mut row);
+        let m = row.knobs();
         for (name, text) in h.iter().zip(&record) {
             if let Some(Err(e)) = m.set_column(name, text).filter(|_| !text.is_empty()) {
                 bail!("line {line}: {name} {text:?}: {e}");
             }
         }
+        let method = m.method;
+        *row.report() = crate::method::report_of_cells(method, h.iter().copied().zip(&record));
         fix(&mut row, &head);
         rows.push(row);
     }
@@ -393,10 +442,7 @@ pub(crate) fn read_rows<T: de::DeserializeOwned>(
 
 /// Reads a file written by `to_csv` back, or by an older version (for tests and tools).
 pub fn from_csv(text: &str) -> Result<Vec<Row>> {
-    fn knobs(r: &mut Row) -> &mut MethodSettings {
-        &mut r.method
-    }
-    read_rows(text, &header(), "label", knobs, |r, head| {
+    read_rows(text, &header(), "label", |r: &mut Row, head| {
         if !head.iter().any(|h| h == "indirect_ms") {
             r.indirect_ms = r.indirect_of_stages();
         }
@@ -499,7 +545,9 @@ pub(crate) mod tests {
                 .map(|(c, _)| head.iter().position(|h| h == c).unwrap())
                 .collect();
             assert!(!own.is_empty(), "{}", room.method);
-            let knobs = head.len() - MethodSettings::columns().len();
+            let knobs = head.len()
+                - MethodSettings::columns().len()
+                - crate::method::report_columns().len();
             for (i, v) in line.iter().enumerate().skip(knobs) {
                 assert_eq!(
                     v.is_empty(),
@@ -534,7 +582,10 @@ pub(crate) mod tests {
                 f[..f.len() - n].to_vec()
             }))
         };
-        // Drop the method knob columns: a file of the version before them.
+        // Drop the report columns, then the method knob columns: files of the versions before
+        // them.
+        let csv = cut_n(&csv, crate::method::report_columns().len());
+        assert_eq!(from_csv(&csv).unwrap(), vec![r.clone()]);
         let csv = cut_n(&csv, MethodSettings::columns().len());
         assert_eq!(from_csv(&csv).unwrap(), vec![r.clone()]);
         // Drop the adapter columns: a file of the version before them.
@@ -577,17 +628,21 @@ pub(crate) mod tests {
     }
 
     /// The header is the row's fields (the stage columns `stages()` after `iterations`), then the
-    /// knobs; no two columns share a name, and `stage` reads each stage's own column.
+    /// knobs, then the report columns; no two columns share a name, and `stage` reads each stage's
+    /// own column.
     #[test]
     fn the_header_is_the_rows_fields_then_the_knobs() {
         let h = header();
         let at = h.iter().position(|c| c == "iterations").unwrap() + 1;
         let stage_cols: Vec<String> = stages().map(|s| format!("{s}_ms")).collect();
         assert_eq!(h[at..at + stage_cols.len()], stage_cols[..]);
+        let report = crate::method::report_columns();
+        let knobs_at = h.len() - MethodSettings::columns().len() - report.len();
         assert_eq!(
-            h[h.len() - MethodSettings::columns().len()..],
+            h[knobs_at..h.len() - report.len()],
             MethodSettings::columns()
         );
+        assert_eq!(h[h.len() - report.len()..], report);
         let mut unique = h.clone();
         unique.sort();
         unique.dedup();

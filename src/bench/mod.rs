@@ -518,6 +518,7 @@ impl Bench<'_> {
             indirect_ms: frame_ms - stage(Pass::Primary) - stage(Pass::Direct),
             adapter: self.ctx.adapter_name.clone(),
             driver: self.ctx.driver.clone(),
+            report: frame.report_of(c.method.method).cloned(),
             ..Default::default()
         };
         for (name, v) in row.stages_mut() {

@@ -116,17 +116,12 @@ pub struct PathRow {
     pub rel_mse: f64,
     /// `None` for the first frame (no previous one).
     pub instability: Option<f64>,
-    /// Alg. 1 iterations the SP clustering ran, and the centroids a warm start kept.
-    pub sp_iterations: u32,
-    pub sp_warm_kept: Option<u32>,
     pub sp_clusters_used: u32,
     /// GPU ms of this frame's reference. The last column every file has.
     pub reference_ms: f64,
-    /// GPU ms of the visibility pass, and its rows copied from the previous frame.
+    /// GPU ms of the visibility pass.
     #[serde(default)]
     pub visibility_ms: f64,
-    #[serde(default)]
-    pub visibility_rows_reused: u32,
     /// The adapter and its driver, the scene and the frame.
     #[serde(default)]
     pub adapter: String,
@@ -164,23 +159,37 @@ pub struct PathRow {
     /// light changes when read between the previous frame's pixels (docs/temporal.md).
     #[serde(default)]
     pub instability_world_direct_only: Option<f64>,
+    /// The method's report (`Frame::report`), in the report columns after the knobs
+    /// (`method::report_columns`; files of versions that had some among their own columns read
+    /// them there, by name).
+    #[serde(skip)]
+    pub report: Option<serde_json::Value>,
 }
 
-/// `path.csv`'s header: `PathRow`'s fields, then every method's knobs.
+impl super::csv::MethodCells for PathRow {
+    fn knobs(&mut self) -> &mut MethodSettings {
+        &mut self.method
+    }
+    fn report(&mut self) -> &mut Option<serde_json::Value> {
+        &mut self.report
+    }
+}
+
+/// `path.csv`'s header: `PathRow`'s fields, then every method's knobs, then their report columns.
 pub fn header() -> Vec<String> {
     super::csv::header_of::<PathRow>()
 }
 
 pub fn to_csv(rows: &[PathRow]) -> String {
-    super::csv::write_rows(&header(), rows.iter().map(|r| (r, &r.method)))
+    super::csv::write_rows(
+        &header(),
+        rows.iter().map(|r| (r, &r.method, r.report.as_ref())),
+    )
 }
 
 /// Reads a file written by `to_csv` back, or by an older version (`bench-table`, tests).
 pub fn from_csv(text: &str) -> Result<Vec<PathRow>> {
-    fn knobs(r: &mut PathRow) -> &mut MethodSettings {
-        &mut r.method
-    }
-    super::csv::read_rows(text, &header(), "reference_ms", knobs, |_, _| {})
+    super::csv::read_rows(text, &header(), "reference_ms", |_: &mut PathRow, _| {})
 }
 
 fn on_off<S: serde::Serializer>(on: &bool, s: S) -> Result<S::Ok, S::Error> {
@@ -371,12 +380,9 @@ fn path_row(
         mse: metrics::mse(&f.radiance, reference),
         rel_mse: metrics::rel_mse(&f.radiance, reference),
         instability,
-        sp_iterations: f.sp_iterations,
-        sp_warm_kept: f.sp_warm_kept,
         sp_clusters_used: f.sp_clusters_used,
         reference_ms: *reference_ms,
         visibility_ms: f.ms(Pass::Visibility),
-        visibility_rows_reused: f.visibility_rows_reused,
         adapter: ctx.adapter_name.clone(),
         driver: ctx.driver.clone(),
         scene: plan.scene_name.clone(),
@@ -388,6 +394,7 @@ fn path_row(
         indirect_ms: Some(f.frame_ms() - f.ms(Pass::Primary) - f.ms(Pass::Direct)),
         temporal_alpha: alpha,
         instability_world_direct_only,
+        report: f.report_of(c.method.method).cloned(),
     }
 }
 
@@ -395,14 +402,15 @@ fn path_row(
 fn say(row: &PathRow) {
     let opt = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.3e}"));
     eprintln!(
-        "path: {} temporal {} frame {}: {:.1} ms (SP clustering {:.1} ms, {} iteration(s), kept {}), MSE {:.3e}, instability {} (world {})",
+        "path: {} temporal {} frame {}: {:.1} ms (SP clustering {:.1} ms{}), MSE {:.3e}, instability {} (world {})",
         row.label,
         if row.temporal { "on" } else { "off" },
         row.frame,
         row.frame_ms,
         row.sp_cluster_ms,
-        row.sp_iterations,
-        row.sp_warm_kept.map_or("-".into(), |k| k.to_string()),
+        row.report
+            .as_ref()
+            .map_or(String::new(), |r| format!(", {r}")),
         row.mse,
         opt(row.instability),
         opt(row.instability_world)
@@ -606,12 +614,9 @@ mod tests {
             mse,
             rel_mse: 0.5,
             instability: inst,
-            sp_iterations: 1,
-            sp_warm_kept: on.then_some(180),
             sp_clusters_used: 192,
             reference_ms: 100.0,
             visibility_ms: 5.0,
-            visibility_rows_reused: 0,
             adapter: "an adapter, with a comma".into(),
             driver: "a driver".into(),
             scene: "builtin:conference".into(),
@@ -619,6 +624,15 @@ mod tests {
             height: 120,
             vpls: 4096,
             instability_world: inst.map(|v| v / 2.0),
+            report: Some(serde_json::json!({
+                "sp_iterations": 1,
+                "sp_warm_kept": on.then_some(180),
+                "visibility_rows_reused": 0,
+            }))
+            .map(|mut v| {
+                v.as_object_mut().unwrap().retain(|_, x| !x.is_null());
+                v
+            }),
             ..Default::default()
         };
         let rows = vec![
@@ -649,7 +663,15 @@ mod tests {
         let f0: Vec<&str> = lines[1].split(',').collect();
         assert_eq!((f0[1], f0[2], f0[7]), ("off", "0", ""));
         let f4: Vec<&str> = lines[5].split(',').collect();
-        assert_eq!((f4[1], f4[9]), ("on", "180"));
+        assert_eq!(f4[1], "on");
+        // The report in its columns (found by name: the adapter's cell holds a comma).
+        let cell = |line: &str, c: &str| {
+            let at = header().iter().position(|h| h == c).unwrap();
+            super::super::csv::split_line(line)[at].clone()
+        };
+        assert_eq!(cell(lines[5], "sp_warm_kept"), "180");
+        assert_eq!(cell(lines[1], "sp_warm_kept"), "");
+        assert_eq!(cell(lines[1], "sp_iterations"), "1");
         assert_eq!(f4[7].parse::<f64>().unwrap(), 1.0);
         assert_eq!(from_csv(&csv).unwrap(), rows);
     }
@@ -666,7 +688,11 @@ mod tests {
             frame_ms: 12.5,
             mse: 1e-4,
             instability: Some(2e-5),
-            sp_warm_kept: Some(40),
+            report: Some(serde_json::json!({
+                "sp_iterations": 2,
+                "sp_warm_kept": 40,
+                "visibility_rows_reused": 3,
+            })),
             adapter: "a, \"quoted\" adapter".into(),
             instability_world: Some(1e-6),
             indirect_ms: Some(7.25),
@@ -679,7 +705,7 @@ mod tests {
         let head = super::super::csv::split_line(text.lines().next().unwrap());
         assert_eq!(head, header());
         assert_eq!(
-            head[21..25],
+            head[18..22],
             [
                 "method",
                 "indirect_ms",
@@ -687,7 +713,9 @@ mod tests {
                 "instability_world_direct_only"
             ]
         );
-        assert_eq!(head[25..], MethodSettings::columns());
+        let knobs = MethodSettings::columns().len();
+        assert_eq!(head[22..22 + knobs], MethodSettings::columns());
+        assert_eq!(head[22 + knobs..], crate::method::report_columns());
         assert_eq!(from_csv(&text).unwrap(), vec![r]);
         let old = "\
 label,temporal,frame,frame_ms,sp_cluster_ms,mse,rel_mse,instability,sp_iterations,sp_warm_kept,\
@@ -699,7 +727,11 @@ weighted 192/512 F6 g4,on,1,10.5,2.5,0.0001,0.002,0.00003,1,180,192,400
             (
                 rows[0].temporal,
                 rows[0].frame,
-                rows[0].sp_warm_kept,
+                rows[0]
+                    .report
+                    .as_ref()
+                    .and_then(|r| r.get("sp_warm_kept"))
+                    .and_then(|k| k.as_u64()),
                 rows[0].reference_ms
             ),
             (true, 1, Some(180), 400.0)

@@ -17,6 +17,7 @@ pub mod reference;
 pub mod refine;
 pub mod rng;
 pub mod scene_gpu;
+pub mod sum;
 pub mod upsample;
 pub mod vpl_cluster;
 pub mod vpl_trace;

@@ -68,68 +68,66 @@ pub fn no_limits(_: &Limits) -> Result<(), String> {
 }
 
 /// What a frame's indirect passes report for the stats (`Frame`): the shadow rays they traced, the
-/// SP and VPL clusters they used, and the CPU milliseconds of a pass's steps (added to its GPU time).
+/// SP and VPL clusters they used, the CPU milliseconds of a pass's steps (added to its GPU time),
+/// γ as the SP clustering sampled with (a setting as resolved, not a count), the method's own
+/// report and the counts left on the GPU. A method's own counts are its report's, never fields here.
 #[derive(Clone, Debug, Default)]
 pub struct Counts {
     pub indirect_rays: u64,
     pub sp_used: u32,
     pub vpl_clusters_used: u32,
     pub cpu_ms: Vec<(Pass, f64)>,
-    /// colom's SP k-means: iterations run, centroids the warm start kept, γ used; visibility rows
-    /// copied instead of traced (`Frame`'s fields of the same names).
-    pub sp_iterations: u32,
-    pub sp_warm_kept: Option<u32>,
+    /// γ Alg. 1 sampled with (`kmeans::effective_gamma`): the stats' `settings.gamma_used`, the
+    /// CSV's `gamma_used`; `None` when no SP clustering ran.
     pub gamma_used: Option<u32>,
-    pub rows_reused: u32,
-    /// The method's own report (cvrtgi's sizes: voxels, clusters, faces, the lit ones), one serde
-    /// value: `Frame::report`, the stats' `counts.<method>`.
+    /// The method's own report (e.g. cvrtgi's sizes), one serde value: `Frame::report`, the stats'
+    /// `counts.<method>`.
     pub report: Option<serde_json::Value>,
-    /// Counts the GPU keeps (colom's SP clustering): read back only when asked.
-    pub pending: Option<PendingCounts>,
+    /// Counts the GPU keeps: read back only when asked (`PendingReport::read`).
+    pub pending: Option<std::sync::Arc<dyn PendingReport>>,
 }
 
-/// colom's counts left on the GPU (its SP clustering's `KmCounters`): the frame's recording never
-/// waits for them, and they are read back only on request (`GpuFrame::read`, `GpuFrame::counts`:
-/// the stats, the panel's counts).
-#[derive(Clone, Debug)]
-pub struct PendingCounts {
-    /// The SP clustering's `Clustering::bounds`.
-    pub bounds: wgpu::Buffer,
-    /// The clustering started warm.
-    pub warm: bool,
-    /// The visibility rows of kept representatives were copied, not traced (same lights).
-    pub rows_copied: bool,
-    pub num_lights: u32,
+/// A method's counts left on the GPU (its clustering's counters, its pixels' rays summed there):
+/// the frame's recording never waits for them, and they are read back only on request
+/// (`GpuFrame::read`, `GpuFrame::counts`: the stats, the viewer's counts, the bench).
+pub trait PendingReport: fmt::Debug + Send + Sync {
+    /// Reads them back (a wait for the frame's passes and a few bytes).
+    fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Resolved>;
 }
 
-/// `PendingCounts` read back: the SP clusters used, the clustering's iterations and warm start, the
-/// visibility rows copied and the rays the visibility pass traced.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ResolvedCounts {
-    pub sp_used: u32,
-    pub sp_iterations: u32,
-    pub sp_warm_kept: Option<u32>,
-    pub rows_reused: u32,
+/// A `PendingReport` read back: shadow rays to add to the frame's, the SP clusters used where the
+/// GPU counted them, and the method's report (its keys join `Counts::report`'s).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Resolved {
     pub indirect_rays: u64,
+    pub sp_used: Option<u32>,
+    pub report: Option<serde_json::Value>,
 }
 
-impl PendingCounts {
-    /// Reads them back (a wait for the frame's clustering and 68 bytes).
-    pub fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<ResolvedCounts> {
-        let k = crate::gi::kmeans::KmCounters::read(device, queue, &self.bounds, self.warm)?;
-        Ok(self.resolve(&k))
-    }
+/// A method's shadow rays summed on the GPU (`gi::sum`): its per-pixel counts never leave it.
+#[derive(Debug)]
+pub struct PendingRays(pub crate::gi::sum::PendingSum);
 
-    /// The counts from the clustering's.
-    pub fn resolve(&self, k: &crate::gi::kmeans::KmCounters) -> ResolvedCounts {
-        let rows_reused = if self.rows_copied { k.reps_kept } else { 0 };
-        ResolvedCounts {
-            sp_used: k.reps_used,
-            sp_iterations: k.iterations_run,
-            sp_warm_kept: k.warm_kept,
-            rows_reused,
-            indirect_rays: k.reps_used.saturating_sub(rows_reused) as u64 * self.num_lights as u64,
+impl PendingReport for PendingRays {
+    fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Resolved> {
+        Ok(Resolved {
+            indirect_rays: self.0.read(device, queue)?,
+            ..Default::default()
+        })
+    }
+}
+
+/// `report` with `more`'s keys added (both objects), else whichever there is (`more` first).
+pub fn join_reports(
+    report: Option<serde_json::Value>,
+    more: Option<serde_json::Value>,
+) -> Option<serde_json::Value> {
+    match (report, more) {
+        (Some(serde_json::Value::Object(mut a)), Some(serde_json::Value::Object(b))) => {
+            a.extend(b);
+            Some(serde_json::Value::Object(a))
         }
+        (a, b) => b.or(a),
     }
 }
 
@@ -197,6 +195,59 @@ pub struct Room {
     pub label: fn(&MethodSettings) -> String,
     pub series: fn(&MethodSettings) -> String,
     pub short: fn(&MethodSettings) -> String,
+    /// The keys of its report (`Counts::report`, what its pending counts read back) that the
+    /// bench's `results.csv` and `path.csv` carry as columns (`report_columns`), in order.
+    pub report_columns: &'static [&'static str],
+}
+
+/// Every method's report columns in registry order (the CSVs' last columns, after the knobs').
+pub fn report_columns() -> Vec<&'static str> {
+    ROOMS
+        .iter()
+        .flat_map(|r| r.report_columns.iter().copied())
+        .collect()
+}
+
+/// A row's values of `report_columns()`: its method's report's (numbers and text as they are,
+/// empty where the key is absent or null), empty for the other methods'.
+pub fn report_values(method: Method, report: Option<&serde_json::Value>) -> Vec<String> {
+    ROOMS
+        .iter()
+        .flat_map(|r| {
+            r.report_columns.iter().map(move |key| {
+                let v = report
+                    .filter(|_| r.method == method)
+                    .and_then(|v| v.get(key));
+                match v {
+                    None | Some(serde_json::Value::Null) => String::new(),
+                    Some(serde_json::Value::String(s)) => s.clone(),
+                    Some(v) => v.to_string(),
+                }
+            })
+        })
+        .collect()
+}
+
+/// `method`'s report from a row's cells of its report columns (`(column, text)`, any order, the
+/// others' ignored): numbers as numbers, `true`/`false` as booleans, other text as text, empty
+/// cells absent; `None` when no cell of its is filled.
+pub fn report_of_cells<'a>(
+    method: Method,
+    cells: impl IntoIterator<Item = (&'a str, &'a str)>,
+) -> Option<serde_json::Value> {
+    let own = room(method).report_columns;
+    let map: serde_json::Map<String, serde_json::Value> = cells
+        .into_iter()
+        .filter(|(c, t)| own.contains(c) && !t.is_empty())
+        .map(|(c, t)| {
+            let v = serde_json::from_str::<serde_json::Value>(t)
+                .ok()
+                .filter(|v| v.is_number() || v.is_boolean())
+                .unwrap_or_else(|| serde_json::Value::String(t.to_string()));
+            (c.to_string(), v)
+        })
+        .collect();
+    (!map.is_empty()).then_some(serde_json::Value::Object(map))
 }
 
 /// Declares the registry from one line a method (`module: Variant`), the method's folder (declared
@@ -514,6 +565,20 @@ mod tests {
         sorted.sort_unstable();
         sorted.dedup();
         assert_eq!(sorted.len(), names.len(), "{names:?}");
+    }
+
+    /// Reports join key by key; one alone is kept.
+    #[test]
+    fn reports_join() {
+        let a = serde_json::json!({"a": 1, "b": 2});
+        let b = serde_json::json!({"b": 3, "c": 4});
+        assert_eq!(
+            join_reports(Some(a.clone()), Some(b.clone())),
+            Some(serde_json::json!({"a": 1, "b": 3, "c": 4}))
+        );
+        assert_eq!(join_reports(Some(a.clone()), None), Some(a));
+        assert_eq!(join_reports(None, Some(b.clone())), Some(b));
+        assert_eq!(join_reports(None, None), None);
     }
 
     /// The knobs' columns follow the registry's order, a room's own filled and the others' empty.

@@ -27,7 +27,8 @@ pub struct Frame {
     pub shadow_rays: u64,
     pub sp_clusters_used: u32,
     pub vpl_clusters_used: u32,
-    /// γ Alg. 1 sampled with (`kmeans::effective_gamma`); `None` when no SP clustering ran.
+    /// γ Alg. 1 sampled with (`kmeans::effective_gamma`), a setting as resolved (the stats'
+    /// `settings.gamma_used`); `None` when no SP clustering ran.
     pub gamma_used: Option<u32>,
     /// The shading point of each pixel: world position, w = 1 where the primary ray hit (0: sky).
     /// What the viewer reprojects a frame with.
@@ -35,15 +36,9 @@ pub struct Frame {
     /// The shading normal of each pixel's shading point (xyz; zero where the ray missed): with
     /// `positions`, what tells two frames' pixels show the same surface (`metrics::instability_world`).
     pub normals: Vec<[f32; 4]>,
-    /// Alg. 1 iterations the SP clustering ran (0 when none ran).
-    pub sp_iterations: u32,
-    /// SP centroids a temporal warm start kept from the previous frame (`None`: a cold start).
-    pub sp_warm_kept: Option<u32>,
-    /// Rows of the visibility matrix copied from the previous frame instead of traced (kept
-    /// representatives, same lights).
-    pub visibility_rows_reused: u32,
-    /// The method's own report and its name (`method::Counts::report`: what its room counts, e.g.
-    /// sizes and the resident stages this frame (re)built): the stats' `counts.<method>`.
+    /// The method's own report and its name (`method::Counts::report` joined with what its
+    /// pending counts read back: what its room counts, e.g. an SP clustering's iterations or a
+    /// voxel grid's sizes): the stats' `counts.<method>`, the CSVs' report columns.
     pub report: Option<(crate::method::Method, serde_json::Value)>,
 }
 
@@ -60,6 +55,14 @@ impl Frame {
 
     pub fn ran(&self, pass: Pass) -> bool {
         self.passes.contains(&pass)
+    }
+
+    /// The report of `method` when this frame's method is that one and has one.
+    pub fn report_of(&self, method: crate::method::Method) -> Option<&serde_json::Value> {
+        self.report
+            .as_ref()
+            .filter(|(m, _)| *m == method)
+            .map(|(_, v)| v)
     }
 }
 
@@ -179,11 +182,11 @@ pub struct GpuFrame {
     pub buffers: std::sync::Arc<FrameBuffers>,
     /// Everything known without reading anything back: size, passes, timings. Its images,
     /// positions and normals are empty, `shading_points` and `shadow_rays` are 0, and the counts
-    /// the GPU keeps (`pending`: a clustering's SP clusters used, iterations, warm start, rows copied) are
-    /// 0 until `read` or `counts`.
+    /// the GPU keeps (`pending`: e.g. a clustering's SP clusters used, the method's report) are
+    /// missing until `read` or `counts`.
     pub meta: Frame,
-    /// Counts left on the GPU, read by `counts` and `read`.
-    pub pending: Option<crate::method::PendingCounts>,
+    /// The method's counts left on the GPU, read by `counts` and `read`.
+    pub pending: Option<std::sync::Arc<dyn crate::method::PendingReport>>,
     /// The images' factor from render units to the scene's (`Renderer::output_scale`).
     pub output_scale: f32,
     /// The G-buffer's positions' factor from the scene's units to render units.
@@ -194,6 +197,8 @@ pub struct GpuFrame {
     /// they counted themselves.
     pub rays_per_point: u64,
     pub indirect_rays: u64,
+    /// The method whose indirect passes ran (`None`: none did), whose report `pending` adds to.
+    pub method: Option<crate::method::Method>,
 }
 
 impl GpuFrame {
@@ -203,8 +208,8 @@ impl GpuFrame {
         self.read_with(&ctx.device, &ctx.queue)
     }
 
-    /// `meta` with the counts the GPU keeps read back (68 bytes; the images stay on the GPU), and
-    /// the indirect passes' shadow rays with the ones those counts give.
+    /// `meta` with the counts the GPU keeps read back (a few bytes; the images stay on the GPU),
+    /// and the indirect passes' shadow rays with the ones those counts give.
     pub fn counts(
         &self,
         device: &wgpu::Device,
@@ -214,10 +219,13 @@ impl GpuFrame {
         let mut rays = self.indirect_rays;
         if let Some(p) = &self.pending {
             let c = p.read(device, queue)?;
-            meta.sp_clusters_used = c.sp_used;
-            meta.sp_iterations = c.sp_iterations;
-            meta.sp_warm_kept = c.sp_warm_kept;
-            meta.visibility_rows_reused = c.rows_reused;
+            if let Some(used) = c.sp_used {
+                meta.sp_clusters_used = used;
+            }
+            if let Some(m) = self.method {
+                let before = meta.report.take().map(|(_, v)| v);
+                meta.report = crate::method::join_reports(before, c.report).map(|v| (m, v));
+            }
             rays += c.indirect_rays;
         }
         Ok((meta, rays))

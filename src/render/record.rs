@@ -335,6 +335,7 @@ impl Renderer<'_> {
             rays_per_point: r.rays_per_point,
             indirect_rays: c.indirect_rays,
             pending: c.pending.clone(),
+            method: self.last_method,
             meta: Frame {
                 width,
                 height,
@@ -348,10 +349,7 @@ impl Renderer<'_> {
                     c.vpl_clusters_used
                 },
                 gamma_used: c.gamma_used,
-                sp_iterations: c.sp_iterations,
-                sp_warm_kept: c.sp_warm_kept,
-                visibility_rows_reused: c.rows_reused,
-                report: plan.method.zip(c.report.clone()),
+                report: self.last_method.zip(c.report.clone()),
                 ..Default::default()
             },
             buffers: r.buffers,

@@ -463,3 +463,10 @@ pub fn slab_under_ceiling() -> Scene {
     s.name = "slab-under-ceiling".into();
     s
 }
+
+/// colom's report in a frame (`counts.colom`: SP iterations, warm start, visibility rows reused);
+/// the default where colom did not run or its counts were not read back.
+pub fn colom(f: &fuzzy_vpl::render::Frame) -> fuzzy_vpl::method::colom::Report {
+    fuzzy_vpl::method::colom::Report::of(f.report_of(fuzzy_vpl::method::Method::Colom))
+        .unwrap_or_default()
+}

@@ -16,9 +16,9 @@ use std::any::Any;
 
 use anyhow::Result;
 
-use super::{Counts, FrameInputs, IndirectMethod, Limits, Method, PendingCounts, Room};
+use super::{Counts, FrameInputs, IndirectMethod, Limits, Method, PendingReport, Resolved, Room};
 use crate::gi::dispatch::Gpu;
-use crate::gi::kmeans::{Clustering, KMeans, KMeansSettings, Points, Warm};
+use crate::gi::kmeans::{Clustering, KMeans, KMeansSettings, KmCounters, Points, Warm};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::SceneGpu;
 use crate::gi::vpl_cluster::LightKey;
@@ -45,7 +45,77 @@ pub const ROOM: Room = Room {
     label: |_| String::new(),
     series: |_| String::new(),
     short: |_| String::new(),
+    report_columns: &["sp_iterations", "sp_warm_kept", "visibility_rows_reused"],
 };
+
+/// colom's counts: the stats' `counts.colom` and path.csv's columns of the same names (read back
+/// from its SP clustering's counters on request, `PendingSp`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct Report {
+    /// Alg. 1 iterations the SP clustering ran.
+    pub sp_iterations: u32,
+    /// SP centroids a temporal warm start kept from the previous frame (absent: a cold start).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sp_warm_kept: Option<u32>,
+    /// Rows of the visibility matrix copied from the previous frame instead of traced (kept
+    /// representatives, same lights).
+    pub visibility_rows_reused: u32,
+}
+
+impl Report {
+    /// colom's report in a frame's (`Frame::report_of(Method::Colom)`); `None` when colom did not
+    /// run or its counts were not read back.
+    pub fn of(report: Option<&serde_json::Value>) -> Option<Report> {
+        serde_json::from_value(report?.clone()).ok()
+    }
+}
+
+/// colom's counts left on the GPU (its SP clustering's `KmCounters`): the frame's recording never
+/// waits for them; `read` (on request) gives the SP clusters used, the rays the visibility pass
+/// traced and colom's `Report`.
+#[derive(Clone, Debug)]
+pub struct PendingSp {
+    /// The SP clustering's `Clustering::bounds`.
+    pub bounds: wgpu::Buffer,
+    /// The clustering started warm.
+    pub warm: bool,
+    pub visibility: VisibilityRows,
+}
+
+/// What the visibility pass did with the clustering's representatives' rows.
+#[derive(Clone, Copy, Debug)]
+pub struct VisibilityRows {
+    /// The rows of kept representatives were copied, not traced (same lights).
+    pub rows_copied: bool,
+    /// The lights a traced row has a ray to.
+    pub num_lights: u32,
+}
+
+impl VisibilityRows {
+    /// The counts from the clustering's.
+    pub fn resolve(&self, k: &KmCounters) -> Resolved {
+        let rows_reused = if self.rows_copied { k.reps_kept } else { 0 };
+        let report = Report {
+            sp_iterations: k.iterations_run,
+            sp_warm_kept: k.warm_kept,
+            visibility_rows_reused: rows_reused,
+        };
+        Resolved {
+            indirect_rays: k.reps_used.saturating_sub(rows_reused) as u64 * self.num_lights as u64,
+            sp_used: Some(k.reps_used),
+            report: Some(serde_json::to_value(report).expect("a plain struct")),
+        }
+    }
+}
+
+impl PendingReport for PendingSp {
+    /// Reads them back (a wait for the frame's clustering and 68 bytes).
+    fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Resolved> {
+        let k = KmCounters::read(device, queue, &self.bounds, self.warm)?;
+        Ok(self.visibility.resolve(&k))
+    }
+}
 
 /// Bytes of the visibility bit matrix (step 5): one row per SP cluster, one bit per light, the
 /// lights being the VPL clusters or, unclustered, every VPL (an upper bound: fewer may be traced or
@@ -177,12 +247,14 @@ impl Colom {
             },
         );
         // The clusters used, the rows copied and the rays traced stay on the GPU until asked for.
-        counts.pending = Some(PendingCounts {
+        counts.pending = Some(std::sync::Arc::new(PendingSp {
             bounds: c.bounds.clone(),
             warm: c.warm,
-            rows_copied: previous.as_ref().is_some_and(|p| p.matrix.words == words),
-            num_lights,
-        });
+            visibility: VisibilityRows {
+                rows_copied: previous.as_ref().is_some_and(|p| p.matrix.words == words),
+                num_lights,
+            },
+        }));
         self.frame.visibility = Some(Previous {
             bits,
             rows: c.k(),
@@ -269,5 +341,79 @@ impl IndirectMethod for Colom {
 
     fn sp_clustering(&self) -> Option<&Clustering> {
         self.clustering.as_ref()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// colom's report columns round-trip: its keys written as their JSON scalars (absent ones
+    /// empty), read back from the cells by name; another method's row leaves them empty and reads
+    /// none.
+    #[test]
+    fn report_columns_round_trip() {
+        let cols = crate::method::report_columns();
+        assert_eq!(
+            cols,
+            ["sp_iterations", "sp_warm_kept", "visibility_rows_reused"]
+        );
+        let report = serde_json::json!({"sp_iterations": 3, "visibility_rows_reused": 7});
+        let cells = crate::method::report_values(Method::Colom, Some(&report));
+        assert_eq!(cells, ["3", "", "7"]);
+        let back = crate::method::report_of_cells(
+            Method::Colom,
+            cols.iter().copied().zip(cells.iter().map(String::as_str)),
+        );
+        assert_eq!(back, Some(report.clone()));
+        let other = crate::method::report_values(Method::Wang, Some(&report));
+        assert!(other.iter().all(String::is_empty));
+        let cells = cols.iter().copied().zip(["3", "", "7"]);
+        assert_eq!(crate::method::report_of_cells(Method::Wang, cells), None);
+        assert_eq!(
+            crate::method::report_of_cells(Method::Colom, [("sp_iterations", "x")]),
+            Some(serde_json::json!({"sp_iterations": "x"}))
+        );
+    }
+
+    /// Hand-worked: 40 representatives of which 30 kept with their rows copied, 64 lights: 10 rows
+    /// traced (640 rays); without the copy every row is traced. The report is `counts.colom`'s.
+    #[test]
+    fn pending_counts_resolve_to_rays_and_the_report() {
+        let ctx_free = |rows_copied| VisibilityRows {
+            rows_copied,
+            num_lights: 64,
+        };
+        let k = KmCounters {
+            iterations_run: 2,
+            warm_kept: Some(33),
+            reps_used: 40,
+            reps_kept: 30,
+        };
+        let r = ctx_free(true).resolve(&k);
+        assert_eq!((r.indirect_rays, r.sp_used), (640, Some(40)));
+        assert_eq!(
+            r.report,
+            Some(serde_json::json!({
+                "sp_iterations": 2,
+                "sp_warm_kept": 33,
+                "visibility_rows_reused": 30
+            }))
+        );
+        let r = ctx_free(false).resolve(&k);
+        assert_eq!(r.indirect_rays, 40 * 64);
+        let cold = KmCounters {
+            warm_kept: None,
+            ..k
+        };
+        let back = Report::of(ctx_free(false).resolve(&cold).report.as_ref()).unwrap();
+        assert_eq!(
+            back,
+            Report {
+                sp_iterations: 2,
+                sp_warm_kept: None,
+                visibility_rows_reused: 0
+            }
+        );
     }
 }

@@ -750,6 +750,7 @@ pub const ROOM: Room = Room {
         let v = &m.cvrtgi;
         format!("v{}-s{}-r{}", v.voxel_res, v.cluster_step, v.face_rays)
     },
+    report_columns: &[],
 };
 
 impl IndirectMethod for Cvrtgi {

@@ -20,10 +20,11 @@ use glam::Vec3;
 use self::cluster::LightClusters;
 use self::settings::LcVisibility;
 use super::Method;
-use super::{Counts, FrameInputs, IndirectMethod, Room};
+use super::{Counts, FrameInputs, IndirectMethod, PendingRays, Room};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
+use crate::gi::sum::{WordSum, Words};
 use crate::gpu::GpuContext;
 
 pub use settings::{LightClusterLists as KnobLists, LightClusterSettings as Knobs};
@@ -168,12 +169,15 @@ pub const ROOM: Room = Room {
     },
     series: |m| format!("d_init {}", m.lightcluster.d_init),
     short: |m| format!("d{}", m.lightcluster.d_init),
+    report_columns: &[],
 };
 
 /// lightcluster's state: its kernel and the frame's clusters (from `CLUSTER` to `SHADE`).
 pub struct LightClusterMethod {
     kernel: LightCluster,
     clusters: Option<LightClusters>,
+    /// The pixels' rays summed on the GPU (the state's third word).
+    rays: WordSum,
 }
 
 impl LightClusterMethod {
@@ -181,6 +185,7 @@ impl LightClusterMethod {
         LightClusterMethod {
             kernel: LightCluster::new(ctx, scene),
             clusters: None,
+            rays: WordSum::new(ctx),
         }
     }
 }
@@ -213,7 +218,6 @@ impl IndirectMethod for LightClusterMethod {
             }
             // §3.2: every pixel × every VPL with its cluster's disc visibility.
             SHADE => {
-                let ctx = g.ctx;
                 let inputs = ShadeInputs {
                     gbuffer: f.gbuffer,
                     clusters: self.clusters.as_ref().expect("lightcluster_cluster ran"),
@@ -224,10 +228,15 @@ impl IndirectMethod for LightClusterMethod {
                 };
                 // The rays traced, as each pixel counted them: a disc's DISC_SAMPLES where one of
                 // its cluster's terms is positive, once; one a member group where one of its
-                // group's terms is positive.
+                // group's terms is positive. Summed on the GPU and read only on request.
                 if let Some(state) = self.kernel.record(g, &inputs) {
-                    let st: Vec<[u32; 8]> = ctx.read_buffer(&state, f.pixels as usize)?;
-                    n.indirect_rays += st.iter().map(|p| p[2] as u64).sum::<u64>();
+                    let words = Words {
+                        items: f.pixels,
+                        stride: 8,
+                        word: 2,
+                    };
+                    let sum = self.rays.record(g, SHADE.name(), &state, words);
+                    n.pending = Some(std::sync::Arc::new(PendingRays(sum)));
                 }
             }
             _ => unreachable!("{pass} is not lightcluster's"),

@@ -21,11 +21,12 @@ use bytemuck::{Pod, Zeroable};
 
 use self::settings::{Combine, RestirLights};
 use super::Method;
-use super::{Counts, FrameInputs, IndirectMethod, Room};
+use super::{Counts, FrameInputs, IndirectMethod, PendingRays, Room};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::primary::{CameraParams, SP_BYTES};
 use crate::gi::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
+use crate::gi::sum::{WordSum, Words};
 use crate::gi::vpl_cluster::LightKey;
 use crate::gpu::GpuContext;
 use crate::gpu::persistent::Uniform;
@@ -105,13 +106,12 @@ pub struct Past {
     pixels: u32,
 }
 
-/// The buffers of a frame size: two reservoir buffers (read one, write the other), the rays each
-/// pixel traced and the buffer they are read back through.
+/// The buffers of a frame size: two reservoir buffers (read one, write the other) and the rays each
+/// pixel traced.
 struct SizeBuffers {
     pixels: u32,
     reservoirs: [wgpu::Buffer; 2],
     rays: wgpu::Buffer,
-    rays_read: wgpu::Buffer,
 }
 
 /// What the last frame ran with (tests read it: `Renderer::method_state`).
@@ -140,6 +140,8 @@ pub struct RestirMethod {
     ran: bool,
     frames: u32,
     pub last: Option<LastFrame>,
+    /// The pixels' rays summed on the GPU.
+    rays: WordSum,
 }
 
 impl RestirMethod {
@@ -159,6 +161,7 @@ impl RestirMethod {
             ran: false,
             frames: 0,
             last: None,
+            rays: WordSum::new(ctx),
         }
     }
 
@@ -195,15 +198,6 @@ impl RestirMethod {
                     ctx.storage("restir reservoirs 1", bytes),
                 ],
                 rays: ctx.storage("restir rays", pixels as u64 * 4),
-                rays_read: {
-                    crate::gpu::traffic::buffer_made("restir rays (read back)");
-                    ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                        label: Some("restir rays (read back)"),
-                        size: (pixels as u64 * 4).max(4),
-                        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                        mapped_at_creation: false,
-                    })
-                },
             });
         }
         if self.past.as_ref().is_none_or(|p| p.pixels != pixels) {
@@ -297,8 +291,8 @@ impl RestirMethod {
     }
 
     /// After the shade: the frame's final reservoirs and G-buffer kept for the next frame (with
-    /// `--temporal on`), and the rays the pixels traced counted.
-    fn finish(&mut self, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) -> anyhow::Result<()> {
+    /// `--temporal on`), and the rays the pixels traced summed on the GPU (read only on request).
+    fn finish(&mut self, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) {
         let ctx = g.ctx;
         let size = self.size.as_ref().expect("prepared");
         let past = self.past.as_mut().expect("prepared");
@@ -311,28 +305,15 @@ impl RestirMethod {
             enc.copy_buffer_to_buffer(f.gbuffer, 0, &past.gbuffer, 0, f.pixels as u64 * SP_BYTES);
             past.cam = f.cam;
         }
-        let bytes = f.pixels as u64 * 4;
-        enc.copy_buffer_to_buffer(&size.rays, 0, &size.rays_read, 0, bytes);
         ctx.queue.submit([enc.finish()]);
-        n.indirect_rays += sum_rays(ctx, &size.rays_read, bytes)?;
-        Ok(())
+        let words = Words {
+            items: f.pixels,
+            stride: 1,
+            word: 0,
+        };
+        let sum = self.rays.record(g, SHADE.name(), &size.rays, words);
+        n.pending = Some(std::sync::Arc::new(PendingRays(sum)));
     }
-}
-
-/// The sum of `buffer` (`MAP_READ`, `bytes` long, its copy submitted) as u32s, waiting for the
-/// device (`gpu::mapped`).
-fn sum_rays(ctx: &GpuContext, buffer: &wgpu::Buffer, bytes: u64) -> anyhow::Result<u64> {
-    if bytes == 0 {
-        return Ok(0);
-    }
-    let sum = crate::gpu::mapped(&ctx.device, buffer, "restir's ray counts", |view| {
-        bytemuck::cast_slice::<u8, u32>(view)
-            .iter()
-            .map(|&r| r as u64)
-            .sum()
-    })?;
-    crate::gpu::traffic::read_back(bytes);
-    Ok(sum)
 }
 
 impl IndirectMethod for RestirMethod {
@@ -372,7 +353,7 @@ impl IndirectMethod for RestirMethod {
             }
             SHADE => {
                 self.stage(g, pass, stage_seed(3, 0), pixels, false);
-                self.finish(g, f, n)?;
+                self.finish(g, f, n);
             }
             _ => unreachable!("{pass} is not restir's"),
         }
@@ -443,4 +424,5 @@ pub const ROOM: Room = Room {
         )
     },
     short: |m| label(m).replace(' ', "-"),
+    report_columns: &[],
 };

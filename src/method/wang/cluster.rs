@@ -151,8 +151,9 @@ pub struct WangClustering {
     pub samples: wgpu::Buffer,
     /// The sample points as shading points of albedo 1 (what the gather reads).
     pub sample_gbuffer: wgpu::Buffer,
-    /// Clusters with a sample point.
-    pub used: u32,
+    /// The clustering's counters (8 words; word 7: the clusters with a sample point), left on the
+    /// GPU: read on request (`read_used`, the frame's pending counts).
+    pub bounds: wgpu::Buffer,
     /// Assignment passes run.
     pub passes: u32,
 }
@@ -160,6 +161,11 @@ pub struct WangClustering {
 impl WangClustering {
     pub fn k(&self) -> u32 {
         self.params.k
+    }
+
+    /// Clusters with a sample point (read back: a wait and 32 bytes; on request only).
+    pub fn read_used(&self, ctx: &GpuContext) -> Result<u32> {
+        used_of(&ctx.device, &ctx.queue, &self.bounds)
     }
 
     /// The labels (read back; tests and views).
@@ -188,6 +194,11 @@ impl WangClustering {
             .map(|c| c[SAMPLE_WORD as usize])
             .collect())
     }
+}
+
+/// Clusters with a sample point: word 7 of a clustering's `bounds` (read back, waiting for it).
+pub fn used_of(device: &wgpu::Device, queue: &wgpu::Queue, bounds: &wgpu::Buffer) -> Result<u32> {
+    Ok(crate::gpu::read_buffer::<u32>(device, queue, bounds, 8)?[7])
 }
 
 const ENTRIES: &[&str] = &[
@@ -350,7 +361,6 @@ impl WangCluster {
             ],
             None,
         );
-        let used = ctx.read_buffer::<u32>(&bounds, 8)?[7];
         Ok(WangClustering {
             params: *p,
             labels,
@@ -359,7 +369,7 @@ impl WangCluster {
             tree,
             samples,
             sample_gbuffer,
-            used,
+            bounds,
             passes,
         })
     }

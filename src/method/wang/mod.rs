@@ -17,7 +17,7 @@ use bytemuck::{Pod, Zeroable};
 
 use self::cluster::{ClusterParams, WangCluster, WangClustering};
 use super::Method;
-use super::{Counts, FrameInputs, IndirectMethod, Room};
+use super::{Counts, FrameInputs, IndirectMethod, PendingReport, Resolved, Room};
 use crate::gi::dispatch::{Gpu, Kernel, Run, copy_to_texture, data_texture};
 use crate::gi::pass::Pass;
 use crate::gi::reference::GatherInputs;
@@ -239,6 +239,7 @@ pub const ROOM: Room = Room {
     label: |m| format!("a{}", m.wang.wang_alpha),
     series: |m| format!("α {}", m.wang.wang_alpha),
     short: |m| format!("a{}", m.wang.wang_alpha),
+    report_columns: &[],
 };
 
 /// wang's state: its pipelines, what its passes hand on within a frame, and the last frame's
@@ -256,6 +257,25 @@ impl WangMethod {
             state: WangState::default(),
             last: None,
         }
+    }
+}
+
+/// wang's counts left on the GPU: its clustering's clusters with a sample point, each of which
+/// traced a ray to every light and `RADIUS_RAYS` more; read on request.
+#[derive(Debug)]
+struct PendingUsed {
+    bounds: wgpu::Buffer,
+    rays_per_cluster: u64,
+}
+
+impl PendingReport for PendingUsed {
+    fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Resolved> {
+        let used = cluster::used_of(device, queue, &self.bounds)?;
+        Ok(Resolved {
+            indirect_rays: used as u64 * self.rays_per_cluster,
+            sp_used: Some(used),
+            report: None,
+        })
     }
 }
 
@@ -278,7 +298,6 @@ impl IndirectMethod for WangMethod {
                 let bounds = f.scene.bounds();
                 let p = ClusterParams::new(w, h, c.sp_clusters, alpha, f.frame.seed, bounds);
                 let w = wang.cluster.run(g, img, &p, c.iterations)?;
-                n.sp_used = w.used;
                 self.state.clustering = Some(w);
             }
             // The irradiance at the sample points (every light with its own shadow ray: the gather
@@ -303,7 +322,11 @@ impl IndirectMethod for WangMethod {
                     &mut |_, _| true,
                 );
                 let radius = wang.radius(g, &c, f.frame.seed);
-                n.indirect_rays = c.used as u64 * (num_lights + RADIUS_RAYS) as u64;
+                // The clusters used and the rays their sample points traced stay on the GPU.
+                n.pending = Some(std::sync::Arc::new(PendingUsed {
+                    bounds: c.bounds.clone(),
+                    rays_per_cluster: (num_lights + RADIUS_RAYS) as u64,
+                }));
                 self.state.frame = Some(WangFrame {
                     clustering: c,
                     irradiance,
