@@ -1,13 +1,14 @@
 #!/usr/bin/env python3
-"""The longest Rust functions under a folder (default src/), from the `fn` line to the closing brace
+"""The longest Rust functions under a folder (default: both crates' src/, crates/core/src and src), from the `fn` line to the closing brace
 (string and char literals and // comments ignored), and how many exceed a limit (default 150 lines;
 exit 1 if any does). Usage: scripts/long-functions.py [DIR [LIMIT]]."""
 import os, re, sys
-root = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "src")
+here = os.path.join(os.path.dirname(__file__), "..")
+roots = [sys.argv[1]] if len(sys.argv) > 1 else [os.path.join(here, "crates", "core", "src"), os.path.join(here, "src")]
 limit = int(sys.argv[2]) if len(sys.argv) > 2 else 150
 out = []
 fn_re = re.compile(r"^\s*(pub(\([^)]*\))?\s+)?(const\s+)?(async\s+)?(unsafe\s+)?(extern\s+\"[^\"]*\"\s+)?fn\s+(\w+)")
-for dp, _, fns in os.walk(root):
+for root, (dp, _, fns) in ((r, w) for r in roots for w in os.walk(r)):
     for f in fns:
         if not f.endswith(".rs"):
             continue

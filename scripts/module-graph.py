@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""The dependency graph of src/'s top-level modules (`crate::X` and `use crate::{X, ..}` outside
+"""The dependency graph of the top-level modules of the core crate (crates/core/src) and the
+application (src), as one graph (`crate::X` and `use crate::{X, ..}` outside
 `#[cfg(test)]` blocks), printed one module a line, and any cycle between them (exit 1 on a cycle).
 Also counts production imports of the CPU twins (`cpu::`, and a room's own `method::<m>::twin`;
 production is every file but `cpu/` and the rooms' `twin.rs`, outside `#[cfg(test)]`) and the
@@ -10,21 +11,33 @@ import os
 import re
 import sys
 
-root = os.path.join(os.path.dirname(__file__), "..", "src")
+here = os.path.join(os.path.dirname(__file__), "..")
+core = os.path.join(here, "crates", "core", "src")
+roots = [core, os.path.join(here, "src")]
 tops = set()
-for f in os.listdir(root):
-    if f.endswith(".rs") and f not in ("lib.rs", "main.rs"):
-        tops.add(f[:-3])
-    elif os.path.isdir(os.path.join(root, f)):
-        tops.add(f)
+for root in roots:
+    for f in os.listdir(root):
+        if f.endswith(".rs") and f not in ("lib.rs", "main.rs"):
+            tops.add(f[:-3])
+        elif os.path.isdir(os.path.join(root, f)):
+            tops.add(f)
+
+
+def files():
+    """Every .rs file with its path relative to its crate's src."""
+    for root in roots:
+        for dp, _, fn in os.walk(root):
+            for f in fn:
+                if f.endswith(".rs"):
+                    p = os.path.join(dp, f)
+                    yield p, os.path.relpath(p, root)
+
+
 edges = collections.defaultdict(set)
 cpu_imports = []
-for dp, _, fn in os.walk(root):
-    for f in fn:
-        if not f.endswith(".rs"):
-            continue
-        p = os.path.join(dp, f)
-        rel = os.path.relpath(p, root).split(os.sep)
+for p, relpath in files():
+    if True:
+        rel = relpath.split(os.sep)
         top = rel[0][:-3] if rel[0].endswith(".rs") else rel[0]
         if top in ("lib", "main"):
             continue
@@ -45,7 +58,7 @@ for dp, _, fn in os.walk(root):
         if room:
             twin = twin or re.search(r"\btwin::|::twin\b|\{[^}]*\btwin\b", code)
         if top != "cpu" and (re.search(r"\bcpu::", code) or twin):
-            cpu_imports.append(os.path.relpath(p, root))
+            cpu_imports.append(relpath)
 for k in sorted(edges):
     print(f"{k} -> {', '.join(sorted(edges[k]))}")
 index, low, stack, on, sccs, counter = {}, {}, [], set(), [], [0]
@@ -79,14 +92,12 @@ for v in sorted(tops):
 cycles = [s for s in sccs if len(s) > 1]
 print(f"cycles: {len(cycles)} {cycles if cycles else ''}")
 print(f"production imports of cpu:: or method::<m>::twin: {len(cpu_imports)} {cpu_imports if cpu_imports else ''}")
-methods = os.path.join(root, "method")
+methods = os.path.join(core, "method")
 for m in sorted(d for d in os.listdir(methods) if os.path.isdir(os.path.join(methods, d))):
     named = []
-    for dp, _, fn in os.walk(root):
-        for f in fn:
-            p = os.path.join(dp, f)
-            if f.endswith(".rs") and not os.path.relpath(p, root).startswith(f"method{os.sep}{m}{os.sep}"):
-                if m in open(p).read().lower():
-                    named.append(os.path.relpath(p, root))
-    print(f"{m}: named in {len(named)} files outside src/method/{m}/: {', '.join(sorted(named))}")
+    for p, relpath in files():
+        if not relpath.startswith(f"method{os.sep}{m}{os.sep}"):
+            if m in open(p).read().lower():
+                named.append(relpath)
+    print(f"{m}: named in {len(named)} files outside method/{m}/: {', '.join(sorted(named))}")
 sys.exit(1 if cycles or cpu_imports else 0)

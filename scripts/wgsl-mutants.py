@@ -53,7 +53,7 @@ MUTANTS = [
     ("eq5-cluster-spread-radius-ignored", "common/vpl.wgsl", "max(d2, max(d_min2, v.nrm.w))", "max(d2, d_min2)", "Eq. 5"),
     ("eq5-visibility-inverted", "reference.wgsl", "&& vpl_visible(p, n, v.pos.xyz, v.nrm.xyz)", "&& !vpl_visible(p, n, v.pos.xyz, v.nrm.xyz)", "Eq. 5"),
     ("eq5-shadow-ray-overshoots", "common/bvh.wgsl", "dist * (1.0 - 1e-4)", "dist * 1.5", "Eq. 5"),
-    # --- common/bvh.wgsl (traversal; CPU twin src/bvh.rs, tests/traversal.rs)
+    # --- common/bvh.wgsl (traversal; CPU twin crates/core/src/bvh.rs, tests/traversal.rs)
     ("bvh-safe-inverse-tiny-not-huge", "common/bvh.wgsl", "return select(-1.0, 1.0, x >= 0.0) / eps;", "return select(-1.0, 1.0, x >= 0.0) * eps;", "BVH"),
     ("bvh-box-slab-sign", "common/bvh.wgsl", "let t1 = (bmin - origin) * inv_dir;", "let t1 = (origin - bmin) * inv_dir;", "BVH"),
     ("bvh-node-second-texel-off-by-one", "common/bvh.wgsl", "texel_xy(2u * i + 1u)", "texel_xy(2u * i + 2u)", "BVH"),
@@ -188,7 +188,7 @@ MUTANTS = [
     # bounds, as zeros: no representative, and its write past the matrix is dropped by wgpu's bounds
     # checks) and `min(c0 + 32u, params.num_lights)` → `c0 + 32u` (the light texture past the last
     # light is zero-initialised: a zero normal fails the facing test, no bit).
-    # --- common/rng.wgsl (PCG hash; CPU twin src/cpu/rng.rs)
+    # --- common/rng.wgsl (PCG hash; CPU twin crates/core/src/cpu/rng.rs)
     ("rng-pcg-shift-off-by-one", "common/rng.wgsl", "((state >> 28u) + 4u)", "((state >> 28u) + 3u)", "rng"),
     ("rng-seed-middle-hash-dropped", "common/rng.wgsl", "pcg_hash(b ^ pcg_hash(c))", "pcg_hash(b ^ c)", "rng"),
     ("rng-next-half-range", "common/rng.wgsl", "f32(*state >> 8u)", "f32(*state >> 9u)", "rng"),
@@ -219,7 +219,7 @@ MUTANTS = [
     ("surface-albedo-vertex-colour-dropped", "common/surface.wgsl", "        a *= color;\n", "", "surface"),
     ("surface-emission-from-back", "common/surface.wgsl", "let front = dot(n, dir) < 0.0;", "let front = dot(n, dir) > 0.0;", "surface"),
     ("surface-shading-normal-not-faced", "common/surface.wgsl", "if dot(n, ng) < 0.0 {", "if false {", "surface"),
-    # --- common/alpha.wgsl (alpha test; CPU twin AlphaMask in src/bvh.rs)
+    # --- common/alpha.wgsl (alpha test; CPU twin AlphaMask in crates/core/src/bvh.rs)
     ("alpha-texel-row-column-swapped", "common/alpha.wgsl", "u32(yi * w + xi)", "u32(xi * w + yi)", "alpha"),
     ("alpha-bilinear-centre-dropped", "common/alpha.wgsl", "vec2<f32>(f32(t.width), f32(t.height)) - 0.5;", "vec2<f32>(f32(t.width), f32(t.height));", "alpha"),
     ("alpha-bilinear-axes-swapped", "common/alpha.wgsl", "mix(mix(a, b, w.x), mix(c, d, w.x), w.y)", "mix(mix(a, b, w.y), mix(c, d, w.y), w.x)", "alpha"),
@@ -230,7 +230,7 @@ MUTANTS = [
     # --- raycast.wgsl (batch queries of tests/traversal.rs)
     ("raycast-u-v-swapped", "raycast.wgsl", "bitcast<u32>(h.u), bitcast<u32>(h.v)", "bitcast<u32>(h.v), bitcast<u32>(h.u)", "raycast"),
     ("raycast-mode-swapped", "raycast.wgsl", "if params.mode == 0u {", "if params.mode != 0u {", "raycast"),
-    # --- lightcluster.wgsl (CPU twin src/method/lightcluster/twin.rs)
+    # --- lightcluster.wgsl (CPU twin crates/core/src/method/lightcluster/twin.rs)
     ("lc-disc-radius-not-sqrt", "lightcluster.wgsl", "a.w * sqrt((f32(i) + 0.5) / f32(DISC_SAMPLES))", "a.w * ((f32(i) + 0.5) / f32(DISC_SAMPLES))", "lightcl."),
     ("lc-disc-golden-angle-wrong", "lightcluster.wgsl", "let th = 2.399963 * f32(i);", "let th = 2.0 * PI * f32(i) / f32(DISC_SAMPLES);", "lightcl."),
     ("lc-disc-fraction-off-by-one", "lightcluster.wgsl", "f32(seen) / f32(DISC_SAMPLES)", "f32(seen) / f32(DISC_SAMPLES - 1u)", "lightcl."),
@@ -241,7 +241,7 @@ MUTANTS = [
     ("lc-member-flush-ignores-visibility", "lightcluster.wgsl", "if vpl_visible(p, n, v.pos.xyz, v.nrm.xyz) {", "if true {", "lightcl."),
     ("lc-member-group-weight-one-channel", "lightcluster.wgsl", "let w = t.x + t.y + t.z;", "let w = t.x;", "lightcl."),
     ("lc-visibility-cache-never-refreshed", "lightcluster.wgsl", "if c != cur {", "if cur == INVALID {", "lightcl."),
-    # --- wang.wgsl (CPU twin src/method/wang/twin.rs)
+    # --- wang.wgsl (CPU twin crates/core/src/method/wang/twin.rs)
     ("wang-label-texel-row-2048", "wang.wgsl", "vec2<u32>(q & 4095u, q >> 12u)", "vec2<u32>(q & 2047u, q >> 11u)", "wang"),
     ("wang-point-texel-column-even", "wang.wgsl", "vec2<u32>(i & 4095u, i >> 12u)", "vec2<u32>(i & 4094u, i >> 12u)", "wang"),
     ("wang-neighbour-bound-off-by-one", "wang.wgsl", "qx >= i32(params.width)", "qx > i32(params.width)", "wang"),
@@ -294,7 +294,7 @@ MUTANTS = [
     ("wang-cluster-sample-error-starts-at-zero", "wang/sample.wgsl", "atomicStore(&sums[WORDS * j + 13u], 0xffffffffu);", "atomicStore(&sums[WORDS * j + 13u], 0u);", "wang"),
     ("wang-cluster-sample-min-swapped", "wang/sample.wgsl", "if bits < atomicLoad(&sums[WORDS * l + 13u]) {", "if bits > atomicLoad(&sums[WORDS * l + 13u]) {", "wang"),
     ("wang-cluster-sample-albedo-slot-off-by-one", "wang/sample.wgsl", "sample_gbuffer[4u * j + 2u] = albedo;", "sample_gbuffer[4u * j + 3u] = albedo;", "wang"),
-    # --- cvrtgi.wgsl (CPU twin src/method/cvrtgi/twin.rs)
+    # --- cvrtgi.wgsl (CPU twin crates/core/src/method/cvrtgi/twin.rs)
     ("cv-face-axis-sign-swapped", "cvrtgi.wgsl", "select(-1.0, 1.0, dir % 2u == 0u)", "select(1.0, -1.0, dir % 2u == 0u)", "cvrtgi"),
     ("cv-dominant-face-sign-swapped", "cvrtgi.wgsl", "select(0u, 1u, n[axis] < 0.0)", "select(1u, 0u, n[axis] < 0.0)", "cvrtgi"),
     ("cv-voxel-coord-rounded", "cvrtgi.wgsl", "floor((p - params.origin.xyz) / params.origin.w)", "floor((p - params.origin.xyz) / params.origin.w + 0.5)", "cvrtgi"),

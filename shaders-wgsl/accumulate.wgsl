@@ -1,8 +1,8 @@
-// Temporal accumulation of the indirect light (`--temporal on`, src/gi/accumulate.rs): each pixel's
+// Temporal accumulation of the indirect light (`--temporal on`, crates/core/src/gi/accumulate.rs): each pixel's
 // surface point is projected into the previous frame, that frame's accumulated indirect light is read
 // there bilinearly from the taps that show the same surface (depth along the previous view and normal),
 // and blended with this frame's: an exponential moving average over the frames that saw the point.
-// CPU twin: src/cpu/accumulate.rs.
+// CPU twin: crates/core/src/cpu/accumulate.rs.
 #import common/chunk.wgsl
 #import common/gbuffer.wgsl
 #import common/camera.wgsl

@@ -1,5 +1,5 @@
 // The pixels of a frame whose primary ray hit a surface, counted on the GPU into one slot of a ring
-// of counters (src/gi/count_lit.rs): the viewer's `motion.lit_fraction_min` without reading the
+// of counters (crates/core/src/gi/count_lit.rs): the viewer's `motion.lit_fraction_min` without reading the
 // G-buffer back. The CPU twin is `app::motion::lit_fraction` over the read-back positions.
 #import common/chunk.wgsl
 #import common/gbuffer.wgsl

@@ -1,5 +1,5 @@
 // CVRTGI (Cosin Ayerbe & Patow 2022, seed 003; docs/cvrtgi.md): clustered voxels with VPLs as the lit
-// surface. Entry points, each over a range of items (src/gi/cvrtgi.rs bounds the dispatches):
+// surface. Entry points, each over a range of items (crates/core/src/gi/cvrtgi.rs bounds the dispatches):
 // - visibility (§4.3): per exposed voxel face, the clusters its rays see (BVH rays);
 // - escape: per VPL, the fractions of its light stopped at its surface and sent into the scene
 //   (not in the paper);
@@ -7,7 +7,7 @@
 //   conservation scale, not in the paper);
 // - filter_faces (§4.4): one pass of the Gaussian filter over same-direction faces;
 // - lookup (§4.5): per pixel, ρ/π times its voxel face's filtered irradiance.
-// CPU twin: src/method/cvrtgi/twin.rs (same names).
+// CPU twin: crates/core/src/method/cvrtgi/twin.rs (same names).
 #import common/bvh.wgsl
 #import common/chunk.wgsl
 #import common/gbuffer.wgsl

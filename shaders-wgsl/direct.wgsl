@@ -1,5 +1,5 @@
 // Direct light per shading point: stratified area-light samples (emitters chosen by power) and every
-// punctual light, each with its own shadow ray; emission is added. CPU twin: `CpuScene::direct` (src/cpu/shading.rs).
+// punctual light, each with its own shadow ray; emission is added. CPU twin: `CpuScene::direct` (crates/core/src/cpu/shading.rs).
 #import common/bvh.wgsl
 #import common/lights.wgsl
 #import common/rng.wgsl
@@ -31,7 +31,7 @@ fn visible(p: vec3<f32>, n: vec3<f32>, q: vec3<f32>) -> bool {
 }
 
 // Random numbers restart every RNG_BLOCK samples from a stream seeded by the block, so a sub range that
-// starts at a block boundary needs no earlier draws (src/gi/direct.rs splits the samples that way).
+// starts at a block boundary needs no earlier draws (crates/core/src/gi/direct.rs splits the samples that way).
 // With at most RNG_BLOCK samples the stream is the single one of block 0.
 const RNG_BLOCK: u32 = 64u;
 

@@ -1,5 +1,5 @@
 // LightCluster (seed 002) adapted to VPLs (docs/methods.md, "lightcluster"); CPU twin:
-// src/method/lightcluster/twin.rs. §3.2.1: L(p) = sum_i L_d(p, l_i) (1/A_c) int_{A_c} V(p, l) dl: every VPL's
+// crates/core/src/method/lightcluster/twin.rs. §3.2.1: L(p) = sum_i L_d(p, l_i) (1/A_c) int_{A_c} V(p, l) dl: every VPL's
 // own Eq. (5) term times its cluster's visibility.
 // - `params.mode` 1, the paper's §3.2.2: the visibility of the cluster's disc (radius d_min) from
 //   DISC_SAMPLES shadow rays to fixed points of it (the paper filters a cube shadow map with PCSS),

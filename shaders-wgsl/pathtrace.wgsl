@@ -1,5 +1,5 @@
 // A diffuse path tracer over the same BVH and materials, to check the VPL reference's own bias
-// (src/gi/pathtrace.rs). Same primary ray per pixel centre as the G-buffer; next-event estimation at
+// (crates/core/src/gi/pathtrace.rs). Same primary ray per pixel centre as the G-buffer; next-event estimation at
 // every vertex (emitters are not hit by bounce rays: diffuse-only NEE); cosine bounces and the same
 // Russian roulette as the VPL particles; at most max_vertices surface vertices. With NEE off it counts
 // emission where bounce rays land instead.

@@ -1,4 +1,4 @@
-// Batch ray queries for the traversal tests and the throughput benchmark (src/gi/raycast.rs).
+// Batch ray queries for the traversal tests and the throughput benchmark (crates/core/src/gi/raycast.rs).
 #import common/bvh.wgsl
 #import common/chunk.wgsl
 

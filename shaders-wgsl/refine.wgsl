@@ -1,4 +1,4 @@
-// The direct light at rest, refined (src/gi/refine.rs): the frame's emission + direct light becomes
+// The direct light at rest, refined (crates/core/src/gi/refine.rs): the frame's emission + direct light becomes
 // the running mean of its estimates, each new one blended in with weight 1 / n (n = the estimates so
 // far, this one included), in place on the GPU. The CPU twin is the mean the viewer's split path
 // takes in f64 (app::worker::Accumulation).

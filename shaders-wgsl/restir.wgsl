@@ -1,5 +1,5 @@
 // ReSTIR DI (Bitterli, Wyman, Pharr, Shirley, Novák, Jarosz 2020) over the frame's VPLs
-// (docs/methods.md, "restir"; src/method/restir/). CPU twin: src/method/restir/twin.rs.
+// (docs/methods.md, "restir"; crates/core/src/method/restir/). CPU twin: crates/core/src/method/restir/twin.rs.
 // One kernel, its stage in `chunk.seed` (low byte; the spatial iteration above it), each a bounded
 // dispatch over pixel ranges:
 // - 0, initial: M candidates drawn by flux from the alias table (resampled importance sampling),

@@ -1,5 +1,5 @@
 // One word of each item of a buffer summed on the GPU into a 64-bit total (two u32 words, low then
-// high) in one slot of a ring that stays on the GPU (src/gi/sum.rs): a method's per-pixel counts
+// high) in one slot of a ring that stays on the GPU (crates/core/src/gi/sum.rs): a method's per-pixel counts
 // (e.g. the shadow rays each pixel traced) counted without reading them back each frame. The CPU
 // twin is `gi::sum::sum_words_cpu`.
 #import common/chunk.wgsl

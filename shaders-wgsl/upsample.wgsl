@@ -1,8 +1,8 @@
-// The indirect light at a lower resolution than the image (`--indirect-scale`, src/gi/upsample.rs):
+// The indirect light at a lower resolution than the image (`--indirect-scale`, crates/core/src/gi/upsample.rs):
 // `downsample` builds the render-scale G-buffer from the image's (one representative shading point a
 // low-res pixel), the indirect passes run on it unchanged, and `upsample` brings their light back to
 // every image pixel with joint bilateral weights (bilinear x plane distance x normal agreement),
-// falling back to the low-res tap nearest in depth where no tap matches. CPU twin: src/cpu/upsample.rs.
+// falling back to the low-res tap nearest in depth where no tap matches. CPU twin: crates/core/src/cpu/upsample.rs.
 #import common/chunk.wgsl
 #import common/gbuffer.wgsl
 

@@ -1,5 +1,5 @@
 // Step 1 of the paper's frame: light particles from the emitters (chosen by power), a VPL at every
-// diffuse hit, cosine-distributed bounces, Russian roulette after the first bounce (src/gi/vpl_trace.rs).
+// diffuse hit, cosine-distributed bounces, Russian roulette after the first bounce (crates/core/src/gi/vpl_trace.rs).
 // Path k writes its VPLs to slots k * MAX_DEPTH + b; the host keeps the first N in path order.
 #import common/bvh.wgsl
 #import common/lights.wgsl

@@ -1,5 +1,5 @@
 // Wang et al. 2009 (seed 001) adapted to VPL lighting (docs/methods.md, "wang"); CPU twin:
-// src/method/wang/twin.rs. Two entry points, each its own pipeline (src/method/wang/mod.rs); the clustering
+// crates/core/src/method/wang/twin.rs. Two entry points, each its own pipeline (crates/core/src/method/wang/mod.rs); the clustering
 // of §3.2 is wang_cluster.wgsl:
 // - radius: §3.4's R_j, the harmonic mean distance to the surfaces seen from sample point j (summed
 //   inverse hit distances of cosine-distributed rays);
@@ -21,7 +21,7 @@ struct WangParams {
     _p0: u32,
     _p1: u32,
     seed: u32,
-    // R_j's clamp [r_min, r_max] (src/method/wang/twin.rs, radius_from_sum).
+    // R_j's clamp [r_min, r_max] (crates/core/src/method/wang/twin.rs, radius_from_sum).
     r_min: f32,
     r_max: f32,
     // Rays of R_j in all.
@@ -91,7 +91,7 @@ fn radius(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     }
 }
 
-// R_j from the summed inverse distances (src/method/wang/twin.rs, radius_from_sum).
+// R_j from the summed inverse distances (crates/core/src/method/wang/twin.rs, radius_from_sum).
 fn radius_of(j: u32) -> f32 {
     let s = radius_sum[j].x;
     var r = params.r_max;

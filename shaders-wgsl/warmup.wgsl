@@ -1,4 +1,4 @@
-// GPU warm-up (src/gpu/warmup.rs): dependent multiply-adds that keep every core busy, so that the
+// GPU warm-up (crates/core/src/gpu/warmup.rs): dependent multiply-adds that keep every core busy, so that the
 // GPU runs at its working clock when the timed renders start. Touches nothing the renderer reads.
 
 struct WarmupParams {
@@ -16,7 +16,7 @@ struct WarmupParams {
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     var x = f32(gid.x & 1023u) * 1e-3;
     var y = 1.0 - x;
-    // At most a few thousand trips (src/gpu/warmup.rs): lavapipe ends a loop after 65,535.
+    // At most a few thousand trips (crates/core/src/gpu/warmup.rs): lavapipe ends a loop after 65,535.
     for (var i = 0u; i < params.iterations; i++) {
         x = fma(x, 0.9999, y * 1e-4);
         y = fma(y, 0.9998, x * 2e-4);

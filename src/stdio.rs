@@ -20,10 +20,8 @@ pub fn out(args: std::fmt::Arguments) {
     }
 }
 
-/// Writes `args` to stderr, ignoring a failure (nothing is left to tell it on).
-pub fn err(args: std::fmt::Arguments) {
-    let _ = std::io::stderr().lock().write_fmt(args);
-}
+/// Writes `args` to stderr, ignoring a failure (the core's).
+pub use fuzzy_vpl_core::stdio::err;
 
 fn note_stdout_error(e: std::io::Error) {
     let mut first = STDOUT_FAILED.lock().unwrap_or_else(|p| p.into_inner());
@@ -57,6 +55,8 @@ macro_rules! eprintln {
     ($($arg:tt)*) => { $crate::stdio::err(format_args!("{}\n", format_args!($($arg)*))) };
 }
 
+// Unused today; here so that an `eprint!` added later cannot panic either.
+#[allow(unused_macros)]
 macro_rules! eprint {
     ($($arg:tt)*) => { $crate::stdio::err(format_args!($($arg)*)) };
 }

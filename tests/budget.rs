@@ -5,7 +5,7 @@
 //! How near real frames land on a budget is a measurement, not a test: the bench's `--target-ms`
 //! rows and `fuzzy-vpl render --target-ms MS --stats` report it (docs/results.md); this test prints
 //! the real GPU times of the chosen settings beside the model's. The controller's steps on
-//! hand-worked times are unit tests in `src/render/budget.rs`.
+//! hand-worked times are unit tests in `crates/core/src/render/budget.rs`.
 //!
 //! Sizes: conference at 160×120 with 4096 VPLs (the controller's start: K_SP 192, K_VPL 1000).
 

@@ -1,13 +1,13 @@
 //! The viewer's display pass (`app::display`, `shaders-wgsl/display.wgsl`) against its CPU twin
-//! (`cpu::display`) on every view it draws, and against hand-worked values; the library's frame on
+//! (`app::twin`) on every view it draws, and against hand-worked values; the library's frame on
 //! the GPU (`Renderer::render_gpu`, `render_to_texture`) against the frame read back, and what
 //! crosses the bus (`gpu::traffic`).
 
 mod common;
 
 use fuzzy_vpl::app::display::{Display, DisplayInputs, Images};
+use fuzzy_vpl::app::twin;
 use fuzzy_vpl::app::views::View;
-use fuzzy_vpl::cpu::display as twin;
 use fuzzy_vpl::exposure::Exposure;
 use fuzzy_vpl::gpu::{GpuContext, read_texture, traffic::Traffic};
 use fuzzy_vpl::render::{RenderSettings, Renderer};

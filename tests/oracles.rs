@@ -725,7 +725,7 @@ fn run_visibility(
 /// (facing away), c3 (under P0's plane) and c4 (grazing), whose shadow rays (along +z below the
 /// quad, along −z and along +x) meet nothing: words (0x3d, 0x10); a row without a representative
 /// stays (0, 0). The radiance through that matrix is the same 0.438625: Eq. (6) gives c2, c3 and c4
-/// nothing through their own cosines. The setting's default is off (a test in `src/settings`).
+/// nothing through their own cosines. The setting's default is off (a test in `crates/core/src/settings`).
 #[test]
 fn gpu_visibility_is_pure_visibility_by_default() {
     let ctx = common::gpu();

@@ -8,8 +8,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use fuzzy_vpl::app::panel::PANEL_WIDTH;
+use fuzzy_vpl::app::twin;
 use fuzzy_vpl::app::views::{self, View};
-use fuzzy_vpl::cpu::display as twin;
 use fuzzy_vpl::exposure::Exposure;
 use fuzzy_vpl::gi::primary::CameraParams;
 use fuzzy_vpl::render::{RenderSettings, Renderer};
@@ -140,7 +140,7 @@ fn compare(shown: &[[u8; 3]], expected: &[[u8; 3]], masked: &[bool]) -> (i32, us
 /// - final, direct, indirect: `render --indirect-scale 0.5 [--layer L] -o L.png`;
 /// - SP clusters: the library's frame of the same settings (`Renderer::render`, its radiance
 ///   checked against `render`'s EXR: measured bit-equal, bound 1e-6 relative) and its labels
-///   (`Renderer::sp_labels`) composed by the CPU twin (`cpu::display`);
+///   (`Renderer::sp_labels`) composed by the CPU twin (`app::twin`);
 /// - VPL clusters: the darkened final image (`render`'s PNG, each 8-bit value divided by 3) outside
 ///   3 × 3 pixels about each VPL and 9 × 9 about each light (VPL-cluster representative), projected
 ///   with the view's camera from the library frame's resident sets (`Renderer::vpl_set`, `lights`).

@@ -5,7 +5,7 @@
 // a loop of their own: on lavapipe the mere presence of the test in the one leaf loop slowed every
 // ray by ~40% (docs/scenes.md). Inside such a leaf, triangles not flagged in v0.w are plain hits,
 // and a scene without any compiles the test out (HAS_ALPHA_TEST). CPU twin: `AlphaMask` in
-// src/bvh.rs.
+// crates/core/src/bvh.rs.
 #import common/surface.wgsl
 
 // Alpha of one texel, repeat-wrapped.

@@ -1,5 +1,5 @@
 // Software BVH2 traversal (stackless, skip links) with a conservative ray-box test (Ize 2013) and the
-// watertight ray-triangle test (Woop, Benthin, Wald 2013); src/bvh.rs has the CPU twin of both and
+// watertight ray-triangle test (Woop, Benthin, Wald 2013); crates/core/src/bvh.rs has the CPU twin of both and
 // tests/traversal.rs checks GPU, twin and obvhs' own CPU traversal agree.
 //
 // Nodes and triangles are read with textureLoad from 16-byte texels, not from storage buffers: on
@@ -54,7 +54,7 @@ fn load_node(i: u32) -> BvhNode {
     return BvhNode(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w);
 }
 
-// 1 + 2 gamma(3), gamma(n) = n u / (1 - n u), u = 2^-24 (Ize 2013; src/bvh.rs has the same constant).
+// 1 + 2 gamma(3), gamma(n) = n u / (1 - n u), u = 2^-24 (Ize 2013; crates/core/src/bvh.rs has the same constant).
 const BOX_EXIT_SCALE: f32 = 1.0000004;
 
 // Per-ray constants of the watertight ray-triangle test (Woop, Benthin and Wald 2013): the axis `k.z`

@@ -1,5 +1,5 @@
 // Bounded dispatches: a heavy pass runs as several dispatches over ranges of its items, each told its
-// range here (src/gi/dispatch.rs writes it before each submission).
+// range here (crates/core/src/gi/dispatch.rs writes it before each submission).
 struct Chunk {
     offset: u32,
     count: u32,

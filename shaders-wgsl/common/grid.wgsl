@@ -1,6 +1,6 @@
 // The uniform grid over cluster centres and its ring search, one for both k-means: colom's (Alg. 1
 // line 5, kmeans/grid.wgsl and common/nearest.wgsl) and wang's (§3.2, wang/grid.wgsl and
-// wang/assign.wgsl). CPU twin: src/cpu/grid.rs.
+// wang/assign.wgsl). CPU twin: crates/core/src/cpu/grid.rs.
 //
 // The file that imports it supplies, by name:
 // - the bindings `bounds` (atomic words; 0-5 the valid centres' bounds as float_key bits, min xyz
@@ -30,7 +30,7 @@ struct Grid {
     num_cells: u32,
 }
 
-// Texel i of a data texture: 4096 texels a row (DATA_ROW in src/gi/dispatch.rs).
+// Texel i of a data texture: 4096 texels a row (DATA_ROW in crates/core/src/gi/dispatch.rs).
 fn texel_xy(i: u32) -> vec2<u32> {
     return vec2<u32>(i & 4095u, i >> 12u);
 }
@@ -79,7 +79,7 @@ fn add_to_bounds(pos: vec4<f32>) {
 // k points spread over the bounds' surface area; at most MAX_DIM cells per axis and no finer than
 // 1e-7 of the frame's diagonal (frame_ext.w). Without a valid centre, one frame (frame_lo, frame_ext)
 // of cells. `along_line`: the spacing is at least that of k points along the bounds' longest edge
-// (centres along a line have no area; wang's choice, src/cpu/grid.rs `cell_side_and_dims`: it acts
+// (centres along a line have no area; wang's choice, crates/core/src/cpu/grid.rs `cell_side_and_dims`: it acts
 // only below 97 centres, where 1.5 / k exceeds the MAX_DIM floor's 1 / 64).
 fn grid_build(k: u32, frame_lo: vec3<f32>, frame_ext: vec4<f32>, along_line: bool) {
     var lo = vec3<f32>(0.0);
@@ -136,7 +136,7 @@ fn grid_count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
 // `ranges` (off[-1] = 0, off[c] = the total past the last cell): one fetch gives a row run of three
 // cells around c (scan_ring1). Two passes; a workgroup takes blocks wid, wid + groups, ..., so any
 // number of workgroups gives the same sums. Only the GPU knows the cell count: the host dispatches
-// about one workgroup a block from an estimate (src/gi/kmeans.rs, scan_groups). A single workgroup
+// about one workgroup a block from an estimate (crates/core/src/gi/kmeans.rs, scan_groups). A single workgroup
 // walking all cells cost 0.6 ms a grid build at 94k cells on an H100; a fixed 256 workgroups, mostly
 // idle, cost lavapipe 4 ms a grid build at 720 cells. The workgroup scan is common/scan.wgsl's.
 var<workgroup> wg_cells: u32;

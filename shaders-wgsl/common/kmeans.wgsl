@@ -6,7 +6,7 @@
 const INVALID: u32 = 0xffffffffu;
 const BIG: f32 = 3.4028235e38;
 const MAX_F: u32 = 16u;
-// F of the pipeline (params.f; src/gi/kmeans.rs builds one pipeline set per F in use): loops over the
+// F of the pipeline (params.f; crates/core/src/gi/kmeans.rs builds one pipeline set per F in use): loops over the
 // F slots of a point have a constant trip count, so its list lives in registers.
 override F: u32 = 1u;
 // Where the nearest-centroid search reads the grid (the result is the same). true (software
@@ -15,10 +15,10 @@ override F: u32 = 1u;
 // every fetch). false (GPUs): the storage buffers, the normal loaded with the position (both cached;
 // a thread's chain of dependent loads sets the time there: 13% less in assign_sampled on an H100).
 override TEXTURE_SEARCH: bool = true;
-// Whether final_assign applies the plane gate (params.plane_gate <= 1; src/gi/kmeans.rs builds the
+// Whether final_assign applies the plane gate (params.plane_gate <= 1; crates/core/src/gi/kmeans.rs builds the
 // pipelines with it on only when asked, so the default frame pays nothing for it).
 override PLANE_GATE: bool = false;
-// The departures from Alg. 1 and 2, each on by default and off with --paper (src/gi/kmeans.rs builds
+// The departures from Alg. 1 and 2, each on by default and off with --paper (crates/core/src/gi/kmeans.rs builds
 // a pipeline set per combination, `settings::Adaptations`, so a switched-off one costs nothing; the
 // CPU twin reads the same switches from params.adapt). docs/clustering.md, "The paper exactly".
 // RESEED: an empty cluster is re-seeded at an orphan or a drawn sampled point (iterate.wgsl).
@@ -51,7 +51,7 @@ struct KmParams {
     ext: vec4<f32>,
     // p of the fuzzy weights w'_f = dist^-p (Eq. 10 is p = 1; 0 is Eq. 8's plain mean).
     weight_exponent: f32,
-    // The plane gate of the final assignment: sin of its angle, 2 when off (src/gi/kmeans.rs).
+    // The plane gate of the final assignment: sin of its angle, 2 when off (crates/core/src/gi/kmeans.rs).
     plane_gate: f32,
     // settings::Adaptations::bits (for the CPU twin; the shaders use the overrides above).
     adapt: u32,
@@ -112,7 +112,7 @@ fn stopped() -> bool {
 
 // The grid as the nearest-centroid search reads it: grid_scatter writes the valid centroids sorted by
 // cell (2 texels a slot, as float bits: position with w = the centroid's index, normal),
-// grid_scan_ranges each cell's offsets. On a software adapter (TEXTURE_SEARCH) src/gi/kmeans.rs
+// grid_scan_ranges each cell's offsets. On a software adapter (TEXTURE_SEARCH) crates/core/src/gi/kmeans.rs
 // copies both into the textures below after each grid build and the search reads those; on a GPU it
 // reads the storage buffers and the textures are one unused texel each.
 @group(1) @binding(13) var<storage, read_write> sorted: array<vec4<u32>>;

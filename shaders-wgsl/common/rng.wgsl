@@ -1,4 +1,4 @@
-// PCG hash random numbers (Jarzynski & Olano 2020); mirrored by src/cpu/rng.rs.
+// PCG hash random numbers (Jarzynski & Olano 2020); mirrored by crates/core/src/cpu/rng.rs.
 
 fn pcg_hash(v: u32) -> u32 {
     let state = v * 747796405u + 2891336453u;

@@ -1,4 +1,4 @@
-// Sampling helpers; mirrored by src/cpu/sampling.rs.
+// Sampling helpers; mirrored by crates/core/src/cpu/sampling.rs.
 
 // An orthonormal basis around unit n (Duff et al. 2017).
 fn onb(n: vec3<f32>) -> mat3x3<f32> {

@@ -1,5 +1,5 @@
-// Scene data shared by every pass: bind group 0, laid out by src/gi/scene_gpu.rs.
-// Triangle arrays are in BVH slot order (see src/bvh.rs).
+// Scene data shared by every pass: bind group 0, laid out by crates/core/src/gi/scene_gpu.rs.
+// Triangle arrays are in BVH slot order (see crates/core/src/bvh.rs).
 
 struct SceneInfo {
     num_tris: u32,
@@ -14,7 +14,7 @@ struct SceneInfo {
     _pad: u32,
 }
 
-// BVH2 in depth-first preorder with skip links (src/bvh.rs): an inner node's first child follows it;
+// BVH2 in depth-first preorder with skip links (crates/core/src/bvh.rs): an inner node's first child follows it;
 // `index` is the inner node's skip link (next node after its subtree) or the leaf's first triangle slot.
 // Stored as two texels of `bvh_texels` (min | prim_count, max | index); see bvh.wgsl for why textures.
 // A leaf holding an alpha-tested triangle has ALPHA_LEAF set in prim_count (alpha.wgsl).
@@ -74,7 +74,7 @@ struct Light {
 @group(0) @binding(1) var bvh_texels: texture_2d<u32>;
 // Shading normals and uvs, 4 texels (n0, n1, n2, extra of TriShade) a triangle: a texture rather than a
 // storage buffer so that a scene is not limited by one storage binding (128 MiB on lavapipe: 2.1 M
-// triangles at 64 bytes); data textures hold 33.5 M texels (src/gi/scene_gpu.rs, MAX_TEXELS).
+// triangles at 64 bytes); data textures hold 33.5 M texels (crates/core/src/gi/scene_gpu.rs, MAX_TEXELS).
 @group(0) @binding(3) var shade_texels: texture_2d<f32>;
 @group(0) @binding(4) var<storage, read> materials: array<Material>;
 @group(0) @binding(5) var<storage, read> tex_info: array<TexInfo>;
@@ -86,7 +86,7 @@ struct Light {
 // Linear vertex colours (COLOR_0), 3 per triangle slot; one unused entry without HAS_VERTEX_COLORS.
 @group(0) @binding(10) var<storage, read> tri_colors: array<vec4<f32>>;
 
-// Texel i of a data texture: TEXEL_ROW (4096) texels a row (src/gi/scene_gpu.rs).
+// Texel i of a data texture: TEXEL_ROW (4096) texels a row (crates/core/src/gi/scene_gpu.rs).
 fn texel_xy(i: u32) -> vec2<u32> {
     return vec2<u32>(i & 4095u, i >> 12u);
 }

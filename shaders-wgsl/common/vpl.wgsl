@@ -1,4 +1,4 @@
-// VPLs and their contribution to a shading point (Eq. 5); mirrored by src/cpu/vpl.rs.
+// VPLs and their contribution to a shading point (Eq. 5); mirrored by crates/core/src/cpu/vpl.rs.
 #import common/scene.wgsl
 
 // A VPL: position, normal (the side it lights), flux reflected at its hit (RGB). As a Lambertian
@@ -33,7 +33,7 @@ fn eq5_vpl_radiance(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, v: Vpl, d_min
 
 // How a VPL-cluster light reaches a point (--cluster-light): true, the spread below (the default);
 // false, the paper's point light, eq5_vpl_radiance of the representative with the summed flux. Set
-// by the pipelines that shade with cluster lights (src/gi/shade.rs, src/gi/reference.rs), each built
+// by the pipelines that shade with cluster lights (crates/core/src/gi/shade.rs, crates/core/src/gi/reference.rs), each built
 // per value, so the point light costs no test of the spread.
 override CLUSTER_SPREAD: bool = true;
 

@@ -4,7 +4,7 @@
 //! pass's (`app::flip`, built on first use): its map of A against the reference at the display's
 //! exposure, in magma, written into the same texture. It owns its pipelines, its bind-group layout,
 //! its uniform and its output texture, all made once a size: a frame allocates nothing. Its CPU twin
-//! is `cpu::display`.
+//! is `app::twin`.
 
 use bytemuck::{Pod, Zeroable};
 

@@ -19,6 +19,7 @@ pub mod reproject;
 pub mod reproject_gpu;
 pub mod screenshot;
 pub mod settings;
+pub mod twin;
 pub mod views;
 pub mod window;
 pub mod worker;

@@ -205,7 +205,7 @@ pub struct Stats {
     /// GPU timestamp durations; with `--repeat N` the mean of the 3 best of N (the paper's method).
     pub timings_ms: BTreeMap<String, f64>,
     pub repeat: u32,
-    /// Milliseconds of GPU work run before the timed renders (`--warmup-ms`, src/gpu/warmup.rs).
+    /// Milliseconds of GPU work run before the timed renders (`--warmup-ms`, crates/core/src/gpu/warmup.rs).
     pub warmup_ms: f64,
     /// The driver (`gpu::driver_name`) and whether the adapter is "software" (lavapipe: its times
     /// say little about a GPU's) or "hardware".

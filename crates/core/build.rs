@@ -20,8 +20,8 @@ fn walk(dir: &Path, rel: &str, out: &mut Vec<String>) {
 }
 
 fn main() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders-wgsl");
-    println!("cargo:rerun-if-changed=shaders-wgsl");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shaders-wgsl");
+    println!("cargo:rerun-if-changed=../../shaders-wgsl");
     let mut files = Vec::new();
     walk(&root, "", &mut files);
     let mut code = String::from("&[\n");
@@ -31,7 +31,7 @@ fn main() {
     for f in &files {
         code += &format!(
             "    ({f:?}, include_str!(concat!(env!(\"CARGO_MANIFEST_DIR\"), {:?}))),\n",
-            format!("/shaders-wgsl/{f}")
+            format!("/../../shaders-wgsl/{f}")
         );
     }
     code += "]\n";

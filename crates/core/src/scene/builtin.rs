@@ -15,8 +15,8 @@ pub const DENSE: &[(&str, u32, u32)] = &[("dense-3m", 1225, 1224), ("dense-8m", 
 /// The embedded GLB of a built-in scene.
 fn bytes(name: &str) -> Option<&'static [u8]> {
     match name {
-        "cornell" => Some(include_bytes!("../../assets/cornell.glb")),
-        "conference" => Some(include_bytes!("../../assets/conference.glb")),
+        "cornell" => Some(include_bytes!("../../../../assets/cornell.glb")),
+        "conference" => Some(include_bytes!("../../../../assets/conference.glb")),
         _ => None,
     }
 }

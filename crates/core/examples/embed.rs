@@ -2,7 +2,7 @@
 //! fuzzy-vpl renders a frame of a scene into that texture.
 //!
 //! ```sh
-//! cargo run --release --example embed -- OUT.png [SCENE]
+//! cargo run --release -p fuzzy-vpl-core --example embed -- OUT.png [SCENE]
 //! ```
 //!
 //! SCENE is a built-in scene (`builtin:cornell`, the default) or a glTF file. The example creates
@@ -14,7 +14,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Context as _, Result, bail};
-use fuzzy_vpl::{
+use fuzzy_vpl_core::{
     ClusterSettings, FrameSettings, GpuContext, Method, MethodSettings, RenderSettings, Renderer,
 };
 
@@ -29,14 +29,14 @@ fn main() -> Result<()> {
     let adapter = pollster::block_on(instance.request_adapter(&Default::default()))?;
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some("host device"),
-        required_features: adapter.features() & fuzzy_vpl::gpu::wanted_features(),
-        required_limits: fuzzy_vpl::gpu::required_limits(&adapter.limits()),
+        required_features: adapter.features() & fuzzy_vpl_core::gpu::wanted_features(),
+        required_limits: fuzzy_vpl_core::gpu::required_limits(&adapter.limits()),
         ..Default::default()
     }))?;
     let ctx = GpuContext::from_device(instance, adapter, device, queue)?;
 
     // The scene and the settings: one frame at 320×240 with 2048 VPLs, clustered as in the paper.
-    let scene = fuzzy_vpl::scene::load(&spec)?;
+    let scene = fuzzy_vpl_core::scene::load(&spec)?;
     let camera = scene.default_camera();
     let settings = RenderSettings {
         frame: FrameSettings {
@@ -90,7 +90,7 @@ fn main() -> Result<()> {
     );
 
     // What the host would do with its texture; here: read it back and write a PNG.
-    let bytes = fuzzy_vpl::gpu::read_texture(&ctx.device, &ctx.queue, &texture)?;
+    let bytes = fuzzy_vpl_core::gpu::read_texture(&ctx.device, &ctx.queue, &texture)?;
     let radiance: Vec<[f32; 3]> = bytes
         .chunks_exact(16)
         .map(|t| {
@@ -100,12 +100,12 @@ fn main() -> Result<()> {
         .collect();
     let mean =
         radiance.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / (3 * radiance.len()) as f32;
-    let exposure = fuzzy_vpl::exposure::auto_exposure(&radiance);
-    fuzzy_vpl::export::write_png_rgb8(
+    let exposure = fuzzy_vpl_core::exposure::auto_exposure(&radiance);
+    fuzzy_vpl_core::export::write_png_rgb8(
         &out,
         w,
         h,
-        fuzzy_vpl::export::to_srgb8(&radiance, exposure),
+        fuzzy_vpl_core::export::to_srgb8(&radiance, exposure),
     )?;
     println!("wrote {} (mean radiance {mean:.4})", out.display());
     if !(mean > 0.0 && mean.is_finite()) {

@@ -4,7 +4,6 @@
 //! the traversal twin.
 
 pub mod accumulate;
-pub mod display;
 pub mod grid;
 pub mod kmeans;
 pub mod reproject;

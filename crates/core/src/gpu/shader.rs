@@ -8,8 +8,8 @@ use std::collections::HashSet;
 /// `build.rs` from the folder, so a new pass (a method's included) adds its file and nothing else.
 pub const FILES: &[(&str, &str)] = include!(concat!(env!("OUT_DIR"), "/wgsl_files.rs"));
 
-/// The pass shaders (top-level files; `common/` holds shared code, `kmeans/` and `wang/` the steps
-/// of the k-means and wang_cluster passes), each composed and validated on its own.
+/// The pass shaders (top-level files; `common/` holds shared code, the other folders the steps of
+/// a pass split by stage), each composed and validated on its own.
 pub fn pass_names() -> impl Iterator<Item = &'static str> {
     FILES
         .iter()
@@ -174,22 +174,32 @@ mod tests {
 
     #[test]
     fn every_wgsl_file_is_listed() {
-        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/shaders-wgsl");
-        let mut on_disk = Vec::new();
-        for sub in ["", "common/", "kmeans/", "wang/"] {
-            for e in std::fs::read_dir(format!("{dir}/{sub}")).unwrap() {
-                let name = e.unwrap().file_name().into_string().unwrap();
-                if name.ends_with(".wgsl") {
-                    on_disk.push(format!("{sub}{name}"));
+        // Walked here on its own (not with build.rs's walk): every folder, however deep.
+        fn walk(dir: &std::path::Path, rel: &str, out: &mut Vec<String>) {
+            for e in std::fs::read_dir(dir).unwrap() {
+                let e = e.unwrap();
+                let name = e.file_name().into_string().unwrap();
+                if e.path().is_dir() {
+                    walk(&e.path(), &format!("{rel}{name}/"), out);
+                } else if name.ends_with(".wgsl") {
+                    out.push(format!("{rel}{name}"));
                 }
             }
         }
+        let mut on_disk = Vec::new();
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shaders-wgsl");
+        walk(std::path::Path::new(dir), "", &mut on_disk);
         for f in &on_disk {
             assert!(
                 file(f).is_some(),
                 "{f} exists but is not in gpu::shader::FILES (build.rs)"
             );
         }
+        assert_eq!(on_disk.len(), FILES.len(), "FILES lists a file not on disk");
+        assert!(
+            on_disk.iter().any(|f| f.starts_with("common/")),
+            "{on_disk:?}"
+        );
     }
 
     #[test]

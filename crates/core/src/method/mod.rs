@@ -14,7 +14,7 @@ use std::collections::BTreeMap;
 use std::fmt;
 
 use anyhow::Result;
-use clap::Args;
+#[cfg(feature = "cli")]
 use clap::builder::PossibleValue;
 use serde::{Deserialize, Serialize};
 
@@ -292,7 +292,8 @@ macro_rules! rooms {
         /// The method and every method's knobs (each declared in its room with `knobs!`),
         /// flattened into `render`, `view` and the stats JSON beside the paper's
         /// `ClusterSettings`.
-        #[derive(Args, Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+        #[cfg_attr(feature = "cli", derive(clap::Args))]
         #[serde(default)]
         pub struct MethodSettings {
             /// The method that computes the indirect light: colom (the paper this tool
@@ -301,10 +302,10 @@ macro_rules! rooms {
             /// visibility per cluster), cvrtgi (clustered voxel GI: irradiance per voxel face
             /// from voxel clusters), restir (ReSTIR DI over the VPLs: resampled candidates,
             /// temporal and spatial reuse). docs/methods.md.
-            #[arg(long, value_enum, default_value_t = Method::Colom, help_heading = METHOD_HEADING)]
+            #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Method::Colom, help_heading = METHOD_HEADING))]
             pub method: Method,
             $(
-                #[command(flatten)]
+                #[cfg_attr(feature = "cli", command(flatten))]
                 #[serde(flatten)]
                 pub $module: $module::Knobs,
             )+
@@ -352,16 +353,17 @@ macro_rules! rooms {
         }
 
         /// `bench`'s lists: the methods to compare and each method's knob lists.
-        #[derive(Args, Clone, Debug, Default, PartialEq)]
+        #[derive(Clone, Debug, Default, PartialEq)]
+        #[cfg_attr(feature = "cli", derive(clap::Args))]
         pub struct MethodLists {
             /// Methods to compare: colom,wang,lightcluster,cvrtgi,restir (default colom;
             /// docs/methods.md). `--modes` and the fuzzy knobs apply to colom; a method that
             /// clusters the SPs (wang) also takes the K's and --iterations; each method's own
             /// knob lists follow.
-            #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_method)]
+            #[cfg_attr(feature = "cli", arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_method))]
             pub methods: Vec<Method>,
             $(
-                #[command(flatten)]
+                #[cfg_attr(feature = "cli", command(flatten))]
                 pub $module: $module::KnobLists,
             )+
         }
@@ -431,6 +433,7 @@ impl Method {
 }
 
 /// The command line's names (`rooms!`), each with its room's `doc` in `--help`.
+#[cfg(feature = "cli")]
 impl clap::ValueEnum for Method {
     fn value_variants<'a>() -> &'a [Self] {
         &Method::ALL
@@ -493,19 +496,25 @@ impl MethodLists {
     }
 }
 
+/// A method by its name (any case).
 pub fn parse_method(item: &str) -> Result<Method, Invalid> {
-    <Method as clap::ValueEnum>::from_str(item.trim(), true).map_err(|_| {
-        Invalid(format!(
-            "unknown method (expected one of: {})",
-            Method::ALL.map(|m| m.name()).join(", ")
-        ))
-    })
+    let item = item.trim();
+    let mut known = Method::ALL.into_iter();
+    known
+        .find(|m| m.name().eq_ignore_ascii_case(item))
+        .ok_or_else(|| {
+            Invalid(format!(
+                "unknown method (expected one of: {})",
+                Method::ALL.map(|m| m.name()).join(", ")
+            ))
+        })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    #[cfg(feature = "cli")]
     #[test]
     fn method_names_are_the_command_line_and_json_names() {
         use clap::ValueEnum;
@@ -530,6 +539,7 @@ mod tests {
 
     /// `--method`'s possible values carry each method's line (colom's, its room's `doc`), and an
     /// unknown name in JSON is refused with the names it may be.
+    #[cfg(feature = "cli")]
     #[test]
     fn the_help_lines_are_the_rooms_docs() {
         use clap::ValueEnum;

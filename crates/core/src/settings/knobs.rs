@@ -25,13 +25,14 @@ macro_rules! knobs {
         )+
     ) => {
         $(#[doc = $sdoc])*
-        #[derive(clap::Args, Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-        #[command(next_help_heading = $heading)]
+        #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+        #[cfg_attr(feature = "cli", derive(clap::Args))]
+        #[cfg_attr(feature = "cli", command(next_help_heading = $heading))]
         #[serde(default)]
         pub struct $Settings {
             $(
                 $(#[doc = $doc])*
-                #[arg(long, default_value_t = $default, value_parser = $parser)]
+                #[cfg_attr(feature = "cli", arg(long, default_value_t = $default, value_parser = $parser))]
                 pub $field: $ty,
             )+
         }
@@ -87,12 +88,13 @@ macro_rules! knobs {
         }
 
         #[doc = concat!("`bench`'s lists of `", stringify!($Settings), "`'s knobs: a configuration takes one value of each (an empty list: the default).")]
-        #[derive(clap::Args, Clone, Debug, Default, PartialEq)]
-        #[command(next_help_heading = $heading)]
+        #[derive(Clone, Debug, Default, PartialEq)]
+        #[cfg_attr(feature = "cli", derive(clap::Args))]
+        #[cfg_attr(feature = "cli", command(next_help_heading = $heading))]
         pub struct $Lists {
             $(
                 $(#[doc = $doc])*
-                #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = $parser)]
+                #[cfg_attr(feature = "cli", arg(long, value_name = "LIST", value_delimiter = ',', value_parser = $parser))]
                 pub $field: Vec<$ty>,
             )+
         }
@@ -165,12 +167,13 @@ macro_rules! listed {
         }
 
         $(#[$lmeta])*
-        #[derive(clap::Args, Clone, Debug, Default, PartialEq)]
-        #[command(next_help_heading = $heading)]
+        #[derive(Clone, Debug, Default, PartialEq)]
+        #[cfg_attr(feature = "cli", derive(clap::Args))]
+        #[cfg_attr(feature = "cli", command(next_help_heading = $heading))]
         pub struct $Lists {
             $($(
                 #[doc = $help]
-                #[arg(long, value_name = "LIST", value_delimiter = ',', $($larg)*)]
+                #[cfg_attr(feature = "cli", arg(long, value_name = "LIST", value_delimiter = ',', $($larg)*))]
                 pub $field: Vec<$ty>,
             )?)+
         }
@@ -256,26 +259,11 @@ mod tests {
         b: f32 = 0.5, parse parse_half, sweep [0.25, 0.75], ui "the b" super::super::Widget::log(0.1, 1.0);
     }
 
+    /// One declaration gives the defaults, the names, the controls, the values as text, setting
+    /// by text through the parser, the bench's combinations and serde.
     #[test]
-    fn one_declaration_gives_defaults_parsing_names_values_and_combinations() {
-        use clap::Parser;
-        #[derive(clap::Parser)]
-        struct Cli {
-            #[command(flatten)]
-            pair: Pair,
-        }
-        #[derive(clap::Parser)]
-        struct Bench {
-            #[command(flatten)]
-            lists: PairLists,
-        }
+    fn one_declaration_gives_defaults_names_values_and_combinations() {
         assert_eq!(Pair::default(), Pair { a: 3, b: 0.5 });
-        assert_eq!(Cli::parse_from(["x"]).pair, Pair::default());
-        assert_eq!(
-            Cli::parse_from(["x", "--a", "7"]).pair,
-            Pair { a: 7, b: 0.5 }
-        );
-        assert!(Cli::try_parse_from(["x", "--a", "12"]).is_err());
         assert_eq!(Pair::NAMES, &["a", "b"]);
         // Only `b` declares a control; its value reads back as its text.
         let c = super::super::KnobWidget {
@@ -292,16 +280,45 @@ mod tests {
         assert_eq!(p, Pair { a: 3, b: 0.25 });
         assert!(matches!(p.set("a", "12"), Some(Err(_))));
         assert_eq!(p.set("c", "1"), None);
-        let l = Bench::parse_from(["x", "--a", "1,2,1", "--b", "0,1"]).lists;
-        let c = l.configs();
+        let l = PairLists {
+            a: vec![1, 2],
+            b: vec![0.0, 1.0],
+        };
         let want = [(1, 0.0), (1, 1.0), (2, 0.0), (2, 1.0)].map(|(a, b)| Pair { a, b });
-        assert_eq!(c, want);
+        assert_eq!(l.configs(), want);
         // An empty list: the default, or the knob's sweep list.
         let swept = [(3, 0.25), (3, 0.75)].map(|(a, b)| Pair { a, b });
         assert_eq!(PairLists::default().configs(), swept);
-        assert!(Bench::try_parse_from(["x", "--b", "0,2"]).is_err());
         // serde: the field names, and a missing field takes its default.
         let j: Pair = serde_json::from_str(r#"{"a": 5}"#).unwrap();
         assert_eq!(j, Pair { a: 5, b: 0.5 });
+    }
+
+    /// With the feature `cli`, the same declaration is the command line: defaults, parsing with
+    /// the parsers, and the bench's lists (repeats dropped by `configs`).
+    #[cfg(feature = "cli")]
+    #[test]
+    fn one_declaration_gives_the_command_line() {
+        use clap::Parser;
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            pair: Pair,
+        }
+        #[derive(clap::Parser)]
+        struct Bench {
+            #[command(flatten)]
+            lists: PairLists,
+        }
+        assert_eq!(Cli::parse_from(["x"]).pair, Pair::default());
+        assert_eq!(
+            Cli::parse_from(["x", "--a", "7"]).pair,
+            Pair { a: 7, b: 0.5 }
+        );
+        assert!(Cli::try_parse_from(["x", "--a", "12"]).is_err());
+        let l = Bench::parse_from(["x", "--a", "1,2,1", "--b", "0,1"]).lists;
+        let want = [(1, 0.0), (1, 1.0), (2, 0.0), (2, 1.0)].map(|(a, b)| Pair { a, b });
+        assert_eq!(l.configs(), want);
+        assert!(Bench::try_parse_from(["x", "--b", "0,2"]).is_err());
     }
 }

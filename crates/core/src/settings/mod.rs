@@ -19,7 +19,6 @@ use knobs::listed;
 use std::fmt;
 use std::str::FromStr;
 
-use clap::Args;
 use serde::{Deserialize, Serialize};
 
 use crate::exposure::Exposure;
@@ -97,19 +96,9 @@ pub struct KnobWidget {
 
 /// How a pixel's F SP clusters combine their visibility.
 #[derive(
-    Clone,
-    Copy,
-    Debug,
-    Default,
-    PartialEq,
-    Eq,
-    Hash,
-    PartialOrd,
-    Ord,
-    clap::ValueEnum,
-    Serialize,
-    Deserialize,
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize,
 )]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum Weighting {
     /// F = 1: the nearest cluster only.
@@ -138,9 +127,8 @@ impl Weighting {
 }
 
 /// How a VPL cluster's light reaches a shading point (`--cluster-light`).
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, Serialize, Deserialize,
-)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum ClusterLight {
     /// The paper (Eq. 6): the representative VPL as a point light with the members' summed flux.
@@ -160,9 +148,8 @@ impl fmt::Display for ClusterLight {
 }
 
 /// A centroid's normal after Alg. 1's update (`--centroid-normal`).
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, Serialize, Deserialize,
-)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum CentroidNormal {
     /// Not in the paper: the members' mean normal scaled to unit length.
@@ -321,105 +308,106 @@ pub const MAX_SIDE: u32 = 16384;
 listed! {
 /// The clustering of shading points and VPLs: the paper's knobs. The fields `bench` sweeps have
 /// their lists in `ClusterLists` (`listed!`).
-#[derive(Args, Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[command(next_help_heading = "Clustering (the paper's knobs)")]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+#[cfg_attr(feature = "cli", command(next_help_heading = "Clustering (the paper's knobs)"))]
 #[serde(default)]
 pub struct ClusterSettings {
     /// K of the shading-point clustering (0 = no SP clustering; off when ≥ the pixel count).
-    #[arg(long, default_value_t = ClusterSettings::DEFAULT.sp_clusters)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = ClusterSettings::DEFAULT.sp_clusters))]
     pub sp_clusters: u32 => list "SP cluster counts (default 768,1536,3072; quick 48,96)." ()
         default [768, 1536, 3072] quick [48, 96],
     /// K of the VPL clustering (0 = no VPL clustering; off when ≥ --vpls).
-    #[arg(long, default_value_t = ClusterSettings::DEFAULT.vpl_clusters)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = ClusterSettings::DEFAULT.vpl_clusters))]
     pub vpl_clusters: u32 => list "VPL cluster counts (default 1024; quick 128)." () quick [128],
     /// F: SP clusters per pixel (fuzziness), 1..16 (hard weighting uses 1).
-    #[arg(long, default_value_t = ClusterSettings::DEFAULT.fuzziness, value_parser = parse_fuzziness)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = ClusterSettings::DEFAULT.fuzziness, value_parser = parse_fuzziness))]
     pub fuzziness: u32 => list "F values, 1..16 (default 6)." (value_parser = parse_fuzziness),
     /// γ: SP downsampling factor for the k-means iterations, or `auto`: the largest γ in 4..16 that
     /// keeps 40 sampled points a cluster and 19,200 in all. Either way at most pixels / K, so that at
     /// least K points are sampled.
-    #[arg(long, default_value_t = ClusterSettings::DEFAULT.gamma, value_parser = parse_gamma)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = ClusterSettings::DEFAULT.gamma, value_parser = parse_gamma))]
     pub gamma: Gamma => list "γ values: `auto` (the default: the largest γ in 4..16 that keeps 40 \
         sampled points a cluster and 19,200 in all) or factors of at least 1, e.g. auto,4,16."
         (value_parser = parse_gamma),
     /// n_t of Eq. (7): cosine of the largest normal angle within a cluster, in [-1, 1] (Eq. 7's test
     /// is strict, so 1 is read as 1 - 2^-20: the same normal only).
-    #[arg(long, default_value_t = ClusterSettings::DEFAULT.normal_threshold, value_parser = parse_normal_threshold)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = ClusterSettings::DEFAULT.normal_threshold, value_parser = parse_normal_threshold))]
     pub normal_threshold: f32 => list "n_t values of Eq. (7), cosines in [-1, 1] (default 0.866)."
         (value_parser = parse_normal_threshold, allow_hyphen_values = true),
     /// k-means iterations (Alg. 1), 0..=1000.
-    #[arg(long, default_value_t = ClusterSettings::DEFAULT.iterations, value_parser = parse_iterations)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = ClusterSettings::DEFAULT.iterations, value_parser = parse_iterations))]
     pub iterations: u32 => list "k-means iterations (default 10)." (value_parser = parse_iterations),
     /// How a pixel's F clusters combine visibility: hard (F = 1), uniform (Eq. 8), inverse-distance
     /// (Eq. 9).
-    #[arg(long, value_enum, default_value_t = ClusterSettings::DEFAULT.weighting)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = ClusterSettings::DEFAULT.weighting))]
     pub weighting: Weighting,
     /// p of the inverse-distance weights, w'_f = dist^-p: 1 is Eq. (10); larger p falls off faster
     /// (the paper's §6 suggestion), 0 is Eq. (8)'s plain mean (but a point on a centroid still takes
     /// it alone), 64 is nearly hard clustering. [0, 64].
-    #[arg(long, default_value_t = ClusterSettings::DEFAULT.weight_exponent, value_parser = parse_weight_exponent)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = ClusterSettings::DEFAULT.weight_exponent, value_parser = parse_weight_exponent))]
     pub weight_exponent: f32 => list "p values of the inverse-distance weights w'_f = dist^-p, for \
         weighted and sp-only (default 1, Eq. 10)." (value_parser = parse_weight_exponent),
     /// Not in the paper (off by default): the fuzzy modes' slots 2..F keep only SP clusters whose
     /// centroid lies within DEG degrees of the pixel's tangent plane, seen from the pixel. Eq. (7)
     /// gates on normals alone, so without it a floor pixel's F clusters include a chair seat above
     /// it (docs/clustering.md, "The plane gate"). (0, 90].
-    #[arg(long = "plane-gate", value_name = "DEG", value_parser = parse_plane_gate)]
+    #[cfg_attr(feature = "cli", arg(long = "plane-gate", value_name = "DEG", value_parser = parse_plane_gate))]
     #[serde(rename = "plane_gate_deg", skip_serializing_if = "Option::is_none")]
     pub plane_gate: Option<f32> => list "Plane gates of the fuzzy modes' F lists: `off` (the paper, \
         default) or angles in degrees, e.g. off,20 (see render --plane-gate)."
         (value_parser = parse_plane_gate_or_off),
     /// Eq. (10) weights from the distances to the SP clusters' representatives (the paper's text)
     /// instead of their centroids (Alg. 2).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub weights_to_reps: bool,
     /// Temporal reuse (on|off): each frame's SP clustering starts from the previous one's centroids
     /// where the view still sees them, the VPL clustering from its last centroids when the lights
     /// change (docs/temporal.md). A single `render` has no past: only --repeat's later renders reuse.
-    #[arg(long, default_value = on_off(ClusterSettings::DEFAULT.temporal), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    #[cfg_attr(feature = "cli", arg(long, default_value = on_off(ClusterSettings::DEFAULT.temporal), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set))]
     pub temporal: bool,
     /// With temporal reuse on: the weight of a new frame's indirect light once a surface point's
     /// history is long (it is the plain mean over the point's first frames). Each pixel's surface
     /// point is found in the previous frame and the indirect light blended there, an exponential
     /// moving average over about 1/α frames (docs/temporal.md, "Accumulation"). 1: no
     /// accumulation. (0, 1].
-    #[arg(long, default_value_t = ClusterSettings::DEFAULT.temporal_alpha, value_name = "ALPHA", value_parser = parse_temporal_alpha)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = ClusterSettings::DEFAULT.temporal_alpha, value_name = "ALPHA", value_parser = parse_temporal_alpha))]
     pub temporal_alpha: f32,
     /// Not in the paper (off by default): step 5 traces only representative pairs that face each
     /// other (both cosines positive) and leaves the others' V at 0. The paper's V is pure
     /// visibility; Eq. (6) applies each pixel's own cosines (docs/clustering.md, "V and the facing
     /// test").
-    #[arg(long, default_value = on_off(ClusterSettings::DEFAULT.visibility_facing), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    #[cfg_attr(feature = "cli", arg(long, default_value = on_off(ClusterSettings::DEFAULT.visibility_facing), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set))]
     pub visibility_facing: bool,
     /// How a VPL cluster lights a point: `point` (the paper's Eq. 6: its representative VPL with
     /// the members' summed flux) or `spread` (not in the paper, the default: the other members'
     /// share of the flux is evaluated no closer than their RMS distance from the representative;
     /// docs/clustering.md, "VPL clusters as lights").
-    #[arg(long, value_enum, default_value_t = ClusterSettings::DEFAULT.cluster_light)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = ClusterSettings::DEFAULT.cluster_light))]
     pub cluster_light: ClusterLight => list "VPL-cluster lights: point (the paper), spread (default), \
         e.g. point,spread." (value_enum),
     /// Not in the paper (on by default): Alg. 1 re-seeds an empty cluster at a sampled point no
     /// centroid within reach accepts (an orphan), or else at a drawn sampled point
     /// (docs/clustering.md, "Surfaces without a cluster"). off: an empty cluster stays empty.
-    #[arg(long, default_value = on_off(ClusterSettings::DEFAULT.reseed), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    #[cfg_attr(feature = "cli", arg(long, default_value = on_off(ClusterSettings::DEFAULT.reseed), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set))]
     pub reseed: bool => list "Re-seeding of empty clusters: on (default), off (the paper)."
         (value_parser = parse_on_off),
     /// Not in the paper (on by default): a point with no centroid passing n_t in the 27 cells
     /// around it searches rings of cells further out (3 while iterating, 4 in the final
     /// assignment). off: the 27 cells only, as Alg. 1 and 2 (docs/clustering.md, "Fallbacks").
-    #[arg(long, default_value = on_off(ClusterSettings::DEFAULT.ring_fallback), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    #[cfg_attr(feature = "cli", arg(long, default_value = on_off(ClusterSettings::DEFAULT.ring_fallback), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set))]
     pub ring_fallback: bool => list "Ring fallback of the search: on (default), off (the paper)."
         (value_parser = parse_on_off),
     /// Not in the paper (on by default): a point the final assignment finds no centroid passing
     /// n_t for takes the nearest centroid by position alone. off: it stays without a cluster (to
     /// Eq. 7 it is at distance ∞ from every centroid) and gets no indirect light from SP clusters.
-    #[arg(long, default_value = on_off(ClusterSettings::DEFAULT.position_fallback), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    #[cfg_attr(feature = "cli", arg(long, default_value = on_off(ClusterSettings::DEFAULT.position_fallback), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set))]
     pub position_fallback: bool => list "Position-only fallback of the final assignment: on \
         (default), off (the paper)." (value_parser = parse_on_off),
     /// A centroid's normal (Alg. 1 line 18): `normalised` (the default: the members' mean normal
     /// scaled to unit length) or `mean` (the paper's value / counter: the plain mean, shorter than 1
     /// where the members' normals differ, which Eq. 7's test n · n_c > n_t then reads as is).
-    #[arg(long, value_enum, default_value_t = ClusterSettings::DEFAULT.centroid_normal)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = ClusterSettings::DEFAULT.centroid_normal))]
     pub centroid_normal: CentroidNormal => list "Centroid normals: normalised (default), mean (the \
         paper)." (value_enum),
     /// Every setting at the paper's choice (docs/clustering.md, "The paper exactly"): point cluster
@@ -427,13 +415,13 @@ pub struct ClusterSettings {
     /// weights (Eq. 10, p 1, to the centroids), K_SP and K_VPL in the ratios of the paper's
     /// intermediate setting (8k of 1024×720 pixels, 2k of 8000 VPLs), no G-term clamp, no plane
     /// gate, facing test or temporal reuse. An option given on the command line wins over it.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub paper: bool,
     /// A GPU-time budget for the frame in ms (> 0): K_SP and K_VPL are chosen to meet it (`render`:
     /// a few frames adjusting them, K_SP following K_VPL on a line through the paper's intermediate
     /// setting; `view`: adjusted while
     /// the view changes). --sp-clusters and --vpl-clusters then only say which clusterings run.
-    #[arg(long, value_name = "MS", value_parser = parse_target_ms)]
+    #[cfg_attr(feature = "cli", arg(long, value_name = "MS", value_parser = parse_target_ms))]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub target_ms: Option<f64>,
 }
@@ -564,43 +552,44 @@ pub fn plane_gate_sine(deg: Option<f32>) -> f32 {
 
 /// What a frame is: its size, random seed, VPLs, bounce budget, direct-light samples, exposure and
 /// G-term clamp.
-#[derive(Args, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[command(next_help_heading = "Frame")]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+#[cfg_attr(feature = "cli", command(next_help_heading = "Frame"))]
 #[serde(default)]
 pub struct FrameSettings {
     /// Image width, 1..16384.
-    #[arg(long, default_value_t = FrameSettings::DEFAULT.width, value_parser = parse_side)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.width, value_parser = parse_side))]
     pub width: u32,
     /// Image height, 1..16384.
-    #[arg(long, default_value_t = FrameSettings::DEFAULT.height, value_parser = parse_side)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.height, value_parser = parse_side))]
     pub height: u32,
-    #[arg(long, default_value_t = FrameSettings::DEFAULT.seed)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.seed))]
     pub seed: u32,
     /// Number of VPLs (traced once, resident).
-    #[arg(long, default_value_t = FrameSettings::DEFAULT.vpls)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.vpls))]
     pub vpls: u32,
     /// Indirect bounce budget: the most VPLs a light path deposits (the path tracer gets the same),
     /// 1..64.
-    #[arg(long, default_value_t = FrameSettings::DEFAULT.bounces, value_parser = parse_bounces)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.bounces, value_parser = parse_bounces))]
     pub bounces: u32,
     /// Area-light samples (shadow rays) per pixel for direct light, 1..=65536.
-    #[arg(long, default_value_t = FrameSettings::DEFAULT.direct_samples, value_parser = parse_direct_samples)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.direct_samples, value_parser = parse_direct_samples))]
     pub direct_samples: u32,
     /// Exposure of PNG images and the viewer: `auto` (the default: the image's log-average
     /// luminance is shown as middle grey 0.18, Reinhard et al. 2002) or a factor >= 0. EXR stays
     /// linear, unscaled radiance.
-    #[arg(long, default_value_t = FrameSettings::DEFAULT.exposure, value_parser = parse_exposure)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.exposure, value_parser = parse_exposure))]
     pub exposure: Exposure,
     /// G-term clamp: the VPL distance in 1/d² is at least CLAMP × scene diagonal (scale-free),
     /// [0, 1).
-    #[arg(long, default_value_t = FrameSettings::DEFAULT.clamp, value_parser = parse_clamp)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.clamp, value_parser = parse_clamp))]
     pub clamp: f32,
     /// The indirect light's resolution as a fraction of the image's, (0, 1]: below 1 the
     /// primary rays and the direct light stay at the image's size and the indirect light is
     /// computed on a G-buffer of this scale, then upsampled with depth- and normal-aware weights
     /// (`gi::upsample`). The unclustered reference ignores it; `view` takes it from --render-scale.
     /// Written to the stats only when not 1.
-    #[arg(long, default_value_t = FrameSettings::DEFAULT.indirect_scale, value_parser = parse_indirect_scale)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.indirect_scale, value_parser = parse_indirect_scale))]
     #[serde(skip_serializing_if = "is_one")]
     pub indirect_scale: f32,
 }
@@ -642,29 +631,36 @@ impl FrameSettings {
 }
 
 /// Lights added to a scene (for scenes that ship without any) and the scale of its emitters.
-#[derive(Args, Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[command(next_help_heading = "Added lights")]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+#[cfg_attr(feature = "cli", command(next_help_heading = "Added lights"))]
 pub struct LightSettings {
     /// Add a directional light: DX,DY,DZ,E\[,R,G,B\] (direction towards the sun).
-    #[arg(
-        long,
-        value_name = "DX,DY,DZ,E[,R,G,B]",
-        allow_hyphen_values = true,
-        help = "Add a directional light: DX,DY,DZ,E[,R,G,B] (direction towards the sun)"
+    #[cfg_attr(
+        feature = "cli",
+        arg(
+            long,
+            value_name = "DX,DY,DZ,E[,R,G,B]",
+            allow_hyphen_values = true,
+            help = "Add a directional light: DX,DY,DZ,E[,R,G,B] (direction towards the sun)"
+        )
     )]
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub sun: Vec<String>,
     /// Add a point light: X,Y,Z,I\[,R,G,B\].
-    #[arg(
-        long,
-        value_name = "X,Y,Z,I[,R,G,B]",
-        allow_hyphen_values = true,
-        help = "Add a point light: X,Y,Z,I[,R,G,B]"
+    #[cfg_attr(
+        feature = "cli",
+        arg(
+            long,
+            value_name = "X,Y,Z,I[,R,G,B]",
+            allow_hyphen_values = true,
+            help = "Add a point light: X,Y,Z,I[,R,G,B]"
+        )
     )]
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub point: Vec<String>,
     /// Multiply every emitter's power by this factor (>= 0).
-    #[arg(long, default_value_t = LightSettings::DEFAULT.light_scale, value_parser = parse_light_scale)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = LightSettings::DEFAULT.light_scale, value_parser = parse_light_scale))]
     pub light_scale: f32,
 }
 
@@ -811,6 +807,7 @@ mod tests {
     use super::*;
 
     /// The defaults of a group of options as clap gives them.
+    #[cfg(feature = "cli")]
     fn clap_defaults<T: clap::Args + clap::FromArgMatches>() -> T {
         let cmd = T::augment_args(clap::Command::new("defaults"));
         let m = cmd
@@ -821,6 +818,7 @@ mod tests {
 
     /// The options' defaults are the types' `DEFAULT` (declared once; the options name it), also
     /// for the on/off options and flags, whose defaults clap takes as text or as absent.
+    #[cfg(feature = "cli")]
     #[test]
     fn the_options_defaults_are_the_declared_defaults() {
         assert_eq!(clap_defaults::<ClusterSettings>(), ClusterSettings::DEFAULT);
@@ -1002,6 +1000,7 @@ mod tests {
     }
 
     /// The paper's V is pure visibility: the facing test is an option, off unless asked.
+    #[cfg(feature = "cli")]
     #[test]
     fn visibility_is_pure_by_default() {
         use clap::Parser;
@@ -1019,6 +1018,7 @@ mod tests {
         );
     }
 
+    #[cfg(feature = "cli")]
     #[test]
     fn settings_round_trip_through_json() {
         let c = ClusterSettings {
@@ -1049,13 +1049,14 @@ mod tests {
 pub const WARMUP_MS: f64 = 200.0;
 
 /// How GPU times are taken (`render`, `bench`, `bench --camera-path`).
-#[derive(Args, Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[command(next_help_heading = "Timing")]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+#[cfg_attr(feature = "cli", command(next_help_heading = "Timing"))]
 #[serde(default)]
 pub struct TimingSettings {
-    /// Milliseconds of GPU work before the timed renders (a busy kernel, src/gpu/warmup.rs), so
+    /// Milliseconds of GPU work before the timed renders (a busy kernel, crates/core/src/gpu/warmup.rs), so
     /// the GPU runs at its working clock; before each camera-path frame too. 0: none.
-    #[arg(long, value_name = "MS", default_value_t = TimingSettings::DEFAULT.warmup_ms, value_parser = parse_warmup_ms)]
+    #[cfg_attr(feature = "cli", arg(long, value_name = "MS", default_value_t = TimingSettings::DEFAULT.warmup_ms, value_parser = parse_warmup_ms))]
     pub warmup_ms: f64,
 }
 
@@ -1072,7 +1073,7 @@ impl Default for TimingSettings {
     }
 }
 
-fn parse_warmup_ms(v: &str) -> Result<f64, String> {
+pub fn parse_warmup_ms(v: &str) -> Result<f64, String> {
     match v.parse::<f64>() {
         Ok(ms) if (0.0..=60_000.0).contains(&ms) => Ok(ms),
         _ => Err(format!("{v}: milliseconds from 0 to 60000")),

@@ -25,7 +25,7 @@ pub enum Pass {
     Reference,
     /// The diffuse path tracer (`--path-trace`), instead of every pass above.
     PathTrace,
-    /// A pass of one of the other methods (`src/method/<name>/`), by the name its room gives it
+    /// A pass of one of the other methods (`crates/core/src/method/<name>/`), by the name its room gives it
     /// (its room's `passes`, consts of its module): a method adds its passes in its own
     /// folder, not here. Its name keys its timings as any pass's does.
     Room(&'static str),
