@@ -470,3 +470,22 @@ pub fn colom(f: &fuzzy_vpl::render::Frame) -> fuzzy_vpl::method::colom::Report {
     fuzzy_vpl::method::colom::Report::of(f.report_of(fuzzy_vpl::method::Method::Colom))
         .unwrap_or_default()
 }
+
+/// A command line: `words` split at white space, then `rest` (paths and other arguments that
+/// are not plain words).
+pub fn cmd<'a>(words: &'a str, rest: &[&'a str]) -> Vec<&'a str> {
+    words
+        .split_whitespace()
+        .chain(rest.iter().copied())
+        .collect()
+}
+
+/// `p` as an argument (test paths are UTF-8).
+pub fn arg(p: &std::path::Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The JSON file at `p` (a stats file, a trace, a bench report).
+pub fn read_json(p: &std::path::Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
+}
