@@ -645,7 +645,8 @@ fn plane_gate_is_reported_where_it_applies() {
         let exr = d.join(format!("{name}.exr"));
         let stats = d.join(format!("{name}.json"));
         let mut a = common::cmd(
-            "render builtin:conference --width 64 --height 48 --vpls 512 --vpl-clusters 128 --sp-clusters 48",
+            "render builtin:conference --width 64 --height 48 --vpls 512 --vpl-clusters 128 \
+             --sp-clusters 48",
             &["-o", common::arg(&exr), "--stats", common::arg(&stats)],
         );
         a.extend_from_slice(extra);
@@ -976,7 +977,8 @@ fn png_exposure_is_automatic_and_written_in_the_stats() {
         let png = d.join(format!("{tag}.png"));
         let stats = d.join(format!("{tag}.json"));
         let mut args = common::cmd(
-            "render builtin:cornell --width 64 --height 48 --vpls 256 --vpl-clusters 32 --sp-clusters 64 --direct-samples 2",
+            "render builtin:cornell --width 64 --height 48 --vpls 256 --vpl-clusters 32 \
+             --sp-clusters 64 --direct-samples 2",
             &[
                 "-o",
                 common::arg(&exr),
@@ -1094,7 +1096,8 @@ fn a_gltf_room_at_any_finite_scale_renders_the_same_image() {
         let p = scaled_room(&d, &format!("room{k:e}"), k);
         let exr = d.join(format!("room{k:e}.exr"));
         let (code, _, err) = run(&common::cmd(
-            "render --width 48 --height 36 --vpls 256 --vpl-clusters 32 --sp-clusters 48 --direct-samples 4",
+            "render --width 48 --height 36 --vpls 256 --vpl-clusters 32 --sp-clusters 48 \
+             --direct-samples 4",
             &[common::arg(&p), "-o", common::arg(&exr)],
         ));
         let px = if code == 0 {
@@ -1189,7 +1192,8 @@ fn render_layers_add_up_and_the_stats_name_the_indirect_light() {
         let exr = d.join(format!("{layer}.exr"));
         let stats = d.join(format!("{layer}.json"));
         let (code, _, err) = common::run_cli(&common::cmd(
-            "render builtin:cornell --width 48 --height 36 --vpls 512 --vpl-clusters 64 --sp-clusters 16 --warmup-ms 0",
+            "render builtin:cornell --width 48 --height 36 --vpls 512 --vpl-clusters 64 \
+             --sp-clusters 16 --warmup-ms 0",
             &[
                 "--layer",
                 layer,

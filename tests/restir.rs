@@ -6,6 +6,8 @@
 
 mod common;
 
+use common::shading_points;
+
 use fuzzy_vpl::gi::pass::Pass;
 use fuzzy_vpl::gi::primary::ShadingPoint;
 use fuzzy_vpl::gi::vpl_trace::{ResidentVpls, Vpl, VplKey, VplSet};
@@ -53,14 +55,6 @@ fn reservoirs(r: &Renderer, pixels: usize) -> Vec<Reservoir> {
     let b = state(r).reservoirs().unwrap();
     let raw: Vec<[u32; 4]> = r.ctx.read_buffer(b, pixels).unwrap();
     raw.into_iter().map(Reservoir::from_gpu).collect()
-}
-
-fn shading_points(r: &Renderer) -> Vec<ShadingPoint> {
-    r.last_gbuffer()
-        .unwrap()
-        .chunks(4)
-        .map(ShadingPoint::from_gpu)
-        .collect()
 }
 
 /// How far two reservoirs are apart: `None` when their samples differ, else the largest relative

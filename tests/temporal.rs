@@ -520,16 +520,7 @@ fn direct_light_estimates_average_towards_the_converged_image() {
     let sc = scene::load("builtin:cornell").unwrap();
     let mut r = Renderer::new(&ctx, &sc).unwrap();
     let cam = sc.default_camera();
-    let one = RenderSettings {
-        frame: FrameSettings {
-            width: 48,
-            height: 36,
-            vpls: 0,
-            direct_samples: 1,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let one = common::gbuffer_settings(48, 36);
     let f = r.render(&cam, &one).unwrap();
     let (again, ms) = r.direct_again(&one, one.frame.seed, None).unwrap();
     assert_eq!(again, f.direct, "the same seed gives the same estimate");

@@ -5,8 +5,9 @@ use fuzzy_vpl::cpu::kmeans::RepPoint;
 use fuzzy_vpl::cpu::shading::CpuScene;
 use fuzzy_vpl::gi::primary::ShadingPoint;
 use fuzzy_vpl::gpu::GpuContext;
-use fuzzy_vpl::render::Renderer;
-use fuzzy_vpl::scene::Scene;
+use fuzzy_vpl::render::{RenderSettings, Renderer};
+use fuzzy_vpl::scene::{Camera, Scene};
+use fuzzy_vpl::settings::FrameSettings;
 
 pub fn gpu() -> GpuContext {
     GpuContext::new_headless().unwrap_or_else(|e| {
@@ -469,6 +470,115 @@ pub fn slab_under_ceiling() -> Scene {
 pub fn colom(f: &fuzzy_vpl::render::Frame) -> fuzzy_vpl::method::colom::Report {
     fuzzy_vpl::method::colom::Report::of(f.report_of(fuzzy_vpl::method::Method::Colom))
         .unwrap_or_default()
+}
+
+/// The GPU's SP clustering of a renderer's last frame, read back.
+pub struct SpClusters {
+    /// The frame's shading points.
+    pub sps: Vec<ShadingPoint>,
+    /// Each pixel's `nf` slots' clusters.
+    pub assign: Vec<u32>,
+    /// Each pixel's `nf` slots' weights.
+    pub weights: Vec<f32>,
+    /// A cold start's representative points (`cold_rep_points` of the GPU's members).
+    pub reps: Vec<RepPoint>,
+    /// The clusters.
+    pub k: usize,
+    /// The slots a pixel.
+    pub nf: usize,
+}
+
+/// `r`'s last frame's SP clustering, read back on `ctx`.
+pub fn sp_clusters(ctx: &GpuContext, r: &Renderer) -> SpClusters {
+    let sps = shading_points(r);
+    let c = r.sp_clustering().unwrap();
+    let (k, nf) = (c.k() as usize, c.f() as usize);
+    let assign: Vec<u32> = ctx.read_buffer(&c.assign, sps.len() * nf).unwrap();
+    let weights: Vec<f32> = ctx.read_buffer(&c.weights, sps.len() * nf).unwrap();
+    let members: Vec<u32> = ctx.read_buffer(&c.reps, k * 2).unwrap();
+    // A cold start: each representative point is its member pixel's shading point.
+    let reps = cold_rep_points(&sps, &members);
+    SpClusters {
+        k,
+        nf,
+        sps,
+        assign,
+        weights,
+        reps,
+    }
+}
+
+impl SpClusters {
+    /// Pixel `m`'s slots, as the shading twin reads them (`weighted`: inverse-distance weights).
+    pub fn slots(&self, m: usize, weighted: bool) -> fuzzy_vpl::cpu::shade::Slots<'_> {
+        let at = m * self.nf..m * self.nf + self.nf;
+        fuzzy_vpl::cpu::shade::Slots {
+            assign: &self.assign[at.clone()],
+            weights: &self.weights[at],
+            weighted,
+        }
+    }
+}
+
+/// Settings for a `width` × `height` frame with no VPLs and one direct sample (a frame rendered
+/// for its G-buffer).
+pub fn gbuffer_settings(width: u32, height: u32) -> RenderSettings {
+    RenderSettings {
+        frame: FrameSettings {
+            width,
+            height,
+            vpls: 0,
+            direct_samples: 1,
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
+/// A camera named "down" at `eye` looking at `target` with vertical field of view `yfov`, the
+/// image's up towards −z.
+pub fn down_camera(eye: glam::Vec3, target: glam::Vec3, yfov: f32) -> Camera {
+    Camera::look_at("down", eye, target, glam::Vec3::NEG_Z, yfov)
+}
+
+/// `builtin:cornell` and its upload on `ctx`.
+pub fn cornell_gpu(ctx: &GpuContext) -> (Scene, fuzzy_vpl::gi::scene_gpu::SceneGpu) {
+    let sc = fuzzy_vpl::scene::load("builtin:cornell").unwrap();
+    let bvh = fuzzy_vpl::bvh::SceneBvh::build(&sc).unwrap();
+    let gpu = fuzzy_vpl::gi::scene_gpu::SceneGpu::upload(ctx, &sc, &bvh);
+    (sc, gpu)
+}
+
+/// `km` over `points` (the data, `stride` vec4s a point) with settings `s` in `frame`, on `ctx`
+/// with `builtin:cornell` bound, profiled under `label`: the clustering.
+pub fn kmeans_on_cornell(
+    ctx: &GpuContext,
+    km: &fuzzy_vpl::gi::kmeans::KMeans,
+    label: &str,
+    (data, stride): (&[[f32; 4]], u32),
+    s: &fuzzy_vpl::gi::kmeans::KMeansSettings,
+    frame: (glam::Vec3, glam::Vec3),
+) -> fuzzy_vpl::gi::kmeans::Clustering {
+    let (_sc, gpu) = cornell_gpu(ctx);
+    let mut prof = fuzzy_vpl::gpu::profiler::Profiler::new(ctx);
+    let buf = ctx.storage_init("data", data);
+    let mut g = fuzzy_vpl::gi::dispatch::Gpu {
+        ctx,
+        scene: &gpu,
+        profiler: &mut prof,
+    };
+    let points = fuzzy_vpl::gi::kmeans::Points {
+        data: &buf,
+        count: data.len() as u32 / stride,
+        stride,
+    };
+    km.run(&mut g, label, &points, s, frame, None).unwrap()
+}
+
+/// `r`'s last frame's shading points.
+pub fn shading_points(r: &Renderer) -> Vec<ShadingPoint> {
+    let gbuffer = r.last_gbuffer().unwrap();
+    gbuffer.chunks(4).map(ShadingPoint::from_gpu).collect()
 }
 
 /// A command line: `words` split at white space, then `rest` (paths and other arguments that
