@@ -575,6 +575,41 @@ pub fn kmeans_on_cornell(
     km.run(&mut g, label, &points, s, frame, None).unwrap()
 }
 
+/// The display tests' frame: 48 × 36, 256 VPLs, 2 direct samples, K_SP 48, K_VPL 64, `weighting`.
+pub fn display_frame(weighting: fuzzy_vpl::settings::Weighting) -> RenderSettings {
+    RenderSettings {
+        frame: FrameSettings {
+            width: 48,
+            height: 36,
+            vpls: 256,
+            direct_samples: 2,
+            ..Default::default()
+        },
+        cluster: fuzzy_vpl::settings::ClusterSettings {
+            sp_clusters: 48,
+            vpl_clusters: 64,
+            weighting,
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
+/// Runs the display pass `d` on `inputs` and reads its texture (RGBA8) and exposure back.
+pub fn draw_display(
+    ctx: &GpuContext,
+    d: &mut fuzzy_vpl::app::display::Display,
+    inputs: &fuzzy_vpl::app::display::DisplayInputs,
+) -> (Vec<u8>, f32) {
+    let mut enc = ctx.device.create_command_encoder(&Default::default());
+    d.record(&ctx.device, &ctx.queue, &mut enc, inputs);
+    ctx.queue.submit([enc.finish()]);
+    let texture = &d.target().unwrap().texture;
+    let rgba = fuzzy_vpl::gpu::read_texture(&ctx.device, &ctx.queue, texture).unwrap();
+    let e: Vec<f32> = ctx.read_buffer(d.exposure_buffer(), 1).unwrap();
+    (rgba, e[0])
+}
+
 /// `r`'s last frame's shading points.
 pub fn shading_points(r: &Renderer) -> Vec<ShadingPoint> {
     let gbuffer = r.last_gbuffer().unwrap();
