@@ -727,7 +727,7 @@ fn render_stats(
 ) -> serde_json::Value {
     let mut args = common::cmd(
         "render builtin:cornell --direct-samples 1",
-        &["-o", common::arg(&o), "--stats", common::arg(&stats)],
+        &["-o", common::arg(o), "--stats", common::arg(stats)],
     );
     args.extend_from_slice(frame);
     args.extend_from_slice(extra);

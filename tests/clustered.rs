@@ -52,7 +52,7 @@ fn shading_pairs(
     let lights = &r.lights.as_ref().unwrap().list.lights;
     let cpu = common::cpu_scene(r, s);
     let facing = fs.cluster.visibility_facing;
-    let (bits, words) = shade::visibility_bits(&cpu, &reps, lights, facing);
+    let (bits, words) = shade::visibility_bits(&cpu, reps, lights, facing);
     let d_min = fs.frame.clamp * s.extent();
     sps.iter()
         .enumerate()

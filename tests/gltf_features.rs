@@ -391,7 +391,7 @@ fn cpu_twins_agree_on_the_alpha_tested_scene() {
     let lights = &r.lights.as_ref().unwrap().list.lights;
     let cpu = common::cpu_scene(&r, &s);
     let facing = fs.cluster.visibility_facing;
-    let (bits, words) = shade::visibility_bits(&cpu, &reps, lights, facing);
+    let (bits, words) = shade::visibility_bits(&cpu, reps, lights, facing);
     // The shading pass's twin: every pixel, at the measured maximum × 2 on software (measured
     // 3.7e-9; docs/testing.md, "Twin tolerances").
     let mut pairs = Vec::with_capacity(n as usize);
