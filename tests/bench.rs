@@ -85,14 +85,10 @@ fn quick_bench_writes_csv_plots_and_summary() {
     // header, and one row per CSV row (run named by its folder), each with its configuration's
     // label and MSE; a folder without a CSV exits 2 with one line naming it.
     let run_name = d.file_name().unwrap().to_str().unwrap().to_string();
-    let (code, table, err) = run(&[
-        "bench-table",
-        d.to_str().unwrap(),
-        "--commit",
-        "abc1234",
-        "--date",
-        "2026-11-28",
-    ]);
+    let (code, table, err) = run(&common::cmd(
+        "bench-table --commit abc1234 --date 2026-11-28",
+        &[common::arg(&d)],
+    ));
     assert_eq!(code, 0, "{err}");
     assert!(table.contains("commit `abc1234`, 2026-11-28"), "{table}");
     assert!(table.contains("| run | scene | size |"), "{table}");
@@ -123,28 +119,11 @@ fn bench_rows_say_what_ran_and_reruns_leave_no_stale_images() {
     std::fs::write(d.join("images/07_weighted_99x99_F6_g4.png"), b"old").unwrap();
     std::fs::write(d.join("images/notes.txt"), b"mine").unwrap();
     // 16 x 12 = 192 pixels: K_sp 8 with γ 64 samples with γ 192 / 8 = 24; K_sp 400 is not below 192.
-    let (code, _, err) = run(&[
-        "bench",
-        "builtin:cornell",
-        "--width",
-        "16",
-        "--height",
-        "12",
-        "--vpls",
-        "64",
-        "--modes",
-        "hard",
-        "--sp-clusters",
-        "8,400",
-        "--vpl-clusters",
-        "16",
-        "--gamma",
-        "64",
-        "--repeat",
-        "1",
-        "--out-dir",
-        d.to_str().unwrap(),
-    ]);
+    let (code, _, err) = run(&common::cmd(
+        "bench builtin:cornell --width 16 --height 12 --vpls 64 --modes hard --sp-clusters 8,400 \
+         --vpl-clusters 16 --gamma 64 --repeat 1",
+        &["--out-dir", common::arg(&d)],
+    ));
     assert_eq!(code, 0, "{err}");
     let rows = csv::from_csv(&std::fs::read_to_string(d.join("results.csv")).unwrap()).unwrap();
     assert_eq!(rows.len(), 2, "{rows:?}");
@@ -212,38 +191,30 @@ fn bad_sweep_options_exit_2_with_one_line() {
 
 /// `bench --camera-path orbit:N:DEG --temporal off,on`: one row per frame and setting, frame 0
 /// without instability, the warm start visible in the rows, and the plot.
+/// A path CSV's header and rows.
+fn path_csv(text: &str) -> (Vec<&str>, Vec<Vec<String>>) {
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().split(',').collect();
+    (header, lines.map(csv::split_line).collect())
+}
+
+/// `row`'s value in column `name` of `header`.
+fn cell(header: &[&str], row: &[String], name: &str) -> String {
+    row[header.iter().position(|h| *h == name).unwrap()].clone()
+}
+
 #[test]
 fn camera_path_writes_path_csv_and_plot() {
     let d = common::scratch("bench-path");
-    let (code, out, err) = run(&[
-        "bench",
-        "builtin:conference",
-        "--out-dir",
-        d.to_str().unwrap(),
-        "--camera-path",
-        "orbit:3:2",
-        "--temporal",
-        "off,on",
-        "--modes",
-        "weighted",
-        "--sp-clusters",
-        "48",
-        "--vpl-clusters",
-        "64",
-        "--width",
-        "64",
-        "--height",
-        "48",
-        "--vpls",
-        "512",
-        "--direct-samples",
-        "1",
-    ]);
+    let (code, out, err) = run(&common::cmd(
+        "bench builtin:conference --camera-path orbit:3:2 --temporal off,on --modes weighted \
+         --sp-clusters 48 --vpl-clusters 64 --width 64 --height 48 --vpls 512 --direct-samples 1",
+        &["--out-dir", common::arg(&d)],
+    ));
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("instability"), "{out}");
     let text = std::fs::read_to_string(d.join("path.csv")).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let (header, rows) = path_csv(&text);
     for c in [
         "label",
         "temporal",
@@ -256,9 +227,7 @@ fn camera_path_writes_path_csv_and_plot() {
     ] {
         assert!(header.contains(&c), "no column {c} in {header:?}");
     }
-    let col =
-        |row: &[String], name: &str| row[header.iter().position(|h| *h == name).unwrap()].clone();
-    let rows: Vec<Vec<String>> = lines.map(csv::split_line).collect();
+    let col = |row: &[String], name: &str| cell(&header, row, name);
     assert_eq!(rows.len(), 6, "{text}");
     for (i, r) in rows.iter().enumerate() {
         let (on, frame) = (i >= 3, i % 3);
@@ -299,25 +268,17 @@ fn camera_path_writes_path_csv_and_plot() {
 fn camera_path_refuses_a_bad_path() {
     let d = common::scratch("bench-path-bad");
     for bad in ["orbit:0:3", "circle:3:3", "orbit:3"] {
-        let (code, _, err) = run(&[
-            "bench",
-            "builtin:cornell",
-            "--out-dir",
-            d.to_str().unwrap(),
-            "--camera-path",
-            bad,
-        ]);
+        let (code, _, err) = run(&common::cmd(
+            "bench builtin:cornell",
+            &["--out-dir", common::arg(&d), "--camera-path", bad],
+        ));
         assert_eq!(code, 2, "{bad}: {err}");
         assert!(err.contains("orbit:N:DEG"), "{bad}: {err}");
     }
-    let (code, _, err) = run(&[
-        "bench",
-        "builtin:cornell",
-        "--out-dir",
-        d.to_str().unwrap(),
-        "--temporal",
-        "on",
-    ]);
+    let (code, _, err) = run(&common::cmd(
+        "bench builtin:cornell --temporal on",
+        &["--out-dir", common::arg(&d)],
+    ));
     assert_eq!(code, 2, "{err}");
 }
 
@@ -325,69 +286,21 @@ fn camera_path_refuses_a_bad_path() {
 #[test]
 fn header_has_the_contract_columns_in_order() {
     let h = csv::header();
-    let want = [
-        "scene",
-        "camera",
-        "width",
-        "height",
-        "vpls",
-        "mode",
-        "vpl_clusters",
-        "sp_clusters",
-        "fuzziness",
-        "gamma",
-        "normal_threshold",
-        "iterations",
-        "vpl_trace_ms",
-        "vpl_cluster_ms",
-        "primary_ms",
-        "sp_cluster_ms",
-        "visibility_ms",
-        "shade_ms",
-        "gather_ms",
-        "direct_ms",
-        "frame_ms",
-        "reference_ms",
-        "speedup",
-        "mse",
-        "rel_mse",
-        "sp_clusters_used",
-        "vpl_clusters_used",
-        "shadow_rays",
-        "repeat",
-        "label",
-        "weight_exponent",
-        "gamma_used",
-        "plane_gate_deg",
-        "flip",
-        "border",
-        "interior",
-        "border_ratio",
-        "flip_border",
-        "target_ms",
-        "front_mse",
-        "method",
-        "indirect_ms",
-        "adapter",
-        "driver",
-        // Every method's knobs (docs/design.md), the last columns.
-        "wang_alpha",
-        "d_init",
-        "lightcluster_visibility",
-        "voxel_res",
-        "cluster_step",
-        "cluster_iterations",
-        "cluster_angle",
-        "face_rays",
-        "near_voxels",
-        "filter_radius",
-        "filter_passes",
-        "cluster_gather",
-        "escape_rays",
-    ];
+    // The columns, white-space separated; then every method's knobs (docs/design.md), the last
+    // columns.
+    let want = "scene camera width height vpls mode vpl_clusters sp_clusters fuzziness gamma \
+         normal_threshold iterations vpl_trace_ms vpl_cluster_ms primary_ms sp_cluster_ms \
+         visibility_ms shade_ms gather_ms direct_ms frame_ms reference_ms speedup mse rel_mse \
+         sp_clusters_used vpl_clusters_used shadow_rays repeat label weight_exponent gamma_used \
+         plane_gate_deg flip border interior border_ratio flip_border target_ms front_mse \
+         method indirect_ms adapter driver \
+         wang_alpha d_init lightcluster_visibility voxel_res cluster_step cluster_iterations \
+         cluster_angle face_rays near_voxels filter_radius filter_passes cluster_gather \
+         escape_rays";
+    let want: Vec<String> = want.split_whitespace().map(String::from).collect();
     // A method added later appends its knobs: the columns above stay a prefix, and the knobs
     // follow, in the registry's order, before the report columns (read by name).
-    assert_eq!(h[..want.len()], want.map(String::from));
+    assert_eq!(h[..want.len()], want);
     let knobs = fuzzy_vpl::method::MethodSettings::columns();
     let at = h.iter().position(|c| c == "driver").unwrap() + 1;
     assert_eq!(h[at..at + knobs.len()], knobs);
@@ -407,26 +320,11 @@ fn header_has_the_contract_columns_in_order() {
 #[test]
 fn target_ms_rows_follow_the_sweep() {
     let d = common::scratch("bench-target");
-    let (code, _, err) = run(&[
-        "bench",
-        "builtin:cornell",
-        "--width",
-        "24",
-        "--height",
-        "16",
-        "--vpls",
-        "128",
-        "--modes",
-        "hard,weighted",
-        "--pairs",
-        "8/16,32/48",
-        "--target-ms",
-        "100000",
-        "--repeat",
-        "1",
-        "--out-dir",
-        d.to_str().unwrap(),
-    ]);
+    let (code, _, err) = run(&common::cmd(
+        "bench builtin:cornell --width 24 --height 16 --vpls 128 --modes hard,weighted \
+         --pairs 8/16,32/48 --target-ms 100000 --repeat 1",
+        &["--out-dir", common::arg(&d)],
+    ));
     assert_eq!(code, 0, "{err}");
     let rows = csv::from_csv(&std::fs::read_to_string(d.join("results.csv")).unwrap()).unwrap();
     assert_eq!(rows.len(), 4 + 2, "{rows:?}");
@@ -603,39 +501,14 @@ fn methods_expand_with_their_own_knobs() {
 #[test]
 fn bench_methods_colom_restir_at_a_tiny_size() {
     let d = common::scratch("bench-restir");
-    let size = [
-        "--width",
-        "32",
-        "--height",
-        "24",
-        "--vpls",
-        "256",
-        "--direct-samples",
-        "1",
-    ];
-    let mut args = vec![
-        "bench",
-        "builtin:cornell",
-        "--out-dir",
-        d.to_str().unwrap(),
-        "--methods",
-        "colom,restir",
-        "--modes",
-        "weighted",
-        "--pairs",
-        "24/32,48/64",
-        "--restir-candidates",
-        "4,16",
-        "--restir-neighbours",
-        "5",
-        "--restir-iterations",
-        "0,1",
-        "--repeat",
-        "1",
-        "--reference-repeat",
-        "1",
-    ];
-    args.extend(size);
+    let size = "--width 32 --height 24 --vpls 256 --direct-samples 1";
+    let mut args = common::cmd(
+        "bench builtin:cornell --methods colom,restir --modes weighted --pairs 24/32,48/64 \
+         --restir-candidates 4,16 --restir-neighbours 5 --restir-iterations 0,1 --repeat 1 \
+         --reference-repeat 1",
+        &["--out-dir", common::arg(&d)],
+    );
+    args.extend(size.split_whitespace());
     let (code, _, err) = run(&args);
     assert_eq!(code, 0, "{err}");
     let text = std::fs::read_to_string(d.join("results.csv")).unwrap();
@@ -667,35 +540,17 @@ fn bench_methods_colom_restir_at_a_tiny_size() {
     }
     // The camera path, restir alone at its defaults.
     let p = common::scratch("bench-restir-path");
-    let mut args = vec![
-        "bench",
-        "builtin:conference",
-        "--out-dir",
-        p.to_str().unwrap(),
-        "--methods",
-        "restir",
-        "--restir-candidates",
-        "8",
-        "--restir-neighbours",
-        "5",
-        "--restir-iterations",
-        "1",
-        "--camera-path",
-        "orbit:3:2",
-        "--temporal",
-        "off,on",
-        "--temporal-alpha",
-        "1",
-    ];
-    args.extend(size);
+    let mut args = common::cmd(
+        "bench builtin:conference --methods restir --restir-candidates 8 --restir-neighbours 5 \
+         --restir-iterations 1 --camera-path orbit:3:2 --temporal off,on --temporal-alpha 1",
+        &["--out-dir", common::arg(&p)],
+    );
+    args.extend(size.split_whitespace());
     let (code, _, err) = run(&args);
     assert_eq!(code, 0, "{err}");
     let text = std::fs::read_to_string(p.join("path.csv")).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col =
-        |row: &[String], name: &str| row[header.iter().position(|h| *h == name).unwrap()].clone();
-    let rows: Vec<Vec<String>> = lines.map(csv::split_line).collect();
+    let (header, rows) = path_csv(&text);
+    let col = |row: &[String], name: &str| cell(&header, row, name);
     assert_eq!(rows.len(), 6, "{text}");
     for (i, r) in rows.iter().enumerate() {
         let (on, frame) = (i >= 3, i % 3);
@@ -720,24 +575,11 @@ fn bench_methods_colom_restir_at_a_tiny_size() {
 fn paper_off_on_runs_both_side_by_side() {
     let d = common::scratch("bench-paper-off-on");
     let dir = d.to_str().unwrap();
-    let args = [
-        "bench",
-        "builtin:cornell",
-        "--width",
-        "32",
-        "--height",
-        "24",
-        "--vpls",
-        "64",
-        "--modes",
-        "hard",
-        "--paper",
-        "off,on",
-        "--repeat",
-        "1",
-        "--out-dir",
-        dir,
-    ];
+    let args = common::cmd(
+        "bench builtin:cornell --width 32 --height 24 --vpls 64 --modes hard --paper off,on \
+         --repeat 1",
+        &["--out-dir", dir],
+    );
     let (code, _, err) = run(&args);
     assert_eq!(code, 0, "{err}");
     let rows = csv::from_csv(&std::fs::read_to_string(d.join("results.csv")).unwrap()).unwrap();

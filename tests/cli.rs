@@ -32,18 +32,10 @@ fn render_cornell_128_exr_with_stats() {
     let d = common::scratch("cli-exr");
     let exr = d.join("c.exr");
     let stats = d.join("s.json");
-    let (code, _, err) = run(&[
-        "render",
-        "builtin:cornell",
-        "-o",
-        exr.to_str().unwrap(),
-        "--width",
-        "128",
-        "--height",
-        "128",
-        "--stats",
-        stats.to_str().unwrap(),
-    ]);
+    let (code, _, err) = run(&common::cmd(
+        "render builtin:cornell --width 128 --height 128",
+        &["-o", common::arg(&exr), "--stats", common::arg(&stats)],
+    ));
     assert_eq!(code, 0, "{err}");
     let (w, h, px) = fuzzy_vpl::export::read_exr(&exr).unwrap();
     assert_eq!((w, h), (128, 128));
@@ -64,7 +56,7 @@ fn render_cornell_128_exr_with_stats() {
         assert!(header.contains(c), "{header}");
     }
     assert!(header.contains("(0 0) - (127 127)"), "{header}");
-    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    let j = common::read_json(&stats);
     for k in [
         "scene",
         "width",
@@ -133,14 +125,7 @@ fn render_cornell_128_exr_with_stats() {
 fn compare_fills_error_and_writes_error_map() {
     let d = common::scratch("cli-compare");
     let r = d.join("ref.exr");
-    let base = [
-        "render",
-        "builtin:cornell",
-        "--width",
-        "32",
-        "--height",
-        "32",
-    ];
+    let base = common::cmd("render builtin:cornell --width 32 --height 32", &[]);
     let (code, _, err) = run(&[&base[..], &["-o", r.to_str().unwrap(), "--seed", "1"]].concat());
     assert_eq!(code, 0, "{err}");
     let stats = d.join("s.json");
@@ -162,7 +147,7 @@ fn compare_fills_error_and_writes_error_map() {
     ]
     .concat());
     assert_eq!(code, 0, "{err}");
-    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    let j = common::read_json(&stats);
     let mse = j["error"]["mse"].as_f64().unwrap();
     let rel = j["error"]["rel_mse"].as_f64().unwrap();
     // Different seeds: small, non-zero noise difference.
@@ -200,7 +185,7 @@ fn compare_fills_error_and_writes_error_map() {
     ]
     .concat());
     assert_eq!(code, 0, "{err}");
-    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    let j = common::read_json(&stats);
     for k in ["flip", "border", "interior", "flip_border"] {
         let v = j["error"][k].as_f64().unwrap_or(f64::NAN);
         assert!(v.is_finite() && v >= 0.0, "{k}: {j}");
@@ -210,32 +195,24 @@ fn compare_fills_error_and_writes_error_map() {
     assert_eq!(m.dimensions(), (32, 32));
 }
 
+/// `render builtin:cornell` at 48 × 32 with 256 VPLs and `--target-ms ms` into scratch `name`,
+/// which must exit 0: (stderr, the stats JSON, the image's path).
+fn render_target_ms(name: &str, ms: &str) -> (String, serde_json::Value, std::path::PathBuf) {
+    let d = common::scratch(name);
+    let (stats, out) = (d.join("s.json"), d.join("t.exr"));
+    let words = "render builtin:cornell --width 48 --height 32 --vpls 256 --target-ms";
+    let rest = [ms, "-o", common::arg(&out), "--stats", common::arg(&stats)];
+    let (code, _, err) = run(&common::cmd(words, &rest));
+    assert_eq!(code, 0, "{err}");
+    (err, common::read_json(&stats), out)
+}
+
 /// `--target-ms`: a few frames choose the K's; the stats hold the budget, each frame's K's and time,
 /// and the K's chosen (the last frame's) in `settings`.
 #[test]
 fn target_ms_chooses_the_cluster_counts_and_says_so() {
-    let d = common::scratch("cli-target");
-    let stats = d.join("s.json");
-    let png = d.join("t.exr");
-    let (code, _, err) = run(&[
-        "render",
-        "builtin:cornell",
-        "--width",
-        "48",
-        "--height",
-        "32",
-        "--vpls",
-        "256",
-        "--target-ms",
-        "100000",
-        "-o",
-        png.to_str().unwrap(),
-        "--stats",
-        stats.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{err}");
+    let (err, j, png) = render_target_ms("cli-target", "100000");
     assert!(err.contains("--target-ms 100000: frame 1"), "{err}");
-    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
     assert_eq!(j["settings"]["target_ms"].as_f64(), Some(100000.0), "{j}");
     let steps = j["target"]["steps"].as_array().unwrap();
     assert!(!steps.is_empty() && steps.len() <= 8, "{j}");
@@ -440,15 +417,7 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
         ),
         // 200,000 SP clusters x 8192 VPLs: a 205 MB visibility matrix (lavapipe binds 128 MiB).
         (
-            vec![
-                "render",
-                "-o",
-                &o,
-                "--sp-clusters",
-                "200000",
-                "--vpl-clusters",
-                "0",
-            ],
+            common::cmd("render --sp-clusters 200000 --vpl-clusters 0", &["-o", &o]),
             "--sp-clusters 200000",
         ),
         (
@@ -464,15 +433,7 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
             "nodir",
         ),
         (
-            vec![
-                "view",
-                "--vpls",
-                "4294967295",
-                "--frames",
-                "1",
-                "--screenshot",
-                &png,
-            ],
+            common::cmd("view --vpls 4294967295 --frames 1", &["--screenshot", &png]),
             "--vpls 4294967295",
         ),
         (
@@ -484,26 +445,17 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
             "--direct-samples 0",
         ),
         (
-            vec![
-                "view",
-                "--direct-samples",
-                "65537",
-                "--frames",
-                "1",
-                "--screenshot",
-                &png,
-            ],
+            common::cmd(
+                "view --direct-samples 65537 --frames 1",
+                &["--screenshot", &png],
+            ),
             "--direct-samples 65537",
         ),
         (
-            vec![
-                "bench",
-                "--quick",
-                "--out-dir",
-                &bench_dir,
-                "--direct-samples",
-                "70000",
-            ],
+            common::cmd(
+                "bench --quick --direct-samples 70000",
+                &["--out-dir", &bench_dir],
+            ),
             "--direct-samples 70000",
         ),
         (
@@ -517,28 +469,17 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
             "--width/--height 2048x1100",
         ),
         (
-            vec![
-                "bench",
-                "--quick",
-                "--out-dir",
-                &bench_dir,
-                "--width",
-                "2048",
-                "--height",
-                "1100",
-            ],
+            common::cmd(
+                "bench --quick --width 2048 --height 1100",
+                &["--out-dir", &bench_dir],
+            ),
             "--width/--height 2048x1100",
         ),
         (
-            vec![
-                "bench",
-                "--out-dir",
-                &bench_dir,
-                "--modes",
-                "sp-only",
-                "--sp-clusters",
-                "200000",
-            ],
+            common::cmd(
+                "bench --modes sp-only --sp-clusters 200000",
+                &["--out-dir", &bench_dir],
+            ),
             "--sp-clusters 200000",
         ),
     ];
@@ -584,15 +525,7 @@ fn negative_values_and_directory_outputs_get_clear_messages() {
             "'--vpls <VPLS>'",
         ),
         (
-            vec![
-                "view",
-                "--render-scale",
-                "-1",
-                "--frames",
-                "1",
-                "--screenshot",
-                &o,
-            ],
+            common::cmd("view --render-scale -1 --frames 1", &["--screenshot", &o]),
             "--render-scale",
         ),
         (
@@ -622,43 +555,28 @@ fn negative_values_and_directory_outputs_get_clear_messages() {
 fn scene_without_light_renders_black() {
     let d = common::scratch("cli-dark");
     // One triangle facing +Z, no material, no light.
-    let pos: [f32; 9] = [-1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 0.0];
-    let bytes: Vec<u8> = pos.iter().flat_map(|f| f.to_le_bytes()).collect();
-    std::fs::write(d.join("t.bin"), &bytes).unwrap();
+    let pos = [-1.0f32, -1.0, 0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 0.0].map(f32::to_le_bytes);
+    std::fs::write(d.join("t.bin"), pos.concat()).unwrap();
+    let path = d.join("dark.gltf");
     let gltf = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
       "meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
       "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[-1,-1,0],"max":[1,1,0]}],
       "bufferViews":[{"buffer":0,"byteLength":36}],"buffers":[{"uri":"t.bin","byteLength":36}]}"#;
-    let path = d.join("dark.gltf");
     std::fs::write(&path, gltf).unwrap();
     let out = d.join("dark.exr");
-    let (code, _, err) = run(&[
-        "render",
-        path.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--width",
-        "16",
-        "--height",
-        "16",
-    ]);
+    let (code, _, err) = run(&common::cmd(
+        "render --width 16 --height 16",
+        &[common::arg(&path), "-o", common::arg(&out)],
+    ));
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("warning") && err.contains("no light"), "{err}");
     let (_, _, px) = fuzzy_vpl::export::read_exr(&out).unwrap();
     assert!(px.iter().flatten().all(|c| *c == 0.0));
     // The same scene with a point light from the command line is lit.
-    let (code, _, err) = run(&[
-        "render",
-        path.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--width",
-        "16",
-        "--height",
-        "16",
-        "--point",
-        "0,0,2,5",
-    ]);
+    let (code, _, err) = run(&common::cmd(
+        "render --width 16 --height 16 --point 0,0,2,5",
+        &[common::arg(&path), "-o", common::arg(&out)],
+    ));
     assert_eq!(code, 0, "{err}");
     let (_, _, px) = fuzzy_vpl::export::read_exr(&out).unwrap();
     assert!(common::all_finite(&px));
@@ -726,28 +644,15 @@ fn plane_gate_is_reported_where_it_applies() {
     let render = |name: &str, extra: &[&str]| {
         let exr = d.join(format!("{name}.exr"));
         let stats = d.join(format!("{name}.json"));
-        let mut a = vec![
-            "render",
-            "builtin:conference",
-            "--width",
-            "64",
-            "--height",
-            "48",
-            "--vpls",
-            "512",
-            "--vpl-clusters",
-            "128",
-            "--sp-clusters",
-            "48",
-            "-o",
-            exr.to_str().unwrap(),
-            "--stats",
-            stats.to_str().unwrap(),
-        ];
+        let mut a = common::cmd(
+            "render builtin:conference --width 64 --height 48 --vpls 512 --vpl-clusters 128 \
+             --sp-clusters 48",
+            &["-o", common::arg(&exr), "--stats", common::arg(&stats)],
+        );
         a.extend_from_slice(extra);
         let (code, _, err) = run(&a);
         assert_eq!(code, 0, "{err}");
-        let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+        let j = common::read_json(&stats);
         let px = fuzzy_vpl::export::read_exr(&exr).unwrap().2;
         assert!(common::all_finite(&px), "{name}");
         (j, px)
@@ -820,16 +725,10 @@ fn render_stats(
     frame: &[&str],
     extra: &[&str],
 ) -> serde_json::Value {
-    let mut args = vec![
-        "render",
-        "builtin:cornell",
-        "-o",
-        o.to_str().unwrap(),
-        "--stats",
-        stats.to_str().unwrap(),
-        "--direct-samples",
-        "1",
-    ];
+    let mut args = common::cmd(
+        "render builtin:cornell --direct-samples 1",
+        &["-o", common::arg(o), "--stats", common::arg(stats)],
+    );
     args.extend_from_slice(frame);
     args.extend_from_slice(extra);
     let (code, _, err) = run(&args);
@@ -845,18 +744,10 @@ fn auto_gamma_is_written_as_chosen() {
     let o = d.join("a.png");
     let stats = d.join("a.json");
     let render = |extra: &[&str]| -> serde_json::Value {
-        let frame = [
-            "--width",
-            "400",
-            "--height",
-            "300",
-            "--sp-clusters",
-            "100",
-            "--vpls",
-            "512",
-            "--vpl-clusters",
-            "64",
-        ];
+        let frame = common::cmd(
+            "--width 400 --height 300 --sp-clusters 100 --vpls 512 --vpl-clusters 64",
+            &[],
+        );
         render_stats(&o, &stats, &frame, extra)
     };
     // 120,000 pixels, K 100: 40 a cluster allows 30, 19,200 in all allows 6.
@@ -904,15 +795,10 @@ fn paper_sets_the_papers_choices_and_given_options_win() {
     assert_eq!(s["clamp"], 0.0);
     assert_eq!(s["fuzziness"], 6);
     assert_eq!(s["weighting"], "inverse-distance");
-    let s = &render(&[
-        "--paper",
-        "--clamp",
-        "0.01",
-        "--cluster-light",
-        "spread",
-        "--sp-clusters",
-        "50",
-    ])["settings"];
+    let s = &render(&common::cmd(
+        "--paper --clamp 0.01 --cluster-light spread --sp-clusters 50",
+        &[],
+    ))["settings"];
     assert_eq!(
         (s["paper"].clone(), s["cluster_light"].clone()),
         (true.into(), "spread".into())
@@ -1090,32 +976,22 @@ fn png_exposure_is_automatic_and_written_in_the_stats() {
         let exr = d.join(format!("{tag}.exr"));
         let png = d.join(format!("{tag}.png"));
         let stats = d.join(format!("{tag}.json"));
-        let mut args = vec![
-            "render",
-            "builtin:cornell",
-            "-o",
-            exr.to_str().unwrap(),
-            "-o",
-            png.to_str().unwrap(),
-            "--stats",
-            stats.to_str().unwrap(),
-            "--width",
-            "64",
-            "--height",
-            "48",
-            "--vpls",
-            "256",
-            "--vpl-clusters",
-            "32",
-            "--sp-clusters",
-            "64",
-            "--direct-samples",
-            "2",
-        ];
+        let mut args = common::cmd(
+            "render builtin:cornell --width 64 --height 48 --vpls 256 --vpl-clusters 32 \
+             --sp-clusters 64 --direct-samples 2",
+            &[
+                "-o",
+                common::arg(&exr),
+                "-o",
+                common::arg(&png),
+                "--stats",
+                common::arg(&stats),
+            ],
+        );
         args.extend_from_slice(extra);
         let (code, _, err) = run(&args);
         assert_eq!(code, 0, "{extra:?}: {err}");
-        let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+        let j = common::read_json(&stats);
         let (_, _, px) = fuzzy_vpl::export::read_exr(&exr).unwrap();
         assert!(common::all_finite(&px));
         let rgb = image::open(&png).unwrap().into_rgb8().into_raw();
@@ -1219,24 +1095,11 @@ fn a_gltf_room_at_any_finite_scale_renders_the_same_image() {
     let render = |k: f64| -> (i32, String, Vec<[f32; 3]>) {
         let p = scaled_room(&d, &format!("room{k:e}"), k);
         let exr = d.join(format!("room{k:e}.exr"));
-        let (code, _, err) = run(&[
-            "render",
-            p.to_str().unwrap(),
-            "-o",
-            exr.to_str().unwrap(),
-            "--width",
-            "48",
-            "--height",
-            "36",
-            "--vpls",
-            "256",
-            "--vpl-clusters",
-            "32",
-            "--sp-clusters",
-            "48",
-            "--direct-samples",
-            "4",
-        ]);
+        let (code, _, err) = run(&common::cmd(
+            "render --width 48 --height 36 --vpls 256 --vpl-clusters 32 --sp-clusters 48 \
+             --direct-samples 4",
+            &[common::arg(&p), "-o", common::arg(&exr)],
+        ));
         let px = if code == 0 {
             fuzzy_vpl::export::read_exr(&exr).unwrap().2
         } else {
@@ -1282,25 +1145,17 @@ fn a_gltf_room_at_any_finite_scale_renders_the_same_image() {
 fn render_writes_a_chrome_trace_of_its_passes() {
     let d = common::scratch("cli-trace");
     let (trace, stats) = (d.join("t.json"), d.join("s.json"));
-    let (code, _, err) = common::run_cli(&[
-        "render",
-        "-o",
-        d.join("o.exr").to_str().unwrap(),
-        "--width",
-        "32",
-        "--height",
-        "24",
-        "--vpls",
-        "256",
-        "--vpl-clusters",
-        "32",
-        "--sp-clusters",
-        "48",
-        "--trace",
-        trace.to_str().unwrap(),
-        "--stats",
-        stats.to_str().unwrap(),
-    ]);
+    let (code, _, err) = common::run_cli(&common::cmd(
+        "render --width 32 --height 24 --vpls 256 --vpl-clusters 32 --sp-clusters 48",
+        &[
+            "-o",
+            d.join("o.exr").to_str().unwrap(),
+            "--trace",
+            common::arg(&trace),
+            "--stats",
+            common::arg(&stats),
+        ],
+    ));
     assert_eq!(code, 0, "{err}");
     let t: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&trace).unwrap()).expect("the trace is JSON");
@@ -1336,32 +1191,22 @@ fn render_layers_add_up_and_the_stats_name_the_indirect_light() {
     for layer in ["final", "direct", "indirect"] {
         let exr = d.join(format!("{layer}.exr"));
         let stats = d.join(format!("{layer}.json"));
-        let (code, _, err) = common::run_cli(&[
-            "render",
-            "builtin:cornell",
-            "--width",
-            "48",
-            "--height",
-            "36",
-            "--vpls",
-            "512",
-            "--vpl-clusters",
-            "64",
-            "--sp-clusters",
-            "16",
-            "--warmup-ms",
-            "0",
-            "--layer",
-            layer,
-            "-o",
-            exr.to_str().unwrap(),
-            "--stats",
-            stats.to_str().unwrap(),
-        ]);
+        let (code, _, err) = common::run_cli(&common::cmd(
+            "render builtin:cornell --width 48 --height 36 --vpls 512 --vpl-clusters 64 \
+             --sp-clusters 16 --warmup-ms 0",
+            &[
+                "--layer",
+                layer,
+                "-o",
+                common::arg(&exr),
+                "--stats",
+                common::arg(&stats),
+            ],
+        ));
         assert_eq!(code, 0, "{err}");
         let (_, _, px) = fuzzy_vpl::export::read_exr(&exr).unwrap();
         assert!(common::all_finite(&px));
-        let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+        let j = common::read_json(&stats);
         images.push((px, j));
     }
     let (fin, direct, indirect) = (&images[0].0, &images[1].0, &images[2].0);
@@ -1418,27 +1263,7 @@ fn weighting_names_are_the_cli_and_serde_names() {
 /// frame over the budget, and the settings it ends on are the ones rendered.
 #[test]
 fn target_ms_with_a_binding_budget_cuts_k_and_the_direct_light() {
-    let d = common::scratch("cli-target-binding");
-    let stats = d.join("s.json");
-    let out = d.join("t.exr");
-    let (code, _, err) = run(&[
-        "render",
-        "builtin:cornell",
-        "--width",
-        "48",
-        "--height",
-        "32",
-        "--vpls",
-        "256",
-        "--target-ms",
-        "0.001",
-        "-o",
-        out.to_str().unwrap(),
-        "--stats",
-        stats.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{err}");
-    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    let (_, j, out) = render_target_ms("cli-target-binding", "0.001");
     let steps = j["target"]["steps"].as_array().unwrap();
     println!("steps {steps:?}");
     assert!(steps.len() >= 2, "{j}");
@@ -1461,44 +1286,28 @@ fn target_ms_with_a_binding_budget_cuts_k_and_the_direct_light() {
     assert!(common::all_finite(&px));
 }
 
+/// `render` of `builtin:cornell` at 32 × 24, 256 VPLs, K_SP 32, K_VPL 64.
+const FRAME_32X24: &str =
+    "render builtin:cornell --width 32 --height 24 --vpls 256 --sp-clusters 32 --vpl-clusters 64";
+
 /// `render --method wang` and `--method lightcluster`: the method's own passes run (not the
 /// reference nor colom's), the stats name the method, and its indirect light is within 20% of the
 /// reference's on the same frame (measured at 32×24: wang 1.068, lightcluster 1.000).
 #[test]
 fn render_runs_wang_and_lightcluster() {
     let d = common::scratch("cli-methods");
-    let frame = [
-        "builtin:cornell",
-        "--width",
-        "32",
-        "--height",
-        "24",
-        "--vpls",
-        "256",
-        "--sp-clusters",
-        "32",
-        "--vpl-clusters",
-        "64",
-    ];
     let render = |name: &str, extra: &[&str]| -> serde_json::Value {
         let (out, stats) = (
             d.join(format!("{name}.exr")),
             d.join(format!("{name}.json")),
         );
-        let mut args = vec!["render"];
-        args.extend(frame);
-        args.extend(extra);
-        args.extend([
-            "-o",
-            out.to_str().unwrap(),
-            "--stats",
-            stats.to_str().unwrap(),
-        ]);
+        let mut args = common::cmd(FRAME_32X24, extra);
+        args.extend(["-o", common::arg(&out), "--stats", common::arg(&stats)]);
         let (code, _, err) = run(&args);
         assert_eq!(code, 0, "{args:?}: {err}");
         let (_, _, px) = fuzzy_vpl::export::read_exr(&out).unwrap();
         assert!(common::all_finite(&px), "{name}");
-        serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap()
+        common::read_json(&stats)
     };
     let reference = render("reference", &["--reference"]);
     let ind_ref = reference["mean_luminance_indirect"].as_f64().unwrap();
@@ -1540,19 +1349,13 @@ fn render_runs_wang_and_lightcluster() {
 fn raybench_reports_both_ray_kinds() {
     let d = common::scratch("cli-raybench");
     let json = d.join("rays.json");
-    let (code, out, err) = run(&[
-        "raybench",
-        "builtin:cornell",
-        "--width",
-        "32",
-        "--height",
-        "24",
-        "--json",
-        json.to_str().unwrap(),
-    ]);
+    let (code, out, err) = run(&common::cmd(
+        "raybench builtin:cornell --width 32 --height 24",
+        &["--json", common::arg(&json)],
+    ));
     assert_eq!(code, 0, "{err}");
     assert!(out.starts_with("adapter: "), "{out}");
-    let rows: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let rows = common::read_json(&json);
     let rows = rows.as_array().unwrap();
     assert_eq!(rows.len(), 2, "{rows:?}");
     let s = fuzzy_vpl::scene::load("builtin:cornell").unwrap();
@@ -1588,22 +1391,7 @@ fn frames_without_bounds_checks_or_loop_bounding_are_the_same() {
     let render = |name: &str, env: &[&str]| {
         let out = d.join(format!("{name}.exr"));
         let mut c = bin();
-        c.args([
-            "render",
-            "builtin:cornell",
-            "--width",
-            "32",
-            "--height",
-            "24",
-            "--vpls",
-            "256",
-            "--sp-clusters",
-            "32",
-            "--vpl-clusters",
-            "64",
-            "-o",
-            out.to_str().unwrap(),
-        ]);
+        c.args(common::cmd(FRAME_32X24, &["-o", common::arg(&out)]));
         for e in env {
             c.env(e, "1");
         }

@@ -75,6 +75,63 @@ fn down_from(y: f32) -> Camera {
     Camera::look_at("down", Vec3::new(0.0, y, 0.0), Vec3::ZERO, Vec3::Z, 1.2)
 }
 
+/// The seeds a furnace or particle test averages over: `FVPL_FURNACE_SEEDS`, 4 by default.
+fn furnace_seeds() -> u32 {
+    std::env::var("FVPL_FURNACE_SEEDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(4u32)
+}
+
+/// One seed of a furnace test through `cam`: the reference frame with 4096 VPLs and 16 direct
+/// samples (its radiance finite) and 64 paths a pixel traced: (direct, indirect, path-traced).
+fn furnace_frames(r: &mut Renderer, cam: &Camera, seed: u32) -> [Vec<[f32; 3]>; 3] {
+    let rs = RenderSettings {
+        reference: true,
+        frame: FrameSettings {
+            vpls: 4096,
+            ..direct_only(16, seed).frame
+        },
+        ..Default::default()
+    };
+    let f = r.render(cam, &rs).unwrap();
+    assert!(common::all_finite(&f.radiance));
+    let pt = r.path_trace(cam, &rs, 64).unwrap();
+    [f.direct, f.indirect, pt.radiance]
+}
+
+/// One seed of a particle test: an 8 × 6 reference frame with 16,384 VPLs seen `down_from(0.5)`
+/// (its radiance finite); the VPLs stay in `r`.
+fn particles_frame(r: &mut Renderer, seed: u32) {
+    let rs = RenderSettings {
+        reference: true,
+        frame: FrameSettings {
+            width: 8,
+            height: 6,
+            vpls: 16384,
+            ..direct_only(1, seed).frame
+        },
+        ..Default::default()
+    };
+    let f = r.render(&down_from(0.5), &rs).unwrap();
+    assert!(common::all_finite(&f.radiance));
+}
+
+/// The punctual tests' spot light: I = 5 cd at height 2 pointing down, cone angles `inner` and
+/// `outer` rad from its axis.
+fn spot_down(inner: f64, outer: f64) -> PunctualLight {
+    PunctualLight {
+        kind: LightKind::Spot {
+            inner_cone: inner as f32,
+            outer_cone: outer as f32,
+        },
+        position: Vec3::new(0.0, 2.0, 0.0),
+        direction: Vec3::NEG_Y,
+        color: Vec3::ONE,
+        intensity: 5.0,
+    }
+}
+
 fn direct_only(samples: u32, seed: u32) -> RenderSettings {
     RenderSettings {
         frame: FrameSettings {
@@ -196,16 +253,7 @@ fn point_and_spot_lights_are_inverse_square_and_the_gltf_cone() {
     assert_closed_form("point", &px, |p| RHO / PI * lambert(2.0, 1.5, p), 2.2e-6);
 
     let (inner, outer) = (0.3f64, 0.6f64);
-    let spot = PunctualLight {
-        kind: LightKind::Spot {
-            inner_cone: inner as f32,
-            outer_cone: outer as f32,
-        },
-        position: Vec3::new(0.0, 2.0, 0.0),
-        direction: Vec3::NEG_Y,
-        color: Vec3::ONE,
-        intensity: 5.0,
-    };
+    let spot = spot_down(inner, outer);
     let s = floor_scene(&[], 0.0, vec![spot]);
     let px = floor_pixels(
         &mut Renderer::new(&ctx, &s).unwrap(),
@@ -301,10 +349,7 @@ fn a_square_emitter_gives_the_closed_form_irradiance() {
         let (hh, hf) = (h as f64, half as f64);
         RHO / PI * le as f64 * rect(-hf - p.x, hf - p.x, -hf - p.z, hf - p.z, hh)
     };
-    let seeds = std::env::var("FVPL_FURNACE_SEEDS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(4u32);
+    let seeds = furnace_seeds();
     let ctx = common::gpu();
     let mut r = Renderer::new(&ctx, &s).unwrap();
     let mut means = Vec::new();
@@ -376,10 +421,7 @@ fn two_emitters_of_unequal_power_and_area_give_the_sum_of_their_closed_forms() {
             )
     };
     let want = |p: glam::DVec3| one(p, a) + one(p, b);
-    let seeds = std::env::var("FVPL_FURNACE_SEEDS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(4u32);
+    let seeds = furnace_seeds();
     let ctx = common::gpu();
     let mut r = Renderer::new(&ctx, &s).unwrap();
     assert_eq!(r.gpu.emitters.len(), 4, "two squares, two triangles each");
@@ -501,32 +543,15 @@ fn a_closed_furnace_gives_the_bounce_sum_in_every_pass() {
     let ctx = common::gpu();
     let mut r = Renderer::new(&ctx, &s).unwrap();
     let cam = Camera::look_at("in", Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 1.2);
-    let seeds = std::env::var("FVPL_FURNACE_SEEDS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(4u32);
+    let seeds = furnace_seeds();
     let mean = |img: &[[f32; 3]]| {
         assert!(common::all_finite(img));
         img.iter().map(|c| c[1] as f64).sum::<f64>() / img.len() as f64
     };
     let mut ratios = vec![Vec::new(); 3];
     for seed in 1..=seeds {
-        let rs = RenderSettings {
-            reference: true,
-            frame: FrameSettings {
-                vpls: 4096,
-                ..direct_only(16, seed).frame
-            },
-            ..Default::default()
-        };
-        let f = r.render(&cam, &rs).unwrap();
-        assert!(common::all_finite(&f.radiance));
-        let pt = r.path_trace(&cam, &rs, 64).unwrap();
-        for (i, m) in [mean(&f.direct), mean(&f.indirect), mean(&pt.radiance)]
-            .into_iter()
-            .enumerate()
-        {
-            ratios[i].push(m / want[i]);
+        for (i, img) in furnace_frames(&mut r, &cam, seed).iter().enumerate() {
+            ratios[i].push(mean(img) / want[i]);
         }
     }
     for (i, name) in ["direct", "VPL indirect", "path tracer"].iter().enumerate() {
@@ -577,10 +602,7 @@ fn a_coloured_furnace_gives_each_channels_bounce_sum() {
     let ctx = common::gpu();
     let mut r = Renderer::new(&ctx, &s).unwrap();
     let cam = Camera::look_at("in", Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 1.2);
-    let seeds = std::env::var("FVPL_FURNACE_SEEDS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(4u32);
+    let seeds = furnace_seeds();
     let mean = |img: &[[f32; 3]], c: usize| {
         assert!(common::all_finite(img));
         img.iter().map(|x| x[c] as f64).sum::<f64>() / img.len() as f64
@@ -588,23 +610,9 @@ fn a_coloured_furnace_gives_each_channels_bounce_sum() {
     // ratios[pass][channel]: per-seed mean ratios.
     let mut ratios = vec![vec![Vec::new(); 3]; 3];
     for seed in 1..=seeds {
-        let rs = RenderSettings {
-            reference: true,
-            frame: FrameSettings {
-                vpls: 4096,
-                ..direct_only(16, seed).frame
-            },
-            ..Default::default()
-        };
-        let f = r.render(&cam, &rs).unwrap();
-        assert!(common::all_finite(&f.radiance));
-        let pt = r.path_trace(&cam, &rs, 64).unwrap();
+        let [direct, indirect, traced] = furnace_frames(&mut r, &cam, seed);
         for c in 0..3 {
-            let got = [
-                mean(&f.direct, c),
-                mean(&f.indirect, c),
-                mean(&pt.radiance, c),
-            ];
+            let got = [mean(&direct, c), mean(&indirect, c), mean(&traced, c)];
             for (i, pass) in ratios.iter_mut().enumerate() {
                 pass[c].push(got[i] / want(c)[i]);
             }
@@ -675,43 +683,19 @@ fn emitted_particles_land_by_the_closed_form() {
     let inner3 = flux_over(-1.5, 1.5, -1.5, 1.5);
     let floor = flux_over(-4.0, 4.0, -4.0, 4.0);
     let want = [centre, inner3 - centre, floor - inner3, 0.5, 0.5];
-    let region = |p: Vec3| {
-        let m = p.x.abs().max(p.z.abs());
-        if m < 0.5 {
-            0
-        } else if m < 1.5 {
-            1
-        } else {
-            2
-        }
-    };
     let ctx = common::gpu();
     let mut r = Renderer::new(&ctx, &s).unwrap();
     assert_eq!((r.geometry_scale, r.output_scale), (1.0, 1.0));
-    let seeds = std::env::var("FVPL_FURNACE_SEEDS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(4u32);
+    let seeds = furnace_seeds();
     let mut ratios = vec![Vec::new(); 5];
     for seed in 1..=seeds {
-        let rs = RenderSettings {
-            reference: true,
-            frame: FrameSettings {
-                width: 8,
-                height: 6,
-                vpls: 16384,
-                ..direct_only(1, seed).frame
-            },
-            ..Default::default()
-        };
-        let f = r.render(&down_from(0.5), &rs).unwrap();
-        assert!(common::all_finite(&f.radiance));
+        particles_frame(&mut r, seed);
         let vpls = &r.vpl_set.as_ref().unwrap().set.vpls;
         let mut got = [0f64; 5];
         for v in vpls {
             let p = Vec3::new(v.pos[0], v.pos[1], v.pos[2]);
             assert!(p.y.abs() < 1e-4, "a VPL off the floor: {p}");
-            got[region(p)] += v.flux[1] as f64;
+            got[region(p.x as f64, p.z as f64)] += v.flux[1] as f64;
             got[3] += if p.x > 0.0 { v.flux[1] as f64 } else { 0.0 };
             got[4] += if p.z > 0.0 { v.flux[1] as f64 } else { 0.0 };
         }
@@ -780,16 +764,7 @@ fn punctual_particles_carry_the_lights_power() {
             color: Vec3::ONE,
             intensity: 2.0,
         },
-        PunctualLight {
-            kind: LightKind::Spot {
-                inner_cone: inner as f32,
-                outer_cone: outer as f32,
-            },
-            position: Vec3::new(0.0, 2.0, 0.0),
-            direction: Vec3::NEG_Y,
-            color: Vec3::ONE,
-            intensity: 5.0,
-        },
+        spot_down(inner, outer),
     ];
     let lambert = |i: f64, h: f64, x: f64, z: f64| {
         let d2 = h * h + x * x + z * z;
@@ -806,10 +781,7 @@ fn punctual_particles_carry_the_lights_power() {
         &|x, z| lambert(5.0, 2.0, x, z) * cone(x, z),
     ];
     let names = ["sun", "point", "spot"];
-    let seeds = std::env::var("FVPL_FURNACE_SEEDS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(4u32);
+    let seeds = furnace_seeds();
     let ctx = common::gpu();
     for (l, light) in lights.into_iter().enumerate() {
         // ρ ∫ E over the three regions (midpoint rule, cells of 0.01).
@@ -826,18 +798,7 @@ fn punctual_particles_carry_the_lights_power() {
         assert_eq!((r.geometry_scale, r.output_scale), (1.0, 1.0));
         let mut ratios = vec![Vec::new(); 3];
         for seed in 1..=seeds {
-            let rs = RenderSettings {
-                reference: true,
-                frame: FrameSettings {
-                    width: 8,
-                    height: 6,
-                    vpls: 16384,
-                    ..direct_only(1, seed).frame
-                },
-                ..Default::default()
-            };
-            let f = r.render(&down_from(0.5), &rs).unwrap();
-            assert!(common::all_finite(&f.radiance));
+            particles_frame(&mut r, seed);
             let mut got = [0f64; 3];
             for v in &r.vpl_set.as_ref().unwrap().set.vpls {
                 assert!(v.pos[1].abs() < 1e-4, "a VPL off the floor: {:?}", v.pos);

@@ -5,7 +5,6 @@ mod common;
 
 use fuzzy_vpl::cpu::kmeans::RepPoint;
 use fuzzy_vpl::cpu::shade;
-use fuzzy_vpl::gi::primary::ShadingPoint;
 use fuzzy_vpl::method::Method;
 use fuzzy_vpl::method::colom::Colom;
 use fuzzy_vpl::metrics::{mean_luminance, mse};
@@ -45,21 +44,15 @@ fn shading_pairs(
     f: &Frame,
     fs: &RenderSettings,
 ) -> Vec<(Vec3, Vec3)> {
-    let gbuf = r.last_gbuffer().unwrap();
-    let sps: Vec<ShadingPoint> = gbuf.chunks(4).map(ShadingPoint::from_gpu).collect();
+    let g = common::sp_clusters(ctx, r);
+    let (sps, reps) = (&g.sps, &g.reps[..]);
     let c = r.sp_clustering().unwrap();
-    let (k, nf) = (c.k() as usize, c.f() as usize);
-    let assign: Vec<u32> = ctx.read_buffer(&c.assign, sps.len() * nf).unwrap();
-    let weights: Vec<f32> = ctx.read_buffer(&c.weights, sps.len() * nf).unwrap();
-    let reps: Vec<u32> = ctx.read_buffer(&c.reps, k * 2).unwrap();
-    // A cold start: each representative point is its member pixel's shading point.
-    let reps = common::cold_rep_points(&sps, &reps);
-    let on_gpu = RepPoint::from_vec4s(&ctx.read_buffer(&c.rep_points, k * 2).unwrap());
+    let on_gpu = RepPoint::from_vec4s(&ctx.read_buffer(&c.rep_points, g.k * 2).unwrap());
     assert_eq!(on_gpu, reps, "representative points");
     let lights = &r.lights.as_ref().unwrap().list.lights;
     let cpu = common::cpu_scene(r, s);
     let facing = fs.cluster.visibility_facing;
-    let (bits, words) = shade::visibility_bits(&cpu, &reps, lights, facing);
+    let (bits, words) = shade::visibility_bits(&cpu, reps, lights, facing);
     let d_min = fs.frame.clamp * s.extent();
     sps.iter()
         .enumerate()
@@ -68,11 +61,7 @@ fn shading_pairs(
                 sp,
                 lights,
                 &shade::Bits { bits: &bits, words },
-                &shade::Slots {
-                    assign: &assign[m * nf..m * nf + nf],
-                    weights: &weights[m * nf..m * nf + nf],
-                    weighted: fs.cluster.weighting == Weighting::InverseDistance,
-                },
+                &g.slots(m, fs.cluster.weighting == Weighting::InverseDistance),
                 d_min * d_min,
                 fs.cluster.cluster_light,
             );

@@ -39,6 +39,13 @@ fn eq1_accepts_34_degrees_and_refuses_36() {
     assert!(eq1_within_angle(n0, at(44.0), 45.0) && !eq1_within_angle(n0, at(46.0), 45.0));
 }
 
+/// SLIC with one voxel a cluster: step 1, one iteration, 35°.
+const ONE_VOXEL_SLIC: SlicSettings = SlicSettings {
+    step: 1,
+    iterations: 1,
+    angle: 35.0,
+};
+
 /// Unit voxels at integer coordinates: fragments at the voxel centres with the given normals.
 fn hand_voxels(dims: u32, cells: &[([i32; 3], Vec3)]) -> Voxels {
     let grid = Grid {
@@ -174,14 +181,7 @@ fn a_face_under_one_cluster_gets_its_closed_form_irradiance() {
     // E = Φ/π cos θ cos θ' / d² = Φ / (π d²) with d = 4 (d_min below it), both cosines 1.
     let cells = [([0, 0, 0], Vec3::Y), ([0, 4, 0], -Vec3::Y)];
     let mut v = hand_voxels(8, &cells);
-    let clusters = voxel::slic(
-        &mut v,
-        &SlicSettings {
-            step: 1,
-            iterations: 1,
-            angle: 35.0,
-        },
-    );
+    let clusters = voxel::slic(&mut v, &ONE_VOXEL_SLIC);
     assert_eq!(clusters.len(), 2);
     let faces: Faces = twin::faces(&v);
     let vpl = Vpl {
@@ -330,14 +330,7 @@ fn escape_fractions_under_a_plane_by_hand() {
     // light counts half in `sent` and whole in the cluster's flux.
     let cells = [([0, 0, 0], Vec3::Y)];
     let mut v = hand_voxels(4, &cells);
-    let clusters = voxel::slic(
-        &mut v,
-        &SlicSettings {
-            step: 1,
-            iterations: 1,
-            angle: 35.0,
-        },
-    );
+    let clusters = voxel::slic(&mut v, &ONE_VOXEL_SLIC);
     let at = |x: f32| Vpl {
         pos: [x, 0.5, 0.5, 0.0],
         nrm: [0.0, 1.0, 0.0, 0.0],
@@ -677,33 +670,17 @@ fn cornell_mean_luminance_is_near_the_reference() {
 fn render_stats_count_cvrtgi_voxels_and_clusters() {
     let d = common::scratch("cvrtgi-stats");
     let (stats, exr) = (d.join("s.json"), d.join("i.exr"));
-    let args = |method: &str| {
-        [
-            "render",
-            "builtin:cornell",
-            "--method",
-            method,
-            "--voxel-res",
-            "12",
-            "--cluster-step",
-            "4",
-            "--width",
-            "32",
-            "--height",
-            "24",
-            "--vpls",
-            "256",
-            "-o",
-            exr.to_str().unwrap(),
-            "--stats",
-            stats.to_str().unwrap(),
-        ]
-        .map(String::from)
+    let render = |method: &str| {
+        let words = "render builtin:cornell --voxel-res 12 --cluster-step 4 --width 32 --height 24 \
+                     --vpls 256";
+        let (o, st) = (common::arg(&exr), common::arg(&stats));
+        common::run_cli(&common::cmd(
+            words,
+            &["--method", method, "-o", o, "--stats", st],
+        ))
     };
-    let read = || -> serde_json::Value {
-        serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap()
-    };
-    let (code, _, err) = common::run_cli(&args("cvrtgi").each_ref().map(String::as_str));
+    let read = || common::read_json(&stats);
+    let (code, _, err) = render("cvrtgi");
     assert_eq!(code, 0, "{err}");
     let j = read();
     let c = &j["counts"]["cvrtgi"];
@@ -722,7 +699,7 @@ fn render_stats_count_cvrtgi_voxels_and_clusters() {
     assert!(n("lit_voxels") <= voxels && n("faces") > 0, "{c}");
     assert_eq!(j["counts"]["vpl_clusters_used"], c["lit_clusters"], "{j}");
     assert_eq!(c["geometry_built"], true, "{c}");
-    let (code, _, err) = common::run_cli(&args("colom").each_ref().map(String::as_str));
+    let (code, _, err) = render("colom");
     assert_eq!(code, 0, "{err}");
     assert!(read()["counts"].get("cvrtgi").is_none());
     let _ = std::fs::remove_dir_all(&d);

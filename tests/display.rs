@@ -5,13 +5,15 @@
 
 mod common;
 
+use common::draw_display as draw;
+
 use fuzzy_vpl::app::display::{Display, DisplayInputs, Images};
 use fuzzy_vpl::app::twin;
 use fuzzy_vpl::app::views::View;
 use fuzzy_vpl::exposure::Exposure;
 use fuzzy_vpl::gpu::{GpuContext, read_texture, traffic::Traffic};
 use fuzzy_vpl::render::{RenderSettings, Renderer};
-use fuzzy_vpl::settings::{ClusterSettings, FrameSettings, Weighting};
+use fuzzy_vpl::settings::{ClusterSettings, Weighting};
 use fuzzy_vpl::{Frame, scene};
 
 /// The bytes and buffers this file's frame test counts are the process's (`gpu::traffic`): its tests
@@ -24,23 +26,9 @@ fn serial() -> std::sync::MutexGuard<'static, ()> {
 const W: u32 = 48;
 const H: u32 = 36;
 
+/// `common::display_frame`: W × H.
 fn settings(weighting: Weighting) -> RenderSettings {
-    RenderSettings {
-        frame: FrameSettings {
-            width: W,
-            height: H,
-            vpls: 256,
-            direct_samples: 2,
-            ..Default::default()
-        },
-        cluster: ClusterSettings {
-            sp_clusters: 48,
-            vpl_clusters: 64,
-            weighting,
-            ..Default::default()
-        },
-        ..Default::default()
-    }
+    common::display_frame(weighting)
 }
 
 /// A vec4 buffer of `img` on the device.
@@ -62,16 +50,6 @@ fn cpu_images(f: &Frame) -> twin::Images<'_> {
         direct: &f.direct,
         indirect: &f.indirect,
     }
-}
-
-/// Runs the display pass and reads its texture (RGBA8) and exposure back.
-fn draw(ctx: &GpuContext, d: &mut Display, inputs: &DisplayInputs) -> (Vec<u8>, f32) {
-    let mut enc = ctx.device.create_command_encoder(&Default::default());
-    d.record(&ctx.device, &ctx.queue, &mut enc, inputs);
-    ctx.queue.submit([enc.finish()]);
-    let rgba = read_texture(&ctx.device, &ctx.queue, &d.target().unwrap().texture).unwrap();
-    let e: Vec<f32> = ctx.read_buffer(d.exposure_buffer(), 1).unwrap();
-    (rgba, e[0])
 }
 
 /// Every view, auto and fixed exposure, the direct light on and off, against the twin on a

@@ -9,7 +9,7 @@ use fuzzy_vpl::app::display::{Display, DisplayInputs, Images};
 use fuzzy_vpl::app::flip::{Flip, FlipInputs};
 use fuzzy_vpl::app::views::{self, View};
 use fuzzy_vpl::exposure::Exposure;
-use fuzzy_vpl::gpu::{GpuContext, read_texture};
+use fuzzy_vpl::gpu::GpuContext;
 use fuzzy_vpl::metrics;
 
 const W: u32 = 64;
@@ -259,17 +259,10 @@ fn flip_pass_runs_under_default_limits() {
 #[test]
 fn display_flip_view_matches_views_flip() {
     use fuzzy_vpl::render::{RenderSettings, Renderer};
-    use fuzzy_vpl::settings::{ClusterSettings, FrameSettings};
+    use fuzzy_vpl::settings::ClusterSettings;
     let ctx = common::gpu();
     let mut d = Display::new(&ctx.device);
-    let draw = |d: &mut Display, inputs: &DisplayInputs| -> (Vec<u8>, f32) {
-        let mut enc = ctx.device.create_command_encoder(&Default::default());
-        d.record(&ctx.device, &ctx.queue, &mut enc, inputs);
-        ctx.queue.submit([enc.finish()]);
-        let rgba = read_texture(&ctx.device, &ctx.queue, &d.target().unwrap().texture).unwrap();
-        let e: Vec<f32> = ctx.read_buffer(d.exposure_buffer(), 1).unwrap();
-        (rgba, e[0])
-    };
+    let draw = |d: &mut Display, inputs: &DisplayInputs| common::draw_display(&ctx, d, inputs);
     let compare = |name: &str, gpu: &[u8], cpu: &[u8]| -> (usize, i32) {
         assert_eq!(gpu.len(), cpu.len());
         let mut differing = 0;
@@ -293,21 +286,8 @@ fn display_flip_view_matches_views_flip() {
     let (w, h) = (48u32, 36u32);
     let sc = fuzzy_vpl::scene::load("builtin:cornell").unwrap();
     let cam = sc.default_camera();
-    let s = RenderSettings {
-        frame: FrameSettings {
-            width: w,
-            height: h,
-            vpls: 256,
-            direct_samples: 2,
-            ..Default::default()
-        },
-        cluster: ClusterSettings {
-            sp_clusters: 48,
-            vpl_clusters: 64,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let s = common::display_frame(ClusterSettings::default().weighting);
+    assert_eq!((s.frame.width, s.frame.height), (w, h));
     let mut r = Renderer::new(&ctx, &sc).unwrap();
     let a = r.render_gpu(&cam, &s).unwrap();
     let reference = r

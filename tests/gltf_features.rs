@@ -386,19 +386,12 @@ fn cpu_twins_agree_on_the_alpha_tested_scene() {
         rs
     };
     let f: Frame = r.render(&cam, &fs).unwrap();
-    let gbuf = r.last_gbuffer().unwrap();
-    let sps: Vec<ShadingPoint> = gbuf.chunks(4).map(ShadingPoint::from_gpu).collect();
-    let c = r.sp_clustering().unwrap();
-    let (k, nf) = (c.k() as usize, c.f() as usize);
-    let assign: Vec<u32> = ctx.read_buffer(&c.assign, sps.len() * nf).unwrap();
-    let weights: Vec<f32> = ctx.read_buffer(&c.weights, sps.len() * nf).unwrap();
-    let reps: Vec<u32> = ctx.read_buffer(&c.reps, k * 2).unwrap();
-    // A cold start: each representative point is its member pixel's shading point.
-    let reps = common::cold_rep_points(&sps, &reps);
+    let g = common::sp_clusters(&ctx, &r);
+    let (sps, reps) = (&g.sps, &g.reps[..]);
     let lights = &r.lights.as_ref().unwrap().list.lights;
     let cpu = common::cpu_scene(&r, &s);
     let facing = fs.cluster.visibility_facing;
-    let (bits, words) = shade::visibility_bits(&cpu, &reps, lights, facing);
+    let (bits, words) = shade::visibility_bits(&cpu, reps, lights, facing);
     // The shading pass's twin: every pixel, at the measured maximum × 2 on software (measured
     // 3.7e-9; docs/testing.md, "Twin tolerances").
     let mut pairs = Vec::with_capacity(n as usize);
@@ -407,11 +400,7 @@ fn cpu_twins_agree_on_the_alpha_tested_scene() {
             sp,
             lights,
             &shade::Bits { bits: &bits, words },
-            &shade::Slots {
-                assign: &assign[m * nf..m * nf + nf],
-                weights: &weights[m * nf..m * nf + nf],
-                weighted: true,
-            },
+            &g.slots(m, true),
             d_min * d_min,
             fs.cluster.cluster_light,
         );
@@ -528,6 +517,18 @@ fn vertex_color_scene() -> Scene {
     }
 }
 
+/// 3 above the origin looking down, a 40° field of view.
+fn above_origin() -> Camera {
+    common::down_camera(Vec3::new(0.0, 3.0, 0.0), Vec3::ZERO, 40f32.to_radians())
+}
+
+/// The G-buffer of `r`'s scene seen from `above_origin` at `w` × `h` (no VPLs, one direct sample).
+fn gbuffer_from_above(r: &mut Renderer, w: u32, h: u32) -> Vec<[f32; 4]> {
+    r.render(&above_origin(), &common::gbuffer_settings(w, h))
+        .unwrap();
+    r.last_gbuffer().unwrap()
+}
+
 /// Barycentrics (b1, b2) of point (x, z) in the floor triangle with corners a, b, c (2D, by hand).
 fn bary2(a: Vec2, b: Vec2, c: Vec2, q: Vec2) -> (f32, f32) {
     let cross = |u: Vec2, v: Vec2| u.x * v.y - u.y * v.x;
@@ -543,24 +544,9 @@ fn vertex_colours_multiply_the_base_colour_and_their_alpha_is_tested() {
     assert_eq!(s.alpha_test_flags(), [false, true]);
     let mut r = Renderer::new(&ctx, &s).unwrap();
     assert!(r.gpu.has_vertex_colors && r.gpu.has_alpha_test);
-    let cam = Camera::look_at(
-        "down",
-        Vec3::new(0.0, 3.0, 0.0),
-        Vec3::ZERO,
-        Vec3::NEG_Z,
-        40f32.to_radians(),
-    );
+    let cam = above_origin();
     let (w, h) = (40u32, 40u32);
-    let fs = RenderSettings {
-        frame: FrameSettings {
-            width: w,
-            height: h,
-            vpls: 0,
-            direct_samples: 1,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let fs = common::gbuffer_settings(w, h);
     let f = r.render(&cam, &fs).unwrap();
     assert!(common::all_finite(&f.radiance));
     let gbuf = r.last_gbuffer().unwrap();
@@ -694,26 +680,8 @@ fn textures_are_bilinear_repeat_wrapped_and_srgb_decoded() {
         ..Scene::default()
     };
     let mut r = Renderer::new(&ctx, &s).unwrap();
-    let cam = Camera::look_at(
-        "down",
-        Vec3::new(0.0, 3.0, 0.0),
-        Vec3::ZERO,
-        Vec3::NEG_Z,
-        40f32.to_radians(),
-    );
     let (w, h) = (40u32, 40u32);
-    let fs = RenderSettings {
-        frame: FrameSettings {
-            width: w,
-            height: h,
-            vpls: 0,
-            direct_samples: 1,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
-    r.render(&cam, &fs).unwrap();
-    let gbuf = r.last_gbuffer().unwrap();
+    let gbuf = gbuffer_from_above(&mut r, w, h);
     let (mut checked, mut wrapped, mut worst) = (0, 0, 0f32);
     for px in 0..(w * h) as usize {
         let sp = ShadingPoint::from_gpu(&gbuf[px * 4..px * 4 + 4]);
@@ -845,24 +813,9 @@ fn a_texture_file_keeps_its_orientation_in_the_render() {
         assert_eq!((s.textures[0].width, s.textures[0].height), (width, height));
         let mut r = Renderer::new(&ctx, &s).unwrap();
         // Looking down from above the centre, image up towards -z (uv v = 0).
-        let cam = Camera::look_at(
-            "down",
-            Vec3::new(0.0, 2.5, 0.0),
-            Vec3::ZERO,
-            Vec3::NEG_Z,
-            0.8,
-        );
+        let cam = common::down_camera(Vec3::new(0.0, 2.5, 0.0), Vec3::ZERO, 0.8);
         let (w, h) = (48u32, 48u32);
-        let fs = RenderSettings {
-            frame: FrameSettings {
-                width: w,
-                height: h,
-                vpls: 0,
-                direct_samples: 1,
-                ..Default::default()
-            },
-            ..Default::default()
-        };
+        let fs = common::gbuffer_settings(w, h);
         let f = r.render(&cam, &fs).unwrap();
         assert!(common::all_finite(&f.radiance));
         let gbuf = r.last_gbuffer().unwrap();
@@ -945,24 +898,9 @@ fn the_alpha_test_reads_its_texture_bilinearly_and_wrapped() {
     };
     let mut r = Renderer::new(&ctx, &s).unwrap();
     let eye = Vec3::new(-1.0, 3.0, -1.0);
-    let cam = Camera::look_at(
-        "down",
-        eye,
-        Vec3::new(-1.0, 0.0, -1.0),
-        Vec3::NEG_Z,
-        40f32.to_radians(),
-    );
+    let cam = common::down_camera(eye, Vec3::new(-1.0, 0.0, -1.0), 40f32.to_radians());
     let (w, h) = (48u32, 48u32);
-    let fs = RenderSettings {
-        frame: FrameSettings {
-            width: w,
-            height: h,
-            vpls: 0,
-            direct_samples: 1,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let fs = common::gbuffer_settings(w, h);
     r.render(&cam, &fs).unwrap();
     let gbuf = r.last_gbuffer().unwrap();
     let (mut on_quad, mut on_floor) = (0, 0);
@@ -1034,26 +972,8 @@ fn shading_normals_are_interpolated_normalised_and_faced() {
         ..Scene::default()
     };
     let mut r = Renderer::new(&ctx, &s).unwrap();
-    let cam = Camera::look_at(
-        "down",
-        Vec3::new(0.0, 3.0, 0.0),
-        Vec3::ZERO,
-        Vec3::NEG_Z,
-        40f32.to_radians(),
-    );
     let (w, h) = (40u32, 40u32);
-    let fs = RenderSettings {
-        frame: FrameSettings {
-            width: w,
-            height: h,
-            vpls: 0,
-            direct_samples: 1,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
-    r.render(&cam, &fs).unwrap();
-    let gbuf = r.last_gbuffer().unwrap();
+    let gbuf = gbuffer_from_above(&mut r, w, h);
     let c2 = |p: Vec3| Vec2::new(p.x, p.z);
     let (mut checked, mut flipped, mut worst) = (0, 0, 0f32);
     for px in 0..(w * h) as usize {
@@ -1106,25 +1026,7 @@ fn a_triangle_without_normals_emits_on_its_winding_side() {
         ..Scene::default()
     };
     let mut r = Renderer::new(&ctx, &s).unwrap();
-    let cam = Camera::look_at(
-        "down",
-        Vec3::new(0.0, 3.0, 0.0),
-        Vec3::ZERO,
-        Vec3::NEG_Z,
-        40f32.to_radians(),
-    );
-    let fs = RenderSettings {
-        frame: FrameSettings {
-            width: 16,
-            height: 16,
-            vpls: 0,
-            direct_samples: 1,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
-    r.render(&cam, &fs).unwrap();
-    let gbuf = r.last_gbuffer().unwrap();
+    let gbuf = gbuffer_from_above(&mut r, 16, 16);
     let mut lit = 0;
     for px in 0..16 * 16 {
         let sp = ShadingPoint::from_gpu(&gbuf[px * 4..px * 4 + 4]);

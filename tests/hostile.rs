@@ -65,18 +65,8 @@ fn listing(dir: &Path) -> Vec<String> {
     v
 }
 
-const SMALL: [&str; 10] = [
-    "--width",
-    "32",
-    "--height",
-    "24",
-    "--vpls",
-    "256",
-    "--vpl-clusters",
-    "64",
-    "--sp-clusters",
-    "32",
-];
+/// A small frame's options, as words.
+const SMALL: &str = "--width 32 --height 24 --vpls 256 --vpl-clusters 64 --sp-clusters 32";
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -260,7 +250,7 @@ fn outputs_may_not_name_each_other_or_an_input() {
     for (args, needles) in cases {
         let mut all = vec!["render"];
         all.extend(args);
-        all.extend(SMALL);
+        all.extend(SMALL.split_whitespace());
         refused(&all, &needles);
     }
     // The scene's buffer is found when the scene is loaded, before the render.
@@ -271,7 +261,7 @@ fn outputs_may_not_name_each_other_or_an_input() {
         .replace("scene.bin", "scene.bin.png");
     std::fs::write(&scene, text).unwrap();
     let mut args = vec!["render", &sc, "-o", &bin_out];
-    args.extend(SMALL);
+    args.extend(SMALL.split_whitespace());
     refused(&args, &["scene.bin.png", "the scene's file", "input"]);
     assert_eq!(std::fs::read(&bin_out).unwrap(), tri);
     std::fs::write(&scene, &before).unwrap();
@@ -286,7 +276,7 @@ fn long_names_and_failed_writes_name_the_file_and_the_reason() {
     let d = common::scratch("hostile-names");
     let longest = d.join(format!("{}.png", "a".repeat(251)));
     let mut args = vec!["render", "-o", s(&longest)];
-    args.extend(SMALL);
+    args.extend(SMALL.split_whitespace());
     let (code, _, err) = common::run_cli(&args);
     assert_eq!(code, 0, "{err}");
     assert_eq!(listing(&d).len(), 1, "{:?}", listing(&d));
@@ -299,7 +289,7 @@ fn long_names_and_failed_writes_name_the_file_and_the_reason() {
     let big = d.join("big.exr");
     let mut cmd = bin();
     cmd.args(["render", "-o", s(&big), "--width", "256", "--height", "256"])
-        .args(&SMALL[4..]);
+        .args(SMALL.split_whitespace().skip(4));
     unsafe {
         std::os::unix::process::CommandExt::pre_exec(&mut cmd, || {
             let lim = libc::rlimit {
@@ -355,7 +345,8 @@ fn full_stdout_and_stderr_are_not_panics() {
     // render with a full stderr (the progress line and the summary fail): writes its image.
     let out = d.join("o.png");
     let mut cmd = bin();
-    cmd.args(["render", "-o", s(&out)]).args(SMALL);
+    cmd.args(["render", "-o", s(&out)])
+        .args(SMALL.split_whitespace());
     cmd.stderr(full());
     let mut child = cmd.stdout(Stdio::null()).spawn().unwrap();
     let status = child.wait().unwrap();
@@ -479,7 +470,7 @@ fn a_faint_light_scale_is_still_exposed() {
     let d = common::scratch("hostile-faint");
     let png = d.join("faint.png");
     let mut args = vec!["render", "-o", s(&png), "--light-scale", "1e-36"];
-    args.extend(SMALL);
+    args.extend(SMALL.split_whitespace());
     let (code, _, err) = common::run_cli(&args);
     assert_eq!(code, 0, "{err}");
     assert!(!err.contains("warning"), "{err}");

@@ -45,23 +45,8 @@ fn run_gpu_with(
     s: &KMeansSettings,
     frame: (Vec3, Vec3),
 ) -> GpuResult {
-    let sc = scene::load("builtin:cornell").unwrap();
-    let bvh = SceneBvh::build(&sc).unwrap();
-    let gpu = SceneGpu::upload(ctx, &sc, &bvh);
-    let mut prof = Profiler::new(ctx);
-    let buf = ctx.storage_init("data", data);
     let m = data.len() as u32 / stride;
-    let mut g = Gpu {
-        ctx,
-        scene: &gpu,
-        profiler: &mut prof,
-    };
-    let points = Points {
-        data: &buf,
-        count: m,
-        stride,
-    };
-    let c = km.run(&mut g, "test", &points, s, frame, None).unwrap();
+    let c = common::kmeans_on_cornell(ctx, km, "test", (data, stride), s, frame);
     let p = c.params;
     let raw: Vec<[f32; 4]> = ctx.read_buffer(&c.centroids, p.k as usize * 2).unwrap();
     let centroids = raw

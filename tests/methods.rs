@@ -3,6 +3,8 @@
 
 mod common;
 
+use common::shading_points;
+
 use fuzzy_vpl::bvh::SceneBvh;
 use fuzzy_vpl::cpu::vpl::eq5_vpl_radiance;
 use fuzzy_vpl::gi::dispatch::Gpu;
@@ -58,15 +60,6 @@ fn wang_frame<'r>(r: &'r Renderer) -> &'r WangFrame {
         .last
         .as_ref()
         .unwrap()
-}
-
-/// The last frame's shading points.
-fn shading_points(r: &Renderer) -> Vec<ShadingPoint> {
-    r.last_gbuffer()
-        .unwrap()
-        .chunks(4)
-        .map(ShadingPoint::from_gpu)
-        .collect()
 }
 
 /// wang's GPU clustering (`wang_cluster.wgsl`) against its CPU twin (`method::wang::twin::cluster`) with the
@@ -989,32 +982,12 @@ fn bad_method_knobs_exit_2_with_one_line() {
 #[test]
 fn bench_compares_the_methods() {
     let d = common::scratch("bench-methods");
-    let (code, _, err) = common::run_cli(&[
-        "bench",
-        "builtin:cornell",
-        "--out-dir",
-        d.to_str().unwrap(),
-        "--methods",
-        "colom,wang,lightcluster,cvrtgi",
-        "--voxel-res",
-        "12",
-        "--cluster-step",
-        "4",
-        "--modes",
-        "weighted",
-        "--pairs",
-        "24/32",
-        "--d-init",
-        "2",
-        "--width",
-        "32",
-        "--height",
-        "24",
-        "--vpls",
-        "256",
-        "--repeat",
-        "1",
-    ]);
+    let (code, _, err) = common::run_cli(&common::cmd(
+        "bench builtin:cornell --methods colom,wang,lightcluster,cvrtgi --voxel-res 12 \
+         --cluster-step 4 --modes weighted --pairs 24/32 --d-init 2 --width 32 --height 24 \
+         --vpls 256 --repeat 1",
+        &["--out-dir", common::arg(&d)],
+    ));
     assert_eq!(code, 0, "{err}");
     let text = std::fs::read_to_string(d.join("results.csv")).unwrap();
     let rows = fuzzy_vpl::bench::csv::from_csv(&text).unwrap();

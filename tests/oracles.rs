@@ -13,6 +13,8 @@
 
 mod common;
 
+use common::cornell_gpu;
+
 use std::f32::consts::PI;
 
 use fuzzy_vpl::bvh::SceneBvh;
@@ -20,7 +22,7 @@ use fuzzy_vpl::cpu::kmeans::{Centroid, Point, eq7_dist, eq10_weights};
 use fuzzy_vpl::cpu::vpl::{eq5_cluster_radiance, eq5_vpl_radiance};
 use fuzzy_vpl::export;
 use fuzzy_vpl::gi::dispatch::Gpu;
-use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings, Points};
+use fuzzy_vpl::gi::kmeans::{KMeans, KMeansSettings};
 use fuzzy_vpl::gi::primary::{CameraParams, ShadingPoint};
 use fuzzy_vpl::gi::reference::{GatherInputs, Reference};
 use fuzzy_vpl::gi::scene_gpu::SceneGpu;
@@ -29,9 +31,9 @@ use fuzzy_vpl::gi::vpl_trace::{Vpl, VplSet};
 use fuzzy_vpl::gpu::{GpuContext, profiler::Profiler};
 use fuzzy_vpl::method::colom::shade::{Shade, ShadeInputs, ShadeParams};
 use fuzzy_vpl::method::colom::visibility::{Previous, VisInputs, Visibility};
-use fuzzy_vpl::render::{RenderSettings, Renderer};
+use fuzzy_vpl::render::Renderer;
 use fuzzy_vpl::scene::{self, Camera};
-use fuzzy_vpl::settings::{ClusterLight, FrameSettings, Gamma};
+use fuzzy_vpl::settings::{ClusterLight, Gamma};
 use glam::Vec3;
 
 /// `a` within `rel` of `b` (relative, with an absolute floor of `rel` × 1e-3 for values near 0).
@@ -203,26 +205,9 @@ struct Fuzzy {
 }
 
 fn run_kmeans(ctx: &GpuContext, data: &[[f32; 4]], s: &KMeansSettings) -> Fuzzy {
-    let sc = scene::load("builtin:cornell").unwrap();
-    let bvh = SceneBvh::build(&sc).unwrap();
-    let gpu = SceneGpu::upload(ctx, &sc, &bvh);
-    let mut prof = Profiler::new(ctx);
-    let buf = ctx.storage_init("data", data);
     let m = data.len() as u32 / 2;
     let frame = (Vec3::ZERO, Vec3::splat(16.0));
-    let mut g = Gpu {
-        ctx,
-        scene: &gpu,
-        profiler: &mut prof,
-    };
-    let points = Points {
-        data: &buf,
-        count: m,
-        stride: 2,
-    };
-    let c = KMeans::new()
-        .run(&mut g, "oracle", &points, s, frame, None)
-        .unwrap();
+    let c = common::kmeans_on_cornell(ctx, &KMeans::new(), "oracle", (data, 2), s, frame);
     let f = c.params.f as usize;
     let raw: Vec<[f32; 4]> = ctx
         .read_buffer(&c.centroids, c.params.k as usize * 2)
@@ -456,13 +441,6 @@ fn vpl_term_by_hand() {
     );
 }
 
-fn cornell_gpu(ctx: &GpuContext) -> (scene::Scene, SceneGpu) {
-    let sc = scene::load("builtin:cornell").unwrap();
-    let bvh = SceneBvh::build(&sc).unwrap();
-    let gpu = SceneGpu::upload(ctx, &sc, &bvh);
-    (sc, gpu)
-}
-
 /// Eq. (6) with Ṽ of Eq. (9) and (8) on the GPU shading pass: two pixels, three lights, F = 2, two
 /// SP-cluster rows (row 0 sees L0 and L1, row 1 sees L0 and L2). Pixel 0 in rows (0, 1) with
 /// weights (0.75, 0.25): Ṽ = 1, 0.75, 0.25 (Eq. 9) or 1, 0.5, 0.5 (Eq. 8); pixel 1 in row 1 alone
@@ -689,6 +667,54 @@ fn occluder_lights() -> Vec<Vpl> {
 }
 
 /// Runs the visibility pass over `reps` and `lights`: the bit matrix, row by row.
+/// The occluder quad (`occluder_quad`) uploaded on `ctx`, with the lights of `occluder_lights`:
+/// the scene, the lights' buffer and their number.
+fn occluder_upload(ctx: &GpuContext) -> (SceneGpu, wgpu::Buffer, u32) {
+    let sc = occluder_quad();
+    let bvh = SceneBvh::build(&sc).unwrap();
+    let lights = occluder_lights();
+    let buf = ctx.storage_init("lights", &lights);
+    (SceneGpu::upload(ctx, &sc, &bvh), buf, lights.len() as u32)
+}
+
+/// The shading pass with F = 1 (weight 1, 2 words a row of `bits`) over the G-buffer's pixels,
+/// pixel m in cluster `assign[m]`, lit by `lights` (buffer, number) as spread lights: each pixel's
+/// indirect light.
+fn shade_by_cluster(
+    g: &mut Gpu,
+    gbuffer: &wgpu::Buffer,
+    lights: (&wgpu::Buffer, u32),
+    bits: &[u32],
+    assign: &[u32],
+) -> Vec<[f32; 4]> {
+    let ctx = g.ctx;
+    let pixels = assign.len();
+    let bits_buf = ctx.storage_init("bits", bits);
+    let indirect = ctx.storage("indirect", pixels as u64 * 16);
+    Shade::new().record(
+        g,
+        &ShadeInputs {
+            gbuffer,
+            lights: lights.0,
+            bits: &bits_buf,
+            assign: &ctx.storage_init("assign", assign),
+            weights: &ctx.storage_init("weights", &vec![1.0f32; pixels]),
+            indirect: &indirect,
+            pixels: pixels as u32,
+            params: ShadeParams {
+                num_lights: lights.1,
+                words: 2,
+                f: 1,
+                weighted: 1,
+                d_min2: DMIN2,
+                _pad: [0; 3],
+            },
+            light: ClusterLight::Spread,
+        },
+    );
+    ctx.read_buffer(&indirect, pixels).unwrap()
+}
+
 fn run_visibility(
     ctx: &GpuContext,
     gpu: &SceneGpu,
@@ -729,12 +755,7 @@ fn run_visibility(
 #[test]
 fn gpu_visibility_is_pure_visibility_by_default() {
     let ctx = common::gpu();
-    let sc = occluder_quad();
-    let bvh = SceneBvh::build(&sc).unwrap();
-    let gpu = SceneGpu::upload(&ctx, &sc, &bvh);
-    let lights = occluder_lights();
-    let n = lights.len() as u32;
-    let lights_buf = ctx.storage_init("lights", &lights);
+    let (gpu, lights_buf, n) = occluder_upload(&ctx);
     let reps = [
         rep(Vec3::ZERO, UP, true, false),
         rep(Vec3::ZERO, UP, false, false),
@@ -744,37 +765,14 @@ fn gpu_visibility_is_pure_visibility_by_default() {
     let bits = run_visibility(&ctx, &gpu, &reps, &lights_buf, n, None, facing);
     let want: [u32; 4] = [0x3d, 0x10, 0, 0];
     assert_eq!(bits, want, "bits {bits:08x?}, by hand {want:08x?}");
-    let sps = vec![sp(Vec3::ZERO, UP, [0.5; 3])];
-    let gbuffer = ctx.storage_init("gbuffer", &sps);
-    let indirect = ctx.storage("indirect", 16);
     let mut prof = Profiler::new(&ctx);
     let mut g = Gpu {
         ctx: &ctx,
         scene: &gpu,
         profiler: &mut prof,
     };
-    Shade::new().record(
-        &mut g,
-        &ShadeInputs {
-            gbuffer: &gbuffer,
-            lights: &lights_buf,
-            bits: &ctx.storage_init("bits", &bits),
-            assign: &ctx.storage_init("assign", &[0u32]),
-            weights: &ctx.storage_init("weights", &[1.0f32]),
-            indirect: &indirect,
-            pixels: 1,
-            params: ShadeParams {
-                num_lights: n,
-                words: 2,
-                f: 1,
-                weighted: 1,
-                d_min2: DMIN2,
-                _pad: [0; 3],
-            },
-            light: ClusterLight::Spread,
-        },
-    );
-    let got: Vec<[f32; 4]> = ctx.read_buffer(&indirect, 1).unwrap();
+    let gbuffer = ctx.storage_init("gbuffer", &[sp(Vec3::ZERO, UP, [0.5; 3])]);
+    let got = shade_by_cluster(&mut g, &gbuffer, (&lights_buf, n), &bits, &[0]);
     for c in 0..3 {
         let rel = (got[0][c] - 0.438625).abs() / 0.438625;
         assert!(rel < 2e-6, "radiance {:?}, by hand 0.438625", got[0]);
@@ -808,12 +806,7 @@ fn gpu_visibility_is_pure_visibility_by_default() {
 #[test]
 fn gpu_visibility_matrix_and_its_radiance_by_hand() {
     let ctx = common::gpu();
-    let sc = occluder_quad();
-    let bvh = SceneBvh::build(&sc).unwrap();
-    let gpu = SceneGpu::upload(&ctx, &sc, &bvh);
-    let lights = occluder_lights();
-    let n = lights.len() as u32;
-    let lights_buf = ctx.storage_init("lights", &lights);
+    let (gpu, lights_buf, n) = occluder_upload(&ctx);
     let (p0, p1) = (Vec3::ZERO, Vec3::new(0.0, 0.0, 2.5));
     let reps = |kept: [bool; 3]| {
         vec![
@@ -837,36 +830,13 @@ fn gpu_visibility_matrix_and_its_radiance_by_hand() {
     ];
     let want = [0.438625f32, 0.0, 60.0];
     let gbuffer = ctx.storage_init("gbuffer", &sps);
-    let bits_buf = ctx.storage_init("bits", &bits);
-    let indirect = ctx.storage("indirect", 3 * 16);
     let mut prof = Profiler::new(&ctx);
     let mut g = Gpu {
         ctx: &ctx,
         scene: &gpu,
         profiler: &mut prof,
     };
-    Shade::new().record(
-        &mut g,
-        &ShadeInputs {
-            gbuffer: &gbuffer,
-            lights: &lights_buf,
-            bits: &bits_buf,
-            assign: &ctx.storage_init("assign", &[0u32, 1, 2]),
-            weights: &ctx.storage_init("weights", &[1.0f32; 3]),
-            indirect: &indirect,
-            pixels: 3,
-            params: ShadeParams {
-                num_lights: n,
-                words: 2,
-                f: 1,
-                weighted: 1,
-                d_min2: DMIN2,
-                _pad: [0; 3],
-            },
-            light: ClusterLight::Spread,
-        },
-    );
-    let shaded: Vec<[f32; 4]> = ctx.read_buffer(&indirect, 3).unwrap();
+    let shaded = shade_by_cluster(&mut g, &gbuffer, (&lights_buf, n), &bits, &[0, 1, 2]);
     let reference_out = ctx.storage("reference", 3 * 16);
     Reference::new(&ctx, &gpu).record(
         &mut g,
@@ -1035,6 +1005,28 @@ fn one_cluster(g: &mut Gpu, set: &VplSet) -> vpl_cluster::LightList {
     list
 }
 
+/// `vpls` (one light path each) as one cluster (`one_cluster`) on `gpu`: the VPL set and its light
+/// list.
+fn one_cluster_of(
+    ctx: &GpuContext,
+    gpu: &SceneGpu,
+    vpls: &[Vpl],
+) -> (VplSet, vpl_cluster::LightList) {
+    let set = VplSet {
+        buffer: ctx.storage_init("vpls", vpls),
+        vpls: vpls.to_vec(),
+        paths: vpls.len() as u32,
+    };
+    let mut prof = Profiler::new(ctx);
+    let mut g = Gpu {
+        ctx,
+        scene: gpu,
+        profiler: &mut prof,
+    };
+    let list = one_cluster(&mut g, &set);
+    (set, list)
+}
+
 /// The near-field spike of a VPL-cluster light (Sponza's, docs/methods.md "Indirect light, per
 /// method"), by hand: VPLs A (0,0,0), C (1,0,0), B (4,0,0), normals +y, flux 1 each, as one cluster
 /// (K = 1): the representative is C, nearest the centroid (5/3, 0, 0); the other members' share is
@@ -1051,18 +1043,7 @@ fn a_cluster_light_spread_over_its_members_has_no_near_field_spike() {
         .iter()
         .map(|&x| light(Vec3::new(x, 0.0, 0.0), up, [1.0; 3]))
         .collect();
-    let set = VplSet {
-        buffer: ctx.storage_init("vpls", &vpls),
-        vpls: vpls.clone(),
-        paths: 3,
-    };
-    let mut prof = Profiler::new(&ctx);
-    let mut g = Gpu {
-        ctx: &ctx,
-        scene: &gpu,
-        profiler: &mut prof,
-    };
-    let list = one_cluster(&mut g, &set);
+    let (_, list) = one_cluster_of(&ctx, &gpu, &vpls);
     let l = list.lights[0];
     assert_eq!(l.pos, vpls[1].pos, "the representative is C");
     assert_eq!(l.flux, [3.0, 3.0, 3.0, 2.0 / 3.0]);
@@ -1122,18 +1103,13 @@ fn a_two_vpl_cluster_as_point_or_spread_light_by_hand() {
     let gpu = SceneGpu::upload(&ctx, &sc, &bvh);
     let (a, b) = (Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0));
     let vpls = vec![light(a, UP, [PI2; 3]), light(b, UP, [3.0 * PI2; 3])];
-    let set = VplSet {
-        buffer: ctx.storage_init("vpls", &vpls),
-        vpls: vpls.clone(),
-        paths: 2,
-    };
+    let (set, list) = one_cluster_of(&ctx, &gpu, &vpls);
     let mut prof = Profiler::new(&ctx);
     let mut g = Gpu {
         ctx: &ctx,
         scene: &gpu,
         profiler: &mut prof,
     };
-    let list = one_cluster(&mut g, &set);
     let l = list.lights[0];
     assert_eq!(l.pos, vpls[0].pos, "the representative is A");
     let f4 = 4.0 * PI2;
@@ -1289,16 +1265,7 @@ fn camera_rays_at_the_frustum_corners() {
     let look = sc.default_camera().forward();
     let cam = Camera::look_at("t", eye, eye + look, Vec3::Y, yfov);
     let mut r = Renderer::new(&ctx, &sc).unwrap();
-    let fs = RenderSettings {
-        frame: FrameSettings {
-            width: w,
-            height: h,
-            vpls: 0,
-            direct_samples: 1,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let fs = common::gbuffer_settings(w, h);
     r.render(&cam, &fs).unwrap();
     let g = r.last_gbuffer().unwrap();
     let rc = r.to_render_units(&cam);

@@ -184,12 +184,18 @@ fn direct_light_with_thousands_of_samples_matches_cpu_twin() {
     assert!(lit * 2 > w * h, "only {lit} pixels lit");
 }
 
+/// The scale tests' frame: 64 × 48, 4 direct samples, 512 VPLs, K_VPL 64, K_SP 96.
+fn scale_settings() -> RenderSettings {
+    let mut rs = settings(64, 48, 4);
+    rs.frame.vpls = 512;
+    rs.cluster.vpl_clusters = 64;
+    rs.cluster.sp_clusters = 96;
+    rs
+}
+
 fn scaled(mut s: Scene, k: f32) -> Scene {
-    for t in &mut s.triangles {
-        for p in &mut t.p {
-            *p *= k;
-        }
-    }
+    let vertices = s.triangles.iter_mut().flat_map(|t| t.p.iter_mut());
+    vertices.for_each(|p| *p *= k);
     for l in &mut s.lights {
         l.position *= k;
     }
@@ -445,13 +451,7 @@ fn any_finite_scale_renders_the_unscaled_image() {
     let ctx = common::gpu();
     for name in ["cornell", "conference"] {
         let base = scene::load(&format!("builtin:{name}")).unwrap();
-        let fs = {
-            let mut rs = settings(64, 48, 4);
-            rs.frame.vpls = 512;
-            rs.cluster.vpl_clusters = 64;
-            rs.cluster.sp_clusters = 96;
-            rs
-        };
+        let fs = scale_settings();
         let render = |k: f32| {
             let s = scaled(base.clone(), k);
             let mut r = Renderer::new(&ctx, &s).unwrap();
@@ -594,13 +594,7 @@ fn lights_set_at_any_scale_are_in_the_callers_units() {
         color: Vec3::ONE,
         intensity: 2.0 * (hi - lo).length_squared() * k * k,
     };
-    let fs = {
-        let mut rs = settings(64, 48, 4);
-        rs.frame.vpls = 512;
-        rs.cluster.vpl_clusters = 64;
-        rs.cluster.sp_clusters = 96;
-        rs
-    };
+    let fs = scale_settings();
     let render = |k: f32| {
         let s = scaled(base.clone(), k);
         let mut r = Renderer::new(&ctx, &s).unwrap();

@@ -6,6 +6,8 @@
 
 mod common;
 
+use common::shading_points;
+
 use fuzzy_vpl::gi::pass::Pass;
 use fuzzy_vpl::gi::primary::ShadingPoint;
 use fuzzy_vpl::gi::vpl_trace::{ResidentVpls, Vpl, VplKey, VplSet};
@@ -53,14 +55,6 @@ fn reservoirs(r: &Renderer, pixels: usize) -> Vec<Reservoir> {
     let b = state(r).reservoirs().unwrap();
     let raw: Vec<[u32; 4]> = r.ctx.read_buffer(b, pixels).unwrap();
     raw.into_iter().map(Reservoir::from_gpu).collect()
-}
-
-fn shading_points(r: &Renderer) -> Vec<ShadingPoint> {
-    r.last_gbuffer()
-        .unwrap()
-        .chunks(4)
-        .map(ShadingPoint::from_gpu)
-        .collect()
 }
 
 /// How far two reservoirs are apart: `None` when their samples differ, else the largest relative
@@ -226,9 +220,7 @@ fn restir_temporal_matches_cpu_twin() {
     let n = (w * h) as usize;
     let cam = s.default_camera();
     for combine in [Combine::Biased, Combine::Unbiased] {
-        let mut fs = settings(w, h, 256);
-        fs.cluster.temporal = true;
-        fs.cluster.temporal_alpha = 1.0;
+        let mut fs = reusing(settings(w, h, 256));
         fs.method.restir.restir_iterations = 0;
         fs.method.restir.restir_cap = 2.0;
         fs.method.restir.restir_combine = combine;
@@ -272,9 +264,7 @@ fn restir_history_is_dropped_when_the_vpls_change() {
     let s = scene::load("builtin:cornell").unwrap();
     let mut r = Renderer::new(&ctx, &s).unwrap();
     let cam = s.default_camera();
-    let mut fs = settings(16, 12, 64);
-    fs.cluster.temporal = true;
-    fs.cluster.temporal_alpha = 1.0;
+    let fs = reusing(settings(16, 12, 64));
     let reused = |r: &mut Renderer, fs: &RenderSettings| {
         let f = r.render(&cam, fs).unwrap();
         assert!(common::all_finite(&f.radiance));
@@ -319,9 +309,7 @@ fn restir_steady_frames_make_no_buffer() {
     let s = scene::load("builtin:cornell").unwrap();
     let mut r = Renderer::new(&ctx, &s).unwrap();
     let cam = s.default_camera();
-    let mut fs = settings(16, 12, 64);
-    fs.cluster.temporal = true;
-    fs.cluster.temporal_alpha = 1.0;
+    let mut fs = reusing(settings(16, 12, 64));
     for combine in [Combine::Biased, Combine::Unbiased] {
         fs.method.restir.restir_combine = combine;
         r.render(&cam, &fs).unwrap();
@@ -484,24 +472,30 @@ fn restir_unbiased_mean_is_the_reference_on_the_built_in_rooms() {
     let _serial = serial();
     let ctx = common::gpu();
     for (name, s) in rooms() {
-        let mut r = Renderer::new(&ctx, &s).unwrap();
-        let cam = s.default_camera();
-        let mut fs = settings(32, 24, 256);
-        fs.method.restir.restir_combine = Combine::Unbiased;
-        let reference = RenderSettings {
-            reference: true,
-            ..fs.clone()
-        };
-        let refl = r.render(&cam, &reference).unwrap();
-        let exact = metrics::mean_luminance(&refl.indirect);
-        let (lums, _) = seeds(&mut r, &cam, &fs, 16);
-        let (mean, se) = mean_se(&lums);
-        println!("{name}: reference {exact:.5}, unbiased mean {mean:.5} ± {se:.5} (16 seeds)");
-        assert!(
-            (mean - exact).abs() <= 3.0 * se,
-            "{name}: {mean} ± {se} vs {exact}"
-        );
+        assert_unbiased_mean_is_the_reference(&ctx, name, &s);
     }
+}
+
+/// `s`'s unbiased mean over 16 seeds (32×24, 256 VPLs) within 3 standard errors of the reference's
+/// mean luminance (`name` in the messages).
+fn assert_unbiased_mean_is_the_reference(ctx: &fuzzy_vpl::gpu::GpuContext, name: &str, s: &Scene) {
+    let mut r = Renderer::new(ctx, s).unwrap();
+    let cam = s.default_camera();
+    let mut fs = settings(32, 24, 256);
+    fs.method.restir.restir_combine = Combine::Unbiased;
+    let reference = RenderSettings {
+        reference: true,
+        ..fs.clone()
+    };
+    let refl = r.render(&cam, &reference).unwrap();
+    let exact = metrics::mean_luminance(&refl.indirect);
+    let (lums, _) = seeds(&mut r, &cam, &fs, 16);
+    let (mean, se) = mean_se(&lums);
+    println!("{name}: reference {exact:.5}, unbiased mean {mean:.5} ± {se:.5} (16 seeds)");
+    assert!(
+        (mean - exact).abs() <= 3.0 * se,
+        "{name}: {mean} ± {se} vs {exact}"
+    );
 }
 
 /// `--restir-lights clusters`: restir over the resident VPL clusters (step 2 runs, its lights the
@@ -665,6 +659,13 @@ fn measure_restir_convergence() {
     }
 }
 
+/// `fs` with temporal reuse at α 1 (restir's own reuse, no accumulation).
+fn reusing(mut fs: RenderSettings) -> RenderSettings {
+    fs.cluster.temporal = true;
+    fs.cluster.temporal_alpha = 1.0;
+    fs
+}
+
 fn settings_combine(s: &str) -> Combine {
     fuzzy_vpl::method::restir::settings::parse_combine(s).unwrap()
 }
@@ -678,20 +679,5 @@ fn restir_unbiased_mean_is_the_reference_on_dense_3m() {
     let _serial = serial();
     let ctx = common::gpu();
     let s = scene::load("builtin:dense-3m").unwrap();
-    let mut r = Renderer::new(&ctx, &s).unwrap();
-    let cam = s.default_camera();
-    let mut fs = settings(32, 24, 256);
-    fs.method.restir.restir_combine = Combine::Unbiased;
-    let reference = RenderSettings {
-        reference: true,
-        ..fs.clone()
-    };
-    let refl = r.render(&cam, &reference).unwrap();
-    let exact = metrics::mean_luminance(&refl.indirect);
-    let (lums, _) = seeds(&mut r, &cam, &fs, 16);
-    let (mean, se) = mean_se(&lums);
-    println!(
-        "builtin:dense-3m: reference {exact:.5}, unbiased mean {mean:.5} ± {se:.5} (16 seeds)"
-    );
-    assert!((mean - exact).abs() <= 3.0 * se, "{mean} ± {se} vs {exact}");
+    assert_unbiased_mean_is_the_reference(&ctx, "builtin:dense-3m", &s);
 }

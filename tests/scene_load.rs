@@ -289,6 +289,13 @@ fn close(a: Vec3, b: Vec3) -> bool {
     (a - b).length() < 1e-5
 }
 
+/// Every triangle's positions and normals are finite.
+fn vertices_finite(s: &Scene) -> bool {
+    s.triangles
+        .iter()
+        .all(|t| t.p.iter().chain(&t.n).all(|v| v.is_finite()))
+}
+
 // ---------------------------------------------------------------------------------------------
 // Malformed files
 
@@ -1941,11 +1948,7 @@ fn assimp_gltf_corpus() {
             Ok(s) => {
                 assert!(!is_gltf1(f), "{} is glTF 1.0 but loaded", f.display());
                 assert!(!s.triangles.is_empty());
-                assert!(
-                    s.triangles
-                        .iter()
-                        .all(|t| t.p.iter().chain(&t.n).all(|v| v.is_finite()))
-                );
+                assert!(vertices_finite(&s), "{}", f.display());
                 assert!(
                     s.triangles
                         .iter()
@@ -2019,11 +2022,7 @@ fn real_scenes() {
             s.report.dropped_degenerate * 100 <= expected,
             "{file}: too many degenerate"
         );
-        assert!(
-            s.triangles
-                .iter()
-                .all(|t| t.p.iter().chain(&t.n).all(|v| v.is_finite()))
-        );
+        assert!(vertices_finite(&s), "{file}");
         assert!(
             s.triangles
                 .iter()

@@ -20,6 +20,17 @@ use glam::Vec3;
 const W: u32 = 16;
 const H: u32 = 12;
 
+/// A `width` × `height` frame of `vpls` VPLs and `direct_samples` direct samples.
+fn frame(width: u32, height: u32, vpls: u32, direct_samples: u32) -> FrameSettings {
+    FrameSettings {
+        width,
+        height,
+        vpls,
+        direct_samples,
+        ..Default::default()
+    }
+}
+
 /// A 16×12 view from the origin down −Z (90° vertical field of view) onto the plane z = −5 facing
 /// the camera, as a G-buffer (4 vec4s a pixel); the pixels of the right-most column see nothing.
 fn plane_view() -> (CameraParams, Vec<[f32; 4]>) {
@@ -225,13 +236,7 @@ fn warm_sp_clustering_matches_its_twin_on_a_moving_view() {
     let sc = scene::load("builtin:conference").unwrap();
     let mut r = Renderer::new(&ctx, &sc).unwrap();
     let s = RenderSettings {
-        frame: FrameSettings {
-            width: 64,
-            height: 48,
-            vpls: 512,
-            direct_samples: 1,
-            ..Default::default()
-        },
+        frame: frame(64, 48, 512, 1),
         cluster: ClusterSettings {
             vpl_clusters: 64,
             sp_clusters: 48,
@@ -329,13 +334,7 @@ fn temporal_reuse_steadies_the_error_along_an_orbit() {
     let sc = scene::load("builtin:conference").unwrap();
     let mut r = Renderer::new(&ctx, &sc).unwrap();
     let base = RenderSettings {
-        frame: FrameSettings {
-            width: 80,
-            height: 60,
-            vpls: 1024,
-            direct_samples: 1,
-            ..Default::default()
-        },
+        frame: frame(80, 60, 1024, 1),
         cluster: ClusterSettings {
             vpl_clusters: 128,
             sp_clusters: 64,
@@ -444,13 +443,7 @@ fn relit_renderer_equals_a_fresh_one_of_the_relit_scene() {
     let ctx = common::gpu();
     let sc = scene::load("builtin:cornell").unwrap();
     let s = RenderSettings {
-        frame: FrameSettings {
-            width: 48,
-            height: 36,
-            vpls: 512,
-            direct_samples: 2,
-            ..Default::default()
-        },
+        frame: frame(48, 36, 512, 2),
         cluster: ClusterSettings {
             vpl_clusters: 64,
             sp_clusters: 32,
@@ -520,16 +513,7 @@ fn direct_light_estimates_average_towards_the_converged_image() {
     let sc = scene::load("builtin:cornell").unwrap();
     let mut r = Renderer::new(&ctx, &sc).unwrap();
     let cam = sc.default_camera();
-    let one = RenderSettings {
-        frame: FrameSettings {
-            width: 48,
-            height: 36,
-            vpls: 0,
-            direct_samples: 1,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let one = common::gbuffer_settings(48, 36);
     let f = r.render(&cam, &one).unwrap();
     let (again, ms) = r.direct_again(&one, one.frame.seed, None).unwrap();
     assert_eq!(again, f.direct, "the same seed gives the same estimate");
@@ -590,13 +574,7 @@ fn the_warm_up_leaves_no_past() {
     let s = scene::load("builtin:conference").unwrap();
     let cam = s.default_camera();
     let rs = RenderSettings {
-        frame: FrameSettings {
-            width: 48,
-            height: 36,
-            vpls: 512,
-            direct_samples: 2,
-            ..Default::default()
-        },
+        frame: frame(48, 36, 512, 2),
         cluster: ClusterSettings {
             vpl_clusters: 64,
             sp_clusters: 24,

@@ -212,26 +212,11 @@ fn indirect_scale_1_is_the_default_and_bad_scales_are_refused() {
     let dir = common::scratch("indirect-scale");
     let args = |name: &str, extra: &[&str]| {
         let out = dir.join(name).to_string_lossy().into_owned();
-        let mut a: Vec<String> = [
-            "render",
-            "builtin:cornell",
-            "--width",
-            "48",
-            "--height",
-            "36",
-            "--vpls",
-            "256",
-            "--sp-clusters",
-            "64",
-            "--vpl-clusters",
-            "32",
-            "-o",
-            &out,
-        ]
-        .map(String::from)
-        .to_vec();
-        a.extend(extra.iter().map(|s| s.to_string()));
-        a
+        let words = "render builtin:cornell --width 48 --height 36 --vpls 256 --sp-clusters 64 \
+                     --vpl-clusters 32";
+        let mut a = common::cmd(words, &["-o", &out]);
+        a.extend(extra);
+        a.into_iter().map(String::from).collect::<Vec<_>>()
     };
     for (name, extra) in [
         ("default.exr", &[][..]),

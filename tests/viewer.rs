@@ -104,24 +104,11 @@ fn scripted_view_saves_a_window_screenshot() {
         .env_remove("WAYLAND_DISPLAY")
         // Bookmarks of built-in scenes go to the config dir: keep the test's out of the user's.
         .env("XDG_CONFIG_HOME", &dir)
-        .args([
-            "view",
-            "builtin:cornell",
-            "--frames",
-            "5",
-            "--screenshot",
-            png.to_str().unwrap(),
-            "--width",
-            "320",
-            "--height",
-            "240",
-            "--vpls",
-            "1024",
-            "--sp-clusters",
-            "256",
-            "--vpl-clusters",
-            "128",
-        ])
+        .args(common::cmd(
+            "view builtin:cornell --frames 5",
+            &["--screenshot", common::arg(&png)],
+        ))
+        .args(FRAME_320.split_whitespace())
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
@@ -146,6 +133,9 @@ fn scripted_view_saves_a_window_screenshot() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// The large frame's options: 320 × 240, 1024 VPLs, K_SP 256, K_VPL 128.
+const FRAME_320: &str = "--width 320 --height 240 --vpls 1024 --sp-clusters 256 --vpl-clusters 128";
+
 /// Runs `fuzzy-vpl view ARGS` on the display `x`, its config dir in `dir`.
 fn view(x: &Xvfb, dir: &std::path::Path, args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_fuzzy-vpl"))
@@ -167,27 +157,12 @@ fn scripted_view_saves_the_displayed_image_as_exr() {
     let dir = std::env::temp_dir().join(format!("fuzzy-vpl-viewer-exr-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let exr = dir.join("view.exr");
-    let out = view(
-        &x,
-        &dir,
-        &[
-            "builtin:cornell",
-            "--frames",
-            "3",
-            "--screenshot",
-            exr.to_str().unwrap(),
-            "--width",
-            "320",
-            "--height",
-            "240",
-            "--vpls",
-            "1024",
-            "--sp-clusters",
-            "256",
-            "--vpl-clusters",
-            "128",
-        ],
+    let mut args = common::cmd(
+        "builtin:cornell --frames 3",
+        &["--screenshot", common::arg(&exr)],
     );
+    args.extend(FRAME_320.split_whitespace());
+    let out = view(&x, &dir, &args);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(0), "{err}");
     let (w, h, px) = fuzzy_vpl::export::read_exr(&exr).expect("the EXR");
@@ -321,30 +296,12 @@ fn animated_view_reports_motion() {
             std::env::temp_dir().join(format!("fuzzy-vpl-motion-{path}-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let json = dir.join("motion.json");
-        let out = view(
-            &x,
-            &dir,
-            &[
-                "builtin:conference",
-                "--animate",
-                "--frames",
-                "30",
-                "--stats",
-                json.to_str().unwrap(),
-                "--width",
-                "160",
-                "--height",
-                "120",
-                "--vpls",
-                "512",
-                "--sp-clusters",
-                "64",
-                "--vpl-clusters",
-                "64",
-                "--display-path",
-                path,
-            ],
-        );
+        // `CORNELL_160`'s frame options on the conference room.
+        let stats = ["--stats", common::arg(&json)];
+        let mut args = common::cmd("builtin:conference --animate --frames 30", &stats);
+        args.extend(&common::CORNELL_160[1..]);
+        args.extend(["--display-path", path]);
+        let out = view(&x, &dir, &args);
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(0), "{path}: {err}");
         let v: serde_json::Value =

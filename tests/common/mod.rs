@@ -5,8 +5,9 @@ use fuzzy_vpl::cpu::kmeans::RepPoint;
 use fuzzy_vpl::cpu::shading::CpuScene;
 use fuzzy_vpl::gi::primary::ShadingPoint;
 use fuzzy_vpl::gpu::GpuContext;
-use fuzzy_vpl::render::Renderer;
-use fuzzy_vpl::scene::Scene;
+use fuzzy_vpl::render::{RenderSettings, Renderer};
+use fuzzy_vpl::scene::{Camera, Scene};
+use fuzzy_vpl::settings::FrameSettings;
 
 pub fn gpu() -> GpuContext {
     GpuContext::new_headless().unwrap_or_else(|e| {
@@ -469,4 +470,167 @@ pub fn slab_under_ceiling() -> Scene {
 pub fn colom(f: &fuzzy_vpl::render::Frame) -> fuzzy_vpl::method::colom::Report {
     fuzzy_vpl::method::colom::Report::of(f.report_of(fuzzy_vpl::method::Method::Colom))
         .unwrap_or_default()
+}
+
+/// The GPU's SP clustering of a renderer's last frame, read back.
+pub struct SpClusters {
+    /// The frame's shading points.
+    pub sps: Vec<ShadingPoint>,
+    /// Each pixel's `nf` slots' clusters.
+    pub assign: Vec<u32>,
+    /// Each pixel's `nf` slots' weights.
+    pub weights: Vec<f32>,
+    /// A cold start's representative points (`cold_rep_points` of the GPU's members).
+    pub reps: Vec<RepPoint>,
+    /// The clusters.
+    pub k: usize,
+    /// The slots a pixel.
+    pub nf: usize,
+}
+
+/// `r`'s last frame's SP clustering, read back on `ctx`.
+pub fn sp_clusters(ctx: &GpuContext, r: &Renderer) -> SpClusters {
+    let sps = shading_points(r);
+    let c = r.sp_clustering().unwrap();
+    let (k, nf) = (c.k() as usize, c.f() as usize);
+    let assign: Vec<u32> = ctx.read_buffer(&c.assign, sps.len() * nf).unwrap();
+    let weights: Vec<f32> = ctx.read_buffer(&c.weights, sps.len() * nf).unwrap();
+    let members: Vec<u32> = ctx.read_buffer(&c.reps, k * 2).unwrap();
+    // A cold start: each representative point is its member pixel's shading point.
+    let reps = cold_rep_points(&sps, &members);
+    SpClusters {
+        k,
+        nf,
+        sps,
+        assign,
+        weights,
+        reps,
+    }
+}
+
+impl SpClusters {
+    /// Pixel `m`'s slots, as the shading twin reads them (`weighted`: inverse-distance weights).
+    pub fn slots(&self, m: usize, weighted: bool) -> fuzzy_vpl::cpu::shade::Slots<'_> {
+        let at = m * self.nf..m * self.nf + self.nf;
+        fuzzy_vpl::cpu::shade::Slots {
+            assign: &self.assign[at.clone()],
+            weights: &self.weights[at],
+            weighted,
+        }
+    }
+}
+
+/// Settings for a `width` × `height` frame with no VPLs and one direct sample (a frame rendered
+/// for its G-buffer).
+pub fn gbuffer_settings(width: u32, height: u32) -> RenderSettings {
+    RenderSettings {
+        frame: FrameSettings {
+            width,
+            height,
+            vpls: 0,
+            direct_samples: 1,
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
+/// A camera named "down" at `eye` looking at `target` with vertical field of view `yfov`, the
+/// image's up towards −z.
+pub fn down_camera(eye: glam::Vec3, target: glam::Vec3, yfov: f32) -> Camera {
+    Camera::look_at("down", eye, target, glam::Vec3::NEG_Z, yfov)
+}
+
+/// `builtin:cornell` and its upload on `ctx`.
+pub fn cornell_gpu(ctx: &GpuContext) -> (Scene, fuzzy_vpl::gi::scene_gpu::SceneGpu) {
+    let sc = fuzzy_vpl::scene::load("builtin:cornell").unwrap();
+    let bvh = fuzzy_vpl::bvh::SceneBvh::build(&sc).unwrap();
+    let gpu = fuzzy_vpl::gi::scene_gpu::SceneGpu::upload(ctx, &sc, &bvh);
+    (sc, gpu)
+}
+
+/// `km` over `points` (the data, `stride` vec4s a point) with settings `s` in `frame`, on `ctx`
+/// with `builtin:cornell` bound, profiled under `label`: the clustering.
+pub fn kmeans_on_cornell(
+    ctx: &GpuContext,
+    km: &fuzzy_vpl::gi::kmeans::KMeans,
+    label: &str,
+    (data, stride): (&[[f32; 4]], u32),
+    s: &fuzzy_vpl::gi::kmeans::KMeansSettings,
+    frame: (glam::Vec3, glam::Vec3),
+) -> fuzzy_vpl::gi::kmeans::Clustering {
+    let (_sc, gpu) = cornell_gpu(ctx);
+    let mut prof = fuzzy_vpl::gpu::profiler::Profiler::new(ctx);
+    let buf = ctx.storage_init("data", data);
+    let mut g = fuzzy_vpl::gi::dispatch::Gpu {
+        ctx,
+        scene: &gpu,
+        profiler: &mut prof,
+    };
+    let points = fuzzy_vpl::gi::kmeans::Points {
+        data: &buf,
+        count: data.len() as u32 / stride,
+        stride,
+    };
+    km.run(&mut g, label, &points, s, frame, None).unwrap()
+}
+
+/// The display tests' frame: 48 × 36, 256 VPLs, 2 direct samples, K_SP 48, K_VPL 64, `weighting`.
+pub fn display_frame(weighting: fuzzy_vpl::settings::Weighting) -> RenderSettings {
+    RenderSettings {
+        frame: FrameSettings {
+            width: 48,
+            height: 36,
+            vpls: 256,
+            direct_samples: 2,
+            ..Default::default()
+        },
+        cluster: fuzzy_vpl::settings::ClusterSettings {
+            sp_clusters: 48,
+            vpl_clusters: 64,
+            weighting,
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
+/// Runs the display pass `d` on `inputs` and reads its texture (RGBA8) and exposure back.
+pub fn draw_display(
+    ctx: &GpuContext,
+    d: &mut fuzzy_vpl::app::display::Display,
+    inputs: &fuzzy_vpl::app::display::DisplayInputs,
+) -> (Vec<u8>, f32) {
+    let mut enc = ctx.device.create_command_encoder(&Default::default());
+    d.record(&ctx.device, &ctx.queue, &mut enc, inputs);
+    ctx.queue.submit([enc.finish()]);
+    let texture = &d.target().unwrap().texture;
+    let rgba = fuzzy_vpl::gpu::read_texture(&ctx.device, &ctx.queue, texture).unwrap();
+    let e: Vec<f32> = ctx.read_buffer(d.exposure_buffer(), 1).unwrap();
+    (rgba, e[0])
+}
+
+/// `r`'s last frame's shading points.
+pub fn shading_points(r: &Renderer) -> Vec<ShadingPoint> {
+    let gbuffer = r.last_gbuffer().unwrap();
+    gbuffer.chunks(4).map(ShadingPoint::from_gpu).collect()
+}
+
+/// A command line: `words` split at white space, then `rest` (paths and other arguments that
+/// are not plain words).
+pub fn cmd<'a>(words: &'a str, rest: &[&'a str]) -> Vec<&'a str> {
+    words
+        .split_whitespace()
+        .chain(rest.iter().copied())
+        .collect()
+}
+
+/// `p` as an argument (test paths are UTF-8).
+pub fn arg(p: &std::path::Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The JSON file at `p` (a stats file, a trace, a bench report).
+pub fn read_json(p: &std::path::Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
 }
