@@ -101,17 +101,10 @@ fn a_scene_that_fails_to_load_keeps_the_open_one() {
 #[test]
 fn a_bookmarks_file_that_fails_to_load_is_moved_aside_not_overwritten() {
     let d = scratch("bookmarks");
-    // One triangle, lit by nothing: it only has to load.
-    let pos: [f32; 9] = [-1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 0.0];
-    let bytes: Vec<u8> = pos.iter().flat_map(|f| f.to_le_bytes()).collect();
-    std::fs::write(d.join("t.bin"), &bytes).unwrap();
-    let gltf = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
-      "meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
-      "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[-1,-1,0],"max":[1,1,0]}],
-      "bufferViews":[{"buffer":0,"byteLength":36}],"buffers":[{"uri":"t.bin","byteLength":36}]}"#;
-    let scene = d.join("t.gltf");
-    std::fs::write(&scene, gltf).unwrap();
-    let settings = d.join("t.gltf.fuzzy-vpl.json");
+    // Any scene file will do: the built-in Cornell box's GLB, beside its settings file.
+    let scene = d.join("t.glb");
+    std::fs::write(&scene, crate::scene::builtin::bytes("cornell").unwrap()).unwrap();
+    let settings = d.join("t.glb.fuzzy-vpl.json");
     std::fs::write(&settings, "{ \"bookmarks\": [ truncated").unwrap();
     let mut v = viewer(UiSettings::new(&RenderSettings::default()));
     poll_until(&mut v, |v| v.info.is_some());
@@ -127,7 +120,7 @@ fn a_bookmarks_file_that_fails_to_load_is_moved_aside_not_overwritten() {
         .bookmarks
         .push(settings::Bookmark::new("door".into(), &v.cam));
     v.save_bookmarks();
-    let aside = d.join("t.gltf.fuzzy-vpl.json.bad-1");
+    let aside = d.join("t.glb.fuzzy-vpl.json.bad-1");
     assert_eq!(
         std::fs::read_to_string(&aside).unwrap(),
         "{ \"bookmarks\": [ truncated"
@@ -136,7 +129,7 @@ fn a_bookmarks_file_that_fails_to_load_is_moved_aside_not_overwritten() {
     assert_eq!(SceneSettings::load(&settings).unwrap(), v.bookmarks);
     // Later saves write the (now readable) file in place.
     v.save_bookmarks();
-    assert!(!d.join("t.gltf.fuzzy-vpl.json.bad-2").exists());
+    assert!(!d.join("t.glb.fuzzy-vpl.json.bad-2").exists());
     std::fs::remove_dir_all(&d).unwrap();
 }
 
