@@ -10,6 +10,8 @@
 //
 // Its CPU twin is `cpu::display` (tests/display.rs compares them on every view).
 
+#import common/reduce.wgsl
+
 struct DisplayParams {
     // Width, height, view (`VIEW_*`), flags (`FLAG_*`).
     size: vec4<u32>,
@@ -120,13 +122,7 @@ fn log_luminance(@builtin(local_invocation_index) t: u32, @builtin(workgroup_id)
         }
     }
     wg_sum[t] = s;
-    workgroupBarrier();
-    for (var step = REDUCE / 2u; step > 0u; step = step / 2u) {
-        if (t < step) {
-            wg_sum[t] = wg_sum[t] + wg_sum[t + step];
-        }
-        workgroupBarrier();
-    }
+    tree_sum(t);
     if (t == 0u) {
         partials[group] = wg_sum[0];
     }
@@ -142,13 +138,7 @@ fn exposure(@builtin(local_invocation_index) t: u32) {
         s = s + partials[g];
     }
     wg_sum[t] = s;
-    workgroupBarrier();
-    for (var step = REDUCE / 2u; step > 0u; step = step / 2u) {
-        if (t < step) {
-            wg_sum[t] = wg_sum[t] + wg_sum[t + step];
-        }
-        workgroupBarrier();
-    }
+    tree_sum(t);
     if (t == 0u) {
         var e = params.scale.z;
         if ((params.size.w & FLAG_AUTO) != 0u) {

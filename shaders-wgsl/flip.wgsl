@@ -16,6 +16,8 @@
 //   partials.
 // - `colour`: the map through FLIP's magma LUT (`tensor::colorMap`) into the display's texture.
 
+#import common/reduce.wgsl
+
 struct FlipParams {
     // Width, height, pixels, 0.
     size: vec4<u32>,
@@ -316,13 +318,7 @@ fn filter_y(@builtin(global_invocation_id) id: vec3<u32>) {
 // calls it, and gets the sum.
 fn workgroup_sum(t: u32, s: f32) -> f32 {
     wg_sum[t] = s;
-    workgroupBarrier();
-    for (var step = REDUCE / 2u; step > 0u; step = step / 2u) {
-        if (t < step) {
-            wg_sum[t] = wg_sum[t] + wg_sum[t + step];
-        }
-        workgroupBarrier();
-    }
+    tree_sum(t);
     return wg_sum[0];
 }
 

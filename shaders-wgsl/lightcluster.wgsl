@@ -13,6 +13,7 @@
 // `state`, so a cluster spanning several ranges is traced once.
 #import common/bvh.wgsl
 #import common/chunk.wgsl
+#import common/pixel.wgsl
 #import common/gbuffer.wgsl
 #import common/rng.wgsl
 #import common/sampling.wgsl
@@ -83,14 +84,11 @@ fn members_flush(p: vec3<f32>, n: vec3<f32>, drawn: u32, terms: vec3<f32>) -> ve
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let i = chunk_item(gid, nwg);
+    let i = surface_item(gid, nwg);
     if i == INVALID {
         return;
     }
     let sp = gbuffer[i];
-    if sp.pos.w <= 0.0 {
-        return;
-    }
     let p = sp.pos.xyz;
     let n = sp.nrm.xyz;
     var sum = vec3<f32>(0.0);

@@ -3,6 +3,7 @@
 // Runs as bounded dispatches over pixel ranges x VPL ranges, accumulating into `indirect`.
 #import common/bvh.wgsl
 #import common/chunk.wgsl
+#import common/pixel.wgsl
 #import common/gbuffer.wgsl
 #import common/vpl.wgsl
 
@@ -20,14 +21,14 @@ struct RefParams {
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let i = chunk_item(gid, nwg);
-    if i == INVALID {
-        return;
+    let i = surface_item(gid, nwg);
+    if i != INVALID {
+        indirect[i] += vec4<f32>(gather_all(gbuffer[i]), 0.0);
     }
-    let sp = gbuffer[i];
-    if sp.pos.w <= 0.0 {
-        return;
-    }
+}
+
+// Eq. (5) at shading point `sp` over the chunk's VPL range: every VPL with its own shadow ray.
+fn gather_all(sp: ShadingPoint) -> vec3<f32> {
     let p = sp.pos.xyz;
     let n = sp.nrm.xyz;
     var sum = vec3<f32>(0.0);
@@ -38,5 +39,5 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
             sum += c;
         }
     }
-    indirect[i] += vec4<f32>(sum, 0.0);
+    return sum;
 }

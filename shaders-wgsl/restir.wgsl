@@ -320,10 +320,13 @@ fn shade(i: u32, sp: ShadingPoint) {
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = chunk_item(gid, nwg);
-    if i == INVALID {
-        return;
+    if i != INVALID {
+        run_stage(i, gbuffer[i]);
     }
-    let sp = gbuffer[i];
+}
+
+// The chunk's stage (the seed's low byte) on pixel i, whose shading point is `sp`.
+fn run_stage(i: u32, sp: ShadingPoint) {
     let stage = chunk.seed & 0xffu;
     switch stage {
         case 0u: {

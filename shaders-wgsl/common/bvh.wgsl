@@ -147,8 +147,9 @@ fn walk_to_leaf(i: ptr<function, u32>, leaf: ptr<function, BvhNode>, origin: vec
     return false;
 }
 
-// Closest hit along the ray; hit.slot == INVALID on a miss.
-fn trace_closest(ray_in: Ray) -> Hit {
+// The BVH walk of `trace_closest` and `trace_any`: the closest hit along the ray, or with
+// `any_hit` the first hit found; hit.slot == INVALID on a miss.
+fn trace(ray_in: Ray, any_hit: bool) -> Hit {
     var ray = ray_in;
     ray.tmax = min(ray.tmax, INF);
     var hit = Hit(INF, INVALID, 0.0, 0.0);
@@ -164,6 +165,9 @@ fn trace_closest(ray_in: Ray) -> Hit {
                 if r.x < ray.tmax && alpha_passes(k, r.y, r.z) {
                     ray.tmax = r.x;
                     hit = Hit(r.x, k, r.y, r.z);
+                    if any_hit {
+                        return hit;
+                    }
                 }
             }
         } else {
@@ -172,6 +176,9 @@ fn trace_closest(ray_in: Ray) -> Hit {
                 if r.x < ray.tmax {
                     ray.tmax = r.x;
                     hit = Hit(r.x, k, r.y, r.z);
+                    if any_hit {
+                        return hit;
+                    }
                 }
             }
         }
@@ -180,33 +187,14 @@ fn trace_closest(ray_in: Ray) -> Hit {
     return hit;
 }
 
+// Closest hit along the ray; hit.slot == INVALID on a miss.
+fn trace_closest(ray: Ray) -> Hit {
+    return trace(ray, false);
+}
+
 // Any hit in [tmin, tmax]: true when the segment is blocked.
-fn trace_any(ray_in: Ray) -> bool {
-    var ray = ray_in;
-    ray.tmax = min(ray.tmax, INF);
-    let inv_dir = vec3<f32>(safe_inverse(ray.dir.x), safe_inverse(ray.dir.y), safe_inverse(ray.dir.z));
-    let sh = ray_shear(ray.dir);
-    var i = 0u;
-    var node: BvhNode;
-    while walk_to_leaf(&i, &node, ray.origin, inv_dir, ray.tmax) {
-        let count = node.prim_count & ~ALPHA_LEAF;
-        if HAS_ALPHA_TEST && (node.prim_count & ALPHA_LEAF) != 0u {
-            for (var k = node.index; k < node.index + count; k++) {
-                let r = intersect_tri(k, ray, sh);
-                if r.x < ray.tmax && alpha_passes(k, r.y, r.z) {
-                    return true;
-                }
-            }
-        } else {
-            for (var k = node.index; k < node.index + count; k++) {
-                if intersect_tri(k, ray, sh).x < ray.tmax {
-                    return true;
-                }
-            }
-        }
-        i += 1u;
-    }
-    return false;
+fn trace_any(ray: Ray) -> bool {
+    return trace(ray, true).slot != INVALID;
 }
 
 // V(p, q) of Eq. (5), the shadow ray between two surface points: the segment from p (offset along

@@ -78,22 +78,15 @@ impl Target {
     /// An output texture of `size`: written as `Rgba8Unorm` storage, sampled by egui as it is
     /// (sRGB-encoded values), read as a texture (the reprojection) and copied (screenshots).
     pub fn new(device: &wgpu::Device, (w, h): (u32, u32), label: &str) -> Target {
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba8Unorm,
-            usage: wgpu::TextureUsages::STORAGE_BINDING
+        let texture = crate::gpu::texture_2d(
+            device,
+            label,
+            (w, h),
+            wgpu::TextureFormat::Rgba8Unorm,
+            wgpu::TextureUsages::STORAGE_BINDING
                 | wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        );
         let view = texture.create_view(&wgpu::TextureViewDescriptor {
             usage: Some(wgpu::TextureUsages::TEXTURE_BINDING),
             ..Default::default()
@@ -254,18 +247,7 @@ impl Display {
             &self.partials,
             &self.exposure_buf,
         ];
-        let mut entries: Vec<_> = buffers
-            .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
-        entries.push(wgpu::BindGroupEntry {
-            binding: 9,
-            resource: wgpu::BindingResource::TextureView(&out),
-        });
+        let entries = crate::gpu::bind_entries(&buffers, &[&out]);
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("display"),
             layout: &self.layout,

@@ -241,18 +241,7 @@ impl Flip {
             &s.map,
             &s.sums,
         ];
-        let mut entries: Vec<_> = buffers
-            .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
-        entries.push(wgpu::BindGroupEntry {
-            binding: 9,
-            resource: wgpu::BindingResource::TextureView(picture.unwrap_or(&self.stand_in)),
-        });
+        let entries = crate::gpu::bind_entries(&buffers, &[picture.unwrap_or(&self.stand_in)]);
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("flip"),
             layout: &self.layout,

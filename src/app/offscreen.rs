@@ -43,20 +43,13 @@ pub fn run(opts: ViewOptions) -> Result<()> {
     let software = adapter.get_info().device_type == wgpu::DeviceType::Cpu;
     let path = opts.display_path.resolve(software);
     let (device, queue, shared) = super::window::device_for(&instance, &adapter, path)?;
-    let target = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("offscreen window"),
-        size: wgpu::Extent3d {
-            width: size.0,
-            height: size.1,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: FORMAT,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
+    let target = crate::gpu::texture_2d(
+        &device,
+        "offscreen window",
+        size,
+        FORMAT,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+    );
     let view = target.create_view(&Default::default());
     let mut painter = Painter::new(device, queue, FORMAT);
     // No event loop to wake: the loop below polls the worker every window frame.

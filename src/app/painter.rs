@@ -149,20 +149,13 @@ impl Painter {
             .renderer
             .update_buffers(&self.device, &self.queue, &mut enc, jobs, &sd);
         let shot = png.map(|path| {
-            let tex = self.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("screenshot"),
-                size: wgpu::Extent3d {
-                    width: size.0,
-                    height: size.1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: self.format,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            });
+            let tex = crate::gpu::texture_2d(
+                &self.device,
+                "screenshot",
+                size,
+                self.format,
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            );
             (path, tex)
         });
         let shot_view = shot

@@ -115,35 +115,14 @@ impl Reproject {
             usage: Some(wgpu::TextureUsages::TEXTURE_BINDING),
             ..Default::default()
         });
+        let out_view = out.storage_view();
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("reproject"),
             layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: self.params.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: gbuffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: depth.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: source.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: wgpu::BindingResource::TextureView(&old_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: wgpu::BindingResource::TextureView(&out.storage_view()),
-                },
-            ],
+            entries: &crate::gpu::bind_entries(
+                &[&self.params, gbuffer, depth, source],
+                &[&old_view, &out_view],
+            ),
         });
         let groups = n.div_ceil(64).max(1);
         let grid = (groups.min(MAX_GROUPS), groups.div_ceil(MAX_GROUPS));

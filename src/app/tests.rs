@@ -101,17 +101,10 @@ fn a_scene_that_fails_to_load_keeps_the_open_one() {
 #[test]
 fn a_bookmarks_file_that_fails_to_load_is_moved_aside_not_overwritten() {
     let d = scratch("bookmarks");
-    // One triangle, lit by nothing: it only has to load.
-    let pos: [f32; 9] = [-1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 0.0];
-    let bytes: Vec<u8> = pos.iter().flat_map(|f| f.to_le_bytes()).collect();
-    std::fs::write(d.join("t.bin"), &bytes).unwrap();
-    let gltf = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
-      "meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
-      "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[-1,-1,0],"max":[1,1,0]}],
-      "bufferViews":[{"buffer":0,"byteLength":36}],"buffers":[{"uri":"t.bin","byteLength":36}]}"#;
-    let scene = d.join("t.gltf");
-    std::fs::write(&scene, gltf).unwrap();
-    let settings = d.join("t.gltf.fuzzy-vpl.json");
+    // Any scene file will do: the built-in Cornell box's GLB, beside its settings file.
+    let scene = d.join("t.glb");
+    std::fs::write(&scene, crate::scene::builtin::bytes("cornell").unwrap()).unwrap();
+    let settings = d.join("t.glb.fuzzy-vpl.json");
     std::fs::write(&settings, "{ \"bookmarks\": [ truncated").unwrap();
     let mut v = viewer(UiSettings::new(&RenderSettings::default()));
     poll_until(&mut v, |v| v.info.is_some());
@@ -127,7 +120,7 @@ fn a_bookmarks_file_that_fails_to_load_is_moved_aside_not_overwritten() {
         .bookmarks
         .push(settings::Bookmark::new("door".into(), &v.cam));
     v.save_bookmarks();
-    let aside = d.join("t.gltf.fuzzy-vpl.json.bad-1");
+    let aside = d.join("t.glb.fuzzy-vpl.json.bad-1");
     assert_eq!(
         std::fs::read_to_string(&aside).unwrap(),
         "{ \"bookmarks\": [ truncated"
@@ -136,7 +129,7 @@ fn a_bookmarks_file_that_fails_to_load_is_moved_aside_not_overwritten() {
     assert_eq!(SceneSettings::load(&settings).unwrap(), v.bookmarks);
     // Later saves write the (now readable) file in place.
     v.save_bookmarks();
-    assert!(!d.join("t.gltf.fuzzy-vpl.json.bad-2").exists());
+    assert!(!d.join("t.glb.fuzzy-vpl.json.bad-2").exists());
     std::fs::remove_dir_all(&d).unwrap();
 }
 
@@ -515,32 +508,13 @@ fn a_preview_keeps_the_image_size_and_lowers_only_the_indirect_light() {
 /// and F12 for a PNG.
 #[test]
 fn the_panel_driven_by_events() {
-    use egui_kittest::{Harness, kittest::Queryable};
     let d = scratch("kittest");
     let mut v = viewer(small_temporal());
     v.shot_dir = d.clone();
     poll_until(&mut v, |v| v.info.is_some());
     v.schedule();
     poll_until(&mut v, |v| v.latest.is_some());
-    let mut h = Harness::builder()
-        .with_size(egui::vec2(1200.0, 1400.0))
-        .build_ui_state(
-            |ui, v: &mut Viewer| {
-                v.poll();
-                v.ui(ui);
-                v.tick();
-            },
-            v,
-        );
-    h.run_steps(2);
-    // The first widget of a label (the view's "direct" button comes before the direct checkbox).
-    fn click(h: &mut Harness<'_, Viewer>, label: &str) {
-        h.query_all_by_label(label)
-            .next()
-            .unwrap_or_else(|| panic!("no widget labelled {label:?}"))
-            .click();
-        h.run_steps(2);
-    }
+    let mut h = panel_harness(v);
     for view in View::ALL {
         click(&mut h, view.name());
         assert_eq!(h.state().view, view, "clicking {:?}", view.name());
@@ -556,56 +530,9 @@ fn the_panel_driven_by_events() {
     // Each method, colom (the first) last: each asks the worker for a frame of that method.
     let (mut choices, mut sliders) = (0, 0);
     for m in crate::method::Method::ALL.into_iter().rev() {
-        let sent = h.state().pending;
-        click(&mut h, m.name());
-        assert_eq!(h.state().s.method.method, m, "clicking {:?}", m.name());
-        assert!(
-            h.state().pending > sent,
-            "{:?}: no frame asked for",
-            m.name()
-        );
-        let key = h.state().last_sent.clone().unwrap_or_default();
-        assert!(
-            key.contains(&format!("method: {m:?},")),
-            "{:?}: {key}",
-            m.name()
-        );
-        // Its knobs, drawn from their declarations (`knobs!`'s `ui`): every label is there.
-        for c in h.state().s.method.controls() {
-            let found = h.query_all_by_label(c.label).next().is_some();
-            assert!(found, "{m}: no widget labelled {:?}", c.label);
-        }
-        // A choice is a radio button a value; an integer slider takes the arrow keys.
-        let controls = h.state().s.method.controls();
-        let choice = controls.iter().find_map(|c| match c.widget {
-            Widget::Choice(values) => Some((c.name, values)),
-            _ => None,
-        });
-        if let Some((name, values)) = choice {
-            let now = h.state().s.method.knob(name).unwrap();
-            let (value, label) = values.iter().find(|(v, _)| *v != now).unwrap();
-            click(&mut h, label);
-            assert_eq!(
-                h.state().s.method.knob(name).as_deref(),
-                Some(*value),
-                "{m}"
-            );
-            choices += 1;
-        }
-        let slider = controls.iter().find(|c| {
-            matches!(c.widget, Widget::Slider { integer: true, hi, .. }
-                if h.state().s.method.knob(c.name).unwrap().parse::<f64>().unwrap() < hi)
-        });
-        if let Some(c) = slider {
-            let before: f64 = h.state().s.method.knob(c.name).unwrap().parse().unwrap();
-            h.query_all_by_label(c.label).next().unwrap().focus();
-            h.run_steps(1);
-            h.key_press(egui::Key::ArrowRight);
-            h.run_steps(2);
-            let after: f64 = h.state().s.method.knob(c.name).unwrap().parse().unwrap();
-            assert!(after > before, "{m}: {} stayed {before}", c.label);
-            sliders += 1;
-        }
+        let (choice, slider) = drive_method(&mut h, m);
+        choices += choice as u32;
+        sliders += slider as u32;
     }
     // Three rooms declare a choice today, two an integer slider.
     assert!(
@@ -614,17 +541,112 @@ fn the_panel_driven_by_events() {
     );
     // A slider takes the arrow keys once focused.
     let k = h.state().s.cluster.vpl_clusters;
-    h.query_all_by_label("K_VPL")
+    press_on(&mut h, "K_VPL", egui::Key::ArrowRight);
+    assert!(h.state().s.cluster.vpl_clusters > k, "K_VPL stayed {k}");
+    pin_b_and_split(&mut h);
+    fly_reset_and_shoot(&mut h);
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+type PanelHarness = egui_kittest::Harness<'static, Viewer>;
+
+/// The whole window's UI over `v` in egui's test harness, two frames run.
+fn panel_harness(v: Viewer) -> PanelHarness {
+    let mut h = egui_kittest::Harness::builder()
+        .with_size(egui::vec2(1200.0, 1400.0))
+        .build_ui_state(
+            |ui, v: &mut Viewer| {
+                v.poll();
+                v.ui(ui);
+                v.tick();
+            },
+            v,
+        );
+    h.run_steps(2);
+    h
+}
+
+/// Clicks the first widget of a label (the view's "direct" button comes before the direct
+/// checkbox).
+fn click(h: &mut PanelHarness, label: &str) {
+    use egui_kittest::kittest::Queryable;
+    h.query_all_by_label(label)
         .next()
-        .expect("the K_VPL slider")
+        .unwrap_or_else(|| panic!("no widget labelled {label:?}"))
+        .click();
+    h.run_steps(2);
+}
+
+/// Focuses the first widget of a label and presses `key` on it.
+fn press_on(h: &mut PanelHarness, label: &str, key: egui::Key) {
+    use egui_kittest::kittest::Queryable;
+    h.query_all_by_label(label)
+        .next()
+        .unwrap_or_else(|| panic!("no widget labelled {label:?}"))
         .focus();
     h.run_steps(1);
-    h.key_press(egui::Key::ArrowRight);
+    h.key_press(key);
     h.run_steps(2);
-    assert!(h.state().s.cluster.vpl_clusters > k, "K_VPL stayed {k}");
-    click(&mut h, "pin as B");
+}
+
+/// Chooses method `m` (a frame of it asked for), finds each of its declared knobs, picks another
+/// value of its first choice and moves its first integer slider not at its top by a key. Returns
+/// whether it had a choice and such a slider.
+fn drive_method(h: &mut PanelHarness, m: crate::method::Method) -> (bool, bool) {
+    use egui_kittest::kittest::Queryable;
+    let sent = h.state().pending;
+    click(h, m.name());
+    assert_eq!(h.state().s.method.method, m, "clicking {:?}", m.name());
+    assert!(
+        h.state().pending > sent,
+        "{:?}: no frame asked for",
+        m.name()
+    );
+    let key = h.state().last_sent.clone().unwrap_or_default();
+    assert!(
+        key.contains(&format!("method: {m:?},")),
+        "{:?}: {key}",
+        m.name()
+    );
+    // Its knobs, drawn from their declarations (`knobs!`'s `ui`): every label is there.
+    for c in h.state().s.method.controls() {
+        let found = h.query_all_by_label(c.label).next().is_some();
+        assert!(found, "{m}: no widget labelled {:?}", c.label);
+    }
+    // A choice is a radio button a value; an integer slider takes the arrow keys.
+    let controls = h.state().s.method.controls();
+    let choice = controls.iter().find_map(|c| match c.widget {
+        Widget::Choice(values) => Some((c.name, values)),
+        _ => None,
+    });
+    if let Some((name, values)) = choice {
+        let now = h.state().s.method.knob(name).unwrap();
+        let (value, label) = values.iter().find(|(v, _)| *v != now).unwrap();
+        click(h, label);
+        assert_eq!(
+            h.state().s.method.knob(name).as_deref(),
+            Some(*value),
+            "{m}"
+        );
+    }
+    let slider = controls.iter().find(|c| {
+        matches!(c.widget, Widget::Slider { integer: true, hi, .. }
+            if h.state().s.method.knob(c.name).unwrap().parse::<f64>().unwrap() < hi)
+    });
+    if let Some(c) = slider {
+        let before: f64 = h.state().s.method.knob(c.name).unwrap().parse().unwrap();
+        press_on(h, c.label, egui::Key::ArrowRight);
+        let after: f64 = h.state().s.method.knob(c.name).unwrap().parse().unwrap();
+        assert!(after > before, "{m}: {} stayed {before}", c.label);
+    }
+    (choice.is_some(), slider.is_some())
+}
+
+/// "pin as B", then the split view, which asks for A's frame with B's beside it.
+fn pin_b_and_split(h: &mut PanelHarness) {
+    click(h, "pin as B");
     assert!(h.state().b.is_some());
-    click(&mut h, View::Split.name());
+    click(h, View::Split.name());
     assert_eq!(h.state().view, View::Split);
     // The split view asks for A's frame with B's beside it (the job's last part: B's settings; sent
     // already when B was pinned in the A−B view, where the views above ended).
@@ -633,8 +655,12 @@ fn the_panel_driven_by_events() {
         key.contains(" Some(RenderSettings {"),
         "split without B: {key}"
     );
-    click(&mut h, View::Final.name());
-    // W flies forward; R resets to the start view.
+    click(h, View::Final.name());
+}
+
+/// W flies forward and R resets to the start view; F11 saves the view as EXR and F12 asks the
+/// window for a PNG.
+fn fly_reset_and_shoot(h: &mut PanelHarness) {
     h.state_mut().latest.as_ref().expect("a frame");
     let home = h.state().home;
     h.key_down(egui::Key::W);
@@ -645,7 +671,6 @@ fn the_panel_driven_by_events() {
     h.key_press(egui::Key::R);
     h.run_steps(2);
     assert_eq!(h.state().cam, home, "R did not reset the camera");
-    // F11 saves the view as EXR; F12 asks the window for a PNG.
     h.key_press(egui::Key::F11);
     h.run_steps(2);
     let shot = h.state().last_shot.clone();
@@ -653,5 +678,4 @@ fn the_panel_driven_by_events() {
     h.key_press(egui::Key::F12);
     h.run_steps(2);
     assert!(h.state().png_request.is_some());
-    std::fs::remove_dir_all(&d).unwrap();
 }

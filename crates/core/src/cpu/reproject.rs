@@ -12,7 +12,10 @@ fn axis(v: [f32; 4]) -> Vec3 {
     Vec3::new(v[0], v[1], v[2])
 }
 
-fn project_new(c: &CameraParams, d: Vec3, (w, h): (u32, u32)) -> Option<(f32, f32, f32)> {
+/// The offset `d` from camera `c`'s eye on its `(w, h)` image: the continuous pixel coordinates
+/// and the view depth; `None` behind (or almost at) the eye. Used by this twin and restir's
+/// (`Stages::prev_pixel`).
+pub fn project_new(c: &CameraParams, d: Vec3, (w, h): (u32, u32)) -> Option<(f32, f32, f32)> {
     let z = d.dot(axis(c.forward));
     if z.is_nan() || z <= 1e-6 * d.length() {
         return None;

@@ -71,16 +71,13 @@ impl Compose {
             .contains(wgpu::TextureUsages::STORAGE_BINDING);
         let mut scratch = self.scratch.borrow_mut();
         if !direct && scratch.as_ref().is_none_or(|t| t.size() != texture.size()) {
-            *scratch = Some(ctx.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("compose scratch"),
-                size: texture.size(),
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba32Float,
-                usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            }));
+            *scratch = Some(crate::gpu::texture_2d(
+                &ctx.device,
+                "compose scratch",
+                (texture.width(), texture.height()),
+                wgpu::TextureFormat::Rgba32Float,
+                wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+            ));
         }
         let target = if direct {
             texture
@@ -96,24 +93,10 @@ impl Compose {
         let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("compose"),
             layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: self.params.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: light.direct.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: light.indirect.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::TextureView(&view),
-                },
-            ],
+            entries: &crate::gpu::bind_entries(
+                &[&self.params, light.direct, light.indirect],
+                &[&view],
+            ),
         });
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         {

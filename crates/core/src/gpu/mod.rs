@@ -377,3 +377,45 @@ pub fn read_texture(
 pub fn groups(n: u32, size: u32) -> u32 {
     n.div_ceil(size)
 }
+
+/// The bind group entries of a group whose bindings 0, 1, … are `buffers`, each bound whole,
+/// followed by `views` (texture views) at the next bindings.
+pub fn bind_entries<'a>(
+    buffers: &[&'a wgpu::Buffer],
+    views: &[&'a wgpu::TextureView],
+) -> Vec<wgpu::BindGroupEntry<'a>> {
+    let buffers = buffers.iter().map(|b| b.as_entire_binding());
+    let views = views.iter().map(|v| wgpu::BindingResource::TextureView(v));
+    buffers
+        .chain(views)
+        .enumerate()
+        .map(|(i, resource)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource,
+        })
+        .collect()
+}
+
+/// A 2D texture of `(width, height)` pixels, one mip level, one sample.
+pub fn texture_2d(
+    device: &wgpu::Device,
+    label: &str,
+    (width, height): (u32, u32),
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
+}

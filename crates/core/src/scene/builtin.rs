@@ -13,7 +13,7 @@ pub const NAMES: &[&str] = &["cornell", "conference", "dense-3m", "dense-8m"];
 pub const DENSE: &[(&str, u32, u32)] = &[("dense-3m", 1225, 1224), ("dense-8m", 2048, 2047)];
 
 /// The embedded GLB of a built-in scene.
-fn bytes(name: &str) -> Option<&'static [u8]> {
+pub fn bytes(name: &str) -> Option<&'static [u8]> {
     match name {
         "cornell" => Some(include_bytes!("../../../../assets/cornell.glb")),
         "conference" => Some(include_bytes!("../../../../assets/conference.glb")),

@@ -227,6 +227,31 @@ struct Bindings<'a> {
     vis_w: Option<&'a wgpu::Buffer>,
 }
 
+/// The lights' words as the gathering reads them: each cluster's words, then each lit voxel's
+/// position, normal and flux (one zero word where there is none).
+fn light_words(l: &Lighting) -> Vec<[f32; 4]> {
+    let mut words: Vec<[f32; 4]> = l.clusters.iter().flatten().copied().collect();
+    for v in &l.lit {
+        words.extend([v.pos, v.nrm, v.flux]);
+    }
+    if words.is_empty() {
+        words.push([0.0; 4]);
+    }
+    words
+}
+
+/// Runs kernel `k` over the `faces` voxel faces (none: nothing), 2^14 faces a submission.
+fn run_faces(k: &Kernel, g: &mut Gpu, label: &'static str, group: &wgpu::BindGroup, faces: u32) {
+    if faces > 0 {
+        let run = Run {
+            label,
+            group,
+            seed: 0,
+        };
+        k.run(g, run, faces, 1 << 14, &mut |_, _| {});
+    }
+}
+
 impl Bindings<'_> {
     fn group(&self, ctx: &GpuContext, k: &Kernel) -> wgpu::BindGroup {
         let dummy: Vec<wgpu::Buffer> = (0..6).map(|_| ctx.storage("cvrtgi unused", 16)).collect();
@@ -532,7 +557,8 @@ impl Cvrtgi {
         Ok(raw.iter().map(|w| [w[0], w[1]]).collect())
     }
 
-    /// §4.4 on the GPU: the gathering, then the filter passes (ping-pong).
+    /// §4.4 on the GPU: the gathering (twice for the conserved gathering: at scale 1, then with
+    /// each cluster's scale), then the filter passes.
     fn run_light(
         &self,
         g: &mut Gpu,
@@ -545,17 +571,7 @@ impl Cvrtgi {
         let geo = &self.geometry.as_ref().unwrap().1;
         let ks = self.kernels.get().unwrap();
         let params = ctx.uniform("cvrtgi params", &self.params(s, d_min));
-        let words = |l: &Lighting| {
-            let mut words: Vec<[f32; 4]> = l.clusters.iter().flatten().copied().collect();
-            for v in &l.lit {
-                words.extend([v.pos, v.nrm, v.flux]);
-            }
-            if words.is_empty() {
-                words.push([0.0; 4]);
-            }
-            words
-        };
-        let lights_buf = ctx.storage_init("cvrtgi lights", &words(&lighting));
+        let lights_buf = ctx.storage_init("cvrtgi lights", &light_words(&lighting));
         let faces = geo.faces.voxel_dir.len() as u32;
         let bytes = faces.max(1) as u64 * 16;
         let conserved = s.cluster_gather == ClusterGather::Conserved;
@@ -578,22 +594,7 @@ impl Cvrtgi {
             vis_w: Some(&slot_flux),
         };
         let bg = base.group(ctx, &ks.gather);
-        let gather = |g: &mut Gpu| {
-            if faces > 0 {
-                ks.gather.run(
-                    g,
-                    Run {
-                        label: LABELS[1],
-                        group: &bg,
-                        seed: 0,
-                    },
-                    faces,
-                    1 << 14,
-                    &mut |_, _| {},
-                );
-            }
-        };
-        gather(g);
+        run_faces(&ks.gather, g, LABELS[1], &bg, faces);
         let mut cpu_ms = 0.0;
         if conserved && faces > 0 {
             // The flux each cluster hands the faces at scale 1, then again with each cluster's
@@ -605,50 +606,14 @@ impl Cvrtgi {
             let scales = inject::conservation_scales(&lighting, &ids, &flux, geo.rays as usize);
             inject::set_scales(&mut lighting, &scales);
             cpu_ms += t.elapsed().as_secs_f64() * 1e3;
-            ctx.write_buffer(&lights_buf, 0, bytemuck::cast_slice(&words(&lighting)));
-            gather(g);
+            ctx.write_buffer(
+                &lights_buf,
+                0,
+                bytemuck::cast_slice(&light_words(&lighting)),
+            );
+            run_faces(&ks.gather, g, LABELS[1], &bg, faces);
         }
-        let ping = [
-            ctx.storage("cvrtgi filtered a", bytes),
-            ctx.storage("cvrtgi filtered b", bytes),
-        ];
-        let mut src = &gathered;
-        for p in 0..s.filter_passes as usize {
-            let dst = &ping[p % 2];
-            let bg = Bindings {
-                lights: None,
-                vis: None,
-                irr_in: Some(src),
-                out: Some(dst),
-                vis_w: None,
-                ..base
-            }
-            .group(ctx, &ks.filter);
-            if faces > 0 {
-                ks.filter.run(
-                    g,
-                    Run {
-                        label: LABELS[2],
-                        group: &bg,
-                        seed: 0,
-                    },
-                    faces,
-                    1 << 14,
-                    &mut |_, _| {},
-                );
-            }
-            src = dst;
-        }
-        let filtered = if s.filter_passes == 0 {
-            let copy = ctx.storage("cvrtgi filtered", bytes);
-            let mut enc = ctx.device.create_command_encoder(&Default::default());
-            enc.copy_buffer_to_buffer(&gathered, 0, &copy, 0, bytes);
-            ctx.queue.submit([enc.finish()]);
-            copy
-        } else {
-            let [a, b] = ping;
-            if s.filter_passes % 2 == 1 { a } else { b }
-        };
+        let filtered = self.run_filter(g, s, &base, faces, bytes);
         let light = CvrtgiLight {
             lighting,
             escape,
@@ -658,6 +623,50 @@ impl Cvrtgi {
             filtered,
         };
         Ok((light, cpu_ms))
+    }
+
+    /// §4.4's filter passes over `base.out` (the gathered irradiance), ping-pong between two
+    /// buffers; the last one written, or with no pass a copy of the gathered irradiance.
+    fn run_filter(
+        &self,
+        g: &mut Gpu,
+        s: &CvrtgiSettings,
+        base: &Bindings,
+        faces: u32,
+        bytes: u64,
+    ) -> wgpu::Buffer {
+        let ctx = g.ctx;
+        let filter = &self.kernels.get().unwrap().filter;
+        let gathered = base.out.expect("the gathered irradiance");
+        let ping = [
+            ctx.storage("cvrtgi filtered a", bytes),
+            ctx.storage("cvrtgi filtered b", bytes),
+        ];
+        let mut src = gathered;
+        for p in 0..s.filter_passes as usize {
+            let dst = &ping[p % 2];
+            let bg = Bindings {
+                lights: None,
+                vis: None,
+                irr_in: Some(src),
+                out: Some(dst),
+                vis_w: None,
+                ..*base
+            }
+            .group(ctx, filter);
+            run_faces(filter, g, LABELS[2], &bg, faces);
+            src = dst;
+        }
+        if s.filter_passes == 0 {
+            let copy = ctx.storage("cvrtgi filtered", bytes);
+            let mut enc = ctx.device.create_command_encoder(&Default::default());
+            enc.copy_buffer_to_buffer(gathered, 0, &copy, 0, bytes);
+            ctx.queue.submit([enc.finish()]);
+            copy
+        } else {
+            let [a, b] = ping;
+            if s.filter_passes % 2 == 1 { a } else { b }
+        }
     }
 
     /// §4.5 on the GPU: every pixel's indirect light from its face's filtered irradiance.

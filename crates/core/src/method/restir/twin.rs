@@ -194,16 +194,8 @@ impl Stages<'_> {
     pub fn prev_pixel(&self, sp: &ShadingPoint) -> Option<u32> {
         let c = &self.params.prev;
         let d = sp.pos - axis(c.eye);
-        let z = d.dot(axis(c.forward));
-        if z.is_nan() || z <= 1e-6 * d.length() {
-            return None;
-        }
-        let (r, u) = (axis(c.right), axis(c.up));
-        let sx = d.dot(r) / (z * r.dot(r));
-        let sy = d.dot(u) / (z * u.dot(u));
         let (w, h) = (self.params.dims[0], self.params.dims[1]);
-        let x = (sx + 1.0) * 0.5 * w as f32;
-        let y = (1.0 - sy) * 0.5 * h as f32;
+        let (x, y, z) = crate::cpu::reproject::project_new(c, d, (w, h))?;
         if !(x >= 0.0 && y >= 0.0 && x < w as f32 && y < h as f32) {
             return None;
         }
