@@ -25,7 +25,7 @@ pub struct Motion {
     pub rest: Option<(f64, f64, u32, u32)>,
 }
 
-/// `motion` and `rest` of the viewer's stats JSON (docs/design.md, "Contracts added later").
+/// `motion` and `rest` of the viewer's stats JSON (docs/design.md, "Additive contracts").
 #[derive(Debug, Serialize, PartialEq)]
 pub struct MotionStats {
     pub image_latency_ms_p95: f64,
