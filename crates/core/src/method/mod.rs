@@ -42,14 +42,20 @@ pub struct FrameInputs<'a> {
     /// The gather of every light with its own shadow ray (`reference.wgsl`, Eq. 5).
     pub reference: &'a Reference,
     pub gbuffer: &'a wgpu::Buffer,
-    pub pixels: u32,
     /// The size the method's passes work at: the render scale's (`--indirect-scale`), else the
-    /// image's (`pixels` = its product).
+    /// image's (`pixels()` is its product).
     pub size: (u32, u32),
     /// The G-term clamp's distance in render units (`FrameSettings::d_min` of the scene's extent).
     pub d_min: f32,
     pub cam: CameraParams,
     pub indirect: &'a wgpu::Buffer,
+}
+
+impl FrameInputs<'_> {
+    /// The pixels the method's passes work on (`size`'s product).
+    pub fn pixels(&self) -> u32 {
+        self.size.0 * self.size.1
+    }
 }
 
 /// What a method's largest buffers are checked against before a frame (`Room::limits`): one

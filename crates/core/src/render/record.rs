@@ -263,12 +263,16 @@ impl Renderer<'_> {
             lights: self.lights.as_ref(),
             reference: &self.reference,
             gbuffer: &r.buffers.gbuffer,
-            pixels: r.pixels,
             size: r.buffers.low.unwrap_or(r.buffers.size),
             d_min: s.frame.d_min(self.scene.extent()),
             cam: r.cam,
             indirect: &r.buffers.indirect,
         };
+        debug_assert_eq!(
+            inputs.pixels(),
+            r.pixels,
+            "the frame's pixels are its size's"
+        );
         let mut gpu = gpu!(self);
         state.record(pass, &mut gpu, &inputs, &mut r.counts)
     }

@@ -206,7 +206,7 @@ impl Colom {
         });
         let points = Points {
             data: f.gbuffer,
-            count: f.pixels,
+            count: f.pixels(),
             stride: 4,
         };
         let c = self.kmeans.run(
@@ -278,7 +278,7 @@ impl Colom {
                 assign: &c.assign,
                 weights: &c.weights,
                 indirect: f.indirect,
-                pixels: f.pixels,
+                pixels: f.pixels(),
                 params: ShadeParams {
                     num_lights: lights.lights.len() as u32,
                     words: v.words,

@@ -773,7 +773,7 @@ impl IndirectMethod for Cvrtgi {
             vpls: &f.vpls.set,
             vpl_key: f.vpls.key,
             gbuffer: f.gbuffer,
-            pixels: f.pixels,
+            pixels: f.pixels(),
             indirect: f.indirect,
             d_min: f.d_min,
         };

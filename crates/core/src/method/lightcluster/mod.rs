@@ -222,7 +222,7 @@ impl IndirectMethod for LightClusterMethod {
                     gbuffer: f.gbuffer,
                     clusters: self.clusters.as_ref().expect("lightcluster_cluster ran"),
                     indirect: f.indirect,
-                    pixels: f.pixels,
+                    pixels: f.pixels(),
                     d_min: f.d_min,
                     visibility: f.method.lightcluster.lightcluster_visibility,
                 };
@@ -231,7 +231,7 @@ impl IndirectMethod for LightClusterMethod {
                 // group's terms is positive. Summed on the GPU and read only on request.
                 if let Some(state) = self.kernel.record(g, &inputs) {
                     let words = Words {
-                        items: f.pixels,
+                        items: f.pixels(),
                         stride: 8,
                         word: 2,
                     };

@@ -188,7 +188,7 @@ impl RestirMethod {
             self.table = Some((key, ctx.storage_init("restir alias", &table)));
         }
         n.cpu_ms.push((PREPARE, t.elapsed().as_secs_f64() * 1e3));
-        let pixels = f.pixels;
+        let pixels = f.pixels();
         if self.size.as_ref().is_none_or(|s| s.pixels != pixels) {
             let bytes = pixels as u64 * RESERVOIR_BYTES;
             self.size = Some(SizeBuffers {
@@ -300,14 +300,14 @@ impl RestirMethod {
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         if self.key.is_some() {
             let res = &size.reservoirs[self.cur];
-            let bytes = f.pixels as u64 * RESERVOIR_BYTES;
+            let bytes = f.pixels() as u64 * RESERVOIR_BYTES;
             enc.copy_buffer_to_buffer(res, 0, &past.reservoirs, 0, bytes);
-            enc.copy_buffer_to_buffer(f.gbuffer, 0, &past.gbuffer, 0, f.pixels as u64 * SP_BYTES);
+            enc.copy_buffer_to_buffer(f.gbuffer, 0, &past.gbuffer, 0, f.pixels() as u64 * SP_BYTES);
             past.cam = f.cam;
         }
         ctx.queue.submit([enc.finish()]);
         let words = Words {
-            items: f.pixels,
+            items: f.pixels(),
             stride: 1,
             word: 0,
         };
@@ -324,7 +324,7 @@ impl IndirectMethod for RestirMethod {
         f: &FrameInputs,
         n: &mut Counts,
     ) -> anyhow::Result<()> {
-        let pixels = f.pixels;
+        let pixels = f.pixels();
         match pass {
             PREPARE => self.prepare(g, f, n),
             INITIAL => {
