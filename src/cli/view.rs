@@ -74,6 +74,11 @@ pub struct ViewArgs {
 #[derive(Args, Clone, Debug, Default)]
 #[command(next_help_heading = "Split view (B settings)")]
 pub struct BArgs {
+    /// B's value of any option of `view` (repeatable): `--b weighting=hard --b sp-clusters=48
+    /// --b restir-candidates=8` is B = A with `--weighting hard --sp-clusters 48
+    /// --restir-candidates 8`, read by the same parsers (B keeps A's image size).
+    #[arg(id = "b_pairs", long = "b", value_name = "KEY=VALUE", value_parser = parse_pair)]
+    pairs: Vec<(String, String)>,
     /// B's weighting (hard, uniform, inverse-distance).
     #[arg(id = "b_weighting", long = "b-weighting", value_enum)]
     weighting: Option<crate::settings::Weighting>,
@@ -95,10 +100,12 @@ pub struct BArgs {
 }
 
 impl BArgs {
-    /// `a` with the B options applied, when any was given.
+    /// `a` (A's settings, or with `--b KEY=VALUE` B's before the `--b-` options) with the `--b-`
+    /// options applied, when any B option was given.
     fn pin(&self, a: &crate::app::UiSettings) -> Option<crate::app::UiSettings> {
         let b = self.clone();
-        if b.weighting.is_none()
+        if b.pairs.is_empty()
+            && b.weighting.is_none()
             && b.sp_clusters.is_none()
             && b.vpl_clusters.is_none()
             && b.fuzziness.is_none()
@@ -133,6 +140,61 @@ impl BArgs {
     }
 }
 
+/// `KEY=VALUE` of `--b`: the option's name (with `-` or `_`) and its text.
+fn parse_pair(v: &str) -> Result<(String, String), Invalid> {
+    match v.split_once('=') {
+        Some((k, val)) if !k.trim().is_empty() => Ok((
+            k.trim().trim_start_matches("--").replace('_', "-"),
+            val.to_string(),
+        )),
+        _ => Err(Invalid("must be KEY=VALUE, e.g. weighting=hard".into())),
+    }
+}
+
+/// `a`'s settings as the viewer starts from them.
+fn ui_settings(a: &ViewArgs) -> crate::app::UiSettings {
+    let rs = RenderSettings {
+        frame: a.shot.frame,
+        cluster: a.shot.cluster.clone(),
+        method: a.shot.method,
+        ..Default::default()
+    };
+    let mut settings = crate::app::UiSettings::new(&rs);
+    settings.render_scale = a.render_scale;
+    settings
+}
+
+/// B's settings: with `--b KEY=VALUE` pairs, the command line `argv` parsed again with each pair
+/// as `--KEY VALUE` after it (the last value of an option wins), through the same parsers and
+/// `--paper` rule as A, at A's image size; then the `--b-` options. `None` without B options.
+fn b_settings(
+    argv: &[std::ffi::OsString],
+    a: &ViewArgs,
+    a_settings: &crate::app::UiSettings,
+) -> Result<Option<crate::app::UiSettings>> {
+    if a.b.pairs.is_empty() {
+        return Ok(a.b.pin(a_settings));
+    }
+    let mut argv = argv.to_vec();
+    for (k, v) in &a.b.pairs {
+        argv.push(format!("--{k}").into());
+        argv.push(v.into());
+    }
+    let cmd = super::command().mut_subcommand("view", |v| v.args_override_self(true));
+    let m = cmd
+        .try_get_matches_from(argv)
+        .map_err(|e| bad(format!("--b: {}", super::one_line(&e))))?;
+    let given = super::given_ids(&m);
+    let cli = <super::Cli as clap::FromArgMatches>::from_arg_matches(&m)
+        .map_err(|e| bad(format!("--b: {}", super::one_line(&e))))?;
+    let Some(super::Command::View(mut b)) = cli.command else {
+        return Err(bad("--b: only `view` has a B"));
+    };
+    b.shot.apply_paper(&given);
+    (b.shot.frame.width, b.shot.frame.height) = (a.shot.frame.width, a.shot.frame.height);
+    Ok(a.b.pin(&ui_settings(&b)))
+}
+
 fn parse_render_scale(v: &str) -> Result<f32, Invalid> {
     match v.trim().parse::<f32>() {
         Ok(s) if (0.1..=1.0).contains(&s) => Ok(s),
@@ -144,8 +206,9 @@ fn parse_render_scale(v: &str) -> Result<f32, Invalid> {
 pub const OFFSCREEN_IMAGE: (u32, u32) = (900, 550);
 
 /// `given`: the options the command line gave (`--paper` yields to them; `--offscreen` without
-/// `--width`/`--height` takes `OFFSCREEN_IMAGE`).
-pub fn run(mut a: ViewArgs, given: &[String]) -> Result<()> {
+/// `--width`/`--height` takes `OFFSCREEN_IMAGE`); `argv`: the command line (B's `--b KEY=VALUE`
+/// parses it again).
+pub fn run(mut a: ViewArgs, given: &[String], argv: &[std::ffi::OsString]) -> Result<()> {
     a.shot.apply_paper(given);
     if a.offscreen {
         if !given.iter().any(|g| g == "width") {
@@ -203,15 +266,8 @@ pub fn run(mut a: ViewArgs, given: &[String]) -> Result<()> {
     if let Some(i) = a.shot.camera {
         a.scene.camera(&scene, Some(i))?;
     }
-    let rs = RenderSettings {
-        frame: a.shot.frame,
-        cluster: a.shot.cluster,
-        method: a.shot.method,
-        ..Default::default()
-    };
-    let mut settings = crate::app::UiSettings::new(&rs);
-    settings.render_scale = a.render_scale;
-    let b = a.b.pin(&settings);
+    let settings = ui_settings(&a);
+    let b = b_settings(argv, &a, &settings)?;
     let args = a.scene.clone();
     let loader: crate::app::worker::Loader = std::sync::Arc::new(move |spec: &str| {
         let mut sa = args.clone();
@@ -237,4 +293,67 @@ pub fn run(mut a: ViewArgs, given: &[String]) -> Result<()> {
         display_path: a.display_path,
         offscreen: a.offscreen,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::app::UiSettings;
+
+    /// `view ARGS` as `cli::main` parses it, with its command line.
+    fn view(args: &[&str]) -> (ViewArgs, Vec<std::ffi::OsString>) {
+        let argv: Vec<std::ffi::OsString> = ["fuzzy-vpl", "view"]
+            .iter()
+            .chain(args)
+            .map(Into::into)
+            .collect();
+        let m = super::super::command()
+            .try_get_matches_from(argv.clone())
+            .unwrap();
+        let given = super::super::given_ids(&m);
+        let cli = <super::super::Cli as clap::FromArgMatches>::from_arg_matches(&m).unwrap();
+        let Some(super::super::Command::View(mut a)) = cli.command else {
+            panic!("not view")
+        };
+        a.shot.apply_paper(&given);
+        (a, argv)
+    }
+
+    fn b(args: &[&str]) -> Result<Option<UiSettings>> {
+        let (a, argv) = view(args);
+        b_settings(&argv, &a, &ui_settings(&a))
+    }
+
+    /// `--b KEY=VALUE` sets any option of B through the option's own parser, the rest is A's; the
+    /// pair and the `--b-` option give the same B; a value the parser refuses is one line naming
+    /// `--b`, the option and the value.
+    #[test]
+    fn b_pairs_set_any_option_through_its_parser() {
+        assert!(b(&[]).unwrap().is_none());
+        let by_pair = b(&["--b", "weighting=hard"]).unwrap().unwrap();
+        assert_eq!(by_pair.cluster.weighting, crate::settings::Weighting::Hard);
+        assert_eq!(Some(by_pair), b(&["--b-weighting", "hard"]).unwrap());
+        let a_args = ["--fuzziness", "4", "--method", "restir"];
+        let (a, _) = view(&a_args);
+        let a = ui_settings(&a);
+        let pairs = ["--b", "fuzziness=3", "--b", "restir_candidates=8"];
+        let both = [&a_args[..], &pairs[..], &["--b", "temporal_alpha=0.25"]].concat();
+        let pinned = b(&both).unwrap().unwrap();
+        assert_eq!(pinned.cluster.fuzziness, 3);
+        assert_eq!(pinned.method.restir.restir_candidates, 8);
+        assert_eq!(pinned.cluster.temporal_alpha, 0.25);
+        let mut back = pinned.clone();
+        back.cluster.fuzziness = 4;
+        back.method.restir.restir_candidates = a.method.restir.restir_candidates;
+        back.cluster.temporal_alpha = a.cluster.temporal_alpha;
+        assert_eq!(back, a, "B differs from A beyond its pairs");
+        let e = b(&["--b", "fuzziness=0"]).unwrap_err().to_string();
+        assert!(e.contains("--b: --fuzziness 0: must be 1..16"), "{e}");
+        let e = b(&["--b", "no-such-option=1"]).unwrap_err().to_string();
+        assert!(
+            e.starts_with("--b: ") && e.contains("--no-such-option"),
+            "{e}"
+        );
+        assert!(parse_pair("fuzziness").is_err() && parse_pair("=3").is_err());
+    }
 }
