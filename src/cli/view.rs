@@ -23,7 +23,8 @@ pub struct ViewArgs {
     #[command(flatten)]
     shot: ShotArgs,
     /// Render scale of the indirect light relative to the image area, 0.1..1 (the primary rays and
-    /// the direct light are at the image area's size; moving, previews at half this scale).
+    /// the direct light are at the image area's size; moving, previews at half this scale). The
+    /// same setting as --indirect-scale, which `view` also takes (with the same range); give one.
     #[arg(long, default_value_t = 0.5, value_parser = parse_render_scale)]
     render_scale: f32,
     /// Scripted run: draw N window frames once the first full GI frame is shown (with --animate: N
@@ -140,6 +141,24 @@ impl BArgs {
     }
 }
 
+/// `--indirect-scale` is `view`'s render scale under `render`'s name: taken when given alone, and
+/// refused beside `--render-scale` (two values for one setting).
+fn one_render_scale(a: &mut ViewArgs, given: &[String]) -> Result<()> {
+    let has = |id: &str| given.iter().any(|g| g == id);
+    match (has("indirect_scale"), has("render_scale")) {
+        (true, true) => Err(bad(
+            "--indirect-scale and --render-scale are one setting in view (the render scale): give one",
+        )),
+        (true, false) => {
+            let s = a.shot.frame.indirect_scale;
+            a.render_scale = parse_render_scale(&s.to_string())
+                .map_err(|e| bad(format!("--indirect-scale {s}: {e} in view")))?;
+            Ok(())
+        }
+        _ => Ok(()),
+    }
+}
+
 /// `KEY=VALUE` of `--b`: the option's name (with `-` or `_`) and its text.
 fn parse_pair(v: &str) -> Result<(String, String), Invalid> {
     match v.split_once('=') {
@@ -191,6 +210,7 @@ fn b_settings(
         return Err(bad("--b: only `view` has a B"));
     };
     b.shot.apply_paper(&given);
+    one_render_scale(&mut b, &given)?;
     (b.shot.frame.width, b.shot.frame.height) = (a.shot.frame.width, a.shot.frame.height);
     Ok(a.b.pin(&ui_settings(&b)))
 }
@@ -210,6 +230,7 @@ pub const OFFSCREEN_IMAGE: (u32, u32) = (900, 550);
 /// parses it again).
 pub fn run(mut a: ViewArgs, given: &[String], argv: &[std::ffi::OsString]) -> Result<()> {
     a.shot.apply_paper(given);
+    one_render_scale(&mut a, given)?;
     if a.offscreen {
         if !given.iter().any(|g| g == "width") {
             a.shot.frame.width = OFFSCREEN_IMAGE.0;
@@ -355,5 +376,24 @@ mod tests {
             "{e}"
         );
         assert!(parse_pair("fuzziness").is_err() && parse_pair("=3").is_err());
+    }
+
+    /// `--indirect-scale` is view's render scale; beside `--render-scale` it is refused.
+    #[test]
+    fn indirect_scale_is_the_render_scale() {
+        let scale = |args: &[&str]| {
+            let (mut a, argv) = view(args);
+            let m = super::super::command().try_get_matches_from(argv).unwrap();
+            one_render_scale(&mut a, &super::super::given_ids(&m)).map(|()| a.render_scale)
+        };
+        assert_eq!(scale(&[]).unwrap(), 0.5);
+        assert_eq!(scale(&["--render-scale", "0.25"]).unwrap(), 0.25);
+        assert_eq!(scale(&["--indirect-scale", "0.25"]).unwrap(), 0.25);
+        let e = scale(&["--indirect-scale", "0.05"])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--indirect-scale 0.05"), "{e}");
+        let both = scale(&["--indirect-scale", "0.25", "--render-scale", "0.5"]);
+        assert!(both.unwrap_err().to_string().contains("one setting"));
     }
 }
