@@ -589,7 +589,8 @@ pub struct FrameSettings {
     /// The indirect light's resolution as a fraction of the image's, (0, 1]: below 1 the
     /// primary rays and the direct light stay at the image's size and the indirect light is
     /// computed on a G-buffer of this scale, then upsampled with depth- and normal-aware weights
-    /// (`gi::upsample`). The unclustered reference ignores it; In `view` it is the render scale (`--render-scale`, the same setting; give one).
+    /// (`gi::upsample`). The unclustered reference ignores it. In `view` it is the
+    /// render scale (`--render-scale`, the same setting; give one).
     /// Written to the stats only when not 1.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.indirect_scale, value_parser = parse_indirect_scale))]
     #[serde(skip_serializing_if = "is_one")]
