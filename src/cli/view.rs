@@ -75,9 +75,9 @@ pub struct ViewArgs {
 #[derive(Args, Clone, Debug, Default)]
 #[command(next_help_heading = "Split view (B settings)")]
 pub struct BArgs {
-    /// B's value of any option of `view` (repeatable): `--b weighting=hard --b sp-clusters=48
-    /// --b restir-candidates=8` is B = A with `--weighting hard --sp-clusters 48
-    /// --restir-candidates 8`, read by the same parsers (B keeps A's image size).
+    /// B's value of any option of `view` (repeatable): `--b weighting=hard --b sp-clusters=48` is
+    /// B = A with `--weighting hard --sp-clusters 48`, a method's knobs included, read by the same
+    /// parsers (B keeps A's image size).
     #[arg(id = "b_pairs", long = "b", value_name = "KEY=VALUE", value_parser = parse_pair)]
     pairs: Vec<(String, String)>,
     /// B's weighting (hard, uniform, inverse-distance).
@@ -354,18 +354,46 @@ mod tests {
         let by_pair = b(&["--b", "weighting=hard"]).unwrap().unwrap();
         assert_eq!(by_pair.cluster.weighting, crate::settings::Weighting::Hard);
         assert_eq!(Some(by_pair), b(&["--b-weighting", "hard"]).unwrap());
-        let a_args = ["--fuzziness", "4", "--method", "restir"];
+        // A method's own knob: the registry's last method, its first declared control, set to
+        // a value other than the default (a choice's second value, a slider's low end).
+        let method = *crate::method::Method::ALL.last().unwrap();
+        let ms = crate::method::MethodSettings {
+            method,
+            ..Default::default()
+        };
+        let c = ms.controls()[0];
+        let value = match c.widget {
+            crate::settings::Widget::Choice(values) => values[1].0.to_string(),
+            crate::settings::Widget::Slider { lo, .. } => format!("{lo}"),
+        };
+        assert_ne!(ms.knob(c.name), Some(value.clone()), "{}", c.name);
+        let a_args = ["--fuzziness", "4", "--method", method.name()];
         let (a, _) = view(&a_args);
         let a = ui_settings(&a);
-        let pairs = ["--b", "fuzziness=3", "--b", "restir_candidates=8"];
-        let both = [&a_args[..], &pairs[..], &["--b", "temporal_alpha=0.25"]].concat();
-        let pinned = b(&both).unwrap().unwrap();
+        let knob = format!("{}={value}", c.name);
+        let pairs = [
+            "--b",
+            "fuzziness=3",
+            "--b",
+            &knob,
+            "--b",
+            "temporal_alpha=0.25",
+        ];
+        let pinned = b(&[&a_args[..], &pairs[..]].concat()).unwrap().unwrap();
         assert_eq!(pinned.cluster.fuzziness, 3);
-        assert_eq!(pinned.method.restir.restir_candidates, 8);
+        // As the knob writes it back (an f32 slider's low end may print otherwise): equal numbers.
+        let got = pinned.method.knob(c.name).unwrap();
+        let num = |t: &str| t.parse::<f64>().ok();
+        assert!(
+            got == value || num(&got).is_some() && num(&got) == num(&value),
+            "{got}"
+        );
         assert_eq!(pinned.cluster.temporal_alpha, 0.25);
         let mut back = pinned.clone();
         back.cluster.fuzziness = 4;
-        back.method.restir.restir_candidates = a.method.restir.restir_candidates;
+        let _ = back
+            .method
+            .set_column(c.name, &a.method.knob(c.name).unwrap());
         back.cluster.temporal_alpha = a.cluster.temporal_alpha;
         assert_eq!(back, a, "B differs from A beyond its pairs");
         let e = b(&["--b", "fuzziness=0"]).unwrap_err().to_string();
