@@ -34,9 +34,7 @@ use crate::exposure::Exposure;
 use crate::method::{MethodSettings, Room};
 use crate::render::{Control, RenderSettings};
 use crate::scene::Scene;
-use crate::settings::{
-    AUTO_GAMMA_MIN, ClusterSettings, DEFAULT_PLANE_GATE_DEG, FrameSettings, Gamma, Weighting,
-};
+use crate::settings::{ClusterSettings, FrameSettings, Weighting};
 use camera::ViewCamera;
 use settings::SceneSettings;
 use views::View;
@@ -112,63 +110,37 @@ pub fn run(opts: ViewOptions) -> Result<()> {
     }
 }
 
-/// The panel's state: the settings types as the renderer takes them, and what only a panel has
-/// (clusterings switched off keep their K, γ's slider keeps its value while `auto` is ticked, the
-/// plane gate keeps its angle while off, n_t is shown in degrees).
+/// The panel's state: the settings types as the renderer takes them (their controls drawn from
+/// their declarations), and what only a panel has (the exposure, the render scale, the direct
+/// light switched off).
 #[derive(Clone, Debug, PartialEq)]
 pub struct UiSettings {
     /// The frame (its size is the viewer's GI size, set per frame).
     pub frame: FrameSettings,
     pub cluster: ClusterSettings,
-    /// The method and its knobs (each room draws its own, `method::Room::ui`).
+    /// The method and its knobs (each room's declared controls).
     pub method: MethodSettings,
-    /// γ of the slider, used when `gamma_auto` is off.
-    pub gamma: u32,
-    /// γ by `Gamma::auto` (the default).
-    pub gamma_auto: bool,
-    /// n_t as the largest normal angle within a cluster, degrees.
-    pub nt_degrees: f32,
     /// The display exposure; with `exposure_auto` the panel keeps it at `exposure::auto_exposure` of
     /// the latest frame.
     pub exposure: f32,
     pub exposure_auto: bool,
     pub render_scale: f32,
-    /// The plane gate of the fuzzy F lists (off: the paper) and its angle, degrees.
-    pub plane_gate_on: bool,
-    pub plane_gate_deg: f32,
-    pub sp_on: bool,
-    pub vpl_on: bool,
     pub direct_on: bool,
 }
 
 impl UiSettings {
-    /// The panel's state for `s` (its K's at least 1 so that switching a clustering on has one).
+    /// The panel's state for `s`.
     pub fn new(s: &RenderSettings) -> Self {
-        let c = &s.cluster;
         UiSettings {
             frame: s.frame,
-            cluster: ClusterSettings {
-                sp_clusters: c.sp_clusters.max(1),
-                vpl_clusters: c.vpl_clusters.max(1),
-                ..c.clone()
-            },
+            cluster: s.cluster.clone(),
             method: s.method,
-            gamma: match c.gamma {
-                Gamma::Auto => AUTO_GAMMA_MIN,
-                Gamma::Fixed(g) => g,
-            },
-            gamma_auto: c.gamma.is_auto(),
-            nt_degrees: c.normal_threshold.clamp(-1.0, 1.0).acos().to_degrees(),
             exposure: match s.frame.exposure {
                 Exposure::Fixed(e) => e,
                 Exposure::Auto => 1.0,
             },
             exposure_auto: s.frame.exposure.is_auto(),
             render_scale: 1.0,
-            plane_gate_on: c.plane_gate.is_some(),
-            plane_gate_deg: c.plane_gate.unwrap_or(DEFAULT_PLANE_GATE_DEG),
-            sp_on: c.sp_clusters > 0,
-            vpl_on: c.vpl_clusters > 0,
             direct_on: true,
         }
     }
@@ -185,11 +157,7 @@ impl UiSettings {
             };
             crate::settings::paper::apply(&mut frame, &mut self.cluster, &|_| false);
             self.frame.clamp = frame.clamp;
-            self.nt_degrees = self.cluster.normal_threshold.acos().to_degrees();
-            self.plane_gate_on = false;
             self.render_scale = 1.0;
-            self.sp_on = true;
-            self.vpl_on = true;
         } else {
             let d = ClusterSettings::default();
             let c = &mut self.cluster;
@@ -205,17 +173,14 @@ impl UiSettings {
 
     /// The gate's angle when it is on and applies (fuzzy modes).
     pub fn plane_gate(&self) -> Option<f32> {
-        (self.plane_gate_on && self.cluster.weighting != Weighting::Hard)
-            .then_some(self.plane_gate_deg)
+        (self.cluster.weighting != Weighting::Hard)
+            .then_some(self.cluster.plane_gate)
+            .flatten()
     }
 
-    /// γ as the frame settings take it: `Auto` when auto is ticked, else the slider's.
-    pub fn gamma_setting(&self) -> Gamma {
-        if self.gamma_auto {
-            Gamma::Auto
-        } else {
-            Gamma::Fixed(self.gamma)
-        }
+    /// Whether the SP and the VPL clusterings run (a K of 0: off).
+    pub fn clusterings_on(&self) -> (bool, bool) {
+        (self.cluster.sp_clusters > 0, self.cluster.vpl_clusters > 0)
     }
 
     /// The settings a frame of `width` × `height` is rendered with.
@@ -230,11 +195,7 @@ impl UiSettings {
                 ..self.frame
             },
             cluster: ClusterSettings {
-                vpl_clusters: if self.vpl_on { c.vpl_clusters } else { 0 },
-                sp_clusters: if self.sp_on { c.sp_clusters } else { 0 },
                 fuzziness: c.f(),
-                gamma: self.gamma_setting(),
-                normal_threshold: self.nt_degrees.to_radians().cos(),
                 plane_gate: self.plane_gate(),
                 ..c.clone()
             },
@@ -248,13 +209,14 @@ impl UiSettings {
         let p = self.cluster.weight_exponent;
         let room = self.method.knobs_room();
         let series = |r: &Room| format!("{} {}", r.method, (r.series)(&self.method));
-        match (self.sp_on, self.vpl_on) {
+        let (sp_on, vpl_on) = self.clusterings_on();
+        match (sp_on, vpl_on) {
             _ if room.is_some_and(|r| !r.clusters_sps) => series(room.unwrap()),
             (false, false) => "no clustering".into(),
             (false, true) => "VPL clusters only".into(),
             (true, _) if let Some(r) = room => {
                 let m = series(r);
-                if self.vpl_on || !(r.vpl_clusters)(&self.method) {
+                if vpl_on || !(r.vpl_clusters)(&self.method) {
                     m
                 } else {
                     format!("{m}, all VPLs")
@@ -271,11 +233,7 @@ impl UiSettings {
                     Some(g) => format!("{m}, gate {g:.0}°"),
                     None => m,
                 };
-                if self.vpl_on {
-                    m
-                } else {
-                    format!("{m}, all VPLs")
-                }
+                if vpl_on { m } else { format!("{m}, all VPLs") }
             }
         }
     }
@@ -292,25 +250,16 @@ impl UiSettings {
             Weighting::Hard => "hard".to_string(),
             Weighting::Uniform => "uniform".to_string(),
         };
-        let sp = if self.sp_on {
-            format!("K{}", c.sp_clusters)
-        } else {
-            "K0".into()
-        };
-        let vpl = if self.vpl_on {
-            format!("Kv{}", c.vpl_clusters)
-        } else {
-            "Kv0".into()
-        };
+        let (sp, vpl) = (c.sp_clusters, c.vpl_clusters);
         let gate = self
             .plane_gate()
             .map_or(String::new(), |g| format!("_gate{g:.0}"));
         format!(
-            "{mode}_{sp}_{vpl}_N{}_F{}_g{}_nt{:.0}_it{}{gate}",
+            "{mode}_K{sp}_Kv{vpl}_N{}_F{}_g{}_nt{:.0}_it{}{gate}",
             self.frame.vpls,
             c.fuzziness,
-            self.gamma_setting(),
-            self.nt_degrees,
+            c.gamma,
+            c.normal_threshold.clamp(-1.0, 1.0).acos().to_degrees(),
             c.iterations
         )
     }
@@ -342,32 +291,18 @@ pub fn gi_size(area: [u32; 2], scale: f32, max_pixels: u64) -> ((u32, u32), Opti
     }
 }
 
-/// The panel sliders' ranges: their usual ones, extended to take the values the viewer started
-/// with (egui clamps a slider's value into its range, which silently changed command-line values
-/// such as `--vpls 100000` to 65536).
+/// The exposure slider's range: its usual one, extended to take the value the viewer started with
+/// (egui clamps a slider's value into its range). The settings' sliders widen theirs the same way
+/// (`panel::controls`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SliderRanges {
-    pub sp_clusters: u32,
-    pub vpl_clusters: u32,
-    pub vpls: u32,
-    pub gamma: u32,
-    pub iterations: u32,
-    pub weight_exponent: f32,
     pub exposure: (f32, f32),
-    pub plane_gate_min: f32,
 }
 
 impl SliderRanges {
     pub fn new(s: &UiSettings) -> Self {
         SliderRanges {
-            sp_clusters: s.cluster.sp_clusters.max(16384),
-            vpl_clusters: s.cluster.vpl_clusters.max(16384),
-            vpls: s.frame.vpls.max(65536),
-            gamma: s.gamma.max(16),
-            iterations: s.cluster.iterations.max(50),
-            weight_exponent: s.cluster.weight_exponent.max(8.0),
             exposure: (s.exposure.min(0.01), s.exposure.max(64.0)),
-            plane_gate_min: s.plane_gate_deg.min(1.0),
         }
     }
 }

@@ -10,7 +10,7 @@ use super::Viewer;
 use super::camera::Mode as CamMode;
 use super::settings::Bookmark;
 use super::views::View;
-use controls::{clustering_controls, method_controls};
+use controls::{method_controls, settings_controls};
 
 mod controls;
 mod image;
@@ -273,12 +273,10 @@ impl Viewer {
                     );
                 }
                 ui.separator();
-                // The γ the last frame sampled with: the slider starts there when auto is unticked.
-                let gamma_used = self.latest.as_ref().and_then(|l| l.frame.gamma_used);
                 let auto_e = self.latest.as_ref().filter(|_| self.s.exposure_auto);
                 let auto_e = auto_e.and_then(|l| l.auto_exposure);
                 method_controls(ui, &mut self.s);
-                clustering_controls(ui, &mut self.s, &self.ranges, gamma_used);
+                settings_controls(ui, &mut self.s);
                 ui.separator();
                 let (s, r) = (&mut self.s, &self.ranges);
                 ui.horizontal(|ui| {

@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::metrics;
-use crate::settings::Widget;
+use crate::settings::{Gamma, Widget};
 use std::time::Duration;
 
 /// A viewer on builtin:cornell with `s`, without a window (its worker starts on lavapipe).
@@ -245,17 +245,17 @@ fn lights_move_without_a_restart() {
 #[test]
 fn auto_gamma_reaches_the_frame_and_the_file_names() {
     let s = UiSettings::new(&RenderSettings::default());
-    assert!(s.gamma_auto);
+    assert!(s.cluster.gamma.is_auto());
     assert_eq!(s.frame_settings(64, 48).cluster.gamma, Gamma::Auto);
     assert!(s.short().contains("_gauto_"), "{}", s.short());
     // Unticked, the slider's γ is used (a γ from the command line arrives unticked).
     let mut fixed = RenderSettings::default();
     fixed.cluster.gamma = Gamma::Fixed(8);
     let mut s = UiSettings::new(&fixed);
-    assert!(!s.gamma_auto);
     assert_eq!(s.frame_settings(64, 48).cluster.gamma, Gamma::Fixed(8));
     assert!(s.short().contains("_g8_"), "{}", s.short());
-    s.gamma_auto = true;
+    // The γ control's word ("auto") sets it back.
+    assert!(s.cluster.set_control("gamma", "auto".into()));
     assert_eq!(s.frame_settings(64, 48).cluster.gamma, Gamma::Auto);
 }
 
@@ -539,13 +539,38 @@ fn the_panel_driven_by_events() {
         choices >= 3 && sliders >= 2,
         "{choices} choices, {sliders} sliders"
     );
-    // A slider takes the arrow keys once focused.
-    let k = h.state().s.cluster.vpl_clusters;
-    press_on(&mut h, "K_VPL", egui::Key::ArrowRight);
-    assert!(h.state().s.cluster.vpl_clusters > k, "K_VPL stayed {k}");
+    drive_settings(&mut h);
     pin_b_and_split(&mut h);
     fly_reset_and_shoot(&mut h);
     std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Every control `ClusterSettings` and `FrameSettings` declare is in the panel under its label
+/// (drawn from the declarations); a slider takes the arrow keys once focused, a toggle a click, a
+/// word's box a click.
+fn drive_settings(h: &mut PanelHarness) {
+    use crate::settings::{ClusterSettings, FrameSettings};
+    use egui_kittest::kittest::Queryable;
+    let labels = ClusterSettings::CONTROLS
+        .iter()
+        .chain(FrameSettings::CONTROLS);
+    for c in labels {
+        let found = h.query_all_by_label_contains(c.label).next().is_some();
+        assert!(found, "no widget labelled {:?} ({})", c.label, c.name);
+    }
+    let k = h.state().s.cluster.vpl_clusters;
+    press_on(h, "K_VPL", egui::Key::ArrowRight);
+    assert!(h.state().s.cluster.vpl_clusters > k, "K_VPL stayed {k}");
+    let facing = h.state().s.cluster.visibility_facing;
+    click(h, "facing test");
+    assert_eq!(h.state().s.cluster.visibility_facing, !facing);
+    // The time budget's box: ticked "off" (no budget) at the start; unticked, a budget.
+    assert_eq!(h.state().s.cluster.target_ms, None);
+    let off = h.query_all_by_label("off").count();
+    assert!(
+        off >= 3,
+        "{off} boxes labelled off (K's, the gate, the budget)"
+    );
 }
 
 type PanelHarness = egui_kittest::Harness<'static, Viewer>;

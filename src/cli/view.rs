@@ -121,18 +121,16 @@ impl BArgs {
             c.weighting = w;
         }
         if let Some(k) = b.sp_clusters {
-            s.sp_on = k > 0;
-            c.sp_clusters = k.max(1);
+            c.sp_clusters = k;
         }
         if let Some(k) = b.vpl_clusters {
-            s.vpl_on = k > 0;
-            c.vpl_clusters = k.max(1);
+            c.vpl_clusters = k;
         }
         if let Some(f) = b.fuzziness {
             c.fuzziness = f;
         }
         if let Some(n) = b.normal_threshold {
-            s.nt_degrees = n.clamp(-1.0, 1.0).acos().to_degrees();
+            c.normal_threshold = n;
         }
         if let Some(p) = b.weight_exponent {
             c.weight_exponent = p;
@@ -365,6 +363,10 @@ mod tests {
         let value = match c.widget {
             crate::settings::Widget::Choice(values) => values[1].0.to_string(),
             crate::settings::Widget::Slider { lo, .. } => format!("{lo}"),
+            w => panic!(
+                "{}: a method knob's widget is a choice or a slider, not {w:?}",
+                c.name
+            ),
         };
         assert_ne!(ms.knob(c.name), Some(value.clone()), "{}", c.name);
         let a_args = ["--fuzziness", "4", "--method", method.name()];

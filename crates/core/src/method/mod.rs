@@ -351,6 +351,24 @@ macro_rules! rooms {
                 }
             }
 
+            /// The asked method's control `name` (its knob's serde value); `None` when it has no
+            /// such control.
+            pub fn control(&self, name: &str) -> Option<serde_json::Value> {
+                match self.method {
+                    Method::Colom => None,
+                    $(Method::$Variant => self.$module.control(name),)+
+                }
+            }
+
+            /// Sets the asked method's control `name` from a serde value; false when it has no
+            /// such control or the knob's parser refuses the value.
+            pub fn set_control(&mut self, name: &str, v: serde_json::Value) -> bool {
+                match self.method {
+                    Method::Colom => false,
+                    $(Method::$Variant => self.$module.set_control(name, v),)+
+                }
+            }
+
             /// Sets the knob of column `name` from its text; `None` when no method has that
             /// knob.
             pub fn set_column(&mut self, name: &str, text: &str) -> Option<Result<(), Invalid>> {

@@ -1,14 +1,17 @@
-//! `knobs!`: a group of settings declared once. From one list of fields (doc, type, default, value
-//! parser, optionally its viewer control) it makes the settings struct (clap `Args` for `render`
-//! and `view`, serde for the stats and the viewer's files, `Default` from the same defaults), its
-//! viewer controls (`CONTROLS`, drawn by the app) and its bench lists (`bench --NAME a,b,c`: one
-//! `Vec` a knob, `configs()` every combination), so a knob is one field, not five.
+//! Settings declared once. From one list of fields (doc, type, default, value parser or clap
+//! attributes, optionally its viewer control) a macro makes the settings struct (clap `Args` for
+//! `render` and `view`, serde for the stats, the CSVs and the viewer's files, `DEFAULT` and
+//! `Default` from the same defaults), its viewer controls (`CONTROLS`, drawn by the app through
+//! `control` and `set_control`) and, where asked, its bench lists (`bench --NAME a,b,c`), so a
+//! setting is one field, not five.
 //!
-//! `listed!` does the same for a settings type whose fields need their own clap and serde
-//! attributes (`ClusterSettings`): the struct is written as it is, and a field marked `=> list
-//! "help"` also gets its bench list (same type, same value parser unless the list names its own,
-//! its default list and `--quick`'s), its resolution (`resolve`) and its combinations
-//! (`configs`).
+//! - `knobs!`: a method's knobs (each field `name: Type = default, parse parser`).
+//! - `declared!`: a settings type whose fields carry their own clap and serde attributes
+//!   (`FrameSettings`): `pub name: Type = default[, ui "label" widget[, if |s| enabled][,
+//!   paper_only = true]],`.
+//! - `listed!`: `declared!` plus bench lists (`ClusterSettings`): a field marked `=> list "help"`
+//!   also gets its bench list (same type, same value parser unless the list names its own, its
+//!   default list and `--quick`'s), its resolution (`resolve`) and its combinations (`configs`).
 
 /// Declares `$Settings` and `$Lists` (see the module). Each field: its doc comment, then
 /// `name: Type = default, parse parser[, sweep [a, b]][, ui "label" control];` with
@@ -61,8 +64,38 @@ macro_rules! knobs {
                     name: stringify!($field),
                     label: $label,
                     widget: $control,
+                    paper_only: false,
                 },
             )?)+];
+
+            /// Control `name`'s value (its field's serde value); `None` for a knob without one.
+            pub fn control(&self, name: &str) -> Option<serde_json::Value> {
+                match name {
+                    $($(stringify!($field) => {
+                        let _ = $label;
+                        serde_json::to_value(&self.$field).ok()
+                    })?)+
+                    _ => None,
+                }
+            }
+
+            /// Sets control `name` from a serde value; false (and nothing set) when the value
+            /// is not one of the field's or its value parser refuses it.
+            pub fn set_control(&mut self, name: &str, v: serde_json::Value) -> bool {
+                match name {
+                    $($(stringify!($field) => {
+                        let _ = $label;
+                        match serde_json::from_value::<$ty>(v) {
+                            Ok(x) if $parser(&x.to_string()).is_ok() => {
+                                self.$field = x;
+                                true
+                            }
+                            _ => false,
+                        }
+                    })?)+
+                    _ => false,
+                }
+            }
 
             /// Knob `name`'s value as text (as `values` writes it); `None` when `name` is not
             /// one of these knobs.
@@ -139,24 +172,22 @@ macro_rules! knobs {
 
 pub(crate) use knobs;
 
-/// Declares `$Settings` as written and `$Lists`, its bench lists (see the module). A listed field:
-/// `pub name: Type => list "help" (clap arguments of the list) [default [a, b]] [quick [c]],`;
-/// an unlisted field: `pub name: Type,`. The list's value parser is its own clap arguments' (none:
-/// clap's for the type).
-macro_rules! listed {
+/// Declares `$Settings` as written, its fields' defaults given beside them (see the module): a
+/// field is `pub name: Type = default[, ui "label" widget[, if |s| enabled][, paper_only = true]]`, then
+/// optionally `=> list ...` (read by `listed!`, ignored here), then `,`.
+macro_rules! declared {
     (
         $(#[$smeta:meta])*
         pub struct $Settings:ident {
             $(
                 $(#[$fmeta:meta])*
-                pub $field:ident: $ty:ty
+                pub $field:ident: $ty:ty = $default:expr
+                $(, ui $label:literal $widget:expr $(, if $when:expr)? $(, paper_only = $paper_only:literal)?)?
                 $(=> list $help:literal ($($larg:tt)*)
-                    $(default [$($default:expr),+])?
+                    $(default [$($ldefault:expr),+])?
                     $(quick [$($quick:expr),+])?)?,
             )+
         }
-        $(#[$lmeta:meta])*
-        pub struct $Lists:ident, heading $heading:expr;
     ) => {
         $(#[$smeta])*
         pub struct $Settings {
@@ -166,6 +197,118 @@ macro_rules! listed {
             )+
         }
 
+        impl Default for $Settings {
+            fn default() -> Self {
+                Self::DEFAULT
+            }
+        }
+
+        impl $Settings {
+            /// The defaults, declared once beside the fields: the options' defaults
+            /// (`default_value_t = DEFAULT.field`) and `Default`.
+            pub const DEFAULT: $Settings = $Settings {
+                $($field: $default,)+
+            };
+
+            /// The settings the viewer shows, each with its label and widget, in order; the
+            /// viewer draws them from this.
+            pub const CONTROLS: &'static [$crate::settings::KnobWidget] = &[$($(
+                $crate::settings::KnobWidget {
+                    name: stringify!($field),
+                    label: $label,
+                    widget: $widget,
+                    paper_only: false $(|| $paper_only)?,
+                },
+            )?)+];
+
+            /// Control `name`'s value (its field's serde value); `None` for a field without one.
+            pub fn control(&self, name: &str) -> Option<serde_json::Value> {
+                match name {
+                    $($(stringify!($field) => {
+                        let _ = $label;
+                        serde_json::to_value(&self.$field).ok()
+                    })?)+
+                    _ => None,
+                }
+            }
+
+            /// Sets control `name` from a serde value; false (and nothing set) when the value is
+            /// not one of the field's.
+            pub fn set_control(&mut self, name: &str, v: serde_json::Value) -> bool {
+                let _ = &v;
+                match name {
+                    $($(stringify!($field) => {
+                        let _ = $label;
+                        match serde_json::from_value::<$ty>(v) {
+                            Ok(x) => {
+                                self.$field = x;
+                                true
+                            }
+                            Err(_) => false,
+                        }
+                    })?)+
+                    _ => false,
+                }
+            }
+
+            /// Whether control `name` applies with the other settings as they are (a field's
+            /// `if`; true without one).
+            pub fn control_enabled(&self, name: &str) -> bool {
+                match name {
+                    $($(stringify!($field) => {
+                        let _ = $label;
+                        true $(&& {
+                            let enabled: fn(&$Settings) -> bool = $when;
+                            enabled(self)
+                        })?
+                    })?)+
+                    _ => true,
+                }
+            }
+        }
+    };
+}
+
+pub(crate) use declared;
+
+/// Declares `$Settings` with `declared!` and `$Lists`, its bench lists (see the module). A listed
+/// field ends `=> list "help" (clap arguments of the list) [default [a, b]] [quick [c]],`. The
+/// list's value parser is its own clap arguments' (none: clap's for the type).
+macro_rules! listed {
+    (
+        $(#[$smeta:meta])*
+        pub struct $Settings:ident { $($body:tt)* }
+        $(#[$lmeta:meta])*
+        pub struct $Lists:ident, heading $heading:expr;
+    ) => {
+        $crate::settings::knobs::declared! {
+            $(#[$smeta])*
+            pub struct $Settings { $($body)* }
+        }
+        $crate::settings::knobs::lists_of! {
+            $Settings { $($body)* }
+            $(#[$lmeta])*
+            pub struct $Lists, heading $heading;
+        }
+    };
+}
+
+/// `listed!`'s bench lists of `$Settings`' fields marked `=> list`.
+macro_rules! lists_of {
+    (
+        $Settings:ident {
+            $(
+                $(#[$fmeta:meta])*
+                pub $field:ident: $ty:ty = $fdefault:expr
+                $(, ui $label:literal $widget:expr $(, if $when:expr)? $(, paper_only = $paper_only:literal)?)?
+                $(=> list $help:literal ($($larg:tt)*)
+                    $(default [$($default:expr),+])?
+                    $(quick [$($quick:expr),+])?)?,
+            )+
+        }
+        $(#[$lmeta:meta])*
+        pub struct $Lists:ident, heading $heading:expr;
+    ) => {
         $(#[$lmeta])*
         #[derive(Clone, Debug, Default, PartialEq)]
         #[cfg_attr(feature = "cli", derive(clap::Args))]
@@ -236,6 +379,8 @@ macro_rules! listed {
     };
 }
 
+pub(crate) use lists_of;
+
 pub(crate) use listed;
 
 #[cfg(test)]
@@ -270,6 +415,7 @@ mod tests {
             name: "b",
             label: "the b",
             widget: super::super::Widget::log(0.1, 1.0),
+            paper_only: false,
         };
         assert_eq!(Pair::CONTROLS, &[c]);
         assert_eq!(Pair::default().get("b").as_deref(), Some("0.5"));
@@ -292,6 +438,82 @@ mod tests {
         // serde: the field names, and a missing field takes its default.
         let j: Pair = serde_json::from_str(r#"{"a": 5}"#).unwrap();
         assert_eq!(j, Pair { a: 5, b: 0.5 });
+        // The control's value is the field's serde value, set through the value parser.
+        let mut p = Pair::default();
+        assert_eq!(p.control("b"), Some(serde_json::json!(0.5)));
+        assert!(p.set_control("b", serde_json::json!(0.25)));
+        assert!(
+            !p.set_control("b", serde_json::json!(2.0)),
+            "the parser refuses 2"
+        );
+        assert!(!p.set_control("b", serde_json::json!("x")));
+        assert_eq!(p, Pair { a: 3, b: 0.25 });
+        assert_eq!(p.control("a"), None, "a declares no control");
+    }
+
+    use super::super::{Off, Widget};
+
+    declared! {
+        /// A group declared once, with its defaults and controls.
+        #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+        #[serde(default)]
+        pub struct Group {
+            /// On or off.
+            pub on: bool = true, ui "on" Widget::Toggle,
+            /// A count that applies when on; 0 is off.
+            pub n: u32 = 3, ui "n" Widget::or("off", Off::Zero, Widget::int(1, 9), 2.0), if |g| g.on,
+                paper_only = true,
+            /// No control.
+            pub hidden: f32 = 0.5,
+        }
+    }
+
+    /// `declared!`: the defaults beside the fields give `DEFAULT` and `Default`; the controls'
+    /// values are the fields' serde values; `if` and `paper_only` reach the viewer.
+    #[test]
+    fn one_declaration_gives_defaults_and_controls() {
+        let d = Group {
+            on: true,
+            n: 3,
+            hidden: 0.5,
+        };
+        assert_eq!((Group::DEFAULT, Group::default()), (d.clone(), d.clone()));
+        let names: Vec<_> = Group::CONTROLS
+            .iter()
+            .map(|c| (c.name, c.paper_only))
+            .collect();
+        assert_eq!(names, [("on", false), ("n", true)]);
+        assert_eq!(
+            Group::CONTROLS[1].widget,
+            Widget::Or {
+                word: "off",
+                off: Off::Zero,
+                lo: 1.0,
+                hi: 9.0,
+                log: false,
+                integer: true,
+                start: 2.0
+            }
+        );
+        let mut g = d.clone();
+        assert_eq!(g.control("n"), Some(serde_json::json!(3)));
+        assert!(Off::Zero.is(&serde_json::json!(0)) && !Off::Zero.is(&serde_json::json!(3)));
+        assert!(g.set_control("n", Off::Zero.value()));
+        assert_eq!(g.n, 0);
+        assert!(g.set_control("n", Widget::number(true, 6.6)));
+        assert_eq!(g.n, 7);
+        assert!(
+            !g.set_control("n", serde_json::json!(2.5)),
+            "a u32 is not 2.5"
+        );
+        assert!(!g.set_control("n", serde_json::json!("x")));
+        assert_eq!(
+            (g.control("hidden"), g.set_control("hidden", 1.into())),
+            (None, false)
+        );
+        assert!(g.control_enabled("n") && g.control_enabled("on"));
+        assert!(g.set_control("on", false.into()));
+        assert!(!g.control_enabled("n"), "n applies only when on");
     }
 
     /// With the feature `cli`, the same declaration is the command line: defaults, parsing with

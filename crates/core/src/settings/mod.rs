@@ -12,11 +12,13 @@
 //! Ranges are checked by the value parsers below; a value out of range is refused by clap with one
 //! line naming the option and the value, exit 2 (`cli::parse`).
 
+mod control;
 mod knobs;
 pub mod paper;
 mod parse;
+pub use control::*;
 pub(crate) use knobs::knobs;
-use knobs::listed;
+use knobs::{declared, listed};
 pub use parse::*;
 use std::fmt;
 use std::str::FromStr;
@@ -39,61 +41,6 @@ impl std::error::Error for Invalid {}
 
 pub fn invalid<T>(msg: impl Into<String>) -> Result<T, Invalid> {
     Err(Invalid(msg.into()))
-}
-
-/// How the viewer shows a knob: the core describes it, the app draws it (the core knows no UI
-/// toolkit). The value goes through the knob's text (`get`, and `set` with its value parser).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Widget {
-    /// A slider over [lo, hi]; `log`: a logarithmic scale; `integer`: whole numbers.
-    Slider {
-        lo: f64,
-        hi: f64,
-        log: bool,
-        integer: bool,
-    },
-    /// One of these values (each the knob's text, as its parser reads it, and its label).
-    Choice(&'static [(&'static str, &'static str)]),
-}
-
-impl Widget {
-    /// Whole numbers in [lo, hi] on a linear slider.
-    pub const fn int(lo: u32, hi: u32) -> Widget {
-        Widget::Slider {
-            lo: lo as f64,
-            hi: hi as f64,
-            log: false,
-            integer: true,
-        }
-    }
-
-    /// Whole numbers in [lo, hi] on a logarithmic slider.
-    pub const fn int_log(lo: u32, hi: u32) -> Widget {
-        Widget::Slider {
-            lo: lo as f64,
-            hi: hi as f64,
-            log: true,
-            integer: true,
-        }
-    }
-
-    /// Numbers in [lo, hi] on a logarithmic slider.
-    pub const fn log(lo: f64, hi: f64) -> Widget {
-        Widget::Slider {
-            lo,
-            hi,
-            log: true,
-            integer: false,
-        }
-    }
-}
-
-/// A knob in the viewer: its field name (its option and column), its label and its widget.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct KnobWidget {
-    pub name: &'static str,
-    pub label: &'static str,
-    pub widget: Widget,
 }
 
 /// How a pixel's F SP clusters combine their visibility.
@@ -317,38 +264,53 @@ listed! {
 pub struct ClusterSettings {
     /// K of the shading-point clustering (0 = no SP clustering; off when ≥ the pixel count).
     #[cfg_attr(feature = "cli", arg(long, default_value_t = ClusterSettings::DEFAULT.sp_clusters))]
-    pub sp_clusters: u32 => list "SP cluster counts (default 768,1536,3072; quick 48,96)." ()
+    pub sp_clusters: u32 = 3072,
+        ui "K (SP clusters)" Widget::or("off", Off::Zero, Widget::int_log(1, 16384), 3072.0)
+        => list "SP cluster counts (default 768,1536,3072; quick 48,96)." ()
         default [768, 1536, 3072] quick [48, 96],
     /// K of the VPL clustering (0 = no VPL clustering; off when ≥ --vpls).
     #[cfg_attr(feature = "cli", arg(long, default_value_t = ClusterSettings::DEFAULT.vpl_clusters))]
-    pub vpl_clusters: u32 => list "VPL cluster counts (default 1024; quick 128)." () quick [128],
+    pub vpl_clusters: u32 = 1024,
+        ui "K_VPL" Widget::or("off", Off::Zero, Widget::int_log(1, 16384), 1024.0)
+        => list "VPL cluster counts (default 1024; quick 128)." () quick [128],
     /// F: SP clusters per pixel (fuzziness), 1..16 (hard weighting uses 1).
     #[cfg_attr(feature = "cli", arg(long, default_value_t = ClusterSettings::DEFAULT.fuzziness, value_parser = parse_fuzziness))]
-    pub fuzziness: u32 => list "F values, 1..16 (default 6)." (value_parser = parse_fuzziness),
+    pub fuzziness: u32 = 6,
+        ui "F (fuzziness)" Widget::int(1, 16), if |c| c.weighting != Weighting::Hard, paper_only = true
+        => list "F values, 1..16 (default 6)." (value_parser = parse_fuzziness),
     /// γ: SP downsampling factor for the k-means iterations, or `auto`: the largest γ in 4..16 that
     /// keeps 40 sampled points a cluster and 19,200 in all. Either way at most pixels / K, so that at
     /// least K points are sampled.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = ClusterSettings::DEFAULT.gamma, value_parser = parse_gamma))]
-    pub gamma: Gamma => list "γ values: `auto` (the default: the largest γ in 4..16 that keeps 40 \
+    pub gamma: Gamma = Gamma::Auto,
+        ui "γ (downsampling)" Widget::or("auto", Off::Name("auto"), Widget::int(1, 16), 4.0)
+        => list "γ values: `auto` (the default: the largest γ in 4..16 that keeps 40 \
         sampled points a cluster and 19,200 in all) or factors of at least 1, e.g. auto,4,16."
         (value_parser = parse_gamma),
     /// n_t of Eq. (7): cosine of the largest normal angle within a cluster, in [-1, 1] (Eq. 7's test
     /// is strict, so 1 is read as 1 - 2^-20: the same normal only).
     #[cfg_attr(feature = "cli", arg(long, default_value_t = ClusterSettings::DEFAULT.normal_threshold, value_parser = parse_normal_threshold))]
-    pub normal_threshold: f32 => list "n_t values of Eq. (7), cosines in [-1, 1] (default 0.866)."
+    pub normal_threshold: f32 = 0.866, ui "n_t" Widget::Cosine
+        => list "n_t values of Eq. (7), cosines in [-1, 1] (default 0.866)."
         (value_parser = parse_normal_threshold, allow_hyphen_values = true),
     /// k-means iterations (Alg. 1), 0..=1000.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = ClusterSettings::DEFAULT.iterations, value_parser = parse_iterations))]
-    pub iterations: u32 => list "k-means iterations (default 10)." (value_parser = parse_iterations),
+    pub iterations: u32 = 10, ui "k-means iterations" Widget::int(0, 50)
+        => list "k-means iterations (default 10)." (value_parser = parse_iterations),
     /// How a pixel's F clusters combine visibility: hard (F = 1), uniform (Eq. 8), inverse-distance
     /// (Eq. 9).
     #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = ClusterSettings::DEFAULT.weighting))]
-    pub weighting: Weighting,
+    pub weighting: Weighting = Weighting::InverseDistance,
+        ui "weighting" Widget::Choice(&[("hard", "hard"), ("uniform", "fuzzy (uniform)"),
+            ("inverse-distance", "weighted")]), paper_only = true,
     /// p of the inverse-distance weights, w'_f = dist^-p: 1 is Eq. (10); larger p falls off faster
     /// (the paper's §6 suggestion), 0 is Eq. (8)'s plain mean (but a point on a centroid still takes
     /// it alone), 64 is nearly hard clustering. [0, 64].
     #[cfg_attr(feature = "cli", arg(long, default_value_t = ClusterSettings::DEFAULT.weight_exponent, value_parser = parse_weight_exponent))]
-    pub weight_exponent: f32 => list "p values of the inverse-distance weights w'_f = dist^-p, for \
+    pub weight_exponent: f32 = 1.0,
+        ui "p (weights = dist^-p; Eq. 10: 1)" Widget::linear(0.0, 8.0), if |c| c.weighting == Weighting::InverseDistance,
+        paper_only = true
+        => list "p values of the inverse-distance weights w'_f = dist^-p, for \
         weighted and sp-only (default 1, Eq. 10)." (value_parser = parse_weight_exponent),
     /// Not in the paper (off by default): the fuzzy modes' slots 2..F keep only SP clusters whose
     /// centroid lies within DEG degrees of the pixel's tangent plane, seen from the pixel. Eq. (7)
@@ -356,61 +318,75 @@ pub struct ClusterSettings {
     /// it (docs/clustering.md, "The plane gate"). (0, 90].
     #[cfg_attr(feature = "cli", arg(long = "plane-gate", value_name = "DEG", value_parser = parse_plane_gate))]
     #[serde(rename = "plane_gate_deg", skip_serializing_if = "Option::is_none")]
-    pub plane_gate: Option<f32> => list "Plane gates of the fuzzy modes' F lists: `off` (the paper, \
+    pub plane_gate: Option<f32> = None,
+        ui "plane gate (°)" Widget::or("off", Off::Null, Widget::linear(1.0, 90.0), DEFAULT_PLANE_GATE_DEG as f64),
+        if |c| c.weighting != Weighting::Hard, paper_only = true
+        => list "Plane gates of the fuzzy modes' F lists: `off` (the paper, \
         default) or angles in degrees, e.g. off,20 (see render --plane-gate)."
         (value_parser = parse_plane_gate_or_off),
     /// Eq. (10) weights from the distances to the SP clusters' representatives (the paper's text)
     /// instead of their centroids (Alg. 2).
     #[cfg_attr(feature = "cli", arg(long))]
-    pub weights_to_reps: bool,
+    pub weights_to_reps: bool = false,
+        ui "weights to representatives" Widget::Toggle, if |c| c.weighting == Weighting::InverseDistance, paper_only = true,
     /// Temporal reuse (on|off): each frame's SP clustering starts from the previous one's centroids
     /// where the view still sees them, the VPL clustering from its last centroids when the lights
     /// change (docs/temporal.md). A single `render` has no past: only --repeat's later renders reuse.
     #[cfg_attr(feature = "cli", arg(long, default_value = on_off(ClusterSettings::DEFAULT.temporal), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set))]
-    pub temporal: bool,
+    pub temporal: bool = false, ui "temporal reuse" Widget::Toggle,
     /// With temporal reuse on: the weight of a new frame's indirect light once a surface point's
     /// history is long (it is the plain mean over the point's first frames). Each pixel's surface
     /// point is found in the previous frame and the indirect light blended there, an exponential
     /// moving average over about 1/α frames (docs/temporal.md, "Accumulation"). 1: no
     /// accumulation. (0, 1].
     #[cfg_attr(feature = "cli", arg(long, default_value_t = ClusterSettings::DEFAULT.temporal_alpha, value_name = "ALPHA", value_parser = parse_temporal_alpha))]
-    pub temporal_alpha: f32,
+    pub temporal_alpha: f32 = 0.7,
+        ui "α (indirect history)" Widget::linear(0.05, 1.0), if |c| c.temporal,
     /// Not in the paper (off by default): step 5 traces only representative pairs that face each
     /// other (both cosines positive) and leaves the others' V at 0. The paper's V is pure
     /// visibility; Eq. (6) applies each pixel's own cosines (docs/clustering.md, "V and the facing
     /// test").
     #[cfg_attr(feature = "cli", arg(long, default_value = on_off(ClusterSettings::DEFAULT.visibility_facing), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set))]
-    pub visibility_facing: bool,
+    pub visibility_facing: bool = false, ui "facing test" Widget::Toggle, paper_only = true,
     /// How a VPL cluster lights a point: `point` (the paper's Eq. 6: its representative VPL with
     /// the members' summed flux) or `spread` (not in the paper, the default: the other members'
     /// share of the flux is evaluated no closer than their RMS distance from the representative;
     /// docs/clustering.md, "VPL clusters as lights").
     #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = ClusterSettings::DEFAULT.cluster_light))]
-    pub cluster_light: ClusterLight => list "VPL-cluster lights: point (the paper), spread (default), \
+    pub cluster_light: ClusterLight = ClusterLight::Spread,
+        ui "cluster lights" Widget::Choice(&[("point", "point (paper)"), ("spread", "spread")])
+        => list "VPL-cluster lights: point (the paper), spread (default), \
         e.g. point,spread." (value_enum),
     /// Not in the paper (on by default): Alg. 1 re-seeds an empty cluster at a sampled point no
     /// centroid within reach accepts (an orphan), or else at a drawn sampled point
     /// (docs/clustering.md, "Surfaces without a cluster"). off: an empty cluster stays empty.
     #[cfg_attr(feature = "cli", arg(long, default_value = on_off(ClusterSettings::DEFAULT.reseed), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set))]
-    pub reseed: bool => list "Re-seeding of empty clusters: on (default), off (the paper)."
+    pub reseed: bool = true, ui "re-seed" Widget::Toggle, paper_only = true
+        => list "Re-seeding of empty clusters: on (default), off (the paper)."
         (value_parser = parse_on_off),
     /// Not in the paper (on by default): a point with no centroid passing n_t in the 27 cells
     /// around it searches rings of cells further out (3 while iterating, 4 in the final
     /// assignment). off: the 27 cells only, as Alg. 1 and 2 (docs/clustering.md, "Fallbacks").
     #[cfg_attr(feature = "cli", arg(long, default_value = on_off(ClusterSettings::DEFAULT.ring_fallback), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set))]
-    pub ring_fallback: bool => list "Ring fallback of the search: on (default), off (the paper)."
+    pub ring_fallback: bool = true, ui "rings" Widget::Toggle, paper_only = true
+        => list "Ring fallback of the search: on (default), off (the paper)."
         (value_parser = parse_on_off),
     /// Not in the paper (on by default): a point the final assignment finds no centroid passing
     /// n_t for takes the nearest centroid by position alone. off: it stays without a cluster (to
     /// Eq. 7 it is at distance ∞ from every centroid) and gets no indirect light from SP clusters.
     #[cfg_attr(feature = "cli", arg(long, default_value = on_off(ClusterSettings::DEFAULT.position_fallback), value_name = "on|off", value_parser = parse_on_off, action = clap::ArgAction::Set))]
-    pub position_fallback: bool => list "Position-only fallback of the final assignment: on \
+    pub position_fallback: bool = true,
+        ui "by position" Widget::Toggle, paper_only = true
+        => list "Position-only fallback of the final assignment: on \
         (default), off (the paper)." (value_parser = parse_on_off),
     /// A centroid's normal (Alg. 1 line 18): `normalised` (the default: the members' mean normal
     /// scaled to unit length) or `mean` (the paper's value / counter: the plain mean, shorter than 1
     /// where the members' normals differ, which Eq. 7's test n · n_c > n_t then reads as is).
     #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = ClusterSettings::DEFAULT.centroid_normal))]
-    pub centroid_normal: CentroidNormal => list "Centroid normals: normalised (default), mean (the \
+    pub centroid_normal: CentroidNormal = CentroidNormal::Normalised,
+        ui "centroid normals" Widget::Choice(&[("normalised", "unit"), ("mean", "mean (paper)")]),
+        paper_only = true
+        => list "Centroid normals: normalised (default), mean (the \
         paper)." (value_enum),
     /// Every setting at the paper's choice (docs/clustering.md, "The paper exactly"): point cluster
     /// lights, no re-seeding, no fallbacks, mean centroid normals, n_t = √3/2, F 6, inverse-distance
@@ -418,52 +394,22 @@ pub struct ClusterSettings {
     /// intermediate setting (8k of 1024×720 pixels, 2k of 8000 VPLs), no G-term clamp, no plane
     /// gate, facing test or temporal reuse. An option given on the command line wins over it.
     #[cfg_attr(feature = "cli", arg(long))]
-    pub paper: bool,
+    pub paper: bool = false,
     /// A GPU-time budget for the frame in ms (> 0): K_SP and K_VPL are chosen to meet it (`render`:
     /// a few frames adjusting them, K_SP following K_VPL on a line through the paper's intermediate
     /// setting; `view`: adjusted while
     /// the view changes). --sp-clusters and --vpl-clusters then only say which clusterings run.
     #[cfg_attr(feature = "cli", arg(long, value_name = "MS", value_parser = parse_target_ms))]
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub target_ms: Option<f64>,
+    pub target_ms: Option<f64> = None,
+        ui "time budget (ms)" Widget::or("off", Off::Null, Widget::log(1.0, 100000.0), 500.0),
 }
 /// `bench`'s lists of the `ClusterSettings` it sweeps: a configuration takes one value of each
 /// (`resolve` fills the empty ones, `configs` multiplies them out).
 pub struct ClusterLists, heading "Sweep (comma-separated lists)";
 }
 
-impl Default for ClusterSettings {
-    fn default() -> Self {
-        ClusterSettings::DEFAULT
-    }
-}
-
 impl ClusterSettings {
-    /// The defaults, declared once: the options' defaults (`default_value_t = DEFAULT.field`) and
-    /// `Default`.
-    pub const DEFAULT: ClusterSettings = ClusterSettings {
-        sp_clusters: 3072,
-        vpl_clusters: 1024,
-        fuzziness: 6,
-        gamma: Gamma::Auto,
-        normal_threshold: 0.866,
-        iterations: 10,
-        weighting: Weighting::InverseDistance,
-        weight_exponent: 1.0,
-        plane_gate: None,
-        weights_to_reps: false,
-        temporal: false,
-        temporal_alpha: 0.7,
-        visibility_facing: false,
-        cluster_light: ClusterLight::Spread,
-        reseed: true,
-        ring_fallback: true,
-        position_fallback: true,
-        centroid_normal: CentroidNormal::Normalised,
-        paper: false,
-        target_ms: None,
-    };
-
     /// F in effect: 1 for hard clustering.
     pub fn f(&self) -> u32 {
         if self.weighting == Weighting::Hard {
@@ -552,6 +498,7 @@ pub fn plane_gate_sine(deg: Option<f32>) -> f32 {
     deg.map_or(2.0, |d| d.clamp(0.0, 90.0).to_radians().sin())
 }
 
+declared! {
 /// What a frame is: its size, random seed, VPLs, bounce budget, direct-light samples, exposure and
 /// G-term clamp.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -561,31 +508,31 @@ pub fn plane_gate_sine(deg: Option<f32>) -> f32 {
 pub struct FrameSettings {
     /// Image width, 1..16384.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.width, value_parser = parse_side))]
-    pub width: u32,
+    pub width: u32 = 640,
     /// Image height, 1..16384.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.height, value_parser = parse_side))]
-    pub height: u32,
+    pub height: u32 = 480,
     #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.seed))]
-    pub seed: u32,
+    pub seed: u32 = 1,
     /// Number of VPLs (traced once, resident).
     #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.vpls))]
-    pub vpls: u32,
+    pub vpls: u32 = 8192, ui "VPLs" Widget::int_log(0, 65536),
     /// Indirect bounce budget: the most VPLs a light path deposits (the path tracer gets the same),
     /// 1..64.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.bounces, value_parser = parse_bounces))]
-    pub bounces: u32,
+    pub bounces: u32 = MAX_DEPTH,
     /// Area-light samples (shadow rays) per pixel for direct light, 1..=65536.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.direct_samples, value_parser = parse_direct_samples))]
-    pub direct_samples: u32,
+    pub direct_samples: u32 = 16,
     /// Exposure of PNG images and the viewer: `auto` (the default: the image's log-average
     /// luminance is shown as middle grey 0.18, Reinhard et al. 2002) or a factor >= 0. EXR stays
     /// linear, unscaled radiance.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.exposure, value_parser = parse_exposure))]
-    pub exposure: Exposure,
+    pub exposure: Exposure = Exposure::Auto,
     /// G-term clamp: the VPL distance in 1/d² is at least CLAMP × scene diagonal (scale-free),
     /// [0, 1).
     #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.clamp, value_parser = parse_clamp))]
-    pub clamp: f32,
+    pub clamp: f32 = DEFAULT_CLAMP, ui "G-term clamp" Widget::log(0.0, 0.2),
     /// The indirect light's resolution as a fraction of the image's, (0, 1]: below 1 the
     /// primary rays and the direct light stay at the image's size and the indirect light is
     /// computed on a G-buffer of this scale, then upsampled with depth- and normal-aware weights
@@ -594,34 +541,15 @@ pub struct FrameSettings {
     /// Written to the stats only when not 1.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = FrameSettings::DEFAULT.indirect_scale, value_parser = parse_indirect_scale))]
     #[serde(skip_serializing_if = "is_one")]
-    pub indirect_scale: f32,
+    pub indirect_scale: f32 = 1.0,
+}
 }
 
 fn is_one(x: &f32) -> bool {
     *x == 1.0
 }
 
-impl Default for FrameSettings {
-    fn default() -> Self {
-        FrameSettings::DEFAULT
-    }
-}
-
 impl FrameSettings {
-    /// The defaults, declared once: the options' defaults (`default_value_t = DEFAULT.field`) and
-    /// `Default`.
-    pub const DEFAULT: FrameSettings = FrameSettings {
-        width: 640,
-        height: 480,
-        seed: 1,
-        vpls: 8192,
-        bounces: MAX_DEPTH,
-        direct_samples: 16,
-        exposure: Exposure::Auto,
-        clamp: DEFAULT_CLAMP,
-        indirect_scale: 1.0,
-    };
-
     pub fn pixels(&self) -> u32 {
         self.width * self.height
     }
@@ -680,6 +608,23 @@ impl Default for LightSettings {
     fn default() -> Self {
         LightSettings::DEFAULT
     }
+}
+
+/// The default warm-up before timing, in ms of GPU work (`TimingSettings::warmup_ms`).
+pub const WARMUP_MS: f64 = 200.0;
+
+declared! {
+/// How GPU times are taken (`render`, `bench`, `bench --camera-path`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+#[cfg_attr(feature = "cli", command(next_help_heading = "Timing"))]
+#[serde(default)]
+pub struct TimingSettings {
+    /// Milliseconds of GPU work before the timed renders (a busy kernel, crates/core/src/gpu/warmup.rs), so
+    /// the GPU runs at its working clock; before each camera-path frame too. 0: none.
+    #[cfg_attr(feature = "cli", arg(long, value_name = "MS", default_value_t = TimingSettings::DEFAULT.warmup_ms, value_parser = parse_warmup_ms))]
+    pub warmup_ms: f64 = WARMUP_MS,
+}
 }
 
 #[cfg(test)]
@@ -923,39 +868,75 @@ mod tests {
         assert!(j.contains("\"indirect_scale\":0.5"), "{j}");
         assert_eq!(serde_json::from_str::<FrameSettings>(&j).unwrap(), half);
     }
-}
 
-/// The default warm-up before timing, in ms of GPU work (`TimingSettings::warmup_ms`).
-pub const WARMUP_MS: f64 = 200.0;
-
-/// How GPU times are taken (`render`, `bench`, `bench --camera-path`).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[cfg_attr(feature = "cli", derive(clap::Args))]
-#[cfg_attr(feature = "cli", command(next_help_heading = "Timing"))]
-#[serde(default)]
-pub struct TimingSettings {
-    /// Milliseconds of GPU work before the timed renders (a busy kernel, crates/core/src/gpu/warmup.rs), so
-    /// the GPU runs at its working clock; before each camera-path frame too. 0: none.
-    #[cfg_attr(feature = "cli", arg(long, value_name = "MS", default_value_t = TimingSettings::DEFAULT.warmup_ms, value_parser = parse_warmup_ms))]
-    pub warmup_ms: f64,
-}
-
-impl TimingSettings {
-    /// The defaults, declared once (the options' and `Default`).
-    pub const DEFAULT: TimingSettings = TimingSettings {
-        warmup_ms: WARMUP_MS,
-    };
-}
-
-impl Default for TimingSettings {
-    fn default() -> Self {
-        TimingSettings::DEFAULT
-    }
-}
-
-pub fn parse_warmup_ms(v: &str) -> Result<f64, String> {
-    match v.parse::<f64>() {
-        Ok(ms) if (0.0..=60_000.0).contains(&ms) => Ok(ms),
-        _ => Err(format!("{v}: milliseconds from 0 to 60000")),
+    /// Every control the settings declare reads its field and takes back each value its widget
+    /// can give: its value as read, each choice, the word of an `Or`, and the slider's ends.
+    #[test]
+    fn every_declared_control_takes_what_its_widget_gives() {
+        fn check<T: Clone + PartialEq + fmt::Debug>(
+            s: &T,
+            controls: &[KnobWidget],
+            get: impl Fn(&T, &str) -> Option<serde_json::Value>,
+            set: impl Fn(&mut T, &str, serde_json::Value) -> bool,
+        ) {
+            for c in controls {
+                let v = get(s, c.name).unwrap_or_else(|| panic!("{}: no value", c.name));
+                let mut t = s.clone();
+                assert!(set(&mut t, c.name, v.clone()), "{}: {v}", c.name);
+                assert_eq!(&t, s, "{}: its own value changes nothing", c.name);
+                let mut gives = vec![];
+                match c.widget {
+                    Widget::Choice(values) => gives.extend(values.iter().map(|v| v.0.into())),
+                    Widget::Toggle => gives.extend([true.into(), false.into()]),
+                    Widget::Slider {
+                        lo, hi, integer, ..
+                    } => gives.extend([Widget::number(integer, lo), Widget::number(integer, hi)]),
+                    Widget::Or {
+                        off,
+                        lo,
+                        hi,
+                        integer,
+                        ..
+                    } => gives.extend([
+                        off.value(),
+                        Widget::number(integer, lo),
+                        Widget::number(integer, hi),
+                    ]),
+                    Widget::Cosine => gives.extend([1.0.into(), (-1.0).into(), 0.5.into()]),
+                }
+                for g in gives {
+                    let mut t = s.clone();
+                    assert!(set(&mut t, c.name, g.clone()), "{}: {g}", c.name);
+                    assert_eq!(
+                        get(&t, c.name).as_ref().map(|v| v.is_null()),
+                        Some(g.is_null())
+                    );
+                }
+            }
+        }
+        let c = ClusterSettings::default();
+        assert!(ClusterSettings::CONTROLS.len() >= 19);
+        check(
+            &c,
+            ClusterSettings::CONTROLS,
+            |s, n| s.control(n),
+            |s, n, v| s.set_control(n, v),
+        );
+        let f = FrameSettings::default();
+        check(
+            &f,
+            FrameSettings::CONTROLS,
+            |s, n| s.control(n),
+            |s, n, v| s.set_control(n, v),
+        );
+        // The γ control's word is `auto`, a number a fixed γ.
+        let mut g = c.clone();
+        assert!(g.set_control("gamma", 8.into()));
+        assert_eq!(g.gamma, Gamma::Fixed(8));
+        assert!(g.set_control("gamma", "auto".into()));
+        assert_eq!(g.gamma, Gamma::Auto);
+        // F applies with fuzzy weightings only.
+        g.weighting = Weighting::Hard;
+        assert!(!g.control_enabled("fuzziness") && g.control_enabled("sp_clusters"));
     }
 }

@@ -126,3 +126,11 @@ pub fn parse_light_scale(v: &str) -> Result<f32, Invalid> {
         "must be a finite number >= 0",
     )
 }
+
+pub fn parse_warmup_ms(v: &str) -> Result<f64, Invalid> {
+    in_range(
+        v,
+        |ms: f64| (0.0..=60_000.0).contains(&ms),
+        "must be milliseconds from 0 to 60000",
+    )
+}
