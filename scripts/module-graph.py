@@ -4,8 +4,10 @@ application (src), as one graph (`crate::X` and `use crate::{X, ..}` outside
 `#[cfg(test)]` blocks), printed one module a line, and any cycle between them (exit 1 on a cycle).
 Also counts production imports of the CPU twins (`cpu::`, and a room's own `method::<m>::twin`;
 production is every file but `cpu/` and the rooms' `twin.rs`, outside `#[cfg(test)]`) and the
-files outside each method's folder that name it. A room's `twin.rs` is twin code: its imports are
-drawn as `cpu`'s."""
+files outside each method's folder that name it (any case, comments included), where a citation of
+its paper by its authors (`CITATIONS`: "Colom, Marques, Santos", "Colom et al.") names the paper,
+not the method, and is not counted. A room's `twin.rs` is twin code: its imports are drawn as
+`cpu`'s."""
 import collections
 import os
 import re
@@ -93,11 +95,18 @@ cycles = [s for s in sccs if len(s) > 1]
 print(f"cycles: {len(cycles)} {cycles if cycles else ''}")
 print(f"production imports of cpu:: or method::<m>::twin: {len(cpu_imports)} {cpu_imports if cpu_imports else ''}")
 methods = os.path.join(core, "method")
+# The citations of a method's paper by its authors, exactly as written (case-sensitive): they name
+# the paper, not the method.
+CITATIONS = {"colom": ["Colom, Marques, Santos", "Colom et al."]}
 for m in sorted(d for d in os.listdir(methods) if os.path.isdir(os.path.join(methods, d))):
     named = []
     for p, relpath in files():
         if not relpath.startswith(f"method{os.sep}{m}{os.sep}"):
-            if m in open(p).read().lower():
+            text = open(p).read()
+            for c in CITATIONS.get(m, []):
+                text = text.replace(c, "")
+            if m in text.lower():
                 named.append(relpath)
-    print(f"{m}: named in {len(named)} files outside method/{m}/: {', '.join(sorted(named))}")
+    cited = " (paper citations by author not counted)" if m in CITATIONS else ""
+    print(f"{m}: named in {len(named)} files outside method/{m}/{cited}: {', '.join(sorted(named))}")
 sys.exit(1 if cycles or cpu_imports else 0)

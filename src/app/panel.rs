@@ -384,8 +384,8 @@ impl Viewer {
                             "SPs {} · SP clusters {}",
                             f.shading_points, f.sp_clusters_used
                         ));
-                        // The method's report, key by key (colom's: SP iterations, warm start,
-                        // visibility rows reused).
+                        // The method's report, key by key (the paper's: SP iterations, warm
+                        // start, visibility rows reused).
                         let report = f.report.as_ref().and_then(|(_, v)| v.as_object());
                         for (key, v) in report.into_iter().flatten() {
                             ui.label(format!("{} {v}", key.replace('_', " ")));

@@ -314,7 +314,8 @@ fn command_line_values_beyond_the_sliders_survive_the_panel() {
 /// section), name the series and the screenshot files, and reach the frame settings.
 #[test]
 fn the_method_and_its_knobs_survive_the_panel() {
-    // colom's knobs are the paper's, drawn by the clustering controls (other tests).
+    // The room whose knobs are the paper's `ClusterSettings` is drawn by the clustering controls
+    // (other tests).
     for room in crate::method::ROOMS.iter().filter(|r| r.own_knobs) {
         let mut fs = RenderSettings::default();
         fs.method.method = room.method;
@@ -527,7 +528,7 @@ fn the_panel_driven_by_events() {
         click(&mut h, label);
         assert_eq!(h.state().s.cluster.weighting, w, "{label}");
     }
-    // Each method, colom (the first) last: each asks the worker for a frame of that method.
+    // Each method, the default (the first) last: each asks the worker for a frame of that method.
     let (mut choices, mut sliders) = (0, 0);
     for m in crate::method::Method::ALL.into_iter().rev() {
         let (choice, slider) = drive_method(&mut h, m);

@@ -360,12 +360,13 @@ pub fn pareto(path: &Path, title: &str, rows: &[Row]) -> Result<()> {
     scatter(path, title, &sel, short, true)
 }
 
-/// Colour of a method in `methods.png`: colom's is its default mode's, the others' their `mode`
-/// column's (the method's name).
+/// Colour of a method in `methods.png`: the method whose knobs are the paper's `ClusterSettings`
+/// (`Room::own_knobs` false) takes its default mode's ("weighted"), the others their `mode`
+/// column's (the method's name: its room's `colour`).
 pub fn method_colour(method: Method) -> RGBColor {
-    match method {
-        Method::Colom => mode_colour("weighted"),
-        m => mode_colour(m.name()),
+    match crate::method::room(method).own_knobs {
+        true => mode_colour(method.name()),
+        false => mode_colour("weighted"),
     }
 }
 
@@ -463,6 +464,23 @@ mod tests {
         assert_eq!(pareto_front(&p), vec![4, 0, 1, 3]);
         assert!(pareto_front(&[]).is_empty());
         assert_eq!(pareto_front(&[(1.0, 1.0)]), vec![0]);
+    }
+
+    /// Each method's colour in `methods.png`: a room with its own knobs its room's `colour`, the
+    /// paper's (the default) the weighted mode's; no two methods share one.
+    #[test]
+    fn method_colours_are_the_rooms() {
+        let mut seen = Vec::new();
+        for r in crate::method::ROOMS {
+            let c = method_colour(r.method);
+            match r.own_knobs {
+                true => assert_eq!(c, RGBColor(r.colour[0], r.colour[1], r.colour[2])),
+                false => assert_eq!(c, mode_colour("weighted")),
+            }
+            assert!(!seen.contains(&c), "{} shares its colour", r.method);
+            seen.push(c);
+        }
+        assert!(!crate::method::room(Method::default()).own_knobs);
     }
 
     #[test]

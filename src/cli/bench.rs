@@ -18,7 +18,7 @@ Lists are comma-separated; the sweep is every combination of modes x SP K x VPL 
 iterations x p x plane gate (values a mode ignores are dropped: hard has F = 1, vpl-only no SP K,
 sp-only no VPL K).
 Modes: hard, uniform, weighted (both clusterings, Eqs. 8 / 9), vpl-only, sp-only.
-Methods (--methods, docs/methods.md): the modes and fuzzy knobs are colom's; every other method
+Methods (--methods, docs/methods.md): the modes and fuzzy knobs are the paper's (the default method's); every other method
 takes its own knob lists (listed under its heading), and the K pairs and --iterations where it
 clusters the shading points (its rows have the method's name as mode).
 Each configuration is rendered --repeat times; its times are the mean of the 3 best (GPU timestamps),

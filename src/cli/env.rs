@@ -3,6 +3,7 @@
 //! deep inside a run.
 
 use crate::gpu::shader;
+use crate::method;
 
 /// Switches: set to 1 to turn on.
 const SWITCHES: &[&str] = &[
@@ -44,12 +45,14 @@ pub fn check() -> Result<Vec<String>, String> {
         let Some(text) = value.to_str() else {
             return Err(format!("{name}: its value is not valid UTF-8"));
         };
+        // The methods' own variables (each declared in its room).
+        if let Some(v) = method::ENV_INTEGERS.iter().find(|v| v.name == name) {
+            integer(&name, text, v.lo, v.hi)?;
+            continue;
+        }
         match name.as_str() {
             shader::SHADER_DIR_ENV => shader_dir(text)?,
             "FVPL_WORK_SCALE" => integer(&name, text, 1, u32::MAX)?,
-            "FVPL_SHADE_PATTERNS" => {
-                integer(&name, text, 0, crate::method::colom::shade::MAX_PATTERNS)?
-            }
             n if SWITCHES.contains(&n) => {
                 if text != "1" {
                     return Err(format!(
@@ -59,8 +62,13 @@ pub fn check() -> Result<Vec<String>, String> {
             }
             n if TEST_ONLY.contains(&n) => {}
             _ => warnings.push(format!(
-                "{name} is not a variable fuzzy-vpl reads (it reads {}, FVPL_WORK_SCALE, FVPL_SHADE_PATTERNS, {})",
+                "{name} is not a variable fuzzy-vpl reads (it reads {}, FVPL_WORK_SCALE, {}, {})",
                 shader::SHADER_DIR_ENV,
+                method::ENV_INTEGERS
+                    .iter()
+                    .map(|v| v.name)
+                    .collect::<Vec<_>>()
+                    .join(", "),
                 SWITCHES.join(", ")
             )),
         }

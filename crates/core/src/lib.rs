@@ -30,7 +30,7 @@
 //! no window, UI or command-line crate.
 //!
 //! The layers, bottom up: `settings`, `scene`, `bvh`, `gpu`; the shared passes (`gi`: VPLs,
-//! primary rays, direct light, the unclustered gather, colom's clustering, visibility and shading);
+//! primary rays, direct light, the unclustered gather, the paper's clustering, visibility and shading);
 //! the methods (`method`); the frame (`render`); the metrics and the stats. The application crate
 //! (`fuzzy-vpl`: `bench`, `app` (the viewer) and `cli`) is built on them. `cpu` holds the CPU twins
 //! the tests check the shaders against. With the feature `cli`, the settings types are also clap

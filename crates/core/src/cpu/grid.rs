@@ -1,7 +1,8 @@
 //! CPU twin of `shaders-wgsl/common/grid.wgsl`: the uniform grid over cluster centres and its rings
-//! of cells, one for colom's k-means (`cpu::kmeans`, searched with Eq. 7) and one for a room's own
-//! k-means (its twin, searched with its own metric). The kernels' ring search skips cells that
-//! cannot change the result; the twins scan every cell of a ring, which gives the same result.
+//! of cells, one for the paper's k-means (Alg. 1, `cpu::kmeans`, searched with Eq. 7) and one for a
+//! room's own k-means (its twin, searched with its own metric). The kernels' ring search skips
+//! cells that cannot change the result; the twins scan every cell of a ring, which gives the same
+//! result.
 
 use glam::Vec3;
 

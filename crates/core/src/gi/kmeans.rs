@@ -479,9 +479,9 @@ impl KMeans {
     }
 }
 
-/// The steps that build the grid over `k` centres (`shaders-wgsl/common/grid.wgsl`, colom's and
-/// a room's own k-means), the prefix sum in `groups` workgroups: every count is of invocations of
-/// `WORKGROUP` (the scan's workgroups are 256 wide, one each).
+/// The steps that build the grid over `k` centres (`shaders-wgsl/common/grid.wgsl`, the paper's
+/// k-means (Alg. 1) and a room's own), the prefix sum in `groups` workgroups: every count is of
+/// invocations of `WORKGROUP` (the scan's workgroups are 256 wide, one each).
 pub fn grid_steps(k: u32, groups: u32) -> [(&'static str, u32); 5] {
     let scan = WORKGROUP * groups;
     [
@@ -493,12 +493,13 @@ pub fn grid_steps(k: u32, groups: u32) -> [(&'static str, u32); 5] {
     ]
 }
 
-/// The resources of the grid over cluster centres (`shaders-wgsl/common/grid.wgsl`), colom's k-means'
-/// and a room's own: the grid, the cell counts and scan words, the centres sorted by cell (2 texels
-/// each) and per cell the sorted offsets of it and its row neighbours (one texel gives a row run of
-/// three cells). On a software adapter (`texture_search`) the search reads copies of the last two in
-/// textures, refreshed after each grid build (lavapipe fetches texels with vector code, storage reads
-/// per lane with scalar loops); otherwise the textures are bound but never read: one texel each.
+/// The resources of the grid over cluster centres (`shaders-wgsl/common/grid.wgsl`), the paper's
+/// k-means' (Alg. 1) and a room's own: the grid, the cell counts and scan words, the centres sorted
+/// by cell (2 texels each) and per cell the sorted offsets of it and its row neighbours (one texel
+/// gives a row run of three cells). On a software adapter (`texture_search`) the search reads copies
+/// of the last two in textures, refreshed after each grid build (lavapipe fetches texels with vector
+/// code, storage reads per lane with scalar loops); otherwise the textures are bound but never read:
+/// one texel each.
 pub struct GridBuffers {
     pub grid: wgpu::Buffer,
     pub cells: wgpu::Buffer,

@@ -449,6 +449,18 @@ pub fn build(method: Method) -> fn(&GpuContext, &SceneGpu) -> Box<dyn IndirectMe
 /// The `--help` group of the method and its knobs.
 pub const METHOD_HEADING: &str = "Method (docs/methods.md)";
 
+/// A developer variable (`FVPL_*`) a method's passes read: an integer in `lo..=hi`. The
+/// application checks its value before any work (a value out of range is one line, exit code 2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EnvInteger {
+    pub name: &'static str,
+    pub lo: u32,
+    pub hi: u32,
+}
+
+/// Every method's developer variables (each declared in its room).
+pub const ENV_INTEGERS: &[EnvInteger] = &[colom::shade::PATTERNS_ENV];
+
 impl Method {
     /// Its line in `--method`'s help.
     pub fn doc(self) -> &'static str {
@@ -599,6 +611,15 @@ mod tests {
         sorted.sort_unstable();
         sorted.dedup();
         assert_eq!(sorted.len(), names.len(), "{names:?}");
+    }
+
+    /// The methods' developer variables are `FVPL_*`, named once, each with a range.
+    #[test]
+    fn env_integers_are_named_once() {
+        for (i, v) in ENV_INTEGERS.iter().enumerate() {
+            assert!(v.name.starts_with("FVPL_") && v.lo <= v.hi, "{v:?}");
+            assert!(ENV_INTEGERS[..i].iter().all(|w| w.name != v.name), "{v:?}");
+        }
     }
 
     /// Reports join key by key; one alone is kept.

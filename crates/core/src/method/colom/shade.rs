@@ -44,13 +44,20 @@ pub const WORDS_PER_DISPATCH: u32 = 512;
 /// The most visibility patterns a word's table holds (`MAX_PATTERNS` in shade.wgsl).
 pub const MAX_PATTERNS: u32 = 8;
 
+/// `FVPL_SHADE_PATTERNS`, `patterns`' variable: 0..=`MAX_PATTERNS` (`method::ENV_INTEGERS`).
+pub const PATTERNS_ENV: crate::method::EnvInteger = crate::method::EnvInteger {
+    name: "FVPL_SHADE_PATTERNS",
+    lo: 0,
+    hi: MAX_PATTERNS,
+};
+
 /// The shader's `PATTERNS`: the visibility patterns of a word whose Eq. (9) Ṽ `eq6_indirect`
 /// tabulates once instead of computing it per light; `FVPL_SHADE_PATTERNS` (0..8) chooses, default
 /// 0 (Ṽ per light). The image is the same bit for bit for every value (tests/clustered.rs). 0 is
 /// the fastest on lavapipe, measured (docs/architecture.md); on a GPU `scripts/gpu-bench` times
 /// both.
 pub fn patterns() -> u32 {
-    std::env::var("FVPL_SHADE_PATTERNS")
+    std::env::var(PATTERNS_ENV.name)
         .ok()
         .and_then(|v| v.parse::<u32>().ok())
         .map_or(0, |p| p.min(MAX_PATTERNS))

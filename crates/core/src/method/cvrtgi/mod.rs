@@ -1,7 +1,7 @@
 //! The CVRTGI method (Cosin Ayerbe & Patow 2022, "Clustered voxel real-time global illumination",
-//! seed 003; docs/cvrtgi.md) as one pass that writes a frame's indirect light in the form of colom's
-//! `shade` (ρ/π × irradiance, vec4 a pixel, render units), so the direct light, exposure, metrics and
-//! the reference are shared.
+//! seed 003; docs/cvrtgi.md) as one pass that writes a frame's indirect light in the form of the
+//! default method's shade pass (`shade.wgsl`: ρ/π × irradiance, vec4 a pixel, render units), so
+//! the direct light, exposure, metrics and the reference are shared.
 //!
 //! Stages and what each is keyed on (the paper's Fig. 5: the costly part is not redone for a camera
 //! move while the lights stay):

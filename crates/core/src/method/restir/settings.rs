@@ -44,7 +44,7 @@ pub enum RestirLights {
     #[default]
     Vpls,
     /// The resident VPL clusters (step 2, `--vpl-clusters`), each a point light at its
-    /// representative with the members' summed flux (colom's `--cluster-light point`).
+    /// representative with the members' summed flux (the paper's `--cluster-light point`).
     Clusters,
 }
 

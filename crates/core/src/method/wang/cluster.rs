@@ -10,8 +10,8 @@
 //! 2. **k-means with Eq. (2)**: every point to the centre of least error among its own cluster's
 //!    (in the first assignment: the seed of its quadtree node) and those of the 27 cells of a
 //!    uniform grid over the centres around it (the paper uses a kd-tree of the centres "to constrain
-//!    the search within a small Euclidean distance"; the grid is colom's, `shaders-wgsl/common/grid.wgsl`,
-//!    built on the GPU every iteration), so
+//!    the search within a small Euclidean distance"; the grid is the shared k-means grid over
+//!    centres, `shaders-wgsl/common/grid.wgsl`, built on the GPU every iteration), so
 //!    a border moves as far as the centres ask, up to a cell (1.5 cluster spacings) an iteration,
 //!    whatever the pixels; centres the mean position and normal of their members, from 64-bit
 //!    fixed-point sums that a point changing cluster updates with atomics.
@@ -54,7 +54,7 @@ pub const MIN_GRID_POINTS_PER_CLUSTER: u32 = 16;
 
 /// The grid step of the k-means iterations: 2 (a quarter of the pixels) when that leaves at least
 /// `MIN_GRID_POINTS_PER_CLUSTER` grid points a cluster, else 1. Adaptation (docs/methods.md): the
-/// paper's k-means runs on every shading point; here, as Colom's γ does, the iterations run on a
+/// paper's k-means runs on every shading point; here, as the paper's γ does, the iterations run on a
 /// subset and the full image is labelled at the end.
 pub fn grid_step(pixels: u32, k: u32) -> u32 {
     if pixels / 4 >= MIN_GRID_POINTS_PER_CLUSTER * k.max(1) {

@@ -1,6 +1,6 @@
 //! CPU twins of wang's shaders (seed 001, docs/methods.md "wang"): the whole §3.2 clustering of
 //! `shaders-wgsl/wang_cluster.wgsl` (`cluster`: the quadtree seeding of `wang/seed.wgsl`, the
-//! k-means with Eq. (2) over the grid of the centres shared with colom's (`wang/grid.wgsl`,
+//! k-means with Eq. (2) over the shared grid of the centres (`common/grid.wgsl` in `wang/grid.wgsl`,
 //! `wang/assign.wgsl`; `cpu::grid`), the centre updates of `wang/centres.wgsl` and the sample points
 //! of `wang/sample.wgsl`, in the same f32 arithmetic and fixed-point sums as the GPU) and §3.4's R_j and interpolation of `shaders-wgsl/wang.wgsl`
 //! (`harmonic_radius`, `interpolate`).
