@@ -1100,22 +1100,7 @@ pub(crate) mod tests {
     /// again every one of its columns has the same text.
     #[test]
     fn a_file_before_the_settings_columns_reads_and_keeps_its_text() {
-        let old = "\
-scene,camera,width,height,vpls,mode,vpl_clusters,sp_clusters,fuzziness,gamma,normal_threshold,\
-iterations,vpl_trace_ms,vpl_cluster_ms,primary_ms,sp_cluster_ms,visibility_ms,shade_ms,gather_ms,\
-direct_ms,frame_ms,reference_ms,speedup,mse,rel_mse,sp_clusters_used,vpl_clusters_used,\
-shadow_rays,repeat,label,weight_exponent,gamma_used,plane_gate_deg,flip,border,interior,\
-border_ratio,flip_border,target_ms,front_mse,method,indirect_ms,adapter,driver,wang_alpha,d_init,\
-lightcluster_visibility,voxel_res,cluster_step,cluster_iterations,cluster_angle,face_rays,\
-near_voxels,filter_radius,filter_passes,cluster_gather,escape_rays,restir_candidates,\
-restir_neighbours,restir_radius,restir_iterations,restir_cap,restir_combine,restir_lights,\
-sp_iterations,sp_warm_kept,visibility_rows_reused
-builtin:cornell,default,96,72,1024,weighted,128,48,6,4,0.866,10,0.6759999999999999,0.776,\
-0.8759999999999999,0.976,1.076,1.176,1.276,1.3760000000000001,6.756,50,7.400828892835998,\
-7.537783614444091e-4,7.537783614444091e-3,47,128,123456789012,3,weighted 48/128,2,4,20,5e-2,1e-4,\
-1e-4,1e0,6e-2,4e1,,colom,4.5040000000000004,\"llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Mesa \
-22.3.6 (LLVM 15.0.6))\",llvmpipe Mesa 22.3.6 (LLVM 15.0.6),,,,,,,,,,,,,,,,,,,,,3,40,0
-";
+        let old = include_str!("testdata/results-d05e11d.csv");
         let rows = from_csv(old).unwrap();
         let mut want = synthetic("weighted", 48, 128);
         let c = &mut want.cluster;

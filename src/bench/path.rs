@@ -849,18 +849,7 @@ weighted 192/512 F6 g4,on,1,10.5,2.5,0.0001,0.002,0.00003,1,180,192,400
     /// `temporal_alpha` empty with temporal off, the floats as the `csv` crate writes them).
     #[test]
     fn a_path_file_before_the_settings_columns_reads_and_keeps_its_text() {
-        let old = "\
-label,temporal,frame,frame_ms,sp_cluster_ms,mse,rel_mse,instability,sp_clusters_used,reference_ms,\
-visibility_ms,adapter,driver,scene,width,height,vpls,instability_world,method,indirect_ms,\
-temporal_alpha,instability_world_direct_only,wang_alpha,d_init,lightcluster_visibility,voxel_res,\
-cluster_step,cluster_iterations,cluster_angle,face_rays,near_voxels,filter_radius,filter_passes,\
-cluster_gather,escape_rays,restir_candidates,restir_neighbours,restir_radius,restir_iterations,\
-restir_cap,restir_combine,restir_lights,sp_iterations,sp_warm_kept,visibility_rows_reused
-weighted 48/128 F6 g4 α0.5,off,0,10.0,2.5,0.0001,0.002,,47,400.0,1.25,llvmpipe,Mesa,\
-builtin:cornell,96,72,1024,,colom,7.5,,,,,,,,,,,,,,,,,,,,,,,,,
-weighted 48/128 F6 g4 α0.5,on,1,10.0,2.5,0.0001,0.002,0.00003,47,400.0,1.25,llvmpipe,Mesa,\
-builtin:cornell,96,72,1024,1e-6,colom,7.5,0.5,5e-6,,,,,,,,,,,,,,,,,,,,,2,40,3
-";
+        let old = include_str!("testdata/path-d05e11d.csv");
         let rows = from_csv(old).unwrap();
         assert_eq!(rows.len(), 2);
         let (off, on) = (&rows[0], &rows[1]);
