@@ -593,45 +593,45 @@ fn settings_cells(
 }
 
 /// The settings from a row's settings cells (name, text): an empty or missing cell reads the
-/// default, a non-empty one its value (the layout's form read first; as JSON where it parses,
-/// else as a string). An error names the column and the text.
+/// default, a non-empty one its value (the layout's form read first; as JSON where the field takes
+/// that, else as a string: `4` a number, `point` a string). An error names the column and the
+/// text.
 fn settings_of_cells<'a>(
     layout: &Layout,
     cells: impl Iterator<Item = (&'a str, &'a str)> + Clone,
 ) -> Result<(ClusterSettings, FrameSettings), String> {
     fn one<'a, T: DeserializeOwned>(
         layout: &Layout,
-        cells: impl Iterator<Item = (&'a str, &'a str)> + Clone,
+        cells: impl Iterator<Item = (&'a str, &'a str)>,
     ) -> Result<T, String> {
+        use serde_json::Value;
         let fields = fields_of::<T>();
-        let object = |only: Option<&str>| -> Result<serde_json::Value, String> {
-            let mut map = serde_json::Map::new();
-            for (name, text) in cells.clone() {
-                if text.is_empty() || !fields.contains(&name) || only.is_some_and(|o| o != name) {
-                    continue;
+        let mut map = serde_json::Map::new();
+        for (name, cell) in cells.filter(|(n, t)| !t.is_empty() && fields.contains(n)) {
+            let text = match layout.forms.iter().find(|f| f.column == name) {
+                Some(f) => (f.read)(cell).map_err(|e| format!("{name} {cell:?}: {e}"))?,
+                None => cell.to_string(),
+            };
+            // The field alone: its value as JSON, else as a string.
+            let alone = |v: &Value| {
+                let object = Value::Object([(name.to_string(), v.clone())].into_iter().collect());
+                serde_json::from_value::<T>(object).map(|_| ())
+            };
+            let json = serde_json::from_str::<Value>(&text).ok();
+            let mut refused = None;
+            let value = json
+                .into_iter()
+                .chain([Value::String(text.clone())])
+                .find(|v| alone(v).map_err(|e| refused.get_or_insert(e)).is_ok());
+            match value {
+                Some(v) => map.insert(name.to_string(), v),
+                None => {
+                    let e = refused.map_or(String::new(), |e| e.to_string());
+                    return Err(format!("{name} {cell:?}: {e}"));
                 }
-                let form = layout.forms.iter().find(|f| f.column == name);
-                let text = match form {
-                    Some(f) => (f.read)(text).map_err(|e| format!("{name} {text:?}: {e}"))?,
-                    None => text.to_string(),
-                };
-                let value = serde_json::from_str(&text).unwrap_or(serde_json::Value::String(text));
-                map.insert(name.to_string(), value);
-            }
-            Ok(serde_json::Value::Object(map))
-        };
-        serde_json::from_value(object(None)?).map_err(|e| {
-            // The column at fault: the first that is refused alone.
-            for (name, text) in cells.clone() {
-                if fields.contains(&name)
-                    && let Ok(v) = object(Some(name))
-                    && let Err(e) = serde_json::from_value::<T>(v)
-                {
-                    return format!("{name} {text:?}: {e}");
-                }
-            }
-            e.to_string()
-        })
+            };
+        }
+        serde_json::from_value(Value::Object(map)).map_err(|e| e.to_string())
     }
     Ok((one(layout, cells.clone())?, one(layout, cells)?))
 }
@@ -961,6 +961,13 @@ pub(crate) mod tests {
         let bad = text.replacen(",point,", ",pointy,", 1);
         let e = from_csv(&bad).unwrap_err().to_string();
         assert!(e.contains("line 2") && e.contains("cluster_light"), "{e}");
+        let head = split_line(text.lines().next().unwrap());
+        let mut line = split_line(text.lines().nth(1).unwrap());
+        line[head.iter().position(|h| h == "seed").unwrap()] = "-1".into();
+        let e = from_csv(&write_records([head, line]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 2") && e.contains("seed \"-1\""), "{e}");
     }
 
     /// Every settings field (`ClusterSettings`, `FrameSettings`) is a column of both files, once,
