@@ -41,20 +41,23 @@ fn quick_bench_writes_csv_plots_and_summary() {
         assert!(modes.contains(m), "no {m} row");
     }
     for r in &rows {
-        assert_eq!((r.width, r.height, r.vpls), (96, 72, 1024));
+        assert_eq!(
+            (r.frame.width, r.frame.height, r.frame.vpls),
+            (96, 72, 1024)
+        );
         assert!(r.mse.is_finite() && r.mse >= 0.0, "{r:?}");
         assert!(r.rel_mse.is_finite() && r.rel_mse >= 0.0, "{r:?}");
         assert!(r.frame_ms() > 0.0 && r.reference_ms > 0.0, "{r:?}");
         assert!((r.speedup - r.reference_ms / r.frame_ms()).abs() < 1e-6 * r.speedup.max(1.0));
         assert!(r.shadow_rays > 0);
-        if r.sp_clusters > 0 {
+        if r.cluster.sp_clusters > 0 {
             assert!(
                 r.sp_clusters_used > 0 && r.stage("sp_cluster") > 0.0,
                 "{r:?}"
             );
         }
-        if r.vpl_clusters > 0 {
-            assert_eq!(r.vpl_clusters_used, r.vpl_clusters, "{r:?}");
+        if r.cluster.vpl_clusters > 0 {
+            assert_eq!(r.vpl_clusters_used, r.cluster.vpl_clusters, "{r:?}");
         }
     }
     // The speed-ups themselves are measurements (a clock), printed in the summary, not asserted.
@@ -129,12 +132,12 @@ fn bench_rows_say_what_ran_and_reruns_leave_no_stale_images() {
     assert_eq!(rows.len(), 2, "{rows:?}");
     let (clustered, off) = (&rows[0], &rows[1]);
     assert_eq!(
-        (clustered.sp_clusters, clustered.gamma),
+        (clustered.cluster.sp_clusters, clustered.cluster.gamma),
         (8, fuzzy_vpl::settings::Gamma::Fixed(64))
     );
     assert_eq!(clustered.gamma_used, Some(24), "{clustered:?}");
     assert_eq!(clustered.label, "hard 8/16 g24");
-    assert_eq!(off.sp_clusters, 400);
+    assert_eq!(off.cluster.sp_clusters, 400);
     assert_eq!((off.sp_clusters_used, off.gamma_used), (0, None), "{off:?}");
     assert_eq!(off.stage("sp_cluster"), 0.0);
     assert_eq!(off.label, "hard -/16 (K_sp off)");
@@ -256,6 +259,13 @@ fn camera_path_writes_path_csv_and_plot() {
         // measure (an image without indirect light) from frame 1 on.
         assert_eq!(col(r, "temporal_alpha"), if on { "0.7" } else { "" });
         assert_eq!(col(r, "label").ends_with(" α0.7"), on, "{r:?}");
+        // Every setting has a column: the clustering's and the frame's as the frame ran.
+        let settings = (
+            col(r, "sp_clusters"),
+            col(r, "direct_samples"),
+            col(r, "seed"),
+        );
+        assert_eq!(settings, ("48".into(), "1".into(), "1".into()), "{r:?}");
         let floor = col(r, "instability_world_direct_only");
         assert_eq!(floor.is_empty(), frame == 0, "{r:?}");
     }
@@ -286,23 +296,35 @@ fn camera_path_refuses_a_bad_path() {
 #[test]
 fn header_has_the_contract_columns_in_order() {
     let h = csv::header();
-    // The columns, white-space separated; then every method's knobs (docs/design.md), the last
-    // columns.
+    // The columns, white-space separated; then every setting without a column among them
+    // (`ClusterSettings`' fields, then `FrameSettings`', in declaration order: a field added to
+    // them is a column); then every method's knobs (docs/design.md), then the report columns.
     let want = "scene camera width height vpls mode vpl_clusters sp_clusters fuzziness gamma \
          normal_threshold iterations vpl_trace_ms vpl_cluster_ms primary_ms sp_cluster_ms \
          visibility_ms shade_ms gather_ms direct_ms frame_ms reference_ms speedup mse rel_mse \
          sp_clusters_used vpl_clusters_used shadow_rays repeat label weight_exponent gamma_used \
          plane_gate_deg flip border interior border_ratio flip_border target_ms front_mse \
-         method indirect_ms adapter driver \
-         wang_alpha d_init lightcluster_visibility voxel_res cluster_step cluster_iterations \
-         cluster_angle face_rays near_voxels filter_radius filter_passes cluster_gather \
-         escape_rays";
+         method indirect_ms adapter driver";
+    let knobs_want = "wang_alpha d_init lightcluster_visibility voxel_res cluster_step \
+         cluster_iterations cluster_angle face_rays near_voxels filter_radius filter_passes \
+         cluster_gather escape_rays";
     let want: Vec<String> = want.split_whitespace().map(String::from).collect();
-    // A method added later appends its knobs: the columns above stay a prefix, and the knobs
-    // follow, in the registry's order, before the report columns (read by name).
     assert_eq!(h[..want.len()], want);
+    let at = want.len();
+    let settings: Vec<&str> = csv::settings_columns()
+        .filter(|c| !want.iter().any(|w| w == c))
+        .collect();
+    assert!(
+        settings.contains(&"temporal") && settings.contains(&"seed"),
+        "{settings:?}"
+    );
+    assert_eq!(h[at..at + settings.len()], settings);
+    // A method added later appends its knobs: the knobs above stay a prefix of the knob columns,
+    // in the registry's order, before the report columns (read by name).
+    let knobs_want: Vec<String> = knobs_want.split_whitespace().map(String::from).collect();
+    assert_eq!(h[at + settings.len()..][..knobs_want.len()], knobs_want);
+    let at = at + settings.len();
     let knobs = fuzzy_vpl::method::MethodSettings::columns();
-    let at = h.iter().position(|c| c == "driver").unwrap() + 1;
     assert_eq!(h[at..at + knobs.len()], knobs);
     // Then every method's report columns (colom's counts), the last ones.
     assert_eq!(h[at + knobs.len()..], fuzzy_vpl::method::report_columns());
@@ -329,13 +351,13 @@ fn target_ms_rows_follow_the_sweep() {
     let rows = csv::from_csv(&std::fs::read_to_string(d.join("results.csv")).unwrap()).unwrap();
     assert_eq!(rows.len(), 4 + 2, "{rows:?}");
     for r in &rows[..4] {
-        assert_eq!((r.target_ms, r.front_mse), (None, None), "{r:?}");
+        assert_eq!((r.cluster.target_ms, r.front_mse), (None, None), "{r:?}");
     }
     for r in &rows[4..] {
-        assert_eq!(r.target_ms, Some(100000.0), "{r:?}");
+        assert_eq!(r.cluster.target_ms, Some(100000.0), "{r:?}");
         assert!(r.label.starts_with("target 100000 ms "), "{r:?}");
         // A budget above any frame: half the VPLs as VPL clusters.
-        assert_eq!(r.vpl_clusters, 128 / 2, "{r:?}");
+        assert_eq!(r.cluster.vpl_clusters, 128 / 2, "{r:?}");
         assert!(r.mse.is_finite() && r.flip.is_some(), "{r:?}");
         // The front at its time, when a fixed setting was as fast: never above every fixed row.
         if let Some(f) = r.front_mse {
@@ -586,12 +608,9 @@ fn paper_off_on_runs_both_side_by_side() {
     assert_eq!(rows.len(), 2, "{rows:?}");
     let (def, paper) = (&rows[0], &rows[1]);
     // 768 pixels and 64 VPLs: the paper's K ratios, 8 / 16, for both.
-    assert_eq!((def.sp_clusters, def.vpl_clusters), (8, 16), "{def:?}");
-    assert_eq!(
-        (paper.sp_clusters, paper.vpl_clusters),
-        (8, 16),
-        "{paper:?}"
-    );
+    let ks = |r: &csv::Row| (r.cluster.sp_clusters, r.cluster.vpl_clusters);
+    assert_eq!(ks(def), (8, 16), "{def:?}");
+    assert_eq!(ks(paper), (8, 16), "{paper:?}");
     assert!(!def.label.contains("paper"), "{def:?}");
     assert!(paper.label.ends_with(" paper"), "{paper:?}");
     assert!(def.mse.is_finite() && paper.mse.is_finite());

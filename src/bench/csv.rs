@@ -1,18 +1,26 @@
-//! `results.csv`: one row per configuration, a serde struct (`Row`) written and read with the
-//! `csv` crate. Its fields are the columns, in order (the contract a reader indexes by name,
-//! docs/design.md), then every method's knobs (`MethodSettings::columns`); fields are quoted only
-//! when they hold a comma, quote or newline (RFC 4180). Columns were added at the end over time:
-//! a file may stop after any column after `label`, and the missing ones read their defaults.
+//! `results.csv`: one row per configuration, written and read with the `csv` crate. A row (`Row`)
+//! is a serde struct of its own columns that carries the settings it was made with
+//! (`ClusterSettings`, `FrameSettings`) and its method's knobs and report. The columns (`Layout`,
+//! the same for `path.csv`): the contract's, in order (`COLUMNS`: the row's own fields and the
+//! settings fields the contract placed among them, a reader indexes them by name,
+//! docs/design.md), then every other settings field (`settings_columns`, generated from the
+//! settings' declarations: a field added to them is a column), every method's knobs
+//! (`MethodSettings::columns`) and every method's report columns (`method::report_columns`). A
+//! settings cell is serde's value of the field as text (`Cell`), or its contract's older form
+//! (`Form`). Fields are quoted only when they hold a comma, quote or newline (RFC 4180). Columns
+//! were added over time: a file may stop after any column after `label`, and the missing ones read
+//! their defaults; the generated blocks are found by name.
 
 use std::sync::OnceLock;
 
-use serde::de::{self, Deserializer, Visitor};
+use serde::de::{self, DeserializeOwned, Deserializer, Visitor};
+use serde::ser::{self, Impossible, SerializeStruct};
 use serde::{Deserialize, Serialize, Serializer};
 
 use crate::gi::pass::Pass;
-use crate::method::{Method, MethodSettings};
+use crate::method::MethodSettings;
 use crate::render::FRAME_KEY;
-use crate::settings::Gamma;
+use crate::settings::{ClusterSettings, FrameSettings, Gamma};
 use anyhow::{Context, Result, bail};
 
 /// The passes with a `<stage>_ms` column, in the order of the CSV columns (`frame` follows them):
@@ -27,25 +35,14 @@ pub fn stages() -> impl Iterator<Item = &'static str> {
     stage_passes().map(|p| p.name()).chain([FRAME_KEY])
 }
 
-/// One measured configuration: a row of `results.csv`, a field a column.
+/// One measured configuration: a row of `results.csv`, a field a column, with the settings it was
+/// made with (their fields are columns too: `COLUMNS`, `settings_columns`).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Row {
     pub scene: String,
     /// glTF camera index, or `default` (the scene's default view).
     pub camera: String,
-    pub width: u32,
-    pub height: u32,
-    pub vpls: u32,
     pub mode: String,
-    pub vpl_clusters: u32,
-    pub sp_clusters: u32,
-    pub fuzziness: u32,
-    /// γ asked (`auto` or the factor, written so in the file).
-    #[serde(deserialize_with = "gamma_cell")]
-    pub gamma: Gamma,
-    #[serde(serialize_with = "display")]
-    pub normal_threshold: f32,
-    pub iterations: u32,
     /// GPU ms per stage (mean of the 3 best of `repeat`), one column a stage of `stages()`
     /// (`Row::stage` reads them by name).
     #[serde(serialize_with = "display")]
@@ -83,17 +80,10 @@ pub struct Row {
     /// Short name used in plots and the summary (`weighted 48/128 F6 g4`). The last column every
     /// file has; the later ones read their defaults where a file stops before them.
     pub label: String,
-    /// p of the fuzzy weights (w'_f = dist^-p; Eq. 10: 1). Older files without it read 1.
-    #[serde(default = "one", serialize_with = "display")]
-    pub weight_exponent: f32,
-    /// γ Alg. 1 sampled with (`gamma` is the one asked; at most pixels / K): empty in the file
-    /// when no SP clustering ran; older files without it read empty.
+    /// γ Alg. 1 sampled with (`cluster.gamma` is the one asked; at most pixels / K): empty in the
+    /// file when no SP clustering ran; older files without it read empty.
     #[serde(default)]
     pub gamma_used: Option<u32>,
-    /// The plane gate of the F lists in degrees (`bench --plane-gate`), empty when off; older files
-    /// without it read off.
-    #[serde(default, serialize_with = "opt_display")]
-    pub plane_gate_deg: Option<f32>,
     /// Mean FLIP of the tone-mapped image against the reference's (`stats::ErrorStats::flip`).
     /// Older files without it read empty, as do the border columns below.
     #[serde(default, serialize_with = "opt_sci")]
@@ -108,16 +98,15 @@ pub struct Row {
     pub border_ratio: Option<f64>,
     #[serde(default, serialize_with = "opt_sci")]
     pub flip_border: Option<f64>,
-    /// `bench --target-ms`: the budget this row's K's were chosen for (empty for the sweep's rows).
-    #[serde(default, serialize_with = "opt_sci")]
-    pub target_ms: Option<f64>,
-    /// For a budget's row: the lowest MSE of the sweep's fixed settings (same camera) at no more
-    /// frame time than this row's: the Pareto front at its time (empty when none is as fast).
+    /// For a budget's row (`cluster.target_ms`): the lowest MSE of the sweep's fixed settings
+    /// (same camera) at no more frame time than this row's: the Pareto front at its time (empty
+    /// when none is as fast).
     #[serde(default, serialize_with = "opt_sci")]
     pub front_mse: Option<f64>,
     /// The method (`method::Method`, its name in the `method` column; docs/methods.md); files
-    /// without the column read `colom`. Its knobs are the last columns (`MethodSettings::columns`:
-    /// the row's own method's filled, the others' empty); files without them read the defaults.
+    /// without the column read the default method. Its knobs are the knob columns
+    /// (`MethodSettings::columns`: the row's own method's filled, the others' empty); files without
+    /// them read the defaults.
     #[serde(
         default,
         serialize_with = "method_cell",
@@ -134,18 +123,36 @@ pub struct Row {
     pub adapter: String,
     #[serde(default)]
     pub driver: String,
+    /// The clustering the frame ran with (`RenderSettings::cluster` as it ran: under a budget the
+    /// K's chosen and `target_ms` the budget, empty for the sweep's rows), its fields columns.
+    #[serde(skip)]
+    pub cluster: ClusterSettings,
+    /// The frame's settings as it ran (`width`, `height` and `vpls` the frame's own: `vpls` the
+    /// VPLs traced), its fields columns.
+    #[serde(skip)]
+    pub frame: FrameSettings,
     /// The method's report (`Frame::report`), in the report columns after the knobs
     /// (`method::report_columns`); files without them read none.
     #[serde(skip)]
     pub report: Option<serde_json::Value>,
 }
 
-impl MethodCells for Row {
-    fn knobs(&mut self) -> &mut MethodSettings {
-        &mut self.method
+impl Carried for Row {
+    fn carried(&self) -> Parts<'_> {
+        (
+            &self.cluster,
+            &self.frame,
+            &self.method,
+            self.report.as_ref(),
+        )
     }
-    fn report(&mut self) -> &mut Option<serde_json::Value> {
-        &mut self.report
+    fn carried_mut(&mut self) -> PartsMut<'_> {
+        (
+            &mut self.cluster,
+            &mut self.frame,
+            &mut self.method,
+            &mut self.report,
+        )
     }
 }
 
@@ -192,24 +199,10 @@ impl Row {
     }
 }
 
-fn one() -> f32 {
-    1.0
-}
-
 /// A number as Rust prints it (`0`, `0.866`, `1.4118200015218463`): the file's form since its
 /// first version.
 fn display<T: std::fmt::Display, S: Serializer>(v: &T, s: S) -> Result<S::Ok, S::Error> {
     s.collect_str(v)
-}
-
-fn opt_display<T: std::fmt::Display, S: Serializer>(
-    v: &Option<T>,
-    s: S,
-) -> Result<S::Ok, S::Error> {
-    match v {
-        Some(v) => s.collect_str(v),
-        None => s.serialize_none(),
-    }
 }
 
 /// An error (`1.925e-4`), in scientific notation.
@@ -224,39 +217,20 @@ fn opt_sci<S: Serializer>(v: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
     }
 }
 
-/// γ as written (`auto` or the factor), or a number.
-fn gamma_cell<'de, D: Deserializer<'de>>(d: D) -> Result<Gamma, D::Error> {
-    let text = String::deserialize(d)?;
-    text.parse::<Gamma>()
-        .or_else(|e| match text.trim().parse::<f64>() {
-            Ok(g) => Ok(Gamma::Fixed(g as u32)),
-            Err(_) => Err(de::Error::custom(e)),
-        })
-}
-
-/// The `method` column: the method's name (its knobs are the last columns).
+/// The `method` column: the method's name (its knobs are the knob columns).
 pub(crate) fn method_cell<S: Serializer>(m: &MethodSettings, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_str(m.method.name())
 }
 
 pub(crate) fn method_of_cell<'de, D: Deserializer<'de>>(d: D) -> Result<MethodSettings, D::Error> {
     Ok(MethodSettings {
-        method: Method::deserialize(d)?,
+        method: crate::method::Method::deserialize(d)?,
         ..Default::default()
     })
 }
 
-/// A row's knob columns (`MethodSettings::columns`), after its own: serialised as their values.
-pub(crate) struct KnobCells<'a>(pub &'a MethodSettings);
-
-impl Serialize for KnobCells<'_> {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.collect_seq(self.0.column_values())
-    }
-}
-
 /// The field names of a struct that derives `Deserialize`, in order: what serde passes to
-/// `deserialize_struct` (a file's columns are its row type's fields).
+/// `deserialize_struct` (serde's names: renamed fields by their new name, skipped ones left out).
 pub(crate) fn fields_of<'de, T: Deserialize<'de>>() -> &'static [&'static str] {
     struct Names<'a>(&'a mut &'static [&'static str]);
     impl<'de> Deserializer<'de> for Names<'_> {
@@ -284,36 +258,400 @@ pub(crate) fn fields_of<'de, T: Deserialize<'de>>() -> &'static [&'static str] {
     names
 }
 
-/// A row type's header: its fields, then every method's knobs, then every method's report
-/// columns (`method::report_columns`).
-pub(crate) fn header_of<'de, T: Deserialize<'de>>() -> Vec<String> {
-    let own = fields_of::<T>().iter().copied();
-    own.chain(MethodSettings::columns())
+/// Every settings field a row carries, by serde name, in declaration order: `ClusterSettings`'
+/// fields, then `FrameSettings`'. Each is a column of `results.csv` and `path.csv`: where the
+/// contract placed it (`Layout::columns`), or else after the contract's columns in this order.
+pub fn settings_columns() -> impl Iterator<Item = &'static str> {
+    let cluster = fields_of::<ClusterSettings>().iter();
+    cluster.chain(fields_of::<FrameSettings>()).copied()
+}
+
+/// What a row type carries beside its own columns: the settings it was made with, its method's
+/// knobs and the method's report (one serde value, `Frame::report`'s), read from and written to
+/// the settings, knob and report columns.
+pub(crate) trait Carried {
+    fn carried(&self) -> Parts<'_>;
+    fn carried_mut(&mut self) -> PartsMut<'_>;
+}
+
+pub(crate) type Parts<'a> = (
+    &'a ClusterSettings,
+    &'a FrameSettings,
+    &'a MethodSettings,
+    Option<&'a serde_json::Value>,
+);
+
+pub(crate) type PartsMut<'a> = (
+    &'a mut ClusterSettings,
+    &'a mut FrameSettings,
+    &'a mut MethodSettings,
+    &'a mut Option<serde_json::Value>,
+);
+
+/// A CSV file's columns: `columns`, the contract's in order (a name is the row's own field or a
+/// settings field), then the settings fields not among them (`settings_columns`' order), every
+/// method's knobs and every method's report columns.
+pub(crate) struct Layout {
+    pub columns: &'static [&'static str],
+    /// The last column every file has.
+    pub required: &'static str,
+    /// The settings columns whose cells the contract writes otherwise than serde.
+    pub forms: &'static [Form],
+}
+
+/// A settings column in a form of its own (the contract's, older than the settings' serde form).
+pub(crate) struct Form {
+    pub column: &'static str,
+    /// The cell from serde's text of the field (`Cell`) and the row's other settings cells (serde's
+    /// text, by name).
+    pub write: fn(&str, &[(&'static str, String)]) -> String,
+    /// serde's text of the field from a non-empty cell, or why it is not one.
+    pub read: fn(&str) -> Result<String, String>,
+}
+
+/// The columns of `results.csv` the contract names, in its order (docs/design.md, "Bench
+/// outputs"): the row's own fields and the settings fields it placed among them.
+pub const COLUMNS: &[&str] = &[
+    "scene",
+    "camera",
+    "width",
+    "height",
+    "vpls",
+    "mode",
+    "vpl_clusters",
+    "sp_clusters",
+    "fuzziness",
+    "gamma",
+    "normal_threshold",
+    "iterations",
+    "vpl_trace_ms",
+    "vpl_cluster_ms",
+    "primary_ms",
+    "sp_cluster_ms",
+    "visibility_ms",
+    "shade_ms",
+    "gather_ms",
+    "direct_ms",
+    "frame_ms",
+    "reference_ms",
+    "speedup",
+    "mse",
+    "rel_mse",
+    "sp_clusters_used",
+    "vpl_clusters_used",
+    "shadow_rays",
+    "repeat",
+    "label",
+    "weight_exponent",
+    "gamma_used",
+    "plane_gate_deg",
+    "flip",
+    "border",
+    "interior",
+    "border_ratio",
+    "flip_border",
+    "target_ms",
+    "front_mse",
+    "method",
+    "indirect_ms",
+    "adapter",
+    "driver",
+];
+
+/// `results.csv`'s layout: `target_ms` in scientific notation (`4e1`), as the error columns; γ read
+/// also as a number (`4.0`).
+pub(crate) const LAYOUT: Layout = Layout {
+    columns: COLUMNS,
+    required: "label",
+    forms: &[
+        Form {
+            column: "target_ms",
+            write: |text, _| match text.parse::<f64>() {
+                Ok(v) => format!("{v:e}"),
+                Err(_) => text.to_string(),
+            },
+            read: |text| Ok(text.to_string()),
+        },
+        Form {
+            column: "gamma",
+            write: |text, _| text.to_string(),
+            read: gamma_text,
+        },
+    ],
+};
+
+/// γ as written (`auto` or the factor), or a number: serde's text of it.
+fn gamma_text(text: &str) -> Result<String, String> {
+    match text.parse::<Gamma>() {
+        Ok(g) => Ok(g.to_string()),
+        Err(e) => match text.trim().parse::<f64>() {
+            Ok(g) => Ok((g as u32).to_string()),
+            Err(_) => Err(e.to_string()),
+        },
+    }
+}
+
+/// A settings field serialised (`Cell`): its text, or a struct's fields as text.
+enum Serialised {
+    Text(String),
+    Fields(Vec<(&'static str, String)>),
+}
+
+/// serde's value of a settings field as a cell's text: a string as it is, a number as Rust prints
+/// it (`0.866`, `1`), `true`/`false`, an enum's variant by its serde name, empty for none; a
+/// struct as its fields' cells (a field serde skips has none).
+struct Cell;
+
+type CellError = de::value::Error;
+
+fn text(t: impl ToString) -> Result<Serialised, CellError> {
+    Ok(Serialised::Text(t.to_string()))
+}
+
+fn not_a_cell<T>(what: &str) -> Result<T, CellError> {
+    Err(ser::Error::custom(format!("{what} in a CSV cell")))
+}
+
+impl Serializer for Cell {
+    type Ok = Serialised;
+    type Error = CellError;
+    type SerializeSeq = Impossible<Serialised, CellError>;
+    type SerializeTuple = Impossible<Serialised, CellError>;
+    type SerializeTupleStruct = Impossible<Serialised, CellError>;
+    type SerializeTupleVariant = Impossible<Serialised, CellError>;
+    type SerializeMap = Impossible<Serialised, CellError>;
+    type SerializeStruct = Fields;
+    type SerializeStructVariant = Impossible<Serialised, CellError>;
+
+    fn serialize_bool(self, v: bool) -> Result<Serialised, CellError> {
+        text(v)
+    }
+    fn serialize_i8(self, v: i8) -> Result<Serialised, CellError> {
+        text(v)
+    }
+    fn serialize_i16(self, v: i16) -> Result<Serialised, CellError> {
+        text(v)
+    }
+    fn serialize_i32(self, v: i32) -> Result<Serialised, CellError> {
+        text(v)
+    }
+    fn serialize_i64(self, v: i64) -> Result<Serialised, CellError> {
+        text(v)
+    }
+    fn serialize_u8(self, v: u8) -> Result<Serialised, CellError> {
+        text(v)
+    }
+    fn serialize_u16(self, v: u16) -> Result<Serialised, CellError> {
+        text(v)
+    }
+    fn serialize_u32(self, v: u32) -> Result<Serialised, CellError> {
+        text(v)
+    }
+    fn serialize_u64(self, v: u64) -> Result<Serialised, CellError> {
+        text(v)
+    }
+    fn serialize_f32(self, v: f32) -> Result<Serialised, CellError> {
+        text(v)
+    }
+    fn serialize_f64(self, v: f64) -> Result<Serialised, CellError> {
+        text(v)
+    }
+    fn serialize_char(self, v: char) -> Result<Serialised, CellError> {
+        text(v)
+    }
+    fn serialize_str(self, v: &str) -> Result<Serialised, CellError> {
+        text(v)
+    }
+    fn serialize_bytes(self, _: &[u8]) -> Result<Serialised, CellError> {
+        not_a_cell("bytes")
+    }
+    fn serialize_none(self) -> Result<Serialised, CellError> {
+        text("")
+    }
+    fn serialize_some<T: ?Sized + Serialize>(self, v: &T) -> Result<Serialised, CellError> {
+        v.serialize(self)
+    }
+    fn serialize_unit(self) -> Result<Serialised, CellError> {
+        text("")
+    }
+    fn serialize_unit_struct(self, _: &'static str) -> Result<Serialised, CellError> {
+        text("")
+    }
+    fn serialize_unit_variant(
+        self,
+        _: &'static str,
+        _: u32,
+        variant: &'static str,
+    ) -> Result<Serialised, CellError> {
+        text(variant)
+    }
+    fn serialize_newtype_struct<T: ?Sized + Serialize>(
+        self,
+        _: &'static str,
+        v: &T,
+    ) -> Result<Serialised, CellError> {
+        v.serialize(self)
+    }
+    fn serialize_newtype_variant<T: ?Sized + Serialize>(
+        self,
+        _: &'static str,
+        _: u32,
+        _: &'static str,
+        _: &T,
+    ) -> Result<Serialised, CellError> {
+        not_a_cell("an enum with data")
+    }
+    fn serialize_seq(self, _: Option<usize>) -> Result<Self::SerializeSeq, CellError> {
+        not_a_cell("a list")
+    }
+    fn serialize_tuple(self, _: usize) -> Result<Self::SerializeTuple, CellError> {
+        not_a_cell("a tuple")
+    }
+    fn serialize_tuple_struct(
+        self,
+        _: &'static str,
+        _: usize,
+    ) -> Result<Self::SerializeTupleStruct, CellError> {
+        not_a_cell("a tuple")
+    }
+    fn serialize_tuple_variant(
+        self,
+        _: &'static str,
+        _: u32,
+        _: &'static str,
+        _: usize,
+    ) -> Result<Self::SerializeTupleVariant, CellError> {
+        not_a_cell("an enum with data")
+    }
+    fn serialize_map(self, _: Option<usize>) -> Result<Self::SerializeMap, CellError> {
+        not_a_cell("a map")
+    }
+    fn serialize_struct(self, _: &'static str, n: usize) -> Result<Fields, CellError> {
+        Ok(Fields(Vec::with_capacity(n)))
+    }
+    fn serialize_struct_variant(
+        self,
+        _: &'static str,
+        _: u32,
+        _: &'static str,
+        _: usize,
+    ) -> Result<Self::SerializeStructVariant, CellError> {
+        not_a_cell("an enum with data")
+    }
+}
+
+/// A struct's fields as cells, in serialisation order.
+struct Fields(Vec<(&'static str, String)>);
+
+impl SerializeStruct for Fields {
+    type Ok = Serialised;
+    type Error = CellError;
+    fn serialize_field<T: ?Sized + Serialize>(
+        &mut self,
+        key: &'static str,
+        v: &T,
+    ) -> Result<(), CellError> {
+        match v.serialize(Cell)? {
+            Serialised::Text(t) => {
+                self.0.push((key, t));
+                Ok(())
+            }
+            Serialised::Fields(_) => not_a_cell("a struct"),
+        }
+    }
+    fn end(self) -> Result<Serialised, CellError> {
+        Ok(Serialised::Fields(self.0))
+    }
+}
+
+/// A settings struct's cells by serde name (`Cell`).
+fn cells_of<T: Serialize>(v: &T) -> Vec<(&'static str, String)> {
+    match v.serialize(Cell) {
+        Ok(Serialised::Fields(f)) => f,
+        _ => panic!("the settings are structs of plain values"),
+    }
+}
+
+/// The settings cells of a row, by name: serde's text of every field of `settings_columns` (empty
+/// where serde skips it), then the layout's forms.
+fn settings_cells(
+    layout: &Layout,
+    c: &ClusterSettings,
+    f: &FrameSettings,
+) -> Vec<(&'static str, String)> {
+    let serde = [cells_of(c), cells_of(f)].concat();
+    let at = |name: &str| serde.iter().find(|(n, _)| *n == name);
+    let mut cells: Vec<(&'static str, String)> = settings_columns()
+        .map(|name| (name, at(name).map_or(String::new(), |c| c.1.clone())))
+        .collect();
+    for form in layout.forms {
+        if let Some(cell) = cells.iter_mut().find(|(n, _)| *n == form.column) {
+            cell.1 = (form.write)(&cell.1, &serde);
+        }
+    }
+    cells
+}
+
+/// The settings from a row's settings cells (name, text): an empty or missing cell reads the
+/// default, a non-empty one its value (the layout's form read first; as JSON where the field takes
+/// that, else as a string: `4` a number, `point` a string). An error names the column and the
+/// text.
+fn settings_of_cells<'a>(
+    layout: &Layout,
+    cells: impl Iterator<Item = (&'a str, &'a str)> + Clone,
+) -> Result<(ClusterSettings, FrameSettings), String> {
+    fn one<'a, T: DeserializeOwned>(
+        layout: &Layout,
+        cells: impl Iterator<Item = (&'a str, &'a str)>,
+    ) -> Result<T, String> {
+        use serde_json::Value;
+        let fields = fields_of::<T>();
+        let mut map = serde_json::Map::new();
+        for (name, cell) in cells.filter(|(n, t)| !t.is_empty() && fields.contains(n)) {
+            let text = match layout.forms.iter().find(|f| f.column == name) {
+                Some(f) => (f.read)(cell).map_err(|e| format!("{name} {cell:?}: {e}"))?,
+                None => cell.to_string(),
+            };
+            // The field alone: its value as JSON, else as a string.
+            let alone = |v: &Value| {
+                let object = Value::Object([(name.to_string(), v.clone())].into_iter().collect());
+                serde_json::from_value::<T>(object).map(|_| ())
+            };
+            let json = serde_json::from_str::<Value>(&text).ok();
+            let mut refused = None;
+            let value = json
+                .into_iter()
+                .chain([Value::String(text.clone())])
+                .find(|v| alone(v).map_err(|e| refused.get_or_insert(e)).is_ok());
+            match value {
+                Some(v) => map.insert(name.to_string(), v),
+                None => {
+                    let e = refused.map_or(String::new(), |e| e.to_string());
+                    return Err(format!("{name} {cell:?}: {e}"));
+                }
+            };
+        }
+        serde_json::from_value(Value::Object(map)).map_err(|e| e.to_string())
+    }
+    Ok((one(layout, cells.clone())?, one(layout, cells)?))
+}
+
+/// A layout's header: its columns, the settings fields not among them, then every method's knobs
+/// and every method's report columns (`method::report_columns`).
+pub(crate) fn header_of(layout: &Layout) -> Vec<String> {
+    let settings = settings_columns().filter(|c| !layout.columns.contains(c));
+    let columns = layout.columns.iter().copied().chain(settings);
+    columns
+        .chain(MethodSettings::columns())
         .chain(crate::method::report_columns())
         .map(String::from)
         .collect()
 }
 
-/// A row's report columns (`method::report_values`), after its knobs: serialised as their values.
-pub(crate) struct ReportCells(pub Vec<String>);
-
-impl Serialize for ReportCells {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.collect_seq(&self.0)
-    }
-}
-
-/// What a row type holds beside its own columns: its method's knobs and the method's report (one
-/// serde value, `Frame::report`'s), read from and written to the knob and report columns.
-pub(crate) trait MethodCells {
-    fn knobs(&mut self) -> &mut MethodSettings;
-    fn report(&mut self) -> &mut Option<serde_json::Value>;
-}
-
 /// The header, in order.
 pub fn header() -> Vec<String> {
     static HEADER: OnceLock<Vec<String>> = OnceLock::new();
-    HEADER.get_or_init(header_of::<Row>).clone()
+    HEADER.get_or_init(|| header_of(&LAYOUT)).clone()
 }
 
 /// The device's columns, after the method's: files written before them have neither.
@@ -323,31 +661,60 @@ pub const ADAPTER_COLUMNS: [&str; 2] = ["adapter", "driver"];
 /// `indirect_ms`. Files written before them have neither.
 pub const METHOD_COLUMNS: [&str; 2] = ["method", "indirect_ms"];
 
-/// `rows` (each a `T` followed by its knob columns and its report columns) under `header` as CSV
-/// text, `\n` line ends.
-pub(crate) fn write_rows<'a, T: Serialize + 'a>(
-    header: &[String],
-    rows: impl IntoIterator<Item = (&'a T, &'a MethodSettings, Option<&'a serde_json::Value>)>,
+/// A row's own columns (its serde fields) as the `csv` crate writes them, by name.
+fn own_cells<T: Serialize + DeserializeOwned>(r: &T) -> Vec<(&'static str, String)> {
+    let mut w = ::csv::WriterBuilder::new()
+        .has_headers(false)
+        .from_writer(Vec::new());
+    w.serialize(r).expect("writing to memory");
+    let bytes = w.into_inner().expect("writing to memory");
+    let record = ::csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(bytes.as_slice())
+        .records()
+        .next()
+        .expect("one record")
+        .expect("the csv crate reads what it wrote");
+    let names = fields_of::<T>().iter().copied();
+    names.zip(record.iter().map(String::from)).collect()
+}
+
+/// `rows` under `layout`'s header as CSV text, `\n` line ends: each row's own fields and settings
+/// in the layout's columns, then its knobs and report.
+pub(crate) fn write_rows<T: Serialize + DeserializeOwned + Carried>(
+    layout: &Layout,
+    rows: &[T],
 ) -> String {
+    let header = header_of(layout);
+    let knobs_at = header.len() - MethodSettings::columns().len();
+    let knobs_at = knobs_at - crate::method::report_columns().len();
     let mut w = ::csv::WriterBuilder::new()
         .has_headers(false)
         .terminator(::csv::Terminator::Any(b'\n'))
         .from_writer(Vec::new());
-    w.write_record(header).expect("writing to memory");
-    for (r, m, report) in rows {
-        let cells = ReportCells(crate::method::report_values(m.method, report));
-        w.serialize((r, KnobCells(m), cells))
-            .expect("writing to memory");
+    w.write_record(&header).expect("writing to memory");
+    for r in rows {
+        let own = own_cells(r);
+        let (c, f, m, report) = r.carried();
+        let settings = settings_cells(layout, c, f);
+        let cell = |name: &str| {
+            let mut all = own.iter().chain(&settings);
+            all.find(|(n, _)| *n == name).map_or("", |c| c.1.as_str())
+        };
+        let mut record: Vec<String> = header[..knobs_at]
+            .iter()
+            .map(|h| cell(h).to_string())
+            .collect();
+        record.extend(m.column_values());
+        record.extend(crate::method::report_values(m.method, report));
+        w.write_record(&record).expect("writing to memory");
     }
     String::from_utf8(w.into_inner().expect("writing to memory")).expect("UTF-8 fields")
 }
 
 /// The whole file: header and rows, `\n` line ends.
 pub fn to_csv(rows: &[Row]) -> String {
-    write_rows(
-        &header(),
-        rows.iter().map(|r| (r, &r.method, r.report.as_ref())),
-    )
+    write_rows(&LAYOUT, rows)
 }
 
 /// One CSV line's fields (for tests and tools reading `path.csv`).
@@ -372,16 +739,15 @@ pub fn write_records(records: impl IntoIterator<Item = Vec<String>>) -> String {
     String::from_utf8(w.into_inner().expect("writing to memory")).expect("UTF-8 fields")
 }
 
-/// A file's rows as `T` (a row type written by `write_rows`): its header, less the report columns
-/// (`method::report_columns`, found by name wherever they stand: older files have some of them
-/// among their own), a prefix of `full`'s that holds at least the columns through
-/// `last_required`; every line as many fields as the header; the knob columns it has set into the
-/// row's `MethodSettings` and its method's report columns into its report. `fix` completes a row
-/// from what the header lacks.
-pub(crate) fn read_rows<T: de::DeserializeOwned + MethodCells>(
+/// A file's rows as `T` (a row type written by `write_rows` under `layout`, or by an older
+/// version). The header, less the report columns (found by name wherever they stand: older files
+/// have some of them among the others), is a prefix of the layout's columns through at least
+/// `required`, then any of the generated columns (settings fields not among the layout's, knobs),
+/// each once, by name: files written before a block have none of it. A missing column reads its
+/// default; `fix` completes a row from what the header lacks.
+pub(crate) fn read_rows<T: DeserializeOwned + Carried>(
     text: &str,
-    full: &[String],
-    last_required: &str,
+    layout: &Layout,
     fix: impl Fn(&mut T, &::csv::StringRecord),
 ) -> Result<Vec<T>> {
     let mut reader = ::csv::ReaderBuilder::new()
@@ -390,16 +756,22 @@ pub(crate) fn read_rows<T: de::DeserializeOwned + MethodCells>(
     let head = reader.headers().context("reading the header")?.clone();
     let h: Vec<&str> = head.iter().collect();
     let report = crate::method::report_columns();
-    let own = |cols: &[&str]| -> Vec<String> {
-        let own = cols.iter().filter(|c| !report.contains(c));
-        own.map(|c| c.to_string()).collect()
+    let knobs = MethodSettings::columns();
+    let cols: Vec<&str> = h.iter().copied().filter(|c| !report.contains(c)).collect();
+    let listed = (cols.iter().zip(layout.columns))
+        .take_while(|(a, b)| a == b)
+        .count();
+    let required = layout.columns.iter().position(|c| *c == layout.required);
+    let generated = |c: &&str| {
+        !layout.columns.contains(c) && (settings_columns().any(|s| s == *c) || knobs.contains(c))
     };
-    let (own_h, full) = (
-        own(&h),
-        own(&full.iter().map(String::as_str).collect::<Vec<_>>()),
-    );
-    let required = full.iter().position(|c| c == last_required).unwrap() + 1;
-    if own_h.len() < required || own_h.len() > full.len() || full[..own_h.len()] != own_h[..] {
+    let mut seen = cols.clone();
+    seen.sort();
+    seen.dedup();
+    if required.is_none_or(|r| listed <= r)
+        || !cols[listed..].iter().all(generated)
+        || seen.len() != cols.len()
+    {
         bail!("unexpected CSV header: {}", h.join(","));
     }
     let mut rows = Vec::new();
@@ -415,14 +787,16 @@ pub(crate) fn read_rows<T: de::DeserializeOwned + MethodCells>(
         let mut row: T = record
             .deserialize(Some(&head))
             .with_context(|| format!("line {line}"))?;
-        let m = row.knobs();
-        for (name, text) in h.iter().zip(&record) {
+        let cells = h.iter().copied().zip(record.iter());
+        let (c, f, m, row_report) = row.carried_mut();
+        (*c, *f) = settings_of_cells(layout, cells.clone())
+            .map_err(|e| anyhow::anyhow!("line {line}: {e}"))?;
+        for (name, text) in cells.clone() {
             if let Some(Err(e)) = m.set_column(name, text).filter(|_| !text.is_empty()) {
                 bail!("line {line}: {name} {text:?}: {e}");
             }
         }
-        let method = m.method;
-        *row.report() = crate::method::report_of_cells(method, h.iter().copied().zip(&record));
+        *row_report = crate::method::report_of_cells(m.method, cells);
         fix(&mut row, &head);
         rows.push(row);
     }
@@ -431,7 +805,7 @@ pub(crate) fn read_rows<T: de::DeserializeOwned + MethodCells>(
 
 /// Reads a file written by `to_csv` back, or by an older version (for tests and tools).
 pub fn from_csv(text: &str) -> Result<Vec<Row>> {
-    read_rows(text, &header(), "label", |r: &mut Row, head| {
+    read_rows(text, &LAYOUT, |r: &mut Row, head| {
         if !head.iter().any(|h| h == "indirect_ms") {
             r.indirect_ms = r.indirect_of_stages();
         }
@@ -441,6 +815,8 @@ pub fn from_csv(text: &str) -> Result<Vec<Row>> {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::method::Method;
+    use crate::settings::{ClusterLight, Gamma};
 
     /// A plausible row for tests (time grows with the K's, error falls).
     pub fn synthetic(mode: &str, sp: u32, vpl: u32) -> Row {
@@ -453,16 +829,7 @@ pub(crate) mod tests {
         let mut r = Row {
             scene: "builtin:cornell".into(),
             camera: "default".into(),
-            width: 96,
-            height: 72,
-            vpls: 1024,
             mode: mode.into(),
-            vpl_clusters: vpl,
-            sp_clusters: sp,
-            fuzziness: 6,
-            gamma: Gamma::Fixed(4),
-            normal_threshold: 0.866,
-            iterations: 10,
             reference_ms: 50.0,
             mse: bias * 1e-2 / k.sqrt(),
             rel_mse: bias * 1e-1 / k.sqrt(),
@@ -471,20 +838,35 @@ pub(crate) mod tests {
             shadow_rays: 123_456_789_012,
             repeat: 3,
             label: format!("{mode} {sp}/{vpl}"),
-            weight_exponent: 1.0,
             gamma_used: Some(4),
-            plane_gate_deg: None,
             flip: Some(bias * 0.05),
             border: Some(bias * 1e-4),
             interior: Some(1e-4),
             border_ratio: Some(bias),
             flip_border: Some(bias * 0.06),
-            target_ms: None,
             front_mse: None,
             method: MethodSettings::default(),
             indirect_ms: 0.0,
             adapter: "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Mesa 22.3.6 (LLVM 15.0.6))".into(),
             driver: "llvmpipe Mesa 22.3.6 (LLVM 15.0.6)".into(),
+            cluster: ClusterSettings {
+                sp_clusters: sp,
+                vpl_clusters: vpl,
+                fuzziness: 6,
+                gamma: Gamma::Fixed(4),
+                normal_threshold: 0.866,
+                iterations: 10,
+                weight_exponent: 1.0,
+                plane_gate: None,
+                target_ms: None,
+                ..Default::default()
+            },
+            frame: FrameSettings {
+                width: 96,
+                height: 72,
+                vpls: 1024,
+                ..Default::default()
+            },
             ..Default::default()
         };
         for (i, (_, v)) in r.stages_mut().into_iter().enumerate() {
@@ -500,6 +882,26 @@ pub(crate) mod tests {
         r
     }
 
+    /// The cell of column `c` in line `n` (1: the first row) of `text`.
+    pub fn cell(text: &str, n: usize, c: &str) -> String {
+        let head = split_line(text.lines().next().unwrap());
+        let at = head
+            .iter()
+            .position(|h| h == c)
+            .unwrap_or_else(|| panic!("no {c}"));
+        split_line(text.lines().nth(n).unwrap())[at].clone()
+    }
+
+    /// `text` without the columns `drop` names.
+    pub fn without(text: &str, drop: impl Fn(&str) -> bool) -> String {
+        let head = split_line(text.lines().next().unwrap());
+        let keep: Vec<usize> = (0..head.len()).filter(|&i| !drop(&head[i])).collect();
+        write_records(text.lines().map(|l| {
+            let f = split_line(l);
+            keep.iter().map(|&i| f[i].clone()).collect()
+        }))
+    }
+
     #[test]
     fn a_row_round_trips() {
         let mut r = synthetic("weighted", 48, 128);
@@ -510,15 +912,95 @@ pub(crate) mod tests {
         let back = from_csv(&csv).unwrap();
         assert_eq!(back, vec![r.clone()]);
         // γ auto is written as the word and read back.
-        r.gamma = Gamma::Auto;
+        r.cluster.gamma = Gamma::Auto;
         let csv = to_csv(std::slice::from_ref(&r));
         assert!(csv.contains(",auto,"), "{csv}");
         assert_eq!(from_csv(&csv).unwrap(), vec![r]);
     }
 
+    /// Settings without a column of the contract's are columns too (generated from their
+    /// declarations), each as serde writes it, and read back.
+    #[test]
+    fn settings_round_trip_in_their_columns() {
+        let mut r = synthetic("weighted", 48, 128);
+        let c = &mut r.cluster;
+        (c.temporal, c.temporal_alpha, c.visibility_facing) = (true, 0.25, true);
+        (c.cluster_light, c.reseed) = (ClusterLight::Point, false);
+        (r.frame.seed, r.frame.clamp, r.frame.indirect_scale) = (7, 0.05, 0.5);
+        let text = to_csv(std::slice::from_ref(&r));
+        let text_of = |c: &str| cell(&text, 1, c);
+        let cell = |a: &str, b: &str| (text_of(a), text_of(b));
+        assert_eq!(
+            cell("temporal", "temporal_alpha"),
+            ("true".into(), "0.25".into())
+        );
+        assert_eq!(text_of("visibility_facing"), "true");
+        assert_eq!(
+            cell("cluster_light", "reseed"),
+            ("point".into(), "false".into())
+        );
+        assert_eq!(cell("seed", "clamp"), ("7".into(), "0.05".into()));
+        assert_eq!(
+            cell("indirect_scale", "weighting"),
+            ("0.5".into(), "inverse-distance".into())
+        );
+        assert_eq!(from_csv(&text).unwrap(), vec![r.clone()]);
+        // Without those columns (a file of an older version), the settings read their defaults.
+        let extra: Vec<&str> = settings_columns()
+            .filter(|c| !COLUMNS.contains(c))
+            .collect();
+        let old = from_csv(&without(&text, |c| extra.contains(&c))).unwrap();
+        let d = ClusterSettings::default();
+        assert_eq!(
+            (old[0].cluster.temporal, old[0].cluster.temporal_alpha),
+            (d.temporal, d.temporal_alpha)
+        );
+        assert_eq!(old[0].frame.seed, FrameSettings::default().seed);
+        assert_eq!(old[0].cluster.sp_clusters, 48);
+        // A cell a setting refuses is an error naming its line and column.
+        let bad = text.replacen(",point,", ",pointy,", 1);
+        let e = from_csv(&bad).unwrap_err().to_string();
+        assert!(e.contains("line 2") && e.contains("cluster_light"), "{e}");
+        let head = split_line(text.lines().next().unwrap());
+        let mut line = split_line(text.lines().nth(1).unwrap());
+        line[head.iter().position(|h| h == "seed").unwrap()] = "-1".into();
+        let e = from_csv(&write_records([head, line]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 2") && e.contains("seed \"-1\""), "{e}");
+    }
+
+    /// Every settings field (`ClusterSettings`, `FrameSettings`) is a column of both files, once,
+    /// named as serde names it: the contract's where it placed it, the others after the contract's
+    /// columns in declaration order, before the knobs.
+    #[test]
+    fn every_settings_field_is_a_column_of_both_files() {
+        let fields: Vec<&str> = fields_of::<ClusterSettings>()
+            .iter()
+            .chain(fields_of::<FrameSettings>())
+            .copied()
+            .collect();
+        assert!(fields.contains(&"plane_gate_deg") && fields.contains(&"seed"));
+        let path = crate::bench::path::COLUMNS;
+        for (h, listed) in [(header(), COLUMNS), (crate::bench::path::header(), path)] {
+            for f in &fields {
+                assert_eq!(h.iter().filter(|c| c == f).count(), 1, "{f} in {h:?}");
+            }
+            let rest: Vec<&str> = fields
+                .iter()
+                .copied()
+                .filter(|f| !listed.contains(f))
+                .collect();
+            let at = listed.len();
+            assert_eq!(h[..at], listed[..]);
+            assert_eq!(h[at..at + rest.len()], rest[..]);
+            assert_eq!(h[at + rest.len()], MethodSettings::columns()[0]);
+        }
+    }
+
     #[test]
     fn a_method_row_keeps_its_knobs_in_their_columns() {
-        // colom's knobs are the paper's own columns.
+        // A method whose knobs are the paper's has no knob columns of its own.
         for room in crate::method::ROOMS.iter().filter(|r| r.own_knobs) {
             let mut r = synthetic(room.method.name(), 0, 0);
             r.method.method = room.method;
@@ -565,18 +1047,21 @@ pub(crate) mod tests {
         r.gamma_used = None;
         let csv = to_csv(std::slice::from_ref(&r));
         assert_eq!(from_csv(&csv).unwrap(), vec![r.clone()]);
+        // Drop the report columns, the knob columns and the generated settings columns: files of
+        // the versions before them.
+        let report = crate::method::report_columns();
+        let csv = without(&csv, |c| report.contains(&c));
+        assert_eq!(from_csv(&csv).unwrap(), vec![r.clone()]);
+        let csv = without(&csv, |c| MethodSettings::columns().contains(&c));
+        assert_eq!(from_csv(&csv).unwrap(), vec![r.clone()]);
+        let csv = without(&csv, |c| !COLUMNS.contains(&c));
+        assert_eq!(from_csv(&csv).unwrap(), vec![r.clone()]);
         let cut_n = |text: &str, n: usize| {
             write_records(text.lines().map(|l| {
                 let f = split_line(l);
                 f[..f.len() - n].to_vec()
             }))
         };
-        // Drop the report columns, then the method knob columns: files of the versions before
-        // them.
-        let csv = cut_n(&csv, crate::method::report_columns().len());
-        assert_eq!(from_csv(&csv).unwrap(), vec![r.clone()]);
-        let csv = cut_n(&csv, MethodSettings::columns().len());
-        assert_eq!(from_csv(&csv).unwrap(), vec![r.clone()]);
         // Drop the adapter columns: a file of the version before them.
         let a = ADAPTER_COLUMNS.len();
         let csv = cut_n(&csv, a);
@@ -591,7 +1076,7 @@ pub(crate) mod tests {
         let back = from_csv(&cut_n(&csv, m)).unwrap();
         assert_eq!(
             (back[0].method.method, back[0].flip),
-            (Method::Colom, r.flip)
+            (Method::default(), r.flip)
         );
         // Drop also the error columns: a file of the version before them.
         // flip, border, interior, border_ratio, flip_border, target_ms and front_mse.
@@ -603,23 +1088,43 @@ pub(crate) mod tests {
         let cut = |text: &str| cut_n(text, 3);
         let old = cut_n(&csv, m + n + 3);
         let back = from_csv(&old).unwrap();
-        assert_eq!(back[0].weight_exponent, 1.0);
+        assert_eq!(back[0].cluster.weight_exponent, 1.0);
         assert_eq!(back[0].gamma_used, None);
-        assert_eq!(back[0].plane_gate_deg, None);
-        assert_eq!(back[0].method.method, Method::Colom);
+        assert_eq!(back[0].cluster.plane_gate, None);
+        assert_eq!(back[0].method.method, Method::default());
         let want = r.frame_ms() - r.stage("primary") - r.stage("direct");
         assert!((back[0].indirect_ms - want).abs() < 1e-9);
         assert_eq!(back[0].indirect_ms, r.indirect_of_stages());
         assert_eq!(back[0].label, r.label);
-        // Not a prefix of the header, or short of `label`: refused.
+        // Not a prefix of the contract's columns, or short of `label`: refused.
         assert!(from_csv(&old.replacen("scene,camera", "camera,scene", 1)).is_err());
         let short = cut(&old);
         assert!(from_csv(&short).is_err());
     }
 
-    /// The header is the row's fields (the stage columns `stages()` after `iterations`), then the
-    /// knobs, then the report columns; no two columns share a name, and `stage` reads each stage's
-    /// own column.
+    /// A file as the version before the generated settings columns wrote it (commit d05e11d:
+    /// the contract's columns, then the knobs and the report columns): its rows read, and written
+    /// again every one of its columns has the same text.
+    #[test]
+    fn a_file_before_the_settings_columns_reads_and_keeps_its_text() {
+        let old = include_str!("testdata/results-d05e11d.csv");
+        let rows = from_csv(old).unwrap();
+        let mut want = synthetic("weighted", 48, 128);
+        let c = &mut want.cluster;
+        (c.plane_gate, c.target_ms, c.weight_exponent) = (Some(20.0), Some(40.0), 2.0);
+        want.report = Some(serde_json::json!({
+            "sp_iterations": 3, "sp_warm_kept": 40, "visibility_rows_reused": 0
+        }));
+        assert_eq!(rows, vec![want]);
+        let again = to_csv(&rows);
+        for c in split_line(old.lines().next().unwrap()) {
+            assert_eq!(cell(&again, 1, &c), cell(old, 1, &c), "{c}");
+        }
+    }
+
+    /// The header is the contract's columns (the stage columns `stages()` after `iterations`),
+    /// the other settings, then the knobs, then the report columns; no two columns share a name,
+    /// every own field of a row is a column, and `stage` reads each stage's own column.
     #[test]
     fn the_header_is_the_rows_fields_then_the_knobs() {
         let h = header();
@@ -637,6 +1142,21 @@ pub(crate) mod tests {
         unique.sort();
         unique.dedup();
         assert_eq!(unique.len(), h.len(), "{h:?}");
+        // The contract's columns are each a row's field or a setting, and every field is one.
+        for (own, listed) in [
+            (fields_of::<Row>(), COLUMNS),
+            (
+                fields_of::<crate::bench::path::PathRow>(),
+                crate::bench::path::COLUMNS,
+            ),
+        ] {
+            for c in listed {
+                assert!(own.contains(c) ^ settings_columns().any(|s| s == *c), "{c}");
+            }
+            for f in own {
+                assert!(listed.contains(f), "{f} has no column");
+            }
+        }
         let mut r = synthetic("weighted", 48, 128);
         let names: Vec<&str> = r.stages_mut().into_iter().map(|(n, _)| n).collect();
         assert_eq!(names, stages().collect::<Vec<_>>());
@@ -660,26 +1180,42 @@ pub(crate) mod tests {
         }
         (r.reference_ms, r.speedup, r.indirect_ms) = (10.5, 2.25, 3.75);
         (r.mse, r.rel_mse) = (1.5e-7, 2.5e-3);
-        (r.flip, r.border, r.target_ms, r.front_mse) = (Some(0.125), None, Some(40.0), Some(1e-9));
-        (r.plane_gate_deg, r.gamma_used, r.weight_exponent) = (Some(20.0), None, 2.0);
+        (r.flip, r.border, r.cluster.target_ms, r.front_mse) =
+            (Some(0.125), None, Some(40.0), Some(1e-9));
+        (r.cluster.plane_gate, r.gamma_used) = (Some(20.0), None);
+        r.cluster.weight_exponent = 2.0;
         // The last room's method: its knobs (their defaults) filled, the others' empty.
         let room = crate::method::ROOMS.last().unwrap();
         r.method.method = room.method;
         let text = to_csv(std::slice::from_ref(&r));
-        let head = split_line(text.lines().next().unwrap());
-        let line = split_line(text.lines().nth(1).unwrap());
-        let cell = |c: &str| line[head.iter().position(|h| h == c).unwrap()].as_str();
-        assert_eq!((cell("vpl_trace_ms"), cell("gather_ms")), ("0", "6"));
-        assert_eq!((cell("frame_ms"), cell("normal_threshold")), ("8", "0.866"));
-        assert_eq!((cell("mse"), cell("rel_mse")), ("1.5e-7", "2.5e-3"));
+        let cell = |c: &str| cell(&text, 1, c);
+        assert_eq!(
+            (cell("vpl_trace_ms"), cell("gather_ms")),
+            ("0".into(), "6".into())
+        );
+        assert_eq!(
+            (cell("frame_ms"), cell("normal_threshold")),
+            ("8".into(), "0.866".into())
+        );
+        assert_eq!(
+            (cell("mse"), cell("rel_mse")),
+            ("1.5e-7".into(), "2.5e-3".into())
+        );
         assert_eq!(
             (cell("flip"), cell("border"), cell("target_ms")),
-            ("1.25e-1", "", "4e1")
+            ("1.25e-1".into(), "".into(), "4e1".into())
         );
-        assert_eq!((cell("plane_gate_deg"), cell("gamma_used")), ("20", ""));
+        assert_eq!(
+            (cell("plane_gate_deg"), cell("gamma_used")),
+            ("20".into(), "".into())
+        );
         assert_eq!(
             (cell("weight_exponent"), cell("indirect_ms")),
-            ("2", "3.75")
+            ("2".into(), "3.75".into())
+        );
+        assert_eq!(
+            (cell("width"), cell("height"), cell("vpls")),
+            ("96".into(), "72".into(), "1024".into())
         );
         assert_eq!(cell("method"), room.method.name());
         let knobs = MethodSettings::columns()
@@ -711,13 +1247,21 @@ builtin:cornell,default,96,72,1024,weighted,128,48,6,4,0.866,10,1.5,2,0.5,3,1,2.
         let rows = from_csv(old).unwrap();
         let r = &rows[0];
         assert_eq!(
-            (r.label.as_str(), r.gamma, r.sp_clusters_used),
+            (r.label.as_str(), r.cluster.gamma, r.sp_clusters_used),
             ("weighted 48/128 F6 g4", Gamma::Fixed(4), 47)
         );
         assert_eq!((r.shade_ms, r.frame_ms(), r.mse), (2.5, 7.75, 1.2e-4));
         assert_eq!(
-            (r.weight_exponent, r.gamma_used, r.plane_gate_deg),
+            (
+                r.cluster.weight_exponent,
+                r.gamma_used,
+                r.cluster.plane_gate
+            ),
             (1.0, None, None)
+        );
+        assert_eq!(
+            (r.cluster.sp_clusters, r.cluster.vpl_clusters, r.frame.vpls),
+            (48, 128, 1024)
         );
         assert_eq!((r.flip, r.border_ratio, r.front_mse), (None, None, None));
         assert_eq!(r.method, MethodSettings::default());
@@ -726,6 +1270,9 @@ builtin:cornell,default,96,72,1024,weighted,128,48,6,4,0.866,10,1.5,2,0.5,3,1,2.
         assert_eq!(r.indirect_ms, 7.75 - 0.5 - 0.75);
         // Written again, it has every column and reads back the same.
         assert_eq!(from_csv(&to_csv(&rows)).unwrap(), rows);
+        // γ written as a number reads as the factor.
+        let float = old.replacen(",4,0.866,", ",4.0,0.866,", 1);
+        assert_eq!(from_csv(&float).unwrap()[0].cluster.gamma, Gamma::Fixed(4));
     }
 
     #[test]
@@ -735,5 +1282,9 @@ builtin:cornell,default,96,72,1024,weighted,128,48,6,4,0.866,10,1.5,2,0.5,3,1,2.
         let mut csv = to_csv(&[synthetic("hard", 48, 128)]);
         csv = csv.replace(",hard,", ",hard,extra,");
         assert!(from_csv(&csv).is_err());
+        // A column no version wrote, or one twice: refused.
+        let good = to_csv(&[synthetic("hard", 48, 128)]);
+        assert!(from_csv(&good.replacen(",seed,", ",seeds,", 1)).is_err());
+        assert!(from_csv(&good.replacen(",seed,", ",bounces,", 1)).is_err());
     }
 }

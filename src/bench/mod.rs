@@ -427,11 +427,11 @@ impl Bench<'_> {
             reference.exposure,
             labels.as_deref(),
         );
-        let row = Row {
-            target_ms,
+        let mut row = Row {
             label: label.clone(),
             ..self.row(cam_name, c, &t, reference, &error)
         };
+        row.cluster.target_ms = target_ms;
         let out = &self.plan.out_dir;
         let stem = format!("{stem_no}_{}", file_slug(&label));
         let img = format!("images/{stem}.png");
@@ -481,19 +481,8 @@ impl Bench<'_> {
         let mut row = Row {
             scene: self.plan.scene_name.clone(),
             camera: cam_name.to_string(),
-            width: frame.width,
-            height: frame.height,
-            vpls: frame.vpls,
             mode: sweep::mode_name(c).into(),
-            vpl_clusters: c.vpl_clusters,
-            sp_clusters: c.sp_clusters,
-            fuzziness: c.fuzziness,
-            gamma: c.gamma,
             gamma_used: frame.gamma_used,
-            plane_gate_deg: c.plane_gate,
-            weight_exponent: c.weight_exponent,
-            normal_threshold: c.normal_threshold,
-            iterations: c.iterations,
             reference_ms: reference.ms,
             speedup: if frame_ms > 0.0 {
                 reference.ms / frame_ms
@@ -507,7 +496,6 @@ impl Bench<'_> {
             interior: error.interior,
             border_ratio: error.border_ratio,
             flip_border: error.flip_border,
-            target_ms: None,
             front_mse: None,
             sp_clusters_used: frame.sp_clusters_used,
             vpl_clusters_used: frame.vpl_clusters_used,
@@ -519,6 +507,13 @@ impl Bench<'_> {
             adapter: self.ctx.adapter_name.clone(),
             driver: self.ctx.driver.clone(),
             report: frame.report_of(c.method.method).cloned(),
+            cluster: c.cluster.clone(),
+            frame: FrameSettings {
+                width: frame.width,
+                height: frame.height,
+                vpls: frame.vpls,
+                ..t.settings.frame
+            },
             ..Default::default()
         };
         for (name, v) in row.stages_mut() {
@@ -532,10 +527,13 @@ impl Bench<'_> {
     fn mark_front(&self, cam_name: &str, cam_rows: &mut [(Row, String, String)]) {
         let fixed: Vec<(f64, f64)> = cam_rows
             .iter()
-            .filter(|r| r.0.target_ms.is_none())
+            .filter(|r| r.0.cluster.target_ms.is_none())
             .map(|r| (r.0.frame_ms(), r.0.mse))
             .collect();
-        for r in cam_rows.iter_mut().filter(|r| r.0.target_ms.is_some()) {
+        for r in cam_rows
+            .iter_mut()
+            .filter(|r| r.0.cluster.target_ms.is_some())
+        {
             r.0.front_mse = front_at(&fixed, r.0.frame_ms());
             if let Some(f) = r.0.front_mse {
                 self.say(format!(
@@ -562,7 +560,10 @@ impl Bench<'_> {
             just,
         )?;
         plots.push(("Stage times and MSE".to_string(), stages_png));
-        if just.iter().any(|r| r.sp_clusters > 0 && r.vpl_clusters > 0) {
+        if just
+            .iter()
+            .any(|r| r.cluster.sp_clusters > 0 && r.cluster.vpl_clusters > 0)
+        {
             let grid_png = format!("grid{suffix}.png");
             plot::grid(
                 &out.join(&grid_png),

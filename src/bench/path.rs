@@ -2,8 +2,9 @@
 //! each frame against its own unclustered reference (same VPLs, direct-light samples and seed), so
 //! that what temporal reuse buys (SP clustering time) and costs (error) is measured frame by frame,
 //! with `instability` (`metrics::instability`): how much the clustering error changes between
-//! consecutive frames. Writes `path.csv` (a `PathRow` a frame, with the method's knobs as its last
-//! columns, as `results.csv`) and `path.png`.
+//! consecutive frames. Writes `path.csv` (a `PathRow` a frame, its columns laid out as
+//! `results.csv`'s: the contract's, then every other settings field, the method knobs and the
+//! report columns) and `path.png`.
 
 use std::path::Path;
 
@@ -20,8 +21,9 @@ use crate::gi::primary::CameraParams;
 use crate::gpu::GpuContext;
 use crate::method::MethodSettings;
 use crate::render::timed::{FrameKind, FrameLoop, Timing, timed};
-use crate::render::{FRAME_KEY, Frame, Renderer};
+use crate::render::{FRAME_KEY, Frame, RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
+use crate::settings::{ClusterSettings, FrameSettings};
 use crate::{export, metrics};
 
 /// An orbit of `degrees` in all, in `frames` frames, about the vertical axis through the point the
@@ -100,14 +102,13 @@ pub fn orbit_target_of(renderer: &Renderer, cam: &Camera) -> Vec3 {
     (t.as_dvec3() / renderer.geometry_scale).as_vec3()
 }
 
-/// One frame of a path: a row of `path.csv`, a field a column, then every method's knobs
+/// One frame of a path: a row of `path.csv`, a field a column, with the settings it was made with
+/// (their fields are columns too: `COLUMNS`, `csv::settings_columns`), then every method's knobs
 /// (`MethodSettings::columns`). The columns after `reference_ms` were added over time: a file may
 /// stop after any of them, and the missing ones read their defaults.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct PathRow {
     pub label: String,
-    #[serde(serialize_with = "on_off", deserialize_with = "on_off_cell")]
-    pub temporal: bool,
     pub frame: u32,
     /// GPU ms of the frame (resident VPL work excluded) and of its SP clustering.
     pub frame_ms: f64,
@@ -122,19 +123,13 @@ pub struct PathRow {
     /// GPU ms of the visibility pass.
     #[serde(default)]
     pub visibility_ms: f64,
-    /// The adapter and its driver, the scene and the frame.
+    /// The adapter and its driver, and the scene.
     #[serde(default)]
     pub adapter: String,
     #[serde(default)]
     pub driver: String,
     #[serde(default)]
     pub scene: String,
-    #[serde(default)]
-    pub width: u32,
-    #[serde(default)]
-    pub height: u32,
-    #[serde(default)]
-    pub vpls: u32,
     /// Flicker at the same surface point: frame t's error against frame t−1's where the same
     /// surface was (`metrics::instability_world`); empty at frame 0 or when no pixel matched.
     #[serde(default)]
@@ -151,14 +146,19 @@ pub struct PathRow {
     /// files without it read empty.
     #[serde(default)]
     pub indirect_ms: Option<f64>,
-    /// `temporal_alpha` of the accumulation (`--temporal-alpha`); empty with temporal off.
-    #[serde(default)]
-    pub temporal_alpha: Option<f32>,
     /// `instability_world` of the frame's direct light alone against the same references: what
     /// an image without indirect light would score, i.e. how much the references' own indirect
     /// light changes when read between the previous frame's pixels (docs/temporal.md).
     #[serde(default)]
     pub instability_world_direct_only: Option<f64>,
+    /// The clustering the frame ran with: `temporal` (written `on`/`off`) and `temporal_alpha` (the
+    /// accumulation's, `--temporal-alpha`; empty with temporal off) among the contract's columns.
+    #[serde(skip)]
+    pub cluster: ClusterSettings,
+    /// The frame's settings as it ran (`width`, `height` and `vpls` the frame's own: `vpls` the
+    /// VPLs traced); files without `width`, `height` or `vpls` read them 0 (unknown).
+    #[serde(skip)]
+    pub frame_settings: FrameSettings,
     /// The method's report (`Frame::report`), in the report columns after the knobs
     /// (`method::report_columns`; files of versions that had some among their own columns read
     /// them there, by name).
@@ -166,39 +166,119 @@ pub struct PathRow {
     pub report: Option<serde_json::Value>,
 }
 
-impl super::csv::MethodCells for PathRow {
-    fn knobs(&mut self) -> &mut MethodSettings {
-        &mut self.method
+impl super::csv::Carried for PathRow {
+    fn carried(&self) -> super::csv::Parts<'_> {
+        let r = self;
+        (&r.cluster, &r.frame_settings, &r.method, r.report.as_ref())
     }
-    fn report(&mut self) -> &mut Option<serde_json::Value> {
-        &mut self.report
+    fn carried_mut(&mut self) -> super::csv::PartsMut<'_> {
+        let r = self;
+        (
+            &mut r.cluster,
+            &mut r.frame_settings,
+            &mut r.method,
+            &mut r.report,
+        )
     }
 }
 
-/// `path.csv`'s header: `PathRow`'s fields, then every method's knobs, then their report columns.
+impl PathRow {
+    /// Whether the frame reused the past (`cluster.temporal`).
+    pub fn temporal(&self) -> bool {
+        self.cluster.temporal
+    }
+}
+
+/// The columns of `path.csv` the contract names, in its order (docs/design.md, "Additive
+/// contracts" and "path.csv"): the row's own fields and the settings fields placed among them.
+pub const COLUMNS: &[&str] = &[
+    "label",
+    "temporal",
+    "frame",
+    "frame_ms",
+    "sp_cluster_ms",
+    "mse",
+    "rel_mse",
+    "instability",
+    "sp_clusters_used",
+    "reference_ms",
+    "visibility_ms",
+    "adapter",
+    "driver",
+    "scene",
+    "width",
+    "height",
+    "vpls",
+    "instability_world",
+    "method",
+    "indirect_ms",
+    "temporal_alpha",
+    "instability_world_direct_only",
+];
+
+/// `path.csv`'s layout: `temporal` as `on`/`off`, `temporal_alpha` as the `csv` crate writes an
+/// `f32` (`0.7`, `1.0`) and empty with temporal off.
+const LAYOUT: super::csv::Layout = super::csv::Layout {
+    columns: COLUMNS,
+    required: "reference_ms",
+    forms: &[
+        super::csv::Form {
+            column: "temporal",
+            write: |text, _| crate::settings::on_off(text == "true").into(),
+            read: |text| match crate::settings::parse_on_off(text) {
+                Ok(on) => Ok(on.to_string()),
+                Err(e) => Err(e.to_string()),
+            },
+        },
+        super::csv::Form {
+            column: "temporal_alpha",
+            write: |text, cells| {
+                let on = cells.iter().any(|(n, t)| *n == "temporal" && t == "true");
+                match text.parse::<f32>() {
+                    Ok(a) if on => csv_text(a),
+                    _ => String::new(),
+                }
+            },
+            read: |text| Ok(text.to_string()),
+        },
+    ],
+};
+
+/// `v` as the `csv` crate writes it in a cell.
+fn csv_text(v: impl Serialize) -> String {
+    let mut w = ::csv::WriterBuilder::new()
+        .has_headers(false)
+        .from_writer(Vec::new());
+    w.serialize([v]).expect("writing to memory");
+    let text = String::from_utf8(w.into_inner().expect("writing to memory")).expect("UTF-8");
+    text.trim_end().to_string()
+}
+
+/// `path.csv`'s header: the contract's columns, the other settings fields, every method's knobs,
+/// then their report columns.
 pub fn header() -> Vec<String> {
-    super::csv::header_of::<PathRow>()
+    super::csv::header_of(&LAYOUT)
 }
 
 pub fn to_csv(rows: &[PathRow]) -> String {
-    super::csv::write_rows(
-        &header(),
-        rows.iter().map(|r| (r, &r.method, r.report.as_ref())),
-    )
+    super::csv::write_rows(&LAYOUT, rows)
 }
 
 /// Reads a file written by `to_csv` back, or by an older version (`bench-table`, tests).
 pub fn from_csv(text: &str) -> Result<Vec<PathRow>> {
-    super::csv::read_rows(text, &header(), "reference_ms", |_: &mut PathRow, _| {})
-}
-
-fn on_off<S: serde::Serializer>(on: &bool, s: S) -> Result<S::Ok, S::Error> {
-    s.serialize_str(if *on { "on" } else { "off" })
-}
-
-fn on_off_cell<'de, D: serde::Deserializer<'de>>(d: D) -> Result<bool, D::Error> {
-    let text = String::deserialize(d)?;
-    crate::settings::parse_on_off(&text).map_err(serde::de::Error::custom)
+    super::csv::read_rows(text, &LAYOUT, |r: &mut PathRow, head| {
+        let has = |c: &str| head.iter().any(|h| h == c);
+        let f = &mut r.frame_settings;
+        for (c, v) in [
+            ("width", &mut f.width),
+            ("height", &mut f.height),
+            ("vpls", &mut f.vpls),
+        ] {
+            if !has(c) {
+                *v = 0;
+            }
+        }
+    })
 }
 
 /// Means over frames 1.. (the frames that can reuse) of one label and temporal setting: (frame ms,
@@ -206,7 +286,7 @@ fn on_off_cell<'de, D: serde::Deserializer<'de>>(d: D) -> Result<bool, D::Error>
 pub fn means(rows: &[PathRow], label: &str, temporal: bool) -> Option<[f64; 5]> {
     let sel: Vec<&PathRow> = rows
         .iter()
-        .filter(|r| r.label == label && r.temporal == temporal && r.frame >= 1)
+        .filter(|r| r.label == label && r.temporal() == temporal && r.frame >= 1)
         .collect();
     if sel.is_empty() {
         return None;
@@ -303,7 +383,7 @@ pub fn run(
                     references: &references,
                     i,
                 };
-                let row = path_row(ctx, plan, (c, on, alpha), &at, &f, prev.as_ref());
+                let row = path_row(ctx, plan, (c, &s, alpha), &at, &f, prev.as_ref());
                 say(&row);
                 rows.push(row);
                 prev = Some(f);
@@ -334,12 +414,12 @@ struct Along<'a> {
     i: usize,
 }
 
-/// The row of frame `f` (its predecessor `prev`) of configuration `c` with temporal reuse `on` and
-/// accumulation's `alpha`.
+/// The row of frame `f` (its predecessor `prev`) of configuration `c` rendered with `s` (temporal
+/// reuse on or off, the accumulation's `alpha` when given).
 fn path_row(
     ctx: &GpuContext,
     plan: &BenchPlan,
-    (c, on, alpha): (&Config, bool, Option<f32>),
+    (c, s, alpha): (&Config, &RenderSettings, Option<f32>),
     at: &Along,
     f: &Frame,
     prev: Option<&Frame>,
@@ -373,7 +453,6 @@ fn path_row(
     let instability_world_direct_only = world(&|f| &f.direct);
     PathRow {
         label,
-        temporal: on,
         frame: i as u32,
         frame_ms: f.frame_ms(),
         sp_cluster_ms: f.ms(Pass::SpCluster),
@@ -386,14 +465,17 @@ fn path_row(
         adapter: ctx.adapter_name.clone(),
         driver: ctx.driver.clone(),
         scene: plan.scene_name.clone(),
-        width: f.width,
-        height: f.height,
-        vpls: f.vpls,
         instability_world,
         method: c.method,
         indirect_ms: Some(f.frame_ms() - f.ms(Pass::Primary) - f.ms(Pass::Direct)),
-        temporal_alpha: alpha,
         instability_world_direct_only,
+        cluster: s.cluster.clone(),
+        frame_settings: FrameSettings {
+            width: f.width,
+            height: f.height,
+            vpls: f.vpls,
+            ..s.frame
+        },
         report: f.report_of(c.method.method).cloned(),
     }
 }
@@ -404,7 +486,7 @@ fn say(row: &PathRow) {
     eprintln!(
         "path: {} temporal {} frame {}: {:.1} ms (SP clustering {:.1} ms{}), MSE {:.3e}, instability {} (world {})",
         row.label,
-        if row.temporal { "on" } else { "off" },
+        crate::settings::on_off(row.temporal()),
         row.frame,
         row.frame_ms,
         row.sp_cluster_ms,
@@ -435,8 +517,8 @@ pub fn plot(path: &Path, title: &str, rows: &[PathRow]) -> Result<()> {
         let panels = root.split_evenly((1, 2));
         let mut series: Vec<(String, bool)> = Vec::new();
         for r in rows {
-            if !series.contains(&(r.label.clone(), r.temporal)) {
-                series.push((r.label.clone(), r.temporal));
+            if !series.contains(&(r.label.clone(), r.temporal())) {
+                series.push((r.label.clone(), r.temporal()));
             }
         }
         let frames = rows.iter().map(|r| r.frame).max().unwrap_or(0).max(1);
@@ -469,7 +551,7 @@ pub fn plot(path: &Path, title: &str, rows: &[PathRow]) -> Result<()> {
                 let colour = Palette99::pick(i).to_rgba();
                 let pts: Vec<(u32, f64)> = rows
                     .iter()
-                    .filter(|r| &r.label == label && r.temporal == *on)
+                    .filter(|r| &r.label == label && r.temporal() == *on)
                     .filter_map(|r| value(r).filter(|v| *v > 0.0).map(|v| (r.frame, v)))
                     .collect();
                 let width = if *on { 3 } else { 1 };
@@ -607,7 +689,10 @@ mod tests {
     fn csv_and_means_of_frames_after_the_first() {
         let row = |frame: u32, on: bool, sp: f64, mse: f64, inst: Option<f64>| PathRow {
             label: "weighted 192/512".into(),
-            temporal: on,
+            cluster: ClusterSettings {
+                temporal: on,
+                ..Default::default()
+            },
             frame,
             frame_ms: 10.0,
             sp_cluster_ms: sp,
@@ -620,9 +705,12 @@ mod tests {
             adapter: "an adapter, with a comma".into(),
             driver: "a driver".into(),
             scene: "builtin:conference".into(),
-            width: 160,
-            height: 120,
-            vpls: 4096,
+            frame_settings: FrameSettings {
+                width: 160,
+                height: 120,
+                vpls: 4096,
+                ..Default::default()
+            },
             instability_world: inst.map(|v| v / 2.0),
             report: Some(serde_json::json!({
                 "sp_iterations": 1,
@@ -683,7 +771,11 @@ mod tests {
     fn path_csv_reads_back_and_old_files_read() {
         let mut r = PathRow {
             label: "a method 48/128".into(),
-            temporal: true,
+            cluster: ClusterSettings {
+                temporal: true,
+                temporal_alpha: 0.7,
+                ..Default::default()
+            },
             frame: 2,
             frame_ms: 12.5,
             mse: 1e-4,
@@ -696,7 +788,6 @@ mod tests {
             adapter: "a, \"quoted\" adapter".into(),
             instability_world: Some(1e-6),
             indirect_ms: Some(7.25),
-            temporal_alpha: Some(0.7),
             instability_world_direct_only: Some(5e-6),
             ..Default::default()
         };
@@ -713,9 +804,12 @@ mod tests {
                 "instability_world_direct_only"
             ]
         );
+        // The other settings, then the knobs and the report columns.
+        let settings = super::super::csv::settings_columns().filter(|c| !COLUMNS.contains(c));
+        let at = 22 + settings.count();
         let knobs = MethodSettings::columns().len();
-        assert_eq!(head[22..22 + knobs], MethodSettings::columns());
-        assert_eq!(head[22 + knobs..], crate::method::report_columns());
+        assert_eq!(head[at..at + knobs], MethodSettings::columns());
+        assert_eq!(head[at + knobs..], crate::method::report_columns());
         assert_eq!(from_csv(&text).unwrap(), vec![r]);
         let old = "\
 label,temporal,frame,frame_ms,sp_cluster_ms,mse,rel_mse,instability,sp_iterations,sp_warm_kept,\
@@ -725,7 +819,7 @@ weighted 192/512 F6 g4,on,1,10.5,2.5,0.0001,0.002,0.00003,1,180,192,400
         let rows = from_csv(old).unwrap();
         assert_eq!(
             (
-                rows[0].temporal,
+                rows[0].temporal(),
                 rows[0].frame,
                 rows[0]
                     .report
@@ -736,10 +830,9 @@ weighted 192/512 F6 g4,on,1,10.5,2.5,0.0001,0.002,0.00003,1,180,192,400
             ),
             (true, 1, Some(180), 400.0)
         );
-        assert_eq!(
-            (rows[0].visibility_ms, rows[0].scene.as_str(), rows[0].vpls),
-            (0.0, "", 0)
-        );
+        let f = &rows[0].frame_settings;
+        assert_eq!((rows[0].visibility_ms, rows[0].scene.as_str()), (0.0, ""));
+        assert_eq!((f.width, f.height, f.vpls), (0, 0, 0));
         assert_eq!(
             (rows[0].instability_world, rows[0].indirect_ms),
             (None, None)
@@ -749,5 +842,36 @@ weighted 192/512 F6 g4,on,1,10.5,2.5,0.0001,0.002,0.00003,1,180,192,400
         assert!(from_csv(&old.replacen(",on,", ",maybe,", 1)).is_err());
         let short = "label,temporal,frame\nx,on,0\n";
         assert!(from_csv(short).is_err());
+    }
+
+    /// A file as the version before the generated settings columns wrote it (commit d05e11d): its
+    /// rows read, and written again every one of its columns has the same text (`temporal` on/off,
+    /// `temporal_alpha` empty with temporal off, the floats as the `csv` crate writes them).
+    #[test]
+    fn a_path_file_before_the_settings_columns_reads_and_keeps_its_text() {
+        let old = include_str!("testdata/path-d05e11d.csv");
+        let rows = from_csv(old).unwrap();
+        assert_eq!(rows.len(), 2);
+        let (off, on) = (&rows[0], &rows[1]);
+        assert_eq!((off.temporal(), on.temporal()), (false, true));
+        assert_eq!(on.cluster.temporal_alpha, 0.5);
+        let f = &on.frame_settings;
+        assert_eq!((f.width, f.height, f.vpls), (96, 72, 1024));
+        assert_eq!(
+            (on.frame_ms, on.instability, on.indirect_ms),
+            (10.0, Some(3e-5), Some(7.5))
+        );
+        assert_eq!(on.instability_world_direct_only, Some(5e-6));
+        assert_eq!(off.report, None);
+        let kept = on.report.as_ref().and_then(|r| r.get("sp_warm_kept"));
+        assert_eq!(kept.and_then(|k| k.as_u64()), Some(40));
+        let again = to_csv(&rows);
+        let cell = super::super::csv::tests::cell;
+        for c in super::super::csv::split_line(old.lines().next().unwrap()) {
+            for n in [1, 2] {
+                assert_eq!(cell(&again, n, &c), cell(old, n, &c), "{c}, line {n}");
+            }
+        }
+        assert_eq!(from_csv(&again).unwrap(), rows);
     }
 }

@@ -343,13 +343,13 @@ fn scatter(
 pub fn grid(path: &Path, title: &str, rows: &[Row]) -> Result<()> {
     let sel: Vec<&Row> = rows
         .iter()
-        .filter(|r| r.sp_clusters > 0 && r.vpl_clusters > 0)
+        .filter(|r| r.cluster.sp_clusters > 0 && r.cluster.vpl_clusters > 0)
         .collect();
     scatter(
         path,
         title,
         &sel,
-        |r| format!("{}/{}", r.sp_clusters, r.vpl_clusters),
+        |r| format!("{}/{}", r.cluster.sp_clusters, r.cluster.vpl_clusters),
         false,
     )
 }
@@ -436,12 +436,17 @@ fn short(r: &Row) -> String {
             v.to_string()
         }
     };
-    let p = if r.weight_exponent != 1.0 && matches!(r.mode.as_str(), "weighted" | "sp-only") {
-        format!(" p{}", r.weight_exponent)
+    let p = if r.cluster.weight_exponent != 1.0 && matches!(r.mode.as_str(), "weighted" | "sp-only")
+    {
+        format!(" p{}", r.cluster.weight_exponent)
     } else {
         String::new()
     };
-    format!("{}/{}{p}", k(r.sp_clusters), k(r.vpl_clusters))
+    format!(
+        "{}/{}{p}",
+        k(r.cluster.sp_clusters),
+        k(r.cluster.vpl_clusters)
+    )
 }
 
 #[cfg(test)]

@@ -115,9 +115,9 @@ pub fn markdown(s: &SummaryInfo) -> String {
                 i + 1,
                 r.mode,
                 star,
-                r.sp_clusters,
-                r.vpl_clusters,
-                r.fuzziness,
+                r.cluster.sp_clusters,
+                r.cluster.vpl_clusters,
+                r.cluster.fuzziness,
                 gamma_cell(r),
                 fmt_ms(r.frame_ms()),
                 fmt_ms(r.stage("sp_cluster")),
@@ -159,7 +159,9 @@ pub fn markdown(s: &SummaryInfo) -> String {
 fn gamma_cell(r: &Row) -> String {
     match r.gamma_used {
         None => "–".into(),
-        Some(g) if r.gamma != crate::settings::Gamma::Fixed(g) => format!("{} → {g}", r.gamma),
+        Some(g) if r.cluster.gamma != crate::settings::Gamma::Fixed(g) => {
+            format!("{} → {g}", r.cluster.gamma)
+        }
         Some(g) => g.to_string(),
     }
 }

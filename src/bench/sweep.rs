@@ -22,7 +22,7 @@ impl std::ops::Deref for Config {
 }
 
 impl From<ClusterSettings> for Config {
-    /// colom with `cluster`.
+    /// The default method (whose knobs are the paper's `ClusterSettings`) with `cluster`.
     fn from(cluster: ClusterSettings) -> Config {
         Config {
             cluster,
@@ -196,7 +196,7 @@ pub struct Sweep {
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::settings::parse_target_ms)]
     pub target_ms: Vec<f64>,
     /// `--paper` (on), or a list of off / on: the configurations with it start from the paper's
-    /// settings (`render --paper`: colom's point cluster lights, no re-seeding or fallbacks, mean
+    /// settings (`render --paper`: point cluster lights, no re-seeding or fallbacks, mean
     /// centroid normals, n_t = √3/2; every method's frame without a G-term clamp unless --clamp is
     /// given, against a reference without it too); with no K lists, every configuration takes the
     /// paper's K ratios for the frame. The lists given still sweep over them (`--paper --cluster-light
@@ -205,7 +205,7 @@ pub struct Sweep {
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::settings::parse_on_off,
           num_args = 0..=1, default_missing_value = "on")]
     pub paper: Vec<bool>,
-    /// The methods (`--methods`, default colom) and each one's knob lists (docs/methods.md),
+    /// The methods (`--methods`, default the paper's) and each one's knob lists (docs/methods.md),
     /// after the other lists: their headings follow.
     #[command(flatten)]
     pub method: MethodLists,
@@ -304,7 +304,8 @@ impl Sweep {
             );
         }
         let methods = &self.method.methods;
-        let colom = methods.contains(&Method::Colom);
+        // A method whose knobs are the paper's `ClusterSettings` runs the modes.
+        let modes = methods.iter().any(|&m| !crate::method::room(m).own_knobs);
         let sp_room = methods
             .iter()
             .map(|&m| crate::method::room(m))
@@ -317,11 +318,11 @@ impl Sweep {
                 r.method
             ));
         }
-        let sp_modes = colom && self.modes.iter().any(|m| m.clusters_sps());
+        let sp_modes = modes && self.modes.iter().any(|m| m.clusters_sps());
         if sp_modes && sps.contains(&0) {
             return Err("--sp-clusters 0: use --modes vpl-only for no SP clustering".into());
         }
-        let vpl_modes = colom && self.modes.iter().any(|m| m.clusters_vpls());
+        let vpl_modes = modes && self.modes.iter().any(|m| m.clusters_vpls());
         if vpl_modes && vpls.contains(&0) {
             return Err("--vpl-clusters 0: use --modes sp-only for no VPL clustering".into());
         }
@@ -330,7 +331,7 @@ impl Sweep {
 
     /// Every configuration of a resolved sweep, without repeats: the values a mode ignores are
     /// dropped (hard has F = 1, vpl-only no SP K, sp-only no VPL K); another method takes its own
-    /// knobs' combinations, with the K's (and iterations) when it uses colom's clusterings.
+    /// knobs' combinations, with the K's (and iterations) when it uses the paper's clusterings.
     pub fn configs(&self) -> Vec<Config> {
         let ks = self.ks();
         let mut out: Vec<Config> = Vec::new();
@@ -342,7 +343,9 @@ impl Sweep {
         for method in self.method.methods() {
             let room = crate::method::room(method);
             if !room.own_knobs {
-                self.colom_configs(&ks).into_iter().for_each(&mut push);
+                self.cluster_configs(method, &ks)
+                    .into_iter()
+                    .for_each(&mut push);
                 continue;
             }
             let own = self.method.configs_of(method);
@@ -377,10 +380,11 @@ impl Sweep {
         out
     }
 
-    /// colom's configurations: each `--paper` value × mode × K pair × every combination of the
-    /// other lists (`ClusterLists::configs`, in the order of their fields), with what the mode
-    /// ignores set to its neutral value.
-    fn colom_configs(&self, ks: &[(u32, u32)]) -> Vec<Config> {
+    /// The configurations of `method`, whose knobs are the paper's `ClusterSettings`: each
+    /// `--paper` value × mode × K pair × every combination of the other lists
+    /// (`ClusterLists::configs`, in the order of their fields), with what the mode ignores set to
+    /// its neutral value.
+    fn cluster_configs(&self, method: Method, ks: &[(u32, u32)]) -> Vec<Config> {
         // The K's come from the pairs, one (K_SP, K_VPL) at a time.
         let lists = ClusterLists {
             sp_clusters: Vec::new(),
@@ -406,7 +410,12 @@ impl Sweep {
                 }
             }
         }
-        out.into_iter().map(Config::from).collect()
+        let method = MethodSettings {
+            method,
+            ..Default::default()
+        };
+        let config = |cluster| Config { cluster, method };
+        out.into_iter().map(config).collect()
     }
 }
 
@@ -421,12 +430,13 @@ pub fn mode(c: &ClusterSettings) -> Mode {
     }
 }
 
-/// The `mode` column of a configuration: colom's mode, or the method's name for the other methods
-/// (each is its own series in the plots).
+/// The `mode` column of a configuration: the mode of a method whose knobs are the paper's
+/// `ClusterSettings`, or the method's name for the other methods (each is its own series in the
+/// plots).
 pub fn mode_name(c: &Config) -> &'static str {
-    match c.method.method {
-        Method::Colom => mode(c).name(),
-        m => m.name(),
+    match c.method.knobs_room() {
+        None => mode(c).name(),
+        Some(room) => room.method.name(),
     }
 }
 
@@ -651,22 +661,25 @@ mod tests {
     /// settings (each method's), the defaults first; a bare `--paper` is on, none is off.
     #[test]
     fn paper_off_on_sweeps_the_defaults_and_the_paper() {
-        let s = parse(
-            &[
-                "--paper",
-                "off,on",
-                "--modes",
-                "hard",
-                "--pairs",
-                "48/128",
-                "--methods",
-                "colom,lightcluster",
-                "--d-init",
-                "0.5",
-            ],
-            true,
-        )
-        .unwrap();
+        // The default method and one with knobs of its own, each of them pinned to one value.
+        let room = crate::method::ROOMS.iter().find(|r| r.own_knobs).unwrap();
+        let methods = format!("{},{}", Method::default().name(), room.method.name());
+        let mut args: Vec<String> = ["--paper", "off,on", "--modes", "hard", "--pairs", "48/128"]
+            .map(String::from)
+            .to_vec();
+        args.extend(["--methods".to_string(), methods]);
+        let own = MethodSettings {
+            method: room.method,
+            ..Default::default()
+        };
+        let knobs = MethodSettings::columns()
+            .into_iter()
+            .zip(own.column_values());
+        for (knob, value) in knobs.filter(|(_, v)| !v.is_empty()) {
+            args.extend([format!("--{}", knob.replace('_', "-")), value]);
+        }
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let s = parse(&args, true).unwrap();
         assert_eq!(s.paper, [false, true]);
         let c = s.configs();
         let labels: Vec<String> = c.iter().map(label).collect();
@@ -680,13 +693,13 @@ mod tests {
         assert!(!c[0].paper && c[0].reseed == d.reseed && c[0].cluster_light == d.cluster_light);
         assert!(c[1].paper && c[1].reseed == p.reseed && c[1].cluster_light == p.cluster_light);
         assert!(!c[1].ring_fallback && !c[1].position_fallback);
-        let lc: Vec<&Config> = c
+        let other: Vec<&Config> = c
             .iter()
-            .filter(|c| c.method.method != Method::Colom)
+            .filter(|c| c.method.method == room.method)
             .collect();
-        assert_eq!(lc.len(), 2);
-        assert!(!lc[0].paper && lc[1].paper);
-        assert!(label(lc[1]).ends_with(" paper") && !label(lc[0]).contains("paper"));
+        assert_eq!(other.len(), 2);
+        assert!(!other[0].paper && other[1].paper);
+        assert!(label(other[1]).ends_with(" paper") && !label(other[0]).contains("paper"));
         assert_eq!(parse(&["--paper"], true).unwrap().paper, [true]);
         assert_eq!(parse(&[], true).unwrap().paper, [false]);
         assert_eq!(parse(&["--paper", "on,on"], true).unwrap().paper, [true]);

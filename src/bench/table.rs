@@ -33,8 +33,8 @@ fn sweep_row(run: &str, r: &Row) -> String {
     let mut cells = vec![
         run.to_string(),
         format!("`{}`", r.scene),
-        format!("{}×{}", r.width, r.height),
-        r.vpls.to_string(),
+        format!("{}×{}", r.frame.width, r.frame.height),
+        r.frame.vpls.to_string(),
         r.label.clone(),
         "off".into(),
     ];
@@ -86,7 +86,7 @@ fn read_path(text: &str) -> Result<(Vec<PathGroup>, Option<Device>)> {
         if r.frame == 0 {
             continue;
         }
-        let temporal = if r.temporal { "on" } else { "off" };
+        let temporal = crate::settings::on_off(r.temporal());
         let at = match groups
             .iter()
             .position(|g| g.label == r.label && g.temporal == temporal)
@@ -105,10 +105,10 @@ fn read_path(text: &str) -> Result<(Vec<PathGroup>, Option<Device>)> {
                     scene: format!("`{}`", or_dash(r.scene.clone())),
                     size: format!(
                         "{}×{}",
-                        or_dash(r.width.to_string()),
-                        or_dash(r.height.to_string())
+                        or_dash(r.frame_settings.width.to_string()),
+                        or_dash(r.frame_settings.height.to_string())
                     ),
-                    vpls: or_dash(r.vpls.to_string()),
+                    vpls: or_dash(r.frame_settings.vpls.to_string()),
                     label: r.label.clone(),
                     temporal: temporal.into(),
                     frames: 0,
@@ -252,7 +252,11 @@ mod tests {
     fn path_rows() -> Vec<PathRow> {
         let row = |frame: u32, on: bool, ms: f64| PathRow {
             label: "weighted 8000/2000".into(),
-            temporal: on,
+            cluster: crate::settings::ClusterSettings {
+                temporal: on,
+                temporal_alpha: 0.7,
+                ..Default::default()
+            },
             frame,
             frame_ms: ms,
             sp_cluster_ms: ms / 4.0,
@@ -265,11 +269,13 @@ mod tests {
             adapter: "NVIDIA H100 80GB HBM3 (Vulkan, 580.82.07)".into(),
             driver: "NVIDIA 580.82.07".into(),
             scene: "builtin:conference".into(),
-            width: 1024,
-            height: 720,
-            vpls: 8192,
+            frame_settings: crate::settings::FrameSettings {
+                width: 1024,
+                height: 720,
+                vpls: 8192,
+                ..Default::default()
+            },
             instability_world: None,
-            temporal_alpha: on.then_some(0.7),
             ..Default::default()
         };
         vec![

@@ -217,15 +217,15 @@ fn along_path(
     );
     let mut seen = Vec::new();
     for r in &rows {
-        if seen.contains(&(&r.label, r.temporal)) {
+        if seen.contains(&(&r.label, r.temporal())) {
             continue;
         }
-        seen.push((&r.label, r.temporal));
-        if let Some([f, sp, mse, inst, world]) = bench::path::means(&rows, &r.label, r.temporal) {
+        seen.push((&r.label, r.temporal()));
+        if let Some([f, sp, mse, inst, world]) = bench::path::means(&rows, &r.label, r.temporal()) {
             println!(
                 "{:<32} {:>8} {f:>10.2} {sp:>12.2} {mse:>11.3e} {inst:>12.3e} {world:>12.3e}",
                 r.label,
-                if r.temporal { "on" } else { "off" }
+                crate::settings::on_off(r.temporal())
             );
         }
     }
