@@ -24,7 +24,7 @@ use super::{Counts, FrameInputs, IndirectMethod, PendingRays, Room};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
-use crate::gi::sum::{WordSum, Words};
+use crate::gi::sum::{Each, WordSum, Words};
 use crate::gpu::GpuContext;
 
 pub use settings::{LightClusterLists as KnobLists, LightClusterSettings as Knobs};
@@ -234,6 +234,7 @@ impl IndirectMethod for LightClusterMethod {
                         items: f.pixels(),
                         stride: 8,
                         word: 2,
+                        each: Each::Value,
                     };
                     let sum = self.rays.record(g, SHADE.name(), &state, words);
                     n.pending = Some(std::sync::Arc::new(PendingRays(sum)));
