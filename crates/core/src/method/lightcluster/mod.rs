@@ -14,6 +14,7 @@ pub mod twin;
 
 use std::time::Instant;
 
+use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
@@ -191,13 +192,7 @@ impl LightClusterMethod {
 }
 
 impl IndirectMethod for LightClusterMethod {
-    fn record(
-        &mut self,
-        pass: Pass,
-        g: &mut Gpu,
-        f: &FrameInputs,
-        n: &mut Counts,
-    ) -> anyhow::Result<()> {
+    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) -> Result<()> {
         let extent = f.scene.extent();
         match pass {
             // §3.1: the VPLs clustered for this camera on the CPU, as the paper's §4 (its time is

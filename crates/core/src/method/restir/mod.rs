@@ -17,6 +17,7 @@ pub mod twin;
 
 use std::time::Instant;
 
+use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
 use self::settings::{Combine, RestirLights};
@@ -318,13 +319,7 @@ impl RestirMethod {
 }
 
 impl IndirectMethod for RestirMethod {
-    fn record(
-        &mut self,
-        pass: Pass,
-        g: &mut Gpu,
-        f: &FrameInputs,
-        n: &mut Counts,
-    ) -> anyhow::Result<()> {
+    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) -> Result<()> {
         let pixels = f.pixels();
         match pass {
             PREPARE => self.prepare(g, f, n),
