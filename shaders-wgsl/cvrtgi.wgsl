@@ -15,29 +15,8 @@
 #import common/sampling.wgsl
 #import common/vpl.wgsl
 
-struct CvParams {
-    // xyz: the grid's min corner; w: the voxel size s.
-    origin: vec4<f32>,
-    // xyz: voxels per axis; w: occupied voxels V.
-    dims: vec4<u32>,
-    num_faces: u32,
-    rays: u32,
-    num_clusters: u32,
-    // The filter's radius r ((2r+1)³ kernel).
-    radius: u32,
-    d_min2: f32,
-    // Clusters nearer than this (to their box) give their lit voxels one by one.
-    near: f32,
-    inv_two_sigma2: f32,
-    _pad: u32,
-    // 0: the paper's gather; 1: each cluster's light times its conservation scale (flux.w), and
-    // each slot's `slot_flux` before the scale to `vis_w`.
-    gather_mode: u32,
-    // Rays per VPL of `escape`, and how far one must get to escape.
-    escape_rays: u32,
-    escape_reach: f32,
-    num_vpls: u32,
-}
+// CvParams, declared in Rust (crates/core/src/method/cvrtgi/mod.rs: its fields' meaning).
+#import rust/CvParams
 
 @group(1) @binding(1) var<uniform> params: CvParams;
 // Occupied voxels sorted by key, two vec4 each: (mean surface position, cluster bits), (normal, key

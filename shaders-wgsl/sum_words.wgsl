@@ -1,11 +1,13 @@
 // One word of each item of a buffer summed on the GPU into a 64-bit total (two u32 words, low then
 // high) in one slot of a ring that stays on the GPU (crates/core/src/gi/sum.rs): a method's per-pixel counts
-// (e.g. the shadow rays each pixel traced) counted without reading them back each frame. The CPU
+// (e.g. the shadow rays each pixel traced), or the items whose word is a positive f32 (the viewer's
+// lit pixels: the G-buffer's `pos.w > 0`), counted without reading them back each frame. The CPU
 // twin is `gi::sum::sum_words_cpu`.
 #import common/chunk.wgsl
 
 struct SumParams {
-    // x: the words an item spans; y: the word of an item summed; z: the ring's slot.
+    // x: the words an item spans; y: the word of an item summed; z: the ring's slot; w: what the
+    // word adds: 0 its value, 1 one where it is a positive f32 (`gi::sum::Each`).
     words: vec4<u32>,
 }
 
@@ -35,6 +37,9 @@ fn sum_words(
     var v = 0u;
     if i != 0xffffffffu {
         v = data[i * params.words.x + params.words.y];
+        if params.words.w == 1u {
+            v = select(0u, 1u, bitcast<f32>(v) > 0.0);
+        }
     }
     add_group(v);
     workgroupBarrier();

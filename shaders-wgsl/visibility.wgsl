@@ -5,21 +5,8 @@
 #import common/chunk.wgsl
 #import common/vpl.wgsl
 
-struct VisParams {
-    num_sp_clusters: u32,
-    num_lights: u32,
-    // Words per row: ceil(num_lights / 32).
-    words: u32,
-    // Rows of the previous frame's matrix (same lights) whose kept representatives may be copied
-    // instead of traced: 0 for none (temporal reuse off, or the lights changed).
-    reuse_rows: u32,
-    // 1: skip pairs that do not face each other (`--visibility-facing on`, not in the paper); 0:
-    // V is pure visibility, as the paper's (the default).
-    facing: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
-}
+// VisParams, declared in Rust (crates/core/src/method/colom/visibility.rs: its fields' meaning).
+#import rust/VisParams
 
 @group(1) @binding(1) var<uniform> params: VisParams;
 // SP-cluster representatives as points (kmeans.wgsl `rep_points`): position with w > 0 when the

@@ -147,8 +147,14 @@ fn flip_pass_matches_nv_flip() {
                     "{name}: a value off [0, 1]"
                 );
                 assert!(mean.is_finite());
-                let nv = metrics::flip_map(&x, &reference, size.0, size.1, exposure);
-                let twin = metrics::ldr_flip::flip_map(&x, &reference, size.0, size.1, exposure);
+                let p = metrics::FlipInputs {
+                    x: &x,
+                    reference: &reference,
+                    width: size.0,
+                    height: size.1,
+                    exposure,
+                };
+                let (nv, twin) = (metrics::flip_map(p), metrics::ldr_flip::flip_map(p));
                 let (max, mean_abs) = max_mean_abs(&map, &nv);
                 let (twin_max, _) = max_mean_abs(&twin, &nv);
                 let (gpu_twin, _) = max_mean_abs(&map, &twin);

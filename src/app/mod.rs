@@ -470,8 +470,8 @@ pub struct Viewer {
     pub traffic_mark: crate::gpu::traffic::Traffic,
     /// The window's device when the GI worker renders on it (`--display-path shared`).
     pub shared: Option<worker::SharedDevice>,
-    /// Lit-pixel counters of the frames while moving, on the GPU (shared path): ring, slot, pixels.
-    pub lit_slots: Vec<(wgpu::Buffer, u32, u32)>,
+    /// Lit-pixel counts of the frames while moving, on the GPU (shared path), and their pixels.
+    pub lit_slots: Vec<(crate::gi::sum::PendingSum, u32)>,
     /// The composed view of the latest frame (frame id, display key, RGBA, note): reprojected to
     /// every new camera while the next frame renders.
     composed: Option<(u64, String, Vec<u8>, Option<&'static str>)>,

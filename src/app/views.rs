@@ -196,7 +196,13 @@ pub fn error(img: &[[f32; 3]], reference: &[[f32; 3]]) -> Vec<u8> {
 
 /// The FLIP map of `img` against `reference` (both shown with `exposure`), magma, opaque RGBA8.
 pub fn flip(img: &[[f32; 3]], reference: &[[f32; 3]], w: u32, h: u32, exposure: f32) -> Vec<u8> {
-    let map = metrics::flip_map(img, reference, w, h, exposure);
+    let map = metrics::flip_map(metrics::FlipInputs {
+        x: img,
+        reference,
+        width: w,
+        height: h,
+        exposure,
+    });
     metrics::flip_error_map(&map, w, h)
         .chunks(3)
         .flat_map(|c| [c[0], c[1], c[2], 255])

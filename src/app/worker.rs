@@ -77,8 +77,9 @@ pub struct Rendered {
     pub gpu: Option<crate::render::GpuFrame>,
     /// The split view's B frame on the GPU (shared display path).
     pub b_gpu: Option<crate::render::GpuFrame>,
-    /// The ring of lit-pixel counters, this frame's slot and its pixels (`FrameJob::count_lit`).
-    pub lit: Option<(wgpu::Buffer, u32, u32)>,
+    /// This frame's lit pixels counted on the GPU (read on request) and its pixels
+    /// (`FrameJob::count_lit`).
+    pub lit: Option<(crate::gi::sum::PendingSum, u32)>,
     /// Nearest SP cluster per pixel (u32::MAX: none), when asked for and SP clustering ran.
     pub sp_ids: Option<Vec<u32>>,
     /// VPL positions.
@@ -514,8 +515,8 @@ fn render(
     job.settings = ran;
     let lit = match (&gpu, job.count_lit) {
         (Some(g), true) => {
-            let (ring, slot) = renderer.count_lit(&g.buffers);
-            Some((ring, slot, frame.width * frame.height))
+            let lit = renderer.count_lit(&g.buffers);
+            Some((lit, frame.width * frame.height))
         }
         _ => None,
     };

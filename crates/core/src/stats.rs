@@ -150,7 +150,13 @@ impl ErrorStats {
         exposure: f32,
         labels: Option<&[u32]>,
     ) -> (ErrorStats, Vec<f32>) {
-        let map = metrics::flip_map(x, reference, width, height, exposure);
+        let map = metrics::flip_map(metrics::FlipInputs {
+            x,
+            reference,
+            width,
+            height,
+            exposure,
+        });
         let border = labels.and_then(|l| {
             metrics::border_error(
                 &metrics::display(x, exposure),

@@ -96,17 +96,11 @@ impl Viewer {
         let Some(d) = &self.shared else {
             return Ok(());
         };
-        if let Some((ring, _, _)) = self.lit_slots.first() {
-            let counts: Vec<u32> = crate::gpu::read_buffer(
-                &d.device,
-                &d.queue,
-                ring,
-                crate::gi::count_lit::SLOTS as usize,
-            )?;
-            for (_, slot, pixels) in self.lit_slots.drain(..) {
-                let lit = counts[slot as usize] as f64 / pixels.max(1) as f64;
-                self.motion.lit_fractions.push(lit);
-            }
+        let (pending, pixels): (Vec<_>, Vec<_>) = self.lit_slots.drain(..).unzip();
+        let counts = crate::gi::sum::read_all(&d.device, &d.queue, &pending)?;
+        for (lit, pixels) in counts.into_iter().zip(pixels) {
+            let lit = lit as f64 / pixels.max(1) as f64;
+            self.motion.lit_fractions.push(lit);
         }
         Ok(())
     }

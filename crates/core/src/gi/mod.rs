@@ -5,7 +5,6 @@
 
 pub mod accumulate;
 pub mod compose;
-pub mod count_lit;
 pub mod direct;
 pub mod dispatch;
 pub mod kmeans;

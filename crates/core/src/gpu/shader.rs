@@ -1,6 +1,7 @@
 //! WGSL composition: a pass shader names the shared files it needs with `#import common/NAME.wgsl`
-//! lines; they are inlined once each, in order, before naga parses the result. This is all the
-//! composition the project needs, so it does without naga_oil.
+//! lines; they are inlined once each, in order, before naga parses the result. `#import rust/NAME`
+//! inlines a struct declared once in Rust for both sides (`gpu_struct!`, `RUST_STRUCTS`). This is
+//! all the composition the project needs, so it does without naga_oil.
 
 use std::collections::HashSet;
 
@@ -17,6 +18,64 @@ pub fn pass_names() -> impl Iterator<Item = &'static str> {
         .filter(|p| !p.contains('/'))
         .map(|p| p.trim_end_matches(".wgsl"))
 }
+
+/// A `#[repr(C)]` struct a shader reads (a pass's uniform parameters), declared once: the Rust
+/// struct (`Pod`) and `NAME::WGSL`, the same fields in WGSL, which a shader takes with
+/// `#import rust/NAME` once the struct is in `RUST_STRUCTS`. Field types: `u32`, `f32`,
+/// `[u32; 4]` (`vec4<u32>`), `[f32; 4]` (`vec4<f32>`); the caller pads to 16 bytes.
+macro_rules! gpu_struct {
+    (
+        $(#[$m:meta])*
+        $vis:vis struct $name:ident {
+            $($(#[$fm:meta])* $f:ident : $t:tt),* $(,)?
+        }
+    ) => {
+        $(#[$m])*
+        #[repr(C)]
+        #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+        $vis struct $name {
+            $($(#[$fm])* $f: $t),*
+        }
+
+        impl $name {
+            /// The struct in WGSL (`#import rust/NAME`, `gpu::shader::RUST_STRUCTS`).
+            #[allow(dead_code)]
+            pub const WGSL: &'static str = concat!(
+                "struct ", stringify!($name), " {\n",
+                $("    ", stringify!($f), ": ", $crate::gpu::shader::wgsl_type!($t), ",\n",)*
+                "}\n"
+            );
+        }
+    };
+}
+pub(crate) use gpu_struct;
+
+/// The WGSL type of a `gpu_struct!` field's Rust type.
+macro_rules! wgsl_type {
+    (u32) => {
+        "u32"
+    };
+    (f32) => {
+        "f32"
+    };
+    ([u32; 4]) => {
+        "vec4<u32>"
+    };
+    ([f32; 4]) => {
+        "vec4<f32>"
+    };
+}
+pub(crate) use wgsl_type;
+
+/// The structs declared in Rust for the shaders (`gpu_struct!`), by the name `#import rust/NAME`
+/// gives them.
+const RUST_STRUCTS: &[(&str, &str)] = &[
+    ("CvParams", crate::method::cvrtgi::CvParams::WGSL),
+    (
+        "VisParams",
+        crate::method::colom::visibility::VisParams::WGSL,
+    ),
+];
 
 fn file(path: &str) -> Option<&'static str> {
     FILES.iter().find(|(p, _)| *p == path).map(|(_, s)| *s)
@@ -61,7 +120,16 @@ fn inline(path: &str, seen: &mut HashSet<String>, out: &mut String) -> Result<()
     if !seen.insert(path.to_string()) {
         return Ok(());
     }
-    let src = source(path)?;
+    let src = match path.strip_prefix("rust/") {
+        Some(name) => RUST_STRUCTS
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|(_, s)| s.to_string())
+            .ok_or_else(|| {
+                format!("unknown Rust struct {name} (not in gpu::shader::RUST_STRUCTS)")
+            })?,
+        None => source(path)?,
+    };
     for line in src.lines() {
         if let Some(dep) = line.trim().strip_prefix("#import ") {
             inline(dep.trim(), seen, out)?;
@@ -171,6 +239,27 @@ pub fn compute_pipelines<const N: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    gpu_struct! {
+        struct Two {
+            /// A doc comment stays Rust's.
+            a: [f32; 4],
+            b: u32,
+        }
+    }
+
+    /// `gpu_struct!`'s WGSL by hand, and its import.
+    #[test]
+    fn a_rust_struct_is_its_wgsl() {
+        let want = "struct Two {\n    a: vec4<f32>,\n    b: u32,\n}\n";
+        assert_eq!(Two::WGSL, want);
+        assert_eq!(std::mem::size_of::<Two>(), 20);
+        let mut out = String::new();
+        inline("rust/VisParams", &mut HashSet::new(), &mut out).unwrap();
+        assert!(out.starts_with("struct VisParams {\n"), "{out}");
+        let e = inline("rust/Nope", &mut HashSet::new(), &mut String::new()).unwrap_err();
+        assert!(e.contains("unknown Rust struct Nope"), "{e}");
+    }
 
     #[test]
     fn every_wgsl_file_is_listed() {

@@ -272,20 +272,15 @@ pub fn remap_colour(hyab: f32) -> f32 {
     }
 }
 
-/// The per-pixel LDR FLIP error of `x` against `reference` (`width` × `height`, row-major), both
-/// tone-mapped with `export::to_srgb8` at `exposure`, at `PIXELS_PER_DEGREE`: what
-/// `metrics::flip_map` computes through NVIDIA's C++.
-pub fn flip_map(
-    x: &[[f32; 3]],
-    reference: &[[f32; 3]],
-    width: u32,
-    height: u32,
-    exposure: f32,
-) -> Vec<f32> {
-    let (w, h) = (width as usize, height as usize);
-    assert!(x.len() == w * h && reference.len() == w * h);
+/// The per-pixel LDR FLIP error of `p.x` against `p.reference`, both tone-mapped with
+/// `export::to_srgb8` at `p.exposure`, at `PIXELS_PER_DEGREE`: what `metrics::flip_map` computes
+/// through NVIDIA's C++.
+pub fn flip_map(p: crate::metrics::FlipInputs) -> Vec<f32> {
+    p.pixels();
+    let (x, reference) = (p.x, p.reference);
+    let (w, h) = (p.width as usize, p.height as usize);
     let ycxcz = |img: &[[f32; 3]]| -> Vec<[f32; 3]> {
-        crate::export::to_srgb8(img, exposure)
+        crate::export::to_srgb8(img, p.exposure)
             .chunks_exact(3)
             .map(|p| srgb8_to_ycxcz([p[0], p[1], p[2]]))
             .collect()
@@ -461,8 +456,14 @@ mod tests {
     fn twin_matches_nv_flip() {
         let (w, h) = (40u32, 30u32);
         for (k, (a, b)) in test_pairs(w, h).into_iter().enumerate() {
-            let nv = crate::metrics::flip_map(&a, &b, w, h, 1.0);
-            let twin = flip_map(&a, &b, w, h, 1.0);
+            let p = crate::metrics::FlipInputs {
+                x: &a,
+                reference: &b,
+                width: w,
+                height: h,
+                exposure: 1.0,
+            };
+            let (nv, twin) = (crate::metrics::flip_map(p), flip_map(p));
             let worst = nv
                 .iter()
                 .zip(&twin)

@@ -184,31 +184,68 @@ pub fn display(radiance: &[[f32; 3]], exposure: f32) -> Vec<[f32; 3]> {
         .collect()
 }
 
+/// What a FLIP map compares: `x` against `reference`, both `width` × `height` (row-major) and
+/// tone-mapped with `exposure` (`export::to_srgb8`). The input of `flip_map` and of its twin
+/// `ldr_flip::flip_map`.
+#[derive(Clone, Copy, Debug)]
+pub struct FlipInputs<'a> {
+    pub x: &'a [[f32; 3]],
+    pub reference: &'a [[f32; 3]],
+    pub width: u32,
+    pub height: u32,
+    pub exposure: f32,
+}
+
+impl FlipInputs<'_> {
+    /// The pixels, `width` × `height`; panics unless both images hold that many.
+    pub fn pixels(&self) -> usize {
+        let n = self.width as usize * self.height as usize;
+        assert_eq!(self.x.len(), n, "x is not {}x{}", self.width, self.height);
+        assert_eq!(
+            self.reference.len(),
+            n,
+            "reference is not {}x{}",
+            self.width,
+            self.height
+        );
+        n
+    }
+}
+
 /// The per-pixel FLIP error (Andersson et al. 2020, "FLIP: A difference evaluator for alternating
-/// images", NVIDIA's implementation through the `nv-flip` crate) of `x` against `reference`, both
-/// tone-mapped as the PNG and the viewer show them (`export::to_srgb8` with `exposure`: × exposure,
-/// clamped, sRGB, 8 bits), at FLIP's default 67 pixels per degree. Each value is in [0, 1].
-pub fn flip_map(
-    x: &[[f32; 3]],
-    reference: &[[f32; 3]],
-    width: u32,
-    height: u32,
-    exposure: f32,
-) -> Vec<f32> {
-    assert_eq!(x.len(), reference.len());
-    assert_eq!(x.len(), width as usize * height as usize);
-    if x.is_empty() {
+/// images", NVIDIA's implementation through the `nv-flip` crate) of `p.x` against `p.reference`,
+/// both tone-mapped as the PNG and the viewer show them (`export::to_srgb8` with `p.exposure`:
+/// × exposure, clamped, sRGB, 8 bits), at FLIP's default 67 pixels per degree. Each value is in
+/// [0, 1].
+pub fn flip_map(p: FlipInputs) -> Vec<f32> {
+    if p.pixels() == 0 {
         return Vec::new();
     }
-    let img = |p: &[[f32; 3]]| {
-        nv_flip::FlipImageRgb8::with_data(width, height, &crate::export::to_srgb8(p, exposure))
+    let img = |i: &[[f32; 3]]| {
+        nv_flip::FlipImageRgb8::with_data(
+            p.width,
+            p.height,
+            &crate::export::to_srgb8(i, p.exposure),
+        )
     };
-    nv_flip::flip(img(reference), img(x), nv_flip::DEFAULT_PIXELS_PER_DEGREE).to_vec()
+    nv_flip::flip(
+        img(p.reference),
+        img(p.x),
+        nv_flip::DEFAULT_PIXELS_PER_DEGREE,
+    )
+    .to_vec()
 }
 
 /// Mean FLIP error of `x` against `reference` (`flip_map`): 0 for identical images, at most 1.
 pub fn flip(x: &[[f32; 3]], reference: &[[f32; 3]], width: u32, height: u32, exposure: f32) -> f64 {
-    mean(&flip_map(x, reference, width, height, exposure))
+    let p = FlipInputs {
+        x,
+        reference,
+        width,
+        height,
+        exposure,
+    };
+    mean(&flip_map(p))
 }
 
 fn mean(v: &[f32]) -> f64 {
@@ -475,7 +512,13 @@ mod tests {
                 [x, y, 0.5 * (x + y)]
             })
             .collect();
-        let map = flip_map(&img, &img, w, h, 1.0);
+        let map = flip_map(FlipInputs {
+            x: &img,
+            reference: &img,
+            width: w,
+            height: h,
+            exposure: 1.0,
+        });
         assert!(map.iter().all(|e| e.is_finite()));
         assert_eq!(flip(&img, &img, w, h, 1.0), 0.0);
         let off = |k: f32| -> Vec<[f32; 3]> { img.iter().map(|p| p.map(|c| c * k)).collect() };

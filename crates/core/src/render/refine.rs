@@ -1,11 +1,16 @@
 //! The viewer's refinement at rest: the last frame's direct light estimated again with other seeds
 //! and sub-pixel offsets (`direct_again`, or `refine_direct` on the GPU), and the lit pixels counted
-//! on the GPU (`count_lit`).
+//! on the GPU (`count_lit`, by `gi::sum`).
 
 use anyhow::Result;
 
 use super::renderer::{Renderer, gpu};
+use crate::gi::sum::{Each, PendingSum, WordSum, Words};
 use crate::render::settings::RenderSettings;
+
+/// Frames whose lit counts `Renderer::count_lit`'s ring holds: the viewer reads them together,
+/// when the stats are written.
+pub const LIT_SLOTS: u32 = 4096;
 
 impl Renderer<'_> {
     /// The direct light (emission + direct, as `Frame::direct`) of the last frame's shading points
@@ -86,20 +91,26 @@ impl Renderer<'_> {
         Ok(self.profiler.collect(ctx)?.values().sum())
     }
 
-    /// Counts `frame`'s pixels with a surface hit on the GPU into the next slot of the ring of
-    /// counters (`gi::count_lit`); returns the ring and the slot.
-    pub fn count_lit(&mut self, frame: &super::frame::FrameBuffers) -> (wgpu::Buffer, u32) {
+    /// Counts `frame`'s pixels with a surface hit (the G-buffer's `pos.w > 0`) on the GPU into the
+    /// next slot of a ring of `LIT_SLOTS` totals (`gi::sum`, `Each::Positive`); returns the pending
+    /// count, read only on request.
+    pub fn count_lit(&mut self, frame: &super::frame::FrameBuffers) -> PendingSum {
         let ctx = self.ctx;
         let mut lit = self
             .lit
             .take()
-            .unwrap_or_else(|| crate::gi::count_lit::CountLit::new(ctx));
-        let pixels = frame.size.0 * frame.size.1;
-        let slot = lit.record(&mut gpu!(self), frame.image_gbuffer(), pixels);
+            .unwrap_or_else(|| WordSum::with_slots(ctx, LIT_SLOTS));
+        let words = Words {
+            items: frame.size.0 * frame.size.1,
+            // A shading point's words (`common/gbuffer.wgsl`); `pos.w` is its fourth.
+            stride: (crate::gi::primary::SP_BYTES / 4) as u32,
+            word: 3,
+            each: Each::Positive,
+        };
+        let pending = lit.record(&mut gpu!(self), "count_lit", frame.image_gbuffer(), words);
         let _ = self.profiler.collect(ctx);
-        let ring = lit.ring.clone();
         self.lit = Some(lit);
-        (ring, slot)
+        pending
     }
 
     /// The last frame's shading points traced again, each primary ray through sub-pixel offset

@@ -69,8 +69,9 @@ pub struct Renderer<'a> {
     /// one estimate (radiance, jittered G-buffer), kept between calls.
     pub(super) refine: std::cell::OnceCell<crate::gi::refine::Refine>,
     pub(super) estimate: Option<(wgpu::Buffer, wgpu::Buffer, u32)>,
-    /// Lit pixels counted on the GPU (`count_lit`), built on first use.
-    pub(super) lit: Option<crate::gi::count_lit::CountLit>,
+    /// Lit pixels counted on the GPU (`count_lit`: `gi::sum` over the G-buffer's `pos.w`), built on
+    /// first use.
+    pub(super) lit: Option<crate::gi::sum::WordSum>,
     /// The last frame's camera (render units), for `direct_again`'s jittered primary rays.
     pub(super) last_camera: Option<crate::gi::primary::CameraParams>,
     pub vpl_set: Option<ResidentVpls>,

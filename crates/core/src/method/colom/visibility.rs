@@ -1,23 +1,29 @@
 //! Step 5: a shadow ray per (SP-cluster representative, light) pair into a bit matrix
 //! (`shaders-wgsl/visibility.wgsl`).
 
-use bytemuck::{Pod, Zeroable};
-
 use crate::gi::dispatch::{Gpu, Run};
 use crate::gi::dispatch::{Kernel, copy_to_texture};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct VisParams {
-    num_sp_clusters: u32,
-    num_lights: u32,
-    words: u32,
-    reuse_rows: u32,
-    facing: u32,
-    _pad: [u32; 3],
+crate::gpu::shader::gpu_struct! {
+    /// `visibility.wgsl`'s parameters.
+    pub(crate) struct VisParams {
+        num_sp_clusters: u32,
+        num_lights: u32,
+        /// Words per row: ceil(num_lights / 32).
+        words: u32,
+        /// Rows of the previous frame's matrix (same lights) whose kept representatives may be
+        /// copied instead of traced: 0 for none (temporal reuse off, or the lights changed).
+        reuse_rows: u32,
+        /// 1: skip pairs that do not face each other (`--visibility-facing on`, not in the
+        /// paper); 0: V is pure visibility, as the paper's (the default).
+        facing: u32,
+        _pad0: u32,
+        _pad1: u32,
+        _pad2: u32,
+    }
 }
 
 /// The previous frame's visibility matrix, for rows a warm start may copy (the light list must be
@@ -95,7 +101,9 @@ impl Visibility {
                     .filter(|p| p.words == words)
                     .map_or(0, |p| p.rows.min(k_sp)),
                 facing: facing as u32,
-                _pad: [0; 3],
+                _pad0: 0,
+                _pad1: 0,
+                _pad2: 0,
             },
         );
         let none = self.none.get_or_init(|| ctx.storage("no previous bits", 4));

@@ -29,7 +29,6 @@ use std::cell::OnceCell;
 use std::time::Instant;
 
 use anyhow::{Result, bail};
-use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use self::inject::{Faces, Lighting};
@@ -64,23 +63,31 @@ pub const LABELS: [&str; 5] = [
     "cvrtgi.escape",
 ];
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct CvParams {
-    origin: [f32; 4],
-    dims: [u32; 4],
-    num_faces: u32,
-    rays: u32,
-    num_clusters: u32,
-    radius: u32,
-    d_min2: f32,
-    near: f32,
-    inv_two_sigma2: f32,
-    _pad: u32,
-    gather_mode: u32,
-    escape_rays: u32,
-    escape_reach: f32,
-    num_vpls: u32,
+crate::gpu::shader::gpu_struct! {
+    /// `cvrtgi.wgsl`'s parameters.
+    pub(crate) struct CvParams {
+        /// xyz: the grid's min corner; w: the voxel size s.
+        origin: [f32; 4],
+        /// xyz: voxels per axis; w: occupied voxels V.
+        dims: [u32; 4],
+        num_faces: u32,
+        rays: u32,
+        num_clusters: u32,
+        /// The filter's radius r ((2r+1)³ kernel).
+        radius: u32,
+        d_min2: f32,
+        /// Clusters nearer than this (to their box) give their lit voxels one by one.
+        near: f32,
+        inv_two_sigma2: f32,
+        _pad: u32,
+        /// 0: the paper's gather; 1: each cluster's light times its conservation scale (flux.w),
+        /// and each slot's `slot_flux` before the scale to `vis_w`.
+        gather_mode: u32,
+        /// Rays per VPL of `escape`, and how far one must get to escape.
+        escape_rays: u32,
+        escape_reach: f32,
+        num_vpls: u32,
+    }
 }
 
 /// What one frame's CVRTGI pass reads and writes. The caller (the frame graph) provides the scene as

@@ -14,6 +14,7 @@ pub mod twin;
 
 use std::time::Instant;
 
+use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
@@ -24,7 +25,7 @@ use super::{Counts, FrameInputs, IndirectMethod, PendingRays, Room};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
-use crate::gi::sum::{WordSum, Words};
+use crate::gi::sum::{Each, WordSum, Words};
 use crate::gpu::GpuContext;
 
 pub use settings::{LightClusterLists as KnobLists, LightClusterSettings as Knobs};
@@ -191,13 +192,7 @@ impl LightClusterMethod {
 }
 
 impl IndirectMethod for LightClusterMethod {
-    fn record(
-        &mut self,
-        pass: Pass,
-        g: &mut Gpu,
-        f: &FrameInputs,
-        n: &mut Counts,
-    ) -> anyhow::Result<()> {
+    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) -> Result<()> {
         let extent = f.scene.extent();
         match pass {
             // §3.1: the VPLs clustered for this camera on the CPU, as the paper's §4 (its time is
@@ -234,6 +229,7 @@ impl IndirectMethod for LightClusterMethod {
                         items: f.pixels(),
                         stride: 8,
                         word: 2,
+                        each: Each::Value,
                     };
                     let sum = self.rays.record(g, SHADE.name(), &state, words);
                     n.pending = Some(std::sync::Arc::new(PendingRays(sum)));

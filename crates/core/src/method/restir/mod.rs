@@ -17,6 +17,7 @@ pub mod twin;
 
 use std::time::Instant;
 
+use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
 use self::settings::{Combine, RestirLights};
@@ -26,7 +27,7 @@ use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::primary::{CameraParams, SP_BYTES};
 use crate::gi::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
-use crate::gi::sum::{WordSum, Words};
+use crate::gi::sum::{Each, WordSum, Words};
 use crate::gi::vpl_cluster::LightKey;
 use crate::gpu::GpuContext;
 use crate::gpu::persistent::Uniform;
@@ -310,6 +311,7 @@ impl RestirMethod {
             items: f.pixels(),
             stride: 1,
             word: 0,
+            each: Each::Value,
         };
         let sum = self.rays.record(g, SHADE.name(), &size.rays, words);
         n.pending = Some(std::sync::Arc::new(PendingRays(sum)));
@@ -317,13 +319,7 @@ impl RestirMethod {
 }
 
 impl IndirectMethod for RestirMethod {
-    fn record(
-        &mut self,
-        pass: Pass,
-        g: &mut Gpu,
-        f: &FrameInputs,
-        n: &mut Counts,
-    ) -> anyhow::Result<()> {
+    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) -> Result<()> {
         let pixels = f.pixels();
         match pass {
             PREPARE => self.prepare(g, f, n),
