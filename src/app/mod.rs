@@ -5,8 +5,9 @@
 //! - `worker.rs`: the GI thread (own `GpuContext` + `Scene` + `Renderer`), newest-job-wins.
 //! - `panel.rs`: the side panel (settings, stats, reference, plot, screenshots) and the image area.
 //! - `views.rs`: what the image area shows, composed from the last frame.
-//! - `camera.rs`: fly / orbit camera. `settings.rs`: the bookmarks file. `screenshot.rs`: file output.
+//! - `camera.rs`: fly / orbit camera. `bookmarks.rs`: the bookmarks file. `screenshot.rs`: file output.
 
+pub mod bookmarks;
 pub mod camera;
 pub mod display;
 pub mod flip;
@@ -18,7 +19,6 @@ pub mod panel;
 pub mod reproject;
 pub mod reproject_gpu;
 pub mod screenshot;
-pub mod settings;
 pub mod twin;
 pub mod views;
 pub mod window;
@@ -35,8 +35,8 @@ use crate::method::{MethodSettings, Room};
 use crate::render::{Control, RenderSettings};
 use crate::scene::Scene;
 use crate::settings::{ClusterSettings, FrameSettings, Weighting};
+use bookmarks::BookmarksFile;
 use camera::ViewCamera;
-use settings::SceneSettings;
 use views::View;
 use worker::{FrameJob, Loader, Rendered, SceneInfo, Worker};
 
@@ -442,8 +442,8 @@ pub struct Viewer {
     pub plot_zoom: bool,
     /// Points the plot last fitted to (it re-fits when this changes).
     pub plot_fitted: usize,
-    pub bookmarks: SceneSettings,
-    /// The scene's settings file exists but failed to load: never save over it.
+    pub bookmarks: BookmarksFile,
+    /// The scene's bookmarks file exists but failed to load: never save over it.
     pub bookmarks_unreadable: bool,
     pub bookmark_name: String,
     pub path_field: String,
