@@ -22,7 +22,7 @@ use bytemuck::{Pod, Zeroable};
 
 use self::settings::{Combine, RestirLights};
 use super::Method;
-use super::{Counts, FrameInputs, IndirectMethod, PendingRays, Room};
+use super::{FrameInputs, IndirectCounts, IndirectMethod, PendingRays, Room};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::primary::{CameraParams, SP_BYTES};
@@ -178,7 +178,7 @@ impl RestirMethod {
 
     /// The alias table (made when the VPL set changes), the buffers of the size, the history's
     /// use, the uniform and the bind groups.
-    fn prepare(&mut self, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) {
+    fn prepare(&mut self, g: &mut Gpu, f: &FrameInputs, n: &mut IndirectCounts) {
         let ctx = g.ctx;
         let t = Instant::now();
         // The light list: the VPLs themselves, or the VPL clusters (`--restir-lights`).
@@ -293,7 +293,7 @@ impl RestirMethod {
 
     /// After the shade: the frame's final reservoirs and G-buffer kept for the next frame (with
     /// `--temporal on`), and the rays the pixels traced summed on the GPU (read only on request).
-    fn finish(&mut self, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) {
+    fn finish(&mut self, g: &mut Gpu, f: &FrameInputs, n: &mut IndirectCounts) {
         let ctx = g.ctx;
         let size = self.size.as_ref().expect("prepared");
         let past = self.past.as_mut().expect("prepared");
@@ -319,7 +319,13 @@ impl RestirMethod {
 }
 
 impl IndirectMethod for RestirMethod {
-    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) -> Result<()> {
+    fn record(
+        &mut self,
+        pass: Pass,
+        g: &mut Gpu,
+        f: &FrameInputs,
+        n: &mut IndirectCounts,
+    ) -> Result<()> {
         let pixels = f.pixels();
         match pass {
             PREPARE => self.prepare(g, f, n),
