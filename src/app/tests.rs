@@ -310,31 +310,31 @@ fn command_line_values_beyond_the_sliders_survive_the_panel() {
     assert_eq!(v.s, s);
 }
 
-/// The method selector: every room's method and knobs survive the panel (which draws the room's
+/// The method selector: every registry entry's method and knobs survive the panel (which draws the entry's
 /// section), name the series and the screenshot files, and reach the frame settings.
 #[test]
 fn the_method_and_its_knobs_survive_the_panel() {
-    // The room whose knobs are the paper's `ClusterSettings` is drawn by the clustering controls
+    // The method whose knobs are the paper's `ClusterSettings` is drawn by the clustering controls
     // (other tests).
-    for room in crate::method::ROOMS.iter().filter(|r| r.own_knobs) {
+    for entry in crate::method::REGISTRY.iter().filter(|r| r.own_settings) {
         let mut fs = RenderSettings::default();
-        fs.method.method = room.method;
+        fs.method.method = entry.method;
         let s = UiSettings::new(&fs);
         let mut v = viewer(s.clone());
         draw(&mut v);
-        assert_eq!(v.s, s, "{}", room.method);
-        let short = format!("{}-{}_", room.method, (room.short)(&s.method));
+        assert_eq!(v.s, s, "{}", entry.method);
+        let short = format!("{}-{}_", entry.method, (entry.short)(&s.method));
         assert!(
             s.short().starts_with(&short),
             "{} against {short}",
             s.short()
         );
         assert!(
-            s.mode_label().starts_with(room.method.name()),
+            s.mode_label().starts_with(entry.method.name()),
             "{}",
             s.mode_label()
         );
-        assert!(s.mode_label().contains(&(room.series)(&s.method)));
+        assert!(s.mode_label().contains(&(entry.series)(&s.method)));
         let r = s.frame_settings(64, 48);
         assert_eq!(r.method, fs.method);
     }

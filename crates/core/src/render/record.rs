@@ -244,7 +244,7 @@ impl Renderer<'_> {
         Ok(())
     }
 
-    /// One of the pass list of `method`'s room (`method::ROOMS`), its state built the first time.
+    /// One of the pass list of `method`'s entry (`method::REGISTRY`), its state built the first time.
     fn method_pass(
         &mut self,
         method: Method,

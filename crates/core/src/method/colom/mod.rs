@@ -2,7 +2,7 @@
 //! shading points clustered by fuzzy k-means (step 4, Alg. 1 and 2, `gi::kmeans`), one shadow ray
 //! per SP-cluster representative and light (step 5, `visibility`), and Eq. (6) per pixel with
 //! Eq. (8) or (9) (step 6, `shade`). Its lights are the resident VPL clusters (step 2) or the VPLs.
-//! Its passes are `Pass::SpCluster` → `Pass::Visibility` → `Pass::Shade` (its `ROOM`); where K_SP
+//! Its passes are `Pass::SpCluster` → `Pass::Visibility` → `Pass::Shade` (its `ENTRY`); where K_SP
 //! does not apply, the frame is the renderer's shared gather (VPL clusters) or reference.
 //!
 //! Its state is what temporal reuse starts from: the last frame's SP clustering (its centroids warm
@@ -17,7 +17,8 @@ use std::any::Any;
 use anyhow::Result;
 
 use super::{
-    FrameInputs, IndirectCounts, IndirectMethod, Limits, Method, PendingReport, Resolved, Room,
+    FrameInputs, IndirectCounts, IndirectMethod, Limits, Method, MethodEntry, PendingReport,
+    Resolved,
 };
 use crate::gi::dispatch::Gpu;
 use crate::gi::kmeans::{Clustering, KMeans, KMeansSettings, KmCounters, Points, Warm};
@@ -31,7 +32,7 @@ use visibility::{Previous, VisInputs, Visibility};
 
 /// colom's line of the registry. Its knobs are the paper's (`ClusterSettings`: K, F, γ, n_t, the
 /// weighting and the adaptations), shown and swept by the viewer's and the bench's own controls.
-pub const ROOM: Room = Room {
+pub const ENTRY: MethodEntry = MethodEntry {
     method: Method::Colom,
     doc: "Colom, Marques, Santos 2022 (seed 000): fuzzy k-means of SPs and VPLs, visibility \
           between cluster representatives, Eq. (6) shading per pixel × VPL cluster",
@@ -40,7 +41,7 @@ pub const ROOM: Room = Room {
     clusters_sps: true,
     vpl_clusters: |_| true,
     limits,
-    own_knobs: false,
+    own_settings: false,
     colour: [140, 86, 75],
     about: "Colom et al. 2022: fuzzy k-means of SPs and VPLs, Eq. (6) per pixel and VPL cluster \
             (docs/methods.md)",
