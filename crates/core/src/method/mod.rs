@@ -279,7 +279,7 @@ macro_rules! registry {
         /// (`registry!`). (`Ord`: the renderer keeps the methods' state in a map by method.)
         #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
         pub enum Method {
-            /// Colom, Marques, Santos 2022 (seed 000), the paper this tool rebuilds (its entry's `doc`).
+            /// Colom, Marques, Santos 2022, the paper this tool rebuilds (its entry's `doc`).
             #[default]
             Colom,
             $(

@@ -34,7 +34,7 @@ use visibility::{Previous, VisInputs, Visibility};
 /// weighting and the adaptations), shown and swept by the viewer's and the bench's own controls.
 pub const ENTRY: MethodEntry = MethodEntry {
     method: Method::Colom,
-    doc: "Colom, Marques, Santos 2022 (seed 000): fuzzy k-means of SPs and VPLs, visibility \
+    doc: "Colom, Marques, Santos 2022: fuzzy k-means of SPs and VPLs, visibility \
           between cluster representatives, Eq. (6) shading per pixel × VPL cluster",
     passes: &[Pass::SpCluster, Pass::Visibility, Pass::Shade],
     build,

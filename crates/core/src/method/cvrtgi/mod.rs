@@ -738,7 +738,7 @@ impl Cvrtgi {
 /// cvrtgi in the registry.
 pub const ENTRY: MethodEntry = MethodEntry {
     method: Method::Cvrtgi,
-    doc: "CVRTGI (Cosin Ayerbe & Patow 2022, seed 003): the scene voxelised, voxels clustered by \
+    doc: "CVRTGI (Cosin Ayerbe & Patow 2022): the scene voxelised, voxels clustered by \
           SLIC with the 35° normal rule (Eq. 1, Alg. 1), per-voxel-face irradiance from the lit \
           clusters a face's rays find, filtered, read by every pixel; cached while the lights stay",
     passes: &[PASS],

@@ -148,7 +148,7 @@ pub fn z_far(eye: Vec3, (lo, hi): (Vec3, Vec3)) -> f32 {
 /// lightcluster in the registry.
 pub const ENTRY: MethodEntry = MethodEntry {
     method: Method::LightCluster,
-    doc: "LightCluster (seed 002): the VPLs clustered by the minimum-distance (leader) algorithm \
+    doc: "LightCluster (Wiesenhütter, Klein, Nischwitz): the VPLs clustered by the minimum-distance (leader) algorithm \
           (§3.1, d_min = d_init (1 − |C_pos| / z_far)), each cluster a disc light of radius d_min \
           whose visibility a few shadow rays over the disc estimate (§3.2), every VPL shaded with \
           its cluster's visibility",

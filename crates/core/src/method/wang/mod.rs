@@ -224,7 +224,7 @@ impl Wang {
 /// wang in the registry.
 pub const ENTRY: MethodEntry = MethodEntry {
     method: Method::Wang,
-    doc: "Wang et al. 2009 (seed 001): adaptively seeded k-means of the SPs (§3.2, Eq. 2), \
+    doc: "Wang et al. 2009: adaptively seeded k-means of the SPs (§3.2, Eq. 2), \
           irradiance gathered only at the cluster centres, interpolated per pixel with the §3.4 \
           weight",
     passes: &[CLUSTER, GATHER, INTERP],
