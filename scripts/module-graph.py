@@ -2,11 +2,11 @@
 """The dependency graph of the top-level modules of the core crate (crates/core/src) and the
 application (src), as one graph (`crate::X` and `use crate::{X, ..}` outside
 `#[cfg(test)]` blocks), printed one module a line, and any cycle between them (exit 1 on a cycle).
-Also counts production imports of the CPU twins (`cpu::`, and a room's own `method::<m>::twin`;
-production is every file but `cpu/` and the rooms' `twin.rs`, outside `#[cfg(test)]`) and the
+Also counts production imports of the CPU twins (`cpu::`, and a method's own `method::<m>::twin`;
+production is every file but `cpu/` and the methods' `twin.rs`, outside `#[cfg(test)]`) and the
 files outside each method's folder that name it (any case, comments included), where a citation of
 its paper by its authors (`CITATIONS`: "Colom, Marques, Santos", "Colom et al.") names the paper,
-not the method, and is not counted. A room's `twin.rs` is twin code: its imports are drawn as
+not the method, and is not counted. A method's `twin.rs` is twin code: its imports are drawn as
 `cpu`'s."""
 import collections
 import os
@@ -43,8 +43,8 @@ for p, relpath in files():
         top = rel[0][:-3] if rel[0].endswith(".rs") else rel[0]
         if top in ("lib", "main"):
             continue
-        room = rel[1] if top == "method" and len(rel) == 3 else None
-        if room and rel[2] == "twin.rs":
+        method_dir = rel[1] if top == "method" and len(rel) == 3 else None
+        if method_dir and rel[2] == "twin.rs":
             top = "cpu"
             edges[top].add("method")
         src = re.split(r"#\[cfg\(test\)\]", open(p).read())[0]
@@ -57,7 +57,7 @@ for p, relpath in files():
                 if n in tops and n != top:
                     edges[top].add(n)
         twin = re.search(r"method::\w+::(twin\b|\{[^}]*\btwin\b)", code)
-        if room:
+        if method_dir:
             twin = twin or re.search(r"\btwin::|::twin\b|\{[^}]*\btwin\b", code)
         if top != "cpu" and (re.search(r"\bcpu::", code) or twin):
             cpu_imports.append(relpath)

@@ -5,8 +5,9 @@
 //! - `worker.rs`: the GI thread (own `GpuContext` + `Scene` + `Renderer`), newest-job-wins.
 //! - `panel.rs`: the side panel (settings, stats, reference, plot, screenshots) and the image area.
 //! - `views.rs`: what the image area shows, composed from the last frame.
-//! - `camera.rs`: fly / orbit camera. `settings.rs`: the bookmarks file. `screenshot.rs`: file output.
+//! - `camera.rs`: fly / orbit camera. `bookmarks.rs`: the bookmarks file. `screenshot.rs`: file output.
 
+pub mod bookmarks;
 pub mod camera;
 pub mod display;
 pub mod flip;
@@ -18,7 +19,6 @@ pub mod panel;
 pub mod reproject;
 pub mod reproject_gpu;
 pub mod screenshot;
-pub mod settings;
 pub mod twin;
 pub mod views;
 pub mod window;
@@ -31,12 +31,12 @@ use std::time::Instant;
 use anyhow::Result;
 
 use crate::exposure::Exposure;
-use crate::method::{MethodSettings, Room};
+use crate::method::{MethodEntry, MethodSettings};
 use crate::render::{Control, RenderSettings};
 use crate::scene::Scene;
 use crate::settings::{ClusterSettings, FrameSettings, Weighting};
+use bookmarks::BookmarksFile;
 use camera::ViewCamera;
-use settings::SceneSettings;
 use views::View;
 use worker::{FrameJob, Loader, Rendered, SceneInfo, Worker};
 
@@ -118,7 +118,7 @@ pub struct UiSettings {
     /// The frame (its size is the viewer's GI size, set per frame).
     pub frame: FrameSettings,
     pub cluster: ClusterSettings,
-    /// The method and its knobs (each room's declared controls).
+    /// The method and its knobs (each method's declared controls).
     pub method: MethodSettings,
     /// The display exposure; with `exposure_auto` the panel keeps it at `exposure::auto_exposure` of
     /// the latest frame.
@@ -207,14 +207,14 @@ impl UiSettings {
     /// The scatter plot's series: how the indirect light is computed.
     pub fn mode_label(&self) -> String {
         let p = self.cluster.weight_exponent;
-        let room = self.method.knobs_room();
-        let series = |r: &Room| format!("{} {}", r.method, (r.series)(&self.method));
+        let entry = self.method.entry_with_own_settings();
+        let series = |r: &MethodEntry| format!("{} {}", r.method, (r.series)(&self.method));
         let (sp_on, vpl_on) = self.clusterings_on();
         match (sp_on, vpl_on) {
-            _ if room.is_some_and(|r| !r.clusters_sps) => series(room.unwrap()),
+            _ if entry.is_some_and(|r| !r.clusters_sps) => series(entry.unwrap()),
             (false, false) => "no clustering".into(),
             (false, true) => "VPL clusters only".into(),
-            (true, _) if let Some(r) = room => {
+            (true, _) if let Some(r) = entry => {
                 let m = series(r);
                 if vpl_on || !(r.vpl_clusters)(&self.method) {
                     m
@@ -242,7 +242,7 @@ impl UiSettings {
     pub fn short(&self) -> String {
         let c = &self.cluster;
         let mode = match c.weighting {
-            _ if let Some(r) = self.method.knobs_room() => {
+            _ if let Some(r) = self.method.entry_with_own_settings() => {
                 format!("{}-{}", r.method, (r.short)(&self.method))
             }
             Weighting::InverseDistance if c.weight_exponent == 1.0 => "weighted".to_string(),
@@ -442,8 +442,8 @@ pub struct Viewer {
     pub plot_zoom: bool,
     /// Points the plot last fitted to (it re-fits when this changes).
     pub plot_fitted: usize,
-    pub bookmarks: SceneSettings,
-    /// The scene's settings file exists but failed to load: never save over it.
+    pub bookmarks: BookmarksFile,
+    /// The scene's bookmarks file exists but failed to load: never save over it.
     pub bookmarks_unreadable: bool,
     pub bookmark_name: String,
     pub path_field: String,

@@ -7,8 +7,8 @@ use std::sync::atomic::Ordering;
 use egui::{Color32, Key, RichText, Slider, Ui};
 
 use super::Viewer;
+use super::bookmarks::Bookmark;
 use super::camera::Mode as CamMode;
-use super::settings::Bookmark;
 use super::views::View;
 use controls::{method_controls, settings_controls};
 

@@ -76,7 +76,7 @@ impl Viewer {
 
     /// The folder references are kept in on disk: beside the scene's bookmarks file.
     pub fn refs_dir(&self) -> Option<PathBuf> {
-        self.settings_path().map(|p| {
+        self.bookmarks_path().map(|p| {
             let mut name = p.file_name().unwrap_or_default().to_os_string();
             name.push(".refs");
             p.with_file_name(name)

@@ -101,24 +101,24 @@ fn a_scene_that_fails_to_load_keeps_the_open_one() {
 #[test]
 fn a_bookmarks_file_that_fails_to_load_is_moved_aside_not_overwritten() {
     let d = scratch("bookmarks");
-    // Any scene file will do: the built-in Cornell box's GLB, beside its settings file.
+    // Any scene file will do: the built-in Cornell box's GLB, beside its bookmarks file.
     let scene = d.join("t.glb");
     std::fs::write(&scene, crate::scene::builtin::bytes("cornell").unwrap()).unwrap();
-    let settings = d.join("t.glb.fuzzy-vpl.json");
-    std::fs::write(&settings, "{ \"bookmarks\": [ truncated").unwrap();
+    let file = d.join("t.glb.fuzzy-vpl.json");
+    std::fs::write(&file, "{ \"bookmarks\": [ truncated").unwrap();
     let mut v = viewer(UiSettings::new(&RenderSettings::default()));
     poll_until(&mut v, |v| v.info.is_some());
     v.open(scene.display().to_string());
     poll_until(&mut v, |v| v.loading.is_none());
     assert_eq!(v.spec, scene.display().to_string());
     assert!(
-        v.status.contains("not a fuzzy-vpl settings file"),
+        v.status.contains("not a fuzzy-vpl bookmarks file"),
         "{}",
         v.status
     );
     v.bookmarks
         .bookmarks
-        .push(settings::Bookmark::new("door".into(), &v.cam));
+        .push(bookmarks::Bookmark::new("door".into(), &v.cam));
     v.save_bookmarks();
     let aside = d.join("t.glb.fuzzy-vpl.json.bad-1");
     assert_eq!(
@@ -126,7 +126,7 @@ fn a_bookmarks_file_that_fails_to_load_is_moved_aside_not_overwritten() {
         "{ \"bookmarks\": [ truncated"
     );
     assert!(v.status.contains("moved to"), "{}", v.status);
-    assert_eq!(SceneSettings::load(&settings).unwrap(), v.bookmarks);
+    assert_eq!(BookmarksFile::load(&file).unwrap(), v.bookmarks);
     // Later saves write the (now readable) file in place.
     v.save_bookmarks();
     assert!(!d.join("t.glb.fuzzy-vpl.json.bad-2").exists());
@@ -310,31 +310,31 @@ fn command_line_values_beyond_the_sliders_survive_the_panel() {
     assert_eq!(v.s, s);
 }
 
-/// The method selector: every room's method and knobs survive the panel (which draws the room's
+/// The method selector: every registry entry's method and knobs survive the panel (which draws the entry's
 /// section), name the series and the screenshot files, and reach the frame settings.
 #[test]
 fn the_method_and_its_knobs_survive_the_panel() {
-    // The room whose knobs are the paper's `ClusterSettings` is drawn by the clustering controls
+    // The method whose knobs are the paper's `ClusterSettings` is drawn by the clustering controls
     // (other tests).
-    for room in crate::method::ROOMS.iter().filter(|r| r.own_knobs) {
+    for entry in crate::method::REGISTRY.iter().filter(|r| r.own_settings) {
         let mut fs = RenderSettings::default();
-        fs.method.method = room.method;
+        fs.method.method = entry.method;
         let s = UiSettings::new(&fs);
         let mut v = viewer(s.clone());
         draw(&mut v);
-        assert_eq!(v.s, s, "{}", room.method);
-        let short = format!("{}-{}_", room.method, (room.short)(&s.method));
+        assert_eq!(v.s, s, "{}", entry.method);
+        let short = format!("{}-{}_", entry.method, (entry.short)(&s.method));
         assert!(
             s.short().starts_with(&short),
             "{} against {short}",
             s.short()
         );
         assert!(
-            s.mode_label().starts_with(room.method.name()),
+            s.mode_label().starts_with(entry.method.name()),
             "{}",
             s.mode_label()
         );
-        assert!(s.mode_label().contains(&(room.series)(&s.method)));
+        assert!(s.mode_label().contains(&(entry.series)(&s.method)));
         let r = s.frame_settings(64, 48);
         assert_eq!(r.method, fs.method);
     }

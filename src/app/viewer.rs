@@ -1,12 +1,12 @@
 //! The viewer's state machine: camera and panel input, jobs to the GI worker, what each window
 //! frame shows, screenshots and the scripted run (references: `references.rs`).
 
+use super::bookmarks::BookmarksFile;
 use super::camera::ViewCamera;
-use super::settings::SceneSettings;
 use super::views::View;
 use super::worker::{FrameJob, Job, Rendered, Reply, SceneInfo, Source, Worker};
 use super::{Script, SliderRanges, ViewOptions, Viewer, gi_size, preview_settings};
-use super::{camera, lights, motion, settings};
+use super::{bookmarks, camera, lights, motion};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -75,7 +75,7 @@ impl Viewer {
             show_counts: false,
             plot_zoom: false,
             plot_fitted: 0,
-            bookmarks: SceneSettings::default(),
+            bookmarks: BookmarksFile::default(),
             bookmarks_unreadable: false,
             bookmark_name: String::new(),
             path_field: opts.spec,
@@ -180,13 +180,13 @@ impl Viewer {
         self.cam = self.home;
         self.speed = (radius * 0.5).max(1e-6);
         self.bookmarks_unreadable = false;
-        self.bookmarks = match self.settings_path() {
-            Some(p) => SceneSettings::load(&p).unwrap_or_else(|e| {
+        self.bookmarks = match self.bookmarks_path() {
+            Some(p) => BookmarksFile::load(&p).unwrap_or_else(|e| {
                 self.status = format!("{e:#} (kept; moved aside on the next save)");
                 self.bookmarks_unreadable = true;
-                SceneSettings::default()
+                BookmarksFile::default()
             }),
-            None => SceneSettings::default(),
+            None => BookmarksFile::default(),
         };
         if self.status.starts_with("loading") {
             self.status.clear();
@@ -208,14 +208,14 @@ impl Viewer {
         self.last_sent = None;
     }
 
-    pub fn settings_path(&self) -> Option<PathBuf> {
-        settings::settings_path(&self.spec)
+    pub fn bookmarks_path(&self) -> Option<PathBuf> {
+        bookmarks::bookmarks_path(&self.spec)
     }
 
-    /// Saves the bookmarks; a settings file that failed to load is moved aside first, never
+    /// Saves the bookmarks; a bookmarks file that failed to load is moved aside first, never
     /// overwritten.
     pub fn save_bookmarks(&mut self) {
-        if let Some(p) = self.settings_path() {
+        if let Some(p) = self.bookmarks_path() {
             match self.bookmarks.save_keeping(&p, self.bookmarks_unreadable) {
                 Ok(moved) => {
                     self.bookmarks_unreadable = false;

@@ -1001,9 +1001,9 @@ pub(crate) mod tests {
     #[test]
     fn a_method_row_keeps_its_knobs_in_their_columns() {
         // A method whose knobs are the paper's has no knob columns of its own.
-        for room in crate::method::ROOMS.iter().filter(|r| r.own_knobs) {
-            let mut r = synthetic(room.method.name(), 0, 0);
-            r.method.method = room.method;
+        for entry in crate::method::REGISTRY.iter().filter(|r| r.own_settings) {
+            let mut r = synthetic(entry.method.name(), 0, 0);
+            r.method.method = entry.method;
             let text = to_csv(std::slice::from_ref(&r));
             assert_eq!(from_csv(&text).unwrap()[0].method, r.method);
             // Its own knobs filled, the other methods' empty.
@@ -1015,7 +1015,7 @@ pub(crate) mod tests {
                 .filter(|(_, v)| !v.is_empty())
                 .map(|(c, _)| head.iter().position(|h| h == c).unwrap())
                 .collect();
-            assert!(!own.is_empty(), "{}", room.method);
+            assert!(!own.is_empty(), "{}", entry.method);
             let knobs = head.len()
                 - MethodSettings::columns().len()
                 - crate::method::report_columns().len();
@@ -1024,7 +1024,7 @@ pub(crate) mod tests {
                     v.is_empty(),
                     !own.contains(&i),
                     "{} column {}",
-                    room.method,
+                    entry.method,
                     head[i]
                 );
             }
@@ -1184,9 +1184,9 @@ pub(crate) mod tests {
             (Some(0.125), None, Some(40.0), Some(1e-9));
         (r.cluster.plane_gate, r.gamma_used) = (Some(20.0), None);
         r.cluster.weight_exponent = 2.0;
-        // The last room's method: its knobs (their defaults) filled, the others' empty.
-        let room = crate::method::ROOMS.last().unwrap();
-        r.method.method = room.method;
+        // The last entry's method: its knobs (their defaults) filled, the others' empty.
+        let entry = crate::method::REGISTRY.last().unwrap();
+        r.method.method = entry.method;
         let text = to_csv(std::slice::from_ref(&r));
         let cell = |c: &str| cell(&text, 1, c);
         assert_eq!(
@@ -1217,7 +1217,7 @@ pub(crate) mod tests {
             (cell("width"), cell("height"), cell("vpls")),
             ("96".into(), "72".into(), "1024".into())
         );
-        assert_eq!(cell("method"), room.method.name());
+        assert_eq!(cell("method"), entry.method.name());
         let knobs = MethodSettings::columns()
             .into_iter()
             .zip(r.method.column_values());

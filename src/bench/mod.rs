@@ -301,7 +301,7 @@ impl Bench<'_> {
         let mut jobs: Vec<(Config, Option<f64>)> =
             configs.iter().map(|c| (c.clone(), None)).collect();
         let has_k = |c: &&Config| {
-            let r = c.method.room();
+            let r = c.method.entry();
             r.clusters_sps || (r.vpl_clusters)(&c.method)
         };
         for &t in &self.plan.sweep.target_ms {
@@ -407,7 +407,7 @@ impl Bench<'_> {
         let mut label = sweep::label_ran(
             c,
             frame.ran(Pass::SpCluster)
-                || (c.method.knobs_room())
+                || (c.method.entry_with_own_settings())
                     .is_some_and(|r| r.clusters_sps && frame.ran(r.passes[0])),
             frame.ran(Pass::VplCluster),
             frame.gamma_used,

@@ -791,7 +791,7 @@ mod tests {
             instability_world_direct_only: Some(5e-6),
             ..Default::default()
         };
-        r.method.method = crate::method::ROOMS[0].method;
+        r.method.method = crate::method::REGISTRY[0].method;
         let text = to_csv(std::slice::from_ref(&r));
         let head = super::super::csv::split_line(text.lines().next().unwrap());
         assert_eq!(head, header());

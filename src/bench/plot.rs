@@ -35,7 +35,10 @@ pub fn mode_colour(mode: &str) -> RGBColor {
         "weighted" => RGBColor(31, 119, 180),
         "vpl-only" => RGBColor(44, 160, 44),
         "sp-only" => RGBColor(148, 103, 189),
-        m => match crate::method::ROOMS.iter().find(|r| r.method.name() == m) {
+        m => match crate::method::REGISTRY
+            .iter()
+            .find(|r| r.method.name() == m)
+        {
             Some(r) => RGBColor(r.colour[0], r.colour[1], r.colour[2]),
             None => RGBColor(90, 90, 90),
         },
@@ -361,10 +364,10 @@ pub fn pareto(path: &Path, title: &str, rows: &[Row]) -> Result<()> {
 }
 
 /// Colour of a method in `methods.png`: the method whose knobs are the paper's `ClusterSettings`
-/// (`Room::own_knobs` false) takes its default mode's ("weighted"), the others their `mode`
-/// column's (the method's name: its room's `colour`).
+/// (`MethodEntry::own_settings` false) takes its default mode's ("weighted"), the others their `mode`
+/// column's (the method's name: its entry's `colour`).
 pub fn method_colour(method: Method) -> RGBColor {
-    match crate::method::room(method).own_knobs {
+    match crate::method::entry(method).own_settings {
         true => mode_colour(method.name()),
         false => mode_colour("weighted"),
     }
@@ -471,21 +474,21 @@ mod tests {
         assert_eq!(pareto_front(&[(1.0, 1.0)]), vec![0]);
     }
 
-    /// Each method's colour in `methods.png`: a room with its own knobs its room's `colour`, the
+    /// Each method's colour in `methods.png`: a method with knobs of its own its entry's `colour`, the
     /// paper's (the default) the weighted mode's; no two methods share one.
     #[test]
-    fn method_colours_are_the_rooms() {
+    fn method_colours_are_the_entries() {
         let mut seen = Vec::new();
-        for r in crate::method::ROOMS {
+        for r in crate::method::REGISTRY {
             let c = method_colour(r.method);
-            match r.own_knobs {
+            match r.own_settings {
                 true => assert_eq!(c, RGBColor(r.colour[0], r.colour[1], r.colour[2])),
                 false => assert_eq!(c, mode_colour("weighted")),
             }
             assert!(!seen.contains(&c), "{} shares its colour", r.method);
             seen.push(c);
         }
-        assert!(!crate::method::room(Method::default()).own_knobs);
+        assert!(!crate::method::entry(Method::default()).own_settings);
     }
 
     #[test]

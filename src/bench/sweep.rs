@@ -305,12 +305,14 @@ impl Sweep {
         }
         let methods = &self.method.methods;
         // A method whose knobs are the paper's `ClusterSettings` runs the modes.
-        let modes = methods.iter().any(|&m| !crate::method::room(m).own_knobs);
-        let sp_room = methods
+        let modes = methods
             .iter()
-            .map(|&m| crate::method::room(m))
-            .find(|r| r.own_knobs && r.clusters_sps);
-        if let Some(r) = sp_room
+            .any(|&m| !crate::method::entry(m).own_settings);
+        let sp_entry = methods
+            .iter()
+            .map(|&m| crate::method::entry(m))
+            .find(|r| r.own_settings && r.clusters_sps);
+        if let Some(r) = sp_entry
             && sps.contains(&0)
         {
             return Err(format!(
@@ -341,17 +343,17 @@ impl Sweep {
             }
         };
         for method in self.method.methods() {
-            let room = crate::method::room(method);
-            if !room.own_knobs {
+            let entry = crate::method::entry(method);
+            if !entry.own_settings {
                 self.cluster_configs(method, &ks)
                     .into_iter()
                     .for_each(&mut push);
                 continue;
             }
             let own = self.method.configs_of(method);
-            let uses_k = room.clusters_sps || own.iter().any(room.vpl_clusters);
+            let uses_k = entry.clusters_sps || own.iter().any(entry.vpl_clusters);
             let ks = if uses_k { ks.clone() } else { vec![(0, 0)] };
-            let iterations = if room.clusters_sps {
+            let iterations = if entry.clusters_sps {
                 self.cluster.iterations.clone()
             } else {
                 vec![ClusterSettings::default().iterations]
@@ -362,8 +364,8 @@ impl Sweep {
                         for &m in &own {
                             push(Config {
                                 cluster: ClusterSettings {
-                                    sp_clusters: if room.clusters_sps { sp } else { 0 },
-                                    vpl_clusters: if (room.vpl_clusters)(&m) { vpl } else { 0 },
+                                    sp_clusters: if entry.clusters_sps { sp } else { 0 },
+                                    vpl_clusters: if (entry.vpl_clusters)(&m) { vpl } else { 0 },
                                     fuzziness: 1,
                                     weighting: Weighting::Hard,
                                     iterations,
@@ -434,9 +436,9 @@ pub fn mode(c: &ClusterSettings) -> Mode {
 /// `ClusterSettings`, or the method's name for the other methods (each is its own series in the
 /// plots).
 pub fn mode_name(c: &Config) -> &'static str {
-    match c.method.knobs_room() {
+    match c.method.entry_with_own_settings() {
         None => mode(c).name(),
-        Some(room) => room.method.name(),
+        Some(entry) => entry.method.name(),
     }
 }
 
@@ -470,18 +472,18 @@ fn label_of(mode: Mode, c: &ClusterSettings, m: &MethodSettings) -> String {
             v.to_string()
         }
     };
-    if let Some(room) = m.knobs_room() {
-        let own = (room.label)(m);
-        if !(room.clusters_sps || (room.vpl_clusters)(m)) {
-            return format!("{} {own}", room.method);
+    if let Some(entry) = m.entry_with_own_settings() {
+        let own = (entry.label)(m);
+        if !(entry.clusters_sps || (entry.vpl_clusters)(m)) {
+            return format!("{} {own}", entry.method);
         }
         let mut s = format!(
             "{} {}/{} {own}",
-            room.method,
+            entry.method,
             k(c.sp_clusters),
             k(c.vpl_clusters)
         );
-        if room.clusters_sps && c.iterations != ClusterSettings::default().iterations {
+        if entry.clusters_sps && c.iterations != ClusterSettings::default().iterations {
             s += &format!(" i{}", c.iterations);
         }
         return s;
@@ -662,14 +664,17 @@ mod tests {
     #[test]
     fn paper_off_on_sweeps_the_defaults_and_the_paper() {
         // The default method and one with knobs of its own, each of them pinned to one value.
-        let room = crate::method::ROOMS.iter().find(|r| r.own_knobs).unwrap();
-        let methods = format!("{},{}", Method::default().name(), room.method.name());
+        let entry = crate::method::REGISTRY
+            .iter()
+            .find(|r| r.own_settings)
+            .unwrap();
+        let methods = format!("{},{}", Method::default().name(), entry.method.name());
         let mut args: Vec<String> = ["--paper", "off,on", "--modes", "hard", "--pairs", "48/128"]
             .map(String::from)
             .to_vec();
         args.extend(["--methods".to_string(), methods]);
         let own = MethodSettings {
-            method: room.method,
+            method: entry.method,
             ..Default::default()
         };
         let knobs = MethodSettings::columns()
@@ -695,7 +700,7 @@ mod tests {
         assert!(!c[1].ring_fallback && !c[1].position_fallback);
         let other: Vec<&Config> = c
             .iter()
-            .filter(|c| c.method.method == room.method)
+            .filter(|c| c.method.method == entry.method)
             .collect();
         assert_eq!(other.len(), 2);
         assert!(!other[0].paper && other[1].paper);

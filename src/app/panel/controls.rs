@@ -9,11 +9,11 @@ use serde_json::Value;
 use crate::app::UiSettings;
 use crate::settings::{KnobWidget, Widget};
 
-/// The method selector and the chosen method's own knobs (its room's panel section).
+/// The method selector and the chosen method's own knobs (its entry's panel section).
 pub(super) fn method_controls(ui: &mut Ui, s: &mut UiSettings) {
     ui.horizontal(|ui| {
         ui.label("method");
-        for r in crate::method::ROOMS {
+        for r in crate::method::REGISTRY {
             ui.selectable_value(&mut s.method.method, r.method, r.method.name())
                 .on_hover_text(r.about);
         }
@@ -50,9 +50,9 @@ pub(super) fn settings_controls(ui: &mut Ui, s: &mut UiSettings) {
         }
         ui.checkbox(&mut s.direct_on, "direct light");
     });
-    let own_knobs = s.method.knobs_room().is_some();
+    let own_settings = s.method.entry_with_own_settings().is_some();
     for c in crate::settings::ClusterSettings::CONTROLS {
-        let enabled = s.cluster.control_enabled(c.name) && !(c.paper_only && own_knobs);
+        let enabled = s.cluster.control_enabled(c.name) && !(c.paper_only && own_settings);
         if let Some(v) = s.cluster.control(c.name)
             && let Some(next) = draw(ui, c, &v, enabled)
         {

@@ -1,6 +1,6 @@
 //! CPU twin of `shaders-wgsl/common/grid.wgsl`: the uniform grid over cluster centres and its rings
 //! of cells, one for the paper's k-means (Alg. 1, `cpu::kmeans`, searched with Eq. 7) and one for a
-//! room's own k-means (its twin, searched with its own metric). The kernels' ring search skips
+//! method module's own k-means (its twin, searched with its own metric). The kernels' ring search skips
 //! cells that cannot change the result; the twins scan every cell of a ring, which gives the same
 //! result.
 
@@ -20,7 +20,7 @@ pub struct CentreGrid {
 impl CentreGrid {
     /// The grid over the valid centres `(index, position)` of a clustering into `k` clusters
     /// (`grid_build`): over their bounds, or the frame (`lo`, `ext`, `ext[3]` its diagonal) when
-    /// there are none; `along_line`: the guard for centres along a line (`centre_spacing`; a room's
+    /// there are none; `along_line`: the guard for centres along a line (`centre_spacing`; a method module's
     /// k-means sets it).
     pub fn build(
         centres: impl Iterator<Item = (u32, Vec3)> + Clone,

@@ -1,5 +1,5 @@
 //! CPU twins of the GPU kernels' math, used by tests to check the shaders: here those of the shared
-//! passes and those several modules use; a method's own twin lives in its room (`method::<name>::twin`).
+//! passes and those several modules use; a method's own twin lives in its module (`method::<name>::twin`).
 //! Ray queries use obvhs' own CPU traversal (`bvh::SceneBvh::closest` / `occluded`), which is also
 //! the traversal twin.
 

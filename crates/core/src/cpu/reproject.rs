@@ -13,7 +13,7 @@ fn axis(v: [f32; 4]) -> Vec3 {
 }
 
 /// The offset `d` from camera `c`'s eye on its `(w, h)` image: the continuous pixel coordinates
-/// and the view depth; `None` behind (or almost at) the eye. Used by this twin and a room's twin that reprojects
+/// and the view depth; `None` behind (or almost at) the eye. Used by this twin and a method module's twin that reprojects
 /// (`Stages::prev_pixel`).
 pub fn project_new(c: &CameraParams, d: Vec3, (w, h): (u32, u32)) -> Option<(f32, f32, f32)> {
     let z = d.dot(axis(c.forward));

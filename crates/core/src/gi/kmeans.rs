@@ -480,7 +480,7 @@ impl KMeans {
 }
 
 /// The steps that build the grid over `k` centres (`shaders-wgsl/common/grid.wgsl`, the paper's
-/// k-means (Alg. 1) and a room's own), the prefix sum in `groups` workgroups: every count is of
+/// k-means (Alg. 1) and a method module's own), the prefix sum in `groups` workgroups: every count is of
 /// invocations of `WORKGROUP` (the scan's workgroups are 256 wide, one each).
 pub fn grid_steps(k: u32, groups: u32) -> [(&'static str, u32); 5] {
     let scan = WORKGROUP * groups;
@@ -494,7 +494,7 @@ pub fn grid_steps(k: u32, groups: u32) -> [(&'static str, u32); 5] {
 }
 
 /// The resources of the grid over cluster centres (`shaders-wgsl/common/grid.wgsl`), the paper's
-/// k-means' (Alg. 1) and a room's own: the grid, the cell counts and scan words, the centres sorted
+/// k-means' (Alg. 1) and a method module's own: the grid, the cell counts and scan words, the centres sorted
 /// by cell (2 texels each) and per cell the sorted offsets of it and its row neighbours (one texel
 /// gives a row run of three cells). On a software adapter (`texture_search`) the search reads copies
 /// of the last two in textures, refreshed after each grid build (lavapipe fetches texels with vector

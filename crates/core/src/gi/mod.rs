@@ -1,7 +1,7 @@
 //! The shared GI passes, one module per pass, each owning its pipeline and bind-group layout and
 //! driving the WGSL file of the same name: the scene on the GPU, VPLs (step 1) and their clustering
 //! (step 2), primary rays (step 3), direct light, the unclustered gather (Eq. 5) and the k-means.
-//! The methods' own passes are in their rooms (`method`); `render::Plan` decides which passes run.
+//! The methods' own passes are in their modules (`method`); `render::Plan` decides which passes run.
 
 pub mod accumulate;
 pub mod compose;

@@ -25,10 +25,10 @@ pub enum Pass {
     Reference,
     /// The diffuse path tracer (`--path-trace`), instead of every pass above.
     PathTrace,
-    /// A pass of one of the other methods (`crates/core/src/method/<name>/`), by the name its room gives it
-    /// (its room's `passes`, consts of its module): a method adds its passes in its own
+    /// A pass of one of the other methods (`crates/core/src/method/<name>/`), by the name its module gives it
+    /// (its registry entry's `passes`, consts of its module): a method adds its passes in its own
     /// folder, not here. Its name keys its timings as any pass's does.
-    Room(&'static str),
+    Method(&'static str),
     /// `--indirect-scale` below 1: the render-scale indirect light brought to the image's pixels
     /// (`gi::upsample`; the render-scale G-buffer it is computed on is timed under `primary`). Not
     /// in `TIMED`: its key is in `timings_ms` only when it ran, so frames at scale 1 keep theirs.
@@ -40,7 +40,7 @@ pub enum Pass {
 
 impl Pass {
     /// The shared passes whose times the stats report (the other methods' passes follow from
-    /// their rooms: `render::timed::timing_keys`). The first `STAGES`, in this order, are the
+    /// their modules: `render::timed::timing_keys`). The first `STAGES`, in this order, are the
     /// bench CSV's `<stage>_ms` columns (a contract: `bench::csv::stage_passes`); the unclustered
     /// reference has its own column and the other methods' passes are summed in `indirect_ms`.
     pub const TIMED: [Pass; 9] = [
@@ -70,7 +70,7 @@ impl Pass {
             Pass::Gather => "gather",
             Pass::Reference => "reference",
             Pass::PathTrace => "pathtrace",
-            Pass::Room(name) => name,
+            Pass::Method(name) => name,
             Pass::Upsample => "upsample",
             Pass::Accumulate => "accumulate",
         }

@@ -3,7 +3,7 @@
 //! its resident and per-frame state, its production CPU stages and its knobs. All reuse the shared
 //! passes of `gi` (VPLs, primary rays, direct light, the gather of Eq. 5) and reach the frame
 //! through one trait, `IndirectMethod`. colom (the paper) is the default and every method's
-//! reference; `rooms!` below is the registry of the others (`ROOMS`, `Method`, `MethodSettings`,
+//! reference; `registry!` below is the registry of the others (`REGISTRY`, `Method`, `MethodSettings`,
 //! `MethodLists`), from which `render::Plan` picks a method's passes and state. A new method
 //! is its folder and one line of the registry (docs/architecture.md, "Adding a method").
 
@@ -58,7 +58,7 @@ impl FrameInputs<'_> {
     }
 }
 
-/// What a method's largest buffers are checked against before a frame (`Room::limits`): one
+/// What a method's largest buffers are checked against before a frame (`MethodEntry::limits`): one
 /// storage binding's bytes, the clustering settings and the lights its passes see.
 pub struct Limits<'a> {
     pub max_binding: u64,
@@ -68,7 +68,7 @@ pub struct Limits<'a> {
     pub lights_clustered: bool,
 }
 
-/// A room's `limits` with no buffer beyond the frame's.
+/// An entry's `limits` with no buffer beyond the frame's.
 pub fn no_limits(_: &Limits) -> Result<(), String> {
     Ok(())
 }
@@ -78,7 +78,7 @@ pub fn no_limits(_: &Limits) -> Result<(), String> {
 /// γ as the SP clustering sampled with (a setting as resolved, not a count), the method's own
 /// report and the counts left on the GPU. A method's own counts are its report's, never fields here.
 #[derive(Clone, Debug, Default)]
-pub struct Counts {
+pub struct IndirectCounts {
     pub indirect_rays: u64,
     pub sp_used: u32,
     pub vpl_clusters_used: u32,
@@ -102,7 +102,7 @@ pub trait PendingReport: fmt::Debug + Send + Sync {
 }
 
 /// A `PendingReport` read back: shadow rays to add to the frame's, the SP clusters used where the
-/// GPU counted them, and the method's report (its keys join `Counts::report`'s).
+/// GPU counted them, and the method's report (its keys join `IndirectCounts::report`'s).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Resolved {
     pub indirect_rays: u64,
@@ -139,9 +139,15 @@ pub fn join_reports(
 
 /// A method's resident state and the recording of its passes.
 pub trait IndirectMethod: Any {
-    /// Records `pass` (one of its room's `passes`, in their order within a frame).
+    /// Records `pass` (one of its entry's `passes`, in their order within a frame).
     /// `g`: the device, the scene's bind group and the profiler; `n`: what the frame counts.
-    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) -> Result<()>;
+    fn record(
+        &mut self,
+        pass: Pass,
+        g: &mut Gpu,
+        f: &FrameInputs,
+        n: &mut IndirectCounts,
+    ) -> Result<()>;
 
     /// The timings of resident stages (re)built during this frame, taken out of the frame's
     /// `timings` (they are not the frame's, as the VPLs' are not); none by default.
@@ -175,7 +181,7 @@ pub trait IndirectMethod: Any {
 /// A method in the registry: its name, its passes in order, how its state is built (the first time
 /// a frame uses it on a scene's GPU data), what of colom's clustering it uses, and how its knobs are
 /// shown and swept.
-pub struct Room {
+pub struct MethodEntry {
     pub method: Method,
     /// What `--method`'s help says of it (its possible value's line).
     pub doc: &'static str,
@@ -191,7 +197,7 @@ pub struct Room {
     pub limits: fn(&Limits) -> Result<(), String>,
     /// Its knobs are its own (`MethodSettings`' field of its name); colom's are the paper's
     /// `ClusterSettings`, shown and swept on their own.
-    pub own_knobs: bool,
+    pub own_settings: bool,
     /// One line for the viewer's method selector.
     pub about: &'static str,
     /// Its colour in the bench's plots (sRGB).
@@ -201,14 +207,14 @@ pub struct Room {
     pub label: fn(&MethodSettings) -> String,
     pub series: fn(&MethodSettings) -> String,
     pub short: fn(&MethodSettings) -> String,
-    /// The keys of its report (`Counts::report`, what its pending counts read back) that the
+    /// The keys of its report (`IndirectCounts::report`, what its pending counts read back) that the
     /// bench's `results.csv` and `path.csv` carry as columns (`report_columns`), in order.
     pub report_columns: &'static [&'static str],
 }
 
 /// Every method's report columns in registry order (the CSVs' last columns, after the knobs').
 pub fn report_columns() -> Vec<&'static str> {
-    ROOMS
+    REGISTRY
         .iter()
         .flat_map(|r| r.report_columns.iter().copied())
         .collect()
@@ -217,7 +223,7 @@ pub fn report_columns() -> Vec<&'static str> {
 /// A row's values of `report_columns()`: its method's report's (numbers and text as they are,
 /// empty where the key is absent or null), empty for the other methods'.
 pub fn report_values(method: Method, report: Option<&serde_json::Value>) -> Vec<String> {
-    ROOMS
+    REGISTRY
         .iter()
         .flat_map(|r| {
             r.report_columns.iter().map(move |key| {
@@ -241,7 +247,7 @@ pub fn report_of_cells<'a>(
     method: Method,
     cells: impl IntoIterator<Item = (&'a str, &'a str)>,
 ) -> Option<serde_json::Value> {
-    let own = room(method).report_columns;
+    let own = entry(method).report_columns;
     let map: serde_json::Map<String, serde_json::Value> = cells
         .into_iter()
         .filter(|(c, t)| own.contains(c) && !t.is_empty())
@@ -257,27 +263,27 @@ pub fn report_of_cells<'a>(
 }
 
 /// Declares the registry from one line a method (`module: Variant`), the method's folder (declared
-/// beside it, `pub mod module;`, and holding its `ROOM`, its knobs as `Knobs` and their bench lists
-/// as `KnobLists`, both made by `knobs!`): its `Method` variant (named `module` on the command line,
-/// in JSON and in the CSV), its line of `ROOMS`, its field `module` of `MethodSettings` (its knobs,
+/// beside it, `pub mod module;`, and holding its `ENTRY`, its knobs as `Settings` and their bench lists
+/// as `Lists`, both made by `knobs!`): its `Method` variant (named `module` on the command line,
+/// in JSON and in the CSV), its line of `REGISTRY`, its field `module` of `MethodSettings` (its knobs,
 /// flattened into the CLI, the stats JSON and the CSV's last columns) and of `MethodLists`.
-macro_rules! rooms {
+macro_rules! registry {
     ($($module:ident: $Variant:ident),+ $(,)?) => {
 
         /// The registry: colom (the paper, the default) and the others.
-        pub const ROOMS: &[Room] = &[colom::ROOM, $($module::ROOM),+];
+        pub const REGISTRY: &[MethodEntry] = &[colom::ENTRY, $($module::ENTRY),+];
 
         /// Which system computes the indirect light (docs/methods.md). Every method reuses the
         /// VPLs, the BVH, the primary rays, the direct light, the reference and the metrics, and
         /// adds only what its paper adds. colom is the default; the others are the registry's
-        /// (`rooms!`). (`Ord`: the renderer keeps the methods' state in a map by method.)
+        /// (`registry!`). (`Ord`: the renderer keeps the methods' state in a map by method.)
         #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
         pub enum Method {
-            /// Colom, Marques, Santos 2022 (seed 000), the paper this tool rebuilds (its room's `doc`).
+            /// Colom, Marques, Santos 2022, the paper this tool rebuilds (its entry's `doc`).
             #[default]
             Colom,
             $(
-                #[doc = concat!("`", stringify!($module), "` (its room's `doc`).")]
+                #[doc = concat!("`", stringify!($module), "` (its entry's `doc`).")]
                 $Variant,
             )+
         }
@@ -295,7 +301,7 @@ macro_rules! rooms {
             }
         }
 
-        /// The method and every method's knobs (each declared in its room with `knobs!`),
+        /// The method and every method's knobs (each declared in its module with `knobs!`),
         /// flattened into `render`, `view` and the stats JSON beside the paper's
         /// `ClusterSettings`.
         #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -313,7 +319,7 @@ macro_rules! rooms {
             $(
                 #[cfg_attr(feature = "cli", command(flatten))]
                 #[serde(flatten)]
-                pub $module: $module::Knobs,
+                pub $module: $module::Settings,
             )+
         }
 
@@ -321,7 +327,7 @@ macro_rules! rooms {
             /// Every method's knobs as columns of the bench's `results.csv` and `path.csv`, in
             /// order (their last columns).
             pub fn columns() -> Vec<&'static str> {
-                [$($module::Knobs::NAMES),+].concat()
+                [$($module::Settings::NAMES),+].concat()
             }
 
             /// A row's values of `columns()`: its own method's knobs, empty for the other
@@ -339,7 +345,7 @@ macro_rules! rooms {
             pub fn controls(&self) -> &'static [KnobWidget] {
                 match self.method {
                     Method::Colom => &[],
-                    $(Method::$Variant => $module::Knobs::CONTROLS,)+
+                    $(Method::$Variant => $module::Settings::CONTROLS,)+
                 }
             }
 
@@ -388,7 +394,7 @@ macro_rules! rooms {
             pub methods: Vec<Method>,
             $(
                 #[cfg_attr(feature = "cli", command(flatten))]
-                pub $module: $module::KnobLists,
+                pub $module: $module::Lists,
             )+
         }
 
@@ -418,7 +424,7 @@ macro_rules! rooms {
     };
 }
 
-// The registry: a method other than colom is its folder, its `mod` line and its line in `rooms!`.
+// The registry: a method other than colom is its folder, its `mod` line and its line in `registry!`.
 // The folders are declared outside the macro so that tools that walk `mod` declarations
 // (cargo-mutants: docs/testing.md) see them.
 pub mod cvrtgi;
@@ -426,24 +432,24 @@ pub mod lightcluster;
 pub mod restir;
 pub mod wang;
 
-rooms! {
+registry! {
     wang: Wang,
     lightcluster: LightCluster,
     cvrtgi: Cvrtgi,
     restir: Restir,
 }
 
-/// `method`'s room.
-pub fn room(method: Method) -> &'static Room {
-    ROOMS
+/// `method`'s registry entry.
+pub fn entry(method: Method) -> &'static MethodEntry {
+    REGISTRY
         .iter()
         .find(|r| r.method == method)
-        .expect("every method has a room")
+        .expect("every method has an entry")
 }
 
-/// How `method`'s state is built: its room's `build`.
+/// How `method`'s state is built: its entry's `build`.
 pub fn build(method: Method) -> fn(&GpuContext, &SceneGpu) -> Box<dyn IndirectMethod> {
-    room(method).build
+    entry(method).build
 }
 
 /// The `--help` group of the method and its knobs.
@@ -464,11 +470,11 @@ pub const ENV_INTEGERS: &[EnvInteger] = &[colom::shade::PATTERNS_ENV];
 impl Method {
     /// Its line in `--method`'s help.
     pub fn doc(self) -> &'static str {
-        room(self).doc
+        entry(self).doc
     }
 }
 
-/// The command line's names (`rooms!`), each with its room's `doc` in `--help`.
+/// The command line's names (`registry!`), each with its entry's `doc` in `--help`.
 #[cfg(feature = "cli")]
 impl clap::ValueEnum for Method {
     fn value_variants<'a>() -> &'a [Self] {
@@ -504,15 +510,15 @@ impl fmt::Display for Method {
 }
 
 impl MethodSettings {
-    /// The asked method's room.
-    pub fn room(&self) -> &'static Room {
-        room(self.method)
+    /// The asked method's registry entry.
+    pub fn entry(&self) -> &'static MethodEntry {
+        entry(self.method)
     }
 
-    /// The asked method's room where its knobs are its own (`Room::own_knobs`; `None`: colom,
+    /// The asked method's registry entry where its knobs are its own (`MethodEntry::own_settings`; `None`: colom,
     /// whose knobs are the paper's `ClusterSettings`).
-    pub fn knobs_room(&self) -> Option<&'static Room> {
-        Some(self.room()).filter(|r| r.own_knobs)
+    pub fn entry_with_own_settings(&self) -> Option<&'static MethodEntry> {
+        Some(self.entry()).filter(|r| r.own_settings)
     }
 }
 
@@ -564,20 +570,20 @@ mod tests {
     }
 
     #[test]
-    fn every_method_has_one_room() {
+    fn every_method_has_one_entry() {
         for m in Method::ALL {
-            assert_eq!(room(m).method, m);
-            assert_eq!(ROOMS.iter().filter(|r| r.method == m).count(), 1, "{m}");
-            assert_eq!(room(m).own_knobs, m != Method::Colom, "{m}");
+            assert_eq!(entry(m).method, m);
+            assert_eq!(REGISTRY.iter().filter(|r| r.method == m).count(), 1, "{m}");
+            assert_eq!(entry(m).own_settings, m != Method::Colom, "{m}");
         }
-        assert_eq!(ROOMS.len(), Method::ALL.len());
+        assert_eq!(REGISTRY.len(), Method::ALL.len());
     }
 
-    /// `--method`'s possible values carry each method's line (colom's, its room's `doc`), and an
+    /// `--method`'s possible values carry each method's line (colom's, its entry's `doc`), and an
     /// unknown name in JSON is refused with the names it may be.
     #[cfg(feature = "cli")]
     #[test]
-    fn the_help_lines_are_the_rooms_docs() {
+    fn the_help_lines_are_the_entries_docs() {
         use clap::ValueEnum;
         for m in Method::ALL {
             let v = m.to_possible_value().unwrap();
@@ -596,14 +602,14 @@ mod tests {
         assert!(e.contains("unknown method") && e.contains("cvrtgi"), "{e}");
     }
 
-    /// A room's passes are named once: no two passes (the shared ones, every room's) share a
+    /// A method's passes are named once: no two passes (the shared ones, every method's) share a
     /// name, which keys their timings, the stats and the CSV.
     #[test]
     fn pass_names_are_unique() {
         let mut names: Vec<&str> = Pass::TIMED.iter().map(|p| p.name()).collect();
         names.extend([Pass::PathTrace, Pass::Upsample].map(|p| p.name()));
         // colom's passes are among the contract's timed ones (`Pass::TIMED`).
-        for r in ROOMS.iter().filter(|r| r.own_knobs) {
+        for r in REGISTRY.iter().filter(|r| r.own_settings) {
             assert!(!r.passes.is_empty(), "{}", r.method);
             names.extend(r.passes.iter().map(|p| p.name()));
         }
@@ -636,12 +642,12 @@ mod tests {
         assert_eq!(join_reports(None, None), None);
     }
 
-    /// The knobs' columns follow the registry's order, a room's own filled and the others' empty.
+    /// The knobs' columns follow the registry's order, a method's own filled and the others' empty.
     #[test]
     fn knob_columns_follow_the_registry() {
-        let want: Vec<&str> = ROOMS
+        let want: Vec<&str> = REGISTRY
             .iter()
-            .filter(|r| r.own_knobs)
+            .filter(|r| r.own_settings)
             .flat_map(|r| {
                 let m = MethodSettings {
                     method: r.method,

@@ -75,7 +75,7 @@ pub fn check_vpls(ctx: &GpuContext, vpls: u32) -> Result<(), String> {
 }
 
 /// Refuses a frame whose method's own largest buffer does not fit one storage binding of `ctx`
-/// (its room's `limits`, e.g. a visibility bit matrix of K_SP × lights bits); the message names the
+/// (its entry's `limits`, e.g. a visibility bit matrix of K_SP × lights bits); the message names the
 /// options. The shared gather has none.
 pub fn check_method_limits(
     ctx: &GpuContext,
@@ -85,7 +85,7 @@ pub fn check_method_limits(
     let Some(method) = plan.method else {
         return Ok(());
     };
-    (crate::method::room(method).limits)(&crate::method::Limits {
+    (crate::method::entry(method).limits)(&crate::method::Limits {
         max_binding: ctx.max_binding(),
         cluster: &s.cluster,
         lights: plan.lights(s),

@@ -4,7 +4,7 @@
 //!
 //! Resident (per scene / light change, `resident.rs`): the VPLs (step 1) and their clusters (step 2).
 //! Per frame: primary (step 3) → direct + emission → indirect, one of
-//! - a method's own passes (its room's `passes`, `method::ROOMS`); the paper's are `sp_cluster` (step 4)
+//! - a method's own passes (its entry's `passes`, `method::REGISTRY`); the paper's are `sp_cluster` (step 4)
 //!   → `visibility` (step 5) → `shade` (step 6, Eq. 6 with Eq. 8 or 9), the lights being VPL
 //!   clusters ("both") or the VPLs ("SPs only");
 //! - where no method's passes apply (the reference, or a method that clusters the SPs without
@@ -22,9 +22,9 @@ use crate::scene::Scene;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Plan {
     pub indirect: bool,
-    /// Step 2 (the resident VPL clustering: the lights of a room whose `vpl_clusters` asks for it).
+    /// Step 2 (the resident VPL clustering: the lights of a method whose `vpl_clusters` asks for it).
     pub vpl_clustering: bool,
-    /// The method whose own passes (its room's `passes`) compute the indirect light: the one asked
+    /// The method whose own passes (its entry's `passes`) compute the indirect light: the one asked
     /// where it applies; `None` for the reference and where the method asked does not apply (one
     /// that clusters SPs without 0 < K_SP < pixels), whose frame is the shared gather (`reference`,
     /// or `gather` over the VPL clusters).
@@ -50,16 +50,16 @@ impl Plan {
         .filter(|&l| clustered && l != (f.width, f.height));
         let pixels = low.map_or(f.width * f.height, |(w, h)| w * h);
         let sp = clustered && c.sp_clusters > 0 && c.sp_clusters < pixels;
-        // A method's room runs where it applies (one clustering SPs needs 0 < K_SP < pixels);
+        // A method's own passes run where they apply (one clustering SPs needs 0 < K_SP < pixels);
         // elsewhere the shared gather does.
-        let room = Some(s.method.room()).filter(|r| clustered && (sp || !r.clusters_sps));
+        let entry = Some(s.method.entry()).filter(|r| clustered && (sp || !r.clusters_sps));
         Plan {
             indirect,
             vpl_clustering: clustered
-                && room.is_none_or(|r| (r.vpl_clusters)(&s.method))
+                && entry.is_none_or(|r| (r.vpl_clusters)(&s.method))
                 && c.vpl_clusters > 0
                 && c.vpl_clusters < f.vpls,
-            method: room.map(|r| r.method),
+            method: entry.map(|r| r.method),
             low,
             accumulate: clustered && c.temporal && c.temporal_alpha < 1.0,
         }
@@ -86,7 +86,7 @@ impl Plan {
         p.extend([Pass::Primary, Pass::Direct]);
         if self.indirect {
             p.extend_from_slice(match self.method {
-                Some(m) => crate::method::room(m).passes,
+                Some(m) => crate::method::entry(m).passes,
                 None if self.vpl_clustering => &[Pass::Gather],
                 None => &[Pass::Reference],
             });

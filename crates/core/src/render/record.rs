@@ -16,7 +16,7 @@ use super::settings::{Cancelled, RenderSettings};
 use crate::gi::accumulate::Accumulate;
 use crate::gi::pass::Pass;
 use crate::gi::primary::CameraParams;
-use crate::method::{Counts, FrameInputs, Method};
+use crate::method::{FrameInputs, IndirectCounts, Method};
 use crate::scene::{Camera, Scene};
 
 /// A frame's buffers and what its passes hand on to the next ones (the other methods' passes read
@@ -37,7 +37,7 @@ pub(super) struct FrameResources {
     /// counts the pixels).
     pub rays_per_point: u64,
     /// The indirect passes' shadow rays in all, SP clusters and VPL clusters used, CPU steps.
-    pub counts: Counts,
+    pub counts: IndirectCounts,
 }
 
 impl FrameResources {
@@ -84,7 +84,7 @@ impl Renderer<'_> {
             }),
             direct_samples: 0,
             rays_per_point: 0,
-            counts: Counts::default(),
+            counts: IndirectCounts::default(),
         };
         for &pass in &passes {
             match pass {
@@ -244,7 +244,7 @@ impl Renderer<'_> {
         Ok(())
     }
 
-    /// One of the pass list of `method`'s room (`method::ROOMS`), its state built the first time.
+    /// One of the pass list of `method`'s entry (`method::REGISTRY`), its state built the first time.
     fn method_pass(
         &mut self,
         method: Method,

@@ -48,7 +48,7 @@ pub struct Renderer<'a> {
     pub(super) vpl_trace: VplTrace,
     pub(super) reference: Reference,
     pub(super) kmeans: KMeans,
-    /// The other methods' state (`method::ROOMS`), each built the first time a frame uses it.
+    /// The other methods' state (`method::REGISTRY`), each built the first time a frame uses it.
     pub(super) methods: BTreeMap<Method, Box<dyn IndirectMethod>>,
     /// The method whose passes computed the last frame's indirect light (`None`: the shared
     /// gather, or no indirect light).
@@ -229,7 +229,7 @@ impl<'a> Renderer<'a> {
         self.frames.made
     }
 
-    /// A method's state (`method::ROOMS`) as its room's type `T`, once a frame has used it (tests
+    /// A method's state (`method::REGISTRY`) as its module's type `T`, once a frame has used it (tests
     /// and views read a method's last clustering from it).
     pub fn method_state<T: 'static>(&self, method: Method) -> Option<&T> {
         let state: &dyn std::any::Any = self.methods.get(&method)?.as_ref();

@@ -189,11 +189,11 @@ pub fn timed(
     })
 }
 
-/// Every timing key of the contract (the shared passes of `Pass::TIMED`, every room's passes and
+/// Every timing key of the contract (the shared passes of `Pass::TIMED`, every method's passes and
 /// `frame`), so readers can index them; passes that did not run read 0.
 pub fn timing_keys() -> impl Iterator<Item = &'static str> {
-    let rooms = crate::method::ROOMS.iter().flat_map(|r| r.passes);
-    (Pass::TIMED.iter().chain(rooms))
+    let own = crate::method::REGISTRY.iter().flat_map(|r| r.passes);
+    (Pass::TIMED.iter().chain(own))
         .map(|p| p.name())
         .chain([super::frame::FRAME_KEY])
 }
@@ -250,10 +250,10 @@ mod tests {
         for k in timing_keys() {
             assert!(b.contains_key(k), "{k}");
         }
-        // The contract's ten (the shared passes and `frame`), and every room's passes.
-        let rooms: usize = crate::method::ROOMS.iter().map(|r| r.passes.len()).sum();
-        assert_eq!(timing_keys().count(), 10 + rooms);
-        for r in crate::method::ROOMS {
+        // The contract's ten (the shared passes and `frame`), and every method's passes.
+        let own: usize = crate::method::REGISTRY.iter().map(|r| r.passes.len()).sum();
+        assert_eq!(timing_keys().count(), 10 + own);
+        for r in crate::method::REGISTRY {
             assert!(
                 r.passes.iter().all(|p| b.contains_key(p.name())),
                 "{}",

@@ -140,7 +140,7 @@ impl Widget {
 }
 
 /// A setting in the viewer: its field's name (its option and column), its label, its widget, and
-/// whether only the method whose knobs are the paper's (`Room::own_knobs` false) uses it (the
+/// whether only the method whose knobs are the paper's (`MethodEntry::own_settings` false) uses it (the
 /// viewer greys it out for the others).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct KnobWidget {

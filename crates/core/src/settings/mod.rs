@@ -5,7 +5,7 @@
 //!
 //! - `ClusterSettings`: the paper's knobs (K_SP, K_VPL, F, γ, n_t, iterations, weighting, p, the
 //!   plane gate, temporal reuse, the time target); the other methods' knobs are declared in their
-//!   rooms with `knobs!` and gathered in `method::MethodSettings`;
+//!   modules with `knobs!` and gathered in `method::MethodSettings`;
 //! - `FrameSettings`: what a frame is (size, seed, VPLs, bounces, direct samples, exposure, clamp);
 //! - `LightSettings`: the lights added to or scaled in a scene.
 //!

@@ -2,7 +2,7 @@
 //! shading points clustered by fuzzy k-means (step 4, Alg. 1 and 2, `gi::kmeans`), one shadow ray
 //! per SP-cluster representative and light (step 5, `visibility`), and Eq. (6) per pixel with
 //! Eq. (8) or (9) (step 6, `shade`). Its lights are the resident VPL clusters (step 2) or the VPLs.
-//! Its passes are `Pass::SpCluster` → `Pass::Visibility` → `Pass::Shade` (its `ROOM`); where K_SP
+//! Its passes are `Pass::SpCluster` → `Pass::Visibility` → `Pass::Shade` (its `ENTRY`); where K_SP
 //! does not apply, the frame is the renderer's shared gather (VPL clusters) or reference.
 //!
 //! Its state is what temporal reuse starts from: the last frame's SP clustering (its centroids warm
@@ -16,7 +16,10 @@ use std::any::Any;
 
 use anyhow::Result;
 
-use super::{Counts, FrameInputs, IndirectMethod, Limits, Method, PendingReport, Resolved, Room};
+use super::{
+    FrameInputs, IndirectCounts, IndirectMethod, Limits, Method, MethodEntry, PendingReport,
+    Resolved,
+};
 use crate::gi::dispatch::Gpu;
 use crate::gi::kmeans::{Clustering, KMeans, KMeansSettings, KmCounters, Points, Warm};
 use crate::gi::pass::Pass;
@@ -29,16 +32,16 @@ use visibility::{Previous, VisInputs, Visibility};
 
 /// colom's line of the registry. Its knobs are the paper's (`ClusterSettings`: K, F, γ, n_t, the
 /// weighting and the adaptations), shown and swept by the viewer's and the bench's own controls.
-pub const ROOM: Room = Room {
+pub const ENTRY: MethodEntry = MethodEntry {
     method: Method::Colom,
-    doc: "Colom, Marques, Santos 2022 (seed 000): fuzzy k-means of SPs and VPLs, visibility \
+    doc: "Colom, Marques, Santos 2022: fuzzy k-means of SPs and VPLs, visibility \
           between cluster representatives, Eq. (6) shading per pixel × VPL cluster",
     passes: &[Pass::SpCluster, Pass::Visibility, Pass::Shade],
     build,
     clusters_sps: true,
     vpl_clusters: |_| true,
     limits,
-    own_knobs: false,
+    own_settings: false,
     colour: [140, 86, 75],
     about: "Colom et al. 2022: fuzzy k-means of SPs and VPLs, Eq. (6) per pixel and VPL cluster \
             (docs/methods.md)",
@@ -196,7 +199,12 @@ impl Colom {
     }
 
     /// Step 4: the SP clustering, warm-started from the previous frame's with temporal reuse.
-    fn sp_cluster(&mut self, g: &mut Gpu, f: &FrameInputs, counts: &mut Counts) -> Result<()> {
+    fn sp_cluster(
+        &mut self,
+        g: &mut Gpu,
+        f: &FrameInputs,
+        counts: &mut IndirectCounts,
+    ) -> Result<()> {
         let previous = self.clustering.take().filter(|_| f.cluster.temporal);
         let warm = previous.as_ref().map(|c| Warm {
             centroids: &c.centroids,
@@ -230,7 +238,12 @@ impl Colom {
 
     /// Step 5: the visibility bit matrix between SP-cluster representatives and lights; rows of
     /// representatives kept from the previous frame are copied when the lights are the same.
-    fn visibility(&mut self, g: &mut Gpu, f: &FrameInputs, counts: &mut Counts) -> Result<()> {
+    fn visibility(
+        &mut self,
+        g: &mut Gpu,
+        f: &FrameInputs,
+        counts: &mut IndirectCounts,
+    ) -> Result<()> {
         let lights = &f.lights.expect("colom's lights").list;
         let num_lights = lights.lights.len() as u32;
         let c = self.frame.clustering.as_ref().expect("sp_cluster ran");
@@ -300,7 +313,13 @@ struct Past {
 }
 
 impl IndirectMethod for Colom {
-    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) -> Result<()> {
+    fn record(
+        &mut self,
+        pass: Pass,
+        g: &mut Gpu,
+        f: &FrameInputs,
+        n: &mut IndirectCounts,
+    ) -> Result<()> {
         match pass {
             Pass::SpCluster => self.sp_cluster(g, f, n),
             Pass::Visibility => self.visibility(g, f, n),

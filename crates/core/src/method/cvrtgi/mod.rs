@@ -17,11 +17,11 @@
 //! 3. per frame: each pixel reads its face's filtered irradiance (§4.5, `lookup`).
 //!
 //! Shader: `shaders-wgsl/cvrtgi.wgsl`; CPU twin of every kernel: `twin`. The pass is
-//! `PASS` (`ROOM`).
+//! `PASS` (`ENTRY`).
 
 pub mod inject;
 pub mod settings;
-/// The CPU twin of this room's shader, for tests only: no production code calls it.
+/// The CPU twin of this module's shader, for tests only: no production code calls it.
 pub mod twin;
 pub mod voxel;
 
@@ -35,18 +35,18 @@ use self::inject::{Faces, Lighting};
 use self::settings::{ClusterGather, CvrtgiSettings};
 use self::voxel::{Cluster, SlicSettings, Voxels};
 use super::Method;
-use super::{Counts, FrameInputs, IndirectMethod, Room};
+use super::{FrameInputs, IndirectCounts, IndirectMethod, MethodEntry};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::{SceneGpu, TooBig, storage_layout, uniform_layout};
 use crate::gi::vpl_trace::{VplKey, VplSet};
 
-pub use settings::{CvrtgiLists as KnobLists, CvrtgiSettings as Knobs};
+pub use settings::{CvrtgiLists as Lists, CvrtgiSettings as Settings};
 
 /// cvrtgi's one pass: voxels, clusters and the per-face visibility cache (resident while the scene
 /// and its knobs stay), the lit clusters' per-face irradiance, filtered (resident while the VPLs
 /// stay), and every pixel's lookup (GPU times under `cvrtgi.*`, the CPU stages under `cvrtgi`).
-pub const PASS: Pass = Pass::Room("cvrtgi");
+pub const PASS: Pass = Pass::Method("cvrtgi");
 use crate::gpu::GpuContext;
 use crate::scene::Scene;
 
@@ -736,9 +736,9 @@ impl Cvrtgi {
 }
 
 /// cvrtgi in the registry.
-pub const ROOM: Room = Room {
+pub const ENTRY: MethodEntry = MethodEntry {
     method: Method::Cvrtgi,
-    doc: "CVRTGI (Cosin Ayerbe & Patow 2022, seed 003): the scene voxelised, voxels clustered by \
+    doc: "CVRTGI (Cosin Ayerbe & Patow 2022): the scene voxelised, voxels clustered by \
           SLIC with the 35° normal rule (Eq. 1, Alg. 1), per-voxel-face irradiance from the lit \
           clusters a face's rays find, filtered, read by every pixel; cached while the lights stay",
     passes: &[PASS],
@@ -746,7 +746,7 @@ pub const ROOM: Room = Room {
     clusters_sps: false,
     vpl_clusters: |_| false,
     limits: super::no_limits,
-    own_knobs: true,
+    own_settings: true,
     colour: [188, 189, 34],
     about: "CVRTGI: voxel clusters (SLIC, 35° rule) light every voxel face; pixels read their \
             face's filtered irradiance, cached while the lights stay (docs/methods.md)",
@@ -773,7 +773,13 @@ impl IndirectMethod for Cvrtgi {
     /// `PASS`: the frame's indirect light by CVRTGI, from the resident VPLs (no VPL
     /// clustering: a VPL is injected into the cluster of its voxel). Its CPU stages (voxelisation,
     /// SLIC, injection) count as the pass's time when they run.
-    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) -> Result<()> {
+    fn record(
+        &mut self,
+        pass: Pass,
+        g: &mut Gpu,
+        f: &FrameInputs,
+        n: &mut IndirectCounts,
+    ) -> Result<()> {
         debug_assert_eq!(pass, PASS);
         let inputs = CvrtgiInputs {
             scene: f.scene,

@@ -5,11 +5,11 @@
 //! its term is visible, one ray a group, at most `MEMBER_TARGETS` a cluster; with
 //! `--lightcluster-visibility disc` every VPL takes its cluster's disc's visibility from
 //! `DISC_SAMPLES` shadow rays (§3.2) (`shaders-wgsl/lightcluster.wgsl`, CPU twin
-//! `twin`). The passes are `CLUSTER` → `SHADE` (`ROOM`).
+//! `twin`). The passes are `CLUSTER` → `SHADE` (`ENTRY`).
 
 pub mod cluster;
 pub mod settings;
-/// The CPU twin of this room's shader, for tests only: no production code calls it.
+/// The CPU twin of this module's shader, for tests only: no production code calls it.
 pub mod twin;
 
 use std::time::Instant;
@@ -21,19 +21,19 @@ use glam::Vec3;
 use self::cluster::LightClusters;
 use self::settings::LcVisibility;
 use super::Method;
-use super::{Counts, FrameInputs, IndirectMethod, PendingRays, Room};
+use super::{FrameInputs, IndirectCounts, IndirectMethod, MethodEntry, PendingRays};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
 use crate::gi::sum::{Each, WordSum, Words};
 use crate::gpu::GpuContext;
 
-pub use settings::{LightClusterLists as KnobLists, LightClusterSettings as Knobs};
+pub use settings::{LightClusterLists as Lists, LightClusterSettings as Settings};
 
 /// §3.1: the VPLs clustered by the minimum-distance algorithm (CPU).
-pub const CLUSTER: Pass = Pass::Room("lightcluster_cluster");
+pub const CLUSTER: Pass = Pass::Method("lightcluster_cluster");
 /// §3.2: every pixel × every VPL with its cluster's disc visibility.
-pub const SHADE: Pass = Pass::Room("lightcluster_shade");
+pub const SHADE: Pass = Pass::Method("lightcluster_shade");
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -146,9 +146,9 @@ pub fn z_far(eye: Vec3, (lo, hi): (Vec3, Vec3)) -> f32 {
 }
 
 /// lightcluster in the registry.
-pub const ROOM: Room = Room {
+pub const ENTRY: MethodEntry = MethodEntry {
     method: Method::LightCluster,
-    doc: "LightCluster (seed 002): the VPLs clustered by the minimum-distance (leader) algorithm \
+    doc: "LightCluster (Wiesenhütter, Klein, Nischwitz): the VPLs clustered by the minimum-distance (leader) algorithm \
           (§3.1, d_min = d_init (1 − |C_pos| / z_far)), each cluster a disc light of radius d_min \
           whose visibility a few shadow rays over the disc estimate (§3.2), every VPL shaded with \
           its cluster's visibility",
@@ -157,7 +157,7 @@ pub const ROOM: Room = Room {
     clusters_sps: false,
     vpl_clusters: |_| false,
     limits: super::no_limits,
-    own_knobs: true,
+    own_settings: true,
     colour: [23, 190, 207],
     about: "LightCluster: VPLs in minimum-distance clusters whose visibility a few rays estimate \
             (to member VPLs, or to the paper's disc); every VPL shaded (docs/methods.md)",
@@ -192,7 +192,13 @@ impl LightClusterMethod {
 }
 
 impl IndirectMethod for LightClusterMethod {
-    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) -> Result<()> {
+    fn record(
+        &mut self,
+        pass: Pass,
+        g: &mut Gpu,
+        f: &FrameInputs,
+        n: &mut IndirectCounts,
+    ) -> Result<()> {
         let extent = f.scene.extent();
         match pass {
             // §3.1: the VPLs clustered for this camera on the CPU, as the paper's §4 (its time is

@@ -4,7 +4,7 @@
 //! to its sample, reuses the previous frame's reservoir (with `--temporal on`) and its neighbours'
 //! (k of them, n iterations), then shades with its sample's term and weight W and one more shadow
 //! ray (`shaders-wgsl/restir.wgsl`, CPU twin `twin`). The passes are `PREPARE` → `INITIAL`
-//! → `TEMPORAL` → `SPATIAL` → `SHADE` (`ROOM`).
+//! → `TEMPORAL` → `SPATIAL` → `SHADE` (`ENTRY`).
 //!
 //! The VPLs' ids are their indices in the resident set: the history is kept only while that set
 //! (`VplKey`: count, seed, bounces and which trace, so a light change drops it), the frame's
@@ -12,7 +12,7 @@
 
 pub mod alias;
 pub mod settings;
-/// The CPU twin of this room's shader, for tests only: no production code calls it.
+/// The CPU twin of this module's shader, for tests only: no production code calls it.
 pub mod twin;
 
 use std::time::Instant;
@@ -22,7 +22,7 @@ use bytemuck::{Pod, Zeroable};
 
 use self::settings::{Combine, RestirLights};
 use super::Method;
-use super::{Counts, FrameInputs, IndirectMethod, PendingRays, Room};
+use super::{FrameInputs, IndirectCounts, IndirectMethod, MethodEntry, PendingRays};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::primary::{CameraParams, SP_BYTES};
@@ -33,18 +33,18 @@ use crate::gpu::GpuContext;
 use crate::gpu::persistent::Uniform;
 use crate::settings::FrameSettings;
 
-pub use settings::{RestirLists as KnobLists, RestirSettings as Knobs};
+pub use settings::{RestirLists as Lists, RestirSettings as Settings};
 
 /// The candidates' alias table (CPU, when the VPL set changes) and the frame's buffers.
-pub const PREPARE: Pass = Pass::Room("restir_prepare");
+pub const PREPARE: Pass = Pass::Method("restir_prepare");
 /// Initial candidates (RIS) and the visibility of the sample.
-pub const INITIAL: Pass = Pass::Room("restir_initial");
+pub const INITIAL: Pass = Pass::Method("restir_initial");
 /// Temporal reuse (with `--temporal on` and a history).
-pub const TEMPORAL: Pass = Pass::Room("restir_temporal");
+pub const TEMPORAL: Pass = Pass::Method("restir_temporal");
 /// Spatial reuse, its iterations.
-pub const SPATIAL: Pass = Pass::Room("restir_spatial");
+pub const SPATIAL: Pass = Pass::Method("restir_spatial");
 /// The reservoir's light added to the indirect light.
-pub const SHADE: Pass = Pass::Room("restir_shade");
+pub const SHADE: Pass = Pass::Method("restir_shade");
 
 /// Bytes of a reservoir (the VPL, w_sum, M, W).
 pub const RESERVOIR_BYTES: u64 = 16;
@@ -93,7 +93,7 @@ pub fn frame_seed(frame: u32, seed: u32) -> u32 {
 struct HistoryKey {
     lights: LightKey,
     frame: FrameSettings,
-    knobs: Knobs,
+    knobs: Settings,
     pixels: u32,
 }
 
@@ -178,7 +178,7 @@ impl RestirMethod {
 
     /// The alias table (made when the VPL set changes), the buffers of the size, the history's
     /// use, the uniform and the bind groups.
-    fn prepare(&mut self, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) {
+    fn prepare(&mut self, g: &mut Gpu, f: &FrameInputs, n: &mut IndirectCounts) {
         let ctx = g.ctx;
         let t = Instant::now();
         // The light list: the VPLs themselves, or the VPL clusters (`--restir-lights`).
@@ -293,7 +293,7 @@ impl RestirMethod {
 
     /// After the shade: the frame's final reservoirs and G-buffer kept for the next frame (with
     /// `--temporal on`), and the rays the pixels traced summed on the GPU (read only on request).
-    fn finish(&mut self, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) {
+    fn finish(&mut self, g: &mut Gpu, f: &FrameInputs, n: &mut IndirectCounts) {
         let ctx = g.ctx;
         let size = self.size.as_ref().expect("prepared");
         let past = self.past.as_mut().expect("prepared");
@@ -319,7 +319,13 @@ impl RestirMethod {
 }
 
 impl IndirectMethod for RestirMethod {
-    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) -> Result<()> {
+    fn record(
+        &mut self,
+        pass: Pass,
+        g: &mut Gpu,
+        f: &FrameInputs,
+        n: &mut IndirectCounts,
+    ) -> Result<()> {
         let pixels = f.pixels();
         match pass {
             PREPARE => self.prepare(g, f, n),
@@ -395,7 +401,7 @@ fn label(m: &super::MethodSettings) -> String {
 }
 
 /// restir in the registry.
-pub const ROOM: Room = Room {
+pub const ENTRY: MethodEntry = MethodEntry {
     method: Method::Restir,
     doc: "ReSTIR DI (Bitterli et al. 2020) over the frame's VPLs: M candidates a pixel drawn by \
           flux and resampled by Eq. (5)'s unshadowed term, a shadow ray to the sample, the \
@@ -406,7 +412,7 @@ pub const ROOM: Room = Room {
     clusters_sps: false,
     vpl_clusters: |m| m.restir.restir_lights == RestirLights::Clusters,
     limits: super::no_limits,
-    own_knobs: true,
+    own_settings: true,
     colour: [227, 119, 194],
     about: "ReSTIR DI: each pixel resamples VPLs drawn by flux and reuses its neighbours' and \
             (--temporal on) the last frame's samples; one or two shadow rays a pixel \

@@ -5,11 +5,11 @@
 //! weight. Shaders: `shaders-wgsl/wang_cluster.wgsl` (the clustering, `cluster`; its steps in
 //! `shaders-wgsl/wang/`) and
 //! `shaders-wgsl/wang.wgsl` (`radius`, `interp`); CPU twins `twin`.
-//! The passes are `CLUSTER` → `GATHER` → `INTERP` (`ROOM`).
+//! The passes are `CLUSTER` → `GATHER` → `INTERP` (`ENTRY`).
 
 pub mod cluster;
 pub mod settings;
-/// The CPU twin of this room's shaders, for tests only: no production code calls it.
+/// The CPU twin of this module's shaders, for tests only: no production code calls it.
 pub mod twin;
 
 use anyhow::Result;
@@ -17,21 +17,21 @@ use bytemuck::{Pod, Zeroable};
 
 use self::cluster::{ClusterParams, WangCluster, WangClustering};
 use super::Method;
-use super::{Counts, FrameInputs, IndirectMethod, PendingReport, Resolved, Room};
+use super::{FrameInputs, IndirectCounts, IndirectMethod, MethodEntry, PendingReport, Resolved};
 use crate::gi::dispatch::{Gpu, Kernel, Run, copy_to_texture, data_texture};
 use crate::gi::pass::Pass;
 use crate::gi::reference::GatherInputs;
 use crate::gi::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
 
-pub use settings::{WangLists as KnobLists, WangSettings as Knobs};
+pub use settings::{WangLists as Lists, WangSettings as Settings};
 
 /// §3.2: the adaptively seeded k-means of the SPs with Eq. (2), and the sample points.
-pub const CLUSTER: Pass = Pass::Room("wang_cluster");
+pub const CLUSTER: Pass = Pass::Method("wang_cluster");
 /// The irradiance at the sample points (every light with its own shadow ray) and §3.4's R_j.
-pub const GATHER: Pass = Pass::Room("wang_gather");
+pub const GATHER: Pass = Pass::Method("wang_gather");
 /// §3.4: every pixel interpolates the sample points' irradiance.
-pub const INTERP: Pass = Pass::Room("wang_interp");
+pub const INTERP: Pass = Pass::Method("wang_interp");
 
 /// Rays a sample point traces for its harmonic mean distance R_j (§3.4), two dispatches of 16.
 pub const RADIUS_RAYS: u32 = 32;
@@ -222,9 +222,9 @@ impl Wang {
 }
 
 /// wang in the registry.
-pub const ROOM: Room = Room {
+pub const ENTRY: MethodEntry = MethodEntry {
     method: Method::Wang,
-    doc: "Wang et al. 2009 (seed 001): adaptively seeded k-means of the SPs (§3.2, Eq. 2), \
+    doc: "Wang et al. 2009: adaptively seeded k-means of the SPs (§3.2, Eq. 2), \
           irradiance gathered only at the cluster centres, interpolated per pixel with the §3.4 \
           weight",
     passes: &[CLUSTER, GATHER, INTERP],
@@ -232,7 +232,7 @@ pub const ROOM: Room = Room {
     clusters_sps: true,
     vpl_clusters: |_| true,
     limits: super::no_limits,
-    own_knobs: true,
+    own_settings: true,
     colour: [140, 86, 75],
     about: "Wang et al. 2009: irradiance only at the SP clusters' sample points, interpolated per \
             pixel (docs/methods.md)",
@@ -280,7 +280,13 @@ impl PendingReport for PendingUsed {
 }
 
 impl IndirectMethod for WangMethod {
-    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Counts) -> Result<()> {
+    fn record(
+        &mut self,
+        pass: Pass,
+        g: &mut Gpu,
+        f: &FrameInputs,
+        n: &mut IndirectCounts,
+    ) -> Result<()> {
         let ctx = g.ctx;
         let wang = &self.wang;
         let img = Image {

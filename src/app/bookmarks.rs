@@ -1,4 +1,4 @@
-//! The per-scene settings file: camera bookmarks, kept beside the scene (`SCENE.fuzzy-vpl.json`) or,
+//! The per-scene bookmarks file: camera bookmarks, kept beside the scene (`SCENE.fuzzy-vpl.json`) or,
 //! for built-in scenes, in the user's config dir (`$XDG_CONFIG_HOME/fuzzy-vpl/builtin-NAME.json`).
 
 use std::path::{Path, PathBuf};
@@ -43,13 +43,13 @@ impl Bookmark {
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct SceneSettings {
+pub struct BookmarksFile {
     #[serde(default)]
     pub bookmarks: Vec<Bookmark>,
 }
 
-/// Where a scene's settings live (None: no config dir known for a built-in scene).
-pub fn settings_path(spec: &str) -> Option<PathBuf> {
+/// Where a scene's bookmarks file lives (None: no config dir known for a built-in scene).
+pub fn bookmarks_path(spec: &str) -> Option<PathBuf> {
     if let Some(name) = spec.strip_prefix("builtin:") {
         let base = std::env::var_os("XDG_CONFIG_HOME")
             .map(PathBuf::from)
@@ -62,24 +62,24 @@ pub fn settings_path(spec: &str) -> Option<PathBuf> {
     Some(p.with_file_name(format!("{file}.fuzzy-vpl.json")))
 }
 
-/// The largest settings file read (a thousand bookmarks take about 200 KB).
+/// The largest bookmarks file read (a thousand bookmarks take about 200 KB).
 pub const MAX_FILE_BYTES: u64 = 1 << 20;
 /// The most bookmarks a file may hold.
 pub const MAX_BOOKMARKS: usize = 1000;
 
-impl SceneSettings {
-    /// Reads the file; a missing file gives empty settings. Bounded like every input: only a regular
+impl BookmarksFile {
+    /// Reads the file; a missing file gives no bookmarks. Bounded like every input: only a regular
     /// file (a FIFO or device would block or never end) of at most `MAX_FILE_BYTES`, at most
     /// `MAX_BOOKMARKS` bookmarks, each finite with a name of at most 200 characters; anything else
     /// is a one-line error naming the file.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = match crate::files::read_text(path, MAX_FILE_BYTES, "a settings file") {
+        let text = match crate::files::read_text(path, MAX_FILE_BYTES, "a bookmarks file") {
             Ok(t) => t,
             Err(_) if !path.exists() => return Ok(Self::default()),
             Err(e) => anyhow::bail!("{}: cannot read: {e}", path.display()),
         };
         let s: Self = serde_json::from_str(&text)
-            .with_context(|| format!("{}: not a fuzzy-vpl settings file", path.display()))?;
+            .with_context(|| format!("{}: not a fuzzy-vpl bookmarks file", path.display()))?;
         s.check()
             .map_err(|why| anyhow::anyhow!("{}: {why}", path.display()))?;
         Ok(s)
@@ -172,7 +172,7 @@ mod tests {
             let (tx, rx) = std::sync::mpsc::channel();
             let owned = p.to_path_buf();
             std::thread::spawn(move || {
-                let _ = tx.send(format!("{:#}", SceneSettings::load(&owned).unwrap_err()));
+                let _ = tx.send(format!("{:#}", BookmarksFile::load(&owned).unwrap_err()));
             });
             let e = rx
                 .recv_timeout(std::time::Duration::from_secs(60))
@@ -215,19 +215,19 @@ mod tests {
         // A good file still loads.
         let good = dir.join("good.json");
         std::fs::write(&good, file(vec![mark("[1,2,3]", "0.8")])).unwrap();
-        assert_eq!(SceneSettings::load(&good).unwrap().bookmarks.len(), 1);
+        assert_eq!(BookmarksFile::load(&good).unwrap().bookmarks.len(), 1);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
     fn bookmarks_round_trip_through_the_file() {
-        let dir = std::env::temp_dir().join(format!("fuzzy-vpl-settings-{}", std::process::id()));
+        let dir = std::env::temp_dir().join(format!("fuzzy-vpl-bookmarks-{}", std::process::id()));
         let scene = dir.join("room.glb");
-        let path = settings_path(scene.to_str().unwrap()).unwrap();
+        let path = bookmarks_path(scene.to_str().unwrap()).unwrap();
         assert_eq!(path, dir.join("room.glb.fuzzy-vpl.json"));
         assert_eq!(
-            SceneSettings::load(&path).unwrap(),
-            SceneSettings::default()
+            BookmarksFile::load(&path).unwrap(),
+            BookmarksFile::default()
         );
         let cam = ViewCamera {
             eye: Vec3::new(1.0, -2.5, 3.25),
@@ -236,24 +236,24 @@ mod tests {
             yfov: 0.9,
             distance: 4.0,
         };
-        let s = SceneSettings {
+        let s = BookmarksFile {
             bookmarks: vec![
                 Bookmark::new("door".into(), &cam),
                 Bookmark::new("ceiling".into(), &ViewCamera { yaw: -3.0, ..cam }),
             ],
         };
         s.save(&path).unwrap();
-        let back = SceneSettings::load(&path).unwrap();
+        let back = BookmarksFile::load(&path).unwrap();
         assert_eq!(back, s);
         assert_eq!(back.bookmarks[0].camera(), cam);
         std::fs::write(&path, "{ not json").unwrap();
-        assert!(SceneSettings::load(&path).is_err());
+        assert!(BookmarksFile::load(&path).is_err());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
-    fn builtin_settings_go_to_the_config_dir() {
-        let p = settings_path("builtin:cornell");
+    fn builtin_bookmarks_go_to_the_config_dir() {
+        let p = bookmarks_path("builtin:cornell");
         if let Some(p) = p {
             assert!(
                 p.ends_with("fuzzy-vpl/builtin-cornell.json"),
