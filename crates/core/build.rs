@@ -1,5 +1,9 @@
 //! Lists every WGSL file under `shaders-wgsl/` for `gpu::shader::FILES` (a pass's shader, a
-//! method's included, is found by its file alone: no list to edit).
+//! method's included, is found by its file alone: no list to edit), and adds `rust/NAME`, the WGSL
+//! of each struct declared in Rust with `gpu_struct!` under `src/` (a shader's `#import
+//! rust/NAME`): read from the declaration's text here, so that the shader composition names no
+//! module that declares one (each such module's test checks the text against the macro's
+//! `NAME::WGSL`).
 
 use std::path::Path;
 
@@ -19,6 +23,58 @@ fn walk(dir: &Path, rel: &str, out: &mut Vec<String>) {
     }
 }
 
+/// The WGSL type of a `gpu_struct!` field's Rust type (as `gpu::shader::wgsl_type!`).
+fn wgsl_type(t: &str) -> &'static str {
+    match t.split_whitespace().collect::<String>().as_str() {
+        "u32" => "u32",
+        "f32" => "f32",
+        "[u32;4]" => "vec4<u32>",
+        "[f32;4]" => "vec4<f32>",
+        other => panic!("gpu_struct!: field type {other} has no WGSL type here"),
+    }
+}
+
+/// Every `gpu_struct!` under `dir` as (name, WGSL text), the text as `NAME::WGSL` writes it.
+fn rust_structs(dir: &Path, out: &mut Vec<(String, String)>) {
+    let mut entries: Vec<_> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.expect("a directory entry").path())
+        .collect();
+    entries.sort();
+    for p in entries {
+        if p.is_dir() {
+            rust_structs(&p, out);
+            continue;
+        }
+        if p.extension().is_none_or(|e| e != "rs") {
+            continue;
+        }
+        let src = std::fs::read_to_string(&p).expect("a source file");
+        // Not a unit test's own struct.
+        let src = src.split("#[cfg(test)]").next().unwrap_or_default();
+        for (at, _) in src.match_indices("gpu_struct! {") {
+            let body = &src[at..];
+            let head = body.find("struct ").expect("gpu_struct!: a struct") + "struct ".len();
+            let open = body[head..].find('{').expect("gpu_struct!: its fields") + head;
+            let close = body[open..].find('}').expect("gpu_struct!: its end") + open;
+            let name = body[head..open].trim().to_string();
+            if name.starts_with('$') {
+                continue; // the macro's own definition
+            }
+            let mut wgsl = format!("struct {name} {{\n");
+            for line in body[open + 1..close].lines().map(str::trim) {
+                if line.is_empty() || line.starts_with("///") || line.starts_with('#') {
+                    continue;
+                }
+                let (field, ty) = line.trim_end_matches(',').split_once(':').expect("a field");
+                wgsl += &format!("    {}: {},\n", field.trim(), wgsl_type(ty));
+            }
+            wgsl += "}\n";
+            out.push((name, wgsl));
+        }
+    }
+}
+
 fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shaders-wgsl");
     println!("cargo:rerun-if-changed=../../shaders-wgsl");
@@ -33,6 +89,13 @@ fn main() {
             "    ({f:?}, include_str!(concat!(env!(\"CARGO_MANIFEST_DIR\"), {:?}))),\n",
             format!("/../../shaders-wgsl/{f}")
         );
+    }
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    println!("cargo:rerun-if-changed=src");
+    let mut structs = Vec::new();
+    rust_structs(&src, &mut structs);
+    for (name, wgsl) in &structs {
+        code += &format!("    (\"rust/{name}\", {wgsl:?}),\n");
     }
     code += "]\n";
     let out = Path::new(&std::env::var("OUT_DIR").unwrap()).join("wgsl_files.rs");

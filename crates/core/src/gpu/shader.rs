@@ -1,6 +1,6 @@
 //! WGSL composition: a pass shader names the shared files it needs with `#import common/NAME.wgsl`
 //! lines; they are inlined once each, in order, before naga parses the result. `#import rust/NAME`
-//! inlines a struct declared once in Rust for both sides (`gpu_struct!`, `RUST_STRUCTS`). This is
+//! inlines a struct declared once in Rust for both sides (`gpu_struct!`, `rust_struct`). This is
 //! all the composition the project needs, so it does without naga_oil.
 
 use std::collections::HashSet;
@@ -21,7 +21,7 @@ pub fn pass_names() -> impl Iterator<Item = &'static str> {
 
 /// A `#[repr(C)]` struct a shader reads (a pass's uniform parameters), declared once: the Rust
 /// struct (`Pod`) and `NAME::WGSL`, the same fields in WGSL, which a shader takes with
-/// `#import rust/NAME` once the struct is in `RUST_STRUCTS`. Field types: `u32`, `f32`,
+/// `#import rust/NAME` (`build.rs` finds the declaration). Field types: `u32`, `f32`,
 /// `[u32; 4]` (`vec4<u32>`), `[f32; 4]` (`vec4<f32>`); the caller pads to 16 bytes.
 macro_rules! gpu_struct {
     (
@@ -38,7 +38,7 @@ macro_rules! gpu_struct {
         }
 
         impl $name {
-            /// The struct in WGSL (`#import rust/NAME`, `gpu::shader::RUST_STRUCTS`).
+            /// The struct in WGSL (`#import rust/NAME`, `gpu::shader::rust_struct`).
             #[allow(dead_code)]
             pub const WGSL: &'static str = concat!(
                 "struct ", stringify!($name), " {\n",
@@ -67,15 +67,12 @@ macro_rules! wgsl_type {
 }
 pub(crate) use wgsl_type;
 
-/// The structs declared in Rust for the shaders (`gpu_struct!`), by the name `#import rust/NAME`
-/// gives them.
-const RUST_STRUCTS: &[(&str, &str)] = &[
-    ("CvParams", crate::method::cvrtgi::CvParams::WGSL),
-    (
-        "VisParams",
-        crate::method::colom::visibility::VisParams::WGSL,
-    ),
-];
+/// The WGSL of struct `name` declared in Rust with `gpu_struct!` (what `#import rust/NAME`
+/// inlines): `build.rs` writes it from the declaration's text, and the declaring module's test
+/// checks it against the macro's `NAME::WGSL`.
+pub fn rust_struct(name: &str) -> Option<&'static str> {
+    file(&format!("rust/{name}"))
+}
 
 fn file(path: &str) -> Option<&'static str> {
     FILES.iter().find(|(p, _)| *p == path).map(|(_, s)| *s)
@@ -121,13 +118,10 @@ fn inline(path: &str, seen: &mut HashSet<String>, out: &mut String) -> Result<()
         return Ok(());
     }
     let src = match path.strip_prefix("rust/") {
-        Some(name) => RUST_STRUCTS
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map(|(_, s)| s.to_string())
-            .ok_or_else(|| {
-                format!("unknown Rust struct {name} (not in gpu::shader::RUST_STRUCTS)")
-            })?,
+        // Always the built-in text: it is the Rust struct's (`rust_struct`).
+        Some(name) => rust_struct(name)
+            .map(str::to_string)
+            .ok_or_else(|| format!("unknown Rust struct {name} (no gpu_struct! declares it)"))?,
         None => source(path)?,
     };
     for line in src.lines() {
@@ -284,7 +278,12 @@ mod tests {
                 "{f} exists but is not in gpu::shader::FILES (build.rs)"
             );
         }
-        assert_eq!(on_disk.len(), FILES.len(), "FILES lists a file not on disk");
+        let files = FILES.iter().filter(|(p, _)| !p.starts_with("rust/"));
+        assert_eq!(
+            on_disk.len(),
+            files.count(),
+            "FILES lists a file not on disk"
+        );
         assert!(
             on_disk.iter().any(|f| f.starts_with("common/")),
             "{on_disk:?}"

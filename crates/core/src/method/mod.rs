@@ -554,6 +554,26 @@ pub fn parse_method(item: &str) -> Result<Method, Invalid> {
 
 #[cfg(test)]
 mod tests {
+    /// Each struct a method declares for its shader with `gpu_struct!` is the text `build.rs` read
+    /// from the declaration (`gpu::shader::rust_struct`, what `#import rust/NAME` inlines).
+    #[test]
+    fn every_gpu_struct_is_the_text_build_rs_read() {
+        for (name, wgsl) in [
+            ("CvParams", cvrtgi::CvParams::WGSL),
+            ("VisParams", colom::visibility::VisParams::WGSL),
+        ] {
+            assert_eq!(crate::gpu::shader::rust_struct(name), Some(wgsl), "{name}");
+        }
+        let declared = crate::gpu::shader::FILES
+            .iter()
+            .filter(|(p, _)| p.starts_with("rust/"));
+        assert_eq!(
+            declared.count(),
+            2,
+            "a gpu_struct! this test does not check"
+        );
+    }
+
     use super::*;
 
     #[cfg(feature = "cli")]

@@ -25,6 +25,8 @@ pub mod settings;
 pub mod twin;
 pub mod voxel;
 
+mod bindings;
+use bindings::{Bindings, entries, light_words, run_faces};
 use std::cell::OnceCell;
 use std::time::Instant;
 
@@ -38,7 +40,7 @@ use super::Method;
 use super::{FrameInputs, IndirectCounts, IndirectMethod, MethodEntry};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
-use crate::gi::scene_gpu::{SceneGpu, TooBig, storage_layout, uniform_layout};
+use crate::gi::scene_gpu::{SceneGpu, TooBig};
 use crate::gi::vpl_trace::{VplKey, VplSet};
 
 pub use settings::{CvrtgiLists as Lists, CvrtgiSettings as Settings};
@@ -205,79 +207,6 @@ pub struct Cvrtgi {
 /// `vpl_trace` and `vpl_cluster` they are not in `frame` (a frame with the same scene and VPLs runs
 /// only `cvrtgi.lookup`); the stats report their last build's times.
 pub const RESIDENT_KEYS: [&str; 5] = ["cvrtgi", LABELS[0], LABELS[1], LABELS[2], LABELS[4]];
-
-fn entries() -> Vec<wgpu::BindGroupLayoutEntry> {
-    vec![
-        uniform_layout(1),
-        storage_layout(2, true),
-        storage_layout(3, true),
-        storage_layout(4, true),
-        storage_layout(5, false),
-        storage_layout(6, true),
-        storage_layout(7, false),
-        storage_layout(8, true),
-        storage_layout(9, false),
-    ]
-}
-
-/// The buffers of one bind group (a binding the entry point does not use gets a small buffer of
-/// its own: one buffer may not be bound read-only and writable in one dispatch).
-struct Bindings<'a> {
-    params: &'a wgpu::Buffer,
-    voxels: &'a wgpu::Buffer,
-    faces: &'a wgpu::Buffer,
-    lights: Option<&'a wgpu::Buffer>,
-    vis: Option<&'a wgpu::Buffer>,
-    irr_in: Option<&'a wgpu::Buffer>,
-    out: Option<&'a wgpu::Buffer>,
-    gbuffer: Option<&'a wgpu::Buffer>,
-    vis_w: Option<&'a wgpu::Buffer>,
-}
-
-/// The lights' words as the gathering reads them: each cluster's words, then each lit voxel's
-/// position, normal and flux (one zero word where there is none).
-fn light_words(l: &Lighting) -> Vec<[f32; 4]> {
-    let mut words: Vec<[f32; 4]> = l.clusters.iter().flatten().copied().collect();
-    for v in &l.lit {
-        words.extend([v.pos, v.nrm, v.flux]);
-    }
-    if words.is_empty() {
-        words.push([0.0; 4]);
-    }
-    words
-}
-
-/// Runs kernel `k` over the `faces` voxel faces (none: nothing), 2^14 faces a submission.
-fn run_faces(k: &Kernel, g: &mut Gpu, label: &'static str, group: &wgpu::BindGroup, faces: u32) {
-    if faces > 0 {
-        let run = Run {
-            label,
-            group,
-            seed: 0,
-        };
-        k.run(g, run, faces, 1 << 14, &mut |_, _| {});
-    }
-}
-
-impl Bindings<'_> {
-    fn group(&self, ctx: &GpuContext, k: &Kernel) -> wgpu::BindGroup {
-        let dummy: Vec<wgpu::Buffer> = (0..6).map(|_| ctx.storage("cvrtgi unused", 16)).collect();
-        let opt = [
-            self.lights,
-            self.vis,
-            self.irr_in,
-            self.out,
-            self.gbuffer,
-            self.vis_w,
-        ];
-        let mut list: Vec<(u32, &wgpu::Buffer)> =
-            vec![(1, self.params), (2, self.voxels), (3, self.faces)];
-        for (i, b) in opt.iter().enumerate() {
-            list.push((4 + i as u32, b.unwrap_or(&dummy[i])));
-        }
-        k.bind_group(ctx, &list)
-    }
-}
 
 fn f32_bits(v: Vec3) -> [u32; 3] {
     [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()]
