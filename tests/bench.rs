@@ -218,17 +218,10 @@ fn camera_path_writes_path_csv_and_plot() {
     assert!(out.contains("instability"), "{out}");
     let text = std::fs::read_to_string(d.join("path.csv")).unwrap();
     let (header, rows) = path_csv(&text);
-    for c in [
-        "label",
-        "temporal",
-        "frame",
-        "frame_ms",
-        "sp_cluster_ms",
-        "mse",
-        "rel_mse",
-        "instability",
-    ] {
-        assert!(header.contains(&c), "no column {c} in {header:?}");
+    // Every column the contract names (docs/design.md, "path.csv"), then the generated ones.
+    let contract = fuzzy_vpl::bench::path::COLUMNS.iter();
+    for c in contract.chain(&["instability_world", "seed", "direct_samples"]) {
+        assert!(header.contains(c), "no column {c} in {header:?}");
     }
     let col = |row: &[String], name: &str| cell(&header, row, name);
     assert_eq!(rows.len(), 6, "{text}");

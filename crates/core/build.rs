@@ -7,13 +7,18 @@
 
 use std::path::Path;
 
-fn walk(dir: &Path, rel: &str, out: &mut Vec<String>) {
+/// The paths in `dir`, sorted (the lists do not depend on the file system's order).
+fn sorted(dir: &Path) -> Vec<std::path::PathBuf> {
     let mut entries: Vec<_> = std::fs::read_dir(dir)
         .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
         .map(|e| e.expect("a directory entry").path())
         .collect();
     entries.sort();
-    for p in entries {
+    entries
+}
+
+fn walk(dir: &Path, rel: &str, out: &mut Vec<String>) {
+    for p in sorted(dir) {
         let name = p.file_name().unwrap().to_str().expect("UTF-8 file names");
         if p.is_dir() {
             walk(&p, &format!("{rel}{name}/"), out);
@@ -36,12 +41,7 @@ fn wgsl_type(t: &str) -> &'static str {
 
 /// Every `gpu_struct!` under `dir` as (name, WGSL text), the text as `NAME::WGSL` writes it.
 fn rust_structs(dir: &Path, out: &mut Vec<(String, String)>) {
-    let mut entries: Vec<_> = std::fs::read_dir(dir)
-        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
-        .map(|e| e.expect("a directory entry").path())
-        .collect();
-    entries.sort();
-    for p in entries {
+    for p in sorted(dir) {
         if p.is_dir() {
             rust_structs(&p, out);
             continue;

@@ -656,7 +656,7 @@ fn drive_method(h: &mut PanelHarness, m: crate::method::Method) -> (bool, bool) 
         );
     }
     let slider = controls.iter().find(|c| {
-        matches!(c.widget, Widget::Slider { integer: true, hi, .. }
+        matches!(c.widget, Widget::Slider(crate::settings::Range { integer: true, hi, .. })
             if h.state().s.method.knob(c.name).unwrap().parse::<f64>().unwrap() < hi)
     });
     if let Some(c) = slider {

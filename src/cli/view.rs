@@ -362,7 +362,7 @@ mod tests {
         let c = ms.controls()[0];
         let value = match c.widget {
             crate::settings::Widget::Choice(values) => values[1].0.to_string(),
-            crate::settings::Widget::Slider { lo, .. } => format!("{lo}"),
+            crate::settings::Widget::Slider(r) => format!("{}", r.lo),
             w => panic!(
                 "{}: a method knob's widget is a choice or a slider, not {w:?}",
                 c.name

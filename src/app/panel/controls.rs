@@ -7,7 +7,7 @@ use egui::{Slider, Ui};
 use serde_json::Value;
 
 use crate::app::UiSettings;
-use crate::settings::{KnobWidget, Widget};
+use crate::settings::{KnobWidget, Range, Widget};
 
 /// The method selector and the chosen method's own knobs (its entry's panel section).
 pub(super) fn method_controls(ui: &mut Ui, s: &mut UiSettings) {
@@ -70,26 +70,21 @@ pub(super) fn settings_controls(ui: &mut Ui, s: &mut UiSettings) {
 
 /// A slider over [lo, hi], widened to hold `x` (a value given on the command line outside the
 /// usual range stays as it was: egui clamps a slider's value into its range).
-fn slider(ui: &mut Ui, x: &mut f64, (lo, hi): (f64, f64), log: bool, integer: bool, label: &str) {
-    let slider = Slider::new(x, lo.min(*x)..=hi.max(*x))
-        .logarithmic(log)
+fn slider(ui: &mut Ui, x: &mut f64, r: Range, label: &str) {
+    let slider = Slider::new(x, r.lo.min(*x)..=r.hi.max(*x))
+        .logarithmic(r.log)
         .text(label);
-    ui.add(if integer { slider.integer() } else { slider });
+    ui.add(if r.integer { slider.integer() } else { slider });
 }
 
 /// Draws control `c` showing serde value `v`; the new value when the user changed it.
 fn draw(ui: &mut Ui, c: &KnobWidget, v: &Value, enabled: bool) -> Option<Value> {
     ui.add_enabled_ui(enabled, |ui| match c.widget {
-        Widget::Slider {
-            lo,
-            hi,
-            log,
-            integer,
-        } => {
+        Widget::Slider(r) => {
             let old = v.as_f64()?;
             let mut x = old;
-            slider(ui, &mut x, (lo, hi), log, integer, c.label);
-            (x != old).then(|| Widget::number(integer, x))
+            slider(ui, &mut x, r, c.label);
+            (x != old).then(|| Widget::number(r.integer, x))
         }
         Widget::Choice(values) => {
             let now = v.as_str()?;
@@ -113,10 +108,7 @@ fn draw(ui: &mut Ui, c: &KnobWidget, v: &Value, enabled: bool) -> Option<Value> 
         Widget::Or {
             word,
             off,
-            lo,
-            hi,
-            log,
-            integer,
+            slider: r,
             start,
         } => {
             // The number the slider showed last, kept while the word is ticked.
@@ -127,15 +119,13 @@ fn draw(ui: &mut Ui, c: &KnobWidget, v: &Value, enabled: bool) -> Option<Value> 
             let (mut word_on, mut x) = (is_off, old);
             ui.horizontal_wrapped(|ui| {
                 ui.checkbox(&mut word_on, word);
-                ui.add_enabled_ui(!word_on, |ui| {
-                    slider(ui, &mut x, (lo, hi), log, integer, c.label)
-                });
+                ui.add_enabled_ui(!word_on, |ui| slider(ui, &mut x, r, c.label));
             });
             ui.data_mut(|d| d.insert_temp(id, x));
             match (word_on, is_off) {
                 (true, true) => None,
                 (true, false) => Some(off.value()),
-                (false, _) if is_off || x != old => Some(Widget::number(integer, x)),
+                (false, _) if is_off || x != old => Some(Widget::number(r.integer, x)),
                 (false, _) => None,
             }
         }

@@ -78,7 +78,7 @@ pub fn no_limits(_: &Limits) -> Result<(), String> {
 /// γ as the SP clustering sampled with (a setting as resolved, not a count), the method's own
 /// report and the counts left on the GPU. A method's own counts are its report's, never fields here.
 #[derive(Clone, Debug, Default)]
-pub struct IndirectCounts {
+pub struct Tally {
     pub indirect_rays: u64,
     pub sp_used: u32,
     pub vpl_clusters_used: u32,
@@ -102,7 +102,7 @@ pub trait PendingReport: fmt::Debug + Send + Sync {
 }
 
 /// A `PendingReport` read back: shadow rays to add to the frame's, the SP clusters used where the
-/// GPU counted them, and the method's report (its keys join `IndirectCounts::report`'s).
+/// GPU counted them, and the method's report (its keys join `Tally::report`'s).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Resolved {
     pub indirect_rays: u64,
@@ -141,13 +141,7 @@ pub fn join_reports(
 pub trait IndirectMethod: Any {
     /// Records `pass` (one of its entry's `passes`, in their order within a frame).
     /// `g`: the device, the scene's bind group and the profiler; `n`: what the frame counts.
-    fn record(
-        &mut self,
-        pass: Pass,
-        g: &mut Gpu,
-        f: &FrameInputs,
-        n: &mut IndirectCounts,
-    ) -> Result<()>;
+    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Tally) -> Result<()>;
 
     /// The timings of resident stages (re)built during this frame, taken out of the frame's
     /// `timings` (they are not the frame's, as the VPLs' are not); none by default.
@@ -207,7 +201,7 @@ pub struct MethodEntry {
     pub label: fn(&MethodSettings) -> String,
     pub series: fn(&MethodSettings) -> String,
     pub short: fn(&MethodSettings) -> String,
-    /// The keys of its report (`IndirectCounts::report`, what its pending counts read back) that the
+    /// The keys of its report (`Tally::report`, what its pending counts read back) that the
     /// bench's `results.csv` and `path.csv` carry as columns (`report_columns`), in order.
     pub report_columns: &'static [&'static str],
 }

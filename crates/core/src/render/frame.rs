@@ -36,7 +36,7 @@ pub struct Frame {
     /// The shading normal of each pixel's shading point (xyz; zero where the ray missed): with
     /// `positions`, what tells two frames' pixels show the same surface (`metrics::instability_world`).
     pub normals: Vec<[f32; 4]>,
-    /// The method's own report and its name (`method::IndirectCounts::report` joined with what its
+    /// The method's own report and its name (`method::Tally::report` joined with what its
     /// pending counts read back: what its module counts, e.g. an SP clustering's iterations or a
     /// voxel grid's sizes): the stats' `counts.<method>`, the CSVs' report columns.
     pub report: Option<(crate::method::Method, serde_json::Value)>,

@@ -16,7 +16,7 @@ use super::settings::{Cancelled, RenderSettings};
 use crate::gi::accumulate::Accumulate;
 use crate::gi::pass::Pass;
 use crate::gi::primary::CameraParams;
-use crate::method::{FrameInputs, IndirectCounts, Method};
+use crate::method::{FrameInputs, Method, Tally};
 use crate::scene::{Camera, Scene};
 
 /// A frame's buffers and what its passes hand on to the next ones (the other methods' passes read
@@ -37,7 +37,7 @@ pub(super) struct FrameResources {
     /// counts the pixels).
     pub rays_per_point: u64,
     /// The indirect passes' shadow rays in all, SP clusters and VPL clusters used, CPU steps.
-    pub counts: IndirectCounts,
+    pub counts: Tally,
 }
 
 impl FrameResources {
@@ -84,7 +84,7 @@ impl Renderer<'_> {
             }),
             direct_samples: 0,
             rays_per_point: 0,
-            counts: IndirectCounts::default(),
+            counts: Tally::default(),
         };
         for &pass in &passes {
             match pass {

@@ -7,32 +7,39 @@
 /// How the viewer shows a setting.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Widget {
-    /// A slider over [lo, hi] (widened to hold a value given outside it); `log`: a logarithmic
-    /// scale; `integer`: whole numbers.
-    Slider {
-        lo: f64,
-        hi: f64,
-        log: bool,
-        integer: bool,
-    },
+    /// A slider (its range is widened to hold a value given outside it).
+    Slider(Range),
     /// One of these values (each the field's serde name, and its label).
     Choice(&'static [(&'static str, &'static str)]),
     /// On or off (a bool).
     Toggle,
-    /// A word or a number on a slider over [lo, hi] (as `Slider`): the field's value `off` is
-    /// shown as a ticked box labelled `word` (`auto`, `off`), any other as the number; unticking
-    /// starts the slider at `start` (or at the last number the panel showed).
+    /// A word or a number on a slider: the field's value `off` is shown as a ticked box labelled
+    /// `word` (`auto`, `off`), any other as the number; unticking starts the slider at `start` (or
+    /// at the last number the panel showed).
     Or {
         word: &'static str,
         off: Off,
-        lo: f64,
-        hi: f64,
-        log: bool,
-        integer: bool,
+        slider: Range,
         start: f64,
     },
     /// A cosine, shown as its angle in degrees on a slider over [0, 180].
     Cosine,
+}
+
+/// A slider's values: [lo, hi]; `log`: a logarithmic scale; `integer`: whole numbers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Range {
+    pub lo: f64,
+    pub hi: f64,
+    pub log: bool,
+    pub integer: bool,
+}
+
+impl Range {
+    /// The serde values of the slider's two ends.
+    pub fn ends(self) -> [serde_json::Value; 2] {
+        [self.lo, self.hi].map(|x| Widget::number(self.integer, x))
+    }
 }
 
 /// The serde value an `Or` field takes for its word.
@@ -69,59 +76,51 @@ impl Off {
 impl Widget {
     /// Whole numbers in [lo, hi] on a linear slider.
     pub const fn int(lo: u32, hi: u32) -> Widget {
-        Widget::Slider {
+        Widget::Slider(Range {
             lo: lo as f64,
             hi: hi as f64,
             log: false,
             integer: true,
-        }
+        })
     }
 
     /// Whole numbers in [lo, hi] on a logarithmic slider.
     pub const fn int_log(lo: u32, hi: u32) -> Widget {
-        Widget::Slider {
+        Widget::Slider(Range {
             lo: lo as f64,
             hi: hi as f64,
             log: true,
             integer: true,
-        }
+        })
     }
 
     /// Numbers in [lo, hi] on a linear slider.
     pub const fn linear(lo: f64, hi: f64) -> Widget {
-        Widget::Slider {
+        Widget::Slider(Range {
             lo,
             hi,
             log: false,
             integer: false,
-        }
+        })
     }
 
     /// Numbers in [lo, hi] on a logarithmic slider.
     pub const fn log(lo: f64, hi: f64) -> Widget {
-        Widget::Slider {
+        Widget::Slider(Range {
             lo,
             hi,
             log: true,
             integer: false,
-        }
+        })
     }
 
     /// `word` (the value `off`) or a number on `slider`, which starts at `start`.
     pub const fn or(word: &'static str, off: Off, slider: Widget, start: f64) -> Widget {
         match slider {
-            Widget::Slider {
-                lo,
-                hi,
-                log,
-                integer,
-            } => Widget::Or {
+            Widget::Slider(slider) => Widget::Or {
                 word,
                 off,
-                lo,
-                hi,
-                log,
-                integer,
+                slider,
                 start,
             },
             _ => panic!("Widget::or takes a slider"),

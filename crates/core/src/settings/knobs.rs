@@ -68,35 +68,6 @@ macro_rules! knobs {
                 },
             )?)+];
 
-            /// Control `name`'s value (its field's serde value); `None` for a knob without one.
-            pub fn control(&self, name: &str) -> Option<serde_json::Value> {
-                match name {
-                    $($(stringify!($field) => {
-                        let _ = $label;
-                        serde_json::to_value(&self.$field).ok()
-                    })?)+
-                    _ => None,
-                }
-            }
-
-            /// Sets control `name` from a serde value; false (and nothing set) when the value
-            /// is not one of the field's or its value parser refuses it.
-            pub fn set_control(&mut self, name: &str, v: serde_json::Value) -> bool {
-                match name {
-                    $($(stringify!($field) => {
-                        let _ = $label;
-                        match serde_json::from_value::<$ty>(v) {
-                            Ok(x) if $parser(&x.to_string()).is_ok() => {
-                                self.$field = x;
-                                true
-                            }
-                            _ => false,
-                        }
-                    })?)+
-                    _ => false,
-                }
-            }
-
             /// Knob `name`'s value as text (as `values` writes it); `None` when `name` is not
             /// one of these knobs.
             pub fn get(&self, name: &str) -> Option<String> {
@@ -118,6 +89,11 @@ macro_rules! knobs {
                     _ => None,
                 }
             }
+        }
+
+        $crate::settings::controls! {
+            $Settings;
+            $($field: $ty, accept |x| $parser(&x.to_string()).is_ok() $(, ui $label)?;)+
         }
 
         #[doc = concat!("`bench`'s lists of `", stringify!($Settings), "`'s knobs: a configuration takes one value of each (an empty list: the default).")]
@@ -221,36 +197,6 @@ macro_rules! declared {
                 },
             )?)+];
 
-            /// Control `name`'s value (its field's serde value); `None` for a field without one.
-            pub fn control(&self, name: &str) -> Option<serde_json::Value> {
-                match name {
-                    $($(stringify!($field) => {
-                        let _ = $label;
-                        serde_json::to_value(&self.$field).ok()
-                    })?)+
-                    _ => None,
-                }
-            }
-
-            /// Sets control `name` from a serde value; false (and nothing set) when the value is
-            /// not one of the field's.
-            pub fn set_control(&mut self, name: &str, v: serde_json::Value) -> bool {
-                let _ = &v;
-                match name {
-                    $($(stringify!($field) => {
-                        let _ = $label;
-                        match serde_json::from_value::<$ty>(v) {
-                            Ok(x) => {
-                                self.$field = x;
-                                true
-                            }
-                            Err(_) => false,
-                        }
-                    })?)+
-                    _ => false,
-                }
-            }
-
             /// Whether control `name` applies with the other settings as they are (a field's
             /// `if`; true without one).
             pub fn control_enabled(&self, name: &str) -> bool {
@@ -266,10 +212,57 @@ macro_rules! declared {
                 }
             }
         }
+
+        $crate::settings::controls! {
+            $Settings;
+            $($field: $ty, accept |_| true $(, ui $label)?;)+
+        }
     };
 }
 
 pub(crate) use declared;
+
+/// `control` and `set_control` of a settings type's fields that declare a viewer control (for
+/// `knobs!` and `declared!`): a control's value is its field's serde value, set back when it is
+/// one of the field's and `accept` takes it (`knobs!`: the knob's value parser).
+macro_rules! controls {
+    ($Settings:ident; $($field:ident: $ty:ty, accept $accept:expr $(, ui $label:literal)?;)+) => {
+        impl $Settings {
+            /// Control `name`'s value (its field's serde value); `None` for a field without one.
+            pub fn control(&self, name: &str) -> Option<serde_json::Value> {
+                match name {
+                    $($(stringify!($field) => {
+                        let _ = $label;
+                        serde_json::to_value(&self.$field).ok()
+                    })?)+
+                    _ => None,
+                }
+            }
+
+            /// Sets control `name` from a serde value; false (and nothing set) when the value is
+            /// not one of the field's or the field refuses it.
+            pub fn set_control(&mut self, name: &str, v: serde_json::Value) -> bool {
+                let _ = &v;
+                match name {
+                    $($(stringify!($field) => {
+                        let _ = $label;
+                        let accept: fn(&$ty) -> bool = $accept;
+                        match serde_json::from_value::<$ty>(v) {
+                            Ok(x) if accept(&x) => {
+                                self.$field = x;
+                                true
+                            }
+                            _ => false,
+                        }
+                    })?)+
+                    _ => false,
+                }
+            }
+        }
+    };
+}
+
+pub(crate) use controls;
 
 /// Declares `$Settings` with `declared!` and `$Lists`, its bench lists (see the module). A listed
 /// field ends `=> list "help" (clap arguments of the list) [default [a, b]] [quick [c]],`. The
@@ -488,10 +481,12 @@ mod tests {
             Widget::Or {
                 word: "off",
                 off: Off::Zero,
-                lo: 1.0,
-                hi: 9.0,
-                log: false,
-                integer: true,
+                slider: super::super::Range {
+                    lo: 1.0,
+                    hi: 9.0,
+                    log: false,
+                    integer: true
+                },
                 start: 2.0
             }
         );

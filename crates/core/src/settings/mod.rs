@@ -17,7 +17,7 @@ mod knobs;
 pub mod paper;
 mod parse;
 pub use control::*;
-pub(crate) use knobs::knobs;
+pub(crate) use knobs::{controls, knobs};
 use knobs::{declared, listed};
 pub use parse::*;
 use std::fmt;
@@ -888,20 +888,11 @@ mod tests {
                 match c.widget {
                     Widget::Choice(values) => gives.extend(values.iter().map(|v| v.0.into())),
                     Widget::Toggle => gives.extend([true.into(), false.into()]),
-                    Widget::Slider {
-                        lo, hi, integer, ..
-                    } => gives.extend([Widget::number(integer, lo), Widget::number(integer, hi)]),
-                    Widget::Or {
-                        off,
-                        lo,
-                        hi,
-                        integer,
-                        ..
-                    } => gives.extend([
-                        off.value(),
-                        Widget::number(integer, lo),
-                        Widget::number(integer, hi),
-                    ]),
+                    Widget::Slider(r) => gives.extend(r.ends()),
+                    Widget::Or { off, slider, .. } => {
+                        gives.push(off.value());
+                        gives.extend(slider.ends())
+                    }
                     Widget::Cosine => gives.extend([1.0.into(), (-1.0).into(), 0.5.into()]),
                 }
                 for g in gives {

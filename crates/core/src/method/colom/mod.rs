@@ -17,8 +17,7 @@ use std::any::Any;
 use anyhow::Result;
 
 use super::{
-    FrameInputs, IndirectCounts, IndirectMethod, Limits, Method, MethodEntry, PendingReport,
-    Resolved,
+    FrameInputs, IndirectMethod, Limits, Method, MethodEntry, PendingReport, Resolved, Tally,
 };
 use crate::gi::dispatch::Gpu;
 use crate::gi::kmeans::{Clustering, KMeans, KMeansSettings, KmCounters, Points, Warm};
@@ -199,12 +198,7 @@ impl Colom {
     }
 
     /// Step 4: the SP clustering, warm-started from the previous frame's with temporal reuse.
-    fn sp_cluster(
-        &mut self,
-        g: &mut Gpu,
-        f: &FrameInputs,
-        counts: &mut IndirectCounts,
-    ) -> Result<()> {
+    fn sp_cluster(&mut self, g: &mut Gpu, f: &FrameInputs, counts: &mut Tally) -> Result<()> {
         let previous = self.clustering.take().filter(|_| f.cluster.temporal);
         let warm = previous.as_ref().map(|c| Warm {
             centroids: &c.centroids,
@@ -238,12 +232,7 @@ impl Colom {
 
     /// Step 5: the visibility bit matrix between SP-cluster representatives and lights; rows of
     /// representatives kept from the previous frame are copied when the lights are the same.
-    fn visibility(
-        &mut self,
-        g: &mut Gpu,
-        f: &FrameInputs,
-        counts: &mut IndirectCounts,
-    ) -> Result<()> {
+    fn visibility(&mut self, g: &mut Gpu, f: &FrameInputs, counts: &mut Tally) -> Result<()> {
         let lights = &f.lights.expect("colom's lights").list;
         let num_lights = lights.lights.len() as u32;
         let c = self.frame.clustering.as_ref().expect("sp_cluster ran");
@@ -313,13 +302,7 @@ struct Past {
 }
 
 impl IndirectMethod for Colom {
-    fn record(
-        &mut self,
-        pass: Pass,
-        g: &mut Gpu,
-        f: &FrameInputs,
-        n: &mut IndirectCounts,
-    ) -> Result<()> {
+    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Tally) -> Result<()> {
         match pass {
             Pass::SpCluster => self.sp_cluster(g, f, n),
             Pass::Visibility => self.visibility(g, f, n),

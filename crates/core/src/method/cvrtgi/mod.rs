@@ -37,7 +37,7 @@ use self::inject::{Faces, Lighting};
 use self::settings::{ClusterGather, CvrtgiSettings};
 use self::voxel::{Cluster, SlicSettings, Voxels};
 use super::Method;
-use super::{FrameInputs, IndirectCounts, IndirectMethod, MethodEntry};
+use super::{FrameInputs, IndirectMethod, MethodEntry, Tally};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::{SceneGpu, TooBig};
@@ -702,13 +702,7 @@ impl IndirectMethod for Cvrtgi {
     /// `PASS`: the frame's indirect light by CVRTGI, from the resident VPLs (no VPL
     /// clustering: a VPL is injected into the cluster of its voxel). Its CPU stages (voxelisation,
     /// SLIC, injection) count as the pass's time when they run.
-    fn record(
-        &mut self,
-        pass: Pass,
-        g: &mut Gpu,
-        f: &FrameInputs,
-        n: &mut IndirectCounts,
-    ) -> Result<()> {
+    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Tally) -> Result<()> {
         debug_assert_eq!(pass, PASS);
         let inputs = CvrtgiInputs {
             scene: f.scene,

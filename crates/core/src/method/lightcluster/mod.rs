@@ -21,7 +21,7 @@ use glam::Vec3;
 use self::cluster::LightClusters;
 use self::settings::LcVisibility;
 use super::Method;
-use super::{FrameInputs, IndirectCounts, IndirectMethod, MethodEntry, PendingRays};
+use super::{FrameInputs, IndirectMethod, MethodEntry, PendingRays, Tally};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::{SceneGpu, storage_layout, uniform_layout};
@@ -192,13 +192,7 @@ impl LightClusterMethod {
 }
 
 impl IndirectMethod for LightClusterMethod {
-    fn record(
-        &mut self,
-        pass: Pass,
-        g: &mut Gpu,
-        f: &FrameInputs,
-        n: &mut IndirectCounts,
-    ) -> Result<()> {
+    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Tally) -> Result<()> {
         let extent = f.scene.extent();
         match pass {
             // §3.1: the VPLs clustered for this camera on the CPU, as the paper's §4 (its time is

@@ -22,7 +22,7 @@ use bytemuck::{Pod, Zeroable};
 
 use self::settings::{Combine, RestirLights};
 use super::Method;
-use super::{FrameInputs, IndirectCounts, IndirectMethod, MethodEntry, PendingRays};
+use super::{FrameInputs, IndirectMethod, MethodEntry, PendingRays, Tally};
 use crate::gi::dispatch::{Gpu, Kernel, Run};
 use crate::gi::pass::Pass;
 use crate::gi::primary::{CameraParams, SP_BYTES};
@@ -178,7 +178,7 @@ impl RestirMethod {
 
     /// The alias table (made when the VPL set changes), the buffers of the size, the history's
     /// use, the uniform and the bind groups.
-    fn prepare(&mut self, g: &mut Gpu, f: &FrameInputs, n: &mut IndirectCounts) {
+    fn prepare(&mut self, g: &mut Gpu, f: &FrameInputs, n: &mut Tally) {
         let ctx = g.ctx;
         let t = Instant::now();
         // The light list: the VPLs themselves, or the VPL clusters (`--restir-lights`).
@@ -293,7 +293,7 @@ impl RestirMethod {
 
     /// After the shade: the frame's final reservoirs and G-buffer kept for the next frame (with
     /// `--temporal on`), and the rays the pixels traced summed on the GPU (read only on request).
-    fn finish(&mut self, g: &mut Gpu, f: &FrameInputs, n: &mut IndirectCounts) {
+    fn finish(&mut self, g: &mut Gpu, f: &FrameInputs, n: &mut Tally) {
         let ctx = g.ctx;
         let size = self.size.as_ref().expect("prepared");
         let past = self.past.as_mut().expect("prepared");
@@ -319,13 +319,7 @@ impl RestirMethod {
 }
 
 impl IndirectMethod for RestirMethod {
-    fn record(
-        &mut self,
-        pass: Pass,
-        g: &mut Gpu,
-        f: &FrameInputs,
-        n: &mut IndirectCounts,
-    ) -> Result<()> {
+    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Tally) -> Result<()> {
         let pixels = f.pixels();
         match pass {
             PREPARE => self.prepare(g, f, n),

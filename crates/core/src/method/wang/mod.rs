@@ -17,7 +17,7 @@ use bytemuck::{Pod, Zeroable};
 
 use self::cluster::{ClusterParams, WangCluster, WangClustering};
 use super::Method;
-use super::{FrameInputs, IndirectCounts, IndirectMethod, MethodEntry, PendingReport, Resolved};
+use super::{FrameInputs, IndirectMethod, MethodEntry, PendingReport, Resolved, Tally};
 use crate::gi::dispatch::{Gpu, Kernel, Run, copy_to_texture, data_texture};
 use crate::gi::pass::Pass;
 use crate::gi::reference::GatherInputs;
@@ -280,13 +280,7 @@ impl PendingReport for PendingUsed {
 }
 
 impl IndirectMethod for WangMethod {
-    fn record(
-        &mut self,
-        pass: Pass,
-        g: &mut Gpu,
-        f: &FrameInputs,
-        n: &mut IndirectCounts,
-    ) -> Result<()> {
+    fn record(&mut self, pass: Pass, g: &mut Gpu, f: &FrameInputs, n: &mut Tally) -> Result<()> {
         let ctx = g.ctx;
         let wang = &self.wang;
         let img = Image {
