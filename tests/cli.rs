@@ -358,11 +358,11 @@ fn bad_arguments_and_unwritable_outputs_exit_2_with_exactly_one_line() {
         ),
         (
             vec!["view", "--b-fuzziness", "0"],
-            "--b-fuzziness 0|must be 1..16",
+            "--fuzziness 0|must be 1..16",
         ),
         (
             vec!["view", "--b-weighting", "soft"],
-            "--b-weighting|possible values: hard, uniform, inverse-distance",
+            "--weighting|possible values: hard, uniform, inverse-distance",
         ),
         (
             vec!["view", "--target-ms", "0"],

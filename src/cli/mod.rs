@@ -156,6 +156,7 @@ pub fn main() -> ExitCode {
     if args.len() == 1 {
         args.push("view".into());
     }
+    let args = view::b_option_aliases(args);
     let args_for_errors = args.clone();
     let (cli, given) = match parse(args) {
         Ok(c) => c,

@@ -77,66 +77,46 @@ pub struct ViewArgs {
 pub struct BArgs {
     /// B's value of any option of `view` (repeatable): `--b weighting=hard --b sp-clusters=48` is
     /// B = A with `--weighting hard --sp-clusters 48`, a method's knobs included, read by the same
-    /// parsers (B keeps A's image size).
+    /// parsers (B keeps A's image size). `--b-KEY VALUE` is the same as `--b KEY=VALUE`.
     #[arg(id = "b_pairs", long = "b", value_name = "KEY=VALUE", value_parser = parse_pair)]
     pairs: Vec<(String, String)>,
-    /// B's weighting (hard, uniform, inverse-distance).
-    #[arg(id = "b_weighting", long = "b-weighting", value_enum)]
-    weighting: Option<crate::settings::Weighting>,
-    /// B's K_SP.
-    #[arg(id = "b_sp_clusters", long = "b-sp-clusters")]
-    sp_clusters: Option<u32>,
-    /// B's K_VPL.
-    #[arg(id = "b_vpl_clusters", long = "b-vpl-clusters")]
-    vpl_clusters: Option<u32>,
-    /// B's F, 1..16.
-    #[arg(id = "b_fuzziness", long = "b-fuzziness", value_parser = crate::settings::parse_fuzziness)]
-    fuzziness: Option<u32>,
-    /// B's n_t (a cosine in [-1, 1]).
-    #[arg(id = "b_normal_threshold", long = "b-normal-threshold", value_parser = crate::settings::parse_normal_threshold, allow_hyphen_values = true)]
-    normal_threshold: Option<f32>,
-    /// B's p of the inverse-distance weights, [0, 64].
-    #[arg(id = "b_weight_exponent", long = "b-weight-exponent", value_parser = crate::settings::parse_weight_exponent)]
-    weight_exponent: Option<f32>,
 }
 
-impl BArgs {
-    /// `a` (A's settings, or with `--b KEY=VALUE` B's before the `--b-` options) with the `--b-`
-    /// options applied, when any B option was given.
-    fn pin(&self, a: &crate::app::UiSettings) -> Option<crate::app::UiSettings> {
-        let b = self.clone();
-        if b.pairs.is_empty()
-            && b.weighting.is_none()
-            && b.sp_clusters.is_none()
-            && b.vpl_clusters.is_none()
-            && b.fuzziness.is_none()
-            && b.normal_threshold.is_none()
-            && b.weight_exponent.is_none()
-        {
-            return None;
-        }
-        let mut s = a.clone();
-        let c = &mut s.cluster;
-        if let Some(w) = b.weighting {
-            c.weighting = w;
-        }
-        if let Some(k) = b.sp_clusters {
-            c.sp_clusters = k;
-        }
-        if let Some(k) = b.vpl_clusters {
-            c.vpl_clusters = k;
-        }
-        if let Some(f) = b.fuzziness {
-            c.fuzziness = f;
-        }
-        if let Some(n) = b.normal_threshold {
-            c.normal_threshold = n;
-        }
-        if let Some(p) = b.weight_exponent {
-            c.weight_exponent = p;
-        }
-        Some(s)
+/// `view`'s `--b-KEY VALUE` (and `--b-KEY=VALUE`) as `--b KEY=VALUE`, for every KEY: B's options
+/// are declared once, as A's (`BArgs::pairs`). Other commands' arguments, and anything after `--`,
+/// are left as they are.
+pub fn b_option_aliases(args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    if args.get(1).and_then(|a| a.to_str()) != Some("view") {
+        return args;
     }
+    let mut out = Vec::with_capacity(args.len());
+    let mut rest = args.into_iter();
+    while let Some(a) = rest.next() {
+        let Some(key) = a
+            .to_str()
+            .and_then(|t| t.strip_prefix("--b-"))
+            .map(str::to_string)
+        else {
+            let end = a == "--";
+            out.push(a);
+            if end {
+                out.extend(rest.by_ref());
+            }
+            continue;
+        };
+        let pair = match key.split_once('=') {
+            Some((k, v)) => Some(format!("{k}={v}")),
+            None => rest
+                .next()
+                .map(|v| format!("{key}={}", v.to_string_lossy())),
+        };
+        match pair {
+            Some(p) => out.extend(["--b".into(), p.into()]),
+            // No value: clap says so, naming the option as given.
+            None => out.push(format!("--b-{key}").into()),
+        }
+    }
+    out
 }
 
 /// `--indirect-scale` is `view`'s render scale under `render`'s name: taken when given alone, and
@@ -183,16 +163,12 @@ fn ui_settings(a: &ViewArgs) -> crate::app::UiSettings {
 
 /// B's settings: with `--b KEY=VALUE` pairs, the command line `argv` parsed again with each pair
 /// as `--KEY VALUE` after it (the last value of an option wins), through the same parsers and
-/// `--paper` rule as A, at A's image size; then the `--b-` options. `None` without B options.
-fn b_settings(
-    argv: &[std::ffi::OsString],
-    a: &ViewArgs,
-    a_settings: &crate::app::UiSettings,
-) -> Result<Option<crate::app::UiSettings>> {
+/// `--paper` rule as A, at A's image size. `None` without B options.
+fn b_settings(argv: &[std::ffi::OsString], a: &ViewArgs) -> Result<Option<crate::app::UiSettings>> {
     if a.b.pairs.is_empty() {
-        return Ok(a.b.pin(a_settings));
+        return Ok(None);
     }
-    let mut argv = argv.to_vec();
+    let mut argv = b_option_aliases(argv.to_vec());
     for (k, v) in &a.b.pairs {
         argv.push(format!("--{k}").into());
         argv.push(v.into());
@@ -210,7 +186,7 @@ fn b_settings(
     b.shot.apply_paper(&given);
     one_render_scale(&mut b, &given)?;
     (b.shot.frame.width, b.shot.frame.height) = (a.shot.frame.width, a.shot.frame.height);
-    Ok(a.b.pin(&ui_settings(&b)))
+    Ok(Some(ui_settings(&b)))
 }
 
 fn parse_render_scale(v: &str) -> Result<f32, Invalid> {
@@ -286,7 +262,7 @@ pub fn run(mut a: ViewArgs, given: &[String], argv: &[std::ffi::OsString]) -> Re
         a.scene.camera(&scene, Some(i))?;
     }
     let settings = ui_settings(&a);
-    let b = b_settings(argv, &a, &settings)?;
+    let b = b_settings(argv, &a)?;
     let args = a.scene.clone();
     let loader: crate::app::worker::Loader = std::sync::Arc::new(move |spec: &str| {
         let mut sa = args.clone();
@@ -326,6 +302,7 @@ mod tests {
             .chain(args)
             .map(Into::into)
             .collect();
+        let argv = b_option_aliases(argv);
         let m = super::super::command()
             .try_get_matches_from(argv.clone())
             .unwrap();
@@ -340,7 +317,48 @@ mod tests {
 
     fn b(args: &[&str]) -> Result<Option<UiSettings>> {
         let (a, argv) = view(args);
-        b_settings(&argv, &a, &ui_settings(&a))
+        b_settings(&argv, &a)
+    }
+
+    /// `--b-KEY VALUE` and `--b-KEY=VALUE` are `--b KEY=VALUE` for any KEY of `view`; other
+    /// commands and what follows `--` are left as they are.
+    #[test]
+    fn b_short_forms_are_pairs() {
+        let os = |v: &[&str]| v.iter().map(std::ffi::OsString::from).collect::<Vec<_>>();
+        let got = b_option_aliases(os(&[
+            "fuzzy-vpl",
+            "view",
+            "--b-normal-threshold",
+            "-0.5",
+            "--b-fuzziness=3",
+            "--",
+            "--b-x",
+            "1",
+        ]));
+        let want = [
+            "fuzzy-vpl",
+            "view",
+            "--b",
+            "normal-threshold=-0.5",
+            "--b",
+            "fuzziness=3",
+        ];
+        assert_eq!(got, os(&[&want[..], &["--", "--b-x", "1"]].concat()));
+        let render = os(&["fuzzy-vpl", "render", "--b-fuzziness", "3"]);
+        assert_eq!(b_option_aliases(render.clone()), render);
+        // Any option, not only the clustering's: B's K and an n_t below 0, by either form.
+        let by_short = b(&["--b-sp-clusters", "48", "--b-normal-threshold", "-0.5"])
+            .unwrap()
+            .unwrap();
+        let by_pair = b(&["--b", "sp-clusters=48", "--b", "normal-threshold=-0.5"]).unwrap();
+        assert_eq!(Some(by_short.clone()), by_pair);
+        assert_eq!(
+            (
+                by_short.cluster.sp_clusters,
+                by_short.cluster.normal_threshold
+            ),
+            (48, -0.5)
+        );
     }
 
     /// `--b KEY=VALUE` sets any option of B through the option's own parser, the rest is A's; the
