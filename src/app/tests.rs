@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::metrics;
-use crate::settings::{Gamma, Widget};
+use crate::settings::{Controlled, Gamma, Widget};
 use std::time::Duration;
 
 /// A viewer on builtin:cornell with `s`, without a window (its worker starts on lavapipe).

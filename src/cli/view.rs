@@ -294,6 +294,7 @@ pub fn run(mut a: ViewArgs, given: &[String], argv: &[std::ffi::OsString]) -> Re
 mod tests {
     use super::*;
     use crate::app::UiSettings;
+    use crate::settings::Controlled;
 
     /// `view ARGS` as `cli::main` parses it, with its command line.
     fn view(args: &[&str]) -> (ViewArgs, Vec<std::ffi::OsString>) {

@@ -7,7 +7,7 @@ use egui::{Slider, Ui};
 use serde_json::Value;
 
 use crate::app::UiSettings;
-use crate::settings::{KnobWidget, Range, Widget};
+use crate::settings::{Controlled, KnobWidget, Range, Widget};
 
 /// The method selector and the chosen method's own knobs (its entry's panel section).
 pub(super) fn method_controls(ui: &mut Ui, s: &mut UiSettings) {
@@ -18,15 +18,7 @@ pub(super) fn method_controls(ui: &mut Ui, s: &mut UiSettings) {
                 .on_hover_text(r.about);
         }
     });
-    let m = &mut s.method;
-    for c in m.controls() {
-        if let Some(v) = m.control(c.name)
-            && let Some(next) = draw(ui, c, &v, true)
-        {
-            // A value the knob's parser refuses leaves it as it was.
-            m.set_control(c.name, next);
-        }
-    }
+    draw_all(ui, &mut s.method, |_| false);
 }
 
 /// "the paper" (`--paper`), the direct light, and every control of `ClusterSettings` and
@@ -51,19 +43,20 @@ pub(super) fn settings_controls(ui: &mut Ui, s: &mut UiSettings) {
         ui.checkbox(&mut s.direct_on, "direct light");
     });
     let own_settings = s.method.entry_with_own_settings().is_some();
-    for c in crate::settings::ClusterSettings::CONTROLS {
-        let enabled = s.cluster.control_enabled(c.name) && !(c.paper_only && own_settings);
-        if let Some(v) = s.cluster.control(c.name)
+    draw_all(ui, &mut s.cluster, |c| c.paper_only && own_settings);
+    draw_all(ui, &mut s.frame, |_| false);
+}
+
+/// Every control of `s`, greyed out where it does not apply (its declaration's `if`) or where
+/// `greyed` says so.
+fn draw_all(ui: &mut Ui, s: &mut impl Controlled, greyed: impl Fn(&KnobWidget) -> bool) {
+    for c in s.controls() {
+        let enabled = s.control_enabled(c.name) && !greyed(c);
+        if let Some(v) = s.control(c.name)
             && let Some(next) = draw(ui, c, &v, enabled)
         {
-            s.cluster.set_control(c.name, next);
-        }
-    }
-    for c in crate::settings::FrameSettings::CONTROLS {
-        if let Some(v) = s.frame.control(c.name)
-            && let Some(next) = draw(ui, c, &v, s.frame.control_enabled(c.name))
-        {
-            s.frame.set_control(c.name, next);
+            // A value the field refuses (a knob's parser) leaves it as it was.
+            s.set_control(c.name, next);
         }
     }
 }

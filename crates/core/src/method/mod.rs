@@ -334,15 +334,6 @@ macro_rules! registry {
                 [$(own(Method::$Variant, self.$module.values())),+].concat()
             }
 
-            /// The asked method's knobs as the viewer shows them (`knobs!`'s `CONTROLS`; none
-            /// for colom, whose knobs are the paper's `ClusterSettings`).
-            pub fn controls(&self) -> &'static [KnobWidget] {
-                match self.method {
-                    Method::Colom => &[],
-                    $(Method::$Variant => $module::Settings::CONTROLS,)+
-                }
-            }
-
             /// The asked method's knob `name` as text; `None` when it has no such knob.
             pub fn knob(&self, name: &str) -> Option<String> {
                 match self.method {
@@ -351,28 +342,35 @@ macro_rules! registry {
                 }
             }
 
-            /// The asked method's control `name` (its knob's serde value); `None` when it has no
-            /// such control.
-            pub fn control(&self, name: &str) -> Option<serde_json::Value> {
+            /// Sets the knob of column `name` from its text; `None` when no method has that
+            /// knob.
+            pub fn set_column(&mut self, name: &str, text: &str) -> Option<Result<(), Invalid>> {
+                None$(.or_else(|| self.$module.set(name, text)))+
+            }
+        }
+
+        /// The asked method's knobs as the viewer shows them (`knobs!`'s controls; none for colom,
+        /// whose knobs are the paper's `ClusterSettings`).
+        impl $crate::settings::Controlled for MethodSettings {
+            fn controls(&self) -> &'static [KnobWidget] {
+                match self.method {
+                    Method::Colom => &[],
+                    $(Method::$Variant => $module::Settings::CONTROLS,)+
+                }
+            }
+
+            fn control(&self, name: &str) -> Option<serde_json::Value> {
                 match self.method {
                     Method::Colom => None,
                     $(Method::$Variant => self.$module.control(name),)+
                 }
             }
 
-            /// Sets the asked method's control `name` from a serde value; false when it has no
-            /// such control or the knob's parser refuses the value.
-            pub fn set_control(&mut self, name: &str, v: serde_json::Value) -> bool {
+            fn set_control(&mut self, name: &str, v: serde_json::Value) -> bool {
                 match self.method {
                     Method::Colom => false,
                     $(Method::$Variant => self.$module.set_control(name, v),)+
                 }
-            }
-
-            /// Sets the knob of column `name` from its text; `None` when no method has that
-            /// knob.
-            pub fn set_column(&mut self, name: &str, text: &str) -> Option<Result<(), Invalid>> {
-                None$(.or_else(|| self.$module.set(name, text)))+
             }
         }
 

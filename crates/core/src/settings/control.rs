@@ -148,3 +148,20 @@ pub struct KnobWidget {
     pub widget: Widget,
     pub paper_only: bool,
 }
+
+/// A settings type whose fields declare viewer controls (`knobs!`, `declared!`, `listed!`, and a
+/// method's `MethodSettings`): what the viewer draws and how it reads and sets each value.
+pub trait Controlled {
+    /// The controls, in order.
+    fn controls(&self) -> &'static [KnobWidget];
+    /// Control `name`'s value (its field's serde value); `None` for a field without one.
+    fn control(&self, name: &str) -> Option<serde_json::Value>;
+    /// Sets control `name` from a serde value; false (and nothing set) when the value is not one
+    /// of the field's or the field refuses it.
+    fn set_control(&mut self, name: &str, v: serde_json::Value) -> bool;
+    /// Whether control `name` applies with the other settings as they are (a field's `if`).
+    fn control_enabled(&self, name: &str) -> bool {
+        let _ = name;
+        true
+    }
+}

@@ -196,40 +196,31 @@ macro_rules! declared {
                     paper_only: false $(|| $paper_only)?,
                 },
             )?)+];
-
-            /// Whether control `name` applies with the other settings as they are (a field's
-            /// `if`; true without one).
-            pub fn control_enabled(&self, name: &str) -> bool {
-                match name {
-                    $($(stringify!($field) => {
-                        let _ = $label;
-                        true $(&& {
-                            let enabled: fn(&$Settings) -> bool = $when;
-                            enabled(self)
-                        })?
-                    })?)+
-                    _ => true,
-                }
-            }
         }
 
         $crate::settings::controls! {
             $Settings;
-            $($field: $ty, accept |_| true $(, ui $label)?;)+
+            $($field: $ty, accept |_| true $(, ui $label $(, if $when)?)?;)+
         }
     };
 }
 
 pub(crate) use declared;
 
-/// `control` and `set_control` of a settings type's fields that declare a viewer control (for
-/// `knobs!` and `declared!`): a control's value is its field's serde value, set back when it is
-/// one of the field's and `accept` takes it (`knobs!`: the knob's value parser).
+/// `Controlled` for a settings type's fields that declare a viewer control (for `knobs!` and
+/// `declared!`): a control's value is its field's serde value, set back when it is one of the
+/// field's and `accept` takes it (`knobs!`: the knob's value parser); `if` says when it applies.
 macro_rules! controls {
-    ($Settings:ident; $($field:ident: $ty:ty, accept $accept:expr $(, ui $label:literal)?;)+) => {
-        impl $Settings {
-            /// Control `name`'s value (its field's serde value); `None` for a field without one.
-            pub fn control(&self, name: &str) -> Option<serde_json::Value> {
+    (
+        $Settings:ident;
+        $($field:ident: $ty:ty, accept $accept:expr $(, ui $label:literal $(, if $when:expr)?)?;)+
+    ) => {
+        impl $crate::settings::Controlled for $Settings {
+            fn controls(&self) -> &'static [$crate::settings::KnobWidget] {
+                Self::CONTROLS
+            }
+
+            fn control(&self, name: &str) -> Option<serde_json::Value> {
                 match name {
                     $($(stringify!($field) => {
                         let _ = $label;
@@ -239,9 +230,7 @@ macro_rules! controls {
                 }
             }
 
-            /// Sets control `name` from a serde value; false (and nothing set) when the value is
-            /// not one of the field's or the field refuses it.
-            pub fn set_control(&mut self, name: &str, v: serde_json::Value) -> bool {
+            fn set_control(&mut self, name: &str, v: serde_json::Value) -> bool {
                 let _ = &v;
                 match name {
                     $($(stringify!($field) => {
@@ -256,6 +245,19 @@ macro_rules! controls {
                         }
                     })?)+
                     _ => false,
+                }
+            }
+
+            fn control_enabled(&self, name: &str) -> bool {
+                match name {
+                    $($(stringify!($field) => {
+                        let _ = $label;
+                        true $(&& {
+                            let enabled: fn(&$Settings) -> bool = $when;
+                            enabled(self)
+                        })?
+                    })?)+
+                    _ => true,
                 }
             }
         }
@@ -378,7 +380,7 @@ pub(crate) use listed;
 
 #[cfg(test)]
 mod tests {
-    use super::super::{Invalid, in_range};
+    use super::super::{Controlled, Invalid, in_range};
 
     fn parse_small(v: &str) -> Result<u32, Invalid> {
         in_range(v, |n: u32| n < 10, "must be 0..=9")
