@@ -63,7 +63,7 @@ MUTANTS = [
     ("bvh-tri-barycentrics-not-over-det", "common/bvh.wgsl", "return vec3<f32>(t, v / det, w / det);", "return vec3<f32>(t, v, w / det);", "BVH"),
     ("bvh-walk-missed-leaf-skips-next", "common/bvh.wgsl", "            *i += 1u;\n        } else {", "            *i += 2u;\n        } else {", "BVH"),
     ("bvh-closest-tmax-not-lowered", "common/bvh.wgsl", "if r.x < ray.tmax {\n                    ray.tmax = r.x;\n", "if r.x < ray.tmax {\n", "BVH"),
-    ("bvh-any-leaf-skips-last-triangle", "common/bvh.wgsl", "k < node.index + count; k++) {\n                if intersect_tri", "k + 1u < node.index + count; k++) {\n                if intersect_tri", "BVH"),
+    ("bvh-leaf-skips-last-triangle", "common/bvh.wgsl", "} else {\n            for (var k = node.index; k < node.index + count; k++) {", "} else {\n            for (var k = node.index; k + 1u < node.index + count; k++) {", "BVH"),
     # --- Eq. (6), (8), (9): shade.wgsl
     ("eq8-uniform-over-F-not-used-slots", "shade.wgsl", "1.0 / f32(nf)", "1.0 / f32(F)", "Eq. 8"),
     ("eq8-eq9-switch-inverted", "shade.wgsl", "if params.weighted == 0u {", "if params.weighted != 0u {", "Eq. 8/9"),
@@ -350,6 +350,12 @@ MUTANTS = [
     ("pattern-table-v-of-next-light", "shade.wgsl", "vs[k] = eq9_weighted_visibility(w, &rw, first);", "vs[k] = eq9_weighted_visibility(w, &rw, (first + 1u) % 32u);", "patterns"),
     ("pattern-pick-inverted", "shade.wgsl", "v = select(v, vs[k], ((masks[k] >> b) & 1u) != 0u);", "v = select(v, vs[k], ((masks[k] >> b) & 1u) == 0u);", "patterns"),
     ("pattern-past-the-table-dropped", "shade.wgsl", "if ((rest >> b) & 1u) != 0u {", "if false {", "patterns"),
+    # --- shade.wgsl: the tile cull (TILE_CULL; killed by clustered.rs
+    # the_tile_cull_does_not_change_the_image and oracles.rs gpu_tile_cull_drops_only_lights_in_the_tiles_plane)
+    ("tile-cull-point-bound-dropped", "shade.wgsl", "return dot(at_light, vec3<f32>(1.0)) > slack && dot(at_point, vec3<f32>(1.0)) > slack;", "return dot(at_light, vec3<f32>(1.0)) > slack;", "tile cull"),
+    ("tile-cull-light-bound-min", "shade.wgsl", "let at_light = max(n * (lo - x), n * (hi - x));", "let at_light = min(n * (lo - x), n * (hi - x));", "tile cull"),
+    ("tile-mask-of-next-word", "shade.wgsl", "let c0 = (chunk.sub_offset + i % words) * 32u;", "let c0 = (chunk.sub_offset + (i + 1u) % words) * 32u;", "tile cull"),
+    ("tile-box-skips-last-pixel", "shade.wgsl", "for (var i = 0u; i < TILE * TILE; i++) {\n        let m = tile_pixel", "for (var i = 0u; i + 1u < TILE * TILE; i++) {\n        let m = tile_pixel", "tile cull"),
     # --- temporal accumulation: accumulate.wgsl
     ("accumulate-bilinear-weights-swapped", "accumulate.wgsl", "let bx = select(1.0 - tx, tx, dx == 1);", "let bx = select(tx, 1.0 - tx, dx == 1);", "temporal"),
     ("accumulate-depth-test-loose", "accumulate.wgsl", "abs(pq.z - z) <= params.blend.y * z", "abs(pq.z - z) <= 10.0 * z", "temporal"),
@@ -409,7 +415,7 @@ HINTS = {
     "common/bvh.wgsl": ["traversal"],
     "common/scan.wgsl": ["kmeans"],
     "kmeans/init.wgsl": ["kmeans", "temporal"],
-    "shade.wgsl": ["clustered"],
+    "shade.wgsl": ["clustered", "oracles"],
     "accumulate.wgsl": ["accumulate"],
     "upsample.wgsl": ["upsample"],
 }

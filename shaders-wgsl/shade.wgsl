@@ -12,8 +12,9 @@ struct ShadeParams {
     // 0: uniform (Eq. 8), 1: inverse-distance weights (Eq. 9).
     weighted: u32,
     d_min2: f32,
-    _a: u32,
-    _b: u32,
+    // The image the pixels lie in (width, height): a workgroup shades one TILE × TILE tile.
+    width: u32,
+    height: u32,
     _c: u32,
 }
 
@@ -36,6 +37,133 @@ override F: u32 = 6u;
 // Eq. (9)'s loop. crates/core/src/gi/shade.rs sets it (`shade::patterns`); the image is the same bit for bit.
 const MAX_PATTERNS: u32 = 8u;
 override PATTERNS: u32 = 0u;
+
+// Not in the paper, and no change to its result (docs/clustering.md, "Lights no point of a tile can
+// see"): main shades tiles of TILE × TILE pixels, one a workgroup (tile_pixel). With TILE_CULL the
+// entry point tile_box first bounds each tile's shading points, and in each submission tile_mask
+// marks the lights that may light some point of a tile (may_light_box), a bit each: a pixel's walk
+// skips the others. Without it every light the visibility rows see is walked
+// (crates/core/src/method/colom/shade.rs, `tile_cull`).
+const TILE: u32 = 8u;
+override TILE_CULL: bool = true;
+// Each tile's box (the entry point tile_box): position min (w = 1 when the tile has a valid
+// point), position max, normal min, normal max.
+@group(1) @binding(8) var<storage, read_write> tile_boxes: array<vec4<f32>>;
+// This submission's masks (the entry point tile_mask): word w of the chunk's tile k, at
+// k * chunk_words() + w, has bit b set when light 32 (chunk.sub_offset + w) + b may light the tile.
+@group(1) @binding(9) var<storage, read_write> tile_masks: array<u32>;
+
+// The bit words of this submission: [chunk.sub_offset, + chunk_words()).
+fn chunk_words() -> u32 {
+    return min(chunk.sub_count, params.words - min(chunk.sub_offset, params.words));
+}
+
+// Pixel of item i: the tile i / 64 (row-major over the image's tiles), in it pixel i % 64 (row-major);
+// INVALID outside the image.
+fn tile_pixel(i: u32) -> u32 {
+    if i == INVALID {
+        return INVALID;
+    }
+    let tiles_x = (params.width + TILE - 1u) / TILE;
+    let t = i / (TILE * TILE);
+    let l = i % (TILE * TILE);
+    let x = (t % tiles_x) * TILE + l % TILE;
+    let y = (t / tiles_x) * TILE + l / TILE;
+    if x >= params.width || y >= params.height {
+        return INVALID;
+    }
+    return y * params.width + x;
+}
+
+// Not in the paper (docs/clustering.md, "Lights no point of a tile can see"): whether light `v` may
+// add to Eq. (6) at some point with position in [lo, hi] and normal in [nlo, nhi] (boxes). False
+// when, over the boxes, Eq. (5)'s cosine at the light, n_v · (p - x_v), or the one at the point,
+// n · (x_v - p), is at most `slack`: their maxima over boxes are sums over the axes of the largest
+// product at a corner. The slack (1e-5 of the largest coordinate) counts a cosine at the rounding of
+// the coordinates as 0: a light in the tile's plane. CPU twin: cpu::shade::may_light_box.
+fn may_light_box(lo: vec3<f32>, hi: vec3<f32>, nlo: vec3<f32>, nhi: vec3<f32>, v: Vpl) -> bool {
+    let x = v.pos.xyz;
+    let n = v.nrm.xyz;
+    let at_light = max(n * (lo - x), n * (hi - x));
+    let a = x - lo;
+    let b = x - hi;
+    let at_point = max(max(nlo * a, nlo * b), max(nhi * a, nhi * b));
+    let scale = max(max(abs(lo), abs(hi)), abs(x));
+    let slack = 1e-5 * max(scale.x, max(scale.y, scale.z));
+    return dot(at_light, vec3<f32>(1.0)) > slack && dot(at_point, vec3<f32>(1.0)) > slack;
+}
+
+// Word w of this submission's lights for the chunk's tile k (invocation k * chunk_words() + w,
+// before main): the lights may_light_box keeps for the tile's box; none for a tile with no
+// shading point.
+@compute @workgroup_size(64)
+fn tile_mask(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    let words = chunk_words();
+    if words == 0u || i >= (chunk.count / (TILE * TILE)) * words {
+        return;
+    }
+    let t = chunk.offset / (TILE * TILE) + i / words;
+    let b0 = tile_boxes[4u * t];
+    var word = 0u;
+    if b0.w > 0.0 {
+        let lo = b0.xyz;
+        let hi = tile_boxes[4u * t + 1u].xyz;
+        let nlo = tile_boxes[4u * t + 2u].xyz;
+        let nhi = tile_boxes[4u * t + 3u].xyz;
+        let c0 = (chunk.sub_offset + i % words) * 32u;
+        for (var c = c0; c < min(c0 + 32u, params.num_lights); c++) {
+            let v = Vpl(light_texel(3u * c), light_texel(3u * c + 1u), vec4<f32>(0.0));
+            if may_light_box(lo, hi, nlo, nhi, v) {
+                word |= 1u << (c - c0);
+            }
+        }
+    }
+    tile_masks[i] = word;
+}
+
+// The items of a width × height image: 64 a tile (crates/core/src/method/colom/shade.rs `tile_items`).
+fn tile_items(width: u32, height: u32) -> u32 {
+    return ((width + TILE - 1u) / TILE) * ((height + TILE - 1u) / TILE) * TILE * TILE;
+}
+
+// The box of tile t's valid shading points into tile_boxes (one invocation a tile, before main).
+@compute @workgroup_size(64)
+fn tile_box(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let t = chunk_item(gid, nwg);
+    if t == INVALID || t >= tile_items(params.width, params.height) / (TILE * TILE) {
+        return;
+    }
+    var lo = vec3<f32>(0.0);
+    var hi = vec3<f32>(0.0);
+    var nlo = vec3<f32>(0.0);
+    var nhi = vec3<f32>(0.0);
+    var valid = false;
+    for (var i = 0u; i < TILE * TILE; i++) {
+        let m = tile_pixel(t * TILE * TILE + i);
+        if m != INVALID {
+            let sp = gbuffer[m];
+            if sp.pos.w > 0.0 {
+                if valid {
+                    lo = min(lo, sp.pos.xyz);
+                    hi = max(hi, sp.pos.xyz);
+                    nlo = min(nlo, sp.nrm.xyz);
+                    nhi = max(nhi, sp.nrm.xyz);
+                } else {
+                    lo = sp.pos.xyz;
+                    hi = sp.pos.xyz;
+                    nlo = sp.nrm.xyz;
+                    nhi = sp.nrm.xyz;
+                }
+                valid = true;
+            }
+        }
+    }
+    tile_boxes[4u * t] = vec4<f32>(lo, select(0.0, 1.0, valid));
+    tile_boxes[4u * t + 1u] = vec4<f32>(hi, 0.0);
+    tile_boxes[4u * t + 2u] = vec4<f32>(nlo, 0.0);
+    tile_boxes[4u * t + 3u] = vec4<f32>(nhi, 0.0);
+}
 
 fn light_texel(i: u32) -> vec4<f32> {
     return textureLoad(lights_tex, vec2<u32>(i & 4095u, i >> 12u), 0);
@@ -85,7 +213,8 @@ fn same_visibility(rw: ptr<function, array<u32, MAX_F>>, b: u32) -> u32 {
 // Eq. (6) over this dispatch's lights: Σ_c I_c ρ G Ṽ(p, p_c), the lights being the VPL-cluster
 // representatives (or the VPLs) of words [chunk.sub_offset, + chunk.sub_count). Lights 32 at a time:
 // one bit word per row serves 32 lights, and a light no row sees (Ṽ = 0, which would add exactly
-// zero) is skipped. Ṽ (Eq. 9, over j in order) depends only on a light's visibility pattern over the
+// zero) is skipped, and so is one the tile's mask (at tile_masks[mask_base]) has not (its terms
+// are 0: docs/clustering.md, "Lights no point of a tile can see"). Ṽ (Eq. 9, over j in order) depends only on a light's visibility pattern over the
 // F slots, and a word's lights fall in few patterns (all slots see the light, or a shadow edge
 // crosses some): a word's first PATTERNS patterns and their Ṽ are found once (a table in registers),
 // and a light picks its Ṽ from the table with PATTERNS selects instead of an F-slot loop; a light of
@@ -93,7 +222,7 @@ fn same_visibility(rw: ptr<function, array<u32, MAX_F>>, b: u32) -> u32 {
 // adding nothing (t = 0: it faces away or lies behind the pixel) skips Ṽ. Lights are summed
 // in increasing order, each with Ṽ bit for bit as eq9_weighted_visibility gives it, so the sum is the
 // same as a plain loop over all lights. CPU twin: cpu::shade::eq6_indirect.
-fn eq6_indirect(sp: ShadingPoint, rows: ptr<function, array<u32, MAX_F>>, w: ptr<function, array<f32, MAX_F>>) -> vec3<f32> {
+fn eq6_indirect(sp: ShadingPoint, rows: ptr<function, array<u32, MAX_F>>, w: ptr<function, array<f32, MAX_F>>, mask_base: u32) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     var rw: array<u32, MAX_F>;
     var masks: array<u32, MAX_PATTERNS>;
@@ -108,6 +237,9 @@ fn eq6_indirect(sp: ShadingPoint, rows: ptr<function, array<u32, MAX_F>>, w: ptr
                 rw[j] = bits[(*rows)[j] * params.words + wd];
             }
             todo |= rw[j];
+        }
+        if TILE_CULL {
+            todo &= tile_masks[mask_base + wd - chunk.sub_offset];
         }
         // The table: pattern k's lights and Ṽ, in the order of their first lights.
         var rest = todo;
@@ -148,7 +280,8 @@ fn eq6_indirect(sp: ShadingPoint, rows: ptr<function, array<u32, MAX_F>>, w: ptr
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let m = chunk_item(gid, nwg);
+    let item = chunk_item(gid, nwg);
+    let m = tile_pixel(item);
     if m == INVALID {
         return;
     }
@@ -173,7 +306,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     if params.weighted == 0u {
         eq8_mean_weights(&rows, &w);
     }
-    let sum = eq6_indirect(sp, &rows, &w);
+    // The first of the tile's masks (tile_mask; chunks are whole tiles).
+    let mask_base = ((item - chunk.offset) / (TILE * TILE)) * chunk_words();
+    let sum = eq6_indirect(sp, &rows, &w, mask_base);
     // The first range of words writes the pixel, the others add to it.
     if chunk.sub_offset == 0u {
         indirect[m] = vec4<f32>(sum, 0.0);

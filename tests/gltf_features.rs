@@ -395,6 +395,7 @@ fn cpu_twins_agree_on_the_alpha_tested_scene() {
     // The shading pass's twin: every pixel, at the measured maximum × 2 on software (measured
     // 3.7e-9; docs/testing.md, "Twin tolerances").
     let mut pairs = Vec::with_capacity(n as usize);
+    let tiles = shade::tile_bounds(sps, W, H);
     for (m, sp) in sps.iter().enumerate() {
         let c = shade::eq6_indirect(
             sp,
@@ -403,6 +404,7 @@ fn cpu_twins_agree_on_the_alpha_tested_scene() {
             &g.slots(m, true),
             d_min * d_min,
             fs.cluster.cluster_light,
+            tiles[shade::tile_of(m, W)].as_ref(),
         );
         pairs.push((c, Vec3::from(f.indirect[m])));
     }

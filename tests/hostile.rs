@@ -390,6 +390,7 @@ fn developer_variables_are_checked_like_options() {
         ("FVPL_WORK_SCALE", "0".into(), "FVPL_WORK_SCALE=0"),
         ("FVPL_WORK_SCALE", "lots".into(), "FVPL_WORK_SCALE=lots"),
         ("FVPL_SHADE_PATTERNS", "9".into(), "FVPL_SHADE_PATTERNS=9"),
+        ("FVPL_SHADE_TILE_CULL", "2".into(), "FVPL_SHADE_TILE_CULL=2"),
         ("FVPL_PROFILE_STEPS", "0".into(), "set it to 1"),
         ("FVPL_NO_ALPHA_TEST", "yes".into(), "FVPL_NO_ALPHA_TEST=yes"),
     ];

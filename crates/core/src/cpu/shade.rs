@@ -91,8 +91,75 @@ pub fn same_visibility(rw: &[u32], b: u32) -> u32 {
     })
 }
 
+/// The boxes of a tile's shading points' positions and normals (twin of `tile_cull`'s bounds in
+/// shade.wgsl, which shades 8 × 8 tiles, `method::colom::shade::TILE`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TileBounds {
+    pub lo: Vec3,
+    pub hi: Vec3,
+    pub nlo: Vec3,
+    pub nhi: Vec3,
+}
+
+impl TileBounds {
+    /// The bounds of the valid points of `sps`; `None` when none is valid.
+    pub fn of<'a>(sps: impl IntoIterator<Item = &'a ShadingPoint>) -> Option<TileBounds> {
+        sps.into_iter()
+            .filter(|sp| sp.valid)
+            .fold(None, |b: Option<TileBounds>, sp| {
+                let b = b.unwrap_or(TileBounds {
+                    lo: sp.pos,
+                    hi: sp.pos,
+                    nlo: sp.normal,
+                    nhi: sp.normal,
+                });
+                Some(TileBounds {
+                    lo: b.lo.min(sp.pos),
+                    hi: b.hi.max(sp.pos),
+                    nlo: b.nlo.min(sp.normal),
+                    nhi: b.nhi.max(sp.normal),
+                })
+            })
+    }
+}
+
+/// The tile of pixel `m` of an image `width` wide (tiles of `TILE` × `TILE`, row-major), as
+/// `tile_bounds` lists them.
+pub fn tile_of(m: usize, width: u32) -> usize {
+    let tile = crate::method::colom::shade::TILE as usize;
+    let (x, y) = (m % width as usize, m / width as usize);
+    (y / tile) * (width as usize).div_ceil(tile) + x / tile
+}
+
+/// Each tile's bounds over the image's shading points `sps` (`width` × `height`, row-major).
+pub fn tile_bounds(sps: &[ShadingPoint], width: u32, height: u32) -> Vec<Option<TileBounds>> {
+    let tile = crate::method::colom::shade::TILE as usize;
+    let tiles = (width as usize).div_ceil(tile) * (height as usize).div_ceil(tile);
+    let mut members: Vec<Vec<&ShadingPoint>> = vec![Vec::new(); tiles];
+    for (m, sp) in sps.iter().enumerate() {
+        members[tile_of(m, width)].push(sp);
+    }
+    members.into_iter().map(TileBounds::of).collect()
+}
+
+/// Not in the paper: whether light `v` may add to Eq. (6) at a point of the tile `b` (twin of
+/// `may_light_box` in shade.wgsl): false when, over the boxes, the largest cosine term at the
+/// light, n_v · (p - x_v), or at the point, n · (x_v - p), is at most the slack (1e-5 of the
+/// largest coordinate), each maximum a sum over the axes of the largest product at a corner.
+pub fn may_light_box(b: &TileBounds, v: &Vpl) -> bool {
+    let x = Vec3::new(v.pos[0], v.pos[1], v.pos[2]);
+    let n = Vec3::new(v.nrm[0], v.nrm[1], v.nrm[2]);
+    let at_light = (n * (b.lo - x)).max(n * (b.hi - x));
+    let (a, c) = (x - b.lo, x - b.hi);
+    let at_point = (b.nlo * a).max(b.nlo * c).max((b.nhi * a).max(b.nhi * c));
+    let scale = b.lo.abs().max(b.hi.abs()).max(x.abs());
+    let slack = 1e-5 * scale.max_element();
+    at_light.dot(Vec3::ONE) > slack && at_point.dot(Vec3::ONE) > slack
+}
+
 /// Eq. (6) for one pixel: Σ_c I_c ρ G Ṽ(p, p_c) over the lights, each a point or spread as `light`
-/// says (twin of `eq6_indirect` in shade.wgsl).
+/// says (twin of `eq6_indirect` in shade.wgsl); with `tile` (the pixel's tile's bounds), only the
+/// lights `may_light_box` keeps, as the shader's tile cull does.
 pub fn eq6_indirect(
     sp: &ShadingPoint,
     lights: &[Vpl],
@@ -100,6 +167,7 @@ pub fn eq6_indirect(
     slots: &Slots,
     d_min2: f32,
     light: ClusterLight,
+    tile: Option<&TileBounds>,
 ) -> Vec3 {
     if !sp.valid {
         return Vec3::ZERO;
@@ -111,6 +179,9 @@ pub fn eq6_indirect(
     };
     let mut sum = Vec3::ZERO;
     for (c, l) in lights.iter().enumerate() {
+        if tile.is_some_and(|b| !may_light_box(b, l)) {
+            continue;
+        }
         let t = eq5_cluster_light(sp.pos, sp.normal, sp.albedo, l, d_min2, light);
         if t.max_element() <= 0.0 {
             continue;
@@ -140,5 +211,111 @@ mod tests {
         // One slot: the lights it sees, or those it does not.
         assert_eq!(same_visibility(&[0xf0f0_0000], 20), 0xf0f0_0000);
         assert_eq!(same_visibility(&[0xf0f0_0000], 0), 0x0f0f_ffff);
+    }
+
+    fn light(pos: [f32; 3], nrm: [f32; 3]) -> Vpl {
+        Vpl {
+            pos: [pos[0], pos[1], pos[2], 0.0],
+            nrm: [nrm[0], nrm[1], nrm[2], 0.0],
+            flux: [1.0; 4],
+        }
+    }
+
+    /// Hand-worked: a floor tile, x and z in [0, 2], y = 0, normals +y. A light above it facing
+    /// down lights it; one above facing up (its cosine at the tile is negative), one below facing
+    /// up (the tile's cosine is negative) and one in the floor's plane (both cosines 0) do not; a
+    /// light on a wall, and a tile over a corner, as below.
+    #[test]
+    fn may_light_box_by_hand() {
+        let floor = TileBounds {
+            lo: Vec3::new(0.0, 0.0, 0.0),
+            hi: Vec3::new(2.0, 0.0, 2.0),
+            nlo: Vec3::Y,
+            nhi: Vec3::Y,
+        };
+        assert!(may_light_box(
+            &floor,
+            &light([1.0, 1.0, 1.0], [0.0, -1.0, 0.0])
+        ));
+        assert!(!may_light_box(
+            &floor,
+            &light([1.0, 1.0, 1.0], [0.0, 1.0, 0.0])
+        ));
+        assert!(!may_light_box(
+            &floor,
+            &light([1.0, -1.0, 1.0], [0.0, 1.0, 0.0])
+        ));
+        assert!(!may_light_box(
+            &floor,
+            &light([5.0, 0.0, 1.0], [0.0, 1.0, 0.0])
+        ));
+        // A wall light at y = 0.5 facing -x: at the floor (y = 0) the point's cosine n · (x - p)
+        // is 0.5 > 0 and the light's -x · (p - x) = 3 - p.x > 0: it lights the floor.
+        assert!(may_light_box(
+            &floor,
+            &light([3.0, 0.5, 1.0], [-1.0, 0.0, 0.0])
+        ));
+        // The same light at y = 0 (in the floor's plane): the floor's cosine is 0.
+        assert!(!may_light_box(
+            &floor,
+            &light([3.0, 0.0, 1.0], [-1.0, 0.0, 0.0])
+        ));
+        // Within the slack (1e-5 of the largest coordinate, 3 here): 1e-6 above the plane is in
+        // it, 1e-3 above is not.
+        assert!(!may_light_box(
+            &floor,
+            &light([3.0, 1e-6, 1.0], [-1.0, 0.0, 0.0])
+        ));
+        assert!(may_light_box(
+            &floor,
+            &light([3.0, 1e-3, 1.0], [-1.0, 0.0, 0.0])
+        ));
+        // A tile over a corner (floor and wall x = 0 facing +x, normals in the box [0, 1]^2 × 0):
+        // a light below the floor level at x = 1 facing -x sees the wall's side: the point's
+        // bound over the box is max(n.x) (1 - 0) + max(n.y (−1 − y)) = 1 + 0 > 0.
+        let corner = TileBounds {
+            lo: Vec3::new(0.0, 0.0, 0.0),
+            hi: Vec3::new(2.0, 2.0, 2.0),
+            nlo: Vec3::ZERO,
+            nhi: Vec3::new(1.0, 1.0, 0.0),
+        };
+        assert!(may_light_box(
+            &corner,
+            &light([1.0, -1.0, 1.0], [0.0, 1.0, 0.0])
+        ));
+        // Behind the wall (x = -1) facing -x: the light's bound is -x · (p - x) ≤ -(0 + 1) < 0.
+        assert!(!may_light_box(
+            &corner,
+            &light([-1.0, 1.0, 1.0], [-1.0, 0.0, 0.0])
+        ));
+    }
+
+    /// Tiles of 8 × 8 pixels, row-major: in a 20 × 10 image (3 × 2 tiles) pixel (19, 9) is in
+    /// tile 5, pixel (8, 7) in tile 1; the bounds skip invalid points, and a tile of none has none.
+    #[test]
+    fn tiles_by_hand() {
+        assert_eq!(tile_of(9 * 20 + 19, 20), 5);
+        assert_eq!(tile_of(7 * 20 + 8, 20), 1);
+        assert_eq!(tile_of(0, 20), 0);
+        let sp = |valid, x: f32| ShadingPoint {
+            valid,
+            pos: Vec3::new(x, 0.0, -x),
+            normal: Vec3::new(0.0, 1.0, x),
+            material: 0,
+            albedo: Vec3::ONE,
+            emission: Vec3::ZERO,
+        };
+        let b = TileBounds::of([&sp(true, 1.0), &sp(false, 9.0), &sp(true, -2.0)]).unwrap();
+        assert_eq!(b.lo, Vec3::new(-2.0, 0.0, -1.0));
+        assert_eq!(b.hi, Vec3::new(1.0, 0.0, 2.0));
+        assert_eq!(b.nlo, Vec3::new(0.0, 1.0, -2.0));
+        assert_eq!(b.nhi, Vec3::new(0.0, 1.0, 1.0));
+        assert_eq!(TileBounds::of([&sp(false, 1.0)]), None);
+        let sps: Vec<ShadingPoint> = (0..200).map(|m| sp(m != 199, m as f32)).collect();
+        let tiles = tile_bounds(&sps, 20, 10);
+        assert_eq!(tiles.len(), 6);
+        // Tile 5: x 16..19, y 8..9: pixels 176..179 and 196..198 (199 invalid).
+        assert_eq!(tiles[5].unwrap().lo.x, 176.0);
+        assert_eq!(tiles[5].unwrap().hi.x, 198.0);
     }
 }

@@ -28,6 +28,14 @@ pub struct Run<'a> {
     pub seed: u32,
 }
 
+/// An entry point `Kernel::run_2d_after` dispatches before each submission's main one, over
+/// `invocations(count, sub_count)` invocations (the submission's items and sub range).
+#[derive(Clone, Copy)]
+pub struct Before<'a> {
+    pub entry: &'a str,
+    pub invocations: &'a dyn Fn(u32, u32) -> u32,
+}
+
 /// Records copies between the passes of `Kernel::run_entries`.
 pub type RecordCopies<'a> = dyn Fn(&mut wgpu::CommandEncoder) + 'a;
 
@@ -89,6 +97,34 @@ impl DataTextureSlot {
                 let v = t.create_view(&Default::default());
                 *kept = Some((t.clone(), v.clone()));
                 (t, v)
+            }
+        }
+    }
+}
+
+/// A pass's storage buffer kept from frame to frame: made again only when it needs more bytes.
+pub struct StorageSlot {
+    label: &'static str,
+    kept: std::sync::Mutex<Option<wgpu::Buffer>>,
+}
+
+impl StorageSlot {
+    pub const fn new(label: &'static str) -> Self {
+        StorageSlot {
+            label,
+            kept: std::sync::Mutex::new(None),
+        }
+    }
+
+    /// A storage buffer of at least `bytes` bytes.
+    pub fn get(&self, ctx: &GpuContext, bytes: u64) -> wgpu::Buffer {
+        let mut kept = self.kept.lock().unwrap_or_else(|e| e.into_inner());
+        match &*kept {
+            Some(b) if b.size() >= bytes => b.clone(),
+            _ => {
+                let b = ctx.storage(self.label, bytes);
+                *kept = Some(b.clone());
+                b
             }
         }
     }
@@ -342,18 +378,25 @@ impl Kernel {
         sub: (u32, u32),
         progress: &mut dyn FnMut(u64, u64) -> bool,
     ) {
-        let ctx = g.ctx;
+        self.run_2d_after(g, r, items, sub, None, progress)
+    }
+
+    /// `run_2d`, where each submission first dispatches `before`'s entry point (the same chunk
+    /// uniform), then the first entry point (in one compute pass: wgpu puts a barrier between
+    /// dispatches that share a writable buffer).
+    pub fn run_2d_after(
+        &self,
+        g: &mut Gpu,
+        r: Run,
+        items: (u32, u32),
+        sub: (u32, u32),
+        before: Option<Before>,
+        progress: &mut dyn FnMut(u64, u64) -> bool,
+    ) {
         let (total, per_chunk) = items;
-        let per_chunk = per_chunk.clamp(WORKGROUP, WORKGROUP * MAX_GROUPS_X);
+        let per_chunk = chunk_items(g.ctx, total, per_chunk);
         let (sub_total, sub_per) = (sub.0, sub.1.max(1));
-        // Scale the work per submission for this adapter, on the item range only: a pass that sums
-        // over the sub range (the reference: each VPL range adds to the pixel) keeps its ranges, so
-        // its rounding, and the image, do not depend on the scale.
-        let scale = ctx.work_scale.max(1) as u64;
-        let per_chunk = (per_chunk as u64 * scale)
-            .min(total.max(1) as u64)
-            .min((WORKGROUP * MAX_GROUPS_X) as u64)
-            .max(per_chunk as u64) as u32;
+        let before = before.map(|b| (self.entry_index(b.entry), b.invocations));
         let chunks = total.div_ceil(per_chunk) as u64 * sub_total.div_ceil(sub_per).max(1) as u64;
         let mut done = 0u64;
         let mut offset = 0;
@@ -362,7 +405,20 @@ impl Kernel {
             let mut sub_offset = 0;
             loop {
                 let sub_count = sub_per.min(sub_total.saturating_sub(sub_offset));
-                self.submit(g, r, 0, count, (sub_offset, sub_count), offset);
+                let ctx = g.ctx;
+                self.write_chunk(ctx, offset, count, (sub_offset, sub_count), r.seed);
+                let mut enc = ctx.device.create_command_encoder(&Default::default());
+                self.in_pass(&mut enc, g, r, |pass| {
+                    if let Some((index, n)) = before {
+                        pass.set_pipeline(&self.pipelines[index].1);
+                        dispatch_items(pass, n(count, sub_count));
+                    }
+                    pass.set_pipeline(&self.pipelines[0].1);
+                    dispatch_items(pass, count);
+                });
+                g.profiler.submit(ctx, enc);
+                // Waiting keeps each submission short and bounded on software drivers.
+                let _ = ctx.wait();
                 done += 1;
                 if !progress(done, chunks) {
                     return;
@@ -430,6 +486,20 @@ impl Kernel {
             f(pass)
         })
     }
+}
+
+/// The items a submission of `Kernel::run_2d` covers, given `per_chunk` (at least one workgroup):
+/// scaled by the adapter's work scale on the item range only (a pass that sums over the sub range,
+/// the reference: each VPL range adds to the pixel, keeps its ranges, so its rounding, and the
+/// image, do not depend on the scale), at most `total` and one dispatch's. A multiple of 64 when
+/// `per_chunk` and `total` are.
+pub fn chunk_items(ctx: &GpuContext, total: u32, per_chunk: u32) -> u32 {
+    let per_chunk = per_chunk.clamp(WORKGROUP, WORKGROUP * MAX_GROUPS_X);
+    let scale = ctx.work_scale.max(1) as u64;
+    (per_chunk as u64 * scale)
+        .min(total.max(1) as u64)
+        .min((WORKGROUP * MAX_GROUPS_X) as u64)
+        .max(per_chunk as u64) as u32
 }
 
 /// Workgroups for `count` invocations, in rows of 65535 groups.

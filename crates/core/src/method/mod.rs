@@ -457,7 +457,7 @@ pub struct EnvInteger {
 }
 
 /// Every method's developer variables (each declared in its room).
-pub const ENV_INTEGERS: &[EnvInteger] = &[colom::shade::PATTERNS_ENV];
+pub const ENV_INTEGERS: &[EnvInteger] = &[colom::shade::PATTERNS_ENV, colom::shade::TILE_CULL_ENV];
 
 impl Method {
     /// Its line in `--method`'s help.

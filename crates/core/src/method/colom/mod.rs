@@ -194,7 +194,13 @@ impl Colom {
     /// The shade pass's `PATTERNS` (`shade::patterns`, 0..8): its pipelines are built again.
     /// The image does not depend on it.
     pub fn set_shade_patterns(&mut self, patterns: u32) {
-        self.shade = Shade::with_patterns(patterns);
+        self.shade = Shade::with_options(patterns, self.shade.tile_cull());
+    }
+
+    /// The shade pass's `TILE_CULL` (`shade::tile_cull`): its pipelines are built again. The
+    /// image differs at most by terms whose cosine is at the rounding of the coordinates.
+    pub fn set_shade_tile_cull(&mut self, on: bool) {
+        self.shade = Shade::with_options(self.shade.patterns(), on);
     }
 
     /// Step 4: the SP clustering, warm-started from the previous frame's with temporal reuse.
@@ -280,14 +286,15 @@ impl Colom {
                 assign: &c.assign,
                 weights: &c.weights,
                 indirect: f.indirect,
-                pixels: f.pixels(),
                 params: ShadeParams {
                     num_lights: lights.lights.len() as u32,
                     words: v.words,
                     f: c.f(),
                     weighted: (f.cluster.weighting == Weighting::InverseDistance) as u32,
                     d_min2: d_min * d_min,
-                    _pad: [0; 3],
+                    width: f.size.0,
+                    height: f.size.1,
+                    _pad: 0,
                 },
                 light: f.cluster.cluster_light,
             },

@@ -5,8 +5,8 @@ use std::cell::OnceCell;
 
 use bytemuck::{Pod, Zeroable};
 
+use crate::gi::dispatch::{Before, Kernel, chunk_items, copy_to_texture};
 use crate::gi::dispatch::{Gpu, Run};
-use crate::gi::dispatch::{Kernel, copy_to_texture};
 use crate::gi::pass::Pass;
 use crate::gi::scene_gpu::{SceneGpu, data_texture_layout, storage_layout, uniform_layout};
 use crate::gpu::GpuContext;
@@ -20,7 +20,10 @@ pub struct ShadeParams {
     pub f: u32,
     pub weighted: u32,
     pub d_min2: f32,
-    pub _pad: [u32; 3],
+    /// The image's width and height in pixels (the shader shades it in 8 × 8 tiles).
+    pub width: u32,
+    pub height: u32,
+    pub _pad: u32,
 }
 
 /// The inputs of one shading dispatch.
@@ -31,7 +34,6 @@ pub struct ShadeInputs<'a> {
     pub assign: &'a wgpu::Buffer,
     pub weights: &'a wgpu::Buffer,
     pub indirect: &'a wgpu::Buffer,
-    pub pixels: u32,
     pub params: ShadeParams,
     /// How the lights reach a pixel (`--cluster-light`).
     pub light: ClusterLight,
@@ -63,14 +65,48 @@ pub fn patterns() -> u32 {
         .map_or(0, |p| p.min(MAX_PATTERNS))
 }
 
+/// `FVPL_SHADE_TILE_CULL`, `tile_cull`'s variable: 0 or 1 (`method::ENV_INTEGERS`).
+pub const TILE_CULL_ENV: crate::method::EnvInteger = crate::method::EnvInteger {
+    name: "FVPL_SHADE_TILE_CULL",
+    lo: 0,
+    hi: 1,
+};
+
+/// The shader's `TILE_CULL`: each 8 × 8 tile skips the lights that no point of its bounds can see
+/// or be seen by (`may_light_box`, docs/clustering.md, "Lights no point of a tile can see").
+/// `FVPL_SHADE_TILE_CULL=0` walks every light the visibility rows see, for measuring what it saves;
+/// the default is 1.
+pub fn tile_cull() -> bool {
+    std::env::var(TILE_CULL_ENV.name)
+        .ok()
+        .and_then(|v| v.parse::<u32>().ok())
+        .is_none_or(|v| v != 0)
+}
+
+/// The side of the square tiles a shading workgroup shades (`TILE` in shade.wgsl): 8 × 8 pixels,
+/// one workgroup.
+pub const TILE: u32 = 8;
+
+/// The shading dispatches' items for a `width` × `height` image: 64 a tile, the tiles row-major
+/// (`tile_pixel` in shade.wgsl maps an item to its pixel, or to none past the image's edge).
+pub fn tile_items(width: u32, height: u32) -> u32 {
+    width.div_ceil(TILE) * height.div_ceil(TILE) * TILE * TILE
+}
+
 pub struct Shade {
     /// One pipeline per F (the shader's `override F`) and cluster light (point, spread: its
     /// `override CLUSTER_SPREAD`), built the first time that pair is shaded.
     kernels: [[OnceCell<Kernel>; 2]; MAX_F as usize],
     /// The shader's `PATTERNS` (`patterns()` when built).
     patterns: u32,
+    /// The shader's `TILE_CULL` (`tile_cull()` when built).
+    tile_cull: bool,
     params: crate::gpu::persistent::Uniform<ShadeParams>,
     lights: crate::gi::dispatch::DataTextureSlot,
+    /// The tiles' boxes (4 × 16 bytes a tile, the entry point `tile_box`).
+    tile_boxes: crate::gi::dispatch::StorageSlot,
+    /// A submission's light masks (a word a tile and bit word, the entry point `tile_mask`).
+    tile_masks: crate::gi::dispatch::StorageSlot,
 }
 
 impl Default for Shade {
@@ -81,20 +117,33 @@ impl Default for Shade {
 
 impl Shade {
     pub fn new() -> Self {
-        Self::with_patterns(patterns())
+        Self::with_options(patterns(), tile_cull())
     }
 
-    /// With `PATTERNS` = `patterns` (at most `MAX_PATTERNS`).
-    pub fn with_patterns(patterns: u32) -> Self {
+    /// With `PATTERNS` = `patterns` (at most `MAX_PATTERNS`) and `TILE_CULL` = `tile_cull`.
+    pub fn with_options(patterns: u32, tile_cull: bool) -> Self {
         Shade {
             kernels: Default::default(),
             patterns: patterns.min(MAX_PATTERNS),
+            tile_cull,
             params: crate::gpu::persistent::Uniform::new("shade params"),
             lights: crate::gi::dispatch::DataTextureSlot::new(
                 "shade lights",
                 wgpu::TextureFormat::Rgba32Float,
             ),
+            tile_boxes: crate::gi::dispatch::StorageSlot::new("shade tile boxes"),
+            tile_masks: crate::gi::dispatch::StorageSlot::new("shade tile masks"),
         }
+    }
+
+    /// The shader's `PATTERNS`.
+    pub fn patterns(&self) -> u32 {
+        self.patterns
+    }
+
+    /// The shader's `TILE_CULL`.
+    pub fn tile_cull(&self) -> bool {
+        self.tile_cull
     }
 
     fn kernel(&self, ctx: &GpuContext, scene: &SceneGpu, f: u32, spread: bool) -> &Kernel {
@@ -107,12 +156,22 @@ impl Shade {
             ];
             entries.extend((4..=6).map(|b| storage_layout(b, true)));
             entries.push(storage_layout(7, false));
+            entries.push(storage_layout(8, false));
+            entries.push(storage_layout(9, false));
             let overrides = [
                 ("F", f as f64),
                 ("PATTERNS", self.patterns as f64),
                 ("CLUSTER_SPREAD", spread as u32 as f64),
+                ("TILE_CULL", self.tile_cull as u32 as f64),
             ];
-            Kernel::new(ctx, scene, "shade", &entries, &overrides)
+            Kernel::with_entries(
+                ctx,
+                Some(scene),
+                "shade",
+                &["main", "tile_box", "tile_mask"],
+                &entries,
+                &overrides,
+            )
         })
     }
 
@@ -126,6 +185,22 @@ impl Shade {
         copy_to_texture(&mut enc, i.lights, &lights, 48 * n);
         ctx.queue.submit([enc.finish()]);
         let kernel = self.kernel(ctx, g.scene, i.params.f, i.light == ClusterLight::Spread);
+        let items = tile_items(i.params.width, i.params.height);
+        // At most WORDS_PER_DISPATCH bit words (32 lights each) a pixel per dispatch: lavapipe ends
+        // all loops of a SIMD batch after 65,535 trips (docs/architecture.md), and the walk over the
+        // lights takes one a light; 131,072 lights in one dispatch lost the last ones. About 2^22
+        // light terms per submission, in whole workgroups (tiles): a multiple of 64 items.
+        let words = i.params.words.max(1);
+        let per_dispatch = words.min(WORDS_PER_DISPATCH);
+        let lights = i.params.num_lights.clamp(1, per_dispatch * 32);
+        let per = ((1u32 << 22) / lights).max(64) / 64 * 64;
+        // The boxes: 64 bytes a tile (`items` bytes); a submission's masks: a word a tile of its
+        // items and bit word of its range.
+        let tile_boxes = self.tile_boxes.get(ctx, items as u64);
+        let chunk_tiles = chunk_items(ctx, items, per) / (TILE * TILE);
+        let tile_masks = self
+            .tile_masks
+            .get(ctx, 4 * chunk_tiles as u64 * per_dispatch as u64);
         let bg = kernel.bind_group_with_textures(
             ctx,
             &[
@@ -135,27 +210,32 @@ impl Shade {
                 (5, i.assign),
                 (6, i.weights),
                 (7, i.indirect),
+                (8, &tile_boxes),
+                (9, &tile_masks),
             ],
             &[(3, &lights_view)],
         );
-        // At most WORDS_PER_DISPATCH bit words (32 lights each) a pixel per dispatch: lavapipe ends
-        // all loops of a SIMD batch after 65,535 trips (docs/architecture.md), and the walk over the
-        // lights takes one a light; 131,072 lights in one dispatch lost the last ones. About 2^22
-        // light terms per submission.
-        let words = i.params.words.max(1);
-        let per_dispatch = words.min(WORDS_PER_DISPATCH);
-        let lights = i.params.num_lights.clamp(1, per_dispatch * 32);
-        let per = ((1u32 << 22) / lights).max(64);
         let run = Run {
             label: Pass::Shade.name(),
             group: &bg,
             seed: 0,
         };
-        kernel.run_2d(
+        // With the tile cull: each tile's box (an invocation a tile), then in each submission its
+        // tiles' masks (an invocation a tile and bit word) before the walk.
+        let masks = |count: u32, sub_count: u32| count / (TILE * TILE) * sub_count;
+        let before = self.tile_cull.then_some(Before {
+            entry: "tile_mask",
+            invocations: &masks,
+        });
+        if self.tile_cull {
+            kernel.run_entry(g, run, "tile_box", items / (TILE * TILE));
+        }
+        kernel.run_2d_after(
             g,
             run,
-            (i.pixels, per),
+            (items, per),
             (words, per_dispatch),
+            before,
             &mut |_, _| true,
         );
     }
