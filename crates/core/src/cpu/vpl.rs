@@ -9,6 +9,29 @@ use crate::settings::ClusterLight;
 
 /// One term of Eq. (5) without visibility: I_j(p) ρ(p) G(p, p_j), 1/d² clamped at d_min².
 pub fn eq5_vpl_radiance(p: Vec3, n: Vec3, albedo: Vec3, v: &Vpl, d_min2: f32) -> Vec3 {
+    eq5_term(p, n, albedo, v, d_min2, false)
+}
+
+/// Not in the paper: Eq. (5)'s term of a VPL-cluster light, the representative's own share of the
+/// flux (1 − `flux[3]`) as its VPL's term and the other members' share (`flux[3]`) with d clamped
+/// at max(d_min, r), r² = `nrm[3]` their mean squared distance from it: one G-term times
+/// `cluster_spread`. A VPL (`flux[3]` = 0) gives `eq5_vpl_radiance`. Twin of
+/// `eq5_cluster_radiance` in `common/vpl.wgsl`.
+pub fn eq5_cluster_radiance(p: Vec3, n: Vec3, albedo: Vec3, v: &Vpl, d_min2: f32) -> Vec3 {
+    eq5_term(p, n, albedo, v, d_min2, true)
+}
+
+/// Not in the paper: the spread's factor on a cluster light's G-term, (1 − s) + s d′² / d″² with
+/// s = `flux[3]`, d′² = max(d², d_min²) and d″² = max(d², d_min², r²) (twin of `cluster_spread`
+/// in `common/vpl.wgsl`).
+pub fn cluster_spread(d2: f32, d_min2: f32, v: &Vpl) -> f32 {
+    let s = v.flux[3];
+    (1.0 - s) + s * (d2.max(d_min2) / d2.max(d_min2.max(v.nrm[3])))
+}
+
+/// Eq. (5)'s term; with `spread`, the G-term times `cluster_spread` for a light with other members
+/// (twin of `eq5_term` in `common/vpl.wgsl`).
+fn eq5_term(p: Vec3, n: Vec3, albedo: Vec3, v: &Vpl, d_min2: f32, spread: bool) -> Vec3 {
     let d = Vec3::new(v.pos[0], v.pos[1], v.pos[2]) - p;
     let d2 = d.dot(d);
     if d2 <= 0.0 || !d2.is_finite() {
@@ -20,25 +43,12 @@ pub fn eq5_vpl_radiance(p: Vec3, n: Vec3, albedo: Vec3, v: &Vpl, d_min2: f32) ->
     if cp <= 0.0 || cv <= 0.0 {
         return Vec3::ZERO;
     }
-    let g = cp * cv / d2.max(d_min2);
+    let mut g = cp * cv / d2.max(d_min2);
+    if spread && v.flux[3] > 0.0 {
+        g *= cluster_spread(d2, d_min2, v);
+    }
     let pi = std::f32::consts::PI;
     Vec3::new(v.flux[0], v.flux[1], v.flux[2]) / pi * (albedo / pi) * g
-}
-
-/// Not in the paper: Eq. (5)'s term of a VPL-cluster light, the representative's own share of the
-/// flux (1 − `flux[3]`) as its VPL's term and the other members' share (`flux[3]`) with d clamped
-/// at max(d_min, r), r² = `nrm[3]` their mean squared distance from it; a VPL (`flux[3]` = 0) gives
-/// `eq5_vpl_radiance`. Twin of `eq5_cluster_radiance` in `common/vpl.wgsl`.
-pub fn eq5_cluster_radiance(p: Vec3, n: Vec3, albedo: Vec3, v: &Vpl, d_min2: f32) -> Vec3 {
-    let own = eq5_vpl_radiance(p, n, albedo, v, d_min2);
-    let share = v.flux[3];
-    if share.is_nan() || share <= 0.0 || own.max_element() <= 0.0 {
-        return own;
-    }
-    let d = Vec3::new(v.pos[0], v.pos[1], v.pos[2]) - p;
-    let d2 = d.dot(d);
-    let spread = own * (d2.max(d_min2) / d2.max(d_min2.max(v.nrm[3])));
-    own * (1.0 - share) + spread * share
 }
 
 /// Eq. (5)'s term of a VPL-cluster light as `light` says (`--cluster-light`): `Point`, the paper's
