@@ -317,7 +317,7 @@ impl Kernel {
     /// Runs entry point `entry` over `total` items in one submission (small kernels: k-means steps).
     pub fn run_entry(&self, g: &mut Gpu, r: Run, entry: &str, total: u32) {
         let index = self.entry_index(entry);
-        self.submit(g, r, index, total, (0, 1), 0);
+        self.submit(g, r, (None, index), total, (0, 1), 0);
     }
 
     /// Runs several small steps `(entry, items)` in order in one submission, then waits. The steps
@@ -405,20 +405,8 @@ impl Kernel {
             let mut sub_offset = 0;
             loop {
                 let sub_count = sub_per.min(sub_total.saturating_sub(sub_offset));
-                let ctx = g.ctx;
-                self.write_chunk(ctx, offset, count, (sub_offset, sub_count), r.seed);
-                let mut enc = ctx.device.create_command_encoder(&Default::default());
-                self.in_pass(&mut enc, g, r, |pass| {
-                    if let Some((index, n)) = before {
-                        pass.set_pipeline(&self.pipelines[index].1);
-                        dispatch_items(pass, n(count, sub_count));
-                    }
-                    pass.set_pipeline(&self.pipelines[0].1);
-                    dispatch_items(pass, count);
-                });
-                g.profiler.submit(ctx, enc);
-                // Waiting keeps each submission short and bounded on software drivers.
-                let _ = ctx.wait();
+                let first = before.map(|(index, n)| (index, n(count, sub_count)));
+                self.submit(g, r, (first, 0), count, (sub_offset, sub_count), offset);
                 done += 1;
                 if !progress(done, chunks) {
                     return;
@@ -432,13 +420,26 @@ impl Kernel {
         }
     }
 
-    /// One bounded submission of pipeline `index` over items `offset..offset + count`.
-    fn submit(&self, g: &mut Gpu, r: Run, index: usize, count: u32, sub: (u32, u32), offset: u32) {
+    /// One bounded submission of pipeline `pipelines.1` over items `offset..offset + count`, after
+    /// `pipelines.0` (index, invocations) when given, in the same pass with the same chunk.
+    fn submit(
+        &self,
+        g: &mut Gpu,
+        r: Run,
+        pipelines: (Option<(usize, u32)>, usize),
+        count: u32,
+        sub: (u32, u32),
+        offset: u32,
+    ) {
         let ctx = g.ctx;
         self.write_chunk(ctx, offset, count, sub, r.seed);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         self.in_pass(&mut enc, g, r, |pass| {
-            pass.set_pipeline(&self.pipelines[index].1);
+            if let Some((first, invocations)) = pipelines.0 {
+                pass.set_pipeline(&self.pipelines[first].1);
+                dispatch_items(pass, invocations);
+            }
+            pass.set_pipeline(&self.pipelines[pipelines.1].1);
             dispatch_items(pass, count);
         });
         g.profiler.submit(ctx, enc);
