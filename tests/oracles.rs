@@ -863,6 +863,54 @@ fn gpu_visibility_is_pure_visibility_by_default() {
     }
 }
 
+/// The visibility pass answers a light under a representative's plane from the triangle the
+/// representative lies on (`surface_under`, `shadow_ray_blocked_by` in the WGSL) before walking the
+/// BVH: the bits must be those of a plain shadow ray. On the occluder quad (z = 2, x in [−1, 1]):
+/// P0 at the origin (no surface under it), P2 = (0, 0, 2) on the quad, P3 = (0.9999, 0, 2) on it
+/// 1e-4 from its edge, all facing +z (exactly on the edge the probe would miss: a ray along a box's
+/// face misses the box, as in the twin); lights a (0, 0, 1) facing +z, b (3, 0, 1.9) facing −x,
+/// c (0, 0, 3) facing −z, d (0, 0, −1) facing +z (bits 0–3). e ≥ 8e-6 is the rays' offset. By
+/// hand, pure visibility:
+/// - P0: a, b and d are free (nothing under the quad; d lies under P0's plane and no surface is
+///   under P0), c is behind the quad: 0b1011.
+/// - P2: a, b and d lie under its plane, and their rays cross z = 2 within 30e of the origin,
+///   inside the quad: blocked; c is free: 0b0100.
+/// - P3: a's and d's rays cross z = 2 at x < 0.9999, inside: blocked. b's ray crosses it at
+///   x ≈ 0.9999 + 20e > 1, outside the quad: the triangle under P3 does not block it and nothing
+///   else does, so b is visible; c is free: 0b0110.
+///
+/// With the facing test (`--visibility-facing on`): P0 keeps b (a faces away, c is blocked, d is
+/// under its plane): 0b0010; P2 and P3 keep c: 0b0100.
+#[test]
+fn gpu_visibility_under_a_representative_is_plain_visibility() {
+    let ctx = common::gpu();
+    let sc = occluder_quad();
+    let bvh = SceneBvh::build(&sc).unwrap();
+    let gpu = SceneGpu::upload(&ctx, &sc, &bvh);
+    let lights = [
+        light(Vec3::new(0.0, 0.0, 1.0), UP, [PI2; 3]),
+        light(Vec3::new(3.0, 0.0, 1.9), [-1.0, 0.0, 0.0], [PI2; 3]),
+        light(Vec3::new(0.0, 0.0, 3.0), DOWN, [PI2; 3]),
+        light(Vec3::new(0.0, 0.0, -1.0), UP, [PI2; 3]),
+    ];
+    let buf = ctx.storage_init("lights", &lights);
+    let reps = [
+        rep(Vec3::ZERO, UP, true, false),
+        rep(Vec3::new(0.0, 0.0, 2.0), UP, true, false),
+        rep(Vec3::new(0.9999, 0.0, 2.0), UP, true, false),
+    ];
+    for (facing, want) in [
+        (false, [0b1011u32, 0b0100, 0b0110]),
+        (true, [0b0010, 0b0100, 0b0100]),
+    ] {
+        let bits = run_visibility(&ctx, &gpu, &reps, &buf, lights.len() as u32, None, facing);
+        assert_eq!(
+            bits, want,
+            "facing {facing}: bits {bits:?}, by hand {want:?}"
+        );
+    }
+}
+
 /// The visibility pass (step 5) with the facing test (`--visibility-facing on`, not the paper's) on
 /// one occluder quad and the lights of `occluder_lights`, and the radiance the shading pass lets
 /// through its matrix. Rows: P0 (row 0), the same point without a

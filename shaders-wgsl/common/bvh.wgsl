@@ -197,15 +197,37 @@ fn trace_any(ray: Ray) -> bool {
     return trace(ray, true).slot != INVALID;
 }
 
-// V(p, q) of Eq. (5), the shadow ray between two surface points: the segment from p (offset along
-// its normal n) to q (offset along its normal qn) is free. CPU twin: `CpuScene::vpl_visible`.
-fn vpl_visible(p: vec3<f32>, n: vec3<f32>, q: vec3<f32>, qn: vec3<f32>) -> bool {
+// vpl_visible's shadow ray from p (offset along its normal n) to q (offset along its normal qn),
+// ending short of q's offset point; tmax < 0 where the two offset points coincide.
+fn shadow_ray(p: vec3<f32>, n: vec3<f32>, q: vec3<f32>, qn: vec3<f32>) -> Ray {
     let o = offset_origin(p, n);
     let t = offset_origin(q, qn);
     let d = t - o;
     let dist = length(d);
     if !(dist > 0.0) {
+        return Ray(o, vec3<f32>(0.0, 0.0, 1.0), 0.0, -1.0);
+    }
+    return Ray(o, d / dist, 0.0, dist * (1.0 - 1e-4));
+}
+
+// V(p, q) of Eq. (5), the shadow ray between two surface points: the segment from p (offset along
+// its normal n) to q (offset along its normal qn) is free. CPU twin: `CpuScene::vpl_visible`.
+fn vpl_visible(p: vec3<f32>, n: vec3<f32>, q: vec3<f32>, qn: vec3<f32>) -> bool {
+    let ray = shadow_ray(p, n, q, qn);
+    if ray.tmax < 0.0 {
         return false;
     }
-    return !trace_any(Ray(o, d / dist, 0.0, dist * (1.0 - 1e-4)));
+    return !trace_any(ray);
+}
+
+// Whether triangle `slot` blocks vpl_visible's ray from p to q, as trace_any counts a hit (the same
+// test, alpha included): then V(p, q) = 0 without a walk. False says nothing: another triangle may
+// block the ray. The ray of coinciding ends is blocked, as vpl_visible has it.
+fn shadow_ray_blocked_by(slot: u32, p: vec3<f32>, n: vec3<f32>, q: vec3<f32>, qn: vec3<f32>) -> bool {
+    let ray = shadow_ray(p, n, q, qn);
+    if ray.tmax < 0.0 {
+        return true;
+    }
+    let r = intersect_tri(slot, ray, ray_shear(ray.dir));
+    return r.x < ray.tmax && alpha_passes(slot, r.y, r.z);
 }
