@@ -749,14 +749,12 @@ fn occluder_lights() -> Vec<Vpl> {
     l
 }
 
-/// Runs the visibility pass over `reps` and `lights`: the bit matrix, row by row.
-/// The occluder quad (`occluder_quad`) uploaded on `ctx`, with the lights of `occluder_lights`:
-/// the scene, the lights' buffer and their number.
-fn occluder_upload(ctx: &GpuContext) -> (SceneGpu, wgpu::Buffer, u32) {
+/// The occluder quad (`occluder_quad`) uploaded on `ctx`, with `lights` (`occluder_lights` for
+/// most tests): the scene, the lights' buffer and their number.
+fn occluder_upload(ctx: &GpuContext, lights: &[Vpl]) -> (SceneGpu, wgpu::Buffer, u32) {
     let sc = occluder_quad();
     let bvh = SceneBvh::build(&sc).unwrap();
-    let lights = occluder_lights();
-    let buf = ctx.storage_init("lights", &lights);
+    let buf = ctx.storage_init("lights", lights);
     (SceneGpu::upload(ctx, &sc, &bvh), buf, lights.len() as u32)
 }
 
@@ -799,6 +797,7 @@ fn shade_by_cluster(
     ctx.read_buffer(&indirect, pixels).unwrap()
 }
 
+/// Runs the visibility pass over `reps` and `lights`: the bit matrix, row by row.
 fn run_visibility(
     ctx: &GpuContext,
     gpu: &SceneGpu,
@@ -839,7 +838,7 @@ fn run_visibility(
 #[test]
 fn gpu_visibility_is_pure_visibility_by_default() {
     let ctx = common::gpu();
-    let (gpu, lights_buf, n) = occluder_upload(&ctx);
+    let (gpu, lights_buf, n) = occluder_upload(&ctx, &occluder_lights());
     let reps = [
         rep(Vec3::ZERO, UP, true, false),
         rep(Vec3::ZERO, UP, false, false),
@@ -884,16 +883,13 @@ fn gpu_visibility_is_pure_visibility_by_default() {
 #[test]
 fn gpu_visibility_under_a_representative_is_plain_visibility() {
     let ctx = common::gpu();
-    let sc = occluder_quad();
-    let bvh = SceneBvh::build(&sc).unwrap();
-    let gpu = SceneGpu::upload(&ctx, &sc, &bvh);
     let lights = [
         light(Vec3::new(0.0, 0.0, 1.0), UP, [PI2; 3]),
         light(Vec3::new(3.0, 0.0, 1.9), [-1.0, 0.0, 0.0], [PI2; 3]),
         light(Vec3::new(0.0, 0.0, 3.0), DOWN, [PI2; 3]),
         light(Vec3::new(0.0, 0.0, -1.0), UP, [PI2; 3]),
     ];
-    let buf = ctx.storage_init("lights", &lights);
+    let (gpu, buf, n) = occluder_upload(&ctx, &lights);
     let reps = [
         rep(Vec3::ZERO, UP, true, false),
         rep(Vec3::new(0.0, 0.0, 2.0), UP, true, false),
@@ -903,7 +899,7 @@ fn gpu_visibility_under_a_representative_is_plain_visibility() {
         (false, [0b1011u32, 0b0100, 0b0110]),
         (true, [0b0010, 0b0100, 0b0100]),
     ] {
-        let bits = run_visibility(&ctx, &gpu, &reps, &buf, lights.len() as u32, None, facing);
+        let bits = run_visibility(&ctx, &gpu, &reps, &buf, n, None, facing);
         assert_eq!(
             bits, want,
             "facing {facing}: bits {bits:?}, by hand {want:?}"
@@ -938,7 +934,7 @@ fn gpu_visibility_under_a_representative_is_plain_visibility() {
 #[test]
 fn gpu_visibility_matrix_and_its_radiance_by_hand() {
     let ctx = common::gpu();
-    let (gpu, lights_buf, n) = occluder_upload(&ctx);
+    let (gpu, lights_buf, n) = occluder_upload(&ctx, &occluder_lights());
     let (p0, p1) = (Vec3::ZERO, Vec3::new(0.0, 0.0, 2.5));
     let reps = |kept: [bool; 3]| {
         vec![
