@@ -29,12 +29,12 @@ struct ShadeParams {
 @group(1) @binding(7) var<storage, read_write> indirect: array<vec4<f32>>;
 
 const MAX_F: u32 = 16u;
-// F of the pipeline (crates/core/src/gi/shade.rs builds one per F in use). A constant trip count lets the driver
+// F of the pipeline (crates/core/src/method/colom/shade.rs builds one per F in use). A constant trip count lets the driver
 // unroll the loops over the F slots, so `rows`, `w` and `rw` live in registers; with a run-time F a GPU
 // spills them to local memory and re-reads them for every light.
 override F: u32 = 6u;
 // Visibility patterns a word's table holds (eq6_indirect), at most MAX_PATTERNS; 0: every light runs
-// Eq. (9)'s loop. crates/core/src/gi/shade.rs sets it (`shade::patterns`); the image is the same bit for bit.
+// Eq. (9)'s loop. crates/core/src/method/colom/shade.rs sets it (`shade::patterns`); the image is the same bit for bit.
 const MAX_PATTERNS: u32 = 8u;
 override PATTERNS: u32 = 0u;
 
@@ -227,9 +227,10 @@ fn eq6_indirect(sp: ShadingPoint, rows: ptr<function, array<u32, MAX_F>>, w: ptr
     var rw: array<u32, MAX_F>;
     var masks: array<u32, MAX_PATTERNS>;
     var vs: array<f32, MAX_PATTERNS>;
-    // This dispatch's words [chunk.sub_offset, + chunk.sub_count) (crates/core/src/gi/shade.rs bounds them:
-    // lavapipe ends all loops of a SIMD batch after 65,535 trips, and this walk takes one a light).
-    for (var wd = chunk.sub_offset; wd < min(chunk.sub_offset + chunk.sub_count, params.words); wd++) {
+    // This dispatch's words [chunk.sub_offset, + chunk_words()) (crates/core/src/method/colom/shade.rs
+    // bounds them: lavapipe ends all loops of a SIMD batch after 65,535 trips, and this walk takes one
+    // a light).
+    for (var wd = chunk.sub_offset; wd < chunk.sub_offset + chunk_words(); wd++) {
         var todo = 0u;
         for (var j = 0u; j < F; j++) {
             rw[j] = 0u;

@@ -21,7 +21,7 @@ fn eq5_vpl_radiance(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, v: Vpl, d_min
 
 // How a VPL-cluster light reaches a point (--cluster-light): true, the spread below (the default);
 // false, the paper's point light, eq5_vpl_radiance of the representative with the summed flux. Set
-// by the pipelines that shade with cluster lights (crates/core/src/gi/shade.rs, crates/core/src/gi/reference.rs), each built
+// by the pipelines that shade with cluster lights (crates/core/src/method/colom/shade.rs, crates/core/src/gi/reference.rs), each built
 // per value, so the point light costs no test of the spread.
 override CLUSTER_SPREAD: bool = true;
 
