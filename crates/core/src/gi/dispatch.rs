@@ -70,11 +70,34 @@ pub fn data_texture(
         ))
 }
 
+/// A resource a pass keeps from frame to frame (`DataTextureSlot`, `StorageSlot`): made again only
+/// when the kept one no longer fits.
+struct Kept<T: Clone>(std::sync::Mutex<Option<T>>);
+
+impl<T: Clone> Kept<T> {
+    const fn new() -> Self {
+        Kept(std::sync::Mutex::new(None))
+    }
+
+    /// The kept resource when `fits` says it does, else a new one from `make`, kept from now on.
+    fn get(&self, fits: impl FnOnce(&T) -> bool, make: impl FnOnce() -> T) -> T {
+        let mut kept = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        match &*kept {
+            Some(r) if fits(r) => r.clone(),
+            _ => {
+                let r = make();
+                *kept = Some(r.clone());
+                r
+            }
+        }
+    }
+}
+
 /// A pass's data texture kept from frame to frame: made again only when it needs more rows.
 pub struct DataTextureSlot {
     label: &'static str,
     format: wgpu::TextureFormat,
-    kept: std::sync::Mutex<Option<(wgpu::Texture, wgpu::TextureView)>>,
+    kept: Kept<(wgpu::Texture, wgpu::TextureView)>,
 }
 
 impl DataTextureSlot {
@@ -82,51 +105,42 @@ impl DataTextureSlot {
         DataTextureSlot {
             label,
             format,
-            kept: std::sync::Mutex::new(None),
+            kept: Kept::new(),
         }
     }
 
     /// A texture of at least `texels` texels and its view.
     pub fn get(&self, ctx: &GpuContext, texels: u64) -> (wgpu::Texture, wgpu::TextureView) {
         let rows = (texels.max(1) as u32).div_ceil(DATA_ROW);
-        let mut kept = self.kept.lock().unwrap_or_else(|e| e.into_inner());
-        match &*kept {
-            Some((t, v)) if t.height() >= rows => (t.clone(), v.clone()),
-            _ => {
+        self.kept.get(
+            |(t, _)| t.height() >= rows,
+            || {
                 let t = data_texture(ctx, self.label, self.format, texels);
                 let v = t.create_view(&Default::default());
-                *kept = Some((t.clone(), v.clone()));
                 (t, v)
-            }
-        }
+            },
+        )
     }
 }
 
 /// A pass's storage buffer kept from frame to frame: made again only when it needs more bytes.
 pub struct StorageSlot {
     label: &'static str,
-    kept: std::sync::Mutex<Option<wgpu::Buffer>>,
+    kept: Kept<wgpu::Buffer>,
 }
 
 impl StorageSlot {
     pub const fn new(label: &'static str) -> Self {
         StorageSlot {
             label,
-            kept: std::sync::Mutex::new(None),
+            kept: Kept::new(),
         }
     }
 
     /// A storage buffer of at least `bytes` bytes.
     pub fn get(&self, ctx: &GpuContext, bytes: u64) -> wgpu::Buffer {
-        let mut kept = self.kept.lock().unwrap_or_else(|e| e.into_inner());
-        match &*kept {
-            Some(b) if b.size() >= bytes => b.clone(),
-            _ => {
-                let b = ctx.storage(self.label, bytes);
-                *kept = Some(b.clone());
-                b
-            }
-        }
+        self.kept
+            .get(|b| b.size() >= bytes, || ctx.storage(self.label, bytes))
     }
 }
 
