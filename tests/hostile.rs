@@ -493,13 +493,22 @@ fn a_signal_during_a_write_removes_the_temporary_file() {
         let d = common::scratch(&format!("hostile-signal-{name}"));
         let target = d.join("out.json");
         std::fs::write(&target, "old").unwrap();
-        let mut child = Command::new(std::env::current_exe().unwrap())
-            .args(["signal_child_writer", "--exact", "--ignored", "--nocapture"])
+        let mut cmd = Command::new(std::env::current_exe().unwrap());
+        cmd.args(["signal_child_writer", "--exact", "--ignored", "--nocapture"])
             .env(CHILD_ENV, &target)
             .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap();
+            .stderr(Stdio::null());
+        // The child starts with the signal's default action, as from a shell: a test run under
+        // `nohup` would have it inherit SIGHUP ignored, which the writer rightly leaves alone.
+        use std::os::unix::process::CommandExt;
+        // SAFETY: `signal` is async-signal-safe, as `pre_exec` requires.
+        unsafe {
+            cmd.pre_exec(move || {
+                libc::signal(sig, libc::SIG_DFL);
+                Ok(())
+            });
+        }
+        let mut child = cmd.spawn().unwrap();
         // The temporary file exists once the child has written into it (up to 6,000 polls 10 ms
         // apart, 60 s: a hang guard).
         let mut polls = 0;
