@@ -20,9 +20,11 @@ struct ShadeParams {
 
 @group(1) @binding(1) var<uniform> params: ShadeParams;
 @group(1) @binding(2) var<storage, read> gbuffer: array<ShadingPoint>;
-// Lights as 3 texels each (pos, nrm, flux), DATA_ROW (4096) texels a row: on lavapipe a texel fetch
-// gathers a whole texel per lane with vector code, a storage read is a branchy scalar loop per lane.
-@group(1) @binding(3) var lights_tex: texture_2d<f32>;
+// Lights as 2 texels each (pack_lights: pos.xyz and the normal's code, flux.rgb and the spread's
+// code), DATA_ROW (4096) texels a row: on lavapipe a texel fetch gathers a whole texel per lane
+// with vector code, a storage read is a branchy scalar loop per lane, and the walk's cost is its
+// fetches (docs/bvh.md, "Lights in two texels").
+@group(1) @binding(3) var lights_tex: texture_2d<u32>;
 @group(1) @binding(4) var<storage, read> bits: array<u32>;
 @group(1) @binding(5) var<storage, read> assign: array<u32>;
 @group(1) @binding(6) var<storage, read> weights: array<f32>;
@@ -52,6 +54,10 @@ override TILE_CULL: bool = true;
 // This submission's masks (the entry point tile_mask): word w of the chunk's tile k, at
 // k * chunk_words() + w, has bit b set when light 32 (chunk.sub_offset + w) + b may light the tile.
 @group(1) @binding(9) var<storage, read_write> tile_masks: array<u32>;
+// The lights as the step before wrote them (VPL-cluster lights or VPLs), read once a frame by
+// pack_lights, whose two texels a light (packed_lights) are copied into lights_tex.
+@group(1) @binding(10) var<storage, read> lights_in: array<Vpl>;
+@group(1) @binding(11) var<storage, read_write> packed_lights: array<vec4<u32>>;
 
 // The bit words of this submission: [chunk.sub_offset, + chunk_words()).
 fn chunk_words() -> u32 {
@@ -113,8 +119,7 @@ fn tile_mask(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         let nhi = tile_boxes[4u * t + 3u].xyz;
         let c0 = (chunk.sub_offset + i % words) * 32u;
         for (var c = c0; c < min(c0 + 32u, params.num_lights); c++) {
-            let v = Vpl(light_texel(3u * c), light_texel(3u * c + 1u), vec4<f32>(0.0));
-            if may_light_box(lo, hi, nlo, nhi, v) {
+            if may_light_box(lo, hi, nlo, nhi, load_light(c)) {
                 word |= 1u << (c - c0);
             }
         }
@@ -165,12 +170,70 @@ fn tile_box(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     tile_boxes[4u * t + 3u] = vec4<f32>(nhi, 0.0);
 }
 
-fn light_texel(i: u32) -> vec4<f32> {
+// Not in the paper (docs/bvh.md, "Lights in two texels"): unit normal n as 32 bits, its
+// octahedral coordinates (Cigolle et al. 2014, "A survey of efficient representations for
+// independent unit vectors") each rounded to a multiple of 2^-14, as 16-bit integers (x low, y
+// high). An axis is exact; any other normal lies within cpu::shade::OCT_ERROR radians of its decoding. CPU twin:
+// cpu::shade::oct_encode.
+fn oct_encode(n: vec3<f32>) -> u32 {
+    let l1 = abs(n.x) + abs(n.y) + abs(n.z);
+    var e = select(vec2<f32>(0.0), n.xy / l1, l1 > 0.0);
+    if n.z < 0.0 {
+        e = (1.0 - abs(e.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), e >= vec2<f32>(0.0));
+    }
+    let q = vec2<i32>(round(clamp(e, vec2<f32>(-1.0), vec2<f32>(1.0)) * 16384.0));
+    return (u32(q.x) & 0xffffu) | (u32(q.y) << 16u);
+}
+
+// The unit normal of oct_encode's code. The octahedron's point is exact (multiples of 2^-14); only
+// the normalisation rounds. CPU twin: cpu::shade::oct_decode.
+fn oct_decode(code: u32) -> vec3<f32> {
+    let e = vec2<f32>(f32(i32(code << 16u) >> 16u), f32(i32(code) >> 16u)) * (1.0 / 16384.0);
+    var n = vec3<f32>(e, 1.0 - abs(e.x) - abs(e.y));
+    if n.z < 0.0 {
+        n = vec3<f32>((1.0 - abs(e.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), e >= vec2<f32>(0.0)), n.z);
+    }
+    return n * inverseSqrt(dot(n, n));
+}
+
+// Not in the paper: the spread's share s (flux.w, in [0, 1]) and r^2 (nrm.w, >= 0) of a cluster
+// light (eq5_cluster_radiance) as 32 bits: r^2 rounded to 11 mantissa bits (relative error at most
+// 2^-12) in the high 19, s rounded to a multiple of 2^-12 in the low 13. CPU twin:
+// cpu::shade::spread_encode.
+fn spread_encode(s: f32, r2: f32) -> u32 {
+    let r = ((bitcast<u32>(max(r2, 0.0)) + 0x800u) & 0x7ffff000u) << 1u;
+    return r | u32(round(clamp(s, 0.0, 1.0) * 4096.0));
+}
+
+// (s, r^2) of spread_encode's code, both exact. CPU twin: cpu::shade::spread_decode.
+fn spread_decode(code: u32) -> vec2<f32> {
+    return vec2<f32>(f32(code & 0x1fffu) * (1.0 / 4096.0), bitcast<f32>((code >> 1u) & 0x7ffff000u));
+}
+
+// Light c's two texels into packed_lights (one invocation a light, once a frame, before the
+// walk): pos.xyz and oct_encode of the normal, flux.rgb and spread_encode of (s, r^2). Position
+// and flux keep every bit. CPU twin: cpu::shade::stored_light.
+@compute @workgroup_size(64)
+fn pack_lights(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let c = gid.x + gid.y * nwg.x * 64u;
+    if c >= params.num_lights {
+        return;
+    }
+    let v = lights_in[c];
+    packed_lights[2u * c] = vec4<u32>(bitcast<vec3<u32>>(v.pos.xyz), oct_encode(v.nrm.xyz));
+    packed_lights[2u * c + 1u] = vec4<u32>(bitcast<vec3<u32>>(v.flux.xyz), spread_encode(v.flux.w, v.nrm.w));
+}
+
+fn light_texel(i: u32) -> vec4<u32> {
     return textureLoad(lights_tex, vec2<u32>(i & 4095u, i >> 12u), 0);
 }
 
+// Light c as pack_lights stored it.
 fn load_light(c: u32) -> Vpl {
-    return Vpl(light_texel(3u * c), light_texel(3u * c + 1u), light_texel(3u * c + 2u));
+    let a = light_texel(2u * c);
+    let b = light_texel(2u * c + 1u);
+    let sr = spread_decode(b.w);
+    return Vpl(vec4<f32>(bitcast<vec3<f32>>(a.xyz), 1.0), vec4<f32>(oct_decode(a.w), sr.y), vec4<f32>(bitcast<vec3<f32>>(b.xyz), sr.x));
 }
 
 // Eq. (8) as weights: 1/F' for each of the pixel's F' used slots (rows[j] != INVALID), 0 for the

@@ -545,6 +545,37 @@ fn shade_one_light(
     ctx.read_buffer(&indirect, 1).unwrap()
 }
 
+/// `shade_one_light`'s CPU twin: Eq. (6) at `p` with F = 1, the one SP cluster seeing `light`;
+/// with `cull`, the twin's tile cull over a tile of `p` alone.
+fn twin_one_light(
+    p: &ShadingPoint,
+    light: &Vpl,
+    d_min2: f32,
+    cl: ClusterLight,
+    cull: bool,
+) -> Vec3 {
+    use fuzzy_vpl::cpu::shade::{Bits, Slots, TileBounds, eq6_indirect};
+    let tile = if cull { TileBounds::of([p]) } else { None };
+    let bits = Bits {
+        bits: &[1],
+        words: 1,
+    };
+    let slots = Slots {
+        assign: &[0],
+        weights: &[1.0],
+        weighted: true,
+    };
+    eq6_indirect(
+        p,
+        std::slice::from_ref(light),
+        &bits,
+        &slots,
+        d_min2,
+        cl,
+        tile.as_ref(),
+    )
+}
+
 /// The shade pass's tile cull, by hand (docs/clustering.md, "Lights no point of a tile can see"):
 /// one pixel at the origin facing +z (albedo 1) and one light of flux π² at (1, 0, h) facing −x,
 /// so Eq. (5)'s term is cos_p cos_v / d² ≈ h. At h = 1e-6 the point's cosine is within the slack
@@ -589,6 +620,72 @@ fn gpu_tile_cull_drops_only_lights_in_the_tiles_plane() {
             }
         }
     }
+}
+
+/// The shade pass walks each light as it stores it (`cpu::shade::stored_light`; docs/bvh.md,
+/// "Lights in two texels": the normal as a 32-bit octahedral code, within `OCT_ERROR` = 1.4e-4 rad,
+/// the spread's s and r² rounded to 2^-12), and so does its CPU twin. One pixel at the origin
+/// facing +z (albedo 1) and one light of flux π²:
+/// - a point light at (1, 0, 1) whose normal is nearly perpendicular to the way to the pixel
+///   (cos_v ≈ 2e-3), so that the code's rounding moves Eq. (5)'s term by about 1 %;
+/// - a spread light straight above the pixel at height √2, facing it (an axis: an exact code), s
+///   0.3 and r² 2.5 + 2^-11 > d² = 2, whose rounded s (1229 / 4096) and r² (2.5 + 2^-10) move
+///   the term by about 6e-5.
+///
+/// The pass agrees with Eq. (5) of the stored light to 2e-5 and 2e-6 relative (measured on
+/// lavapipe: 0 and 1.9e-7; a cosine of 2e-3 makes the first 500× as sensitive to a GPU's rounding
+/// of inverseSqrt), and lies more than 10× that from Eq. (5) of the light as given (measured:
+/// 1.3e-3 and 6.0e-5): a pass or twin walking the given light fails.
+#[test]
+fn gpu_shade_reads_each_light_as_stored() {
+    use fuzzy_vpl::cpu::shade::stored_light;
+    use fuzzy_vpl::cpu::vpl::eq5_cluster_light;
+    let ctx = common::gpu();
+    let (_sc, gpu) = cornell_gpu(&ctx);
+    let mut prof = Profiler::new(&ctx);
+    let mut g = Gpu {
+        ctx: &ctx,
+        scene: &gpu,
+        profiler: &mut prof,
+    };
+    let pixel = sp(Vec3::ZERO, UP, [1.0; 3]);
+    let gbuffer = ctx.storage_init("gbuffer", &[pixel]);
+    let spoint = ShadingPoint::from_gpu(&pixel);
+    // Along the plane perpendicular to the way to the pixel, (−1, 0, 1) and +y, tilted 2e-3 to it.
+    let to_pixel = Vec3::new(-1.0, 0.0, -1.0).normalize();
+    let n = (Vec3::new(-1.0, 0.0, 1.0).normalize() + 0.3 * Vec3::Y + 2e-3 * to_pixel).normalize();
+    let grazing = light(Vec3::new(1.0, 0.0, 1.0), n.to_array(), [PI2; 3]);
+    let mut spread = light(Vec3::new(0.0, 0.0, 2f32.sqrt()), DOWN, [PI2; 3]);
+    spread.flux[3] = 0.3;
+    spread.nrm[3] = 2.5 + 2f32.powi(-11);
+    let mut worst = [0f32; 2];
+    for (k, (given, cl, bound)) in [
+        (grazing, ClusterLight::Point, 2e-5f32),
+        (spread, ClusterLight::Spread, 2e-6),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let term =
+            |v: &Vpl| eq5_cluster_light(spoint.pos, spoint.normal, spoint.albedo, v, 0.0, cl).x;
+        let (want, as_given) = (term(&stored_light(&given)), term(&given));
+        let lights = ctx.storage_init("lights", &[given]);
+        let got = shade_one_light(&mut g, &Shade::new(), (&gbuffer, &lights), 0.0, cl);
+        let twin = twin_one_light(&spoint, &given, 0.0, cl, false);
+        assert_eq!(twin.x, want, "{cl}: the twin walks the stored light");
+        for x in &got[0][..3] {
+            let rel = ((x - want) / want).abs();
+            worst[k] = worst[k].max(rel);
+            assert!(rel < bound, "{cl}: pass {x}, stored light {want} ({rel:e})");
+        }
+        let apart = ((as_given - want) / want).abs();
+        assert!(
+            apart > 10.0 * bound,
+            "{cl}: given {as_given}, stored {want}: only {apart:e} apart"
+        );
+        println!("{cl}: stored and given {apart:e} apart");
+    }
+    println!("worst relative difference from the stored light's term: {worst:?}");
 }
 
 /// Eq. (5) on the GPU reference pass, closed form: the two pixels and three lights above, far
@@ -1287,22 +1384,7 @@ fn a_two_vpl_cluster_as_point_or_spread_light_by_hand() {
         }
         // The CPU twin of the shading pass.
         let spoint = ShadingPoint::from_gpu(&pixel);
-        let twin = fuzzy_vpl::cpu::shade::eq6_indirect(
-            &spoint,
-            &list.lights,
-            &fuzzy_vpl::cpu::shade::Bits {
-                bits: &[1],
-                words: 1,
-            },
-            &fuzzy_vpl::cpu::shade::Slots {
-                assign: &[0],
-                weights: &[1.0],
-                weighted: true,
-            },
-            DMIN2,
-            cl,
-            fuzzy_vpl::cpu::shade::TileBounds::of([&spoint]).as_ref(),
-        );
+        let twin = twin_one_light(&spoint, &list.lights[0], DMIN2, cl, true);
         for c in 0..3 {
             close(twin[c], want, &format!("CPU twin, {cl}"));
         }

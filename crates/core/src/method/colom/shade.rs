@@ -102,7 +102,10 @@ pub struct Shade {
     /// The shader's `TILE_CULL` (`tile_cull()` when built).
     tile_cull: bool,
     params: crate::gpu::persistent::Uniform<ShadeParams>,
+    /// The lights as the walk reads them: 2 texels each (`pack_lights`, from `packed_lights`).
     lights: crate::gi::dispatch::DataTextureSlot,
+    /// `pack_lights`' output (32 bytes a light), copied into `lights`.
+    packed_lights: crate::gi::dispatch::StorageSlot,
     /// The tiles' boxes (4 × 16 bytes a tile, the entry point `tile_box`).
     tile_boxes: crate::gi::dispatch::StorageSlot,
     /// A submission's light masks (a word a tile and bit word, the entry point `tile_mask`).
@@ -129,8 +132,9 @@ impl Shade {
             params: crate::gpu::persistent::Uniform::new("shade params"),
             lights: crate::gi::dispatch::DataTextureSlot::new(
                 "shade lights",
-                wgpu::TextureFormat::Rgba32Float,
+                wgpu::TextureFormat::Rgba32Uint,
             ),
+            packed_lights: crate::gi::dispatch::StorageSlot::new("shade packed lights"),
             tile_boxes: crate::gi::dispatch::StorageSlot::new("shade tile boxes"),
             tile_masks: crate::gi::dispatch::StorageSlot::new("shade tile masks"),
         }
@@ -152,12 +156,14 @@ impl Shade {
             let mut entries = vec![
                 uniform_layout(1),
                 storage_layout(2, true),
-                data_texture_layout(3, wgpu::TextureSampleType::Float { filterable: false }),
+                data_texture_layout(3, wgpu::TextureSampleType::Uint),
             ];
             entries.extend((4..=6).map(|b| storage_layout(b, true)));
             entries.push(storage_layout(7, false));
             entries.push(storage_layout(8, false));
             entries.push(storage_layout(9, false));
+            entries.push(storage_layout(10, true));
+            entries.push(storage_layout(11, false));
             let overrides = [
                 ("F", f as f64),
                 ("PATTERNS", self.patterns as f64),
@@ -168,7 +174,7 @@ impl Shade {
                 ctx,
                 Some(scene),
                 "shade",
-                &["main", "tile_box", "tile_mask"],
+                &["main", "tile_box", "tile_mask", "pack_lights"],
                 &entries,
                 &overrides,
             )
@@ -178,12 +184,10 @@ impl Shade {
     pub fn record(&self, g: &mut Gpu, i: &ShadeInputs) {
         let ctx = g.ctx;
         let params = self.params.set(ctx, &i.params);
-        // The lights as a texture (3 texels each; see shade.wgsl).
-        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        // The lights as a texture, 2 texels each (`pack_lights` in shade.wgsl).
         let n = i.params.num_lights as u64;
-        let (lights, lights_view) = self.lights.get(ctx, 3 * n);
-        copy_to_texture(&mut enc, i.lights, &lights, 48 * n);
-        ctx.queue.submit([enc.finish()]);
+        let (lights_tex, lights_view) = self.lights.get(ctx, 2 * n);
+        let packed_lights = self.packed_lights.get(ctx, 32 * n.max(1));
         let kernel = self.kernel(ctx, g.scene, i.params.f, i.light == ClusterLight::Spread);
         let items = tile_items(i.params.width, i.params.height);
         // At most WORDS_PER_DISPATCH bit words (32 lights each) a pixel per dispatch: lavapipe ends
@@ -212,6 +216,8 @@ impl Shade {
                 (7, i.indirect),
                 (8, &tile_boxes),
                 (9, &tile_masks),
+                (10, i.lights),
+                (11, &packed_lights),
             ],
             &[(3, &lights_view)],
         );
@@ -227,9 +233,15 @@ impl Shade {
             entry: "tile_mask",
             invocations: &masks,
         });
+        // The lights' texels, then (with the tile cull) each tile's box, in one submission.
+        let copy = |enc: &mut wgpu::CommandEncoder| {
+            copy_to_texture(enc, &packed_lights, &lights_tex, 32 * n)
+        };
+        let mut steps = vec![("pack_lights", i.params.num_lights)];
         if self.tile_cull {
-            kernel.run_entry(g, run, "tile_box", items / (TILE * TILE));
+            steps.push(("tile_box", items / (TILE * TILE)));
         }
+        kernel.run_entries(g, run, &steps, Some(("pack_lights", &copy)));
         kernel.run_2d_after(
             g,
             run,
