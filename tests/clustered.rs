@@ -120,7 +120,7 @@ fn shading_131072_lights_matches_cpu_twin() {
     };
     let f = r.render(&s.default_camera(), &fs).unwrap();
     assert_eq!(r.lights.as_ref().unwrap().list.lights.len(), 131_072);
-    // Every pixel, at the measured maximum × 2 on software (1.06e-6; docs/testing.md).
+    // Every pixel, at the measured maximum × 2 on software (1.04e-6; docs/testing.md).
     let pairs = shading_pairs(&ctx, &r, &s, &f, &fs);
     common::assert_twins(
         &ctx,
