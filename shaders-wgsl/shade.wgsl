@@ -179,10 +179,16 @@ fn oct_encode(n: vec3<f32>) -> u32 {
     let l1 = abs(n.x) + abs(n.y) + abs(n.z);
     var e = select(vec2<f32>(0.0), n.xy / l1, l1 > 0.0);
     if n.z < 0.0 {
-        e = (1.0 - abs(e.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), e >= vec2<f32>(0.0));
+        e = oct_wrap(e);
     }
     let q = vec2<i32>(round(clamp(e, vec2<f32>(-1.0), vec2<f32>(1.0)) * 16384.0));
     return (u32(q.x) & 0xffffu) | (u32(q.y) << 16u);
+}
+
+// The octahedral map's fold of the lower half (z < 0) over the upper one, either way (it is its own
+// inverse): (1 - |e.yx|) with the signs of e, +1 at ±0. CPU twin: cpu::shade::oct_wrap.
+fn oct_wrap(e: vec2<f32>) -> vec2<f32> {
+    return (1.0 - abs(e.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), e >= vec2<f32>(0.0));
 }
 
 // The unit normal of oct_encode's code. The octahedron's point is exact (multiples of 2^-14); only
@@ -191,7 +197,7 @@ fn oct_decode(code: u32) -> vec3<f32> {
     let e = vec2<f32>(f32(i32(code << 16u) >> 16u), f32(i32(code) >> 16u)) * (1.0 / 16384.0);
     var n = vec3<f32>(e, 1.0 - abs(e.x) - abs(e.y));
     if n.z < 0.0 {
-        n = vec3<f32>((1.0 - abs(e.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), e >= vec2<f32>(0.0)), n.z);
+        n = vec3<f32>(oct_wrap(e), n.z);
     }
     return n * inverseSqrt(dot(n, n));
 }

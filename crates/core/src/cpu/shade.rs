@@ -175,18 +175,17 @@ pub fn oct_encode(n: Vec3) -> u32 {
         glam::Vec2::ZERO
     };
     if n.z < 0.0 {
-        e = (glam::Vec2::ONE - glam::Vec2::new(e.y.abs(), e.x.abs())) * sign_not_zero(e);
+        e = oct_wrap(e);
     }
     let q = (e.clamp(glam::Vec2::splat(-1.0), glam::Vec2::ONE) * 16384.0).map(f32::round_ties_even);
     (q.x as i32 as u32 & 0xffff) | ((q.y as i32 as u32) << 16)
 }
 
-/// ±1 by the sign of each coordinate, +1 at ±0 (the octahedral map's fold).
-fn sign_not_zero(e: glam::Vec2) -> glam::Vec2 {
-    glam::Vec2::new(
-        if e.x >= 0.0 { 1.0 } else { -1.0 },
-        if e.y >= 0.0 { 1.0 } else { -1.0 },
-    )
+/// The octahedral map's fold of the lower half (z < 0) over the upper one, either way (it is its
+/// own inverse): (1 − |e.yx|) with the signs of `e`, +1 at ±0 (twin of `oct_wrap` in shade.wgsl).
+fn oct_wrap(e: glam::Vec2) -> glam::Vec2 {
+    let sign = |x: f32| if x >= 0.0 { 1.0 } else { -1.0 };
+    glam::Vec2::new((1.0 - e.y.abs()) * sign(e.x), (1.0 - e.x.abs()) * sign(e.y))
 }
 
 /// The unit normal of `oct_encode`'s code (twin of `oct_decode` in shade.wgsl): the octahedron's
@@ -198,7 +197,7 @@ pub fn oct_decode(code: u32) -> Vec3 {
     ) * (1.0 / 16384.0);
     let mut n = Vec3::new(e.x, e.y, 1.0 - e.x.abs() - e.y.abs());
     if n.z < 0.0 {
-        let xy = (glam::Vec2::ONE - glam::Vec2::new(e.y.abs(), e.x.abs())) * sign_not_zero(e);
+        let xy = oct_wrap(e);
         n = Vec3::new(xy.x, xy.y, n.z);
     }
     n * (1.0 / n.dot(n).sqrt())
