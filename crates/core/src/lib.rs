@@ -57,6 +57,8 @@ pub mod render;
 pub mod scene;
 pub mod settings;
 pub mod stats;
+#[cfg(test)]
+mod test_rng;
 
 pub use gpu::GpuContext;
 pub use method::{Method, MethodSettings};

@@ -312,13 +312,7 @@ mod tests {
     /// sphere from a fixed sequence), and the decoding is unit to 2 ulp.
     #[test]
     fn oct_code_error_is_bounded() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next = crate::test_rng::unit_floats(0x2545_f491_4f6c_dd1d);
         let mut worst = 0f32;
         for _ in 0..1_000_000 {
             let (z, phi) = (2.0 * next() - 1.0, std::f32::consts::TAU * next());

@@ -101,13 +101,7 @@ mod tests {
     /// On many random fluxes too (xorshift): the drawn pdf is the source pdf within 1e-6.
     #[test]
     fn alias_table_random_fluxes() {
-        let mut s = 0x9e3779b97f4a7c15u64;
-        let mut next = || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next = crate::test_rng::unit_floats(0x9e3779b97f4a7c15);
         let vpls: Vec<Vpl> = (0..1000)
             .map(|_| vpl([next() * 3.0, next(), next() * next()]))
             .collect();
