@@ -626,3 +626,49 @@ fn lights_set_at_any_scale_are_in_the_callers_units() {
     }
     assert!(compared > 1000, "{compared}");
 }
+
+/// Every method's passes, `--paper` and the reference run on a device that allows exactly
+/// `gpu::MIN_STORAGE_BUFFERS` storage buffers per shader stage, the fewest `GpuContext` accepts
+/// (a host program's device may have no more): a pipeline binding more fails its validation, which
+/// is fatal.
+#[test]
+fn every_method_runs_with_the_fewest_storage_buffers_accepted() {
+    use fuzzy_vpl::gpu::{GpuContext, MIN_STORAGE_BUFFERS, required_limits, wanted_features};
+    let instance = fuzzy_vpl::gpu::instance();
+    let adapter =
+        pollster::block_on(instance.request_adapter(&Default::default())).expect("an adapter");
+    let limits = wgpu::Limits {
+        max_storage_buffers_per_shader_stage: MIN_STORAGE_BUFFERS,
+        ..required_limits(&adapter.limits())
+    };
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("fewest storage buffers"),
+        required_features: adapter.features() & wanted_features(),
+        required_limits: limits,
+        ..Default::default()
+    }))
+    .expect("a device");
+    let ctx = GpuContext::from_device(instance, adapter, device, queue).unwrap();
+    let s = scene::load("builtin:cornell").unwrap();
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    for entry in fuzzy_vpl::method::REGISTRY {
+        for paper in [false, true] {
+            let mut fs = settings(16, 12, 4);
+            fs.frame.vpls = 512;
+            fs.method.method = entry.method;
+            fs.cluster.vpl_clusters = 64;
+            fs.cluster.sp_clusters = 24;
+            if paper {
+                let given = |id: &str| ["sp_clusters", "vpl_clusters"].contains(&id);
+                fuzzy_vpl::settings::paper::apply(&mut fs.frame, &mut fs.cluster, &given);
+            }
+            let f = r.render(&s.default_camera(), &fs).unwrap();
+            assert!(common::all_finite(&f.radiance), "{}", entry.method);
+        }
+    }
+    let mut fs = settings(16, 12, 4);
+    fs.frame.vpls = 512;
+    fs.reference = true;
+    let f = r.render(&s.default_camera(), &fs).unwrap();
+    assert!(common::all_finite(&f.radiance), "reference");
+}

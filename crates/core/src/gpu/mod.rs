@@ -45,8 +45,8 @@ pub fn driver_name(info: &wgpu::AdapterInfo) -> String {
     if s.is_empty() { "unknown".into() } else { s }
 }
 
-/// Storage buffers one shader stage binds at most: the shade pass (colom's, 9 of its own and the
-/// scene's 6) and restir's passes. `methods::every_method_runs_with_the_fewest_storage_buffers_accepted`
+/// Storage buffers one shader stage binds at most: colom's shade pass (9 of its own and the
+/// scene's 6), and other methods' passes as many. `render::every_method_runs_with_the_fewest_storage_buffers_accepted`
 /// runs every method on a device with exactly this many.
 pub const MIN_STORAGE_BUFFERS: u32 = 15;
 
